@@ -1,0 +1,169 @@
+"""The true dynamics of an office world, compiled to flat arrays, and one compiled step.
+
+The simulator's hidden state is the *full* state ``(position, which doors are open)``,
+indexed ``position * 2**n_doors + door_mask``. For every (full state, action) pair the
+model lists its outcomes (probability, next full state, stuck flag) in CSR form:
+outcomes of pair ``i = full_state * n_actions + action`` are ``ptr[i]:ptr[i+1]``.
+
+The gymnasium env, the fast episode runner and value iteration all read these arrays,
+so there is exactly one definition of the world's dynamics (:func:`compile_model`)
+and one of a step (:func:`env_step`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import COST_KINDS, VERBS, World
+
+CAUSE_NONE, CAUSE_STUCK, CAUSE_GOAL, CAUSE_TIMEOUT = 0, 1, 2, 3
+CAUSES = ("", "stuck", "goal", "timeout")
+"""Why an episode ended, indexed by the cause code :func:`env_step` returns."""
+
+
+class ModelArrays(NamedTuple):
+    """The compiled true model (see the module docstring for the layout)."""
+
+    n_actions: int
+    n_doors: int
+    r_max: float
+    step_limit: int
+    ptr: np.ndarray  # int64[n_full * n_actions + 1]
+    prob: np.ndarray  # float64[n_outcomes]
+    next: np.ndarray  # int64[n_outcomes], full state
+    stuck: np.ndarray  # bool[n_outcomes]
+    cost_kind: np.ndarray  # int64[n_actions], codes of COST_KINDS
+    cost_a: np.ndarray  # float64[n_actions]
+    cost_b: np.ndarray  # float64[n_actions]
+    obs_of: np.ndarray  # int64[n_full], learner state of a full state
+    pos_of: np.ndarray  # int64[n_full], position index of a full state
+    area_of_pos: np.ndarray  # int64[n_positions], area number (0: none)
+
+
+def full_state(world: World, position: str, open_doors: frozenset[str] = frozenset()) -> int:
+    """Full-state index of ``position`` with the named doors open."""
+    mask = sum(1 << i for i, d in enumerate(world.doors) if d.name in open_doors)
+    return world.index[position] * (1 << len(world.doors)) + mask
+
+
+def _outcomes(world: World, p: str, mask: int, verb: str, q: str) -> list[tuple[float, str, int, bool]]:
+    """Outcomes ``(prob, position, mask, stuck)`` of ``verb q`` taken at ``p``."""
+    noop = [(1.0, p, mask, False)]
+    door_ids = {d.name: i for i, d in enumerate(world.doors)}
+    door = world.door_at.get(p)
+    if verb in ("goto", "approach"):
+        ns = world.walk_neighbours[p]
+        wants_door = verb == "approach"
+        if q not in ns or (q in world.door_at) != wants_door:
+            return noop
+        ok = world.navigation_success
+        out = [(ok, q, mask, False)]
+        out += [((1 - ok) / len(ns), n, mask, False) for n in ns]
+        return out
+    if verb in ("opendoor", "gothrough") and door is not None:
+        bit = 1 << door_ids[door.name]
+        is_open = bool(mask & bit)
+        if verb == "opendoor" and q == p and not is_open:
+            result = (door.success, p, mask | bit, False)
+        elif verb == "gothrough" and is_open and q != p and q in door.sides:
+            result = (door.success, q, mask, False)
+        else:
+            return noop
+        out = [result, (door.stuck, p, mask, True)]
+        out.append((1.0 - door.success - door.stuck, p, mask, False))
+        return out
+    return noop
+
+
+def compile_model(world: World) -> ModelArrays:
+    """Compile the world's true dynamics into :class:`ModelArrays`."""
+    spaces = LearnerSpaces(world)
+    n_pos, n_doors = len(world.positions), len(world.doors)
+    n_masks = 1 << n_doors
+    n_full, n_actions = n_pos * n_masks, spaces.n_actions
+    ptr = np.zeros(n_full * n_actions + 1, dtype=np.int64)
+    prob: list[float] = []
+    nxt: list[int] = []
+    stuck: list[bool] = []
+    door_ids = {d.name: i for i, d in enumerate(world.doors)}
+    obs_of = np.zeros(n_full, dtype=np.int64)
+    pos_of = np.zeros(n_full, dtype=np.int64)
+    for fs in range(n_full):
+        pi, mask = divmod(fs, n_masks)
+        p = world.positions[pi]
+        door = world.door_at.get(p)
+        pos_of[fs] = pi
+        obs_of[fs] = spaces.state(p, door is not None and bool(mask >> door_ids[door.name] & 1))
+        for a in range(n_actions):
+            verb, q = spaces.action_parts(a)
+            merged: dict[tuple[int, bool], float] = {}
+            for pr, np_, nm, st in _outcomes(world, p, mask, verb, q):
+                if pr > 0.0:
+                    key = (world.index[np_] * n_masks + nm, st)
+                    merged[key] = merged.get(key, 0.0) + pr
+            for (target, st), pr in merged.items():
+                nxt.append(target)
+                stuck.append(st)
+                prob.append(pr)
+            ptr[fs * n_actions + a + 1] = len(prob)
+    costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
+    area = np.array([world.area_of.get(p, 0) for p in world.positions], dtype=np.int64)
+    return ModelArrays(
+        n_actions=n_actions,
+        n_doors=n_doors,
+        r_max=float(world.r_max),
+        step_limit=int(world.step_limit),
+        ptr=ptr,
+        prob=np.array(prob, dtype=np.float64),
+        next=np.array(nxt, dtype=np.int64),
+        stuck=np.array(stuck, dtype=np.bool_),
+        cost_kind=np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
+        cost_a=np.array([c.a for c in costs], dtype=np.float64),
+        cost_b=np.array([c.b for c in costs], dtype=np.float64),
+        obs_of=obs_of,
+        pos_of=pos_of,
+        area_of_pos=area,
+    )
+
+
+assert VERBS[0] == "goto"  # the action layout above is verb-major from goto
+
+
+@numba.njit(cache=True)
+def sample_cost(kind: int, a: float, b: float, rng: np.random.Generator) -> float:
+    """Draw one action cost (no draw at all for a constant)."""
+    if kind == 0:
+        return a
+    if kind == 1:
+        return a + (b - a) * rng.random()
+    return max(0.0, a + b * rng.standard_normal())
+
+
+@numba.njit(cache=True)
+def env_step(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
+             rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """Take ``action`` in full state ``fs`` at step ``t`` (0-based) of an episode.
+
+    Returns ``(next full state, reward, terminated, truncated, cause)``. Draws exactly
+    one uniform for the outcome, then one cost draw if the cost is not constant.
+    """
+    i = fs * m.n_actions + action
+    k, end = m.ptr[i], m.ptr[i + 1]
+    u = rng.random()
+    acc = m.prob[k]
+    while u >= acc and k < end - 1:
+        k += 1
+        acc += m.prob[k]
+    nxt = m.next[k]
+    cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
+    if m.stuck[k]:
+        return nxt, -m.r_max, True, False, CAUSE_STUCK
+    if m.pos_of[nxt] == goal_pos:
+        return nxt, m.r_max, True, False, CAUSE_GOAL
+    if t + 1 >= m.step_limit:
+        return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
+    return nxt, -cost, False, False, CAUSE_NONE

@@ -1,0 +1,72 @@
+"""The learner's vocabulary for an office world: state and action indices.
+
+The learner sees a state ``(position, is the door at this position open)``: one state
+per open-floor position and two per door-side position, in position order (for the
+office, 7 + 12 x 2 = 31). Its actions are every verb paired with every position,
+verb-major: index ``verb * n_positions + position`` (for the office, 5 x 19 = 95).
+Which position a verb names:
+
+- ``goto p``, ``approach p``, ``gothrough p``: the position the robot moves to;
+- ``opendoor p``, ``stay p``: the position the robot stands at.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+from gdq_pddl.world import VERBS, World
+
+
+@dataclass(frozen=True)
+class LearnerSpaces:
+    """State and action indices of the learner for one world."""
+
+    world: World
+
+    @cached_property
+    def states(self) -> tuple[tuple[str, bool], ...]:
+        """Learner states as ``(position, door open)``, in index order."""
+        out: list[tuple[str, bool]] = []
+        for p in self.world.positions:
+            out.append((p, False))
+            if p in self.world.door_at:
+                out.append((p, True))
+        return tuple(out)
+
+    @cached_property
+    def state_index(self) -> dict[tuple[str, bool], int]:
+        """``(position, door open)`` -> state index."""
+        return {s: i for i, s in enumerate(self.states)}
+
+    @property
+    def n_states(self) -> int:
+        return len(self.states)
+
+    @property
+    def n_actions(self) -> int:
+        return len(VERBS) * len(self.world.positions)
+
+    def state(self, position: str, door_open: bool = False) -> int:
+        """Index of the learner state; ``door_open`` is ignored where there is no door."""
+        return self.state_index[(position, door_open and position in self.world.door_at)]
+
+    def action(self, verb: str, position: str) -> int:
+        """Index of the learner action ``verb position``."""
+        return VERBS.index(verb) * len(self.world.positions) + self.world.index[position]
+
+    def action_parts(self, index: int) -> tuple[str, str]:
+        """``(verb, position)`` of an action index."""
+        n = len(self.world.positions)
+        return VERBS[index // n], self.world.positions[index % n]
+
+    def action_name(self, index: int) -> str:
+        """Human name of an action, e.g. ``"approach p2"``."""
+        return " ".join(self.action_parts(index))
+
+    def state_name(self, index: int) -> str:
+        """Human name of a state, e.g. ``"p2"`` or ``"p2 (door open)"``."""
+        p, is_open = self.states[index]
+        if p not in self.world.door_at:
+            return p
+        return f"{p} (door {'open' if is_open else 'closed'})"
