@@ -1,0 +1,221 @@
+"""Ground a typed STRIPS problem into bitmask operators.
+
+Parameters are bound by joining the action's *static* preconditions (predicates no
+action changes) against the initial state, most-constrained first, with an index per
+(predicate, bound argument positions); only parameters no static atom mentions are
+enumerated by type. Operators whose fluent preconditions are unreachable even when
+delete effects are ignored are dropped. The result is a :class:`GroundTask` whose
+states are Python ``int`` bitmasks over the fluent facts.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import defaultdict
+from dataclasses import dataclass, field
+from functools import cached_property
+
+from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
+from gdq_pddl.pddl.parser import is_subtype
+
+
+@dataclass(frozen=True)
+class GroundOp:
+    """A ground action: its name and precondition/effect bitmasks."""
+
+    name: str
+    pre: int
+    neg: int
+    add: int
+    dele: int
+
+    def applicable(self, state: int) -> bool:
+        return state & self.pre == self.pre and not state & self.neg
+
+    def apply(self, state: int) -> int:
+        return (state & ~self.dele) | self.add
+
+
+@dataclass(frozen=True)
+class GroundTask:
+    """A grounded problem. States are int bitmasks over :attr:`facts`."""
+
+    facts: tuple[str, ...]
+    ops: tuple[GroundOp, ...]
+    init: int
+    goal_pos: int
+    goal_neg: int
+    goal_possible: bool
+    statics: frozenset[str]
+    fact_index: dict[str, int] = field(repr=False, default_factory=dict)
+
+    @cached_property
+    def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
+        """Operators keyed by one positive precondition bit (or -1 for none)."""
+        out: dict[int, list[GroundOp]] = defaultdict(list)
+        counts = defaultdict(int)
+        for op in self.ops:
+            for bit in _bits(op.pre):
+                counts[bit] += 1
+        for op in self.ops:
+            bits = list(_bits(op.pre))
+            key = min(bits, key=counts.__getitem__) if bits else -1
+            out[key].append(op)
+        return {k: tuple(v) for k, v in out.items()}
+
+    def successors(self, state: int) -> list[tuple[GroundOp, int]]:
+        """``(op, next state)`` for every operator applicable in ``state``."""
+        out = []
+        table = self.ops_by_fact
+        for key in (-1, *_bits(state)):
+            for op in table.get(key, ()):
+                if state & op.pre == op.pre and not state & op.neg:
+                    out.append((op, (state & ~op.dele) | op.add))
+        return out
+
+    def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
+        pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
+        return state & pos == pos and not state & neg
+
+    def atoms(self, state: int) -> frozenset[str]:
+        """The fluent atoms true in ``state``."""
+        return frozenset(self.facts[b] for b in _bits(state))
+
+    def mask(self, atoms: frozenset[str] | set[str]) -> int:
+        """Bitmask of fluent atoms; raises KeyError naming an unknown atom."""
+        m = 0
+        for a in atoms:
+            m |= 1 << self.fact_index[a]
+        return m
+
+
+def _bits(mask: int):
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
+
+
+def ground(domain: Domain, problem: Problem) -> GroundTask:
+    """Ground ``problem``; see the module docstring for how."""
+    fluent = domain.fluent_predicates()
+    statics = {a for a in problem.init if a.predicate not in fluent}
+    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
+    for a in statics:
+        static_tuples[a.predicate].add(a.args)
+    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
+               for t in domain.types}
+    typed = {t: frozenset(objs) for t, objs in by_type.items()}
+    raw_ops = []
+    for action in domain.actions:
+        for binding in _bindings(action, static_tuples, by_type, typed, fluent):
+            raw_ops.append(_instantiate(action, binding, fluent))
+    init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
+    reached = set(init_fluents)
+    pending = [op for op in raw_ops if op is not None]
+    live = []
+    changed = True
+    while changed:
+        changed, rest = False, []
+        for op in pending:
+            if op[1] <= reached:
+                live.append(op)
+                if not op[3] <= reached:
+                    reached |= op[3]
+                changed = True
+            else:
+                rest.append(op)
+        pending = rest
+    facts = tuple(sorted(reached))
+    index = {f: i for i, f in enumerate(facts)}
+
+    def m(atoms: set[str]) -> int:
+        return sum(1 << index[a] for a in atoms if a in index)
+
+    ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
+                for name, pre, neg, add, dele in live)
+    goal_pos, goal_neg, possible = set(), set(), True
+    static_strs = {str(a) for a in statics}
+    for lit in problem.goal:
+        s = str(lit.atom)
+        if lit.atom.predicate == "=":
+            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
+        elif lit.atom.predicate not in fluent:
+            possible &= (s in static_strs) == lit.positive
+        elif lit.positive:
+            possible &= s in index
+            goal_pos.add(s)
+        else:
+            goal_neg.add(s)
+    return GroundTask(facts, ops, m(init_fluents), m(goal_pos), m(goal_neg), possible,
+                      frozenset(static_strs), index)
+
+
+def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
+              by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
+              fluent: frozenset[str]):
+    """Yield every parameter binding that satisfies the static preconditions."""
+    params = dict(action.parameters)
+    statics = [lit.atom for lit in action.precondition
+               if lit.positive and lit.atom.predicate not in fluent and lit.atom.predicate != "="]
+    neg_statics = [lit.atom for lit in action.precondition
+                   if not lit.positive and lit.atom.predicate not in fluent
+                   and lit.atom.predicate != "="]
+    equalities = [lit for lit in action.precondition if lit.atom.predicate == "="]
+    indexes: dict[tuple[str, tuple[int, ...]], dict[tuple[str, ...], list[tuple[str, ...]]]] = {}
+
+    def lookup(pred: str, positions: tuple[int, ...], key: tuple[str, ...]):
+        idx = indexes.get((pred, positions))
+        if idx is None:
+            idx = defaultdict(list)
+            for tup in static_tuples.get(pred, ()):
+                idx[tuple(tup[i] for i in positions)].append(tup)
+            indexes[(pred, positions)] = idx
+        return idx.get(key, ())
+
+    bindings: list[dict[str, str]] = [{}]
+    todo = list(statics)
+    while todo and bindings:
+        bound = bindings[0].keys()
+        atom = max(todo, key=lambda a: (sum(1 for x in a.args if x in bound or x[0] != "?"),
+                                        -len(static_tuples.get(a.predicate, ()))))
+        todo.remove(atom)
+        known = tuple(i for i, x in enumerate(atom.args) if x in bound or x[0] != "?")
+        nxt = []
+        for b in bindings:
+            key = tuple(b.get(atom.args[i], atom.args[i]) for i in known)
+            for tup in lookup(atom.predicate, known, key):
+                nb = dict(b)
+                ok = True
+                for x, v in zip(atom.args, tup, strict=True):
+                    if x[0] == "?" and nb.setdefault(x, v) != v:
+                        ok = False
+                        break
+                if ok:
+                    nxt.append(nb)
+        bindings = nxt
+    for b in bindings:
+        free = [p for p in params if p not in b]
+        for values in itertools.product(*(by_type.get(params[p], ()) for p in free)):
+            full = dict(b, **dict(zip(free, values, strict=True)))
+            if not all(full[p] in typed.get(t, ()) for p, t in params.items()):
+                continue
+            if any(tuple(full.get(x, x) for x in a.args) in static_tuples.get(a.predicate, ())
+                   for a in neg_statics):
+                continue
+            if all((full.get(e.atom.args[0], e.atom.args[0]) == full.get(e.atom.args[1],
+                    e.atom.args[1])) == e.positive for e in equalities):
+                yield full
+
+
+def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
+    def s(atom: Atom) -> str:
+        return str(Atom(atom.predicate, tuple(b.get(x, x) for x in atom.args)))
+
+    def part(lits: tuple[Literal, ...], positive: bool) -> set[str]:
+        return {s(lit.atom) for lit in lits
+                if lit.positive == positive and lit.atom.predicate in fluent}
+
+    name = "(" + " ".join((action.name, *(b[p] for p, _ in action.parameters))) + ")"
+    return (name, part(action.precondition, True), part(action.precondition, False),
+            part(action.effect, True), part(action.effect, False))

@@ -1,0 +1,128 @@
+"""What every planner returns, and the problem every planner is given."""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Protocol, runtime_checkable
+
+from gdq_pddl.pddl.grounding import GroundTask, ground
+from gdq_pddl.pddl.model import Domain, Problem
+from gdq_pddl.pddl.parser import parse_domain, parse_problem
+
+State = frozenset[str]
+"""A planner state: the fluent atoms that hold, e.g. ``{"(at p0)", "(closed d0)", ...}``."""
+
+
+class Status(enum.StrEnum):
+    SOLVED = "solved"
+    NO_PLAN = "no-plan"
+    """The goal cannot be reached from the start: learners must cope with this."""
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A plan: ground actions and the planner states before, between and after them."""
+
+    actions: tuple[str, ...]
+    states: tuple[State, ...]
+    """``len(actions) + 1`` states; ``states[0]`` is the start, the last one a goal state."""
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+    def pairs(self) -> Iterator[tuple[State, str]]:
+        """The ``(state, action)`` pairs of the plan, in order."""
+        return zip(self.states[:-1], self.actions, strict=True)
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """What a planner found for one (start, goal) query."""
+
+    status: Status
+    plans: tuple[Plan, ...]
+    planner: str
+    metrics: Mapping[str, float] = field(default_factory=dict)
+    capped: bool = False
+    """True when more plans exist within the tolerance than the cap let through."""
+
+    @property
+    def length(self) -> int | None:
+        """Length of the shortest plan, or None when there is no plan."""
+        return min((len(p) for p in self.plans), default=None)
+
+
+class PlanningProblem:
+    """A parsed domain and problem; grounded on first use, then shared by all queries."""
+
+    def __init__(self, domain: Domain, problem: Problem, domain_text: str = "",
+                 problem_text: str = "") -> None:
+        self.domain, self.problem = domain, problem
+        self.domain_text, self.problem_text = domain_text, problem_text
+        self._results: dict[tuple, PlanResult] = {}
+
+    @classmethod
+    def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
+                   problem_source: str = "<problem>") -> PlanningProblem:
+        domain = parse_domain(domain_text, domain_source)
+        problem = parse_problem(problem_text, domain, problem_source)
+        return cls(domain, problem, domain_text, problem_text)
+
+    @classmethod
+    def from_files(cls, domain_path: str | Path, problem_path: str | Path) -> PlanningProblem:
+        from gdq_pddl.pddl.parser import _read
+
+        return cls.from_texts(_read(domain_path), _read(problem_path), str(domain_path),
+                              str(problem_path))
+
+    @cached_property
+    def task(self) -> GroundTask:
+        """The grounded problem (computed once)."""
+        return ground(self.domain, self.problem)
+
+    @property
+    def init(self) -> State:
+        """The problem's initial state (fluent atoms only)."""
+        return self.task.atoms(self.task.init)
+
+    @property
+    def goal(self) -> State:
+        """The problem's goal as the fluent atoms that must hold."""
+        return self.task.atoms(self.task.goal_pos)
+
+    def cached(self, key: tuple) -> PlanResult | None:
+        return self._results.get(key)
+
+    def remember(self, key: tuple, result: PlanResult) -> PlanResult:
+        self._results[key] = result
+        return result
+
+    def problem_pddl(self, start: State | None = None, goal: State | None = None) -> str:
+        """PDDL text of this problem with another start state and/or goal."""
+        from gdq_pddl.pddl.writer import write_problem
+
+        return write_problem(self, start if start is not None else self.init,
+                             goal if goal is not None else self.goal)
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """A planner backend, as registered under the ``gdq_pddl.planners`` entry points.
+
+    ``all_plans`` says whether :meth:`solve` returns every shortest plan (``graph``,
+    ``clingo``) or one (``pyperplan``). ``unusable_reason`` returns why the backend
+    cannot run here (a missing optional package), or None when it can.
+    """
+
+    name: str
+    all_plans: bool
+
+    @classmethod
+    def unusable_reason(cls) -> str | None: ...
+
+    def solve(self, problem: PlanningProblem, start: State | None = None,
+              goal: State | None = None, tolerance: float = 0.0) -> PlanResult: ...
