@@ -1,0 +1,184 @@
+"""The office world of the GDQ paper as a Gymnasium environment.
+
+A robot moves between named positions of an office; some pairs of positions are the two
+sides of a door, which a person opens on request and which the robot then crosses. The
+building, its doors and their dynamics come from a world file (by default the shipped
+``office.toml``); nothing here is specific to the office.
+
+## Action space
+``Discrete(5 * n_positions)`` (95 for the office), verb-major: action
+``verb * n_positions + position`` with verbs ``goto, approach, opendoor, gothrough,
+stay``. Most actions are inapplicable in a given state: they cost a step and change
+nothing. See :mod:`gdq_pddl.spaces` for names (``env.unwrapped.spaces.action_name(a)``).
+
+## Observation space
+``Discrete(n_states)`` (31 for the office): the learner's state (position, is the door
+at this position open); one state per open-floor position, two per door-side position.
+The full simulator state (which doors are open anywhere) is in ``info["full_state"]``.
+
+## Starting state
+The task's start position, every door closed.
+
+## Rewards
+``+r_max`` on reaching the goal, ``-r_max`` on failure (stuck at a door, or the last
+allowed action taken without reaching the goal), otherwise minus the action's cost
+(1 per action in the office; a world file may give cost distributions).
+
+## Episode end
+Terminated on reaching the goal or getting stuck. Truncated after ``step_limit``
+actions (20 for the office) with reward ``-r_max``: the env counts its own steps, so no
+``TimeLimit`` wrapper is needed (or registered).
+
+## Information
+``info`` holds ``position`` (name), ``area`` (int, 0 if none), ``cause`` (``""``,
+``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and ``step`` (actions
+taken so far).
+
+## Arguments
+``task`` (a task name of the world, default ``"C"``) or ``start`` and ``goal``
+(position or landmark names); ``world`` (a :class:`World`, a world file path or a
+built-in world name; default the office); ``render_mode`` (``"ansi"`` or
+``"rgb_array"``).
+
+Every step goes through :func:`gdq_pddl.envs.model.env_step`, the one definition of the
+dynamics, with randomness from ``self.np_random`` only.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.error import ResetNeeded
+from gymnasium.spaces import Discrete
+
+from gdq_pddl.envs.model import CAUSES, ModelArrays, compile_model, env_step, full_state
+from gdq_pddl.envs.render import Frame, MapPainter, ansi
+from gdq_pddl.errors import WorldError
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import Task, World, builtin_world, load_world
+
+DEFAULT_TASK = "C"
+
+
+def as_world(world: str | Path | World | None) -> World:
+    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
+
+    A bare name without a suffix that is not an existing file (``"office"``) is a
+    built-in world; anything else is read as a world file.
+    """
+    if world is None:
+        return load_world(None)
+    if isinstance(world, World):
+        return world
+    path = Path(world)
+    if isinstance(world, str) and not path.suffix and path.name == world and not path.exists():
+        try:
+            return builtin_world(world)
+        except OSError:
+            raise WorldError(world, "", "no such world file or built-in world") from None
+    return load_world(path)
+
+
+def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
+    """The task to run: by name, from start/goal, or the default.
+
+    The default is task ``C`` when the world has one, else the world's first task.
+    Raises :class:`WorldError` if start and goal are the same position.
+    """
+    if task is None and start is None and goal is None:
+        if DEFAULT_TASK not in world.tasks and world.tasks:
+            task = next(iter(world.tasks))
+        else:
+            task = DEFAULT_TASK
+    chosen = world.resolve(task=task, start=start, goal=goal)
+    if chosen.start == chosen.goal:
+        raise WorldError(world.source, f"tasks.{chosen.name}" if task else "start/goal",
+                         f"start and goal are the same position ({chosen.start}); "
+                         "the episode would be over before it begins")
+    return chosen
+
+
+class OfficeEnv(gym.Env[int, int]):
+    """A robot in an office reaching a goal position (see the module docstring)."""
+
+    metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
+
+    def __init__(self, task: str | None = None, start: str | None = None,
+                 goal: str | None = None, world: str | Path | World | None = None,
+                 render_mode: str | None = None) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
+                             f"or None, got {render_mode!r}")
+        self.world: World = as_world(world)
+        self.task: Task = pick_task(self.world, task, start, goal)
+        self.spaces = LearnerSpaces(self.world)
+        self.model: ModelArrays = compile_model(self.world)
+        self.observation_space = Discrete(self.spaces.n_states)
+        self.action_space = Discrete(self.spaces.n_actions)
+        self.render_mode = render_mode
+        self.goal_pos = self.world.index[self.task.goal]
+        self.start_state = full_state(self.world, self.task.start)
+        self._fs, self._t, self._cause, self._done = self.start_state, 0, "", True
+        self._painter: MapPainter | None = None
+
+    def transition_arrays(self) -> ModelArrays:
+        """The true model (CSR outcomes over full states) for value iteration.
+
+        Pair with ``goal_pos``: ``gdq_pddl.envs.solve.solve(env.transition_arrays(),
+        env.goal_pos)``. The arrays are shared with the env: do not modify them.
+        """
+        return self.model
+
+    def decode(self, fs: int) -> tuple[str, frozenset[str]]:
+        """``(position name, names of the open doors)`` of a full state."""
+        pos, mask = divmod(int(fs), 1 << self.model.n_doors)
+        opened = frozenset(d.name for i, d in enumerate(self.world.doors) if mask >> i & 1)
+        return self.world.positions[pos], opened
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
+        super().reset(seed=seed)
+        self._fs, self._t, self._cause, self._done = self.start_state, 0, "", False
+        return int(self.model.obs_of[self._fs]), self._info()
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        if self._done:
+            raise ResetNeeded("the episode is over (or never began): call reset() first")
+        a = int(action)
+        if not 0 <= a < self.model.n_actions:
+            raise ValueError(f"action must be in [0, {self.model.n_actions}), got {action!r}")
+        fs, reward, terminated, truncated, cause = env_step(
+            self.model, self._fs, a, self._t, self.goal_pos, self.np_random)
+        self._fs, self._t, self._cause = int(fs), self._t + 1, CAUSES[cause]
+        self._done = bool(terminated or truncated)
+        return (int(self.model.obs_of[self._fs]), float(reward), bool(terminated),
+                bool(truncated), self._info())
+
+    def _info(self) -> dict[str, Any]:
+        pos = int(self.model.pos_of[self._fs])
+        return {
+            "position": self.world.positions[pos],
+            "area": int(self.model.area_of_pos[pos]),
+            "cause": self._cause,
+            "full_state": self._fs,
+            "step": self._t,
+        }
+
+    def _frame(self) -> Frame:
+        robot, opened = self.decode(self._fs)
+        return Frame(self.world, self.task.name, robot, self.task.goal, opened, self._t,
+                     self._cause)
+
+    def render(self) -> str | np.ndarray | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode="
+                            "'ansi' or 'rgb_array' to gymnasium.make")
+            return None
+        if self.render_mode == "ansi":
+            return ansi(self._frame())
+        if self._painter is None:
+            self._painter = MapPainter(self.world)
+        return self._painter(self._frame())

@@ -1,0 +1,119 @@
+"""Pictures of an office world: a text map (``ansi``) and an image (``rgb_array``).
+
+Both take a :class:`Frame` (what to show) and know nothing about the env, so they can
+draw any world a user loads. The image layout is a Kamada-Kawai layout of the position
+graph (deterministic: no random seed involved), computed once per :class:`MapPainter`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gdq_pddl.world import World
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One moment of an episode, by name."""
+
+    world: World
+    task_name: str
+    robot: str
+    goal: str
+    open_doors: frozenset[str]
+    step: int
+    cause: str = ""
+
+
+def _label(frame: Frame, p: str) -> str:
+    marks = ("@" if p == frame.robot else "") + ("*" if p == frame.goal else "")
+    door = frame.world.door_at.get(p)
+    text = marks + p
+    if door is not None:
+        text += f"[{door.name} {'open' if door.name in frame.open_doors else 'closed'}]"
+    return text
+
+
+def ansi(frame: Frame) -> str:
+    """A text map: one line per area listing its positions, then the doors.
+
+    ``@`` marks the robot, ``*`` the goal; each door-side position shows its door.
+    """
+    w = frame.world
+    status = f", {frame.cause}" if frame.cause else ""
+    lines = [f"{w.name} task {frame.task_name}: robot {frame.robot}, goal {frame.goal}, "
+             f"step {frame.step}/{w.step_limit}{status}"]
+    listed: set[str] = set()
+    for number in sorted(w.areas):
+        members = w.areas[number]
+        listed.update(members)
+        lines.append(f"area {number}: " + "  ".join(_label(frame, p) for p in members))
+    rest = [p for p in w.positions if p not in listed]
+    if rest:
+        lines.append("no area: " + "  ".join(_label(frame, p) for p in rest))
+    doors = [f"{d.name} {d.sides[0]}|{d.sides[1]} "
+             f"{'open' if d.name in frame.open_doors else 'closed'}" for d in w.doors]
+    if doors:
+        lines.append("doors: " + ", ".join(doors))
+    lines.append("(@ robot, * goal)")
+    return "\n".join(lines) + "\n"
+
+
+ROBOT, GOAL, FLOOR, DOOR_SIDE = "#d62728", "#2ca02c", "#dddddd", "#bbbbff"
+OPEN, CLOSED = "#2ca02c", "#d62728"
+
+
+class MapPainter:
+    """Draws frames of one world as ``uint8[H, W, 3]`` images with matplotlib (Agg)."""
+
+    def __init__(self, world: World, size: tuple[float, float] = (6.0, 6.0),
+                 dpi: int = 80) -> None:
+        import networkx as nx
+
+        self.world, self.size, self.dpi = world, size, dpi
+        graph = nx.Graph()
+        graph.add_nodes_from(world.positions)
+        graph.add_edges_from(world.edges)
+        layout = nx.kamada_kawai_layout(graph) if len(world.positions) > 1 else {
+            p: np.zeros(2) for p in world.positions}
+        self.xy = {p: np.asarray(layout[p], dtype=float) for p in world.positions}
+
+    def __call__(self, frame: Frame) -> np.ndarray:
+        """Render ``frame``; returns a fresh ``uint8[H, W, 3]`` array."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        w, xy = self.world, self.xy
+        fig = Figure(figsize=self.size, dpi=self.dpi)
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_axes((0.02, 0.05, 0.96, 0.87))
+        ax.set_axis_off()
+        door_edges = {frozenset(d.sides): d for d in w.doors}
+        for a, b in w.edges:
+            door = door_edges.get(frozenset((a, b)))
+            colour, width, style = "#888888", 1.5, "-"
+            if door is not None:
+                is_open = door.name in frame.open_doors
+                colour, width, style = (OPEN, 4.0, "-") if is_open else (CLOSED, 4.0, ":")
+            ax.plot(*zip(xy[a], xy[b], strict=True), color=colour, lw=width, ls=style,
+                    zorder=1)
+            if door is not None:
+                mid = (xy[a] + xy[b]) / 2
+                ax.text(*mid, door.name, fontsize=8, ha="center", va="center", zorder=4,
+                        bbox={"fc": "white", "ec": colour, "boxstyle": "round,pad=0.15"})
+        for p in w.positions:
+            face = ROBOT if p == frame.robot else DOOR_SIDE if p in w.door_at else FLOOR
+            edge, lw = (GOAL, 3.5) if p == frame.goal else ("#444444", 1.0)
+            ax.scatter(*xy[p], s=500, c=face, edgecolors=edge, linewidths=lw, zorder=2)
+            ax.text(*xy[p], p, fontsize=8, ha="center", va="center", zorder=3,
+                    color="white" if p == frame.robot else "black")
+        fig.text(0.5, 0.01, "red: robot   green ring: goal   door: green solid open, "
+                 "red dotted closed", ha="center", fontsize=8)
+        status = f" ({frame.cause})" if frame.cause else ""
+        fig.suptitle(f"task {frame.task_name}: {frame.robot} -> {frame.goal}, "
+                     f"step {frame.step}/{w.step_limit}{status}", fontsize=10)
+        ax.margins(0.08)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
