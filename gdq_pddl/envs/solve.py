@@ -1,0 +1,161 @@
+"""Ground truth: finite-horizon value iteration on the true model of a world.
+
+An episode lasts at most ``step_limit`` actions and running out of them is a failure
+(-r_max), so the optimal policy depends on the step counter as well as on the full state
+(position, which doors are open). :func:`solve` computes, for ``t = 0 .. step_limit``,
+
+- ``V[t, fs]``: the optimal expected return from full state ``fs`` with ``t`` actions
+  already taken (``V[step_limit, :] = 0``; states at the goal are worth 0: the episode
+  is over);
+- ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index).
+
+Expected rewards mirror :func:`gdq_pddl.envs.model.env_step` outcome by outcome: a stuck
+outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
+any other outcome of the last allowed action gives -r_max; otherwise the reward is minus
+the mean cost of the action (for a normal cost, the mean of the draw clipped at 0).
+Returns are undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
+per episode that the experiments report.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import norm
+
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.world import COST_KINDS, Task, World
+
+TIE_TOLERANCE = 1e-9
+"""Actions whose value is within this of the best count as tied (lowest index wins)."""
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Optimal values and policy of one (model, goal) pair; see the module docstring."""
+
+    V: np.ndarray  # float64[step_limit + 1, n_full]
+    Q: np.ndarray  # float64[step_limit, n_full, n_actions]
+    policy: np.ndarray  # int64[step_limit, n_full]
+    goal_pos: int
+    gamma: float
+
+
+def expected_costs(model: ModelArrays) -> np.ndarray:
+    """Mean cost of every action (``float64[n_actions]``), as :func:`sample_cost` draws it."""
+    kind, a, b = model.cost_kind, model.cost_a, model.cost_b
+    out = a.astype(np.float64).copy()
+    uniform = kind == COST_KINDS["uniform"]
+    out[uniform] = (a[uniform] + b[uniform]) / 2
+    normal = kind == COST_KINDS["normal"]
+    mu, sd = a[normal], b[normal]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(sd > 0, mu / np.where(sd > 0, sd, 1.0), 0.0)
+        clipped = mu * norm.cdf(z) + sd * norm.pdf(z)  # E[max(0, X)], X ~ N(mu, sd^2)
+    out[normal] = np.where(sd > 0, clipped, np.maximum(mu, 0.0))
+    return out
+
+
+def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
+    """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``."""
+    n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
+    n_full = model.obs_of.shape[0]
+    counts = np.diff(model.ptr)
+    if np.any(counts == 0):
+        raise ValueError("every (full state, action) pair needs at least one outcome")
+    starts = model.ptr[:-1]
+    pair = np.repeat(np.arange(n_full * n_actions), counts)
+    cost = expected_costs(model)[pair % n_actions]
+    at_goal = model.pos_of[model.next] == goal_pos
+    # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
+    ending = model.stuck | at_goal
+    end_reward = np.where(model.stuck, -r, np.where(at_goal, r, -r))
+    goal_states = model.pos_of == goal_pos
+
+    V = np.zeros((limit + 1, n_full))
+    Q = np.empty((limit, n_full, n_actions))
+    policy = np.empty((limit, n_full), dtype=np.int64)
+    for t in range(limit - 1, -1, -1):
+        if t == limit - 1:
+            value = end_reward
+        else:
+            value = np.where(ending, end_reward, -cost + gamma * V[t + 1, model.next])
+        q = np.add.reduceat(model.prob * value, starts).reshape(n_full, n_actions)
+        best = q.max(axis=1)
+        Q[t] = q
+        policy[t] = np.argmax(q >= best[:, None] - TIE_TOLERANCE, axis=1)
+        V[t] = np.where(goal_states, 0.0, best)
+    return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma))
+
+
+def _task(world: World, task: Task | str) -> Task:
+    return world.task(task) if isinstance(task, str) else task
+
+
+def solve_task(world: World, task: Task | str,
+               model: ModelArrays | None = None) -> tuple[Solution, int]:
+    """Solve ``task`` in ``world``; return the solution and the start full state."""
+    t = _task(world, task)
+    model = compile_model(world) if model is None else model
+    return solve(model, world.index[t.goal]), full_state(world, t.start)
+
+
+def optimal_value(world: World, task: Task | str) -> float:
+    """V*: the optimal expected return of ``task`` from its start, doors closed, step 0."""
+    solution, s0 = solve_task(world, task)
+    return float(solution.V[0, s0])
+
+
+def occupancy(model: ModelArrays, solution: Solution, start: int) -> np.ndarray:
+    """Where the optimal policy is: ``float64[step_limit + 1, n_full]``.
+
+    Row 0 is the start; row ``t >= 1`` is the distribution of the full state observed
+    right after action ``t`` (ending outcomes included: stuck, goal, timeout). Row ``t``
+    sums to the probability that the episode lasts at least ``t`` actions.
+    """
+    limit, n_actions = model.step_limit, model.n_actions
+    n_full = model.obs_of.shape[0]
+    out = np.zeros((limit + 1, n_full))
+    running = np.zeros(n_full)
+    out[0, start] = running[start] = 1.0
+    for t in range(limit):
+        after = np.zeros(n_full)
+        for fs in np.flatnonzero(running):
+            i = fs * n_actions + solution.policy[t, fs]
+            k = slice(model.ptr[i], model.ptr[i + 1])
+            np.add.at(out[t + 1], model.next[k], running[fs] * model.prob[k])
+            goes_on = ~model.stuck[k]
+            np.add.at(after, model.next[k][goes_on], running[fs] * model.prob[k][goes_on])
+        after[model.pos_of == solution.goal_pos] = 0.0
+        running = after
+    return out
+
+
+def expected_area_visits(world: World, task: Task | str) -> dict[int, float]:
+    """Expected visits per area in one episode of the optimal policy.
+
+    A visit is the position observed after an action (the start is not counted); every
+    area of the world is a key (0 collects positions in no area, if there are any).
+    """
+    t = _task(world, task)
+    model = compile_model(world)
+    solution, s0 = solve_task(world, t, model)
+    per_pos = np.zeros(len(world.positions))
+    np.add.at(per_pos, model.pos_of, occupancy(model, solution, s0)[1:].sum(axis=0))
+    out = {a: 0.0 for a in sorted(world.areas)}
+    for i, v in enumerate(per_pos):
+        a = int(model.area_of_pos[i])
+        out[a] = out.get(a, 0.0) + float(v)
+    return out
+
+
+def relevant_areas(world: World, task: Task | str, min_visits: float = 0.0) -> tuple[int, ...]:
+    """Areas whose expected visits under the optimal policy exceed ``min_visits``.
+
+    With the default 0 this is "visited with non-zero probability"; since a failed
+    ``goto`` can drop the robot anywhere nearby, that is often every reachable area,
+    so a small threshold (e.g. 0.05 visits per episode) is the more telling figure.
+    """
+    visits = expected_area_visits(world, task)
+    return tuple(a for a, v in visits.items() if a != 0 and v > min_visits)
