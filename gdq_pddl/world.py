@@ -200,7 +200,8 @@ class _Validator:
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
-            name = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+            names = (kind,) if isinstance(kind, type) else kind
+            name = " or ".join(k.__name__ for k in names)
             raise self.fail(path, f"expected {name}, got {value!r}")
         return value
 
@@ -366,7 +367,8 @@ class _Validator:
         table = self.get(self.raw, "costs", "costs", dict, {})
         for verb in table:
             if verb not in VERBS:
-                raise self.fail(f"costs.{verb}", f"unknown verb; expected one of {', '.join(VERBS)}")
+                raise self.fail(f"costs.{verb}",
+                                f"unknown verb; expected one of {', '.join(VERBS)}")
         return {v: self.cost(table.get(v, 1.0), f"costs.{v}") for v in VERBS}
 
     def tasks(self, world: World, forbidden: frozenset[str]) -> dict[str, Task]:

@@ -50,7 +50,8 @@ def full_state(world: World, position: str, open_doors: frozenset[str] = frozens
     return world.index[position] * (1 << len(world.doors)) + mask
 
 
-def _outcomes(world: World, p: str, mask: int, verb: str, q: str) -> list[tuple[float, str, int, bool]]:
+def _outcomes(world: World, p: str, mask: int, verb: str,
+              q: str) -> list[tuple[float, str, int, bool]]:
     """Outcomes ``(prob, position, mask, stuck)`` of ``verb q`` taken at ``p``."""
     noop = [(1.0, p, mask, False)]
     door_ids = {d.name: i for i, d in enumerate(world.doors)}

@@ -71,7 +71,8 @@ class _Reader:
                 stack[-1][1].append(Node(line, symbol=tok.lower()))
             line += tok.count("\n")
         if stack:
-            raise self.fail(stack[-1][0], "expected ')': this '(' is never closed")
+            line = _suspect_unclosed(self.text) or stack[-1][0]
+            raise self.fail(line, "expected ')': this '(' is never closed")
         if top is None:
             raise self.fail(None, "empty file: expected (define ...)")
         return top
@@ -123,12 +124,36 @@ class _Reader:
         for node in body:
             items = self.lst(node, "a section such as (:predicates ...)")
             if not items or items[0].is_list or not items[0].symbol.startswith(":"):
-                raise self.fail(node.line, f"expected a section (:keyword ...), found {node.text()}")
+                raise self.fail(node.line,
+                                f"expected a section (:keyword ...), found {node.text()}")
             key = items[0].symbol
             if key != ":action" and key in out:
                 raise self.fail(node.line, f"duplicate section {key}")
             out[key if key != ":action" else f":action{len(out)}"] = node
         return out
+
+
+def _suspect_unclosed(text: str) -> int | None:
+    """The line of the '(' most likely missing its ')', judged by indentation.
+
+    A form still open when a later line starts at its own indentation or further left
+    (not counting lines that start with ')') has most probably lost its ')'.
+    """
+    open_at: list[tuple[int, int]] = []  # (line, indentation of that line)
+    for number, raw in enumerate(text.splitlines(), 1):
+        code = raw.split(";", 1)[0]
+        stripped = code.lstrip()
+        indent = len(code) - len(stripped)
+        if stripped and not stripped.startswith(")"):
+            for line, ind in reversed(open_at):
+                if line < number and ind >= indent:
+                    return line
+        for ch in code:
+            if ch == "(":
+                open_at.append((number, indent))
+            elif ch == ")" and open_at:
+                open_at.pop()
+    return None
 
 
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
