@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import gymnasium
 import numpy as np
 import pytest
@@ -19,7 +21,7 @@ from gdq_pddl.envs.solve import (
     solve_task,
 )
 from gdq_pddl.envs.variants import deterministic_world
-from gdq_pddl.world import load_world, parse_world
+from gdq_pddl.world import CostDist, load_world, parse_world
 
 ENV_ID = "gdq_pddl/Office-v0"
 
@@ -147,8 +149,9 @@ def test_task_c_prefers_the_easy_doors(office) -> None:
     assert relevant_areas(office, "C", min_visits=0.05) == (1, 2, 3, 6)
 
 
-def monte_carlo(task: str, episodes: int, seed: int) -> tuple[float, float, float]:
-    env = gymnasium.make(ENV_ID, task=task)
+def monte_carlo(episodes: int, seed: int, **make_kwargs) -> tuple[float, float, float]:
+    """V*[0, s0], and the mean return and its standard error of the optimal policy."""
+    env = gymnasium.make(ENV_ID, **make_kwargs)
     u = env.unwrapped
     solution = solve(u.transition_arrays(), u.goal_pos)
     returns = np.empty(episodes)
@@ -167,7 +170,18 @@ def monte_carlo(task: str, episodes: int, seed: int) -> tuple[float, float, floa
 
 @pytest.mark.parametrize(("task", "seed"), [("C", 11), ("A", 12)])
 def test_v_star_matches_monte_carlo(task: str, seed: int) -> None:
-    v_star, mean, se = monte_carlo(task, 3000, seed)
+    v_star, mean, se = monte_carlo(3000, seed, task=task)
+    assert abs(mean - v_star) < 4 * se, (v_star, mean, se)
+
+
+def test_v_star_matches_monte_carlo_with_random_costs(office) -> None:
+    """Uniform and clipped-normal costs: solve's expected costs agree with env_step's draws."""
+    costs = dict(office.costs)
+    costs["goto"] = CostDist("uniform", 0.5, 3.0)
+    costs["approach"] = CostDist("normal", 0.5, 2.0)  # clipped at 0 about 40% of the time
+    costs["opendoor"] = CostDist("normal", 2.0, 1.0)
+    world = replace(office, costs=costs)
+    v_star, mean, se = monte_carlo(3000, 13, world=world, task="D")
     assert abs(mean - v_star) < 4 * se, (v_star, mean, se)
 
 
