@@ -1,0 +1,221 @@
+"""All shortest plans by answer-set programming (clingo), over the grounded task.
+
+The grounded task (:attr:`PlanningProblem.task`) becomes ASP facts: ``pre/neg/add/del``
+of each operator over numbered fluent facts, the start state and the goal. The encoding
+(:data:`ENCODING`) takes one action per step with frame axioms, forbids a state that
+repeats an earlier one and a goal state before the last step (a plan ends where the goal
+first holds), and asks for the goal at the last step. clingo's multi-shot solving grows
+the horizon ``h = 0, 1, 2, ...`` until the goal query is satisfiable at some ``L``, then
+enumerates every answer set at ``L``: one per plan, since the actions fix the states.
+
+With ``tolerance = t`` it goes on to every horizon up to ``floor((1 + t) * L)``, so it
+returns every loop-free plan within that length, as the ``graph`` backend does.
+
+A horizon search alone cannot prove that no plan exists, so whether the goal is
+reachable at all is settled first by a breadth-first pass over the grounded task; its
+distance also bounds the horizon, and a disagreement with clingo is reported as an error.
+clingo is an optional dependency (``pip install gdq_pddl[clingo]``), imported lazily.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections import deque
+from typing import Any
+
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+
+ENCODING = """
+#program base.
+holds(F, 0) :- init(F).
+goal_at(0) :- not unmet(0).
+unmet(0) :- goal(F), not holds(F, 0).
+unmet(0) :- goal_neg(F), holds(F, 0).
+
+#program step(t).
+1 { occ(O, t) : op(O) } 1.
+:- occ(O, t), pre(O, F), not holds(F, t - 1).
+:- occ(O, t), neg(O, F), holds(F, t - 1).
+holds(F, t) :- occ(O, t), add(O, F).
+holds(F, t) :- holds(F, t - 1), not deleted(F, t).
+deleted(F, t) :- occ(O, t), del(O, F).
+goal_at(t) :- not unmet(t).
+unmet(t) :- goal(F), not holds(F, t).
+unmet(t) :- goal_neg(F), holds(F, t).
+% a plan ends where the goal first holds
+:- goal_at(t - 1).
+% no state repeats an earlier one
+differs(T, t) :- holds(F, t), not holds(F, T), T = 0..t - 1.
+differs(T, t) :- holds(F, T), not holds(F, t), fact(F), T = 0..t - 1.
+:- not differs(T, t), T = 0..t - 1.
+
+#program check(t).
+#external query(t).
+:- query(t), not goal_at(t).
+
+#show occ/2.
+"""
+"""The planning encoding: ``base``, then ``step(t)`` and ``check(t)`` for each horizon."""
+
+NOT_INSTALLED = "the optional package clingo is not installed (pip install gdq_pddl[clingo])"
+
+
+class ClingoPlanner:
+    """All shortest plans (or all loop-free plans within a tolerance) with clingo."""
+
+    name = "clingo"
+    all_plans = True
+
+    def __init__(self, max_plans: int = 10_000) -> None:
+        self.max_plans = max_plans
+
+    @classmethod
+    def unusable_reason(cls) -> str | None:
+        """Why clingo cannot run here (it is not installed), or None when it can."""
+        try:
+            import clingo  # noqa: F401
+        except ImportError:
+            return NOT_INSTALLED
+        return None
+
+    def solve(self, problem: PlanningProblem, start: State | None = None,
+              goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
+        """Plans from ``start`` (default: the problem's init) to ``goal`` (default: its goal)."""
+        if tolerance < 0:
+            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
+        key = (self.name, start, goal, tolerance, self.max_plans)
+        hit = problem.cached(key)
+        if hit is not None:
+            return hit
+        t0 = time.perf_counter()
+        task = problem.task
+        s0 = task.init if start is None else _mask(problem, start)
+        if goal is None:
+            gmask = (task.goal_pos, task.goal_neg) if task.goal_possible else None
+        elif set(goal) <= task.fact_index.keys():
+            gmask = (task.mask(goal), 0)
+        else:  # a fluent atom no action ever makes true
+            gmask = None
+        distance = None if gmask is None else _distance(task, s0, gmask)
+        if distance is None:
+            return problem.remember(key, PlanResult(
+                Status.NO_PLAN, (), self.name,
+                {"time_s": time.perf_counter() - t0, "plans": 0}))
+        found, shortest, horizons, capped = self._search(task, s0, gmask, distance, tolerance)
+        if capped:
+            warnings.warn(f"clingo planner: more than {self.max_plans} plans within tolerance "
+                          f"{tolerance}; kept the first {self.max_plans}", stacklevel=2)
+        plans = sorted((_replay(task, s0, ops) for ops in found),
+                       key=lambda p: (len(p), p.actions))
+        metrics = {"time_s": time.perf_counter() - t0, "plans": len(plans),
+                   "horizons": horizons, "length": shortest}
+        return problem.remember(key, PlanResult(Status.SOLVED, tuple(plans), self.name,
+                                                metrics, capped))
+
+    def _search(self, task, s0: int, goal: tuple[int, int], distance: int,
+                tolerance: float) -> tuple[list[tuple[int, ...]], int, int, bool]:
+        """Grow the horizon to the shortest length ``L``, then collect plans up to the bound.
+
+        Returns the plans as operator-index sequences, ``L``, the number of horizons
+        solved, and whether the plan cap cut the enumeration short.
+        """
+        clingo = _clingo()
+        ctl = clingo.Control(["--models=0", "--warn=none"], logger=lambda code, msg: None)
+        ctl.add("base", [], _facts(task, s0, goal))
+        ctl.add("base", [], ENCODING)
+        found: list[tuple[int, ...]] = []
+        capped = False
+
+        def on_model(model: Any) -> bool:
+            nonlocal capped
+            if len(found) >= self.max_plans:
+                capped = True
+                return False
+            occ = sorted((s.arguments[1].number, s.arguments[0].number)
+                         for s in model.symbols(shown=True))
+            found.append(tuple(op for _, op in occ))
+            return True
+
+        try:
+            ctl.ground([("base", []), ("check", [clingo.Number(0)])])
+            horizon, shortest, bound = 0, 0, None
+            while True:
+                query = clingo.Function("query", [clingo.Number(horizon)])
+                ctl.assign_external(query, True)
+                ctl.solve(on_model=on_model)
+                ctl.release_external(query)
+                if found and bound is None:
+                    bound = math.floor((1 + tolerance) * horizon + 1e-9)
+                    shortest = horizon
+                if capped or (bound is not None and horizon >= bound):
+                    return found, shortest, horizon + 1, capped
+                if bound is None and horizon >= distance:
+                    raise PlanningError(f"clingo found no plan of {distance} steps, but the "
+                                        "grounded task has one: the encoding is wrong")
+                horizon += 1
+                n = clingo.Number(horizon)
+                ctl.ground([("step", [n]), ("check", [n])])
+        except RuntimeError as exc:
+            raise PlanningError(f"clingo failed: {exc}") from None
+
+
+def _clingo() -> Any:
+    try:
+        import clingo
+    except ImportError:
+        raise PlanningError(f"planner 'clingo' is not usable here: {NOT_INSTALLED}") from None
+    return clingo
+
+
+def _facts(task, s0: int, goal: tuple[int, int]) -> str:
+    """The grounded task and the query as ASP facts over fact and operator numbers."""
+    out = [f"fact(0..{len(task.facts) - 1})."] if task.facts else []
+    if task.ops:
+        out.append(f"op(0..{len(task.ops) - 1}).")
+    for i, op in enumerate(task.ops):
+        for pred, mask in (("pre", op.pre), ("neg", op.neg), ("add", op.add),
+                           ("del", op.dele)):
+            out.extend(f"{pred}({i},{b})." for b in _bits(mask))
+    out.extend(f"init({b})." for b in _bits(s0))
+    out.extend(f"goal({b})." for b in _bits(goal[0]))
+    out.extend(f"goal_neg({b})." for b in _bits(goal[1]))
+    return "\n".join(out)
+
+
+def _distance(task, s0: int, goal: tuple[int, int]) -> int | None:
+    """Breadth-first distance from ``s0`` to the nearest goal state, or None if unreachable."""
+    depth = {s0: 0}
+    queue = deque([s0])
+    while queue:
+        s = queue.popleft()
+        if task.is_goal(s, goal):
+            return depth[s]
+        for _, t in task.successors(s):
+            if t not in depth:
+                depth[t] = depth[s] + 1
+                queue.append(t)
+    return None
+
+
+def _replay(task, s0: int, ops: tuple[int, ...]) -> Plan:
+    states = [s0]
+    for i in ops:
+        states.append(task.ops[i].apply(states[-1]))
+    return Plan(tuple(task.ops[i].name for i in ops), tuple(task.atoms(s) for s in states))
+
+
+def _bits(mask: int):
+    while mask:
+        low = mask & -mask
+        yield low.bit_length() - 1
+        mask ^= low
+
+
+def _mask(problem: PlanningProblem, atoms: State) -> int:
+    try:
+        return problem.task.mask(atoms)
+    except KeyError as exc:
+        raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start state") from None

@@ -1,0 +1,104 @@
+"""One optimal plan from pyperplan, run through unified-planning.
+
+The query is handed to unified-planning's ``pyperplan`` engine as a problem parsed from
+the PDDL text (see :mod:`gdq_pddl.planning.validate` for how it is built). The engine's
+default search, weighted A* with h_add, is not optimal; this backend asks for A* with
+h_max, which is admissible, so the plan has the shortest length (actions cost 1).
+The plan's intermediate states are computed by replaying its actions on the grounded
+task, which also checks that pyperplan and our grounder agree.
+
+With ``tolerance > 0`` the result is still the one optimal plan: pyperplan finds a
+single plan, and a shortest plan is within any tolerance. Use ``graph`` or ``clingo``
+for every plan within a tolerance.
+"""
+
+from __future__ import annotations
+
+import time
+
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+
+SEARCH = {"search": "astar", "heuristic": "hmax"}
+"""unified-planning parameters of the pyperplan engine: an optimal (admissible) search."""
+
+
+class PyperplanPlanner:
+    """One shortest plan, found by pyperplan's A* search with the h_max heuristic."""
+
+    name = "pyperplan"
+    all_plans = False
+
+    @classmethod
+    def unusable_reason(cls) -> str | None:
+        """Why pyperplan cannot run here (unified-planning or up-pyperplan missing), or None."""
+        from importlib.util import find_spec
+
+        for module, dist in (("unified_planning", "unified-planning"),
+                             ("up_pyperplan", "up-pyperplan")):
+            if find_spec(module) is None:
+                return f"the package {dist} is not installed (pip install {dist})"
+        return None
+
+    def solve(self, problem: PlanningProblem, start: State | None = None,
+              goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
+        """One shortest plan from ``start`` (default: init) to ``goal`` (default: the goal)."""
+        if tolerance < 0:
+            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
+        key = (self.name, start, goal, tolerance)
+        hit = problem.cached(key)
+        if hit is not None:
+            return hit
+        t0 = time.perf_counter()
+        task = problem.task
+        if goal is None and not task.goal_possible or (
+                goal is not None and not set(goal) <= task.fact_index.keys()):
+            # a goal no action can make true: no need to ask pyperplan
+            return problem.remember(key, self._none(t0))
+        from gdq_pddl.planning.validate import up_action_name, up_problem
+
+        up = up_problem(problem, start, goal)
+        result = self._run(up)
+        from unified_planning.engines import PlanGenerationResultStatus as S
+
+        if result.status in (S.UNSOLVABLE_PROVEN, S.UNSOLVABLE_INCOMPLETELY):
+            return problem.remember(key, self._none(t0))
+        if result.status not in (S.SOLVED_SATISFICING, S.SOLVED_OPTIMALLY):
+            raise PlanningError(f"pyperplan did not solve the problem: {result.status.name}")
+        actions = tuple(up_action_name(a) for a in result.plan.actions)
+        plan = _replay(problem, start, actions)
+        metrics = {"time_s": time.perf_counter() - t0, "plans": 1}
+        engine_time = result.metrics.get("engine_internal_time") if result.metrics else None
+        if engine_time is not None:
+            metrics["engine_time_s"] = float(engine_time)
+        return problem.remember(key, PlanResult(Status.SOLVED, (plan,), self.name, metrics))
+
+    def _none(self, t0: float) -> PlanResult:
+        return PlanResult(Status.NO_PLAN, (), self.name,
+                          {"time_s": time.perf_counter() - t0, "plans": 0})
+
+    @staticmethod
+    def _run(up):
+        from unified_planning.shortcuts import OneshotPlanner
+
+        try:
+            with OneshotPlanner(name="pyperplan", params=SEARCH) as engine:
+                return engine.solve(up)
+        except Exception as exc:
+            raise PlanningError(f"pyperplan failed: {type(exc).__name__}: {exc}") from None
+
+
+def _replay(problem: PlanningProblem, start: State | None, actions: tuple[str, ...]) -> Plan:
+    """The plan with the states its actions lead through on the grounded task."""
+    task = problem.task
+    ops = {op.name: op for op in task.ops}
+    state = task.init if start is None else task.mask(start)
+    states = [state]
+    for action in actions:
+        op = ops.get(action)
+        if op is None or not op.applicable(state):
+            raise PlanningError(f"pyperplan's plan step {action} is not applicable in the "
+                                "grounded task")
+        state = op.apply(state)
+        states.append(state)
+    return Plan(actions, tuple(task.atoms(s) for s in states))

@@ -1,0 +1,163 @@
+"""Check plans with unified-planning's plan validator, and the bridge to unified-planning.
+
+:func:`validate_plan` replays a :class:`~gdq_pddl.planning.base.Plan` with
+unified-planning's sequential plan validator, independently of our own grounder, and
+also checks that the plan's recorded states are the ones its actions lead through.
+
+The bridge (:func:`up_problem`, :func:`up_action_name`) is shared with the pyperplan
+backend: the domain and problem are parsed by unified-planning's PDDL reader once per
+:class:`~gdq_pddl.planning.base.PlanningProblem` (the first parse in a process builds
+the reader's grammar and takes about a second), and each query is a clone of that with
+another initial state and goal. unified-planning is imported only when needed.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import TYPE_CHECKING, Any
+
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.planning.base import Plan, PlanningProblem, State
+
+if TYPE_CHECKING:
+    from unified_planning.model import Problem as UPProblem
+
+_PARSED: weakref.WeakKeyDictionary[PlanningProblem, UPProblem] = weakref.WeakKeyDictionary()
+
+
+def _up() -> Any:
+    """Import unified-planning with its credits banner switched off."""
+    try:
+        import unified_planning.shortcuts as shortcuts
+    except ImportError as exc:  # a declared dependency, but say so clearly if it is missing
+        raise PlanningError(f"unified-planning cannot be imported: {exc} "
+                            "(pip install unified-planning up-pyperplan)") from None
+    shortcuts.get_environment().credits_stream = None
+    return shortcuts
+
+
+def base_up_problem(problem: PlanningProblem) -> UPProblem:
+    """``problem`` as a unified-planning problem (parsed once per problem, then reused)."""
+    hit = _PARSED.get(problem)
+    if hit is not None:
+        return hit
+    if not problem.domain_text:
+        raise PlanningError("unified-planning needs the domain as PDDL text: build the "
+                            "problem with PlanningProblem.from_texts or from_files")
+    _up()
+    from unified_planning.io import PDDLReader
+
+    try:
+        parsed = PDDLReader().parse_problem_string(problem.domain_text, problem.problem_pddl())
+    except Exception as exc:
+        raise PlanningError(f"unified-planning cannot read the problem "
+                            f"{problem.problem.name}: {type(exc).__name__}: {exc}") from None
+    _PARSED[problem] = parsed
+    return parsed
+
+
+def _split(atom: str) -> tuple[str, list[str]]:
+    """``"(at p0)"`` -> ``("at", ["p0"])``."""
+    name, *args = atom.strip("()").split()
+    return name, args
+
+
+def _atom(up: UPProblem, atom: str) -> Any:
+    name, args = _split(atom)
+    try:
+        return up.fluent(name)(*(up.object(a) for a in args))
+    except Exception:
+        raise PlanningError(f"unified-planning does not know the atom {atom}") from None
+
+
+def up_problem(problem: PlanningProblem, start: State | None = None,
+               goal: State | None = None) -> UPProblem:
+    """A unified-planning problem for one query: ``start`` (fluent atoms) to ``goal``."""
+    base = base_up_problem(problem)
+    if start is None and goal is None:
+        return base
+    up = base.clone()
+    if start is not None:
+        unknown = set(start) - problem.task.fact_index.keys()
+        if unknown:
+            raise PlanningError(f"unknown or unreachable atom {min(unknown)} in a start state")
+        for fact in problem.task.facts:
+            up.set_initial_value(_atom(up, fact), fact in start)
+    if goal is not None:
+        up.clear_goals()
+        for atom in sorted(goal):
+            up.add_goal(_atom(up, atom))
+    return up
+
+
+def up_action_name(instance: Any) -> str:
+    """A unified-planning action instance as our action name, ``"(approach p0 p2 d1)"``."""
+    args = (str(p.object().name) if p.is_object_exp() else str(p)
+            for p in instance.actual_parameters)
+    return "(" + " ".join((instance.action.name, *args)) + ")"
+
+
+def _up_plan(up: UPProblem, actions: tuple[str, ...]) -> Any:
+    from unified_planning.plans import ActionInstance, SequentialPlan
+
+    steps = []
+    for i, action in enumerate(actions):
+        name, args = _split(action)
+        try:
+            steps.append(ActionInstance(up.action(name), tuple(up.object(a) for a in args)))
+        except Exception as exc:
+            raise PlanningError(f"step {i + 1} of the plan, {action}, is not an action of "
+                                f"domain {up.name}: {exc}") from None
+    return SequentialPlan(steps)
+
+
+def validate_plan(problem: PlanningProblem, plan: Plan, start: State | None = None,
+                  goal: State | None = None) -> None:
+    """Raise :class:`PlanningError` unless ``plan`` leads from ``start`` to ``goal``.
+
+    ``start`` defaults to the plan's first state, ``goal`` to the problem's goal. The
+    actions are checked by unified-planning's sequential plan validator; the plan's
+    states must also be the states its actions lead through. Returns None when valid.
+    """
+    if len(plan.states) != len(plan.actions) + 1:
+        raise PlanningError(f"a plan of {len(plan.actions)} actions must have "
+                            f"{len(plan.actions) + 1} states, not {len(plan.states)}")
+    if start is None:
+        start = plan.states[0]
+    elif frozenset(start) != plan.states[0]:
+        raise PlanningError("the plan does not start in the given start state")
+    up = up_problem(problem, start, goal)
+    _up()
+    from unified_planning.engines.plan_validator import SequentialPlanValidator
+    from unified_planning.engines.results import ValidationResultStatus
+
+    try:
+        result = SequentialPlanValidator().validate(up, _up_plan(up, plan.actions))
+    except PlanningError:
+        raise
+    except Exception as exc:
+        raise PlanningError(f"unified-planning's plan validator failed: "
+                            f"{type(exc).__name__}: {exc}") from None
+    if result.status != ValidationResultStatus.VALID:
+        why = result.reason.name.lower().replace("_", " ") if result.reason else "invalid"
+        bad = result.inapplicable_action
+        where = f" at {up_action_name(bad)}" if bad is not None else ""
+        raise PlanningError(f"plan rejected by unified-planning's validator ({why}{where}): "
+                            f"{' '.join(plan.actions) or '(empty plan)'}")
+    _check_states(problem, plan)
+
+
+def _check_states(problem: PlanningProblem, plan: Plan) -> None:
+    """The plan's states must be the ones its actions lead through on the grounded task."""
+    task = problem.task
+    ops = {op.name: op for op in task.ops}
+    state = task.mask(plan.states[0])
+    for i, action in enumerate(plan.actions):
+        op = ops.get(action)
+        if op is None or not op.applicable(state):
+            raise PlanningError(f"step {i + 1} of the plan, {action}, is not applicable in "
+                                "the grounded task")
+        state = op.apply(state)
+        if task.atoms(state) != plan.states[i + 1]:
+            raise PlanningError(f"state {i + 1} of the plan is not the state {action} leads "
+                                "to")
