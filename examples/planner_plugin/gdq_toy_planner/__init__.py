@@ -1,0 +1,75 @@
+"""An example planner plugin for gdq_pddl: one shortest plan by breadth-first search.
+
+It searches the problem's grounded task (``problem.task``: int bitmask states, ground
+operators with ``successors``), so it works for any STRIPS problem gdq_pddl can parse.
+It ignores ``tolerance`` and returns one shortest plan, which is within any tolerance.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.planning import Plan, PlanningProblem, PlanResult, State, Status
+
+
+class ToyPlanner:
+    """One shortest plan, by breadth-first search over the grounded state space."""
+
+    name = "toy"
+    all_plans = False  # True only if solve returns *every* shortest plan
+
+    @classmethod
+    def unusable_reason(cls) -> str | None:
+        """Why this backend cannot run here (say, a missing package), or None."""
+        return None
+
+    def solve(self, problem: PlanningProblem, start: State | None = None,
+              goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
+        """A shortest plan from ``start`` (default: init) to ``goal`` (default: the goal)."""
+        if tolerance < 0:
+            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
+        key = (self.name, start, goal, tolerance)
+        hit = problem.cached(key)
+        if hit is not None:  # results are cached per problem, keyed by the query
+            return hit
+        t0 = time.perf_counter()
+        task = problem.task
+        try:
+            s0 = task.init if start is None else task.mask(start)
+        except KeyError as exc:
+            raise PlanningError(f"unknown atom {exc.args[0]} in the start state") from None
+        if goal is None:
+            target = (task.goal_pos, task.goal_neg) if task.goal_possible else None
+        elif set(goal) <= task.fact_index.keys():
+            target = (task.mask(goal), 0)
+        else:  # an atom no action can make true
+            target = None
+        path = None if target is None else _bfs(task, s0, target)
+        metrics = {"time_s": time.perf_counter() - t0}
+        if path is None:
+            return problem.remember(key, PlanResult(Status.NO_PLAN, (), self.name, metrics))
+        states, actions = path
+        plan = Plan(tuple(actions), tuple(task.atoms(s) for s in states))
+        return problem.remember(key, PlanResult(Status.SOLVED, (plan,), self.name, metrics))
+
+
+def _bfs(task, s0: int, goal: tuple[int, int]) -> tuple[list[int], list[str]] | None:
+    """States and action names of a shortest path to a goal state, or None if none."""
+    parent: dict[int, tuple[int, str] | None] = {s0: None}
+    queue = deque([s0])
+    while queue:
+        s = queue.popleft()
+        if task.is_goal(s, goal):
+            states, actions = [s], []
+            while parent[s] is not None:
+                s, action = parent[s]
+                states.append(s)
+                actions.append(action)
+            return states[::-1], actions[::-1]
+        for op, t in task.successors(s):
+            if t not in parent:
+                parent[t] = (s, op.name)
+                queue.append(t)
+    return None
