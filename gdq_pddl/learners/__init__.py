@@ -1,0 +1,41 @@
+"""Tabular learners: Q-learning, Dyna-Q, DARLING and Guided Dyna-Q (GDQ).
+
+::
+
+    import gymnasium, numpy as np, gdq_pddl
+    from gdq_pddl.learners import GDQ, office_task_context, run_episodes
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    ctx = office_task_context(env.unwrapped.world, env.unwrapped.task)
+    learner = GDQ(ctx)
+    env.reset(seed=0)
+    records = run_episodes(learner, env, 300, np.random.default_rng(1))
+
+The rules live once, compiled, in :mod:`gdq_pddl.learners.core`; the learners' methods
+and the fast episode loop of :mod:`gdq_pddl.learners.runner` call them.
+"""
+
+from gdq_pddl.learners.agents import (
+    GDQ,
+    METHODS,
+    Darling,
+    DynaQ,
+    Learner,
+    QLearning,
+    TabularLearner,
+    make_learner,
+)
+from gdq_pddl.learners.config import (
+    DarlingConfig,
+    DynaQConfig,
+    GDQConfig,
+    LearnerConfig,
+    QLearningConfig,
+)
+from gdq_pddl.learners.context import TaskContext, empty_plan_table, office_task_context
+from gdq_pddl.learners.runner import EpisodeRecords, run_episodes
+
+__all__ = [
+    "GDQ", "METHODS", "Darling", "DarlingConfig", "DynaQ", "DynaQConfig", "EpisodeRecords",
+    "GDQConfig", "Learner", "LearnerConfig", "QLearning", "QLearningConfig", "TabularLearner",
+    "TaskContext", "empty_plan_table", "make_learner", "office_task_context", "run_episodes",
+]

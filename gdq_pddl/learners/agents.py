@@ -1,0 +1,282 @@
+"""The four learners behind one small interface.
+
+Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state, rng)``,
+``observe(s, a, r, s2, terminated, truncated, rng)``, ``start_task(context)`` and
+``greedy_policy()``. The methods only call the compiled rules of
+:mod:`gdq_pddl.learners.core`, which the fast episode loop calls too.
+
+- :class:`QLearning`: epsilon-greedy Q-learning.
+- :class:`DynaQ`: Q-learning + the goal-independent model + N expected backups per real
+  step on uniformly random pairs tried more than m times.
+- :class:`Darling`: Q-learning restricted, at every state, to the actions that start a
+  plan within the length tolerance (1.3 x shortest) from that state, both when acting
+  (exploration included) and in the max of the update; all actions where no plan exists.
+- :class:`GDQ`: Guided Dyna-Q, below.
+
+GDQ, the paper's algorithm (``variant="paper"``, the default) and the authors' code
+---------------------------------------------------------------------------------------
+Side by side (paper | code):
+
+- Optimistic model: T(s,a,s0) = 1 for every pair, R = R_max on every pair of every plan
+  in H(s0), else 0 | the same model (used by the backups of unknown pairs).
+- Q after OptInit: policy iteration on that model (known pairs: learned model) until pi
+  is stable, and Q <- its Q for every (s, a) | Q <- 0, then Q(s,a) <- R_max on the plan
+  pairs; no policy iteration.
+- Real step: epsilon-greedy on Q, TD update with alpha, count in the model | the same.
+- N backups per step, each on a random transition of a random plan from the current
+  state: expected backup, assigned, ``Q(s,a) <- sum_s' T(s,a,s') (R or gamma V(s'))`` |
+  a TD update with alpha on one ``(r, s')`` sampled from the same model.
+
+Policy iteration in OptInit (a decision). Algorithm 1, read literally, evaluates only
+``Q(s, pi(s))`` and then takes ``argmax_a Q(s, a)`` over a table whose other entries
+are still the initial zeros, so it can lock onto a non-plan action whose 0 beats a
+negative estimate, and it never gives the learner Q values for the other actions. We
+implement standard policy iteration instead: evaluate V^pi exactly (to 1e-10), compute
+``Q(s,a) = R(s,a) + gamma * sum_s' T(s,a,s') V^pi(s')`` for every action, improve
+keeping the current action on ties (else the lowest index) so it terminates, repeat
+until pi is stable, and hand that final Q to the learner. The initial policy is
+"action 0 everywhere" rather than random: the final Q is the optimistic model's Q*
+whatever the start, so this changes nothing the learner uses and keeps OptInit free of
+randomness.
+
+A consequence worth knowing (it follows from the paper's model, not from this code):
+optimistic pairs lead back to s0 without ending the episode, so under policy iteration
+the plan pairs are worth ``R_max / (1 - gamma)`` (400 for the office) and every other
+pair ``gamma`` times that (380), far above any achievable return (at most R_max = 20).
+Real experience then has to pull these values down.
+
+Other decisions where the paper is silent:
+
+- H is re-planned from the state the action was taken in (Alg. 2 line 12 uses the
+  ``s`` of line 1), by a lookup in the task's :class:`PlanTable`.
+- When the current state has no plan (a planner that finds nothing), GDQ's N backups go
+  to uniformly random known pairs, as in Dyna-Q, so it still plans with what it learned.
+- ``start_task``: GDQ keeps its model (counts) and reruns OptInit for the new goal
+  (known pairs with the learned model, unknown with the optimistic one; Q <- 0 first).
+  The baselines keep their Q table (they are not told the task changed other than
+  through the goal states their backups use); DARLING recomputes its allowed sets.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from gdq_pddl.learners import core
+from gdq_pddl.learners.config import (
+    DarlingConfig,
+    DynaQConfig,
+    GDQConfig,
+    LearnerConfig,
+    QLearningConfig,
+)
+from gdq_pddl.learners.context import TaskContext
+
+
+@runtime_checkable
+class Learner(Protocol):
+    """What the episode runner needs from a learner."""
+
+    q: np.ndarray
+
+    def act(self, state: int, rng: np.random.Generator) -> int: ...
+
+    def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+                rng: np.random.Generator) -> None: ...
+
+    def start_task(self, context: TaskContext) -> None: ...
+
+    def greedy_policy(self) -> np.ndarray: ...
+
+
+class TabularLearner:
+    """Shared implementation: arrays in :class:`core.Tables`, rules in :mod:`core`."""
+
+    kind: int = core.KIND_QLEARNING
+    name: str = "tabular"
+
+    def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
+        self.config = config
+        n_s, n_a = context.n_states, context.n_actions
+        self._model = core.new_model(n_s, n_a)
+        self.q = np.zeros((n_s, n_a), dtype=np.float64)
+        self.context = context
+        self.tables, self.params = self._build(context)
+        core.recompute_all_v(self.tables)
+        self._init_task()
+
+    # -- per-learner hooks -------------------------------------------------------------
+    def _allowed(self, context: TaskContext) -> np.ndarray:
+        return np.ones((context.n_states, context.n_actions), dtype=np.bool_)
+
+    def _init_task(self) -> None:
+        """What happens when a task starts (after the tables are rebuilt)."""
+
+    def _n_backups(self) -> int:
+        return 0
+
+    def _m(self) -> int:
+        return 0
+
+    def _backup_mode(self) -> int:
+        return core.BACKUP_EXPECTED
+
+    # -- interface ---------------------------------------------------------------------
+    def _build(self, context: TaskContext) -> tuple[core.Tables, core.Params]:
+        if (context.n_states, context.n_actions) != self.q.shape:
+            raise ValueError(f"task has {context.n_states} states x {context.n_actions} "
+                             f"actions, the learner {self.q.shape}")
+        allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
+        plans = context.plans
+        opt_r = np.zeros_like(allowed)
+        for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
+            lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
+            opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
+        tables = core.Tables(
+            q=self.q, v=np.zeros(len(self.q)), allowed=allowed,
+            n_allowed=allowed.sum(axis=1).astype(np.int64),
+            goal=np.ascontiguousarray(context.goal, dtype=np.bool_), opt_r=opt_r,
+            **self._model,
+            plan_ptr=np.ascontiguousarray(plans.plan_ptr, dtype=np.int64),
+            pair_ptr=np.ascontiguousarray(plans.pair_ptr, dtype=np.int64),
+            pair_state=np.ascontiguousarray(plans.pair_state, dtype=np.int64),
+            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64))
+        c = self.config
+        params = core.Params(
+            kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
+            epsilon=float(c.epsilon), r_max=float(context.r_max),
+            n_backups=int(self._n_backups()), m=int(self._m()),
+            backup=int(self._backup_mode()), s0=int(context.s0))
+        return tables, params
+
+    def start_task(self, context: TaskContext) -> None:
+        """Switch to a new task, keeping what the learner has learned (see module doc)."""
+        self.context = context
+        self.tables, self.params = self._build(context)
+        core.recompute_all_v(self.tables)
+        self._init_task()
+
+    def act(self, state: int, rng: np.random.Generator) -> int:
+        return int(core.act(self.tables, self.params, int(state), rng))
+
+    def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+                rng: np.random.Generator) -> None:
+        core.observe(self.tables, self.params, int(s), int(a), float(r), int(s2),
+                     bool(terminated), bool(truncated), rng)
+
+    def greedy_policy(self) -> np.ndarray:
+        """Per state, the lowest-index allowed action of maximal Q."""
+        return core.greedy(self.tables)
+
+    @property
+    def v(self) -> np.ndarray:
+        """max_a Q(s, a) over the allowed actions, per state."""
+        return self.tables.v
+
+    @property
+    def visits(self) -> np.ndarray:
+        """Trials per (s, a) recorded in the model (model-based learners only)."""
+        return self.tables.visits
+
+    @property
+    def counts(self) -> np.ndarray:
+        """Model transition counts C[s, a, s'] (model-based learners only)."""
+        return self.tables.counts
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.config})"
+
+
+class QLearning(TabularLearner):
+    kind = core.KIND_QLEARNING
+    name = "Q-learning"
+
+    def __init__(self, context: TaskContext, config: QLearningConfig | None = None) -> None:
+        super().__init__(context, config or QLearningConfig())
+
+
+class DynaQ(TabularLearner):
+    kind = core.KIND_DYNAQ
+    name = "Dyna-Q"
+    config: DynaQConfig
+
+    def __init__(self, context: TaskContext, config: DynaQConfig | None = None) -> None:
+        super().__init__(context, config or DynaQConfig())
+
+    def _n_backups(self) -> int:
+        return self.config.n_backups
+
+    def _m(self) -> int:
+        return self.config.m
+
+
+class Darling(TabularLearner):
+    kind = core.KIND_DARLING
+    name = "DARLING"
+    config: DarlingConfig
+
+    def __init__(self, context: TaskContext, config: DarlingConfig | None = None) -> None:
+        super().__init__(context, config or DarlingConfig())
+
+    def _allowed(self, context: TaskContext) -> np.ndarray:
+        table = context.darling_plans
+        if table is None:
+            raise ValueError("DARLING needs a task context with darling_plans")
+        if context.darling_tolerance is not None and not np.isclose(
+                context.darling_tolerance, self.config.tolerance):
+            raise ValueError(f"the context's DARLING plans use tolerance "
+                             f"{context.darling_tolerance}, the config {self.config.tolerance}")
+        allowed = np.array(table.first_actions, dtype=np.bool_, copy=True)
+        allowed[~allowed.any(axis=1)] = True  # no plan from there: every action
+        return allowed
+
+
+class GDQ(TabularLearner):
+    kind = core.KIND_GDQ
+    name = "GDQ"
+    config: GDQConfig
+
+    def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
+        super().__init__(context, config or GDQConfig())
+
+    def _n_backups(self) -> int:
+        return self.config.n_backups
+
+    def _m(self) -> int:
+        return self.config.m
+
+    def _backup_mode(self) -> int:
+        return core.BACKUP_EXPECTED if self.config.variant == "paper" else core.BACKUP_SAMPLE
+
+    def _init_task(self) -> None:
+        """OptInit (Algorithm 1), or the authors' code's shortcut."""
+        self.q[:, :] = 0.0
+        if self.config.variant == "paper":
+            self.policy = core.policy_iteration(self.tables, self.params)
+        else:
+            core.seed_plan_pairs(self.tables, self.params.r_max)
+            self.policy = core.greedy(self.tables)
+
+    @property
+    def optimistic_pairs(self) -> np.ndarray:
+        """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model)."""
+        return self.tables.opt_r
+
+
+METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig]]] = {
+    "qlearning": (QLearning, QLearningConfig),
+    "dynaq": (DynaQ, DynaQConfig),
+    "darling": (Darling, DarlingConfig),
+    "gdq": (GDQ, GDQConfig),
+}
+
+
+def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:
+    """A learner by name (``qlearning``, ``dynaq``, ``darling``, ``gdq``) with config
+    overrides, e.g. ``make_learner("gdq", ctx, variant="code")``."""
+    key = method.lower().replace("-", "").replace("_", "")
+    if key not in METHODS:
+        raise ValueError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
+    cls, cfg = METHODS[key]
+    return cls(context, cfg(**config))  # type: ignore[arg-type]

@@ -1,0 +1,96 @@
+"""Hyper-parameters of the learners, one frozen dataclass per method.
+
+Defaults are the paper's simulation settings (alpha 0.1, gamma 0.95, epsilon 0.1) and,
+where the paper is silent, the authors' released code (N, m, the 1.3 plan-length
+tolerance). ``R_max`` is not a learner parameter: it belongs to the world (its world
+file), and every learner reads it from the task context.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+GDQVariant = Literal["paper", "code"]
+
+
+@dataclass(frozen=True)
+class LearnerConfig:
+    """Parameters shared by every tabular learner."""
+
+    alpha: float = 0.1
+    """Step size of the temporal-difference update (real experience, and the sample-based
+    model backups of GDQ's ``code`` variant)."""
+    gamma: float = 0.95
+    """Discount factor, used in every update and in OptInit's policy iteration."""
+    epsilon: float = 0.1
+    """Probability of a uniformly random (allowed) action instead of the greedy one."""
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.alpha <= 1.0:
+            raise ValueError(f"alpha must be in (0, 1], got {self.alpha}")
+        if not 0.0 <= self.gamma < 1.0:
+            raise ValueError(f"gamma must be in [0, 1), got {self.gamma}")
+        if not 0.0 <= self.epsilon <= 1.0:
+            raise ValueError(f"epsilon must be in [0, 1], got {self.epsilon}")
+
+
+@dataclass(frozen=True)
+class QLearningConfig(LearnerConfig):
+    """Q-learning: nothing beyond the shared parameters."""
+
+
+@dataclass(frozen=True)
+class DynaQConfig(LearnerConfig):
+    """Dyna-Q: Q-learning plus ``n_backups`` model backups per real step."""
+
+    n_backups: int = 3
+    """N: model backups per real step, each on a uniformly random previously observed
+    (state, action) pair (the authors' code used 3 for Dyna-Q)."""
+    m: int = 0
+    """A pair is used for backups once it has been tried more than ``m`` times. Dyna-Q
+    has no optimistic model to fall back on, so the default 0 means "observed at least
+    once", which is classic Dyna-Q; a larger m only delays planning."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.n_backups < 0 or self.m < 0:
+            raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+
+
+@dataclass(frozen=True)
+class GDQConfig(LearnerConfig):
+    """Guided Dyna-Q (the paper's Algorithms 1-3)."""
+
+    n_backups: int = 5
+    """N: backups per real step, each on a random transition of a random plan from the
+    current state (the authors' code used 5)."""
+    m: int = 5
+    """A pair is *known* once tried more than ``m`` times: from then on its R and T come
+    from the learned model, before that from the optimistic model (authors' code: 5)."""
+    variant: GDQVariant = "paper"
+    """``"paper"``: OptInit runs policy iteration on the optimistic model and backups are
+    expected (full) Bellman backups. ``"code"``: as the authors' released code, OptInit
+    sets Q to R_max on plan pairs and backups are sample-based TD updates with alpha.
+    See :mod:`gdq_pddl.learners.agents` for the side-by-side comparison."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.n_backups < 0 or self.m < 0:
+            raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+        if self.variant not in ("paper", "code"):
+            raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
+
+
+@dataclass(frozen=True)
+class DarlingConfig(LearnerConfig):
+    """DARLING (Leonetti, Iocchi & Stone 2016): Q-learning over plan-restricted actions."""
+
+    tolerance: float = 0.3
+    """Plans up to (1 + tolerance) x the shortest length define the allowed actions;
+    the task context's DARLING plan table must have been built with this tolerance."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.tolerance < 0:
+            raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")

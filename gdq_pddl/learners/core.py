@@ -1,0 +1,373 @@
+"""The learning rules, each written once as a numba-compiled function over numpy arrays.
+
+Every learner (Q-learning, Dyna-Q, DARLING, GDQ) is the same data, :class:`Tables`, plus
+scalar :class:`Params` whose ``kind`` selects which rules run after a real step:
+
+- :func:`act`: epsilon-greedy over the allowed actions with random tie-breaking;
+- :func:`observe`: the TD update on the real transition, then (model-based learners)
+  :func:`record` in the model and N :func:`model_backup` calls;
+- :func:`expected_value`: the expected Bellman backup of one pair with the model;
+- :func:`policy_iteration`: OptInit's planning on the (optimistic) model.
+
+The Python learner methods and the fast episode loop of :mod:`gdq_pddl.learners.runner`
+call these same functions, so each rule has a single definition.
+
+The model (goal-independent, so it survives a task switch)
+-------------------------------------------------------------
+``counts[s, a, s']`` transitions to learner state ``s'`` (goal, timeout and ordinary
+steps alike); ``stuck[s, a]`` trials that failed by getting stuck; ``visits[s, a]`` all
+trials; ``cost_sum / cost_n`` the mean step cost of ``(s, a)`` over steps with no goal,
+stuck or timeout event (pairs never seen in such a step use the mean over all pairs, or
+0 before any). The expected backup for the current goal states G is::
+
+    Q(s,a) = sum_s' T(s,a,s') * (R_max if s' in G else -cost(s,a) + gamma * V(s'))
+             + P_stuck(s,a) * (-R_max)
+
+with ``T = counts / visits`` and ``P_stuck = stuck / visits``. A step-limit timeout is
+not part of this Markov model (its transition is counted, its -R_max is not). No backup
+bootstraps through a terminal transition: reaching G or getting stuck ends the sum.
+
+A pair is *known* when ``visits > m``. GDQ's unknown pairs use the optimistic model of
+OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max`` on OptInit's plan pairs (``opt_r``),
+0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
+
+``v[s]`` is kept equal to ``max`` of ``q[s, a]`` over the allowed actions of ``s`` by
+:func:`set_q`, the only writer of single Q entries.
+
+Randomness comes only from the ``np.random.Generator`` passed in.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ = 0, 1, 2, 3
+BACKUP_EXPECTED, BACKUP_SAMPLE = 0, 1
+
+
+class Params(NamedTuple):
+    """Scalar settings of a learner for the current task."""
+
+    kind: int
+    alpha: float
+    gamma: float
+    epsilon: float
+    r_max: float
+    n_backups: int
+    m: int
+    backup: int
+    """BACKUP_EXPECTED (assign the expected value) or BACKUP_SAMPLE (TD on a sample)."""
+    s0: int
+    """The task's start learner state (target of the optimistic transitions)."""
+
+
+class Tables(NamedTuple):
+    """All arrays of a learner (see the module docstring)."""
+
+    q: np.ndarray  # float64[S, A]
+    v: np.ndarray  # float64[S], max of q over allowed actions
+    allowed: np.ndarray  # bool[S, A]
+    n_allowed: np.ndarray  # int64[S]
+    goal: np.ndarray  # bool[S], goal learner states of the current task
+    opt_r: np.ndarray  # bool[S, A], OptInit's plan pairs (R = R_max in the optimistic model)
+    counts: np.ndarray  # int64[S, A, S]
+    stuck: np.ndarray  # int64[S, A]
+    visits: np.ndarray  # int64[S, A]
+    cost_sum: np.ndarray  # float64[S, A]
+    cost_n: np.ndarray  # int64[S, A]
+    cost_all: np.ndarray  # float64[2]: sum and number of all recorded step costs
+    known: np.ndarray  # int64[S * A]: pairs s * A + a in the order they became known
+    n_known: np.ndarray  # int64[1]
+    plan_ptr: np.ndarray  # PlanTable (tolerance 0) arrays of the current task
+    pair_ptr: np.ndarray
+    pair_state: np.ndarray
+    pair_action: np.ndarray
+
+
+def new_model(n_states: int, n_actions: int) -> dict[str, np.ndarray]:
+    """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks."""
+    return {
+        "counts": np.zeros((n_states, n_actions, n_states), dtype=np.int64),
+        "stuck": np.zeros((n_states, n_actions), dtype=np.int64),
+        "visits": np.zeros((n_states, n_actions), dtype=np.int64),
+        "cost_sum": np.zeros((n_states, n_actions), dtype=np.float64),
+        "cost_n": np.zeros((n_states, n_actions), dtype=np.int64),
+        "cost_all": np.zeros(2, dtype=np.float64),
+        "known": np.zeros(n_states * n_actions, dtype=np.int64),
+        "n_known": np.zeros(1, dtype=np.int64),
+    }
+
+
+# --- Q table and its maximum -------------------------------------------------------------
+
+@numba.njit(cache=True)
+def recompute_v(t: Tables, s: int) -> None:
+    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions."""
+    best = -np.inf
+    for a in range(t.q.shape[1]):
+        if t.allowed[s, a] and t.q[s, a] > best:
+            best = t.q[s, a]
+    t.v[s] = best
+
+
+@numba.njit(cache=True)
+def recompute_all_v(t: Tables) -> None:
+    for s in range(t.q.shape[0]):
+        recompute_v(t, s)
+
+
+@numba.njit(cache=True)
+def set_q(t: Tables, s: int, a: int, value: float) -> None:
+    """``q[s, a] <- value``, keeping ``v`` exact."""
+    old = t.q[s, a]
+    t.q[s, a] = value
+    if not t.allowed[s, a]:
+        return
+    if value >= t.v[s]:
+        t.v[s] = value
+    elif old >= t.v[s]:
+        recompute_v(t, s)
+
+
+@numba.njit(cache=True)
+def td_update(t: Tables, s: int, a: int, target: float, alpha: float) -> None:
+    """``Q(s,a) += alpha (target - Q(s,a))``: real and sample-based simulated experience."""
+    set_q(t, s, a, t.q[s, a] + alpha * (target - t.q[s, a]))
+
+
+# --- acting --------------------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
+    """Epsilon-greedy over the allowed actions of ``s``, ties broken uniformly at random.
+
+    Draws one uniform, then one integer when exploring or when several actions tie.
+    """
+    n_actions = t.q.shape[1]
+    if rng.random() < p.epsilon:
+        k = rng.integers(0, t.n_allowed[s])
+        for a in range(n_actions):
+            if t.allowed[s, a]:
+                if k == 0:
+                    return a
+                k -= 1
+    best = t.v[s]
+    ties = 0
+    last = 0
+    for a in range(n_actions):
+        if t.allowed[s, a] and t.q[s, a] == best:
+            ties += 1
+            last = a
+    if ties == 1:
+        return last
+    k = rng.integers(0, ties)
+    for a in range(n_actions):
+        if t.allowed[s, a] and t.q[s, a] == best:
+            if k == 0:
+                return a
+            k -= 1
+    return last
+
+
+@numba.njit(cache=True)
+def greedy(t: Tables) -> np.ndarray:
+    """The greedy policy: per state, the lowest-index allowed action of maximal Q."""
+    n_states, n_actions = t.q.shape
+    out = np.zeros(n_states, dtype=np.int64)
+    for s in range(n_states):
+        for a in range(n_actions):
+            if t.allowed[s, a] and t.q[s, a] == t.v[s]:
+                out[s] = a
+                break
+    return out
+
+
+# --- the model -----------------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+           truncated: bool) -> None:
+    """Count one real transition in the goal-independent model."""
+    if terminated and not t.goal[s2]:
+        t.stuck[s, a] += 1
+    else:
+        t.counts[s, a, s2] += 1
+    if not terminated and not truncated:
+        t.cost_sum[s, a] -= r
+        t.cost_n[s, a] += 1
+        t.cost_all[0] -= r
+        t.cost_all[1] += 1.0
+    t.visits[s, a] += 1
+    if t.visits[s, a] == p.m + 1:
+        t.known[t.n_known[0]] = s * t.q.shape[1] + a
+        t.n_known[0] += 1
+
+
+@numba.njit(cache=True)
+def mean_cost(t: Tables, s: int, a: int) -> float:
+    if t.cost_n[s, a] > 0:
+        return t.cost_sum[s, a] / t.cost_n[s, a]
+    if t.cost_all[1] > 0:
+        return t.cost_all[0] / t.cost_all[1]
+    return 0.0
+
+
+@numba.njit(cache=True)
+def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+    """The expected Bellman backup of ``(s, a)`` under the model, with state values ``v``.
+
+    Known pairs (``visits > m``) use the learned model, unknown ones the optimistic one.
+    """
+    n = t.visits[s, a]
+    if n > p.m:
+        c = mean_cost(t, s, a)
+        total = t.stuck[s, a] * -p.r_max
+        for s2 in range(t.counts.shape[2]):
+            k = t.counts[s, a, s2]
+            if k > 0:
+                if t.goal[s2]:
+                    total += k * p.r_max
+                else:
+                    total += k * (p.gamma * v[s2] - c)
+        return total / n
+    r = p.r_max if t.opt_r[s, a] else 0.0
+    return r + p.gamma * v[p.s0]
+
+
+@numba.njit(cache=True)
+def sample_outcome(t: Tables, p: Params, s: int, a: int,
+                   rng: np.random.Generator) -> tuple[float, int, bool]:
+    """One ``(reward, next state, terminal)`` drawn from the model for ``(s, a)``."""
+    n = t.visits[s, a]
+    if n > p.m:
+        k = rng.integers(0, n)
+        if k < t.stuck[s, a]:
+            return -p.r_max, s, True
+        k -= t.stuck[s, a]
+        for s2 in range(t.counts.shape[2]):
+            k -= t.counts[s, a, s2]
+            if k < 0:
+                if t.goal[s2]:
+                    return p.r_max, s2, True
+                return -mean_cost(t, s, a), s2, False
+    r = p.r_max if t.opt_r[s, a] else 0.0
+    return r, p.s0, False
+
+
+@numba.njit(cache=True)
+def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator) -> None:
+    """One simulated update of ``(s, a)``: expected, or TD on a sampled outcome."""
+    if p.backup == BACKUP_EXPECTED:
+        set_q(t, s, a, expected_value(t, p, s, a, t.v))
+    else:
+        r, s2, terminal = sample_outcome(t, p, s, a, rng)
+        target = r if terminal else r + p.gamma * t.v[s2]
+        td_update(t, s, a, target, p.alpha)
+
+
+@numba.njit(cache=True)
+def backup_known(t: Tables, p: Params, rng: np.random.Generator) -> None:
+    """Dyna-Q planning: N backups of uniformly random known pairs."""
+    nk = t.n_known[0]
+    if nk == 0:
+        return
+    n_actions = t.q.shape[1]
+    for _ in range(p.n_backups):
+        i = t.known[rng.integers(0, nk)]
+        model_backup(t, p, i // n_actions, i % n_actions, rng)
+
+
+@numba.njit(cache=True)
+def backup_plans(t: Tables, p: Params, s: int, rng: np.random.Generator) -> bool:
+    """GDQ planning: N backups of a random transition of a random plan from ``s``.
+
+    Returns False (and does nothing) when ``s`` has no plan.
+    """
+    lo, hi = t.plan_ptr[s], t.plan_ptr[s + 1]
+    if hi <= lo:
+        return False
+    for _ in range(p.n_backups):
+        k = lo + rng.integers(0, hi - lo)
+        j = t.pair_ptr[k] + rng.integers(0, t.pair_ptr[k + 1] - t.pair_ptr[k])
+        model_backup(t, p, t.pair_state[j], t.pair_action[j], rng)
+    return True
+
+
+@numba.njit(cache=True)
+def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+            truncated: bool, rng: np.random.Generator) -> None:
+    """Everything a learner does after one real step ``(s, a, r, s2)``.
+
+    TD update (a terminated or truncated step's target is ``r`` alone); then, for the
+    model-based learners, count the transition and run the N model backups.
+    """
+    target = r if (terminated or truncated) else r + p.gamma * t.v[s2]
+    td_update(t, s, a, target, p.alpha)
+    if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
+        return
+    record(t, p, s, a, r, s2, terminated, truncated)
+    if p.kind == KIND_GDQ and backup_plans(t, p, s, rng):
+        return
+    backup_known(t, p, rng)
+
+
+# --- OptInit -------------------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
+                     improve_tol: float = 1e-6, max_iter: int = 10_000) -> np.ndarray:
+    """Policy iteration on the model (learned for known pairs, optimistic otherwise).
+
+    Starts from the policy "action 0 everywhere", evaluates V^pi (in-place sweeps to
+    ``eval_tol``), computes Q(s, a) for every action and improves, keeping the current
+    action on ties (within ``improve_tol``) and else taking the lowest index, until the
+    policy is stable. Writes that final Q into ``t.q`` (goal rows 0) and returns pi.
+    """
+    n_states, n_actions = t.q.shape
+    pi = np.zeros(n_states, dtype=np.int64)
+    v = np.zeros(n_states)
+    qq = np.zeros((n_states, n_actions))
+    for _ in range(max_iter):
+        for _sweep in range(1_000_000):
+            delta = 0.0
+            for s in range(n_states):
+                if t.goal[s]:
+                    continue
+                x = expected_value(t, p, s, pi[s], v)
+                delta = max(delta, abs(x - v[s]))
+                v[s] = x
+            if delta < eval_tol:
+                break
+        stable = True
+        for s in range(n_states):
+            if t.goal[s]:
+                continue
+            best = -np.inf
+            for a in range(n_actions):
+                qq[s, a] = expected_value(t, p, s, a, v)
+                best = max(best, qq[s, a])
+            if qq[s, pi[s]] < best - improve_tol:
+                stable = False
+                for a in range(n_actions):
+                    if qq[s, a] >= best - improve_tol:
+                        pi[s] = a
+                        break
+        if stable:
+            break
+    t.q[:, :] = qq
+    recompute_all_v(t)
+    return pi
+
+
+@numba.njit(cache=True)
+def seed_plan_pairs(t: Tables, value: float) -> None:
+    """The authors' code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's pairs."""
+    t.q[:, :] = 0.0
+    for s in range(t.q.shape[0]):
+        for a in range(t.q.shape[1]):
+            if t.opt_r[s, a]:
+                t.q[s, a] = value
+    recompute_all_v(t)
