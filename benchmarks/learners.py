@@ -1,0 +1,109 @@
+"""Learner benchmarks on Task C: speed (env steps per second) and learning results.
+
+    python benchmarks/learners.py speed      # steps/s per method, fast path, median of 5
+    python benchmarks/learners.py results    # 300 episodes x 5 runs, mean return per method
+    python benchmarks/learners.py            # both
+
+Speed counts env steps (learner + env, compiled loop) after a JIT warm-up run.
+Results use the paper's protocol (alpha 0.1, gamma 0.95, epsilon 0.1, 20 steps, R_max 20)
+with the env seeded 1000 + run and the learner generator seeded 2000 + run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium
+import numpy as np
+
+import gdq_pddl  # noqa: F401  (registers the env)
+from gdq_pddl.learners import make_learner, office_task_context, run_episodes
+
+METHODS: dict[str, tuple[str, dict]] = {
+    "Q-learning": ("qlearning", {}),
+    "Dyna-Q": ("dynaq", {}),
+    "DARLING": ("darling", {}),
+    "GDQ (paper)": ("gdq", {}),
+    "GDQ (code)": ("gdq", {"variant": "code"}),
+}
+
+
+def _env_and_context(task: str = "C"):
+    env = gymnasium.make("gdq_pddl/Office-v0", task=task)
+    ctx = office_task_context(env.unwrapped.world, env.unwrapped.task)
+    return env, ctx
+
+
+def speed(task: str = "C", episodes: int = 2000, repeats: int = 5) -> dict[str, float]:
+    """Median env steps per second of each method (fresh learner per repeat)."""
+    env, ctx = _env_and_context(task)
+    out = {}
+    for label, (method, kw) in METHODS.items():
+        env.reset(seed=0)
+        run_episodes(make_learner(method, ctx, **kw), env, 5, np.random.default_rng(0))
+        rates = []
+        for r in range(repeats):
+            learner = make_learner(method, ctx, **kw)
+            env.reset(seed=r)
+            t0 = time.perf_counter()
+            rec = run_episodes(learner, env, episodes, np.random.default_rng(r))
+            rates.append(rec.steps.sum() / (time.perf_counter() - t0))
+        out[label] = float(np.median(rates))
+        print(f"{label:12s} {out[label]:>12,.0f} steps/s  (median of {repeats} x "
+              f"{episodes} episodes)", flush=True)
+    return out
+
+
+def first_positive(returns: np.ndarray, window: int = 50) -> int | None:
+    """1-based episode at which the ``window``-episode moving average first exceeds 0."""
+    if len(returns) < window:
+        return None
+    avg = np.convolve(returns, np.ones(window) / window, mode="valid")
+    hits = np.flatnonzero(avg > 0)
+    return int(hits[0]) + window if len(hits) else None
+
+
+def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, dict]:
+    """Mean return per method over ``runs`` runs of ``episodes`` episodes."""
+    env, ctx = _env_and_context(task)
+    out = {}
+    print(f"Task {task}: {runs} runs x {episodes} episodes")
+    print(f"{'method':12s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
+          f"{'success':>8s} {'MA50 > 0 at':>12s}")
+    for label, (method, kw) in METHODS.items():
+        curves = []
+        for run in range(runs):
+            learner = make_learner(method, ctx, **kw)
+            env.reset(seed=1000 + run)
+            rec = run_episodes(learner, env, episodes, np.random.default_rng(2000 + run))
+            curves.append(rec)
+        ret = np.array([c.returns for c in curves])
+        per_run = ret.mean(axis=1)
+        succ = np.mean([c.success.mean() for c in curves])
+        cross = first_positive(ret.mean(axis=0))
+        out[label] = {"mean": float(per_run.mean()),
+                      "se": float(per_run.std(ddof=1) / np.sqrt(runs)) if runs > 1 else 0.0,
+                      "last50": float(ret[:, -50:].mean()), "success": float(succ),
+                      "first_positive": cross}
+        r = out[label]
+        print(f"{label:12s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
+              f"{r['success']:>8.2f} {str(cross) if cross else 'never':>12s}", flush=True)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", nargs="?", choices=["speed", "results", "all"], default="all")
+    parser.add_argument("--task", default="C")
+    parser.add_argument("--episodes", type=int, default=300)
+    parser.add_argument("--runs", type=int, default=5)
+    args = parser.parse_args()
+    if args.what in ("speed", "all"):
+        speed(args.task)
+    if args.what in ("results", "all"):
+        results(args.task, args.episodes, args.runs)
+
+
+if __name__ == "__main__":
+    main()
