@@ -47,8 +47,10 @@ def base_up_problem(problem: PlanningProblem) -> UPProblem:
     _up()
     from unified_planning.io import PDDLReader
 
+    # the original text keeps goal literals the writer drops (negative or static ones)
+    text = problem.problem_text or problem.problem_pddl()
     try:
-        parsed = PDDLReader().parse_problem_string(problem.domain_text, problem.problem_pddl())
+        parsed = PDDLReader().parse_problem_string(problem.domain_text, text)
     except Exception as exc:
         raise PlanningError(f"unified-planning cannot read the problem "
                             f"{problem.problem.name}: {type(exc).__name__}: {exc}") from None
