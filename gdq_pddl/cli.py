@@ -32,6 +32,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("gdq-pddl: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # output piped into `head` and closed early: not an error
+        sys.stderr.close()
+        return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -207,7 +210,173 @@ def cmd_planners(args: argparse.Namespace) -> int:
     return 0
 
 
-COMMANDS: list[Callable] = [_register_problem, _register_plan, _register_planners]
+# --- experiments ------------------------------------------------------------------------
+
+def _run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
+              episodes: int = 2500, runs: int = 10) -> None:
+    from gdq_pddl.experiments import METHODS, PAPER_METHODS
+
+    p.add_argument("--method", nargs="+", metavar="M", default=list(methods or PAPER_METHODS),
+                   help=f"methods to compare (from: {', '.join(METHODS)})")
+    p.add_argument("--episodes", type=int, default=episodes, help="episodes per run (per task)")
+    p.add_argument("--runs", type=int, default=runs, help="independent runs per method")
+    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
+    _exec_args(p)
+
+
+def _exec_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/<command>)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run in --out (same command line)")
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="local processes, or a Ray cluster")
+    p.add_argument("--address", help="Ray cluster address (default: start a local instance)")
+    p.add_argument("--no-report", action="store_true", help="skip figures, tables and report")
+
+
+def _register_run(sub) -> None:
+    p = sub.add_parser("run", help="compare methods on one task",
+                       description="Each method learns the task from scratch --runs times for "
+                                   "--episodes episodes. Writes episodes.csv, figures and "
+                                   "REPORT.md to --out.")
+    _task_args(p)
+    _run_args(p)
+    p.set_defaults(func=cmd_run)
+
+
+def _register_switch(sub) -> None:
+    p = sub.add_parser("switch", help="change the task halfway (the paper's Hypothesis III)",
+                       description="Learn --from for --episodes episodes, then --to for as many; "
+                                   "GDQ keeps its learned model and replans for the new goal.")
+    p.add_argument("--from", dest="first", default="C", help="first task (default C)")
+    p.add_argument("--to", dest="second", default="D", help="second task (default D)")
+    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    _run_args(p)
+    p.set_defaults(func=cmd_switch)
+
+
+def _register_robot(sub) -> None:
+    p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
+                       description="Task X on the office with area 5 forbidden, 10 actions per "
+                                   "trial, R_max 1000, durations as costs, alpha 0.5.")
+    _run_args(p, methods=("GDQ", "Dyna-Q"), episodes=30, runs=10)
+    p.set_defaults(func=cmd_robot)
+
+
+def _register_reproduce(sub) -> None:
+    p = sub.add_parser("reproduce", help="every experiment of the paper, with figures and report",
+                       description="Tasks A-D (2500 episodes x 10 runs), the switches C->D and "
+                                   "C->E (5000 episodes), the robot protocol; then figures, the "
+                                   "area-visit table and REPORT.md in --out.")
+    p.add_argument("--quick", action="store_true", help="300 episodes x 3 runs: a first look")
+    p.add_argument("--seed", type=int, default=0, help="base seed")
+    _exec_args(p)
+    p.set_defaults(func=cmd_reproduce)
+
+
+def _register_report(sub) -> None:
+    p = sub.add_parser("report", help="redraw figures, tables and REPORT.md of an output folder")
+    p.add_argument("out", type=Path, help="an output folder of run/switch/robot/reproduce")
+    p.set_defaults(func=cmd_report)
+
+
+def _experiment_kw(args: argparse.Namespace) -> dict:
+    from gdq_pddl.experiments import METHODS
+
+    unknown = [m for m in args.method if m not in METHODS]
+    if unknown:
+        raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
+    if args.episodes < 1 or args.runs < 1:
+        raise GdqError("--episodes and --runs must be at least 1")
+    return {"methods": tuple(dict.fromkeys(args.method)), "runs": args.runs, "seed": args.seed,
+            "planner": args.planner}
+
+
+def _check_planner(name: str) -> None:
+    from gdq_pddl.planning import get_planner
+
+    get_planner(name)  # fail now, with the list of known planners, not inside a worker
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import Experiment
+
+    world, task = _world_and_task(args)
+    kw = _experiment_kw(args)
+    _check_planner(args.planner)
+    spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
+    exp = Experiment("run", ((spec, args.episodes),), world=str(args.world or "office"), **kw)
+    return _execute([exp], args, f"run-{task.name}")
+
+
+def cmd_switch(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import switch_experiment
+    from gdq_pddl.world import load_world
+
+    world = load_world(args.world)
+    first, second = world.task(args.first).name, world.task(args.second).name
+    kw = _experiment_kw(args)
+    _check_planner(args.planner)
+    exp = switch_experiment(first, second, args.episodes, world=str(args.world or "office"), **kw)
+    return _execute([exp], args, exp.name)
+
+
+def cmd_robot(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from gdq_pddl.experiments import robot_experiment
+
+    kw = _experiment_kw(args)
+    _check_planner(args.planner)
+    exp = robot_experiment(runs=kw.pop("runs"), **kw)
+    exp = replace(exp, schedule=(("X", args.episodes),))
+    return _execute([exp], args, "robot")
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import paper_protocol
+
+    name = "reproduce-quick" if args.quick else "reproduce"
+    return _execute(paper_protocol(quick=args.quick, seed=args.seed), args, name)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    if not (args.out / "episodes.csv").exists():
+        raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
+    _report(args.out)
+    return 0
+
+
+def _execute(experiments, args: argparse.Namespace, name: str) -> int:
+    import time
+
+    from gdq_pddl.experiments import run_experiments
+
+    out = args.out or Path("results") / name
+    t0 = time.perf_counter()
+    run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
+                    address=args.address, resume=args.resume)
+    print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
+          f"{time.perf_counter() - t0:.1f} s; results in {out}/episodes.csv")
+    if not args.no_report:
+        _report(out)
+    return 0
+
+
+def _report(out: Path) -> None:
+    from gdq_pddl.analysis import make_all
+
+    paths = make_all(out)
+    report = next((p for p in paths if p.name == "REPORT.md"), None)
+    print(f"wrote {len(paths)} figures, tables and reports" +
+          (f"; read {report}" if report else ""))
+
+
+COMMANDS: list[Callable] = [_register_problem, _register_plan, _register_planners, _register_run,
+                            _register_switch, _register_robot, _register_reproduce,
+                            _register_report]
 
 if __name__ == "__main__":
     raise SystemExit(main())
