@@ -1,0 +1,18 @@
+"""Experiments: the paper's protocol, run in parallel, resumable, collected as CSV/JSON."""
+
+from gdq_pddl.experiments.protocol import (
+    METHODS,
+    PAPER_METHODS,
+    Experiment,
+    Hyper,
+    Unit,
+    paper_protocol,
+    robot_experiment,
+    switch_experiment,
+    task_experiments,
+)
+from gdq_pddl.experiments.runner import ResultsError, run_experiments
+
+__all__ = ["METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError", "Unit",
+           "paper_protocol", "robot_experiment", "run_experiments", "switch_experiment",
+           "task_experiments"]

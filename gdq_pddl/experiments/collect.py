@@ -1,0 +1,91 @@
+"""Turn the per-unit files of an output folder into its CSV and JSON results."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.work import load_world_named, resolve_task
+
+EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
+                   "success")
+N_AREAS = 7
+
+
+def collect(out: Path, experiments: list[Experiment]) -> None:
+    """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
+    from gdq_pddl.experiments.runner import atomic_write
+
+    units = [u for e in experiments for u in e.units()]
+    header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, N_AREAS + 1))))
+
+    def write_episodes(tmp: Path) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write(header + "\n")
+            for unit in units:
+                data = np.load(out / "units" / f"{unit.key}.npz")
+                fh.write(_episode_rows(unit.experiment.name, unit.method, unit.run, data))
+
+    def write_policies(tmp: Path) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            fh.write("experiment,method,task,run,state,action\n")
+            for unit in units:
+                data = np.load(out / "units" / f"{unit.key}.npz")
+                task = str(data["tasks"][-1])
+                for s, a in enumerate(data["policy"].tolist()):
+                    fh.write(f"{unit.experiment.name},{unit.method},{task},{unit.run},{s},{a}\n")
+
+    atomic_write(out / "episodes.csv", write_episodes)
+    atomic_write(out / "policies.csv", write_policies)
+    optimal = optimal_summary(experiments)
+    atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
+
+
+def _episode_rows(experiment: str, method: str, run: int, data) -> str:
+    """CSV rows of one unit (vectorised formatting: a full protocol has ~1M rows)."""
+    n = len(data["returns"])
+    tasks = np.repeat(data["tasks"], data["counts"])
+    areas = np.zeros((n, N_AREAS), dtype=np.int64)
+    k = min(N_AREAS, data["areas"].shape[1])
+    areas[:, :k] = data["areas"][:, :k]  # column k - 1 counts steps ending in area k
+    buf = io.StringIO()
+    prefix = np.char.add(f"{experiment},{method},", tasks.astype(str))
+    cols = [prefix, np.full(n, str(run)), np.arange(1, n + 1).astype(str),
+            np.char.mod("%.10g", data["returns"]), data["steps"].astype(str),
+            data["success"].astype(np.int64).astype(str)]
+    cols += [areas[:, i].astype(str) for i in range(N_AREAS)]
+    rows = cols[0]
+    for c in cols[1:]:
+        rows = np.char.add(np.char.add(rows, ","), c)
+    buf.write("\n".join(rows.tolist()))
+    buf.write("\n")
+    return buf.getvalue()
+
+
+def optimal_summary(experiments: list[Experiment]) -> dict:
+    """V*, relevant areas and the paper's irrelevant areas of each task the experiments use."""
+    from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
+
+    out: dict = {}
+    for exp in experiments:
+        world = load_world_named(exp.world)
+        for spec, _ in exp.schedule:
+            task = resolve_task(world, spec)
+            key = task.name if exp.world == "office" else f"{task.name}@{exp.world}"
+            if key in out:
+                continue
+            visits = expected_area_visits(world, task)
+            out[key] = {
+                "world": exp.world,
+                "start": task.start,
+                "goal": task.goal,
+                "v_star": optimal_value(world, task),
+                "relevant_areas": list(relevant_areas(world, task, min_visits=0.05)),
+                "irrelevant_areas_paper": list(task.irrelevant_areas),
+                "expected_area_visits": {str(a): v for a, v in visits.items()},
+            }
+    return out

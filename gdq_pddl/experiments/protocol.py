@@ -1,0 +1,112 @@
+"""What an experiment is: a world, a schedule of tasks, methods, runs and hyperparameters.
+
+An :class:`Experiment` expands into :class:`Unit` s, one per (method, run). A unit is the
+thing that runs on one core, is written to disk when it finishes, and is skipped by
+``--resume``. Its seed is derived from the experiment's seed and the unit's identity
+only, so results are identical whatever the number of jobs or the order they finish in.
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+"""Learning methods by name; ``GDQ-code`` is GDQ as in the authors' released code."""
+
+PAPER_METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
+
+
+@dataclass(frozen=True)
+class Hyper:
+    """Learning hyperparameters shared by every method (SPEC sections 5 and 6)."""
+
+    alpha: float = 0.1
+    """Step size of the TD update."""
+    gamma: float = 0.95
+    """Discount factor."""
+    epsilon: float = 0.1
+    """Probability of a uniformly random (allowed) action."""
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One experiment: each method learns ``runs`` times along ``schedule``."""
+
+    name: str
+    """Label written in the ``experiment`` column (``tasks``, ``switch-C-D``, ``robot`` ...)."""
+    schedule: tuple[tuple[str, int], ...]
+    """``(task, episodes)`` in order; a task is a name (``C``) or ``start->goal``."""
+    methods: tuple[str, ...] = PAPER_METHODS
+    runs: int = 10
+    world: str = "office"
+    """``office``, ``office_robot`` (built in) or a path to a world file."""
+    hyper: Hyper = field(default_factory=Hyper)
+    planner: str = "graph"
+    seed: int = 0
+
+    @property
+    def episodes(self) -> int:
+        return sum(n for _, n in self.schedule)
+
+    def units(self) -> list[Unit]:
+        return [Unit(self, m, r) for m in self.methods for r in range(self.runs)]
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One method's one run of an experiment."""
+
+    experiment: Experiment
+    method: str
+    run: int
+
+    @property
+    def key(self) -> str:
+        """A file-name-safe identity, unique within an output folder."""
+        tasks = "-".join(t.replace("->", "_to_") for t, _ in self.experiment.schedule)
+        return f"{self.experiment.name}__{tasks}__{self.method}__run{self.run}"
+
+    def seeds(self) -> tuple[np.random.Generator, int]:
+        """The learner's Generator and the env's integer seed, from the unit's identity."""
+        ident = zlib.crc32(f"{self.experiment.name}|{self.experiment.schedule}".encode())
+        method = zlib.crc32(self.method.encode())
+        seq = np.random.SeedSequence([self.experiment.seed, ident, method, self.run])
+        learner, env = seq.spawn(2)
+        return np.random.default_rng(learner), int(env.generate_state(1)[0])
+
+
+def task_experiments(tasks: tuple[str, ...] = ("A", "B", "C", "D"), episodes: int = 2500,
+                     **kw) -> list[Experiment]:
+    """The paper's first experiment: each task learnt from scratch."""
+    return [Experiment("tasks", ((t, episodes),), **kw) for t in tasks]
+
+
+def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Experiment:
+    """The paper's task switch: ``episodes`` on ``first``, then as many on ``second``."""
+    return Experiment(f"switch-{first}-{second}", ((first, episodes), (second, episodes)), **kw)
+
+
+def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
+    """SPEC section 6: the real-robot protocol, simulated with durations as costs."""
+    kw.setdefault("methods", ("GDQ", "Dyna-Q"))
+    return Experiment("robot", (("X", trials),), runs=runs, world="office_robot",
+                      hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)
+
+
+def paper_protocol(quick: bool = False, seed: int = 0) -> list[Experiment]:
+    """Everything the paper reports; ``quick`` is a small version for a first look."""
+    episodes, runs = (300, 3) if quick else (2500, 10)
+    methods = (*PAPER_METHODS, "GDQ-code")
+    out = task_experiments(episodes=episodes, runs=runs, methods=methods, seed=seed)
+    out += [switch_experiment("C", "D", episodes, runs=runs, methods=methods, seed=seed),
+            switch_experiment("C", "E", episodes, runs=runs, methods=methods, seed=seed),
+            robot_experiment(runs=runs, seed=seed)]
+    return out
+
+
+def with_overrides(exp: Experiment, **changes) -> Experiment:
+    """A copy of ``exp`` with some fields changed (None values are ignored)."""
+    return replace(exp, **{k: v for k, v in changes.items() if v is not None})

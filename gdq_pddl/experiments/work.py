@@ -1,0 +1,91 @@
+"""One unit of work: a method learning along a schedule of tasks, in one process.
+
+:func:`run_unit` is what the local process pool and Ray workers execute; it depends only
+on the :class:`~gdq_pddl.experiments.protocol.Unit`, so where it runs never changes what
+it returns.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.protocol import Hyper, Unit
+from gdq_pddl.world import Task, World, builtin_world, load_world
+
+
+@cache
+def load_world_named(name: str) -> World:
+    """``office`` / ``office_robot`` (built in), or a world file path."""
+    if name in ("office", "office_robot"):
+        return builtin_world(name)
+    return load_world(Path(name))
+
+
+def resolve_task(world: World, spec: str) -> Task:
+    """A task name (``C``) or an ad-hoc ``start->goal``."""
+    if "->" in spec:
+        start, goal = spec.split("->", 1)
+        return world.resolve(start=start, goal=goal)
+    return world.task(spec)
+
+
+def make_learner(method: str, context, hyper: Hyper):
+    """A fresh learner of ``method`` (a name of ``protocol.METHODS``) for ``context``."""
+    from gdq_pddl.experiments.protocol import METHODS
+    from gdq_pddl.learners import make_learner as learner_by_name
+
+    if method not in METHODS:
+        raise GdqError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
+    common = {"alpha": hyper.alpha, "gamma": hyper.gamma, "epsilon": hyper.epsilon}
+    if method == "GDQ-code":
+        return learner_by_name("gdq", context, variant="code", **common)
+    return learner_by_name(method, context, **common)
+
+
+def run_unit(unit: Unit) -> dict[str, np.ndarray]:
+    """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
+    from gdq_pddl.envs.office import OfficeEnv
+    from gdq_pddl.learners.context import office_task_context
+    from gdq_pddl.learners.runner import run_episodes
+
+    exp = unit.experiment
+    world = load_world_named(exp.world)
+    rng, env_seed = unit.seeds()
+    learner, parts = None, []
+    for i, (spec, episodes) in enumerate(exp.schedule):
+        task = resolve_task(world, spec)
+        context = office_task_context(world, task, exp.planner)
+        if learner is None:
+            learner = make_learner(unit.method, context, exp.hyper)
+        else:
+            learner.start_task(context)
+        env = OfficeEnv(world=world, start=task.start, goal=task.goal)
+        env.reset(seed=env_seed + i)
+        parts.append(run_episodes(learner, env, episodes, rng))
+    return {
+        "returns": np.concatenate([p.returns for p in parts]),
+        "steps": np.concatenate([p.steps for p in parts]),
+        "success": np.concatenate([p.success for p in parts]),
+        "areas": np.concatenate([p.area_visits for p in parts]),
+        "tasks": np.array([resolve_task(world, s).name for s, _ in exp.schedule]),
+        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
+        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
+    }
+
+
+def warm_up(units: list[Unit]) -> None:
+    """Compile every kernel once in this process (so forked workers need not)."""
+    from dataclasses import replace
+
+    seen: set[tuple[str, str]] = set()
+    for u in units:
+        if (u.experiment.world, u.method) in seen:
+            continue
+        seen.add((u.experiment.world, u.method))
+        tiny = replace(u.experiment, name="warm-up", schedule=((u.experiment.schedule[0][0], 2),),
+                       runs=1)
+        run_unit(Unit(tiny, u.method, 0))
