@@ -1,0 +1,343 @@
+"""The learners: OptInit, the model's known/unknown switch, DARLING's restriction,
+terminal handling, determinism, fast path == Python path and task switches."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.envs.variants import deterministic_world
+from gdq_pddl.learners import (
+    GDQ,
+    Darling,
+    DarlingConfig,
+    DynaQ,
+    DynaQConfig,
+    GDQConfig,
+    QLearning,
+    TabularLearner,
+    core,
+    empty_plan_table,
+    make_learner,
+    office_task_context,
+    run_episodes,
+)
+from gdq_pddl.world import Task, load_world
+
+WORLD = load_world()
+DET = deterministic_world(WORLD)
+ALL = [("qlearning", {}), ("dynaq", {}), ("darling", {}), ("gdq", {}),
+       ("gdq", {"variant": "code"})]
+
+
+@pytest.fixture(scope="module")
+def ctx_c():
+    return office_task_context(WORLD, "C")
+
+
+class Recording:
+    """Wraps a learner and records every action it chooses."""
+
+    def __init__(self, learner: TabularLearner) -> None:
+        self.learner, self.actions, self.states = learner, [], []
+        self.q = learner.q
+
+    def act(self, s, rng):
+        a = self.learner.act(s, rng)
+        self.states.append(s)
+        self.actions.append(a)
+        return a
+
+    def observe(self, *args):
+        self.learner.observe(*args)
+
+    def start_task(self, ctx):
+        self.learner.start_task(ctx)
+
+    def greedy_policy(self):
+        return self.learner.greedy_policy()
+
+
+def run(learner, env, n, seed, fast=None):
+    env.reset(seed=seed)
+    return run_episodes(learner, env, n, np.random.default_rng(seed + 1), fast=fast)
+
+
+# --- OptInit ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("variant", ["paper", "code"])
+def test_optinit_greedy_policy_follows_a_shortest_plan(variant):
+    ctx = office_task_context(DET, "C")
+    learner = GDQ(ctx, GDQConfig(variant=variant))
+    plans = ctx.plans.plans_from(ctx.s0)
+    shortest = int(ctx.plans.length[ctx.s0])
+    assert shortest == 8 and plans
+    policy = learner.greedy_policy()
+    env = OfficeEnv(task="C", world=DET)
+    s, _ = env.reset(seed=0)
+    taken = []
+    for _ in range(shortest):
+        a = int(policy[s])
+        taken.append((s, a))
+        s, _, terminated, truncated, info = env.step(a)
+        if terminated or truncated:
+            break
+    assert info["cause"] == "goal"
+    assert taken in plans, "the greedy path must be one of the planner's shortest plans"
+
+
+def test_optinit_policy_iteration_values_of_the_optimistic_model(ctx_c):
+    learner = GDQ(ctx_c)
+    r_max, gamma = ctx_c.r_max, learner.config.gamma
+    top = r_max / (1 - gamma)  # optimistic pairs loop back to s0 without ending
+    opt = learner.optimistic_pairs
+    assert opt.any()
+    not_goal = ~ctx_c.goal
+    assert np.allclose(learner.q[opt], top, atol=1e-6)
+    rest = ~opt & not_goal[:, None]
+    assert np.allclose(learner.q[rest], gamma * top, atol=1e-6)
+    assert np.all(learner.q[ctx_c.goal] == 0.0)
+
+
+def test_code_variant_sets_r_max_on_plan_pairs_only(ctx_c):
+    learner = GDQ(ctx_c, GDQConfig(variant="code"))
+    opt = learner.optimistic_pairs
+    assert np.all(learner.q[opt] == ctx_c.r_max)
+    assert np.all(learner.q[~opt] == 0.0)
+    assert learner.params.backup == core.BACKUP_SAMPLE
+
+
+# --- the model ----------------------------------------------------------------------------
+
+def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
+    m = 5
+    learner = GDQ(ctx_c, GDQConfig(m=m, n_backups=0))
+    t, p = learner.tables, learner.params
+    s, a = next(zip(*np.nonzero(learner.optimistic_pairs), strict=True))
+    s, a = int(s), int(a)
+    s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != ctx_c.s0))[0])
+    v = np.full(ctx_c.n_states, 3.0)
+    optimistic = ctx_c.r_max + p.gamma * v[ctx_c.s0]
+    rng = np.random.default_rng(0)
+    for k in range(m + 1):
+        assert core.expected_value(t, p, s, a, v) == optimistic, f"changed after {k} visits"
+        sample = core.sample_outcome(t, p, s, a, rng)
+        assert sample == (ctx_c.r_max, ctx_c.s0, False)
+        learner.observe(s, a, -1.0, s2, False, False, rng)
+    # m + 1 visits: the learned model (always -1 to s2) takes over
+    assert learner.visits[s, a] == m + 1
+    assert core.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
+    assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
+
+
+def test_model_is_goal_independent_counts(ctx_c):
+    learner = DynaQ(ctx_c, DynaQConfig(n_backups=0))
+    rng = np.random.default_rng(0)
+    goal = int(np.flatnonzero(ctx_c.goal)[0])
+    learner.observe(3, 7, 20.0, goal, True, False, rng)  # reached the goal
+    learner.observe(3, 7, -20.0, 3, True, False, rng)  # stuck
+    learner.observe(3, 7, -20.0, 4, False, True, rng)  # timeout: transition counted
+    learner.observe(3, 7, -2.0, 4, False, False, rng)  # ordinary step, cost 2
+    t = learner.tables
+    assert t.counts[3, 7, goal] == 1 and t.counts[3, 7, 4] == 2 and t.stuck[3, 7] == 1
+    assert t.visits[3, 7] == 4
+    assert t.cost_n[3, 7] == 1 and t.cost_sum[3, 7] == 2.0
+
+
+# --- terminal transitions -----------------------------------------------------------------
+
+def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
+    learner = DynaQ(ctx_c, DynaQConfig(n_backups=0))
+    t, p = learner.tables, learner.params
+    rng = np.random.default_rng(0)
+    goal = int(np.flatnonzero(ctx_c.goal)[0])
+    v = np.full(ctx_c.n_states, 1000.0)  # absurdly high values everywhere
+    for _ in range(3):
+        learner.observe(5, 9, 20.0, goal, True, False, rng)
+    assert core.expected_value(t, p, 5, 9, v) == ctx_c.r_max
+    for _ in range(2):
+        learner.observe(6, 9, -20.0, 6, True, False, rng)
+    assert core.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
+    assert core.sample_outcome(t, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
+    assert core.sample_outcome(t, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
+    # the sample-based backup with inflated V must not exceed R_max either
+    t.q[:, :] = 1000.0
+    core.recompute_all_v(t)
+    t.q[5, 9] = 0.0
+    sample = core.Params(**{**p._asdict(), "backup": core.BACKUP_SAMPLE, "alpha": 1.0})
+    core.model_backup(t, sample, 5, 9, rng)
+    assert t.q[5, 9] == ctx_c.r_max
+
+
+def test_real_terminal_and_truncated_steps_do_not_bootstrap(ctx_c):
+    learner = QLearning(ctx_c)
+    t = learner.tables
+    t.q[:, :] = 500.0
+    core.recompute_all_v(t)
+    rng = np.random.default_rng(0)
+    t.q[1, 2] = 0.0
+    learner.observe(1, 2, -20.0, 4, False, True, rng)  # timeout
+    assert t.q[1, 2] == pytest.approx(learner.config.alpha * -20.0)
+    t.q[1, 3] = 0.0
+    learner.observe(1, 3, 20.0, 4, True, False, rng)  # goal
+    assert t.q[1, 3] == pytest.approx(learner.config.alpha * 20.0)
+
+
+@pytest.mark.parametrize("method", ["dynaq", "gdq"])
+def test_q_at_goal_reaching_pairs_never_exceeds_r_max(method):
+    ctx = office_task_context(DET, "C")
+    env = OfficeEnv(task="C", world=DET)
+    learner = make_learner(method, ctx, m=0) if method == "gdq" else make_learner(method, ctx)
+    run(learner, env, 300, 3)
+    goal_pairs = learner.counts[:, :, ctx.goal].sum(axis=2) > 0
+    assert goal_pairs.any()
+    # once known (m = 0: after one visit), a goal-reaching pair's backup is exactly R_max
+    assert np.all(learner.q[goal_pairs] <= ctx.r_max + 1e-9)
+    if method == "dynaq":
+        assert learner.q.max() <= ctx.r_max + 1e-9
+
+
+# --- DARLING ------------------------------------------------------------------------------
+
+def test_darling_never_leaves_its_allowed_set(ctx_c):
+    learner = Darling(ctx_c, DarlingConfig(epsilon=1.0))
+    allowed = ctx_c.darling_plans.first_actions
+    rng = np.random.default_rng(0)
+    for s in range(ctx_c.n_states):
+        if not allowed[s].any():
+            continue
+        picks = {learner.act(s, rng) for _ in range(300)}
+        assert all(allowed[s, a] for a in picks)
+        assert picks == set(np.flatnonzero(allowed[s]).tolist())  # exploration spans the set
+    rec = Recording(Darling(ctx_c))
+    run(rec, OfficeEnv(task="C"), 100, 0, fast=False)
+    for s, a in zip(rec.states, rec.actions, strict=True):
+        assert allowed[s, a] or not allowed[s].any()
+
+
+def test_darling_maximises_over_allowed_actions_only(ctx_c):
+    learner = Darling(ctx_c)
+    s = ctx_c.s0
+    banned = int(np.flatnonzero(~learner.tables.allowed[s])[0])
+    core.set_q(learner.tables, s, banned, 99.0)
+    assert learner.v[s] == 0.0
+    assert learner.greedy_policy()[s] != banned
+
+
+def test_darling_allows_everything_where_there_is_no_plan(ctx_c):
+    empty = empty_plan_table(ctx_c.n_states, ctx_c.n_actions)
+    learner = Darling(replace(ctx_c, darling_plans=empty))
+    assert learner.tables.allowed.all()
+
+
+# --- equivalences and determinism ---------------------------------------------------------
+
+def test_dynaq_without_backups_acts_exactly_like_qlearning(ctx_c):
+    env = OfficeEnv(task="C")
+    a = Recording(DynaQ(ctx_c, DynaQConfig(n_backups=0)))
+    b = Recording(QLearning(ctx_c))
+    run(a, env, 60, 11, fast=False)
+    run(b, env, 60, 11, fast=False)
+    assert a.actions == b.actions
+    assert np.array_equal(a.q, b.q)
+
+
+@pytest.mark.parametrize(("method", "kw"), ALL)
+def test_same_seed_same_results_bit_for_bit(ctx_c, method, kw):
+    env = OfficeEnv(task="C")
+    out = []
+    for _ in range(2):
+        learner = make_learner(method, ctx_c, **kw)
+        rec = run(learner, env, 80, 5)
+        out.append((rec, learner.q.copy()))
+    (r1, q1), (r2, q2) = out
+    for f in ("returns", "steps", "success", "area_visits"):
+        assert np.array_equal(getattr(r1, f), getattr(r2, f))
+    assert np.array_equal(q1, q2)
+
+
+@pytest.mark.parametrize(("method", "kw"), ALL)
+def test_fast_path_equals_python_path(ctx_c, method, kw):
+    env = OfficeEnv(task="C")
+    fast, slow = make_learner(method, ctx_c, **kw), make_learner(method, ctx_c, **kw)
+    rf = run(fast, env, 40, 7, fast=True)
+    rs = run(slow, env, 40, 7, fast=False)
+    for f in ("returns", "steps", "success", "area_visits"):
+        assert np.array_equal(getattr(rf, f), getattr(rs, f)), f
+    assert np.array_equal(fast.q, slow.q)
+    assert np.array_equal(fast.tables.counts, slow.tables.counts)
+    assert rf.area_visits.sum() == rf.steps.sum()  # every office position has an area
+    assert rf.area_visits.shape == (40, 7)
+
+
+def test_runner_works_through_gymnasium_make(ctx_c):
+    import gymnasium
+
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    learner = QLearning(ctx_c)
+    rec_fast = run(learner, env, 20, 1)
+    learner2 = QLearning(ctx_c)
+    rec_slow = run(learner2, env, 20, 1, fast=False)
+    assert np.array_equal(rec_fast.returns, rec_slow.returns)
+
+
+# --- no plans, task switch ----------------------------------------------------------------
+
+def test_gdq_without_any_plan_runs_and_learns():
+    task = Task("near", "p0", "p2")
+    ctx = office_task_context(DET, task)
+    empty = empty_plan_table(ctx.n_states, ctx.n_actions)
+    ctx = replace(ctx, plans=empty, darling_plans=empty)
+    learner = GDQ(ctx)
+    assert not learner.optimistic_pairs.any()
+    env = OfficeEnv(start="p0", goal="p2", world=DET)
+    rec = run(learner, env, 150, 2)
+    assert rec.success[-50:].mean() > 0.8
+    assert rec.success[-50:].mean() > rec.success[:50].mean()
+    assert learner.visits.sum() == rec.steps.sum()
+
+
+def test_task_switch_keeps_the_model_and_reruns_optinit(ctx_c):
+    learner = GDQ(ctx_c)
+    env = OfficeEnv(task="C")
+    run(learner, env, 30, 4)
+    counts, visits = learner.counts.copy(), learner.visits.copy()
+    assert visits.sum() > 0
+    ctx_e = office_task_context(WORLD, "E")
+    learner.start_task(ctx_e)
+    assert np.array_equal(learner.counts, counts)
+    assert np.array_equal(learner.visits, visits)
+    assert learner.params.s0 == ctx_e.s0
+    assert np.array_equal(learner.tables.goal, ctx_e.goal)
+    # OptInit for E: the plan pairs from E's start are the optimistic ones, and the
+    # greedy action at E's start begins one of its plans (unknown pairs dominate there)
+    firsts = {p[0][1] for p in ctx_e.plans.plans_from(ctx_e.s0)}
+    assert learner.greedy_policy()[ctx_e.s0] in firsts
+    # the learned model is what the known pairs' backups use after the switch
+    known = np.argwhere(visits > learner.params.m)
+    assert len(known)
+    s, a = map(int, known[0])
+    assert core.expected_value(learner.tables, learner.params, s, a, learner.v) == \
+        pytest.approx(learner.q[s, a], abs=1e-6)
+    run(learner, OfficeEnv(task="E"), 10, 5)  # keeps learning on the new task
+    assert learner.visits.sum() > visits.sum()
+
+
+def test_dynaq_task_switch_keeps_model_and_q(ctx_c):
+    learner = DynaQ(ctx_c)
+    run(learner, OfficeEnv(task="C"), 20, 4)
+    q, counts = learner.q.copy(), learner.counts.copy()
+    learner.start_task(office_task_context(WORLD, "D"))
+    assert np.array_equal(learner.q, q) and np.array_equal(learner.counts, counts)
+
+
+def test_make_learner_rejects_unknown_methods_and_bad_configs(ctx_c):
+    with pytest.raises(ValueError):
+        make_learner("sarsa", ctx_c)
+    with pytest.raises(ValueError):
+        GDQConfig(variant="other")  # type: ignore[arg-type]
+    with pytest.raises(ValueError):
+        Darling(ctx_c, DarlingConfig(tolerance=0.5))
