@@ -1,0 +1,297 @@
+"""Reading an experiment output folder into numpy arrays.
+
+The runner writes, per output folder:
+
+- ``episodes.csv``: one row per episode, columns ``experiment, method, task, run,
+  episode, return, steps, success, area_1 .. area_k``;
+- ``config.json``: the run's configuration (only a few keys are read, all optional);
+- ``policies.csv``: ``experiment, method, task, run, state, action``, the final greedy
+  policy of each run;
+- ``optimal.json``: ``{task: {"v_star", "relevant_areas", ...}}``.
+
+:func:`load_episodes` reads the CSV once (about 600k rows for a full reproduction) into an
+:class:`Episodes` table: the three text columns are stored as integer codes plus their
+labels, everything else as float64, and :meth:`Episodes.matrix` reshapes one
+(experiment, method[, task]) slice into ``[runs, episodes]``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gdq_pddl.world import World, builtin_world, load_world
+
+CATEGORICAL = ("experiment", "method", "task")
+"""Text columns of ``episodes.csv`` (stored as codes into sorted labels)."""
+
+METHOD_ORDER = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+"""The order methods are listed in every figure and table (unknown ones follow, sorted)."""
+
+TASKS_EXPERIMENT = "tasks"
+ROBOT_EXPERIMENT = "robot"
+SWITCH_PREFIX = "switch-"
+
+
+def order_methods(methods: Iterable[str]) -> list[str]:
+    """``methods`` in :data:`METHOD_ORDER`, unknown names after them in sorted order."""
+    found = set(methods)
+    known = [m for m in METHOD_ORDER if m in found]
+    return known + sorted(found - set(known))
+
+
+def is_gdq(method: str) -> bool:
+    """GDQ or one of its variants (``GDQ-code``): not a baseline."""
+    return method == "GDQ" or method.startswith("GDQ-")
+
+
+@dataclass(frozen=True)
+class Episodes:
+    """The rows of ``episodes.csv`` as columns.
+
+    ``codes[c]`` holds int codes into ``labels[c]`` for the text columns ``experiment``,
+    ``method`` and ``task``; ``values[c]`` holds every other column as float64.
+    """
+
+    codes: Mapping[str, np.ndarray]
+    labels: Mapping[str, tuple[str, ...]]
+    values: Mapping[str, np.ndarray]
+
+    def __len__(self) -> int:
+        return len(next(iter(self.values.values()))) if self.values else 0
+
+    @cached_property
+    def area_columns(self) -> tuple[str, ...]:
+        """``area_1 .. area_k`` in area order."""
+        cols = [c for c in self.values if c.startswith("area_") and c[5:].isdigit()]
+        return tuple(sorted(cols, key=lambda c: int(c[5:])))
+
+    @property
+    def areas(self) -> tuple[int, ...]:
+        """Area numbers that have a column."""
+        return tuple(int(c[5:]) for c in self.area_columns)
+
+    def column(self, name: str) -> np.ndarray:
+        """One column: labels (str array) for text columns, float64 otherwise."""
+        if name in self.codes:
+            return np.asarray(self.labels[name], dtype=object)[self.codes[name]]
+        try:
+            return self.values[name]
+        except KeyError:
+            known = ", ".join([*self.codes, *self.values])
+            raise KeyError(f"no column {name!r} in episodes.csv (known: {known})") from None
+
+    def _code(self, column: str, label: str) -> int:
+        try:
+            return self.labels[column].index(label)
+        except ValueError:
+            return -1
+
+    def mask(self, experiment: str | None = None, method: str | None = None,
+             task: str | None = None) -> np.ndarray:
+        """Boolean row mask of the rows matching every given label."""
+        out = np.ones(len(self), dtype=bool)
+        for column, label in (("experiment", experiment), ("method", method), ("task", task)):
+            if label is not None:
+                out &= self.codes[column] == self._code(column, label)
+        return out
+
+    def unique(self, column: str, experiment: str | None = None,
+               method: str | None = None) -> list[str]:
+        """Labels of a text column present in the selected rows (methods in figure order)."""
+        rows = self.mask(experiment, method)
+        labels = [self.labels[column][c] for c in np.unique(self.codes[column][rows])]
+        if column == "method":
+            return order_methods(labels)
+        if column == "task":  # in order of first appearance (a switch's old task first)
+            first = {lab: self._first_episode(rows & self.mask(task=lab)) for lab in labels}
+            return sorted(labels, key=lambda lab: (first[lab], lab))
+        return sorted(labels)
+
+    def _first_episode(self, rows: np.ndarray) -> float:
+        ep = self.values["episode"][rows]
+        return float(ep.min()) if ep.size else np.inf
+
+    @property
+    def experiments(self) -> list[str]:
+        return self.unique("experiment")
+
+    def methods(self, experiment: str | None = None) -> list[str]:
+        return self.unique("method", experiment)
+
+    def tasks(self, experiment: str | None = None, method: str | None = None) -> list[str]:
+        return self.unique("task", experiment, method)
+
+    def has(self, experiment: str) -> bool:
+        return bool(self.mask(experiment).any())
+
+    def matrix(self, column: str, experiment: str, method: str,
+               task: str | None = None) -> np.ndarray:
+        """``float64[runs, episodes]`` of ``column`` for one slice, NaN where a run lacks one.
+
+        Runs are in ascending run order and episodes in ascending episode order; with a
+        ``task``, only that task's episodes (for a switch: those after the switch).
+        """
+        rows = np.flatnonzero(self.mask(experiment, method, task))
+        if rows.size == 0:
+            return np.empty((0, 0))
+        runs, run_idx = np.unique(self.values["run"][rows], return_inverse=True)
+        eps, ep_idx = np.unique(self.values["episode"][rows], return_inverse=True)
+        out = np.full((len(runs), len(eps)), np.nan)
+        out[run_idx, ep_idx] = self.column(column)[rows]
+        return out
+
+    def episode_numbers(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
+        """The episode numbers (columns) of :meth:`matrix` for the same slice."""
+        rows = self.mask(experiment, method, task)
+        return np.unique(self.values["episode"][rows])
+
+    def area_visits(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
+        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`)."""
+        mats = [self.matrix(c, experiment, method, task) for c in self.area_columns]
+        if not mats or mats[0].size == 0:
+            return np.empty((0, 0, len(mats)))
+        return np.stack(mats, axis=-1)
+
+
+def load_episodes(path: str | Path) -> Episodes:
+    """Read ``episodes.csv`` (or the folder holding it) into an :class:`Episodes`."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "episodes.csv"
+    with path.open(newline="", encoding="utf-8") as f:
+        reader = csv.reader(f)
+        try:
+            header = [h.strip() for h in next(reader)]
+        except StopIteration:
+            raise ValueError(f"{path}: empty file, expected a header row") from None
+        rows = [r for r in reader if r]
+    missing = [c for c in (*CATEGORICAL, "run", "episode", "return") if c not in header]
+    if missing:
+        raise ValueError(f"{path}: missing columns {missing} (header: {header})")
+    columns = list(zip(*rows, strict=True)) if rows else [() for _ in header]
+    codes: dict[str, np.ndarray] = {}
+    labels: dict[str, tuple[str, ...]] = {}
+    values: dict[str, np.ndarray] = {}
+    for name, col in zip(header, columns, strict=True):
+        if name in CATEGORICAL:
+            uniq, inverse = np.unique(np.asarray(col, dtype=str), return_inverse=True)
+            labels[name] = tuple(str(u) for u in uniq)
+            codes[name] = inverse.astype(np.int32)
+        else:
+            arr = np.asarray(col, dtype=str)
+            arr[arr == ""] = "nan"
+            values[name] = arr.astype(np.float64)
+    return Episodes(codes=codes, labels=labels, values=values)
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """The keys of ``config.json`` the analysis uses, with defaults for absent ones."""
+
+    world: str | None = None
+    seed: int = 0
+    episodes: int | None = None
+    runs: int | None = None
+    switch_episode: int | None = None
+    methods: tuple[str, ...] = ()
+    experiments: tuple[str, ...] = ()
+    versions: Mapping[str, Any] = field(default_factory=dict)
+    raw: Mapping[str, Any] = field(default_factory=dict)
+
+
+def load_config(out_dir: str | Path) -> RunConfig:
+    """Read ``config.json`` if present; unknown keys are kept in ``raw`` and ignored."""
+    path = Path(out_dir) / "config.json"
+    if not path.exists():
+        return RunConfig()
+    raw = json.loads(path.read_text(encoding="utf-8"))
+    if not isinstance(raw, dict):
+        return RunConfig()
+
+    def opt_int(key: str) -> int | None:
+        v = raw.get(key)
+        return int(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
+
+    world = raw.get("world")
+    return RunConfig(
+        world=world if isinstance(world, str) else None,
+        seed=opt_int("seed") or 0,
+        episodes=opt_int("episodes"),
+        runs=opt_int("runs"),
+        switch_episode=opt_int("switch_episode"),
+        methods=tuple(str(m) for m in raw.get("methods", []) or []),
+        experiments=tuple(str(e) for e in raw.get("experiments", []) or []),
+        versions=raw.get("versions", {}) if isinstance(raw.get("versions"), dict) else {},
+        raw=raw,
+    )
+
+
+def world_for(config: RunConfig, experiment: str = TASKS_EXPERIMENT) -> World:
+    """The world an experiment ran in.
+
+    The robot experiment uses ``office_robot`` (or ``config.raw["robot_world"]`` when that
+    is a file); the others the config's ``world`` when it is an existing file, the shipped
+    world of that name when it names one, else the shipped office.
+    """
+    key = "robot_world" if experiment == ROBOT_EXPERIMENT else "world"
+    value = config.raw.get(key) if key == "robot_world" else config.world
+    if isinstance(value, str) and value and Path(value).is_file():
+        return load_world(value)
+    if experiment == ROBOT_EXPERIMENT:
+        return builtin_world("office_robot")
+    if isinstance(value, str) and value in ("office", "office_robot"):
+        return builtin_world(value)
+    return load_world(None)
+
+
+@dataclass(frozen=True)
+class Policies:
+    """``policies.csv``: one greedy action per (experiment, method, task, run, state)."""
+
+    rows: tuple[tuple[str, str, str, int, int, int], ...]
+
+    def keys(self, experiment: str) -> list[tuple[str, str, int]]:
+        """``(method, task, run)`` triples with a policy in ``experiment``."""
+        return sorted({(m, t, r) for e, m, t, r, _, _ in self.rows if e == experiment})
+
+    def policy(self, experiment: str, method: str, task: str, run: int) -> dict[int, int]:
+        """State -> greedy action for one run."""
+        return {s: a for e, m, t, r, s, a in self.rows
+                if e == experiment and m == method and t == task and r == run}
+
+    def grouped(self) -> dict[tuple[str, str, str, int], dict[int, int]]:
+        """Every policy at once: ``(experiment, method, task, run) -> {state: action}``."""
+        out: dict[tuple[str, str, str, int], dict[int, int]] = {}
+        for e, m, t, r, s, a in self.rows:
+            out.setdefault((e, m, t, r), {})[s] = a
+        return out
+
+
+def load_policies(out_dir: str | Path) -> Policies | None:
+    """Read ``policies.csv``; None when the folder has none."""
+    path = Path(out_dir) / "policies.csv"
+    if not path.exists():
+        return None
+    with path.open(newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        rows = tuple((r["experiment"], r["method"], r["task"], int(float(r["run"])),
+                      int(float(r["state"])), int(float(r["action"]))) for r in reader)
+    return Policies(rows)
+
+
+def load_optimal(out_dir: str | Path) -> dict[str, dict[str, Any]]:
+    """Read ``optimal.json`` (task -> facts); empty when absent or malformed."""
+    path = Path(out_dir) / "optimal.json"
+    if not path.exists():
+        return {}
+    raw = json.loads(path.read_text(encoding="utf-8"))
+    return {str(k): v for k, v in raw.items() if isinstance(v, dict)} if isinstance(
+        raw, dict) else {}

@@ -1,0 +1,160 @@
+"""Routes of greedy policies, and the ground truth (V*, relevant areas, optimal route).
+
+A learner's final greedy policy (``policies.csv``) is walked along its *intended* route:
+start at the task's start with every door closed, apply the policy's action, follow the
+action's most likely outcome (ties: the first listed), and stop at the goal, after
+:data:`MAX_ROUTE_STEPS` actions, on a stuck outcome, at a state without a policy entry,
+or when a full state repeats (the policy loops). The route in area terms drops
+consecutive repeats: ``p0 p2 p4 p8 p5 p6 p7 p17`` is areas ``1 3 2 6``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.solve import expected_area_visits, optimal_value, solve_task
+from gdq_pddl.world import World
+
+MAX_ROUTE_STEPS = 30
+BEST_ROUTE_C = (1, 3, 2, 6)
+"""The paper's best Task C route in areas (easy doors d1 and d3)."""
+RELEVANCE_THRESHOLD = 0.05
+"""Expected visits per episode of the optimal policy above which an area is relevant
+(only used when ``optimal.json`` gives no ``relevant_areas``: with a threshold of 0 a
+slip of a ``goto`` makes nearly every area relevant)."""
+
+
+@dataclass(frozen=True)
+class Route:
+    """Where a greedy policy takes the robot (positions include the start)."""
+
+    positions: tuple[str, ...]
+    reached_goal: bool
+    end: str
+    """Why the walk stopped: ``goal``, ``stuck``, ``loop``, ``no-policy`` or ``limit``."""
+
+    def areas(self, world: World) -> tuple[int, ...]:
+        return area_route(world, self.positions)
+
+
+def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[int, ...]:
+    """Areas along ``positions``, consecutive repeats dropped (positions in no area skipped)."""
+    out: list[int] = []
+    for p in positions:
+        a = world.area_of.get(p)
+        if a is not None and (not out or out[-1] != a):
+            out.append(a)
+    return tuple(out)
+
+
+_MODELS: dict[int, tuple[World, ModelArrays]] = {}
+
+
+def _model(world: World) -> ModelArrays:
+    """The compiled model of ``world``, compiled once per world object (worlds hold dicts,
+    so they are not hashable: the cache keys on identity and keeps the world alive)."""
+    hit = _MODELS.get(id(world))
+    if hit is None or hit[0] is not world:
+        hit = _MODELS[id(world)] = (world, compile_model(world))
+    return hit[1]
+
+
+def walk_policy(world: World, policy: Mapping[int, int] | np.ndarray, start: str, goal: str,
+                max_steps: int = MAX_ROUTE_STEPS) -> Route:
+    """Follow ``policy`` (learner state -> action) along likeliest outcomes; see module doc."""
+    model = _model(world)
+    goal_pos = world.index[world.position(goal)]
+    fs = full_state(world, world.position(start))
+    positions = [world.positions[model.pos_of[fs]]]
+    seen = {fs}
+    for _ in range(max_steps):
+        obs = int(model.obs_of[fs])
+        if isinstance(policy, np.ndarray):
+            if obs >= len(policy) or policy[obs] < 0:
+                return Route(tuple(positions), False, "no-policy")
+            action = int(policy[obs])
+        else:
+            if obs not in policy:
+                return Route(tuple(positions), False, "no-policy")
+            action = int(policy[obs])
+        i = fs * model.n_actions + action
+        lo, hi = model.ptr[i], model.ptr[i + 1]
+        k = lo + int(np.argmax(model.prob[lo:hi]))
+        if model.stuck[k]:
+            return Route(tuple(positions), False, "stuck")
+        fs = int(model.next[k])
+        positions.append(world.positions[model.pos_of[fs]])
+        if model.pos_of[fs] == goal_pos:
+            return Route(tuple(positions), True, "goal")
+        if fs in seen:
+            return Route(tuple(positions), False, "loop")
+        seen.add(fs)
+    return Route(tuple(positions), False, "limit")
+
+
+def optimal_route(world: World, task: str) -> Route:
+    """The likeliest route of the true optimal (time-dependent) policy from the start."""
+    model = _model(world)
+    solution, fs = solve_task(world, task, model)
+    t = world.task(task)
+    positions = [t.start]
+    for step in range(model.step_limit):
+        i = fs * model.n_actions + int(solution.policy[step, fs])
+        lo, hi = model.ptr[i], model.ptr[i + 1]
+        k = lo + int(np.argmax(model.prob[lo:hi]))
+        if model.stuck[k]:
+            return Route(tuple(positions), False, "stuck")
+        fs = int(model.next[k])
+        positions.append(world.positions[model.pos_of[fs]])
+        if model.pos_of[fs] == solution.goal_pos:
+            return Route(tuple(positions), True, "goal")
+    return Route(tuple(positions), False, "limit")
+
+
+@dataclass(frozen=True)
+class TaskTruth:
+    """What the true model says about one task."""
+
+    task: str
+    v_star: float
+    relevant_areas: tuple[int, ...]
+    irrelevant_areas: tuple[int, ...]
+    """Computed: areas of the world not in :attr:`relevant_areas`."""
+    irrelevant_areas_paper: tuple[int, ...]
+    optimal_route_areas: tuple[int, ...]
+
+
+def _ints(value: Any) -> tuple[int, ...] | None:
+    if isinstance(value, (list, tuple)):
+        return tuple(int(v) for v in value)
+    return None
+
+
+def task_truth(world: World, task: str, given: Mapping[str, Any] | None = None) -> TaskTruth:
+    """Facts of ``task`` from ``optimal.json`` (``given``) where present, computed otherwise."""
+    given = given or {}
+    t = world.task(task)
+    all_areas = tuple(sorted(a for a, ps in world.areas.items() if ps))
+    v_star = given.get("v_star")
+    v = float(v_star) if isinstance(v_star, (int, float)) else optimal_value(world, t)
+    relevant = _ints(given.get("relevant_areas"))
+    if relevant is None:
+        visits = expected_area_visits(world, t)
+        relevant = tuple(a for a in all_areas if visits.get(a, 0.0) > RELEVANCE_THRESHOLD)
+    paper = _ints(given.get("irrelevant_areas_paper"))
+    route = _ints(given.get("optimal_route_areas"))
+    if route is None:
+        route = optimal_route(world, t.name).areas(world)
+    return TaskTruth(
+        task=t.name,
+        v_star=v,
+        relevant_areas=tuple(sorted(relevant)),
+        irrelevant_areas=tuple(a for a in all_areas if a not in relevant),
+        irrelevant_areas_paper=paper if paper is not None else tuple(t.irrelevant_areas),
+        optimal_route_areas=route,
+    )

@@ -1,0 +1,129 @@
+"""One experiment output folder, loaded lazily: the object figures, tables and report share."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.analysis.data import (
+    ROBOT_EXPERIMENT,
+    SWITCH_PREFIX,
+    TASKS_EXPERIMENT,
+    Episodes,
+    Policies,
+    RunConfig,
+    is_gdq,
+    load_config,
+    load_episodes,
+    load_optimal,
+    load_policies,
+    world_for,
+)
+from gdq_pddl.analysis.routes import Route, TaskTruth, task_truth, walk_policy
+from gdq_pddl.world import World
+
+
+@dataclass(frozen=True)
+class Study:
+    """The contents of an output folder (each file read on first use)."""
+
+    out_dir: Path
+    _truths: dict[tuple[str, str], TaskTruth] = field(default_factory=dict, repr=False,
+                                                     compare=False)
+
+    @classmethod
+    def open(cls, out_dir: str | Path) -> Study:
+        out = Path(out_dir)
+        if not (out / "episodes.csv").exists():
+            raise FileNotFoundError(f"{out}: no episodes.csv (is this an experiment output "
+                                    "folder?)")
+        return cls(out)
+
+    @cached_property
+    def episodes(self) -> Episodes:
+        return load_episodes(self.out_dir / "episodes.csv")
+
+    @cached_property
+    def config(self) -> RunConfig:
+        return load_config(self.out_dir)
+
+    @cached_property
+    def policies(self) -> Policies | None:
+        return load_policies(self.out_dir)
+
+    @cached_property
+    def _policy_map(self) -> dict[tuple[str, str, str, int], dict[int, int]]:
+        return self.policies.grouped() if self.policies is not None else {}
+
+    @cached_property
+    def optimal(self) -> dict[str, dict]:
+        return load_optimal(self.out_dir)
+
+    @cached_property
+    def _worlds(self) -> dict[str, World]:
+        return {}
+
+    def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
+        """The world ``experiment`` ran in (one object per kind, so models compile once)."""
+        kind = ROBOT_EXPERIMENT if experiment == ROBOT_EXPERIMENT else TASKS_EXPERIMENT
+        if kind not in self._worlds:
+            self._worlds[kind] = world_for(self.config, kind)
+        return self._worlds[kind]
+
+    def truth(self, experiment: str, task: str) -> TaskTruth:
+        """V*, relevant areas and optimal route of ``task`` in ``experiment``'s world."""
+        key = (ROBOT_EXPERIMENT if experiment == ROBOT_EXPERIMENT else TASKS_EXPERIMENT, task)
+        if key not in self._truths:
+            given = None if key[0] == ROBOT_EXPERIMENT else self.optimal.get(task)
+            self._truths[key] = task_truth(self.world(experiment), task, given)
+        return self._truths[key]
+
+    def has(self, experiment: str) -> bool:
+        return self.episodes.has(experiment)
+
+    @property
+    def switch_experiments(self) -> list[str]:
+        return [e for e in self.episodes.experiments if e.startswith(SWITCH_PREFIX)]
+
+    def methods(self, experiment: str) -> list[str]:
+        return self.episodes.methods(experiment)
+
+    def baselines(self, experiment: str) -> list[str]:
+        """Methods GDQ is tested against: every method but GDQ and its variants."""
+        return [m for m in self.methods(experiment) if not is_gdq(m)]
+
+    def switch_episode(self, experiment: str) -> int | None:
+        """First episode of the new task in a switch experiment (from the data; the
+        config's ``switch_episode`` only when the data show a single task)."""
+        ep = self.episodes
+        tasks = ep.tasks(experiment)
+        if len(tasks) >= 2:
+            rows = ep.mask(experiment, task=tasks[1])
+            return int(ep.values["episode"][rows].min())
+        return self.config.switch_episode
+
+    def route(self, experiment: str, method: str, task: str, run: int) -> Route | None:
+        """The intended route of a run's final greedy policy (None: no policy stored)."""
+        policy = self._policy_map.get((experiment, method, task, run))
+        if not policy:
+            return None
+        world = self.world(experiment)
+        t = world.task(task)
+        return walk_policy(world, policy, t.start, t.goal)
+
+    def routes(self, experiment: str, method: str, task: str) -> dict[int, Route]:
+        """Run -> route, for every run of ``method`` with a stored policy for ``task``."""
+        runs = sorted({r for (e, m, t, r) in self._policy_map
+                       if e == experiment and m == method and t == task})
+        out = {}
+        for r in runs:
+            route = self.route(experiment, method, task, r)
+            if route is not None:
+                out[r] = route
+        return out
+
+    def returns(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
+        return self.episodes.matrix("return", experiment, method, task)
