@@ -1,0 +1,333 @@
+"""Figures of an experiment output folder (matplotlib, Agg backend; PNG and PDF each).
+
+Every function takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and
+returns the paths it wrote (empty when its experiment is missing). A method has the same
+colour in every figure (:func:`method_colour`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.colors import PowerNorm  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+
+from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
+from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
+from gdq_pddl.analysis.study import Study  # noqa: E402
+from gdq_pddl.envs.render import MapPainter  # noqa: E402
+from gdq_pddl.world import World  # noqa: E402
+
+METHOD_COLOURS = {
+    "GDQ": "#d62728",
+    "GDQ-code": "#ff9896",
+    "DARLING": "#2ca02c",
+    "Dyna-Q": "#1f77b4",
+    "Q-learning": "#7f7f7f",
+}
+_EXTRA = ("#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf", "#ff7f0e")
+
+
+def method_colour(method: str) -> str:
+    """The colour of ``method`` in every figure (unknown methods: a stable extra colour)."""
+    if method in METHOD_COLOURS:
+        return METHOD_COLOURS[method]
+    return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
+
+
+@dataclass(frozen=True)
+class FigureOptions:
+    """How figures are drawn."""
+
+    window: int = 50
+    """Moving-average window of learning curves, in episodes."""
+    formats: tuple[str, ...] = ("png", "pdf")
+    dpi: int = 120
+
+
+def _save(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions) -> list[Path]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for ext in opts.formats:
+        path = out_dir / f"{stem}.{ext}"
+        fig.savefig(path, dpi=opts.dpi)
+        paths.append(path)
+    plt.close(fig)
+    return paths
+
+
+def _grid(n: int, width: float = 5.0, height: float = 3.6,
+          max_cols: int = 2) -> tuple[Figure, list[Axes]]:
+    cols = max(1, min(n, max_cols))
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False,
+                             layout="constrained")
+    flat = list(axes.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return fig, flat[:n]
+
+
+def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
+          scale: float = 1.0) -> None:
+    """Mean over runs with a standard-error band, both smoothed by a trailing average."""
+    mean, se = mean_se(matrix / scale, axis=0)
+    if window > 1:
+        mean = moving_average(mean, window, full_only=False)
+        se = moving_average(se, window, full_only=False)
+    colour = method_colour(method)
+    n = matrix.shape[0]
+    ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
+    ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
+
+
+def _task_title(world: World, task: str) -> str:
+    t = world.tasks.get(task)
+    return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"Task {task}"
+
+
+def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
+                    fraction_of_vstar: bool = False) -> list[Path]:
+    """Tasks A-D: return per episode (or return / V*), mean over runs +- SE, smoothed."""
+    exp = TASKS_EXPERIMENT
+    if not study.has(exp):
+        return []
+    ep, world = study.episodes, study.world(exp)
+    tasks = ep.tasks(exp)
+    fig, axes = _grid(len(tasks))
+    for ax, task in zip(axes, tasks, strict=True):
+        v_star = study.truth(exp, task).v_star
+        scale = v_star if fraction_of_vstar else 1.0
+        for method in ep.methods(exp):
+            m = ep.matrix("return", exp, method, task)
+            if m.size:
+                _band(ax, ep.episode_numbers(exp, method, task), m, method, opts.window, scale)
+        ref = 1.0 if fraction_of_vstar else v_star
+        ax.axhline(ref, color="black", ls="--", lw=0.8, label="V*" if not fraction_of_vstar
+                   else "V* (= 1)")
+        ax.set_title(_task_title(world, task), fontsize=10)
+        ax.set_xlabel("episode")
+        ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="lower right")
+    what = "return / V*" if fraction_of_vstar else "return per episode"
+    fig.suptitle(f"{what}: mean over runs +- SE, {opts.window}-episode moving average",
+                 fontsize=11)
+    stem = "fraction_of_vstar" if fraction_of_vstar else "learning_curves"
+    return _save(fig, out_dir, stem, opts)
+
+
+def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
+                  ) -> list[Path]:
+    """Each switch experiment (C->D, C->E): return over the whole run, line at the switch."""
+    exps = study.switch_experiments
+    if not exps:
+        return []
+    ep = study.episodes
+    fig, axes = _grid(len(exps))
+    for ax, exp in zip(axes, exps, strict=True):
+        for method in ep.methods(exp):
+            m = ep.matrix("return", exp, method)
+            if m.size:
+                _band(ax, ep.episode_numbers(exp, method), m, method, opts.window)
+        switch = study.switch_episode(exp)
+        if switch is not None:
+            ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
+        tasks = ep.tasks(exp)
+        ax.set_title(f"{exp}: task {' -> '.join(tasks)}", fontsize=10)
+        ax.set_xlabel("episode")
+        ax.set_ylabel("return (cumulative reward)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, loc="lower right")
+    fig.suptitle(f"goal change: mean over runs +- SE, {opts.window}-episode moving average",
+                 fontsize=11)
+    return _save(fig, out_dir, "switch_curves", opts)
+
+
+def _draw_map(ax: Axes, world: World, xy: dict[str, np.ndarray], alpha: float = 1.0) -> None:
+    """Corridors as thin grey lines, doors as thick dotted brown ones with their names."""
+    door_edges = {frozenset(d.sides): d for d in world.doors}
+    walls = [(xy[a], xy[b]) for a, b in world.edges if frozenset((a, b)) not in door_edges]
+    doors = [(xy[a], xy[b]) for a, b in world.edges if frozenset((a, b)) in door_edges]
+    ax.add_collection(LineCollection(walls, colors="#999999", linewidths=1.2, alpha=alpha,
+                                     zorder=1))
+    ax.add_collection(LineCollection(doors, colors="#8c564b", linewidths=3.0,
+                                     linestyles=":", alpha=alpha, zorder=1))
+    for d in world.doors:
+        if all(side in xy for side in d.sides):
+            mid = (xy[d.sides[0]] + xy[d.sides[1]]) / 2
+            ax.text(*mid, d.name, fontsize=6, ha="center", va="bottom", color="#8c564b",
+                    zorder=5)
+    ax.set_axis_off()
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.margins(0.1)
+
+
+def _mark_task(ax: Axes, world: World, xy: dict[str, np.ndarray], task: str) -> None:
+    t = world.tasks.get(task)
+    if t is None:
+        return
+    ax.scatter(*xy[t.start], s=420, facecolors="none", edgecolors="#1f77b4", lw=2.2, zorder=4)
+    ax.scatter(*xy[t.goal], s=420, facecolors="none", edgecolors="#2ca02c", lw=2.2, zorder=4)
+
+
+def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
+                   ) -> list[Path]:
+    """Per task (and for the robot task): one map panel per method, each position coloured
+    and sized by its area's visits summed over a run, mean over runs (the CSV counts areas,
+    not positions, so all positions of an area share a value)."""
+    paths: list[Path] = []
+    ep = study.episodes
+    for exp in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT):
+        if not study.has(exp):
+            continue
+        world = study.world(exp)
+        xy = MapPainter(world).xy
+        areas = ep.areas
+        for task in ep.tasks(exp):
+            methods = ep.methods(exp)
+            means = {}
+            for method in methods:
+                v = ep.area_visits(exp, method, task)
+                if v.size:
+                    means[method] = np.nanmean(np.nansum(v, axis=1), axis=0)
+            if not means:
+                continue
+            top = max(float(np.max(m)) for m in means.values()) or 1.0
+            norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=top)  # keep small counts visible
+            cmap = plt.get_cmap("magma_r")
+            fig, axes = _grid(len(means), width=3.6, height=3.6, max_cols=3)
+            for ax, (method, mean) in zip(axes, means.items(), strict=True):
+                _draw_map(ax, world, xy, alpha=0.6)
+                by_area = dict(zip(areas, mean, strict=True))
+                values = np.array([by_area.get(world.area_of.get(p, -1), 0.0)
+                                   for p in world.positions])
+                pts = np.array([xy[p] for p in world.positions])
+                ax.scatter(pts[:, 0], pts[:, 1], s=60 + 400 * np.sqrt(values / top),
+                           c=cmap(norm(values)), edgecolors="#333333", linewidths=0.6,
+                           zorder=3)
+                for p, value in zip(world.positions, values, strict=True):
+                    ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
+                            color="white" if value > 0.3 * top else "black")
+                _mark_task(ax, world, xy, task)
+                ax.set_title(method, fontsize=10, color=method_colour(method))
+            sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
+            fig.colorbar(sm, ax=axes, shrink=0.6, label="area visits per run (mean)")
+            label = "robot " if exp == ROBOT_EXPERIMENT else ""
+            fig.suptitle(f"{label}{_task_title(world, task)}: visits per area "
+                         "(blue ring start, green ring goal)", fontsize=10)
+            stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{task}"
+            paths += _save(fig, out_dir, stem, opts)
+    return paths
+
+
+def _draw_route(ax: Axes, xy: dict[str, np.ndarray], positions: Sequence[str],
+                colour: str) -> None:
+    for a, b in zip(positions[:-1], positions[1:], strict=True):
+        if a == b:
+            continue
+        ax.annotate("", xy=xy[b], xytext=xy[a], zorder=4,
+                    arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.2,
+                                "shrinkA": 6, "shrinkB": 6})
+
+
+def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
+                experiment: str = TASKS_EXPERIMENT, task: str = "C") -> list[Path]:
+    """The route each method's final greedy policy takes (most common over runs)."""
+    if study.policies is None or not study.has(experiment):
+        return []
+    world = study.world(experiment)
+    if task not in world.tasks:
+        return []
+    xy = MapPainter(world).xy
+    best = study.truth(experiment, task).optimal_route_areas
+    panels = []
+    for method in study.methods(experiment):
+        routes = study.routes(experiment, method, task)
+        if routes:
+            panels.append((method, routes))
+    if not panels:
+        return []
+    fig, axes = _grid(len(panels), width=3.6, height=3.8, max_cols=3)
+    for ax, (method, routes) in zip(axes, panels, strict=True):
+        _draw_map(ax, world, xy, alpha=0.5)
+        pts = np.array([xy[p] for p in world.positions])
+        ax.scatter(pts[:, 0], pts[:, 1], s=80, c="#eeeeee", edgecolors="#555555",
+                   linewidths=0.6, zorder=2)
+        for p in world.positions:
+            ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6)
+        counts = Counter(r.positions for r in routes.values())
+        top, k = counts.most_common(1)[0]
+        route = next(r for r in routes.values() if r.positions == top)
+        _draw_route(ax, xy, top, method_colour(method))
+        _mark_task(ax, world, xy, task)
+        on_best = sum(r.reached_goal and r.areas(world) == best for r in routes.values())
+        areas = "->".join(map(str, route.areas(world)))
+        ax.set_title(f"{method}: {k}/{len(routes)} runs take this route", fontsize=9,
+                     color=method_colour(method))
+        ax.text(0.5, -0.02, f"areas {areas} ({route.end}); optimal route: "
+                f"{on_best}/{len(routes)} runs", transform=ax.transAxes, ha="center",
+                va="top", fontsize=7)
+    fig.suptitle(f"{_task_title(world, task)}: most common final greedy route per method "
+                 f"(optimal: areas {'->'.join(map(str, best))})", fontsize=10)
+    stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{task}"
+    return _save(fig, out_dir, stem, opts)
+
+
+def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
+                  ) -> list[Path]:
+    """Robot protocol: return (cumulative reward) per trial, mean over runs +- SE."""
+    exp = ROBOT_EXPERIMENT
+    if not study.has(exp):
+        return []
+    ep = study.episodes
+    fig, ax = plt.subplots(figsize=(6.0, 3.8), layout="constrained")
+    tasks = ep.tasks(exp)
+    for method in ep.methods(exp):
+        m = ep.matrix("return", exp, method)
+        if m.size:
+            x = ep.episode_numbers(exp, method)
+            _band(ax, x, m, method, window=1)
+            ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
+    if len(tasks) == 1:
+        ax.axhline(study.truth(exp, tasks[0]).v_star, color="black", ls="--", lw=0.8,
+                   label="V*")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("return (cumulative reward) per trial")
+    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean over runs +- SE "
+                 "(unsmoothed)", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, out_dir, "robot_returns", opts)
+
+
+def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
+                 study: Study | None = None, fig_dir: str | Path | None = None) -> list[Path]:
+    """Every figure of an output folder into ``fig_dir`` (default ``out_dir/figures``)."""
+    study = study or Study.open(out_dir)
+    target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
+    paths: list[Path] = []
+    paths += learning_curves(study, target, opts)
+    paths += learning_curves(study, target, opts, fraction_of_vstar=True)
+    paths += switch_curves(study, target, opts)
+    paths += visit_heatmaps(study, target, opts)
+    paths += task_routes(study, target, opts)
+    if study.has(ROBOT_EXPERIMENT):
+        tasks = study.episodes.tasks(ROBOT_EXPERIMENT)
+        if tasks:
+            paths += task_routes(study, target, opts, ROBOT_EXPERIMENT, tasks[-1])
+    paths += robot_returns(study, target, opts)
+    return paths
