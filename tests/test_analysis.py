@@ -1,0 +1,293 @@
+"""Figures, tables and report from a small synthetic experiment output folder."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
+from gdq_pddl.analysis import make_all, write_report
+from gdq_pddl.analysis.data import load_episodes
+from gdq_pddl.analysis.figures import FigureOptions, make_figures
+from gdq_pddl.analysis.routes import walk_policy
+from gdq_pddl.analysis.stats import compare, first_crossing, moving_average, verdict
+from gdq_pddl.analysis.study import Study
+from gdq_pddl.analysis.tables import area_table, make_tables
+from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.solve import solve
+from gdq_pddl.pddl.office import office_problem
+from gdq_pddl.planning import PlanningProblem, get_planner
+from gdq_pddl.resources import domain_text
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import World, builtin_world, load_world
+
+METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+QUALITY = {"GDQ": 1.0, "GDQ-code": 0.9, "DARLING": 0.6, "Dyna-Q": 0.4, "Q-learning": 0.2}
+V_STAR = {"A": 14.6, "B": 15.7, "C": 11.5, "D": 11.4, "E": 14.6}
+RELEVANT = {"A": [2, 4, 6, 7], "B": [4, 7], "C": [1, 2, 3, 6], "D": [1, 3, 4, 7],
+            "E": [4, 6, 7]}
+PAPER_IRR = {"A": [1, 2, 3], "B": [1, 2, 3, 6], "C": [4, 5, 7], "D": [2, 5], "E": []}
+ROUTE = {"A": [4, 7, 6], "B": [4, 7], "C": [1, 3, 2, 6], "D": [1, 3, 4, 7], "E": [6, 7, 4]}
+RUNS, EPISODES = 2, 60
+SWITCH_AT = EPISODES + 1
+HEADER = ["experiment", "method", "task", "run", "episode", "return", "steps", "success",
+          *[f"area_{k}" for k in range(1, 8)]]
+
+
+def optimal_policy(world: World, task: str) -> dict[int, int]:
+    """Learner policy from the true optimal policy at step 0 (only the local door open)."""
+    model = compile_model(world)
+    sol = solve(model, world.index[world.task(task).goal])
+    spaces = LearnerSpaces(world)
+    out = {}
+    for s, (p, is_open) in enumerate(spaces.states):
+        door = world.door_at.get(p)
+        fs = full_state(world, p, frozenset({door.name}) if door and is_open else frozenset())
+        out[s] = int(sol.policy[0, fs])
+    return out
+
+
+def plan_policy(world: World, task: str) -> dict[int, int]:
+    """Learner policy: the first action of the first shortest graph plan from each state."""
+    ab = OfficeAbstraction(world)
+    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, world.task(task)))
+    table = build_plan_table(ab, problem, get_planner("graph"), ab.goal(world.task(task).goal))
+    return {s: plans[0][0][1] for s in range(ab.n_states) if (plans := table.plans_from(s))}
+
+
+def _episode(rng: np.random.Generator, q: float, episode: int, task: str, v_star: float,
+             r_max: float, route_from: int) -> tuple[float, int, int, list[int]]:
+    """One fake episode: return rising with quality ``q``; area visits on the task's route
+    (off-route areas visited with a probability that falls with ``q``)."""
+    level = -r_max + (v_star + r_max) * q * (1 - np.exp(-episode / 10))
+    ret = float(level + rng.normal(0, r_max / 10))
+    areas = [0] * 7
+    for a in ROUTE[task] if episode >= route_from else RELEVANT[task]:
+        areas[a - 1] += int(rng.integers(1, 3))
+    for a in range(1, 8):
+        if a not in RELEVANT[task] and rng.random() < (1.05 - q) * 0.8:
+            areas[a - 1] += int(rng.integers(1, 4))
+    success = int(ret > 0)
+    return ret, sum(areas), success, areas
+
+
+def write_output(out: Path, worse_task: str | None = None, switches: bool = True,
+                 robot: bool = True) -> Path:
+    """A synthetic output folder; GDQ is best unless ``worse_task`` makes it worst there."""
+    rng = np.random.default_rng(7)
+    world, robot_world = load_world(), builtin_world("office_robot")
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[list] = []
+    experiments = ["tasks"]
+
+    def quality(method: str, task: str) -> float:
+        return 0.05 if method == "GDQ" and task == worse_task else QUALITY[method]
+
+    def add(exp: str, method: str, task: str, run: int, ep: int, local: int, v: float,
+            r_max: float, route_from: int) -> None:
+        ret, steps, success, areas = _episode(rng, quality(method, task), local, task, v,
+                                              r_max, route_from)
+        rows.append([exp, method, task, run, ep, f"{ret:.3f}", steps, success, *areas])
+
+    for method in METHODS:
+        route_from = 20 if method.startswith("GDQ") else 10**6
+        for task in "ABCD":
+            for run in range(RUNS):
+                for e in range(1, EPISODES + 1):
+                    add("tasks", method, task, run, e, e, V_STAR[task], 20.0, route_from)
+        if switches:
+            for second in "DE":
+                for run in range(RUNS):
+                    for e in range(1, 2 * EPISODES + 1):
+                        task = "C" if e < SWITCH_AT else second
+                        local = e if task == "C" else e - SWITCH_AT + 1
+                        add(f"switch-C-{second}", method, task, run, e, local,
+                            V_STAR[task], 20.0, route_from)
+    if switches:
+        experiments += ["switch-C-D", "switch-C-E"]
+    if robot:
+        experiments.append("robot")
+        for method in ("GDQ", "Dyna-Q"):
+            for run in range(RUNS):
+                for e in range(1, 31):
+                    if method == "GDQ":
+                        ret, success = 900.0 - 600 * np.exp(-e / 5) + rng.normal(0, 20), 1
+                        areas = [0, 2, 2, 0, 0, 2, 0] if e > 10 else [0, 1, 2, 0, 0, 2, 1]
+                    else:
+                        ret, success, areas = -1000.0 - rng.uniform(0, 200), 0, [0, 0, 3, 2,
+                                                                                0, 0, 0]
+                    rows.append(["robot", method, "X", run, e, f"{ret:.3f}", sum(areas),
+                                 success, *areas])
+    with (out / "episodes.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(HEADER)
+        w.writerows(rows)
+
+    policies: list[list] = []
+    good, short = optimal_policy(world, "C"), plan_policy(world, "C")
+    for method in METHODS:
+        for run in range(RUNS):
+            pol = good if method.startswith("GDQ") or (method == "DARLING" and run == 0) \
+                else short
+            policies += [["tasks", method, "C", run, s, a] for s, a in pol.items()]
+    if robot:
+        good_x = optimal_policy(robot_world, "X")
+        for run in range(RUNS):
+            policies += [["robot", "GDQ", "X", run, s, a] for s, a in good_x.items()]
+            policies += [["robot", "Dyna-Q", "X", run, s, 0] for s in good_x]
+    with (out / "policies.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["experiment", "method", "task", "run", "state", "action"])
+        w.writerows(policies)
+
+    optimal = {t: {"v_star": V_STAR[t], "relevant_areas": RELEVANT[t],
+                   "irrelevant_areas_paper": PAPER_IRR[t], "optimal_route_areas": ROUTE[t]}
+               for t in "ABCDE"}
+    (out / "optimal.json").write_text(json.dumps(optimal))
+    config = {"world": "office", "seed": 1, "episodes": EPISODES, "runs": RUNS,
+              "switch_episode": SWITCH_AT, "methods": list(METHODS),
+              "versions": {"gdq_pddl": "test"}, "experiments": experiments,
+              "unknown_key": {"ignored": True}}
+    (out / "config.json").write_text(json.dumps(config))
+    return out
+
+
+@pytest.fixture(scope="module")
+def full(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Path]]:
+    out = write_output(tmp_path_factory.mktemp("full"))
+    return out, make_all(out)
+
+
+def _report_verdicts(text: str) -> dict[str, str]:
+    return {m.group(2): m.group(3) for m in re.finditer(
+        r"^\| (I|II|III) \| (.+?) \| \*\*(.+?)\*\* \|", text, re.M)}
+
+
+def test_episodes_load_into_run_by_episode_matrices(full):
+    out, _ = full
+    ep = load_episodes(out)
+    assert ep.experiments == ["robot", "switch-C-D", "switch-C-E", "tasks"]
+    assert ep.methods("tasks") == list(METHODS)
+    assert ep.tasks("switch-C-D") == ["C", "D"]
+    m = ep.matrix("return", "tasks", "GDQ", "C")
+    assert m.shape == (RUNS, EPISODES) and not np.isnan(m).any()
+    assert ep.area_visits("tasks", "GDQ", "C").shape == (RUNS, EPISODES, 7)
+    assert ep.matrix("return", "switch-C-E", "DARLING").shape == (RUNS, 2 * EPISODES)
+    assert ep.matrix("return", "nope", "GDQ").size == 0
+    assert Study.open(out).switch_episode("switch-C-D") == SWITCH_AT
+
+
+def test_figures_are_written_as_png_and_pdf(full):
+    _, paths = full
+    pngs = [p for p in paths if p.suffix == ".png"]
+    assert len(pngs) >= 6
+    assert all(p.stat().st_size > 1000 for p in pngs)
+    assert {p.with_suffix(".pdf") for p in pngs} <= set(paths)
+    names = {p.stem for p in pngs}
+    assert {"learning_curves", "switch_curves", "fraction_of_vstar", "heatmap_C",
+            "routes_C", "robot_returns"} <= names
+
+
+def test_bold_cells_are_the_minima_of_irrelevant_areas(full):
+    out, _ = full
+    table = area_table(Study.open(out))
+    assert table.irrelevant_paper["D"] == (2, 5)
+    assert table.irrelevant_computed["D"] == (2, 5, 6)
+    for task in "ABCD":
+        rows = [r for r in table.rows if r.task == task]
+        irrelevant = set(table.irrelevant_paper[task]) | set(table.irrelevant_computed[task])
+        for i, area in enumerate(table.areas):
+            lowest = min(round(r.mean[i], 1) for r in rows)
+            for r in rows:
+                expect = area in irrelevant and round(r.mean[i], 1) == lowest
+                assert r.bold[i] == expect, (task, area, r.method)
+        assert any(r.bold for r in rows)
+    md = (out / "tables" / "area_visits.md").read_text()
+    tex = (out / "tables" / "area_visits.tex").read_text()
+    assert "**" in md and r"\mathbf" in tex and r"\toprule" in tex
+    with (out / "tables" / "area_visits.csv").open() as f:
+        assert len(list(csv.DictReader(f))) == 4 * len(METHODS)
+
+
+def test_report_has_a_verdict_per_hypothesis_and_task(full):
+    out, _ = full
+    text = (out / "REPORT.md").read_text()
+    verdicts = _report_verdicts(text)
+    for task in "ABCD":
+        assert verdicts[f"Task {task}"] == "holds"
+        assert any(k.startswith(f"Task {task}, paper") for k in verdicts)
+        assert any(k.startswith(f"Task {task}, computed") for k in verdicts)
+    assert sum(k.startswith("switch-C-") for k in verdicts) == 2
+    assert set(verdicts.values()) <= {"holds", "does not hold", "mixed"}
+    assert "Welch p" in text and "95% CI" in text and "n = 2 vs 2 runs" in text
+    assert "![learning curves" in text and "(figures/learning_curves.png)" in text
+    assert "| GDQ | 2/2 (100%)" in text  # both GDQ runs' greedy route is 1->3->2->6
+    assert "| Q-learning | 0/2 (0%)" in text
+    assert "Dyna-Q reached the goal at least once within 30 trials in 0 of 2 runs" in text
+    assert "Skipped" not in text
+
+
+def test_verdict_flips_when_gdq_is_worse(tmp_path):
+    out = write_output(tmp_path, worse_task="B", switches=False, robot=False)
+    text = write_report(out).read_text()
+    verdicts = _report_verdicts(text)
+    assert verdicts["Task B"] == "does not hold"
+    assert verdicts["Task A"] == "holds"
+
+
+def test_missing_experiments_are_skipped_with_a_note(tmp_path):
+    out = write_output(tmp_path, switches=False, robot=False)
+    paths = make_figures(out, FigureOptions(formats=("png",), dpi=50))
+    assert not any(p.stem in ("switch_curves", "robot_returns") for p in paths)
+    assert make_tables(out)
+    text = write_report(out).read_text()
+    assert "Hypothesis III: skipped, no switch experiment" in text
+    assert "Robot protocol: skipped, the robot experiment is missing" in text
+    assert "Task C" in _report_verdicts(text)
+
+
+def test_only_a_robot_run_still_reports(tmp_path):
+    out = write_output(tmp_path)
+    with (out / "episodes.csv").open() as f:
+        rows = [r for r in csv.reader(f) if r[0] in ("experiment", "robot")]
+    with (out / "episodes.csv").open("w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    (out / "optimal.json").unlink()
+    (out / "config.json").write_text("{}")
+    text = write_report(out).read_text()
+    assert "the tasks experiment (A-D) is missing" in text
+    assert "## Robot protocol" in text
+
+
+def test_walking_policies_finds_the_routes():
+    world = load_world()
+    good = walk_policy(world, optimal_policy(world, "C"), "p0", "p17")
+    assert good.reached_goal and good.areas(world) == (1, 3, 2, 6)
+    short = walk_policy(world, plan_policy(world, "C"), "p0", "p17")
+    assert short.reached_goal and short.areas(world) in {(1, 2, 6), (1, 3, 6)}
+    assert walk_policy(world, {}, "p0", "p17").end == "no-policy"
+    stay = {s: 0 for s in range(LearnerSpaces(world).n_states)}  # goto p0: no-op or loop
+    assert not walk_policy(world, stay, "p0", "p17").reached_goal
+
+
+def test_statistics():
+    rng = np.random.default_rng(0)
+    better = compare(rng.normal(5, 1, 10), rng.normal(0, 1, 10), "GDQ", "B")
+    worse = compare(rng.normal(0, 1, 10), rng.normal(5, 1, 10), "GDQ", "B")
+    same = compare(np.array([1.0, 1.0]), np.array([1.0, 1.0]), "GDQ", "B")
+    assert better.outcome == "better" and better.ci_low > 0 and better.p < 0.05
+    assert worse.outcome == "worse"
+    assert same.outcome == "inconclusive"
+    assert verdict([better, better]) == "holds"
+    assert verdict([better, same]) == "mixed"
+    assert verdict([better, worse]) == "does not hold"
+    assert verdict([same]) == "does not hold"
+    ma = moving_average(np.arange(1.0, 6.0), 2)
+    assert np.isnan(ma[0]) and ma[1:].tolist() == [1.5, 2.5, 3.5, 4.5]
+    assert first_crossing(np.array([-1.0, -1, 3, 3, -1]), 2) == 3.0
+    assert np.isnan(first_crossing(-np.ones(10), 3))
