@@ -104,7 +104,8 @@ def test_knowledge_and_reality_agree_on_every_move():
                 task.atoms(t)) for op, t in task.successors(task.mask(atoms))}
             fs = full_state(world, p, open_doors)
             for a in range(model.n_actions):
-                lo, hi = model.ptr[fs * model.n_actions + a], model.ptr[fs * model.n_actions + a + 1]
+                i = fs * model.n_actions + a
+                lo, hi = model.ptr[i], model.ptr[i + 1]
                 likeliest = model.next[lo + int(model.prob[lo:hi].argmax())]
                 moved = hi - lo > 1 or likeliest != fs
                 assert moved == (a in planned), (p, open_doors, abstraction.spaces.action_name(a))

@@ -182,6 +182,8 @@ def _ray(units: list[Unit], jobs: int | None, address: str | None):
                            "(pip install 'gdq_pddl[ray]')") from None
     started = not ray.is_initialized()
     if started:
+        if address:
+            _check_reachable(address)
         kwargs = {"address": address} if address else {"num_cpus": jobs or os.cpu_count()}
         try:
             ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
@@ -199,3 +201,17 @@ def _ray(units: list[Unit], jobs: int | None, address: str | None):
     finally:
         if started:
             ray.shutdown()
+
+
+def _check_reachable(address: str, timeout: float = 5.0) -> None:
+    """Fail fast on a ``host:port`` nobody answers (ray.init retries for minutes)."""
+    import socket
+
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        return  # "auto" and other forms: let Ray resolve them
+    try:
+        socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise ResultsError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}"
+                           ) from None

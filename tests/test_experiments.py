@@ -1,0 +1,176 @@
+"""The experiment runner: results as data, identical for any jobs, resumable after a kill."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gdq_pddl.experiments import (
+    Experiment,
+    ResultsError,
+    run_experiments,
+    switch_experiment,
+    task_experiments,
+)
+
+SMALL = dict(episodes=20, runs=2, methods=("GDQ", "Q-learning"))
+COLUMNS = ["experiment", "method", "task", "run", "episode", "return", "steps", "success",
+           *(f"area_{k}" for k in range(1, 8))]
+
+
+def read_rows(out: Path) -> list[dict[str, str]]:
+    with open(out / "episodes.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_episodes_csv_has_the_documented_columns_and_one_row_per_episode(tmp_path):
+    exps = task_experiments(tasks=("A", "C"), **SMALL)
+    exps.append(switch_experiment("C", "D", 10, runs=1, methods=("GDQ",)))
+    run_experiments(exps, tmp_path, jobs=1)
+    with open(tmp_path / "episodes.csv", newline="") as fh:
+        assert next(csv.reader(fh)) == COLUMNS
+    rows = read_rows(tmp_path)
+    assert len(rows) == 2 * 2 * 2 * 20 + 20
+    switch = [r for r in rows if r["experiment"] == "switch-C-D"]
+    assert [r["task"] for r in switch] == ["C"] * 10 + ["D"] * 10
+    assert [int(r["episode"]) for r in switch] == list(range(1, 21))
+    for r in rows:
+        steps = int(r["steps"])
+        assert 1 <= steps <= 20
+        assert sum(int(r[f"area_{k}"]) for k in range(1, 8)) <= steps
+        assert r["success"] in ("0", "1")
+    config = json.loads((tmp_path / "config.json").read_text())
+    assert {"numpy", "numba", "gdq_pddl"} <= config["versions"].keys()
+    assert len(config["experiments"]) == 3
+    optimal = json.loads((tmp_path / "optimal.json").read_text())
+    assert optimal["C"]["v_star"] == pytest.approx(11.51, abs=0.01)
+    with open(tmp_path / "policies.csv", newline="") as fh:
+        policies = list(csv.DictReader(fh))
+    assert len(policies) == (2 * 2 * 2 + 1) * 31
+
+
+def test_any_number_of_jobs_gives_identical_results(tmp_path):
+    exps = task_experiments(tasks=("C",), **SMALL)
+    run_experiments(exps, tmp_path / "one", jobs=1)
+    run_experiments(exps, tmp_path / "two", jobs=2)
+    assert (tmp_path / "one" / "episodes.csv").read_bytes() == \
+        (tmp_path / "two" / "episodes.csv").read_bytes()
+
+
+def test_existing_results_need_resume_and_the_same_configuration(tmp_path):
+    exps = task_experiments(tasks=("C",), episodes=5, runs=1, methods=("Q-learning",))
+    run_experiments(exps, tmp_path, jobs=1)
+    with pytest.raises(ResultsError, match="--resume"):
+        run_experiments(exps, tmp_path, jobs=1)
+    other = task_experiments(tasks=("C",), episodes=6, runs=1, methods=("Q-learning",))
+    with pytest.raises(ResultsError, match="different configuration"):
+        run_experiments(other, tmp_path, jobs=1, resume=True)
+    run_experiments(exps, tmp_path, jobs=1, resume=True)  # nothing left to do: fine
+
+
+def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
+    """Kill the CLI mid-way (SIGKILL: no chance to clean up), then --resume."""
+    out = tmp_path / "killed"
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--method", "GDQ",
+            "Q-learning", "Dyna-Q", "--episodes", "400", "--runs", "4", "--jobs", "1",
+            "--out", str(out), "--no-report"]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    units = out / "units"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list(units.glob("*.npz"))) < 2:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = len(list(units.glob("*.npz")))
+    assert 2 <= done < 12, "the run should have been killed mid-way"
+    result = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert not list(units.glob(".*.tmp")), "no half-written files may remain"
+    fresh = tmp_path / "fresh"
+    subprocess.run([*argv[:-3], "--out", str(fresh), "--no-report"], check=True,
+                   capture_output=True, timeout=300)
+    assert (out / "episodes.csv").read_bytes() == (fresh / "episodes.csv").read_bytes()
+    keys = [(r["method"], r["run"], r["episode"]) for r in read_rows(out)]
+    assert len(keys) == len(set(keys)) == 3 * 4 * 400
+
+
+def test_interrupt_message_says_how_to_resume(tmp_path):
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "3000",
+            "--runs", "4", "--jobs", "2", "--out", str(tmp_path), "--no-report"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (tmp_path / "config.json").exists():
+        time.sleep(0.05)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0
+    assert "--resume" in err and "Traceback" not in err
+
+
+def test_unit_seeds_depend_only_on_identity():
+    exp = Experiment("tasks", (("C", 5),), ("GDQ", "Q-learning"), runs=2)
+    a = [u.seeds()[0].random() for u in exp.units()]
+    b = [u.seeds()[0].random() for u in exp.units()]
+    assert a == b and len(set(a)) == 4
+
+
+RAY_SCRIPT = """
+import subprocess, sys
+from pathlib import Path
+from gdq_pddl.experiments import run_experiments, task_experiments
+exps = task_experiments(tasks=("C",), episodes=20, runs=2, methods=("GDQ", "Q-learning"))
+subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
+subprocess.run(["ray", "start", "--head", "--port=6399", "--num-cpus=2",
+                "--include-dashboard=false", "--disable-usage-stats"], check=True,
+               capture_output=True)
+try:
+    run_experiments(exps, Path(sys.argv[1]), executor="ray", address="127.0.0.1:6399")
+finally:
+    subprocess.run(["ray", "stop", "--force"], capture_output=True)
+"""
+
+
+def _can_unshare_network() -> bool:
+    try:
+        return subprocess.run(["unshare", "-n", "true"], capture_output=True).returncode == 0
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not _can_unshare_network(), reason="needs a private network namespace")
+def test_ray_executor_matches_local_processes(tmp_path):
+    """A local Ray cluster, started by the test inside a loopback-only network namespace."""
+    pytest.importorskip("ray")
+    env = dict(os.environ, RAY_AUTH_MODE="disabled", RAY_USAGE_STATS_ENABLED="0")
+    result = subprocess.run(["unshare", "-n", sys.executable, "-c", RAY_SCRIPT,
+                             str(tmp_path / "ray")], capture_output=True, text=True, env=env,
+                            timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    run_experiments(task_experiments(tasks=("C",), **SMALL), tmp_path / "local", jobs=2)
+    assert (tmp_path / "ray" / "episodes.csv").read_bytes() == \
+        (tmp_path / "local" / "episodes.csv").read_bytes()
+
+
+def test_unreachable_ray_address_is_a_clear_error(tmp_path):
+    pytest.importorskip("ray")
+    exps = task_experiments(tasks=("C",), episodes=2, runs=1, methods=("GDQ",))
+    with pytest.raises(ResultsError, match="cannot reach a Ray cluster at 127.0.0.1:1"):
+        run_experiments(exps, tmp_path, executor="ray", address="127.0.0.1:1")
+
+
+def test_results_are_arrays_of_the_right_shape(tmp_path):
+    exps = task_experiments(tasks=("B",), episodes=7, runs=1, methods=("DARLING",))
+    run_experiments(exps, tmp_path, jobs=1)
+    data = np.load(next((tmp_path / "units").glob("*.npz")))
+    assert data["returns"].shape == (7,) and data["areas"].shape == (7, 7)
+    assert data["policy"].shape == (31,)
