@@ -12,7 +12,7 @@ import pytest
 
 from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
 from gdq_pddl.analysis import make_all, write_report
-from gdq_pddl.analysis.data import load_episodes
+from gdq_pddl.analysis.data import load_config, load_episodes
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
 from gdq_pddl.analysis.routes import walk_policy
 from gdq_pddl.analysis.stats import compare, first_crossing, moving_average, verdict
@@ -83,7 +83,6 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
     world, robot_world = load_world(), builtin_world("office_robot")
     out.mkdir(parents=True, exist_ok=True)
     rows: list[list] = []
-    experiments = ["tasks"]
 
     def quality(method: str, task: str) -> float:
         return 0.05 if method == "GDQ" and task == worse_task else QUALITY[method]
@@ -108,10 +107,7 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
                         local = e if task == "C" else e - SWITCH_AT + 1
                         add(f"switch-C-{second}", method, task, run, e, local,
                             V_STAR[task], 20.0, route_from)
-    if switches:
-        experiments += ["switch-C-D", "switch-C-E"]
     if robot:
-        experiments.append("robot")
         for method in ("GDQ", "Dyna-Q"):
             for run in range(RUNS):
                 for e in range(1, 31):
@@ -148,11 +144,20 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
     optimal = {t: {"v_star": V_STAR[t], "relevant_areas": RELEVANT[t],
                    "irrelevant_areas_paper": PAPER_IRR[t], "optimal_route_areas": ROUTE[t]}
                for t in "ABCDE"}
-    (out / "optimal.json").write_text(json.dumps(optimal))
-    config = {"world": "office", "seed": 1, "episodes": EPISODES, "runs": RUNS,
-              "switch_episode": SWITCH_AT, "methods": list(METHODS),
-              "versions": {"gdq_pddl": "test"}, "experiments": experiments,
+    # the runner's layout: one entry per experiment (tasks: one per task), versions
+    entries = [{"name": "tasks", "schedule": [[t, EPISODES]], "methods": list(METHODS),
+                "runs": RUNS, "world": "office", "seed": 1} for t in "ABCD"]
+    entries += [{"name": f"switch-C-{t}", "schedule": [["C", EPISODES], [t, EPISODES]],
+                 "methods": list(METHODS), "runs": RUNS, "world": "office", "seed": 1}
+                for t in "DE" if switches]
+    if robot:
+        entries.append({"name": "robot", "schedule": [["X", 30]], "methods": ["GDQ", "Dyna-Q"],
+                        "runs": RUNS, "world": "office_robot", "seed": 1})
+        optimal["X@office_robot"] = {"v_star": 900.0, "relevant_areas": [2, 3, 6],
+                                     "irrelevant_areas_paper": []}
+    config = {"experiments": entries, "versions": {"gdq_pddl": "test"},
               "unknown_key": {"ignored": True}}
+    (out / "optimal.json").write_text(json.dumps(optimal))
     (out / "config.json").write_text(json.dumps(config))
     return out
 
@@ -230,6 +235,8 @@ def test_report_has_a_verdict_per_hypothesis_and_task(full):
     assert "| Q-learning | 0/2 (0%)" in text
     assert "Dyna-Q reached the goal at least once within 30 trials in 0 of 2 runs" in text
     assert "Skipped" not in text
+    assert "| robot | office_robot | X x 30 | GDQ, Dyna-Q | 2 | 1 |" in text
+    assert "V* = 900.0" in text  # read from optimal.json's X@office_robot
 
 
 def test_verdict_flips_when_gdq_is_worse(tmp_path):
@@ -262,6 +269,16 @@ def test_only_a_robot_run_still_reports(tmp_path):
     text = write_report(out).read_text()
     assert "the tasks experiment (A-D) is missing" in text
     assert "## Robot protocol" in text
+
+
+def test_flat_config_keys_are_read_with_defaults(tmp_path):
+    (tmp_path / "config.json").write_text(json.dumps(
+        {"world": "office", "seed": 3, "runs": 10, "episodes": 2500, "switch_episode": 2501,
+         "methods": ["GDQ"], "experiments": ["tasks", "robot"], "other": 1}))
+    cfg = load_config(tmp_path)
+    assert (cfg.seed, cfg.runs, cfg.switch_episode) == (3, 10, 2501)
+    assert cfg.world_spec("tasks") == "office" and cfg.world_spec("robot") == "office_robot"
+    assert load_config(tmp_path / "nowhere").world_spec("tasks") == "office"
 
 
 def test_walking_policies_finds_the_routes():

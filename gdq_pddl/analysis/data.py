@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -182,29 +182,67 @@ def load_episodes(path: str | Path) -> Episodes:
     values: dict[str, np.ndarray] = {}
     for name, col in zip(header, columns, strict=True):
         if name in CATEGORICAL:
-            uniq, inverse = np.unique(np.asarray(col, dtype=str), return_inverse=True)
-            labels[name] = tuple(str(u) for u in uniq)
-            codes[name] = inverse.astype(np.int32)
+            labels[name], codes[name] = _encode(col)
         else:
-            arr = np.asarray(col, dtype=str)
-            arr[arr == ""] = "nan"
-            values[name] = arr.astype(np.float64)
+            values[name] = _floats(col)
     return Episodes(codes=codes, labels=labels, values=values)
+
+
+def _encode(col: Sequence[str]) -> tuple[tuple[str, ...], np.ndarray]:
+    """Sorted labels and int32 codes of a text column (a dict pass: fast for few labels)."""
+    seen: dict[str, int] = {}
+    raw = np.fromiter((seen.setdefault(v, len(seen)) for v in col), dtype=np.int32,
+                      count=len(col))
+    ordered = sorted(seen)
+    remap = np.empty(len(seen), dtype=np.int32)
+    for new, label in enumerate(ordered):
+        remap[seen[label]] = new
+    return tuple(ordered), remap[raw] if len(col) else raw
+
+
+def _floats(col: Sequence[str]) -> np.ndarray:
+    """A numeric column as float64 (empty cells become NaN)."""
+    try:
+        return np.array(col, dtype=np.float64)
+    except ValueError:
+        arr = np.asarray(col, dtype=str)
+        arr[np.char.strip(arr) == ""] = "nan"
+        return arr.astype(np.float64)
 
 
 @dataclass(frozen=True)
 class RunConfig:
-    """The keys of ``config.json`` the analysis uses, with defaults for absent ones."""
+    """The keys of ``config.json`` the analysis uses, with defaults for absent ones.
+
+    The runner writes ``{"experiments": [{"name", "schedule", "methods", "runs", "world",
+    "seed", ...}, ...], "versions": {...}}``; flat keys (``world``, ``seed``, ``runs``,
+    ``episodes``, ``switch_episode``, ``methods``) are read too, as fallbacks.
+    """
 
     world: str | None = None
-    seed: int = 0
+    seed: int | None = None
     episodes: int | None = None
     runs: int | None = None
     switch_episode: int | None = None
     methods: tuple[str, ...] = ()
-    experiments: tuple[str, ...] = ()
+    experiments: tuple[Mapping[str, Any], ...] = ()
+    """One mapping per experiment (a bare name in the file becomes ``{"name": name}``)."""
     versions: Mapping[str, Any] = field(default_factory=dict)
     raw: Mapping[str, Any] = field(default_factory=dict)
+
+    def experiment(self, name: str) -> Mapping[str, Any]:
+        """The config entry of experiment ``name`` (empty when absent)."""
+        return next((e for e in self.experiments if e.get("name") == name), {})
+
+    def world_spec(self, experiment: str) -> str:
+        """``office``, ``office_robot`` or a world-file path that ``experiment`` ran in."""
+        value = self.experiment(experiment).get("world")
+        if isinstance(value, str) and value:
+            return value
+        if experiment == ROBOT_EXPERIMENT:
+            robot = self.raw.get("robot_world")
+            return robot if isinstance(robot, str) and robot else "office_robot"
+        return self.world or "office"
 
 
 def load_config(out_dir: str | Path) -> RunConfig:
@@ -212,7 +250,10 @@ def load_config(out_dir: str | Path) -> RunConfig:
     path = Path(out_dir) / "config.json"
     if not path.exists():
         return RunConfig()
-    raw = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError:
+        return RunConfig()
     if not isinstance(raw, dict):
         return RunConfig()
 
@@ -220,36 +261,32 @@ def load_config(out_dir: str | Path) -> RunConfig:
         v = raw.get(key)
         return int(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else None
 
+    experiments = []
+    for e in raw.get("experiments", []) or []:
+        if isinstance(e, dict):
+            experiments.append(e)
+        elif isinstance(e, str):
+            experiments.append({"name": e})
     world = raw.get("world")
+    methods = raw.get("methods", []) or []
     return RunConfig(
         world=world if isinstance(world, str) else None,
-        seed=opt_int("seed") or 0,
+        seed=opt_int("seed"),
         episodes=opt_int("episodes"),
         runs=opt_int("runs"),
         switch_episode=opt_int("switch_episode"),
-        methods=tuple(str(m) for m in raw.get("methods", []) or []),
-        experiments=tuple(str(e) for e in raw.get("experiments", []) or []),
+        methods=tuple(str(m) for m in methods) if isinstance(methods, list) else (),
+        experiments=tuple(experiments),
         versions=raw.get("versions", {}) if isinstance(raw.get("versions"), dict) else {},
         raw=raw,
     )
 
 
-def world_for(config: RunConfig, experiment: str = TASKS_EXPERIMENT) -> World:
-    """The world an experiment ran in.
-
-    The robot experiment uses ``office_robot`` (or ``config.raw["robot_world"]`` when that
-    is a file); the others the config's ``world`` when it is an existing file, the shipped
-    world of that name when it names one, else the shipped office.
-    """
-    key = "robot_world" if experiment == ROBOT_EXPERIMENT else "world"
-    value = config.raw.get(key) if key == "robot_world" else config.world
-    if isinstance(value, str) and value and Path(value).is_file():
-        return load_world(value)
-    if experiment == ROBOT_EXPERIMENT:
-        return builtin_world("office_robot")
-    if isinstance(value, str) and value in ("office", "office_robot"):
-        return builtin_world(value)
-    return load_world(None)
+def load_world_spec(spec: str) -> World:
+    """``office`` / ``office_robot`` (built in) or a world file (loud error if unreadable)."""
+    if spec in ("office", "office_robot"):
+        return builtin_world(spec)
+    return load_world(spec)
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ colour in every figure (:func:`method_colour`).
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -28,7 +29,8 @@ from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E
 from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
 from gdq_pddl.analysis.study import Study  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
-from gdq_pddl.world import World  # noqa: E402
+from gdq_pddl.errors import GdqError  # noqa: E402
+from gdq_pddl.world import Task, World  # noqa: E402
 
 METHOD_COLOURS = {
     "GDQ": "#d62728",
@@ -45,6 +47,11 @@ def method_colour(method: str) -> str:
     if method in METHOD_COLOURS:
         return METHOD_COLOURS[method]
     return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
+
+
+def slug(label: str) -> str:
+    """A task label as a file-name part (``p0->p17`` -> ``p0_p17``)."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "task"
 
 
 @dataclass(frozen=True)
@@ -93,8 +100,15 @@ def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
     ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
 
 
-def _task_title(world: World, task: str) -> str:
-    t = world.tasks.get(task)
+def _task(study: Study, experiment: str, task: str) -> Task | None:
+    try:
+        return study.task(experiment, task)
+    except GdqError:
+        return None
+
+
+def _task_title(study: Study, experiment: str, task: str) -> str:
+    t = _task(study, experiment, task)
     return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"Task {task}"
 
 
@@ -104,7 +118,7 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     exp = TASKS_EXPERIMENT
     if not study.has(exp):
         return []
-    ep, world = study.episodes, study.world(exp)
+    ep = study.episodes
     tasks = ep.tasks(exp)
     fig, axes = _grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
@@ -117,7 +131,7 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
         ref = 1.0 if fraction_of_vstar else v_star
         ax.axhline(ref, color="black", ls="--", lw=0.8, label="V*" if not fraction_of_vstar
                    else "V* (= 1)")
-        ax.set_title(_task_title(world, task), fontsize=10)
+        ax.set_title(_task_title(study, exp, task), fontsize=10)
         ax.set_xlabel("episode")
         ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ax.grid(alpha=0.3)
@@ -176,9 +190,8 @@ def _draw_map(ax: Axes, world: World, xy: dict[str, np.ndarray], alpha: float = 
     ax.margins(0.1)
 
 
-def _mark_task(ax: Axes, world: World, xy: dict[str, np.ndarray], task: str) -> None:
-    t = world.tasks.get(task)
-    if t is None:
+def _mark_task(ax: Axes, xy: dict[str, np.ndarray], t: Task | None) -> None:
+    if t is None or t.start not in xy or t.goal not in xy:
         return
     ax.scatter(*xy[t.start], s=420, facecolors="none", edgecolors="#1f77b4", lw=2.2, zorder=4)
     ax.scatter(*xy[t.goal], s=420, facecolors="none", edgecolors="#2ca02c", lw=2.2, zorder=4)
@@ -222,14 +235,14 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 for p, value in zip(world.positions, values, strict=True):
                     ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                             color="white" if value > 0.3 * top else "black")
-                _mark_task(ax, world, xy, task)
+                _mark_task(ax, xy, _task(study, exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method))
             sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
             fig.colorbar(sm, ax=axes, shrink=0.6, label="area visits per run (mean)")
             label = "robot " if exp == ROBOT_EXPERIMENT else ""
-            fig.suptitle(f"{label}{_task_title(world, task)}: visits per area "
+            fig.suptitle(f"{label}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
-            stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{task}"
+            stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{slug(task)}"
             paths += _save(fig, out_dir, stem, opts)
     return paths
 
@@ -250,7 +263,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
     if study.policies is None or not study.has(experiment):
         return []
     world = study.world(experiment)
-    if task not in world.tasks:
+    if _task(study, experiment, task) is None:
         return []
     xy = MapPainter(world).xy
     best = study.truth(experiment, task).optimal_route_areas
@@ -273,7 +286,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
         top, k = counts.most_common(1)[0]
         route = next(r for r in routes.values() if r.positions == top)
         _draw_route(ax, xy, top, method_colour(method))
-        _mark_task(ax, world, xy, task)
+        _mark_task(ax, xy, _task(study, experiment, task))
         on_best = sum(r.reached_goal and r.areas(world) == best for r in routes.values())
         areas = "->".join(map(str, route.areas(world)))
         ax.set_title(f"{method}: {k}/{len(routes)} runs take this route", fontsize=9,
@@ -281,9 +294,9 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
         ax.text(0.5, -0.02, f"areas {areas} ({route.end}); optimal route: "
                 f"{on_best}/{len(routes)} runs", transform=ax.transAxes, ha="center",
                 va="top", fontsize=7)
-    fig.suptitle(f"{_task_title(world, task)}: most common final greedy route per method "
-                 f"(optimal: areas {'->'.join(map(str, best))})", fontsize=10)
-    stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{task}"
+    fig.suptitle(f"{_task_title(study, experiment, task)}: most common final greedy route "
+                 f"per method (optimal: areas {'->'.join(map(str, best))})", fontsize=10)
+    stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{slug(task)}"
     return _save(fig, out_dir, stem, opts)
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
-from gdq_pddl.analysis.figures import FigureOptions, make_figures
+from gdq_pddl.analysis.figures import FigureOptions, make_figures, slug
 from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
@@ -107,14 +107,29 @@ class _Writer:
         self.add("# Experiment report", "",
                  f"Output folder: `{self.out_dir}`; {len(ep)} episodes in `episodes.csv`; "
                  f"experiments: {', '.join(ep.experiments) or 'none'}.", "")
-        facts = [f"world `{cfg.world or 'office (built in)'}`", f"seed {cfg.seed}"]
-        if cfg.runs is not None:
-            facts.append(f"{cfg.runs} runs")
-        if cfg.episodes is not None:
-            facts.append(f"{cfg.episodes} episodes per run")
-        if cfg.methods:
-            facts.append("methods " + ", ".join(cfg.methods))
-        self.add("Configuration: " + "; ".join(facts) + ".", "")
+        if cfg.experiments:
+            self.add("| experiment | world | schedule (task x episodes) | methods | runs | seed |",
+                     "|---|---|---|---|--:|--:|")
+            for e in cfg.experiments:
+                sched = e.get("schedule") or []
+                sched_txt = ", ".join(f"{t} x {n}" for t, n in sched
+                                      if isinstance(sched, list)) or "?"
+                self.add(f"| {e.get('name', '?')} | {e.get('world', cfg.world or 'office')} | "
+                         f"{sched_txt} | {', '.join(e.get('methods') or cfg.methods) or '?'} "
+                         f"| {e.get('runs', cfg.runs if cfg.runs is not None else '?')} | "
+                         f"{e.get('seed', cfg.seed if cfg.seed is not None else '?')} |")
+            self.add("")
+        else:
+            facts = [f"world `{cfg.world or 'office (built in)'}`"]
+            if cfg.seed is not None:
+                facts.append(f"seed {cfg.seed}")
+            if cfg.runs is not None:
+                facts.append(f"{cfg.runs} runs")
+            if cfg.episodes is not None:
+                facts.append(f"{cfg.episodes} episodes per run")
+            if cfg.methods:
+                facts.append("methods " + ", ".join(cfg.methods))
+            self.add("Configuration: " + "; ".join(facts) + ".", "")
         if cfg.versions:
             self.add("Versions: " + ", ".join(f"{k} {v}" for k, v in cfg.versions.items()),
                      "")
@@ -136,18 +151,18 @@ class _Writer:
         if not study.has(TASKS_EXPERIMENT):
             self.add("_The tasks experiment is missing: skipped._", "")
             return
-        world = study.world(TASKS_EXPERIMENT)
         self.add("V* is the optimal expected return per episode from value iteration on the "
                  "true model; relevant areas are those the optimal policy visits "
                  "(`optimal.json` where given, else > 0.05 expected visits per episode).", "",
                  "| Task | start -> goal | V* | relevant areas | irrelevant (computed) | "
                  "irrelevant (paper) | optimal route (areas) |", "|---|---|--:|---|---|---|---|")
-        tasks = list(study.episodes.tasks(TASKS_EXPERIMENT))
+        pairs = [(TASKS_EXPERIMENT, t) for t in study.episodes.tasks(TASKS_EXPERIMENT)]
         for exp in study.switch_experiments:
-            tasks += [t for t in study.episodes.tasks(exp) if t not in tasks]
-        for task in tasks:
-            tr = study.truth(TASKS_EXPERIMENT, task)
-            t = world.tasks[task]
+            pairs += [(exp, t) for t in study.episodes.tasks(exp)
+                      if t not in [task for _, task in pairs]]
+        for exp, task in pairs:
+            tr = study.truth(exp, task)
+            t = study.task(exp, task)
             self.add(f"| {task} | {t.start} -> {t.goal} | {tr.v_star:.2f} | "
                      f"{', '.join(map(str, tr.relevant_areas))} | "
                      f"{', '.join(map(str, tr.irrelevant_areas)) or 'none'} | "
@@ -269,7 +284,7 @@ class _Writer:
                          "areas.")
                 self.comparisons(comps, " visits")
         for task in study.episodes.tasks(TASKS_EXPERIMENT):
-            self.figure(f"heatmap_{task}", f"area visits, task {task}")
+            self.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
     def hypothesis_3(self) -> None:
         study, opts = self.study, self.opts
@@ -400,7 +415,7 @@ class _Writer:
         world = study.world(exp)
         truth = study.truth(exp, task)
         self.figure("robot_returns", "robot protocol, return per trial")
-        self.figure(f"routes_robot_{task}", "robot greedy routes")
+        self.figure(f"routes_robot_{slug(task)}", "robot greedy routes")
         self.add(f"Task {task} in `{world.name}`; V* = {truth.v_star:.1f}; optimal route "
                  f"(areas) {_route_str(truth.optimal_route_areas)}. A trial *follows the "
                  "optimal route* when it succeeds visiting exactly those areas; the route "

@@ -18,7 +18,7 @@ import numpy as np
 
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, solve_task
-from gdq_pddl.world import World
+from gdq_pddl.world import Task, World
 
 MAX_ROUTE_STEPS = 30
 BEST_ROUTE_C = (1, 3, 2, 6)
@@ -97,11 +97,23 @@ def walk_policy(world: World, policy: Mapping[int, int] | np.ndarray, start: str
     return Route(tuple(positions), False, "limit")
 
 
-def optimal_route(world: World, task: str) -> Route:
+def resolve_task_label(world: World, label: str) -> Task:
+    """The task a ``task`` column names: a task of the world (``C``), or an ad-hoc
+    ``start->goal`` / ``start-goal`` pair of positions or landmarks."""
+    if label in world.tasks or label.upper() in world.tasks:
+        return world.task(label)
+    for sep in ("->", "-"):
+        if sep in label:
+            start, goal = label.split(sep, 1)
+            return world.resolve(start=start.strip(), goal=goal.strip())
+    return world.task(label)  # raises, listing the known tasks
+
+
+def optimal_route(world: World, task: Task | str) -> Route:
     """The likeliest route of the true optimal (time-dependent) policy from the start."""
+    t = resolve_task_label(world, task) if isinstance(task, str) else task
     model = _model(world)
-    solution, fs = solve_task(world, task, model)
-    t = world.task(task)
+    solution, fs = solve_task(world, t, model)
     positions = [t.start]
     for step in range(model.step_limit):
         i = fs * model.n_actions + int(solution.policy[step, fs])
@@ -135,10 +147,11 @@ def _ints(value: Any) -> tuple[int, ...] | None:
     return None
 
 
-def task_truth(world: World, task: str, given: Mapping[str, Any] | None = None) -> TaskTruth:
+def task_truth(world: World, task: Task | str,
+               given: Mapping[str, Any] | None = None) -> TaskTruth:
     """Facts of ``task`` from ``optimal.json`` (``given``) where present, computed otherwise."""
     given = given or {}
-    t = world.task(task)
+    t = resolve_task_label(world, task) if isinstance(task, str) else task
     all_areas = tuple(sorted(a for a, ps in world.areas.items() if ps))
     v_star = given.get("v_star")
     v = float(v_star) if isinstance(v_star, (int, float)) else optimal_value(world, t)
@@ -149,7 +162,7 @@ def task_truth(world: World, task: str, given: Mapping[str, Any] | None = None) 
     paper = _ints(given.get("irrelevant_areas_paper"))
     route = _ints(given.get("optimal_route_areas"))
     if route is None:
-        route = optimal_route(world, t.name).areas(world)
+        route = optimal_route(world, t).areas(world)
     return TaskTruth(
         task=t.name,
         v_star=v,

@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.analysis.data import (
-    ROBOT_EXPERIMENT,
     SWITCH_PREFIX,
     TASKS_EXPERIMENT,
     Episodes,
@@ -20,10 +19,16 @@ from gdq_pddl.analysis.data import (
     load_episodes,
     load_optimal,
     load_policies,
-    world_for,
+    load_world_spec,
 )
-from gdq_pddl.analysis.routes import Route, TaskTruth, task_truth, walk_policy
-from gdq_pddl.world import World
+from gdq_pddl.analysis.routes import (
+    Route,
+    TaskTruth,
+    resolve_task_label,
+    task_truth,
+    walk_policy,
+)
+from gdq_pddl.world import Task, World
 
 
 @dataclass(frozen=True)
@@ -67,18 +72,30 @@ class Study:
         return {}
 
     def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
-        """The world ``experiment`` ran in (one object per kind, so models compile once)."""
-        kind = ROBOT_EXPERIMENT if experiment == ROBOT_EXPERIMENT else TASKS_EXPERIMENT
-        if kind not in self._worlds:
-            self._worlds[kind] = world_for(self.config, kind)
-        return self._worlds[kind]
+        """The world ``experiment`` ran in (one object per world, so models compile once)."""
+        spec = self.config.world_spec(experiment)
+        if spec not in self._worlds:
+            self._worlds[spec] = load_world_spec(spec)
+        return self._worlds[spec]
+
+    def task(self, experiment: str, label: str) -> Task:
+        """The task a ``task`` column label names in ``experiment``'s world."""
+        return resolve_task_label(self.world(experiment), label)
 
     def truth(self, experiment: str, task: str) -> TaskTruth:
-        """V*, relevant areas and optimal route of ``task`` in ``experiment``'s world."""
-        key = (ROBOT_EXPERIMENT if experiment == ROBOT_EXPERIMENT else TASKS_EXPERIMENT, task)
+        """V*, relevant areas and optimal route of ``task`` in ``experiment``'s world.
+
+        ``optimal.json`` keys a task by name in the office and ``name@world`` elsewhere
+        (the runner's convention); what it lacks is computed from the true model.
+        """
+        spec = self.config.world_spec(experiment)
+        key = (spec, task)
         if key not in self._truths:
-            given = None if key[0] == ROBOT_EXPERIMENT else self.optimal.get(task)
-            self._truths[key] = task_truth(self.world(experiment), task, given)
+            t = self.task(experiment, task)
+            given = self.optimal.get(f"{t.name}@{spec}") or self.optimal.get(f"{task}@{spec}")
+            if given is None and spec == "office":
+                given = self.optimal.get(t.name) or self.optimal.get(task)
+            self._truths[key] = task_truth(self.world(experiment), t, given)
         return self._truths[key]
 
     def has(self, experiment: str) -> bool:
@@ -110,9 +127,8 @@ class Study:
         policy = self._policy_map.get((experiment, method, task, run))
         if not policy:
             return None
-        world = self.world(experiment)
-        t = world.task(task)
-        return walk_policy(world, policy, t.start, t.goal)
+        t = self.task(experiment, task)
+        return walk_policy(self.world(experiment), policy, t.start, t.goal)
 
     def routes(self, experiment: str, method: str, task: str) -> dict[int, Route]:
         """Run -> route, for every run of ``method`` with a stored policy for ``task``."""
