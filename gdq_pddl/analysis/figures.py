@@ -204,6 +204,8 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
     not positions, so all positions of an area share a value)."""
     paths: list[Path] = []
     ep = study.episodes
+    if not ep.areas:
+        return paths
     for exp in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT):
         if not study.has(exp):
             continue

@@ -416,6 +416,7 @@ class _Writer:
         truth = study.truth(exp, task)
         self.figure("robot_returns", "robot protocol, return per trial")
         self.figure(f"routes_robot_{slug(task)}", "robot greedy routes")
+        self.figure(f"heatmap_robot_{slug(task)}", "robot area visits")
         self.add(f"Task {task} in `{world.name}`; V* = {truth.v_star:.1f}; optimal route "
                  f"(areas) {_route_str(truth.optimal_route_areas)}. A trial *follows the "
                  "optimal route* when it succeeds visiting exactly those areas; the route "
