@@ -27,6 +27,10 @@ METHODS: dict[str, tuple[str, dict]] = {
     "GDQ (paper)": ("gdq", {}),
     "GDQ (code)": ("gdq", {"variant": "code"}),
 }
+DIAGNOSTICS: dict[str, tuple[str, dict]] = {
+    # not the paper: optimistic pairs end the episode instead of leading back to s0
+    "GDQ (paper, terminal optimism)": ("gdq", {"optimistic_successor": "terminal"}),
+}
 
 
 def _env_and_context(task: str = "C"):
@@ -69,9 +73,9 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
     env, ctx = _env_and_context(task)
     out = {}
     print(f"Task {task}: {runs} runs x {episodes} episodes")
-    print(f"{'method':12s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
+    print(f"{'method':30s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
           f"{'success':>8s} {'MA50 > 0 at':>12s}")
-    for label, (method, kw) in METHODS.items():
+    for label, (method, kw) in {**METHODS, **DIAGNOSTICS}.items():
         curves = []
         for run in range(runs):
             learner = make_learner(method, ctx, **kw)
@@ -87,7 +91,7 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
                       "last50": float(ret[:, -50:].mean()), "success": float(succ),
                       "first_positive": cross}
         r = out[label]
-        print(f"{label:12s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
+        print(f"{label:30s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
               f"{r['success']:>8.2f} {str(cross) if cross else 'never':>12s}", flush=True)
     return out
 

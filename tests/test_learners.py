@@ -341,3 +341,12 @@ def test_make_learner_rejects_unknown_methods_and_bad_configs(ctx_c):
         GDQConfig(variant="other")  # type: ignore[arg-type]
     with pytest.raises(ValueError):
         Darling(ctx_c, DarlingConfig(tolerance=0.5))
+
+
+def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
+    learner = GDQ(ctx_c, GDQConfig(optimistic_successor="terminal"))
+    opt = learner.optimistic_pairs
+    assert np.allclose(learner.q[opt], ctx_c.r_max)
+    assert np.all(learner.q[~opt] == 0.0)
+    t, p = learner.tables, learner.params
+    assert core.sample_outcome(t, p, ctx_c.s0, 0, np.random.default_rng(0))[2]

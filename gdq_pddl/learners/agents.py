@@ -122,6 +122,9 @@ class TabularLearner:
     def _backup_mode(self) -> int:
         return core.BACKUP_EXPECTED
 
+    def _opt_continue(self) -> float:
+        return 1.0
+
     # -- interface ---------------------------------------------------------------------
     def _build(self, context: TaskContext) -> tuple[core.Tables, core.Params]:
         if (context.n_states, context.n_actions) != self.q.shape:
@@ -147,7 +150,8 @@ class TabularLearner:
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
             n_backups=int(self._n_backups()), m=int(self._m()),
-            backup=int(self._backup_mode()), s0=int(context.s0))
+            backup=int(self._backup_mode()), s0=int(context.s0),
+            opt_continue=float(self._opt_continue()))
         return tables, params
 
     def start_task(self, context: TaskContext) -> None:
@@ -248,6 +252,9 @@ class GDQ(TabularLearner):
 
     def _backup_mode(self) -> int:
         return core.BACKUP_EXPECTED if self.config.variant == "paper" else core.BACKUP_SAMPLE
+
+    def _opt_continue(self) -> float:
+        return 1.0 if self.config.optimistic_successor == "start" else 0.0
 
     def _init_task(self) -> None:
         """OptInit (Algorithm 1), or the authors' code's shortcut."""

@@ -74,10 +74,19 @@ class GDQConfig(LearnerConfig):
     sets Q to R_max on plan pairs and backups are sample-based TD updates with alpha.
     See :mod:`gdq_pddl.learners.agents` for the side-by-side comparison."""
 
+    optimistic_successor: Literal["start", "terminal"] = "start"
+    """Where an optimistic (unknown) pair leads. ``"start"``: to s0, as Algorithm 1's
+    ``T(s, a, s0) = 1`` (so optimistic values reach R_max / (1 - gamma)). ``"terminal"``:
+    nowhere, the optimistic reward ends the episode (values bounded by R_max). Not in
+    the paper; offered to show where the paper variant's excess optimism comes from."""
+
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.n_backups < 0 or self.m < 0:
             raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+        if self.optimistic_successor not in ("start", "terminal"):
+            raise ValueError("optimistic_successor must be 'start' or 'terminal', got "
+                             f"{self.optimistic_successor!r}")
         if self.variant not in ("paper", "code"):
             raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
 

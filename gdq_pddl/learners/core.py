@@ -62,6 +62,8 @@ class Params(NamedTuple):
     """BACKUP_EXPECTED (assign the expected value) or BACKUP_SAMPLE (TD on a sample)."""
     s0: int
     """The task's start learner state (target of the optimistic transitions)."""
+    opt_continue: float = 1.0
+    """1: an optimistic transition leads to s0 (the paper); 0: it ends the episode."""
 
 
 class Tables(NamedTuple):
@@ -234,7 +236,7 @@ def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float
                     total += k * (p.gamma * v[s2] - c)
         return total / n
     r = p.r_max if t.opt_r[s, a] else 0.0
-    return r + p.gamma * v[p.s0]
+    return r + p.opt_continue * p.gamma * v[p.s0]
 
 
 @numba.njit(cache=True)
@@ -254,7 +256,7 @@ def sample_outcome(t: Tables, p: Params, s: int, a: int,
                     return p.r_max, s2, True
                 return -mean_cost(t, s, a), s2, False
     r = p.r_max if t.opt_r[s, a] else 0.0
-    return r, p.s0, False
+    return r, p.s0, p.opt_continue == 0.0
 
 
 @numba.njit(cache=True)
