@@ -25,6 +25,7 @@ from gdq_pddl.learners import (
     office_task_context,
     run_episodes,
 )
+from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, load_world
 
 WORLD = load_world()
@@ -68,25 +69,51 @@ def run(learner, env, n, seed, fast=None):
 
 # --- OptInit ------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("variant", ["paper", "code"])
-def test_optinit_greedy_policy_follows_a_shortest_plan(variant):
-    ctx = office_task_context(DET, "C")
-    learner = GDQ(ctx, GDQConfig(variant=variant))
-    plans = ctx.plans.plans_from(ctx.s0)
-    shortest = int(ctx.plans.length[ctx.s0])
-    assert shortest == 8 and plans
+def greedy_walk(learner, world, task: str, limit: int) -> tuple[list[tuple[int, int]], str]:
+    """The (state, action) pairs of the greedy policy from the start, and how it ended."""
     policy = learner.greedy_policy()
-    env = OfficeEnv(task="C", world=DET)
+    env = OfficeEnv(task=task, world=world)
     s, _ = env.reset(seed=0)
-    taken = []
-    for _ in range(shortest):
+    taken, info = [], {"cause": ""}
+    for _ in range(limit):
         a = int(policy[s])
         taken.append((s, a))
         s, _, terminated, truncated, info = env.step(a)
         if terminated or truncated:
             break
-    assert info["cause"] == "goal"
+    return taken, info["cause"]
+
+
+@pytest.mark.parametrize("config", [GDQConfig(variant="paper"),
+                                    GDQConfig(variant="code", plan_tolerance=0.0)])
+def test_optinit_greedy_policy_follows_a_shortest_plan(config):
+    ctx = office_task_context(DET, "C")
+    learner = GDQ(ctx, config)
+    plans = ctx.plans.plans_from(ctx.s0)
+    shortest = int(ctx.plans.length[ctx.s0])
+    assert shortest == 8 and plans
+    taken, cause = greedy_walk(learner, DET, "C", shortest)
+    assert cause == "goal"
     assert taken in plans, "the greedy path must be one of the planner's shortest plans"
+
+
+def test_code_variant_plans_within_the_authors_tolerance():
+    """GDQ-code's H holds plans up to 1.3 x the shortest: the 9-step easy-door route too."""
+    ctx = office_task_context(DET, "C")
+    code, paper = GDQ(ctx, GDQConfig(variant="code")), GDQ(ctx)
+    assert code.config.plan_tolerance == pytest.approx(0.3)
+    assert paper.config.plan_tolerance == 0.0
+    sp = LearnerSpaces(DET)
+    p8_to_p5 = (sp.state("p8"), sp.action("goto", "p5"))  # only on the 1->3->2->6 route
+    assert code.optimistic_pairs[p8_to_p5] and not paper.optimistic_pairs[p8_to_p5]
+    # every pair the greedy policy takes is on some plan (ties between plans may cycle
+    # in a memoryless policy: only real experience breaks them)
+    taken, _ = greedy_walk(code, DET, "C", 10)
+    assert all(code.optimistic_pairs[s, a] for s, a in taken)
+    firsts = {plan[0][1] for plan in ctx.darling_plans.plans_from(ctx.s0)}
+    assert taken[0][1] in firsts
+    with pytest.raises(ValueError, match="plan_tolerance 0.5"):
+        GDQ(ctx, GDQConfig(variant="code", plan_tolerance=0.5))
 
 
 def test_optinit_policy_iteration_values_of_the_optimistic_model(ctx_c):

@@ -63,6 +63,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.learners import core
 from gdq_pddl.learners.config import (
     DarlingConfig,
@@ -110,6 +111,10 @@ class TabularLearner:
     def _allowed(self, context: TaskContext) -> np.ndarray:
         return np.ones((context.n_states, context.n_actions), dtype=np.bool_)
 
+    def _plans(self, context: TaskContext) -> PlanTable:
+        """H: the plans this learner backs up (GDQ may ask for plans within a tolerance)."""
+        return context.plans
+
     def _init_task(self) -> None:
         """What happens when a task starts (after the tables are rebuilt)."""
 
@@ -131,7 +136,7 @@ class TabularLearner:
             raise ValueError(f"task has {context.n_states} states x {context.n_actions} "
                              f"actions, the learner {self.q.shape}")
         allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
-        plans = context.plans
+        plans = self._plans(context)
         opt_r = np.zeros_like(allowed)
         for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
             lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
@@ -252,6 +257,17 @@ class GDQ(TabularLearner):
 
     def _backup_mode(self) -> int:
         return core.BACKUP_EXPECTED if self.config.variant == "paper" else core.BACKUP_SAMPLE
+
+    def _plans(self, context: TaskContext) -> PlanTable:
+        tolerance = self.config.plan_tolerance
+        if not tolerance:
+            return context.plans
+        if context.darling_plans is None or context.darling_tolerance is None or \
+                not np.isclose(context.darling_tolerance, tolerance):
+            raise ValueError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
+                             f"tolerant plan table was built with that tolerance (it has "
+                             f"{context.darling_tolerance})")
+        return context.darling_plans
 
     def _opt_continue(self) -> float:
         return 1.0 if self.config.optimistic_successor == "start" else 0.0

@@ -79,6 +79,12 @@ class GDQConfig(LearnerConfig):
     ``T(s, a, s0) = 1`` (so optimistic values reach R_max / (1 - gamma)). ``"terminal"``:
     nowhere, the optimistic reward ends the episode (values bounded by R_max). Not in
     the paper; offered to show where the paper variant's excess optimism comes from."""
+    plan_tolerance: float | None = None
+    """H holds every loop-free plan up to ``(1 + plan_tolerance)`` x the shortest length.
+    None means the variant's own setting: 0 for ``"paper"`` (the paper plans "a set of the
+    shortest plans") and 0.3 for ``"code"`` (the authors' released planner returned
+    plans up to 1.3 x the shortest). The task context must hold a plan table built with
+    that tolerance (its ``darling_plans``)."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -89,6 +95,10 @@ class GDQConfig(LearnerConfig):
                              f"{self.optimistic_successor!r}")
         if self.variant not in ("paper", "code"):
             raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
+        if self.plan_tolerance is None:
+            object.__setattr__(self, "plan_tolerance", 0.0 if self.variant == "paper" else 0.3)
+        if self.plan_tolerance < 0:
+            raise ValueError(f"plan_tolerance must be >= 0, got {self.plan_tolerance}")
 
 
 @dataclass(frozen=True)
