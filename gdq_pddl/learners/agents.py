@@ -17,6 +17,8 @@ GDQ, the paper's algorithm (``variant="paper"``, the default) and the authors' c
 ---------------------------------------------------------------------------------------
 Side by side (paper | code):
 
+- H, the plans: every shortest plan (the paper: "a set of the shortest plans") | every
+  plan up to 1.3 x the shortest (the authors' planner setting); ``plan_tolerance``.
 - Optimistic model: T(s,a,s0) = 1 for every pair, R = R_max on every pair of every plan
   in H(s0), else 0 | the same model (used by the backups of unknown pairs).
 - Q after OptInit: policy iteration on that model (known pairs: learned model) until pi
