@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, solve_task
 from gdq_pddl.world import Task, World
 
@@ -52,22 +52,10 @@ def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[in
     return tuple(out)
 
 
-_MODELS: dict[int, tuple[World, ModelArrays]] = {}
-
-
-def _model(world: World) -> ModelArrays:
-    """The compiled model of ``world``, compiled once per world object (worlds hold dicts,
-    so they are not hashable: the cache keys on identity and keeps the world alive)."""
-    hit = _MODELS.get(id(world))
-    if hit is None or hit[0] is not world:
-        hit = _MODELS[id(world)] = (world, compile_model(world))
-    return hit[1]
-
-
 def walk_policy(world: World, policy: Mapping[int, int] | np.ndarray, start: str, goal: str,
                 max_steps: int = MAX_ROUTE_STEPS) -> Route:
     """Follow ``policy`` (learner state -> action) along likeliest outcomes; see module doc."""
-    model = _model(world)
+    model = compile_model(world)
     goal_pos = world.index[world.position(goal)]
     fs = full_state(world, world.position(start))
     positions = [world.positions[model.pos_of[fs]]]
@@ -112,7 +100,7 @@ def resolve_task_label(world: World, label: str) -> Task:
 def optimal_route(world: World, task: Task | str) -> Route:
     """The likeliest route of the true optimal (time-dependent) policy from the start."""
     t = resolve_task_label(world, task) if isinstance(task, str) else task
-    model = _model(world)
+    model = compile_model(world)
     solution, fs = solve_task(world, t, model)
     positions = [t.start]
     for step in range(model.step_limit):

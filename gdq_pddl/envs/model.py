@@ -12,6 +12,7 @@ and one of a step (:func:`env_step`).
 
 from __future__ import annotations
 
+import weakref
 from typing import NamedTuple
 
 import numba
@@ -50,11 +51,10 @@ def full_state(world: World, position: str, open_doors: frozenset[str] = frozens
     return world.index[position] * (1 << len(world.doors)) + mask
 
 
-def _outcomes(world: World, p: str, mask: int, verb: str,
+def _outcomes(world: World, door_ids: dict[str, int], p: str, mask: int, verb: str,
               q: str) -> list[tuple[float, str, int, bool]]:
     """Outcomes ``(prob, position, mask, stuck)`` of ``verb q`` taken at ``p``."""
     noop = [(1.0, p, mask, False)]
-    door_ids = {d.name: i for i, d in enumerate(world.doors)}
     door = world.door_at.get(p)
     if verb in ("goto", "approach"):
         ns = world.walk_neighbours[p]
@@ -80,8 +80,27 @@ def _outcomes(world: World, p: str, mask: int, verb: str,
     return noop
 
 
+_COMPILED: dict[int, tuple[weakref.ref, ModelArrays]] = {}
+
+
 def compile_model(world: World) -> ModelArrays:
-    """Compile the world's true dynamics into :class:`ModelArrays`."""
+    """The world's true dynamics as :class:`ModelArrays` (read-only, compiled once per world).
+
+    Every env, solver and analysis of the same :class:`World` object shares one copy:
+    building it is the slowest part of making an env, and experiments make thousands.
+    """
+    hit = _COMPILED.get(id(world))
+    if hit is not None and hit[0]() is world:
+        return hit[1]
+    model = _compile(world)
+    for array in model:
+        if isinstance(array, np.ndarray):
+            array.setflags(write=False)
+    _COMPILED[id(world)] = (weakref.ref(world), model)
+    return model
+
+
+def _compile(world: World) -> ModelArrays:
     spaces = LearnerSpaces(world)
     n_pos, n_doors = len(world.positions), len(world.doors)
     n_masks = 1 << n_doors
@@ -93,16 +112,16 @@ def compile_model(world: World) -> ModelArrays:
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
     obs_of = np.zeros(n_full, dtype=np.int64)
     pos_of = np.zeros(n_full, dtype=np.int64)
+    parts = [spaces.action_parts(a) for a in range(n_actions)]
     for fs in range(n_full):
         pi, mask = divmod(fs, n_masks)
         p = world.positions[pi]
         door = world.door_at.get(p)
         pos_of[fs] = pi
         obs_of[fs] = spaces.state(p, door is not None and bool(mask >> door_ids[door.name] & 1))
-        for a in range(n_actions):
-            verb, q = spaces.action_parts(a)
+        for a, (verb, q) in enumerate(parts):
             merged: dict[tuple[int, bool], float] = {}
-            for pr, np_, nm, st in _outcomes(world, p, mask, verb, q):
+            for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q):
                 if pr > 0.0:
                     key = (world.index[np_] * n_masks + nm, st)
                     merged[key] = merged.get(key, 0.0) + pr
