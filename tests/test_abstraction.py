@@ -59,3 +59,15 @@ def test_o_is_total_over_every_plan_pair(office, task):
                 assert plan[0][0] == s
         first = table.first_actions.sum(axis=1)
         assert (first[table.length > 0] >= 1).all()
+
+
+def test_plan_cap_warns_and_marks_the_result_capped():
+    from gdq_pddl.planning.graph import GraphPlanner
+
+    world = load_world()
+    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, world.task("D")))
+    with pytest.warns(UserWarning, match="more than 4 plans"):
+        result = GraphPlanner(max_plans=4).solve(problem, tolerance=0.3)
+    assert result.capped and len(result.plans) == 4
+    full = GraphPlanner().solve(problem, tolerance=0.3)
+    assert not full.capped and len(full.plans) > 4
