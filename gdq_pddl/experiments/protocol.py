@@ -46,6 +46,10 @@ class Experiment:
     hyper: Hyper = field(default_factory=Hyper)
     planner: str = "graph"
     seed: int = 0
+    knowledge: str | None = None
+    """The world the learners' knowledge (PDDL problem, plans) is built from, named like
+    ``world`` (also ``office:<variant>``, see :mod:`gdq_pddl.experiments.knowledge`);
+    None: ``world`` itself, accurate knowledge. Not part of unit keys or seeds."""
 
     @property
     def episodes(self) -> int:

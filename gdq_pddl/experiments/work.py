@@ -22,6 +22,10 @@ def load_world_named(name: str) -> World:
     """``office`` / ``office_robot`` (built in), or a world file path."""
     if name in ("office", "office_robot"):
         return builtin_world(name)
+    if name.startswith("office:"):  # in-memory variants, see experiments/knowledge.py
+        from gdq_pddl.experiments.knowledge import derived_world
+
+        return derived_world(name)
     return load_world(Path(name))
 
 
@@ -49,6 +53,7 @@ def make_learner(method: str, context, hyper: Hyper):
 def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
     from gdq_pddl.envs.office import OfficeEnv
+    from gdq_pddl.experiments.knowledge import knowledge_world
     from gdq_pddl.learners.context import office_task_context
     from gdq_pddl.learners.runner import run_episodes
 
@@ -58,7 +63,7 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     learner, parts = None, []
     for i, (spec, episodes) in enumerate(exp.schedule):
         task = resolve_task(world, spec)
-        context = office_task_context(world, task, exp.planner)
+        context = office_task_context(knowledge_world(world, exp.knowledge), task, exp.planner)
         if learner is None:
             learner = make_learner(unit.method, context, exp.hyper)
         else:

@@ -71,8 +71,10 @@ _TABLES: dict[tuple, PlanTable] = {}
 
 
 def _knowledge_key(world: World) -> tuple:
-    """What the planner's knowledge depends on (not the dynamics' probabilities)."""
-    return (world.positions, world.edges, tuple((d.name, d.sides) for d in world.doors))
+    """What the planner's knowledge depends on (not the dynamics' probabilities, only
+    whether a door can open at all: see :func:`gdq_pddl.pddl.office.office_problem`)."""
+    return (world.positions, world.edges,
+            tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 
 
 def office_plan_table(world: World, goal: str, planner: str = "graph",

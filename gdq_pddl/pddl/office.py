@@ -3,6 +3,12 @@
 The files in ``problems/`` are the output of :func:`office_problem` for the world's
 tasks, and a test fails if they drift from the world file: knowledge and reality agree
 by default, and disagree only where an experiment makes them.
+
+The PDDL has no probabilities, so a door's difficulty (success and stuck probabilities)
+is not part of the knowledge, with one exception: a door whose success probability is 0
+(locked) gets no ``connects`` facts, since knowing that a door never opens is knowing
+that it is a wall (the knowledge-vs-reality experiments of
+:mod:`gdq_pddl.experiments.knowledge` rely on this for their accurate reference).
 """
 
 from __future__ import annotations
@@ -33,9 +39,10 @@ def office_problem(world: World, task: Task) -> str:
         lines.append(f"    (walkway {a} {b})")
     for d in world.doors:
         a, b = d.sides
-        lines += [f"    (door-side {a} {d.name})", f"    (door-side {b} {d.name})",
-                  f"    (connects {d.name} {a} {b})", f"    (connects {d.name} {b} {a})",
-                  f"    (closed {d.name})"]
+        lines += [f"    (door-side {a} {d.name})", f"    (door-side {b} {d.name})"]
+        if d.success > 0:  # a door that never opens (locked) connects nothing
+            lines += [f"    (connects {d.name} {a} {b})", f"    (connects {d.name} {b} {a})"]
+        lines.append(f"    (closed {d.name})")
     lines[-1] += ")"
     lines += [f"  (:goal (at {task.goal})))", ""]
     return "\n".join(lines)
