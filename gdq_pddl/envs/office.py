@@ -51,10 +51,10 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.model import CAUSES, ModelArrays, compile_model, env_step, full_state
+from gdq_pddl.envs.base import ModelEnv
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.errors import WorldError
 from gdq_pddl.spaces import LearnerSpaces
@@ -101,7 +101,7 @@ def pick_task(world: World, task: str | None, start: str | None, goal: str | Non
     return chosen
 
 
-class OfficeEnv(gym.Env[int, int]):
+class OfficeEnv(ModelEnv):
     """A robot in an office reaching a goal position (see the module docstring)."""
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
@@ -121,16 +121,8 @@ class OfficeEnv(gym.Env[int, int]):
         self.render_mode = render_mode
         self.goal_pos = self.world.index[self.task.goal]
         self.start_state = full_state(self.world, self.task.start)
-        self._fs, self._t, self._cause, self._done = self.start_state, 0, "", True
+        self._begin()
         self._painter: MapPainter | None = None
-
-    def transition_arrays(self) -> ModelArrays:
-        """The true model (CSR outcomes over full states) for value iteration.
-
-        Pair with ``goal_pos``: ``gdq_pddl.envs.solve.solve(env.transition_arrays(),
-        env.goal_pos)``. The arrays are shared with the env: do not modify them.
-        """
-        return self.model
 
     def decode(self, fs: int) -> tuple[str, frozenset[str]]:
         """``(position name, names of the open doors)`` of a full state."""
@@ -138,34 +130,9 @@ class OfficeEnv(gym.Env[int, int]):
         opened = frozenset(d.name for i, d in enumerate(self.world.doors) if mask >> i & 1)
         return self.world.positions[pos], opened
 
-    def reset(self, *, seed: int | None = None,
-              options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
-        super().reset(seed=seed)
-        self._fs, self._t, self._cause, self._done = self.start_state, 0, "", False
-        return int(self.model.obs_of[self._fs]), self._info()
-
-    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self._done:
-            raise ResetNeeded("the episode is over (or never began): call reset() first")
-        a = int(action)
-        if not 0 <= a < self.model.n_actions:
-            raise ValueError(f"action must be in [0, {self.model.n_actions}), got {action!r}")
-        fs, reward, terminated, truncated, cause = env_step(
-            self.model, self._fs, a, self._t, self.goal_pos, self.np_random)
-        self._fs, self._t, self._cause = int(fs), self._t + 1, CAUSES[cause]
-        self._done = bool(terminated or truncated)
-        return (int(self.model.obs_of[self._fs]), float(reward), bool(terminated),
-                bool(truncated), self._info())
-
     def _info(self) -> dict[str, Any]:
         pos = int(self.model.pos_of[self._fs])
-        return {
-            "position": self.world.positions[pos],
-            "area": int(self.model.area_of_pos[pos]),
-            "cause": self._cause,
-            "full_state": self._fs,
-            "step": self._t,
-        }
+        return {"position": self.world.positions[pos], **super()._info()}
 
     def _frame(self) -> Frame:
         robot, opened = self.decode(self._fs)

@@ -31,11 +31,17 @@ from gdq_pddl.learners.config import (
     LearnerConfig,
     QLearningConfig,
 )
-from gdq_pddl.learners.context import TaskContext, empty_plan_table, office_task_context
+from gdq_pddl.learners.context import (
+    TaskContext,
+    empty_plan_table,
+    office_task_context,
+    pddl_task_context,
+)
 from gdq_pddl.learners.runner import EpisodeRecords, run_episodes
 
 __all__ = [
     "GDQ", "METHODS", "Darling", "DarlingConfig", "DynaQ", "DynaQConfig", "EpisodeRecords",
     "GDQConfig", "Learner", "LearnerConfig", "QLearning", "QLearningConfig", "TabularLearner",
-    "TaskContext", "empty_plan_table", "make_learner", "office_task_context", "run_episodes",
+    "TaskContext", "empty_plan_table", "make_learner", "office_task_context", "pddl_task_context",
+    "run_episodes",
 ]

@@ -109,3 +109,53 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
         plans=office_plan_table(world, task.goal, planner, 0.0), r_max=float(world.r_max),
         darling_plans=office_plan_table(world, task.goal, planner, darling_tolerance),
         darling_tolerance=float(darling_tolerance), name=task.name)
+
+
+_PDDL_TABLES: dict[tuple, tuple[object, PlanTable]] = {}
+
+MAX_MODEL_ENTRIES = 2_000_000_000
+"""The learners' model is dense (states x actions x states counts); past this many
+entries a PDDL task is refused with a clear message instead of exhausting memory."""
+
+
+def pddl_plan_table(instance, planner: str = "graph", tolerance: float = 0.0) -> PlanTable:
+    """Plans from every reachable state of a :class:`~gdq_pddl.envs.pddl_env.PDDLInstance`.
+
+    The ``graph`` planner's table comes from one backward BFS over the state graph
+    (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other backend is asked
+    once per state. Cached per (instance, planner, tolerance).
+    """
+    from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
+
+    key = (id(instance), planner, float(tolerance))
+    hit = _PDDL_TABLES.get(key)
+    if hit is not None and hit[0] is instance:
+        return hit[1]
+    if planner == "graph":
+        table = graph_plan_table(instance.graph, tolerance)
+    else:
+        from gdq_pddl.planning import get_planner
+
+        abstraction = PDDLAbstraction(instance.graph)
+        table = build_plan_table(abstraction, instance.problem, get_planner(planner),
+                                 abstraction.goal(), tolerance)
+    _PDDL_TABLES[key] = (instance, table)
+    return table
+
+
+def pddl_task_context(instance, planner: str = "graph",
+                      darling_tolerance: float = 0.3) -> TaskContext:
+    """The :class:`TaskContext` of a PDDL problem: learner states are its reachable states
+    (0 is the initial one), actions its ground actions, goal where the problem's goal holds."""
+    from gdq_pddl.errors import PlanningError
+
+    n_s, n_a = instance.n_states, instance.n_actions
+    if n_s * n_s * n_a > MAX_MODEL_ENTRIES:
+        raise PlanningError(f"{instance.problem.problem.source}: {n_s} reachable states x "
+                            f"{n_a} ground actions: the learners' dense model would need "
+                            f"{n_s * n_s * n_a * 8 / 1e9:.0f} GB; make the problem smaller")
+    return TaskContext(
+        s0=0, goal=np.asarray(instance.graph.is_goal, dtype=np.bool_),
+        plans=pddl_plan_table(instance, planner, 0.0), r_max=float(instance.dynamics.r_max),
+        darling_plans=pddl_plan_table(instance, planner, darling_tolerance),
+        darling_tolerance=float(darling_tolerance), name=instance.name)

@@ -4,7 +4,8 @@ Two paths with identical results for the same seeds:
 
 - a generic Python loop over any gymnasium env of this package (``env.reset``,
   ``env.step``, ``learner.act`` / ``learner.observe``);
-- a fast path, used when ``env.unwrapped`` is an :class:`OfficeEnv` and the learner one of
+- a fast path, used when ``env.unwrapped`` is a :class:`~gdq_pddl.envs.base.ModelEnv`
+  (the office, or a PDDL domain) and the learner one of
   :mod:`gdq_pddl.learners.agents`: one compiled loop calling
   :func:`gdq_pddl.envs.model.env_step` and the same :mod:`~gdq_pddl.learners.core` rules.
 
@@ -21,8 +22,8 @@ import gymnasium as gym
 import numba
 import numpy as np
 
+from gdq_pddl.envs.base import ModelEnv
 from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
-from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.learners import core
 from gdq_pddl.learners.agents import Learner, TabularLearner
 
@@ -60,11 +61,12 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     ``fast=None`` picks the compiled loop when possible; ``True`` demands it and
     ``False`` forces the Python loop (both give the same results).
     """
-    can_fast = isinstance(env.unwrapped, OfficeEnv) and isinstance(learner, TabularLearner)
+    can_fast = isinstance(env.unwrapped, ModelEnv) and isinstance(learner, TabularLearner)
     if fast is None:
         fast = can_fast
     if fast and not can_fast:
-        raise TypeError("the fast path needs an OfficeEnv and a TabularLearner")
+        raise TypeError("the fast path needs an env of this package (a ModelEnv) and a "
+                        "TabularLearner")
     if fast:
         return _run_fast(learner, env, n_episodes, rng)  # type: ignore[arg-type]
     return _run_python(learner, env, n_episodes, rng)
@@ -97,7 +99,7 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
 
 def _run_fast(learner: TabularLearner, env: gym.Env, n_episodes: int,
               rng: np.random.Generator) -> EpisodeRecords:
-    office: OfficeEnv = env.unwrapped  # type: ignore[assignment]
+    office: ModelEnv = env.unwrapped  # type: ignore[assignment]
     n_areas = _n_areas(env)
     returns = np.zeros(n_episodes)
     steps = np.zeros(n_episodes, dtype=np.int64)

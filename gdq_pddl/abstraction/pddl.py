@@ -1,0 +1,122 @@
+"""O for a generic PDDL problem: the learner state *is* the planner state.
+
+The learner of a PDDL env (:mod:`gdq_pddl.envs.pddl_env`) sees every reachable planner
+state as one index and acts with the ground actions, so O is a lookup both ways.
+
+:func:`graph_plan_table` builds the plan table of every state at once from the reachable
+state graph and one backward BFS (:mod:`gdq_pddl.pddl.reachable`), with the ``graph``
+planner's semantics: plans end where the goal first holds; with tolerance 0 every
+shortest plan; with tolerance ``t`` every loop-free plan of at most
+``floor((1 + t) * L)`` actions, ``L`` the shortest length from that state; at most
+``max_plans`` plans per state, sorted by (length, action names).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from gdq_pddl.abstraction.table import PlanTable
+from gdq_pddl.errors import AbstractionError
+from gdq_pddl.pddl.reachable import StateGraph
+from gdq_pddl.planning.base import State
+
+
+class PDDLAbstraction:
+    """O between a grounded problem's reachable states/ground actions and indices."""
+
+    def __init__(self, graph: StateGraph) -> None:
+        self.graph = graph
+        self.task = graph.task
+        self.n_states = graph.n_states
+        self.n_actions = len(graph.task.ops)
+
+    def learner_state(self, state: State) -> int:
+        """The index of a reachable planner state."""
+        try:
+            i = self.graph.index.get(self.task.mask(state))
+        except KeyError as exc:
+            raise AbstractionError(f"planner state {sorted(state)}: unknown atom "
+                                   f"{exc.args[0]}") from None
+        if i is None:
+            raise AbstractionError(f"planner state {sorted(state)} is not reachable from the "
+                                   "problem's initial state: it has no learner state")
+        return i
+
+    def learner_action(self, action: str) -> int:
+        """The index of a ground action, e.g. ``"(move r1 r2)"``."""
+        try:
+            return self.graph.op_index[action]
+        except KeyError:
+            raise AbstractionError(f"planner action {action!r} is not a ground action of "
+                                   "the problem") from None
+
+    def planner_state(self, state: int) -> State:
+        """The fluent atoms of learner state ``state``."""
+        return self.task.atoms(self.graph.states[state])
+
+    def goal(self, position_or_goal: str | None = None) -> State | None:
+        """The problem's goal atoms; None (the problem's own goal) if it has negative
+        literals, which a set of atoms cannot say."""
+        if self.task.goal_neg:
+            return None
+        return self.task.atoms(self.task.goal_pos)
+
+
+def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
+                     max_plans: int = 10_000) -> PlanTable:
+    """Plans from every reachable state (see the module docstring)."""
+    if tolerance < 0:
+        raise ValueError(f"tolerance must be >= 0, got {tolerance}")
+    dist = graph.distances
+    names = [op.name for op in graph.task.ops]
+    edges = [graph.edges(s) for s in range(graph.n_states)]
+    plan_ptr, pair_ptr = [0], [0]
+    pair_s: list[int] = []
+    pair_a: list[int] = []
+    first = np.zeros((graph.n_states, len(names)), dtype=np.bool_)
+    capped = False
+    for s in range(graph.n_states):
+        if dist[s] > 0:
+            bound = math.floor((1 + tolerance) * dist[s] + 1e-9)
+            plans, cut = _paths(s, edges, dist, bound, max_plans)
+            capped |= cut
+            plans.sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))
+            for plan in plans:
+                first[s, plan[0][1]] = True
+                pair_s += [x for x, _ in plan]
+                pair_a += [a for _, a in plan]
+                pair_ptr.append(len(pair_s))
+        plan_ptr.append(len(pair_ptr) - 1)
+    return PlanTable(np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
+                     np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64),
+                     first, dist.astype(np.int64, copy=True), capped)
+
+
+def _paths(start: int, edges: list[list[tuple[int, int]]], dist: np.ndarray, bound: int,
+           max_plans: int) -> tuple[list[list[tuple[int, int]]], bool]:
+    """Loop-free plans ``[(state, op), ...]`` from ``start`` to a goal within ``bound``."""
+    out: list[list[tuple[int, int]]] = []
+    path: list[tuple[int, int]] = []
+    on_path = {start}
+
+    def walk(node: int) -> bool:
+        for op, nxt in edges[node]:
+            d = dist[nxt]
+            if d < 0 or nxt in on_path or len(path) + 1 + d > bound:
+                continue
+            path.append((node, op))
+            if d == 0:
+                if len(out) >= max_plans:
+                    return True
+                out.append(list(path))
+            else:
+                on_path.add(nxt)
+                if walk(nxt):
+                    return True
+                on_path.discard(nxt)
+            path.pop()
+        return False
+
+    return out, walk(start)
