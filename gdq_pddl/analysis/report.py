@@ -11,12 +11,12 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
+from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT, is_gdq, order_methods
 from gdq_pddl.analysis.figures import FigureOptions, make_figures, slug
 from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
@@ -76,7 +76,7 @@ class _Writer:
     def __init__(self, study: Study, opts: ReportOptions, out_dir: Path) -> None:
         self.study, self.opts, self.out_dir = study, opts, out_dir
         self.lines: list[str] = []
-        self.summary: list[tuple[str, str, str, str]] = []  # hypothesis, case, verdict, basis
+        self.summary: dict[tuple[str, str], _Case] = {}  # (hypothesis, case) -> verdicts
         self.notes: list[str] = []
 
     def add(self, *lines: str) -> None:
@@ -93,12 +93,21 @@ class _Writer:
         self.add("")
 
     def verdict_line(self, hypothesis: str, case: str, comps: Sequence[Comparison],
-                     basis: str) -> str:
+                     basis: str, variant: str = "GDQ") -> str:
+        """Record ``variant``'s verdict on a case and write its bullet (the paper's GDQ
+        under the case name, a variant as ``case, variant``)."""
         v = verdict(comps)
         reason = verdict_reason(comps)
-        self.summary.append((hypothesis, case, v, f"{basis}: GDQ {reason}"))
-        self.add(f"- **{case}: {v}**: GDQ {reason} ({basis})")
+        entry = self.summary.setdefault((hypothesis, case), _Case(hypothesis, case, basis))
+        entry.verdicts[variant] = v
+        entry.reasons[variant] = reason
+        label = case if variant == "GDQ" else f"{case}, {variant}"
+        self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})")
         return v
+
+    def variants(self, experiment: str) -> list[str]:
+        """GDQ and its variants present in ``experiment`` (the paper's GDQ first)."""
+        return [m for m in self.study.methods(experiment) if is_gdq(m)]
 
     # --- sections -------------------------------------------------------------------
 
@@ -135,12 +144,15 @@ class _Writer:
                      "")
         self.add(
             "**Method.** The unit of analysis is the run. For each comparison every run "
-            "contributes one number; GDQ is compared with each baseline (every method but "
-            "GDQ and its variants) by Welch's t-test (two-sided) and a percentile bootstrap "
+            "contributes one number; each GDQ variant (`GDQ`, the paper's algorithm; "
+            "`GDQ-code`, the authors' released code) is compared on its own with each "
+            "baseline (every method but GDQ and its variants) by Welch's t-test "
+            "(two-sided) and a percentile bootstrap "
             f"95% CI of the difference in means (10,000 resamples, seed {self.opts.seed}). "
             f"A difference counts when the CI excludes 0 and p < {ALPHA} (with fewer than 2 "
-            "runs per method nothing counts). Verdict per case: **holds** = GDQ "
-            "significantly better than every baseline; **does not hold** = significantly "
+            "runs per method nothing counts). Verdict per case and variant: **holds** = "
+            "the variant significantly better than every baseline; **does not hold** = "
+            "significantly "
             "worse than at least one, or better than none; **mixed** = otherwise. "
             "Milestones use a trailing moving average over full windows of "
             f"{self.opts.window} episodes (defined from episode {self.opts.window} on).", "")
@@ -201,27 +213,29 @@ class _Writer:
         self.add("Statistic: per-run mean return over all episodes of the task (the "
                  "cumulative reward of a run divided by its episodes).", "")
         for task in ep.tasks(TASKS_EXPERIMENT):
-            comps, early = [], []
-            gdq = study.returns(TASKS_EXPERIMENT, "GDQ", task)
-            if gdq.size == 0:
+            variants = [v for v in self.variants(TASKS_EXPERIMENT)
+                        if study.returns(TASKS_EXPERIMENT, v, task).size]
+            if "GDQ" not in variants:
                 self.add(f"- {task}: no GDQ runs; skipped.")
-                continue
-            for b in study.baselines(TASKS_EXPERIMENT):
-                base = study.returns(TASKS_EXPERIMENT, b, task)
-                if base.size == 0:
-                    continue
-                comps.append(compare(run_means(gdq), run_means(base), "GDQ", b,
-                                     seed=opts.seed))
-                early.append(compare(run_means(gdq, 0, opts.early_window),
-                                     run_means(base, 0, opts.early_window), "GDQ", b,
-                                     seed=opts.seed))
-            self.verdict_line("I", f"Task {task}", comps,
-                              "Welch + bootstrap on per-run mean return")
-            self.comparisons(comps)
-            if opts.early_window < gdq.shape[1]:
-                self.add(f"  First {opts.early_window} episodes only (verdict "
-                         f"{verdict(early)}: GDQ {verdict_reason(early)}):")
-                self.comparisons(early)
+            for variant in variants:
+                gdq = study.returns(TASKS_EXPERIMENT, variant, task)
+                comps, early = [], []
+                for b in study.baselines(TASKS_EXPERIMENT):
+                    base = study.returns(TASKS_EXPERIMENT, b, task)
+                    if base.size == 0:
+                        continue
+                    comps.append(compare(run_means(gdq), run_means(base), variant, b,
+                                         seed=opts.seed))
+                    early.append(compare(run_means(gdq, 0, opts.early_window),
+                                         run_means(base, 0, opts.early_window), variant, b,
+                                         seed=opts.seed))
+                self.verdict_line("I", f"Task {task}", comps,
+                                  "Welch + bootstrap on per-run mean return", variant)
+                self.comparisons(comps)
+                if opts.early_window < gdq.shape[1]:
+                    self.add(f"  First {opts.early_window} episodes only (verdict "
+                             f"{verdict(early)}: {variant} {verdict_reason(early)}):")
+                    self.comparisons(early)
         self.milestones()
 
     def milestones(self) -> None:
@@ -257,32 +271,36 @@ class _Writer:
                  "the run (fewer is better), for the paper's and for the computed set.", "")
         areas = study.episodes.areas
         for task in study.episodes.tasks(TASKS_EXPERIMENT):
-            gdq = run_area_totals(study, "GDQ", task)
-            if gdq.shape[0] == 0:
+            totals = {v: run_area_totals(study, v, task)
+                      for v in self.variants(TASKS_EXPERIMENT)}
+            totals = {v: t for v, t in totals.items() if t.shape[0]}
+            if "GDQ" not in totals:
                 self.add(f"- {task}: no GDQ runs; skipped.")
-                continue
             for label, irr in (("paper", table.irrelevant_paper[task]),
                                ("computed", table.irrelevant_computed[task])):
                 cols = [areas.index(a) for a in irr if a in areas]
                 case = f"Task {task}, {label} irrelevant areas {{{', '.join(map(str, irr))}}}"
                 if not cols:
-                    self.add(f"- {case}: no irrelevant areas; nothing to test.", "")
+                    if totals:
+                        self.add(f"- {case}: no irrelevant areas; nothing to test.", "")
                     continue
-                comps = []
-                for b in study.baselines(TASKS_EXPERIMENT):
-                    base = run_area_totals(study, b, task)
-                    if base.shape[0]:
-                        comps.append(compare(gdq[:, cols].sum(axis=1),
-                                             base[:, cols].sum(axis=1), "GDQ", b,
-                                             higher_is_better=False, seed=self.opts.seed))
-                self.verdict_line("II", case, comps,
-                                  "Welch + bootstrap on per-run visits to those areas")
-                fewest = sum(row.bold[areas.index(a)] for row in table.rows
-                             if row.task == task and row.method == "GDQ" for a in irr
-                             if a in areas)
-                self.add(f"  GDQ has the fewest visits in {fewest} of {len(cols)} of these "
-                         "areas.")
-                self.comparisons(comps, " visits")
+                for variant, gdq in totals.items():
+                    comps = []
+                    for b in study.baselines(TASKS_EXPERIMENT):
+                        base = run_area_totals(study, b, task)
+                        if base.shape[0]:
+                            comps.append(compare(gdq[:, cols].sum(axis=1),
+                                                 base[:, cols].sum(axis=1), variant, b,
+                                                 higher_is_better=False, seed=self.opts.seed))
+                    self.verdict_line("II", case, comps,
+                                      "Welch + bootstrap on per-run visits to those areas",
+                                      variant)
+                    fewest = sum(row.bold[areas.index(a)] for row in table.rows
+                                 if row.task == task and row.method == variant for a in irr
+                                 if a in areas)
+                    self.add(f"  {variant} has the fewest visits in {fewest} of {len(cols)} "
+                             "of these areas.")
+                    self.comparisons(comps, " visits")
         for task in study.episodes.tasks(TASKS_EXPERIMENT):
             self.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
@@ -308,21 +326,24 @@ class _Writer:
                 self.add(f"- {exp}: only task {', '.join(tasks)} in the data; skipped.", "")
                 continue
             new = tasks[-1]
-            gdq = study.returns(exp, "GDQ", new)
-            if gdq.size == 0:
+            variants = [v for v in self.variants(exp) if study.returns(exp, v, new).size]
+            if "GDQ" not in variants:
                 self.add(f"- {exp}: no GDQ runs; skipped.", "")
+            for variant in variants:
+                gdq = study.returns(exp, variant, new)
+                comps = []
+                for b in study.baselines(exp):
+                    base = study.returns(exp, b, new)
+                    if base.size:
+                        comps.append(compare(run_means(gdq, 0, n), run_means(base, 0, n),
+                                             variant, b, seed=opts.seed))
+                self.verdict_line("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
+                                  f"{study.switch_episode(exp)})", comps,
+                                  f"Welch + bootstrap on per-run mean return, first {n} "
+                                  "episodes after the switch", variant)
+                self.comparisons(comps)
+            if not variants:
                 continue
-            comps = []
-            for b in study.baselines(exp):
-                base = study.returns(exp, b, new)
-                if base.size:
-                    comps.append(compare(run_means(gdq, 0, n), run_means(base, 0, n), "GDQ",
-                                         b, seed=opts.seed))
-            self.verdict_line("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
-                              f"{study.switch_episode(exp)})", comps,
-                              f"Welch + bootstrap on per-run mean return, first {n} "
-                              "episodes after the switch")
-            self.comparisons(comps)
             parts = []
             for m in ep.methods(exp):
                 ms = first_positive(study.returns(exp, m, new), opts.window)
@@ -379,7 +400,7 @@ class _Writer:
                      + ", ".join(_fmt(c, 5) if not math.isnan(c) else "never" for c in gdq)
                      + ".", "")
 
-    def variants(self) -> None:
+    def variant_table(self) -> None:
         study = self.study
         self.add("## The paper's GDQ vs the authors'-code variant (GDQ-code)", "")
         exp = TASKS_EXPERIMENT
@@ -460,20 +481,60 @@ class _Writer:
         self.notes.append(f"{what}: skipped, {why}.")
         self.add(f"_Skipped: {why}._", "")
 
+    def verdict_counts(self) -> str:
+        """``paper GDQ: k of n cases hold; authors'-code GDQ: j of m cases hold``."""
+        variants = self._summary_variants()
+        if not variants:
+            return "No verdicts (no GDQ runs in the data)."
+        parts = []
+        for v in variants:
+            cases = [c for c in self.summary.values() if v in c.verdicts]
+            held = sum(c.verdicts[v] == HOLDS for c in cases)
+            parts.append(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {held} of {len(cases)} cases hold")
+        return "; ".join(parts) + "."
+
+    def _summary_variants(self) -> list[str]:
+        found = {v for c in self.summary.values() for v in c.verdicts}
+        return order_methods(found)
+
     def render(self) -> str:
-        summary = ["## Verdicts", "", "| Hypothesis | Case | Verdict | Basis |",
-                   "|---|---|---|---|"]
-        summary += [f"| {h} | {c} | **{v}** | {b} |" for h, c, v, b in self.summary]
+        variants = self._summary_variants() or ["GDQ"]
+        summary = ["## Verdicts", "",
+                   "| Hypothesis | Case | " + " | ".join(
+                       f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
+                       for v in variants) + " | Basis |",
+                   "|---|---|" + "---|" * len(variants) + "---|"]
+        for c in self.summary.values():
+            cells = [f"**{c.verdicts[v]}**" if v in c.verdicts else "–" for v in variants]
+            reasons = "; ".join(f"{v} {c.reasons[v]}" for v in variants if v in c.reasons)
+            summary.append(f"| {c.hypothesis} | {c.case} | " + " | ".join(cells)
+                           + f" | {c.basis}: {reasons} |")
         if not self.summary:
-            summary.append("| – | – | no data | – |")
-        held = sum(v == HOLDS for _, _, v, _ in self.summary)
-        summary += ["", f"{held} of {len(self.summary)} cases hold.", ""]
+            summary.append("| – | – | " + "no data | " * len(variants) + "– |")
+        summary += ["", self.verdict_counts(), ""]
         if self.notes:
             summary += ["Skipped parts:", "", *[f"- {n}" for n in self.notes], ""]
         # header is the first block up to the method paragraph; put the summary after it
         head_end = next(i for i, line in enumerate(self.lines)
                         if line.startswith("**Method.**")) + 2
-        return "\n".join(self.lines[:head_end] + summary + self.lines[head_end:]) + "\n"
+        top = [f"**Summary.** {self.verdict_counts()}", ""]
+        return "\n".join(self.lines[:2] + top + self.lines[2:head_end] + summary
+                         + self.lines[head_end:]) + "\n"
+
+
+VARIANT_NAMES = {"GDQ": "paper GDQ", "GDQ-code": "authors'-code GDQ"}
+"""How the verdict summary names the GDQ variants."""
+
+
+@dataclass
+class _Case:
+    """One hypothesis case: each GDQ variant's verdict and reason."""
+
+    hypothesis: str
+    case: str
+    basis: str
+    verdicts: dict[str, str] = field(default_factory=dict)
+    reasons: dict[str, str] = field(default_factory=dict)
 
 
 def write_report(out_dir: str | Path, opts: ReportOptions = ReportOptions(),
@@ -488,7 +549,7 @@ def write_report(out_dir: str | Path, opts: ReportOptions = ReportOptions(),
     w.hypothesis_2()
     w.hypothesis_3()
     w.route_c()
-    w.variants()
+    w.variant_table()
     w.robot()
     path = out / "REPORT.md"
     path.write_text(w.render(), encoding="utf-8")
