@@ -1,17 +1,21 @@
 """The default planner: all shortest plans from the grounded state graph.
 
 It grounds the problem once (:mod:`gdq_pddl.pddl.grounding`), then for each query
-builds, breadth first and only as deep as the query needs, the reachable state graph
-as a :class:`networkx.DiGraph` (goal states are not expanded: a plan ends where the goal
-first holds). With ``tolerance == 0`` it returns every shortest plan (networkx's
-``all_shortest_paths`` to a sink joined to every goal state); with ``tolerance = t`` it
-returns every loop-free plan of at most ``floor((1 + t) * L)`` actions, where ``L`` is
-the shortest length, by a depth-first search pruned with each state's distance to the
-goal. Works for any STRIPS + typing problem, not only the office.
+finds the shortest length ``L`` by A* with h_max (:mod:`gdq_pddl.planning.heuristic`)
+and builds, breadth first, the part of the state graph with ``depth + h_max <= L``
+(or the tolerance's bound) as a :class:`networkx.DiGraph`: h_max is admissible, so
+that part holds every state of every plan within the bound, and the rest of the state
+space (which doubles with every door of a building) is never generated. Goal states are
+not expanded: a plan ends where the goal first holds. With ``tolerance == 0`` it
+returns every shortest plan (networkx's ``all_shortest_paths`` to a sink joined to
+every goal state); with ``tolerance = t`` it returns every loop-free plan of at most
+``floor((1 + t) * L)`` actions by a depth-first search pruned with each state's
+distance to the goal. Works for any STRIPS + typing problem, not only the office.
 """
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import math
 import time
@@ -21,6 +25,7 @@ import networkx as nx
 
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+from gdq_pddl.planning.heuristic import INFINITE, hmax_for
 
 _SINK = -1
 
@@ -33,6 +38,7 @@ class GraphPlanner:
 
     def __init__(self, max_plans: int = 10_000) -> None:
         self.max_plans = max_plans
+        self._generated = 0  # states whose h_max the last query computed
 
     @classmethod
     def unusable_reason(cls) -> str | None:
@@ -72,7 +78,7 @@ class GraphPlanner:
                           f"{tolerance}; kept the first {self.max_plans}", stacklevel=2)
         plans.sort(key=lambda p: (len(p), p.actions))
         metrics = {"time_s": time.perf_counter() - t0, "states": graph.number_of_nodes() - 1,
-                   "plans": len(plans)}
+                   "generated": self._generated, "plans": len(plans)}
         return problem.remember(key, PlanResult(Status.SOLVED, tuple(plans), self.name,
                                                 metrics, capped))
 
@@ -82,35 +88,59 @@ class GraphPlanner:
 
     def _explore(self, problem: PlanningProblem, s0: int, goal: tuple[int, int],
                  tolerance: float) -> tuple[nx.DiGraph, list[int], int]:
-        """BFS from ``s0``: to the first goal layer, or deeper within the tolerance."""
+        """The part of the state graph that plans within the tolerance can use.
+
+        First A* with h_max finds the shortest length ``L``; then a breadth-first search
+        keeps only states with ``depth + h_max <= bound`` (``bound = floor((1+t) L)``).
+        h_max is admissible, so every state of every plan of at most ``bound`` actions
+        is kept, at its BFS depth, and the rest of the state space is never generated.
+        """
         task = problem.task
+        hmax = hmax_for(task)
+        h_cache: dict[int, int] = {}
+
+        def h(s: int) -> int:
+            v = h_cache.get(s)
+            if v is None:
+                v = h_cache[s] = hmax(s, goal[0])
+            return v
+
         graph = nx.DiGraph()
         graph.add_node(s0)
+        shortest = _astar(task, s0, goal, h)
+        if shortest is None:
+            return graph, [], 0
+        bound = math.floor((1 + tolerance) * shortest + 1e-9)
         depth_of = {s0: 0}
-        layer, depth, goals, bound = [s0], 0, [], None
+        layer, depth, goals = [s0], 0, []
         if task.is_goal(s0, goal):
-            goals, bound = [s0], 0
-        while layer and (bound is None or depth < bound):
+            goals = [s0]
+        while layer and depth < bound:
             nxt = []
             for s in layer:
                 if task.is_goal(s, goal):
                     continue
                 for op, t in task.successors(s):
-                    if t not in depth_of:
+                    d = depth_of.get(t)
+                    if d is None:
+                        hv = h(t)
+                        if hv == INFINITE or depth + 1 + hv > bound:
+                            depth_of[t] = -1  # pruned: no plan within the bound uses it
+                            continue
                         depth_of[t] = depth + 1
                         nxt.append(t)
                         if task.is_goal(t, goal):
                             goals.append(t)
+                    elif d < 0:
+                        continue
                     if graph.has_edge(s, t):
                         graph[s][t]["actions"].append(op.name)
                     else:
                         graph.add_edge(s, t, actions=[op.name])
             layer, depth = nxt, depth + 1
-            if goals and bound is None:
-                bound = math.floor((1 + tolerance) * depth + 1e-9)
         for g in goals:
             graph.add_edge(g, _SINK, actions=[])
-        shortest = min((depth_of[g] for g in goals), default=0)
+        self._generated = len(h_cache)
         return graph, goals, shortest
 
     def _expand(self, task, graph: nx.DiGraph, paths) -> tuple[list[Plan], bool]:
@@ -125,6 +155,31 @@ class GraphPlanner:
                     return plans, True
                 plans.append(Plan(tuple(actions), atoms))
         return plans, False
+
+
+def _astar(task, s0: int, goal: tuple[int, int], h) -> int | None:
+    """Length of a shortest plan from ``s0`` by A* with the consistent heuristic ``h``,
+    or None when there is none."""
+    h0 = h(s0)
+    if h0 == INFINITE:
+        return None
+    g_of = {s0: 0}
+    heap = [(h0, 0, s0)]  # (f, -g, state): ties go to the deeper state
+    while heap:
+        _f, neg_g, s = heapq.heappop(heap)
+        g = -neg_g
+        if g > g_of[s]:
+            continue
+        if task.is_goal(s, goal):
+            return g
+        for _op, t in task.successors(s):
+            if g + 1 < g_of.get(t, math.inf):
+                ht = h(t)
+                if ht == INFINITE:
+                    continue
+                g_of[t] = g + 1
+                heapq.heappush(heap, (g + 1 + ht, -g - 1, t))
+    return None
 
 
 def _bounded_paths(graph: nx.DiGraph, source: int, bound: int):
