@@ -1,0 +1,353 @@
+"""Generated office-like buildings of any size, as world files (``gdq-pddl building``).
+
+A building is rows of corridor joined by a few short vertical corridors, rooms hanging
+off the corridors behind doors, some rooms with a second door to another corridor (a
+shortcut), and a few fire doors inside the corridors. Every door joins two door-side
+positions: for a room door, a stub beside the corridor and the room's entrance.
+
+Layout, from a seed (``numpy.random.default_rng(seed)``, the only source of randomness):
+
+- ``--doors K`` doors (default ``positions // 8``): about 1/6 fire doors, about 1/6
+  second room doors, the rest one per room. Rooms have 3-8 positions, a chain with
+  sometimes a closing edge.
+- The positions left over form ``R = round(sqrt(n / 4))`` corridor rows of random
+  lengths, split into segments of 4-8 positions; rows are joined by 2-3 vertical
+  corridors (1-3 positions) at random places, so routes have alternatives but few ties.
+- Areas: one per room, one per corridor segment (a fire door's stubs belong to the
+  segments they face; a room door's corridor stub to the corridor's segment).
+- Doors of mixed difficulty, the office's five kinds (:data:`DOOR_KINDS`).
+- Tasks A, B, C: start and goal in rooms far apart (A and B the farthest pair found,
+  in both directions; C another far pair). Where a task's shortest route crosses a fire
+  door or a second room door that an alternative route avoids, that door is made
+  "most difficult", so the best route is not a shortest one (the office's Task C).
+- ``step_limit = ceil(2.5 * L)`` with ``L`` the longest shortest plan of the tasks (the
+  office: plans of 7-9 actions, limit 20) and ``r_max = step_limit``: as in the office,
+  reaching the goal by the optimal route must beat failing, whatever the route's length.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.errors import WorldError
+from gdq_pddl.world import Task, World, parse_world
+
+DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
+    # label, success, stuck, how often
+    ("easiest", 0.95, 0.0, 0.2),
+    ("easy", 0.9, 0.0, 0.35),
+    ("difficult", 0.8, 0.2, 0.2),
+    ("difficult", 0.6, 0.2, 0.15),
+    ("most difficult", 0.6, 0.4, 0.1),
+)
+"""Door kinds as in the office: label, success and stuck probabilities, and weight."""
+
+MIN_POSITIONS = 40
+STEP_FACTOR = 2.5
+
+
+@dataclass
+class Building:
+    """A generated building before it becomes a world file."""
+
+    name: str
+    positions: list[str] = field(default_factory=list)
+    edges: list[tuple[str, str]] = field(default_factory=list)
+    doors: dict[str, dict] = field(default_factory=dict)
+    areas: dict[int, list[str]] = field(default_factory=dict)
+    rooms: list[list[str]] = field(default_factory=list)
+    landmarks: dict[str, str] = field(default_factory=dict)
+    tasks: dict[str, tuple[str, str]] = field(default_factory=dict)
+    step_limit: int = 20
+    description: str = ""
+
+    def add(self, area: int) -> str:
+        p = f"p{len(self.positions)}"
+        self.positions.append(p)
+        self.areas.setdefault(area, []).append(p)
+        return p
+
+
+def generate(positions: int, seed: int = 0, doors: int | None = None) -> Building:
+    """A building of exactly ``positions`` positions (see the module docstring).
+
+    Raises :class:`WorldError` when the numbers cannot make a building.
+    """
+    if positions < MIN_POSITIONS:
+        raise WorldError("building", "positions", f"need at least {MIN_POSITIONS}, got {positions}")
+    k = positions // 8 if doors is None else doors
+    if k < 3:
+        raise WorldError("building", "doors", f"need at least 3 doors, got {k}")
+    rng = np.random.default_rng(seed)
+    n_fire = max(1, round(k / 6))
+    n_second = max(1, round(k / 6))
+    n_rooms = k - n_fire - n_second
+    if n_rooms < 2:
+        raise WorldError("building", "doors", f"{k} doors leave too few rooms")
+    sizes = rng.integers(3, 9, size=n_rooms)
+    stubs = n_rooms + n_second + 2 * n_fire
+    corridor = positions - stubs - int(sizes.sum())
+    need = 8 * max(2, round(math.sqrt(max(corridor, 1) / 4)))
+    while corridor < need and sizes.max() > 3:  # too many room positions: shrink rooms
+        sizes[int(np.argmax(sizes))] -= 1
+        corridor += 1
+    if corridor < need:
+        raise WorldError("building", "doors", f"{k} doors are too many for {positions} "
+                                              "positions")
+    b = Building(name=f"building-{positions}-s{seed}")
+    rows = _corridors(b, rng, corridor, n_fire)
+    _rooms(b, rng, rows, sizes, n_second)
+    _tasks(b, rng)
+    b.description = (f"generated building: {positions} positions, {len(b.doors)} doors, "
+                     f"{len(b.areas)} areas (seed {seed})")
+    assert len(b.positions) == positions
+    return b
+
+
+def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int) -> list[list[str]]:
+    """Corridor rows and links of ``n`` positions in all (fire doors' stubs come on top)."""
+    n_rows = max(2, round(math.sqrt(n / 4)))
+    n_links = sum(int(rng.integers(2, 4)) for _ in range(n_rows - 1))
+    link_len = rng.integers(1, 4, size=n_links)
+    row_total = n - int(link_len.sum())
+    weights = rng.uniform(0.8, 1.2, size=n_rows)
+    lengths = np.floor(weights / weights.sum() * row_total).astype(int)
+    lengths[: row_total - lengths.sum()] += 1
+    # each fire door goes into a row or a link (a link holds at most one)
+    row_fires = np.zeros(n_rows, dtype=int)
+    link_fire = np.zeros(n_links, dtype=bool)
+    for _ in range(n_fire):
+        slot = int(rng.integers(0, n_rows + n_links))
+        if slot >= n_rows and not link_fire[slot - n_rows]:
+            link_fire[slot - n_rows] = True
+        else:
+            row_fires[slot % n_rows] += 1
+    area = 1
+    rows: list[list[str]] = []
+    for r, length in enumerate(lengths):
+        fires = set(rng.choice(np.arange(2, length - 2), size=row_fires[r],
+                               replace=False).tolist())
+        row: list[str] = []
+        seg_left = int(rng.integers(4, 9))
+        for i in range(length):
+            new_area = seg_left == 0 or i in fires
+            if new_area:
+                area += 1
+                seg_left = int(rng.integers(4, 9))
+            p = b.add(area)
+            if i in fires:
+                _door_between(b, row[-1], p, area - 1, area)
+            elif row:
+                b.edges.append((row[-1], p))
+            row.append(p)
+            seg_left -= 1
+        rows.append(row)
+        area += 1
+    gaps = np.sort(rng.integers(0, n_rows - 1, size=n_links))
+    gaps[: n_rows - 1] = np.arange(n_rows - 1)  # every pair of rows is joined
+    for k, gap in enumerate(np.sort(gaps)):
+        upper, lower = rows[gap], rows[gap + 1]
+        a = upper[int(rng.integers(0, len(upper)))]
+        z = lower[int(rng.integers(0, len(lower)))]
+        path = [a, *(b.add(area) for _ in range(int(link_len[k]))), z]
+        for i, (x, y) in enumerate(itertools.pairwise(path)):
+            if link_fire[k] and i == 0:
+                _door_between(b, x, y, area, area)
+            else:
+                b.edges.append((x, y))
+        area += 1
+    return rows
+
+
+def _door_between(b: Building, x: str, y: str, area_x: int, area_y: int) -> str:
+    """Put a door, with its two sides as new positions, between ``x`` and ``y``."""
+    s1, s2 = b.add(area_x), b.add(area_y)
+    b.edges += [(x, s1), (s1, s2), (s2, y)]
+    name = f"d{len(b.doors)}"
+    b.doors[name] = {"sides": (s1, s2)}
+    return name
+
+
+def _rooms(b: Building, rng: np.random.Generator, rows: list[list[str]], sizes: np.ndarray,
+           n_second: int) -> None:
+    door_sides = {s for d in b.doors.values() for s in d["sides"]}
+    corridor = [p for row in rows for p in row if p not in door_sides]
+    area = max(b.areas) + 1
+    for size in sizes:
+        at = corridor[int(rng.integers(0, len(corridor)))]
+        corridor_area = next(a for a, ps in b.areas.items() if at in ps)
+        stub = b.add(corridor_area)
+        room = [b.add(area) for _ in range(int(size))]
+        b.edges.append((at, stub))
+        b.edges.append((stub, room[0]))
+        b.doors[f"d{len(b.doors)}"] = {"sides": (stub, room[0])}
+        b.edges += list(zip(room, room[1:], strict=False))
+        if size >= 4 and rng.random() < 0.5:
+            b.edges.append((room[0], room[2]))
+        b.rooms.append(room)
+        area += 1
+    order = rng.permutation(len(b.rooms))
+    made = 0
+    for i in order:
+        room = b.rooms[i]
+        if made == n_second:
+            break
+        if len(room) < 3:
+            continue
+        at = corridor[int(rng.integers(0, len(corridor)))]
+        corridor_area = next(a for a, ps in b.areas.items() if at in ps)
+        stub = b.add(corridor_area)
+        b.edges += [(at, stub), (stub, room[-1])]
+        b.doors[f"d{len(b.doors)}"] = {"sides": (stub, room[-1])}
+        made += 1
+    kinds = rng.choice(len(DOOR_KINDS), size=len(b.doors),
+                       p=[k[3] for k in DOOR_KINDS])
+    for door, kind in zip(b.doors.values(), kinds, strict=True):
+        label, success, stuck, _ = DOOR_KINDS[int(kind)]
+        door.update(label=label, success=success, stuck=stuck)
+
+
+def _graph(b: Building, skip: frozenset[str] = frozenset()) -> dict[str, list[tuple[str, int]]]:
+    """Position graph weighted by plan steps: 2 across a door (open + go through)."""
+    side_of = {s: name for name, d in b.doors.items() for s in d["sides"]}
+    out: dict[str, list[tuple[str, int]]] = {p: [] for p in b.positions}
+    for x, y in b.edges:
+        if side_of.get(x) is not None and side_of.get(x) == side_of.get(y):
+            if side_of[x] in skip:
+                continue
+            w = 2
+        else:
+            w = 1
+        out[x].append((y, w))
+        out[y].append((x, w))
+    return out
+
+
+def _distances(graph: dict[str, list[tuple[str, int]]], source: str) -> dict[str, int]:
+    """0-1-2 weighted shortest distances (a small Dijkstra by buckets)."""
+    dist = {source: 0}
+    buckets: list[deque[str]] = [deque([source])]
+    d = 0
+    while d < len(buckets):
+        while buckets[d]:
+            p = buckets[d].popleft()
+            if dist[p] != d:
+                continue
+            for q, w in graph[p]:
+                if q not in dist or dist[q] > d + w:
+                    dist[q] = d + w
+                    while len(buckets) <= d + w:
+                        buckets.append(deque())
+                    buckets[d + w].append(q)
+        d += 1
+    return dist
+
+
+def _route_doors(b: Building, graph, start: str, goal: str) -> list[str]:
+    """Doors on one shortest route from ``start`` to ``goal``."""
+    dist = _distances(graph, goal)
+    side_of = {s: name for name, d in b.doors.items() for s in d["sides"]}
+    out, p = [], start
+    while p != goal:
+        q = min((q for q, w in graph[p] if dist.get(q, math.inf) + w == dist[p]),
+                key=b.positions.index)
+        if side_of.get(p) is not None and side_of.get(p) == side_of.get(q):
+            out.append(side_of[p])
+        p = q
+    return out
+
+
+def _tasks(b: Building, rng: np.random.Generator) -> None:
+    graph = _graph(b)
+    inner = [room[len(room) // 2] for room in b.rooms]
+    probe = inner[int(rng.integers(0, len(inner)))]
+    far_a = max(inner, key=_distances(graph, probe).__getitem__)
+    dist_a = _distances(graph, far_a)
+    far_b = max(inner, key=dist_a.__getitem__)
+    dist_b = _distances(graph, far_b)
+    third = max((p for p in inner if p not in (far_a, far_b)),
+                key=lambda p: min(dist_a[p], dist_b[p]))
+    b.landmarks = {"P1": far_a, "P2": far_b, "P3": third}
+    b.tasks = {"A": (far_a, far_b), "B": (far_b, far_a), "C": (third, far_a)}
+    for start, goal in b.tasks.values():
+        for name in _route_doors(b, graph, start, goal):
+            if set(b.doors[name]["sides"]) & {start, goal}:
+                continue
+            if goal in _distances(_graph(b, frozenset({name})), start):
+                b.doors[name].update(label="most difficult", success=0.6, stuck=0.4)
+                break
+    longest = max(_distances(graph, s)[g] for s, g in b.tasks.values())
+    b.step_limit = math.ceil(STEP_FACTOR * longest)
+
+
+def to_toml(b: Building) -> str:
+    """The world file text of ``b`` (the schema of ``gdq_pddl/data/office.toml``)."""
+    q = '"{}"'.format
+    lines = [
+        f"# {b.description}. Generated by `gdq-pddl building`; regenerate rather than edit.",
+        f"# step_limit = ceil({STEP_FACTOR} x the longest shortest plan of the tasks); "
+        "r_max = step_limit.",
+        "",
+        "[world]",
+        f"name = {q(b.name)}",
+        f"description = {q(b.description)}",
+        f"step_limit = {b.step_limit}",
+        f"r_max = {float(b.step_limit)}",
+        "navigation_success = 0.95",
+        "positions = [" + ", ".join(q(p) for p in b.positions) + "]",
+        "adjacency = [",
+        *(f"  [{q(x)}, {q(y)}]," for x, y in b.edges),
+        "]",
+        "",
+        "[costs]",
+        *(f"{v} = 1.0" for v in ("goto", "approach", "opendoor", "gothrough", "stay")),
+    ]
+    for name, d in b.doors.items():
+        lines += ["", f"[doors.{name}]", f"sides = [{q(d['sides'][0])}, {q(d['sides'][1])}]",
+                  f"success = {d['success']}", f"stuck = {d['stuck']}",
+                  f"label = {q(d['label'])}"]
+    lines += ["", "[areas]"]
+    lines += [f"{a} = [" + ", ".join(q(p) for p in ps) + "]" for a, ps in sorted(b.areas.items())]
+    lines += ["", "[landmarks]", *(f"{k} = {q(v)}" for k, v in b.landmarks.items())]
+    for name, (s, g) in b.tasks.items():
+        lines += ["", f"[tasks.{name}]", f"start = {q(s)}", f"goal = {q(g)}"]
+    return "\n".join(lines) + "\n"
+
+
+def building_world(positions: int, seed: int = 0, doors: int | None = None) -> World:
+    """The validated :class:`World` of a generated building (nothing written)."""
+    b = generate(positions, seed, doors)
+    return parse_world(to_toml(b), source=f"{b.name}.toml (generated)")
+
+
+def write_building(out: str | Path, positions: int, seed: int = 0,
+                   doors: int | None = None) -> tuple[Path, list[Path]]:
+    """Write ``<name>.toml``, ``domain.pddl`` and ``problems/<name>-<task>.pddl`` to ``out``.
+
+    Returns the world file and the problem files. The world file is validated by
+    :func:`gdq_pddl.world.load_world` before anything is written.
+    """
+    from gdq_pddl.learners.context import _domain_text
+    from gdq_pddl.pddl.office import office_problem
+
+    b = generate(positions, seed, doors)
+    text = to_toml(b)
+    world = parse_world(text, source=f"{b.name}.toml (generated)")
+    out = Path(out)
+    (out / "problems").mkdir(parents=True, exist_ok=True)
+    world_path = out / f"{b.name}.toml"
+    world_path.write_text(text, encoding="utf-8")
+    (out / "domain.pddl").write_text(_domain_text(), encoding="utf-8")
+    problems = []
+    for task in world.tasks.values():
+        path = out / "problems" / f"{b.name}-{task.name.lower()}.pddl"
+        path.write_text(office_problem(world, Task(task.name, task.start, task.goal)),
+                        encoding="utf-8")
+        problems.append(path)
+    return world_path, problems
