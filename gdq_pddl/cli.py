@@ -266,6 +266,12 @@ def _register_run(sub) -> None:
                                    "--episodes episodes. Writes episodes.csv, figures and "
                                    "REPORT.md to --out.")
     _task_args(p)
+    p.add_argument("--domain", type=Path,
+                   help="a PDDL domain: with --problem and --dynamics, learn on that problem "
+                        "instead of an office task (see docs/domains.md)")
+    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
+    p.add_argument("--dynamics", type=Path,
+                   help="the dynamics file (TOML) of --domain: success, failure, costs")
     _run_args(p)
     p.set_defaults(func=cmd_run)
 
@@ -327,12 +333,33 @@ def _check_planner(name: str) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     from gdq_pddl.experiments import Experiment
 
+    if args.domain or args.problem or args.dynamics:
+        return _run_pddl(args)
     world, task = _world_and_task(args)
     kw = _experiment_kw(args)
     _check_planner(args.planner)
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
     exp = Experiment("run", ((spec, args.episodes),), world=str(args.world or "office"), **kw)
     return _execute([exp], args, f"run-{task.name}")
+
+
+def _run_pddl(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.generic import write_generic_report
+    from gdq_pddl.experiments import Experiment
+    from gdq_pddl.experiments.work import load_pddl_instance
+
+    if not (args.domain and args.problem and args.dynamics):
+        raise GdqError("a PDDL run needs --domain, --problem and --dynamics")
+    if args.task or args.start or args.goal or args.world:
+        raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
+                       "its start and goal from --problem")
+    files = tuple(str(p) for p in (args.domain, args.problem, args.dynamics))
+    instance = load_pddl_instance(files)  # check the files (and size) before any worker
+    instance.model  # noqa: B018
+    kw = _experiment_kw(args)
+    _check_planner(args.planner)
+    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
+    return _execute([exp], args, f"run-{instance.name}", report=write_generic_report)
 
 
 def cmd_switch(args: argparse.Namespace) -> int:
@@ -373,7 +400,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
-def _execute(experiments, args: argparse.Namespace, name: str) -> int:
+def _execute(experiments, args: argparse.Namespace, name: str, report=None) -> int:
     import time
 
     from gdq_pddl.experiments import run_experiments
@@ -384,7 +411,9 @@ def _execute(experiments, args: argparse.Namespace, name: str) -> int:
                     address=args.address, resume=args.resume)
     print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
           f"{time.perf_counter() - t0:.1f} s; results in {out}/episodes.csv")
-    if not args.no_report:
+    if not args.no_report and report is not None:
+        print(f"wrote {report(out)}")
+    elif not args.no_report:
         _report(out)
     return 0
 

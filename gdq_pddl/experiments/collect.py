@@ -72,6 +72,9 @@ def optimal_summary(experiments: list[Experiment]) -> dict:
 
     out: dict = {}
     for exp in experiments:
+        if exp.pddl is not None:
+            out.update(pddl_optimal(exp))
+            continue
         world = load_world_named(exp.world)
         for spec, _ in exp.schedule:
             task = resolve_task(world, spec)
@@ -89,3 +92,21 @@ def optimal_summary(experiments: list[Experiment]) -> dict:
                 "expected_area_visits": {str(a): v for a, v in visits.items()},
             }
     return out
+
+
+def pddl_optimal(exp: Experiment) -> dict:
+    """V* (value iteration on the true model) and the shortest plan length of a PDDL
+    experiment's problem, keyed ``<schedule entry>@<problem file>``."""
+    from gdq_pddl.envs.pddl_env import GOAL_POS
+    from gdq_pddl.envs.solve import solve
+    from gdq_pddl.experiments.work import load_pddl_instance
+
+    instance = load_pddl_instance(tuple(exp.pddl))
+    v_star = float(solve(instance.model, GOAL_POS).V[0, 0])
+    shortest = int(instance.graph.distances[0])
+    return {f"{spec}@{exp.pddl[1]}": {
+        "world": "pddl", "domain": exp.pddl[0], "problem": exp.pddl[1],
+        "dynamics": exp.pddl[2], "v_star": v_star, "shortest_plan": shortest,
+        "states": instance.n_states, "actions": instance.n_actions,
+        "relevant_areas": [], "irrelevant_areas_paper": [], "expected_area_visits": {},
+    } for spec, _ in exp.schedule}

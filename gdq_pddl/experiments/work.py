@@ -58,6 +58,8 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     from gdq_pddl.learners.runner import run_episodes
 
     exp = unit.experiment
+    if exp.pddl is not None:
+        return _run_pddl_unit(unit)
     world = load_world_named(exp.world)
     rng, env_seed = unit.seeds()
     learner, parts = None, []
@@ -77,6 +79,43 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
         "success": np.concatenate([p.success for p in parts]),
         "areas": np.concatenate([p.area_visits for p in parts]),
         "tasks": np.array([resolve_task(world, s).name for s, _ in exp.schedule]),
+        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
+        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
+    }
+
+
+@cache
+def load_pddl_instance(files: tuple[str, str, str]):
+    """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``."""
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+
+    return PDDLInstance.from_files(*files)
+
+
+def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:
+    """:func:`run_unit` on a PDDL problem: every schedule entry runs on it (no areas)."""
+    from gdq_pddl.envs.pddl_env import PDDLEnv
+    from gdq_pddl.learners.context import pddl_task_context
+    from gdq_pddl.learners.runner import run_episodes
+
+    exp = unit.experiment
+    instance = load_pddl_instance(tuple(exp.pddl))
+    rng, env_seed = unit.seeds()
+    context = pddl_task_context(instance, exp.planner)
+    learner = make_learner(unit.method, context, exp.hyper)
+    env = PDDLEnv(instance=instance)
+    parts = []
+    for i, (_, episodes) in enumerate(exp.schedule):
+        if i:
+            learner.start_task(context)
+        env.reset(seed=env_seed + i)
+        parts.append(run_episodes(learner, env, episodes, rng))
+    return {
+        "returns": np.concatenate([p.returns for p in parts]),
+        "steps": np.concatenate([p.steps for p in parts]),
+        "success": np.concatenate([p.success for p in parts]),
+        "areas": np.concatenate([p.area_visits for p in parts]),
+        "tasks": np.array([s for s, _ in exp.schedule]),
         "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
         "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
     }
