@@ -306,6 +306,23 @@ def _register_reproduce(sub) -> None:
     p.set_defaults(func=cmd_reproduce)
 
 
+def _register_knowledge(sub) -> None:
+    from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS
+
+    p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
+                       description="Task C with a door locked in reality but usable in the "
+                                   "knowledge (d3, d1), a corridor only reality has, and a "
+                                   "control; each also with accurate knowledge. Writes "
+                                   "episodes.csv, figures and REPORT.md to --out.")
+    p.add_argument("--episodes", type=int, default=1500, help="episodes per run")
+    p.add_argument("--runs", type=int, default=10, help="independent runs per method and case")
+    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
+                   help="methods to compare")
+    _exec_args(p)
+    p.set_defaults(func=cmd_knowledge)
+
+
 def _register_report(sub) -> None:
     p = sub.add_parser("report", help="redraw figures, tables and REPORT.md of an output folder")
     p.add_argument("out", type=Path, help="an output folder of run/switch/robot/reproduce")
@@ -393,6 +410,32 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return _execute(paper_protocol(quick=args.quick, seed=args.seed), args, name)
 
 
+def cmd_knowledge(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import METHODS, run_experiments
+    from gdq_pddl.experiments.knowledge import knowledge_experiments
+
+    unknown = [m for m in args.method if m not in METHODS]
+    if unknown:
+        raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
+    if args.episodes < 1 or args.runs < 1:
+        raise GdqError("--episodes and --runs must be at least 1")
+    exps = knowledge_experiments(args.episodes, args.runs, args.seed,
+                                 tuple(dict.fromkeys(args.method)))
+    out = args.out or Path("results") / "knowledge"
+    run_experiments(exps, out, jobs=args.jobs, executor=args.executor, address=args.address,
+                    resume=args.resume)
+    print(f"ran {sum(e.runs * len(e.methods) for e in exps)} runs; results in "
+          f"{out}/episodes.csv")
+    if not args.no_report:
+        from gdq_pddl.analysis.knowledge import make_knowledge_report
+
+        command = (f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} "
+                   f"--seed {args.seed}")
+        paths = make_knowledge_report(out, command)
+        print(f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}")
+    return 0
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     if not (args.out / "episodes.csv").exists():
         raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
@@ -429,7 +472,7 @@ def _report(out: Path) -> None:
 
 COMMANDS: list[Callable] = [_register_problem, _register_building, _register_plan, _register_planners, _register_run,
                             _register_switch, _register_robot, _register_reproduce,
-                            _register_report]
+                            _register_report, _register_knowledge]
 
 if __name__ == "__main__":
     raise SystemExit(main())
