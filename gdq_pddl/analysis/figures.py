@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -312,13 +311,13 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
     best = study.truth(experiment, task).optimal_route_areas
     panels = []
     for method in study.methods(experiment):
-        routes = study.routes(experiment, method, task)
-        if routes:
-            panels.append((method, routes))
+        summary = study.route_summary(experiment, method, task)
+        if summary is not None:
+            panels.append((method, summary))
     if not panels:
         return []
     fig, axes, _ = _map_grid(len(panels), width=3.6, height=3.8)
-    for ax, (method, routes) in zip(axes, panels, strict=True):
+    for ax, (method, summary) in zip(axes, panels, strict=True):
         _draw_map(ax, world, xy, alpha=0.5)
         pts = np.array([xy[p] for p in world.positions])
         ax.scatter(pts[:, 0], pts[:, 1], s=80, c="#eeeeee", edgecolors="#555555",
@@ -326,17 +325,14 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
         for p in world.positions:
             ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                     in_layout=False)
-        counts = Counter(r.positions for r in routes.values())
-        top, k = counts.most_common(1)[0]
-        route = next(r for r in routes.values() if r.positions == top)
-        _draw_route(ax, xy, top, method_colour(method))
+        _draw_route(ax, xy, summary.example.positions, method_colour(method))
         _mark_task(ax, xy, _task(study, experiment, task))
-        on_best = sum(r.reached_goal and r.areas(world) == best for r in routes.values())
-        areas = "->".join(map(str, route.areas(world)))
-        ax.set_title(f"{method}: {k}/{len(routes)} runs take this route", fontsize=9,
-                     color=method_colour(method))
-        ax.text(0.5, -0.02, f"areas {areas} ({route.end}); optimal route: "
-                f"{on_best}/{len(routes)} runs", transform=ax.transAxes, ha="center",
+        on_best = summary.on_route(world, best)
+        areas = "->".join(map(str, summary.areas)) or "(none)"
+        ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
+                     fontsize=9, color=method_colour(method), y=1.0)
+        ax.text(0.5, -0.02, f"areas {areas} ({summary.end}); optimal route: "
+                f"{on_best}/{summary.runs} runs", transform=ax.transAxes, ha="center",
                 va="top", fontsize=7)
     fig.suptitle(f"{_task_title(study, experiment, task)}: most common final greedy route "
                  f"per method (optimal: areas {'->'.join(map(str, best))})", fontsize=10)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -29,6 +30,44 @@ from gdq_pddl.analysis.routes import (
     walk_policy,
 )
 from gdq_pddl.world import Task, World
+
+
+@dataclass(frozen=True)
+class RouteSummary:
+    """The final greedy routes of one method's runs, and the most common one.
+
+    Runs are grouped by route in *area* terms and how the walk ended (``goal``, ``loop``
+    ...); the most common group is the method's route (ties: the group of the lowest
+    run). :attr:`example` is that group's most common position sequence, for drawing.
+    The report's table and the route figure both use this, so they always agree.
+    """
+
+    routes: dict[int, Route]
+    areas: tuple[int, ...]
+    end: str
+    count: int
+    example: Route
+
+    @property
+    def runs(self) -> int:
+        return len(self.routes)
+
+    def on_route(self, world: World, areas: tuple[int, ...]) -> int:
+        """Runs whose route reaches the goal through exactly ``areas``."""
+        return sum(r.reached_goal and r.areas(world) == tuple(areas)
+                   for r in self.routes.values())
+
+
+def summarise_routes(world: World, routes: dict[int, Route]) -> RouteSummary | None:
+    """The :class:`RouteSummary` of ``routes`` (None when there are none)."""
+    if not routes:
+        return None
+    groups = Counter((r.areas(world), r.end) for _, r in sorted(routes.items()))
+    (areas, end), count = groups.most_common(1)[0]
+    members = [r for _, r in sorted(routes.items()) if (r.areas(world), r.end) == (areas, end)]
+    top = Counter(r.positions for r in members).most_common(1)[0][0]
+    example = next(r for r in members if r.positions == top)
+    return RouteSummary(dict(routes), areas, end, count, example)
 
 
 @dataclass(frozen=True)
@@ -140,6 +179,10 @@ class Study:
             if route is not None:
                 out[r] = route
         return out
+
+    def route_summary(self, experiment: str, method: str, task: str) -> RouteSummary | None:
+        """The most common final greedy route of ``method`` (None: no policies)."""
+        return summarise_routes(self.world(experiment), self.routes(experiment, method, task))
 
     def returns(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
         return self.episodes.matrix("return", experiment, method, task)
