@@ -9,7 +9,6 @@ or robot) are skipped with a note.
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -375,15 +374,14 @@ class _Writer:
                  "| converged runs | convergence episode (mean) |", "|---|--:|---|--:|--:|")
         ep = study.episodes
         for m in ep.methods(exp):
-            routes = study.routes(exp, m, "C") if have_policies else {}
+            summary = study.route_summary(exp, m, "C") if have_policies else None
             share, common = "–", "–"
-            if routes:
-                on = sum(r.reached_goal and r.areas(world) == BEST_ROUTE_C
-                         for r in routes.values())
-                share = f"{on}/{len(routes)} ({on / len(routes):.0%})"
-                (areas, end), k = Counter((r.areas(world), r.end)
-                                          for r in routes.values()).most_common(1)[0]
-                common = f"{_route_str(areas)} ({end}, {k} run{'s' if k != 1 else ''})"
+            if summary is not None:
+                on = summary.on_route(world, BEST_ROUTE_C)
+                share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
+                k = summary.count
+                common = (f"{_route_str(summary.areas)} ({summary.end}, {k} "
+                          f"run{'s' if k != 1 else ''})")
             conv = convergence_episode(ep.area_visits(exp, m, "C"),
                                        ep.matrix("success", exp, m, "C"), BEST_ROUTE_C,
                                        ep.areas, opts.route_window, opts.route_share)
@@ -423,6 +421,65 @@ class _Writer:
                      f"{c.diff:+.2f} [{c.ci_low:+.2f}, {c.ci_high:+.2f}] | {_fmt(c.p)} |")
         self.add("")
 
+    def why_gdq_fails(self) -> None:
+        """Measured evidence for the paper GDQ's failure: its Q values right after OptInit
+        and how its episodes end."""
+        study = self.study
+        exp = TASKS_EXPERIMENT
+        self.add("## Why the paper's GDQ fails here", "")
+        if not study.has(exp) or not {"GDQ", "GDQ-code"} & set(study.methods(exp)):
+            self.note("Why the paper's GDQ fails", "the tasks experiment has no GDQ runs")
+            return
+        tasks = study.episodes.tasks(exp)
+        task = "C" if "C" in tasks else tasks[0]
+        init = optinit_values(study, exp, task)
+        r_max, gamma = init.r_max, init.gamma
+        bound = r_max / (1 - gamma)
+        self.add(f"Q values at the start state of Task {task} right after OptInit, measured "
+                 "by building each learner as the experiment did (before any episode); "
+                 f"R_max = {r_max:g}, gamma = {gamma:g}, so R_max / (1 - gamma) = "
+                 f"{bound:.4g} and gamma R_max / (1 - gamma) = {gamma * bound:.4g}.", "",
+                 "| Variant | Q(s0, greedy action) | median Q(s0, ·) | actions at s0 |",
+                 "|---|--:|--:|--:|")
+        for method, (greedy, median, n) in init.values.items():
+            self.add(f"| {method} | {greedy:.4g} | {median:.4g} | {n} |")
+        self.add("")
+        ep = study.episodes
+        limit = study.world(exp).step_limit
+        methods = study.methods(exp)
+        self.add(f"How episodes end (tasks {', '.join(tasks)}, all episodes of all runs): the "
+                 f"share that run out of the {limit}-step limit without reaching the goal "
+                 f"(steps = {limit} and success = 0), and the share that reach the goal.", "",
+                 "| Method | step limit, no goal | goal reached | mean return |",
+                 "|---|--:|--:|--:|")
+        shares = {}
+        for m in methods:
+            rows = ep.mask(exp, m)
+            steps, success = ep.values["steps"][rows], ep.values["success"][rows]
+            timeout = float(np.mean((steps == limit) & (success == 0)))
+            shares[m] = timeout
+            self.add(f"| {m} | {timeout:.1%} | {float(np.mean(success > 0)):.1%} | "
+                     f"{float(np.mean(ep.values['return'][rows])):.2f} |")
+        self.add("")
+        paper = init.values.get("GDQ")
+        if paper is not None:
+            timeout = shares.get("GDQ", math.nan)
+            self.add(
+                "**Mechanism.** Algorithm 1's optimistic model sends every pair back to s0 "
+                "without ending the episode, so policy iteration values the plan pairs at "
+                f"R_max / (1 - gamma) = {bound:.4g} and every other pair at about gamma times "
+                f"that (measured: greedy {paper[0]:.4g}, median {paper[1]:.4g}), far above any "
+                f"real return (at most R_max = {r_max:g}). Reaching the goal ends the episode "
+                f"with a target of at most {r_max:g}, which *lowers* the value of the pair "
+                "that got there relative to the inflated bootstrap of pairs that keep the "
+                "episode going, so the greedy policy learns to avoid the goal; with "
+                f"alpha = {init.alpha:g} the excess decays by only about "
+                f"{init.alpha * (1 - gamma):.2%} per visit (alpha (1 - gamma)). Measured: "
+                f"{_pct(timeout)} of the paper GDQ's episodes end at the step limit without "
+                f"the goal, against {_pct(shares.get('GDQ-code', math.nan))} for GDQ-code, "
+                "whose OptInit gives R_max only to the plan pairs (no policy iteration), so "
+                "its values start no higher than what the goal pays.", "")
+
     def robot(self) -> None:
         study, opts = self.study, self.opts
         self.add("## Robot protocol (simulated)", "")
@@ -459,12 +516,10 @@ class _Writer:
                                   truth.optimal_route_areas, ep.areas)
             conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
             conv_txt = ", ".join("never" if math.isnan(c) else str(int(c)) for c in conv)
-            routes = study.routes(exp, m, task)
+            summary = study.route_summary(exp, m, task)
             final = "–"
-            if routes:
-                on = sum(r.reached_goal and r.areas(world) == truth.optimal_route_areas
-                         for r in routes.values())
-                final = f"{on}/{len(routes)}"
+            if summary is not None:
+                final = f"{summary.on_route(world, truth.optimal_route_areas)}/{summary.runs}"
             self.add(f"| {m} | {n} | {np.nanmean(ret):.1f} | {succ_runs}/{n} | "
                      f"{_fmt(float(np.mean(firsts)), 3) if firsts else 'none'} | {conv_txt} | "
                      f"{final} |")
@@ -537,6 +592,46 @@ class _Case:
     reasons: dict[str, str] = field(default_factory=dict)
 
 
+def _pct(x: float) -> str:
+    return "n/a" if math.isnan(x) else f"{x:.1%}"
+
+
+@dataclass(frozen=True)
+class OptInitValues:
+    """Q at the start state right after OptInit, per GDQ variant (see
+    :func:`optinit_values`)."""
+
+    task: str
+    r_max: float
+    gamma: float
+    alpha: float
+    values: dict[str, tuple[float, float, int]]
+    """Method -> (Q(s0, greedy action), median Q(s0, ·), number of actions)."""
+
+
+def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
+    """Build ``GDQ`` and ``GDQ-code`` for ``task`` with the experiment's hyperparameters
+    and planner (as the runner does) and read Q(s0, ·) before any episode."""
+    from gdq_pddl.experiments.protocol import Hyper
+    from gdq_pddl.experiments.work import make_learner
+    from gdq_pddl.learners import office_task_context
+
+    entry = next((e for e in study.config.experiments if e.get("name") == experiment
+                  and any(t == task for t, _ in e.get("schedule") or [])),
+                 study.config.experiment(experiment))
+    raw = entry.get("hyper") if isinstance(entry.get("hyper"), dict) else {}
+    hyper = Hyper(**{k: float(v) for k, v in raw.items() if k in ("alpha", "gamma", "epsilon")})
+    planner = entry.get("planner") if isinstance(entry.get("planner"), str) else "graph"
+    ctx = office_task_context(study.world(experiment), study.task(experiment, task), planner)
+    values = {}
+    for method in ("GDQ", "GDQ-code"):
+        learner = make_learner(method, ctx, hyper)
+        q = learner.q[ctx.s0]
+        greedy = int(learner.greedy_policy()[ctx.s0])
+        values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
+    return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
+
+
 def write_report(out_dir: str | Path, opts: ReportOptions = ReportOptions(),
                  study: Study | None = None) -> Path:
     """Write ``REPORT.md`` in ``out_dir`` (embedding figures already in ``out_dir/figures``)."""
@@ -550,6 +645,7 @@ def write_report(out_dir: str | Path, opts: ReportOptions = ReportOptions(),
     w.hypothesis_3()
     w.route_c()
     w.variant_table()
+    w.why_gdq_fails()
     w.robot()
     path = out / "REPORT.md"
     path.write_text(w.render(), encoding="utf-8")
