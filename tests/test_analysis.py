@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
-from gdq_pddl.analysis import make_all, write_report
+from gdq_pddl.analysis import figures, make_all, write_report
 from gdq_pddl.analysis.data import load_config, load_episodes
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
+from gdq_pddl.analysis.report import optinit_values
 from gdq_pddl.analysis.routes import walk_policy
 from gdq_pddl.analysis.stats import compare, first_crossing, moving_average, verdict
 from gdq_pddl.analysis.study import Study
@@ -27,6 +28,7 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World, builtin_world, load_world
 
 METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+ROBOT_METHODS = ("GDQ", "Dyna-Q", "GDQ-code")  # robot_experiment's default methods
 QUALITY = {"GDQ": 1.0, "GDQ-code": 0.9, "DARLING": 0.6, "Dyna-Q": 0.4, "Q-learning": 0.2}
 V_STAR = {"A": 14.6, "B": 15.7, "C": 11.5, "D": 11.4, "E": 14.6}
 RELEVANT = {"A": [2, 4, 6, 7], "B": [4, 7], "C": [1, 2, 3, 6], "D": [1, 3, 4, 7],
@@ -77,15 +79,16 @@ def _episode(rng: np.random.Generator, q: float, episode: int, task: str, v_star
 
 
 def write_output(out: Path, worse_task: str | None = None, switches: bool = True,
-                 robot: bool = True) -> Path:
-    """A synthetic output folder; GDQ is best unless ``worse_task`` makes it worst there."""
+                 robot: bool = True, worse_method: str = "GDQ") -> Path:
+    """A synthetic output folder; GDQ (and GDQ-code) are best unless ``worse_task`` makes
+    ``worse_method`` worst there."""
     rng = np.random.default_rng(7)
     world, robot_world = load_world(), builtin_world("office_robot")
     out.mkdir(parents=True, exist_ok=True)
     rows: list[list] = []
 
     def quality(method: str, task: str) -> float:
-        return 0.05 if method == "GDQ" and task == worse_task else QUALITY[method]
+        return 0.05 if method == worse_method and task == worse_task else QUALITY[method]
 
     def add(exp: str, method: str, task: str, run: int, ep: int, local: int, v: float,
             r_max: float, route_from: int) -> None:
@@ -108,10 +111,10 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
                         add(f"switch-C-{second}", method, task, run, e, local,
                             V_STAR[task], 20.0, route_from)
     if robot:
-        for method in ("GDQ", "Dyna-Q"):
+        for method in ROBOT_METHODS:
             for run in range(RUNS):
                 for e in range(1, 31):
-                    if method == "GDQ":
+                    if method.startswith("GDQ"):
                         ret, success = 900.0 - 600 * np.exp(-e / 5) + rng.normal(0, 20), 1
                         areas = [0, 2, 2, 0, 0, 2, 0] if e > 10 else [0, 1, 2, 0, 0, 2, 1]
                     else:
@@ -135,6 +138,7 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
         good_x = optimal_policy(robot_world, "X")
         for run in range(RUNS):
             policies += [["robot", "GDQ", "X", run, s, a] for s, a in good_x.items()]
+            policies += [["robot", "GDQ-code", "X", run, s, a] for s, a in good_x.items()]
             policies += [["robot", "Dyna-Q", "X", run, s, 0] for s in good_x]
     with (out / "policies.csv").open("w", newline="") as f:
         w = csv.writer(f)
@@ -151,7 +155,7 @@ def write_output(out: Path, worse_task: str | None = None, switches: bool = True
                  "methods": list(METHODS), "runs": RUNS, "world": "office", "seed": 1}
                 for t in "DE" if switches]
     if robot:
-        entries.append({"name": "robot", "schedule": [["X", 30]], "methods": ["GDQ", "Dyna-Q"],
+        entries.append({"name": "robot", "schedule": [["X", 30]], "methods": list(ROBOT_METHODS),
                         "runs": RUNS, "world": "office_robot", "seed": 1})
         optimal["X@office_robot"] = {"v_star": 900.0, "relevant_areas": [2, 3, 6],
                                      "irrelevant_areas_paper": []}
@@ -171,6 +175,12 @@ def full(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[Path]]:
 def _report_verdicts(text: str) -> dict[str, str]:
     return {m.group(2): m.group(3) for m in re.finditer(
         r"^\| (I|II|III) \| (.+?) \| \*\*(.+?)\*\* \|", text, re.M)}
+
+
+def _code_verdicts(text: str) -> dict[str, str]:
+    """The GDQ-code column of the verdict table."""
+    return {m.group(2): m.group(3) for m in re.finditer(
+        r"^\| (I|II|III) \| (.+?) \| \*\*.+?\*\* \| \*\*(.+?)\*\* \|", text, re.M)}
 
 
 def test_episodes_load_into_run_by_episode_matrices(full):
@@ -235,7 +245,9 @@ def test_report_has_a_verdict_per_hypothesis_and_task(full):
     assert "| Q-learning | 0/2 (0%)" in text
     assert "Dyna-Q reached the goal at least once within 30 trials in 0 of 2 runs" in text
     assert "Skipped" not in text
-    assert "| robot | office_robot | X x 30 | GDQ, Dyna-Q | 2 | 1 |" in text
+    assert "| robot | office_robot | X x 30 | GDQ, Dyna-Q, GDQ-code | 2 | 1 |" in text
+    robot = text[text.index("## Robot protocol"):]
+    assert all(f"| {m} | 2 |" in robot for m in ROBOT_METHODS)
     assert "V* = 900.0" in text  # read from optimal.json's X@office_robot
 
 
@@ -308,3 +320,82 @@ def test_statistics():
     assert np.isnan(ma[0]) and ma[1:].tolist() == [1.5, 2.5, 3.5, 4.5]
     assert first_crossing(np.array([-1.0, -1, 3, 3, -1]), 2) == 3.0
     assert np.isnan(first_crossing(-np.ones(10), 3))
+
+
+def test_gdq_code_verdict_flips_when_its_data_flip(tmp_path):
+    out = write_output(tmp_path, worse_task="B", switches=False, robot=False,
+                       worse_method="GDQ-code")
+    text = write_report(out).read_text()
+    code, paper = _code_verdicts(text), _report_verdicts(text)
+    assert code["Task B"] == "does not hold" and code["Task A"] == "holds"
+    assert paper["Task B"] == "holds"  # the paper GDQ's data did not change
+    assert "- **Task B, GDQ-code: does not hold**: GDQ-code " in text
+    held_paper = sum(v == "holds" for v in paper.values())
+    held_code = sum(v == "holds" for v in code.values())
+    summary = re.search(r"^\*\*Summary\.\*\* paper GDQ \(`GDQ`\): (\d+) of (\d+) cases hold; "
+                        r"authors'-code GDQ \(`GDQ-code`\): (\d+) of (\d+) cases hold\.$",
+                        text, re.M)
+    assert summary is not None
+    assert (int(summary[1]), int(summary[3])) == (held_paper, held_code)
+    assert int(summary[2]) == len(paper) == int(summary[4]) == len(code)
+
+
+def test_why_section_reports_measured_optinit_values(full):
+    out, _ = full
+    text = (out / "REPORT.md").read_text()
+    why = text[text.index("## Why the paper's GDQ fails here"):text.index("## Robot protocol")]
+    # the office: R_max 20, gamma 0.95 -> 20 / 0.05 = 400 and 0.95 * 400 = 380
+    assert "R_max = 20, gamma = 0.95" in why and "R_max / (1 - gamma) = 400" in why
+    assert "| GDQ | 400 | 380 | 95 |" in why
+    assert "| GDQ-code | 20 | 0 | 95 |" in why
+    # the step-limit shares come from episodes.csv (the fake GDQ mostly succeeds)
+    ep = load_episodes(out)
+    rows = ep.mask("tasks", "GDQ")
+    share = np.mean((ep.values["steps"][rows] == 20) & (ep.values["success"][rows] == 0))
+    assert f"| GDQ | {share:.1%} |" in why
+
+
+def test_optinit_values_follow_the_hyperparameters(tmp_path):
+    out = write_output(tmp_path, switches=False, robot=False)
+    config = json.loads((out / "config.json").read_text())
+    for e in config["experiments"]:
+        e["hyper"] = {"alpha": 0.1, "gamma": 0.9, "epsilon": 0.1}
+    (out / "config.json").write_text(json.dumps(config))
+    init = optinit_values(Study.open(out), "tasks", "C")
+    assert init.gamma == 0.9 and init.r_max == 20.0
+    greedy, median, _ = init.values["GDQ"]
+    assert greedy == pytest.approx(20 / 0.1) and median == pytest.approx(0.9 * 20 / 0.1)
+
+
+def test_route_figure_and_table_use_the_same_most_common_route(tmp_path):
+    out = write_output(tmp_path, switches=False, robot=False)
+    world = load_world()
+    # three runs of Q-learning: two take a shortest plan, one the optimal route
+    with (out / "policies.csv").open() as f:
+        rows = [r for r in csv.reader(f)]
+    good, short = optimal_policy(world, "C"), plan_policy(world, "C")
+    rows += [["tasks", "Q-learning", "C", 2, s, a] for s, a in good.items()]
+    with (out / "policies.csv").open("w", newline="") as f:
+        csv.writer(f).writerows(rows)
+    study = Study.open(out)
+    summary = study.route_summary("tasks", "Q-learning", "C")
+    short_areas = walk_policy(world, short, "p0", "p17").areas(world)
+    assert summary.runs == 3 and summary.count == 2 and summary.areas == short_areas
+    assert summary.example.areas(world) == summary.areas
+    drawn = []
+    original = figures._draw_route
+    figures._draw_route = lambda ax, xy, positions, colour: drawn.append(tuple(positions))
+    try:
+        figures.task_routes(study, tmp_path / "figs", FigureOptions(formats=("png",), dpi=40))
+    finally:
+        figures._draw_route = original
+    by_method = dict(zip([m for m in study.methods("tasks")
+                          if study.route_summary("tasks", m, "C")], drawn, strict=True))
+    assert world.area_of  # routes are compared in area terms, as in the table
+    text = write_report(out).read_text()
+    for method, positions in by_method.items():
+        s = study.route_summary("tasks", method, "C")
+        assert positions == s.example.positions
+        areas = "->".join(map(str, s.areas))
+        assert re.search(rf"^\| {re.escape(method)} \| [^|]+ \| {re.escape(areas)} "
+                         rf"\({s.end}, {s.count} runs?\) \|", text, re.M), method
