@@ -12,10 +12,11 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 BUDGET = {"task_x.py": ["--trials", "5"]}
 
 
-@pytest.mark.parametrize("script", sorted(p.name for p in EXAMPLES.glob("task_*.py")))
+@pytest.mark.parametrize("script", sorted(p.name for p in [*EXAMPLES.glob("task_*.py"),
+                                                           *EXAMPLES.glob("domain_*.py")]))
 def test_example_runs(script):
     argv = BUDGET.get(script, ["--episodes", "20"])
-    if script == "task_b.py":
+    if script == "task_b.py" or script.startswith("domain_"):
         argv += ["--runs", "1"]
     result = subprocess.run([sys.executable, str(EXAMPLES / script), *argv],
                             capture_output=True, text=True, timeout=300)

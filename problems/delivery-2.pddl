@@ -1,0 +1,31 @@
+; Two parcels (mail room, store) to the lab, one at a time.
+(define (problem delivery-2)
+  (:domain delivery)
+  (:objects
+    mail c1 c2 c3 c4 c5 lab kitchen store - room
+    fire kd - door
+    p1 p2 - parcel)
+  (:init
+    (at mail)
+    (empty-handed)
+    (hall mail c1)
+    (hall c1 mail)
+    (hall c1 c2)
+    (hall c2 c1)
+    (hall mail c3)
+    (hall c3 mail)
+    (hall c3 c4)
+    (hall c4 c3)
+    (hall c4 c5)
+    (hall c5 c4)
+    (hall c5 lab)
+    (hall lab c5)
+    (hall c1 kitchen)
+    (hall kitchen c1)
+    (door fire c2 lab)
+    (door fire lab c2)
+    (door kd c4 store)
+    (door kd store c4)
+    (in p1 mail)
+    (in p2 store))
+  (:goal (and (in p1 lab) (in p2 lab))))
