@@ -1,0 +1,156 @@
+"""Experiments where the PDDL knowledge disagrees with the world (gdq-pddl knowledge)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gdq_pddl.analysis.knowledge import convergence_episode, policy_value, route_check
+from gdq_pddl.cli import main
+from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.solve import solve_task
+from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.knowledge import (
+    CASES,
+    PASSAGE,
+    derived_world,
+    knowledge_experiments,
+    knowledge_world,
+)
+from gdq_pddl.experiments.protocol import Experiment, Unit
+from gdq_pddl.experiments.work import load_world_named, make_learner, run_unit
+from gdq_pddl.learners import office_task_context
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import builtin_world
+
+
+@pytest.fixture(scope="module")
+def office():
+    return builtin_world("office")
+
+
+def _plan_pairs(table, spaces):
+    return {(spaces.state_name(int(s)), spaces.action_name(int(a)))
+            for s, a in zip(table.pair_state, table.pair_action, strict=True)}
+
+
+def test_locked_door_is_believed_usable_but_locked_in_reality(office):
+    real = load_world_named("office:locked-d3")
+    assert LearnerSpaces(real).states == LearnerSpaces(office).states
+    spaces = LearnerSpaces(office)
+    wrong = office_task_context(knowledge_world(real, "office"), "C")
+    pairs = _plan_pairs(wrong.plans, spaces) | _plan_pairs(wrong.darling_plans, spaces)
+    assert ("p6 (door open)", "gothrough p7") in pairs  # the knowledge plans through d3
+    # reality: d3 never opens (success 0) and never traps the robot
+    d3 = {d.name: d for d in real.doors}["d3"]
+    assert (d3.success, d3.stuck) == (0.0, 0.0)
+    model = compile_model(real)
+    fs = full_state(real, "p6")
+    i = fs * model.n_actions + spaces.action("opendoor", "p6")
+    assert list(model.next[model.ptr[i]:model.ptr[i + 1]]) == [fs]
+    assert not model.stuck[model.ptr[i]:model.ptr[i + 1]].any()
+    # accurate knowledge (built from the real world) knows the door is a wall
+    accurate = office_task_context(real, "C")
+    acc_pairs = _plan_pairs(accurate.plans, spaces) | _plan_pairs(accurate.darling_plans, spaces)
+    assert not any(a in ("gothrough p7", "gothrough p6") for _, a in acc_pairs)
+
+
+def test_passage_exists_in_reality_but_in_no_plan(office):
+    real = load_world_named("office:passage")
+    a, b = PASSAGE
+    assert b in real.walk_neighbours[a] and b not in office.walk_neighbours[a]
+    spaces = LearnerSpaces(real)
+    goto = spaces.action("goto", b)
+    model = compile_model(real)
+    i = full_state(real, a) * model.n_actions + goto
+    outcomes = dict(zip(model.pos_of[model.next[model.ptr[i]:model.ptr[i + 1]]].tolist(),
+                        model.prob[model.ptr[i]:model.ptr[i + 1]].tolist(), strict=True))
+    assert outcomes[real.index[b]] >= real.navigation_success
+    wrong = office_task_context(knowledge_world(real, "office"), "C")
+    s = spaces.state(a)
+    for table in (wrong.plans, wrong.darling_plans):
+        assert not table.first_actions[:, goto][s]
+        assert not np.any((table.pair_state == s) & (table.pair_action == goto))
+    # DARLING's allowed set at p8 therefore excludes the optimal action
+    steps = route_check(real, office, real.task("C"))
+    assert [s.state for s in steps if not s.darling_allowed] == [a]
+    assert all(s.darling_allowed for s in route_check(real, real, real.task("C")))
+
+
+def test_control_knowledge_is_the_accurate_knowledge(office):
+    det = derived_world("office:deterministic")
+    a, b = office_task_context(office, "C"), office_task_context(det, "C")
+    for x, y in ((a.plans, b.plans), (a.darling_plans, b.darling_plans)):
+        assert np.array_equal(x.pair_state, y.pair_state)
+        assert np.array_equal(x.pair_action, y.pair_action)
+
+
+def test_knowledge_world_must_have_the_same_spaces(office):
+    with pytest.raises(GdqError, match="learner spaces differ"):
+        knowledge_world(office, "office_robot")
+    with pytest.raises(GdqError, match="unknown derived world"):
+        load_world_named("office:nowhere")
+
+
+def test_experiments_pair_each_case_with_accurate_knowledge():
+    exps = knowledge_experiments(episodes=10, runs=2)
+    assert len(exps) == 2 * len(CASES)
+    for c, (acc, wrong) in zip(CASES, zip(exps[::2], exps[1::2], strict=True), strict=True):
+        assert acc.world == wrong.world == c.real
+        assert acc.knowledge is None and wrong.knowledge == c.knowledge
+
+
+def test_knowledge_none_is_bit_identical_to_before(office):
+    """knowledge=None changes nothing: same keys, seeds and results as the loop the runner
+    had before the field existed."""
+    from gdq_pddl.envs.office import OfficeEnv
+    from gdq_pddl.learners.runner import run_episodes
+
+    exp = Experiment("tasks", (("C", 40),), methods=("GDQ-code", "DARLING"), runs=1)
+    for method in exp.methods:
+        unit = Unit(exp, method, 0)
+        assert unit.key == "tasks__C__" + method + "__run0"
+        got = run_unit(unit)
+        rng, env_seed = unit.seeds()
+        task = office.task("C")
+        learner = make_learner(method, office_task_context(office, task), exp.hyper)
+        env = OfficeEnv(world=office, start=task.start, goal=task.goal)
+        env.reset(seed=env_seed)
+        ref = run_episodes(learner, env, 40, rng)
+        assert np.array_equal(got["returns"], ref.returns)
+        assert np.array_equal(got["policy"], learner.greedy_policy())
+        # naming the real world as the knowledge is the same experiment
+        same = run_unit(Unit(replace(exp, knowledge="office"), method, 0))
+        assert np.array_equal(same["returns"], got["returns"])
+        assert Unit(replace(exp, knowledge="office"), method, 0).key == unit.key
+
+
+def test_convergence_is_first_passage_of_the_moving_average():
+    r = np.r_[np.full(20, -10.0), np.full(30, 10.0)]
+    assert convergence_episode(r, 9.0, window=10) == 30
+    assert convergence_episode(r, 11.0, window=10) is None
+
+
+def test_policy_value_of_the_optimal_first_step_policy_is_v_star(office):
+    task = office.task("C")
+    model = compile_model(office)
+    sol, s0 = solve_task(office, task, model)
+    pi: dict[int, int] = {}
+    for fs in range(len(model.obs_of)):
+        pi.setdefault(int(model.obs_of[fs]), int(sol.policy[0, fs]))
+    assert policy_value(office, task, pi, model) == pytest.approx(sol.V[0, s0], abs=1e-3)
+
+
+def test_knowledge_command_end_to_end(tmp_path):
+    out = tmp_path / "k"
+    assert main(["knowledge", "--episodes", "30", "--runs", "1", "--jobs", "1",
+                 "--method", "GDQ-code", "DARLING", "--out", str(out)]) == 0
+    report = (out / "REPORT.md").read_text()
+    for c in CASES:
+        assert f"## {c.name}" in report
+    assert "DARLING allows an optimal action" in report
+    assert "no, not at p8 (goto p17)" in report  # the passage case, measured
+    for stem in ("knowledge_curves", "knowledge_convergence"):
+        assert (out / f"{stem}.png").stat().st_size > 0
