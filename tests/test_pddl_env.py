@@ -260,3 +260,16 @@ def test_cli_pddl_errors(tmp_path, capsys):
     assert main(["run", "--domain", str(tmp_path / "d.pddl"), "--problem",
                  str(tmp_path / "p.pddl"), "--dynamics", str(tmp_path / "f.toml")]) == 2
     assert "f.toml: actions.fly: unknown action schema" in capsys.readouterr().err
+
+
+def test_domains_doc_code_runs(monkeypatch):
+    import re
+
+    text = (ROOT / "docs" / "domains.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert blocks
+    monkeypatch.chdir(ROOT)
+    namespace: dict = {}
+    for block in blocks:
+        exec(compile(block, "domains.md", "exec"), namespace)
+    assert len(namespace["records"]) == 300
