@@ -1,0 +1,90 @@
+"""Planning on generated buildings of 100, 300 and 1000 positions (the `graph` backend).
+
+    python benchmarks/scale.py [--sizes 100 300 1000] [--repeats 5] [--seed 0]
+
+For each size, the building of ``gdq-pddl building --positions N --seed S`` and its
+task A (start and goal in rooms far apart) plus the reverse of task C:
+
+cold      parse the domain and problem, ground, all shortest plans (a fresh problem)
+warm      all shortest plans with the result cache emptied (grounding kept)
+tol 0.3   every loop-free plan up to 1.3 x the shortest, warm (DARLING's and GDQ-code's H)
+L         shortest plan length; states: nodes of the pruned state graph; generated:
+          states whose h_max was computed (everything the search touched); plans
+
+Times are medians of --repeats runs in milliseconds (imports and numba compilation
+excluded: one untimed warm-up query first).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+from gdq_pddl.buildings import building_world
+from gdq_pddl.learners.context import _domain_text
+from gdq_pddl.pddl.office import office_problem
+from gdq_pddl.planning import PlanningProblem, get_planner
+from gdq_pddl.world import Task
+
+
+def median_ms(fn, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append((time.perf_counter() - t0) * 1000)
+    return statistics.median(times)
+
+
+def measure(n: int, seed: int, repeats: int) -> list[dict]:
+    world = building_world(n, seed)
+    domain = _domain_text()
+    planner = get_planner("graph")
+    out = []
+    tasks = [world.tasks["A"], Task("C'", world.tasks["C"].goal, world.tasks["C"].start)]
+    for task in tasks:
+        text = office_problem(world, task)
+
+        def cold(text=text):
+            return planner.solve(PlanningProblem.from_texts(domain, text))
+
+        problem = PlanningProblem.from_texts(domain, text)
+        cold()
+
+        def warm(tolerance=0.0, problem=problem):
+            problem._results.clear()
+            return planner.solve(problem, tolerance=tolerance)
+
+        result = warm()
+        tol = warm(0.3)
+        out.append({
+            "positions": n, "doors": len(world.doors), "task": task.name,
+            "cold_ms": median_ms(cold, repeats), "warm_ms": median_ms(warm, repeats),
+            "tol_ms": median_ms(lambda: warm(0.3), max(1, repeats // 2)),
+            "L": result.length, "states": result.metrics["states"],
+            "generated": result.metrics["generated"], "plans": len(result.plans),
+            "tol_plans": len(tol.plans), "tol_states": tol.metrics["states"],
+        })
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    print(f"{'positions':>9} {'doors':>5} {'task':>4} {'cold ms':>8} {'warm ms':>8} "
+          f"{'L':>4} {'states':>6} {'generated':>9} {'plans':>5} {'tol0.3 ms':>9} "
+          f"{'plans':>5} {'states':>6}")
+    for n in args.sizes:
+        for r in measure(n, args.seed, args.repeats):
+            print(f"{r['positions']:>9} {r['doors']:>5} {r['task']:>4} {r['cold_ms']:>8.1f} "
+                  f"{r['warm_ms']:>8.1f} {r['L']:>4} {r['states']:>6} {r['generated']:>9} "
+                  f"{r['plans']:>5} {r['tol_ms']:>9.1f} {r['tol_plans']:>5} "
+                  f"{r['tol_states']:>6}")
+
+
+if __name__ == "__main__":
+    main()

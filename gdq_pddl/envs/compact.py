@@ -1,0 +1,224 @@
+"""The true dynamics of a large world without enumerating door masks.
+
+:func:`gdq_pddl.envs.model.compile_model` lists outcomes for every *full* state
+``(position, set of open doors)``: ``n_positions * 2**n_doors`` states, impossible for
+a building of 100+ doors. But an action's outcomes depend only on the position and on
+whether the door *at that position* is open, i.e. on the learner state. So this model
+lists outcomes per (learner state, action) pair, in CSR form (outcomes of pair
+``i = state * n_actions + action`` are ``ptr[i]:ptr[i+1]``), each as
+
+- ``next_pos``: the position after the action,
+- ``opens``: whether the action opened the door at the position it was taken at,
+- ``stuck``: whether the trial failed;
+
+and the episode keeps the set of open doors as a ``uint8`` array. A pair without
+outcomes is inapplicable: the robot stays (most of the ``5 * n_positions`` actions).
+
+The outcomes come from the same per-action rule as the full model
+(``gdq_pddl.envs.model._outcomes``), merged and ordered the same way, and
+:func:`compact_step` draws the same random numbers as
+:func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost draw),
+so on the office an episode is bit-identical to one of :class:`OfficeEnv` (tested).
+This is a second model kind, for worlds too large for the full one; value iteration
+(V*) still needs the full model and so small worlds.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import gymnasium as gym
+import numba
+import numpy as np
+from gymnasium.error import ResetNeeded
+from gymnasium.spaces import Discrete
+
+from gdq_pddl.envs.model import (
+    CAUSE_GOAL,
+    CAUSE_NONE,
+    CAUSE_STUCK,
+    CAUSE_TIMEOUT,
+    CAUSES,
+    _outcomes,
+    sample_cost,
+)
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import COST_KINDS, VERBS, World
+
+
+class CompactModel(NamedTuple):
+    """The compiled dynamics per learner state (see the module docstring)."""
+
+    n_actions: int
+    r_max: float
+    step_limit: int
+    ptr: np.ndarray  # int64[n_states * n_actions + 1]
+    prob: np.ndarray  # float64[n_outcomes]
+    next_pos: np.ndarray  # int64[n_outcomes]
+    opens: np.ndarray  # bool[n_outcomes]
+    stuck: np.ndarray  # bool[n_outcomes]
+    cost_kind: np.ndarray  # int64[n_actions]
+    cost_a: np.ndarray  # float64[n_actions]
+    cost_b: np.ndarray  # float64[n_actions]
+    door_of_pos: np.ndarray  # int64[n_positions], door index (-1: open floor)
+    state_of: np.ndarray  # int64[n_positions, 2], learner state of (position, door open)
+    pos_of_state: np.ndarray  # int64[n_states]
+    area_of_pos: np.ndarray  # int64[n_positions]
+    n_doors: int
+
+
+def _applicable(world: World, spaces: LearnerSpaces, p: str) -> list[tuple[int, str, str]]:
+    """``(action, verb, target)`` of the actions that can do something at ``p``."""
+    out = []
+    for q in world.walk_neighbours[p]:
+        verb = "approach" if q in world.door_at else "goto"
+        out.append((spaces.action(verb, q), verb, q))
+    door = world.door_at.get(p)
+    if door is not None:
+        out.append((spaces.action("opendoor", p), "opendoor", p))
+        other = door.sides[1] if door.sides[0] == p else door.sides[0]
+        out.append((spaces.action("gothrough", other), "gothrough", other))
+    return sorted(out)
+
+
+def compile_compact(world: World) -> CompactModel:
+    """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
+    number of learner states x actions)."""
+    spaces = LearnerSpaces(world)
+    n_states, n_actions = spaces.n_states, spaces.n_actions
+    door_ids = {d.name: i for i, d in enumerate(world.doors)}
+    counts = np.zeros(n_states * n_actions, dtype=np.int64)
+    prob: list[float] = []
+    nxt: list[int] = []
+    opens: list[bool] = []
+    stuck: list[bool] = []
+    for s, (p, is_open) in enumerate(spaces.states):
+        door = world.door_at.get(p)
+        mask = 1 << door_ids[door.name] if door is not None and is_open else 0
+        for a, verb, q in _applicable(world, spaces, p):
+            merged: dict[tuple[int, bool, bool], float] = {}
+            for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q):
+                if pr > 0.0:
+                    key = (world.index[np_], nm != mask, st)
+                    merged[key] = merged.get(key, 0.0) + pr
+            if list(merged) == [(world.index[p], False, False)]:
+                continue  # a no-op after all: leave the pair empty
+            for (target, op, st), pr in merged.items():
+                nxt.append(target)
+                opens.append(op)
+                stuck.append(st)
+                prob.append(pr)
+            counts[s * n_actions + a] = len(merged)
+    ptr = np.zeros(n_states * n_actions + 1, dtype=np.int64)
+    np.cumsum(counts, out=ptr[1:])
+    costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
+    door_of = np.array([door_ids[world.door_at[p].name] if p in world.door_at else -1
+                        for p in world.positions], dtype=np.int64)
+    state_of = np.array([[spaces.state(p, False), spaces.state(p, True)]
+                         for p in world.positions], dtype=np.int64)
+    return CompactModel(
+        n_actions=n_actions, r_max=float(world.r_max), step_limit=int(world.step_limit),
+        ptr=ptr, prob=np.array(prob, dtype=np.float64),
+        next_pos=np.array(nxt, dtype=np.int64), opens=np.array(opens, dtype=np.bool_),
+        stuck=np.array(stuck, dtype=np.bool_),
+        cost_kind=np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
+        cost_a=np.array([c.a for c in costs], dtype=np.float64),
+        cost_b=np.array([c.b for c in costs], dtype=np.float64),
+        door_of_pos=door_of, state_of=state_of,
+        pos_of_state=np.array([world.index[p] for p, _ in spaces.states], dtype=np.int64),
+        area_of_pos=np.array([world.area_of.get(p, 0) for p in world.positions],
+                             dtype=np.int64),
+        n_doors=len(world.doors))
+
+
+assert VERBS[0] == "goto"
+
+
+@numba.njit(cache=True)
+def observe_state(m: CompactModel, pos: int, doors: np.ndarray) -> int:
+    """The learner state of ``pos`` given the open doors."""
+    d = m.door_of_pos[pos]
+    return m.state_of[pos, 1 if d >= 0 and doors[d] else 0]
+
+
+@numba.njit(cache=True)
+def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: int,
+                 goal_pos: int, rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """Take ``action`` at ``pos`` (``doors[d]``: door ``d`` open; updated in place).
+
+    Returns ``(next position, reward, terminated, truncated, cause)``; draws what
+    :func:`gdq_pddl.envs.model.env_step` draws, in the same order.
+    """
+    s = observe_state(m, pos, doors)
+    i = s * m.n_actions + action
+    k, end = m.ptr[i], m.ptr[i + 1]
+    u = rng.random()
+    nxt, stuck = pos, False
+    if end > k:
+        acc = m.prob[k]
+        while u >= acc and k < end - 1:
+            k += 1
+            acc += m.prob[k]
+        nxt, stuck = m.next_pos[k], m.stuck[k]
+        if m.opens[k]:
+            doors[m.door_of_pos[pos]] = 1
+    cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
+    if stuck:
+        return nxt, -m.r_max, True, False, CAUSE_STUCK
+    if nxt == goal_pos:
+        return nxt, m.r_max, True, False, CAUSE_GOAL
+    if t + 1 >= m.step_limit:
+        return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
+    return nxt, -cost, False, False, CAUSE_NONE
+
+
+class CompactEnv(gym.Env[int, int]):
+    """The office-like env of any world over a :class:`CompactModel`.
+
+    Same spaces, rewards, episode ends and random draws as
+    :class:`gdq_pddl.envs.office.OfficeEnv`; ``info`` has ``position``, ``area``,
+    ``cause``, ``step`` and ``open_doors`` (door indices), not ``full_state``.
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(self, task: str | None = None, start: str | None = None,
+                 goal: str | None = None, world: str | Path | World | None = None) -> None:
+        from gdq_pddl.envs.office import as_world, pick_task
+
+        self.world = as_world(world)
+        self.task = pick_task(self.world, task, start, goal)
+        self.spaces = LearnerSpaces(self.world)
+        self.model = compile_compact(self.world)
+        self.observation_space = Discrete(self.spaces.n_states)
+        self.action_space = Discrete(self.spaces.n_actions)
+        self.goal_pos = self.world.index[self.task.goal]
+        self.start_pos = self.world.index[self.task.start]
+        self.doors = np.zeros(max(1, len(self.world.doors)), dtype=np.uint8)
+        self._pos, self._t, self._cause, self._done = self.start_pos, 0, "", True
+
+    def reset(self, *, seed: int | None = None,
+              options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
+        super().reset(seed=seed)
+        self.doors[:] = 0
+        self._pos, self._t, self._cause, self._done = self.start_pos, 0, "", False
+        return int(observe_state(self.model, self._pos, self.doors)), self._info()
+
+    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
+        if self._done:
+            raise ResetNeeded("the episode is over (or never began): call reset() first")
+        a = int(action)
+        if not 0 <= a < self.model.n_actions:
+            raise ValueError(f"action must be in [0, {self.model.n_actions}), got {action!r}")
+        pos, reward, terminated, truncated, cause = compact_step(
+            self.model, self._pos, self.doors, a, self._t, self.goal_pos, self.np_random)
+        self._pos, self._t, self._cause = int(pos), self._t + 1, CAUSES[cause]
+        self._done = bool(terminated or truncated)
+        return (int(observe_state(self.model, self._pos, self.doors)), float(reward),
+                bool(terminated), bool(truncated), self._info())
+
+    def _info(self) -> dict[str, Any]:
+        return {"position": self.world.positions[self._pos],
+                "area": int(self.model.area_of_pos[self._pos]), "cause": self._cause,
+                "step": self._t, "open_doors": tuple(np.flatnonzero(self.doors).tolist())}
