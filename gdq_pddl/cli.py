@@ -291,7 +291,7 @@ def _register_robot(sub) -> None:
     p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
                        description="Task X on the office with area 5 forbidden, 10 actions per "
                                    "trial, R_max 1000, durations as costs, alpha 0.5.")
-    _run_args(p, methods=("GDQ", "Dyna-Q"), episodes=30, runs=10)
+    _run_args(p, methods=("GDQ", "Dyna-Q", "GDQ-code"), episodes=30, runs=10)
     p.set_defaults(func=cmd_robot)
 
 
