@@ -470,9 +470,9 @@ def _report(out: Path) -> None:
           (f"; read {report}" if report else ""))
 
 
-COMMANDS: list[Callable] = [_register_problem, _register_building, _register_plan, _register_planners, _register_run,
-                            _register_switch, _register_robot, _register_reproduce,
-                            _register_report, _register_knowledge]
+COMMANDS: list[Callable] = [_register_problem, _register_building, _register_plan,
+                            _register_planners, _register_run, _register_switch, _register_robot,
+                            _register_reproduce, _register_report, _register_knowledge]
 
 if __name__ == "__main__":
     raise SystemExit(main())
