@@ -1,0 +1,129 @@
+"""Learning against building size: every method on generated buildings of N positions.
+
+For each size N (default 100, 300, 1000) the building of ``gdq-pddl building
+--positions N --seed S`` and its task A (start and goal in rooms far apart), each method
+runs ``runs`` times for ``episodes`` episodes over the compact model
+(:mod:`gdq_pddl.envs.compact`; the full-state model would need ``2**n_doors`` states).
+Seeds come from ``(seed, N, method, run)`` only.
+
+Decisions, where the office protocol does not carry over:
+
+- **Reference return** ``R_ref = r_max - (L - 1)``: every action of a shortest plan
+  (``L`` actions) succeeds, the last one reaches the goal. No V* at these sizes (value
+  iteration needs the full-state model).
+- **Discount** ``gamma = 1 - 1 / step_limit`` (the office: 0.95 = 1 - 1/20). With the
+  office's 0.95, a goal 65 actions away is worth 0.95**65 x r_max, about 2, less than the
+  step costs on the way: no learner would go for it.
+- **Episodes to convergence**: the first episode ``e`` from which the trailing 50-episode
+  moving average of the return stays at or above ``0.5 * R_ref`` until the last episode;
+  a run that never gets there counts as not converged (shown as ``> episodes``).
+- **Plan tolerance 0** for DARLING and GDQ-code (shortest plans only, not 1.3 x): at
+  300 positions one query within 1.3 x the shortest takes seconds and returns thousands
+  of plans, at 1000 about 100 s and 7000 plans, for each of ~1100 learner states.
+- **Model-based learners need ``n_states^2 x n_actions`` counts** (a dense int64 array in
+  :mod:`gdq_pddl.learners.core`): 1.7 GB at 300 positions, about 50 GB at 1000. A
+  (method, size) pair whose tables exceed ``max_table_gb`` is skipped and reported so.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gdq_pddl.buildings import building_world
+from gdq_pddl.envs.compact import CompactEnv
+from gdq_pddl.learners import make_learner, office_task_context
+from gdq_pddl.learners.compact_runner import run_compact
+
+METHODS: dict[str, tuple[str, dict]] = {
+    "GDQ": ("gdq", {}),
+    "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.0}),
+    "DARLING": ("darling", {"tolerance": 0.0}),
+    "Dyna-Q": ("dynaq", {}),
+    "Q-learning": ("qlearning", {}),
+}
+MODEL_BASED = {"GDQ", "GDQ-code", "Dyna-Q"}
+WINDOW = 50
+THRESHOLD = 0.5
+
+
+@dataclass
+class SizeResult:
+    """Everything measured at one building size."""
+
+    positions: int
+    doors: int
+    n_states: int
+    n_actions: int
+    plan_length: int
+    step_limit: int
+    r_max: float
+    context_s: float
+    returns: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes
+    success: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes, bool
+    steps_per_s: dict[str, float] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def r_ref(self) -> float:
+        return self.r_max - (self.plan_length - 1)
+
+
+def converged_at(returns: np.ndarray, r_ref: float, window: int = WINDOW,
+                 threshold: float = THRESHOLD) -> int | None:
+    """Episodes to convergence of one run (see the module docstring), or None."""
+    if len(returns) < window:
+        return None
+    avg = np.convolve(returns, np.ones(window) / window, mode="valid")
+    bad = np.flatnonzero(avg < threshold * r_ref)
+    if len(bad) == 0:
+        return window
+    if bad[-1] == len(avg) - 1:
+        return None
+    return int(bad[-1] + 1 + window)
+
+
+def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
+             methods: list[str] | None = None, max_table_gb: float = 4.0,
+             log=print) -> SizeResult:
+    """Run every method at one size (see the module docstring)."""
+    world = building_world(positions, seed)
+    t0 = time.perf_counter()
+    ctx = office_task_context(world, "A", darling_tolerance=0.0)
+    context_s = time.perf_counter() - t0
+    env = CompactEnv(task="A", world=world)
+    out = SizeResult(positions, len(world.doors), ctx.n_states, ctx.n_actions,
+                     int(ctx.plans.length[ctx.s0]), world.step_limit, world.r_max, context_s)
+    log(f"{positions} positions: {len(world.doors)} doors, {ctx.n_states} states x "
+        f"{ctx.n_actions} actions, L = {out.plan_length}, plans for every state in "
+        f"{context_s:.1f} s")
+    for mi, name in enumerate(methods or list(METHODS)):
+        method, config = METHODS[name]
+        gb = ctx.n_states ** 2 * ctx.n_actions * 8 / 1e9
+        if name in MODEL_BASED and gb > max_table_gb:
+            out.skipped[name] = f"model counts need {gb:.0f} GB (> {max_table_gb:g} GB)"
+            log(f"  {name}: skipped, {out.skipped[name]}")
+            continue
+        returns = np.zeros((runs, episodes))
+        success = np.zeros((runs, episodes), dtype=np.bool_)
+        steps, wall = 0, 0.0
+        for run in range(runs):
+            ss = np.random.SeedSequence([seed, positions, mi, run])
+            env_seed, learner_seed = ss.generate_state(2)
+            learner = make_learner(method, ctx, gamma=1.0 - 1.0 / world.step_limit, **config)
+            env.reset(seed=int(env_seed))
+            t1 = time.perf_counter()
+            records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
+            wall += time.perf_counter() - t1
+            steps += int(records.steps.sum())
+            returns[run] = records.returns
+            success[run] = records.success
+            del learner
+        out.returns[name] = returns
+        out.success[name] = success
+        out.steps_per_s[name] = steps / wall if wall > 0 else float("nan")
+        conv = [converged_at(r, out.r_ref) for r in returns]
+        log(f"  {name}: {out.steps_per_s[name]:,.0f} steps/s, converged at {conv}")
+    return out

@@ -1,0 +1,148 @@
+"""Generated buildings, planning on them, the compact model, and a learning smoke test."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from gdq_pddl.buildings import _distances, _graph, building_world, generate, to_toml
+from gdq_pddl.cli import main
+from gdq_pddl.envs.compact import CompactEnv, compile_compact
+from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.learners import make_learner, office_task_context, run_episodes
+from gdq_pddl.learners.compact_runner import run_compact
+from gdq_pddl.learners.context import _domain_text
+from gdq_pddl.pddl.office import office_problem
+from gdq_pddl.planning import PlanningProblem, get_planner
+from gdq_pddl.world import Task, load_world
+
+
+def test_generator_is_deterministic_and_validates(tmp_path):
+    assert to_toml(generate(300, 4)) == to_toml(generate(300, 4))
+    assert to_toml(generate(300, 4)) != to_toml(generate(300, 5))
+    assert main(["building", "--positions", "120", "--seed", "2", "--doors", "15",
+                 "--out", str(tmp_path)]) == 0
+    world = load_world(tmp_path / "building-120-s2.toml")
+    assert len(world.positions) == 120 and len(world.doors) == 15
+    assert set(world.tasks) == {"A", "B", "C"}
+    for p in world.positions:  # one area per room / corridor segment covers everything
+        assert p in world.area_of
+    assert len(list((tmp_path / "problems").glob("*.pddl"))) == 3
+    problem = PlanningProblem.from_files(tmp_path / "domain.pddl",
+                                         tmp_path / "problems" / "building-120-s2-a.pddl")
+    assert get_planner("graph").solve(problem).status == "solved"
+
+
+@pytest.mark.parametrize("n", [100, 300, 1000])
+def test_buildings_have_mixed_doors_and_sensible_limits(n):
+    world = building_world(n, 0)
+    assert len(world.positions) == n
+    labels = {d.label for d in world.doors}
+    assert {"easy", "difficult", "most difficult"} <= labels
+    assert len({(d.success, d.stuck) for d in world.doors}) >= 3
+    assert world.r_max == world.step_limit
+    b = generate(n, 0)
+    graph = _graph(b)
+    for s, g in b.tasks.values():
+        assert 2 * _distances(graph, s)[g] <= world.step_limit
+
+
+def _bfs_plans(task, s0: int, goal: tuple[int, int]) -> set[tuple[str, ...]]:
+    """Every shortest plan by a plain breadth-first search (the reference)."""
+    parents: dict[int, list[tuple[int, str]]] = {s0: []}
+    depth, layer, goals = {s0: 0}, [s0], []
+    while layer and not goals:
+        nxt = []
+        for s in layer:
+            for op, t in task.successors(s):
+                if t not in depth:
+                    depth[t] = depth[s] + 1
+                    nxt.append(t)
+                    if task.is_goal(t, goal):
+                        goals.append(t)
+                if depth[t] == depth[s] + 1:
+                    parents.setdefault(t, []).append((s, op.name))
+        layer = nxt
+
+    def back(t):
+        if t == s0:
+            yield ()
+            return
+        for s, name in parents[t]:
+            for prefix in back(s):
+                yield (*prefix, name)
+
+    return {p for g in goals for p in back(g)}
+
+
+def test_planning_on_300_positions_matches_plain_bfs():
+    world = building_world(300, 0)
+    b = generate(300, 0)
+    start = world.tasks["A"].start
+    dist = _distances(_graph(b), start)
+    goals = [p for p in b.positions if dist[p] in (9, 13)][:2]
+    problem = PlanningProblem.from_texts(_domain_text(),
+                                         office_problem(world, Task("t", start, goals[0])))
+    planner = get_planner("graph")
+    for goal in goals:
+        atoms = frozenset({f"(at {goal})"})
+        result = planner.solve(problem, goal=atoms)
+        reference = _bfs_plans(problem.task, problem.task.init, (problem.task.mask(atoms), 0))
+        assert {p.actions for p in result.plans} == reference
+        assert result.metrics["generated"] < 200
+
+
+def test_compact_model_has_the_full_models_outcomes_on_the_office():
+    world = load_world(None)
+    full, compact = compile_model(world), compile_compact(world)
+    n_doors = len(world.doors)
+    door_ids = {d.name: i for i, d in enumerate(world.doors)}
+    for p, mask in itertools.product(world.positions, range(1 << n_doors)):
+        fs = full_state(world, p, frozenset(d.name for d in world.doors
+                                            if mask >> door_ids[d.name] & 1))
+        pi = world.index[p]
+        d = compact.door_of_pos[pi]
+        s = compact.state_of[pi, 1 if d >= 0 and mask >> d & 1 else 0]
+        assert full.obs_of[fs] == s
+        for a in range(full.n_actions):
+            i = fs * full.n_actions + a
+            want = [(float(full.prob[k]), int(full.next[k]), bool(full.stuck[k]))
+                    for k in range(full.ptr[i], full.ptr[i + 1])]
+            j = s * compact.n_actions + a
+            got = [(float(compact.prob[k]),
+                    int(compact.next_pos[k]) * (1 << n_doors)
+                    + (mask | (1 << d) if compact.opens[k] else mask), bool(compact.stuck[k]))
+                   for k in range(compact.ptr[j], compact.ptr[j + 1])]
+            assert got == (want if want != [(1.0, fs, False)] else []), (p, mask, a)
+
+
+@pytest.mark.parametrize("method,config", [("gdq", {}), ("darling", {})])
+def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
+    out = []
+    for env in (OfficeEnv(task="C"), CompactEnv(task="C")):
+        learner = make_learner(method, office_task_context(env.world, "C"), **config)
+        env.reset(seed=3)
+        run = run_episodes if isinstance(env, OfficeEnv) else run_compact
+        out.append((run(learner, env, 60, np.random.default_rng(5)), learner.q.copy()))
+    (a, qa), (b, qb) = out
+    assert np.array_equal(a.returns, b.returns) and np.array_equal(qa, qb)
+    assert np.array_equal(a.area_visits, b.area_visits)
+
+
+def test_learning_smoke_on_100_positions(tmp_path):
+    from gdq_pddl.analysis.scale import figure, report
+    from gdq_pddl.experiments.scale import converged_at, run_size
+
+    result = run_size(100, 1, 60, methods=["DARLING", "Q-learning"], log=lambda *a: None)
+    assert set(result.returns) == {"DARLING", "Q-learning"}
+    assert all(v > 0 for v in result.steps_per_s.values())
+    assert result.returns["DARLING"].shape == (1, 60)
+    assert len(figure([result], 60, tmp_path)) == 2
+    assert "100 positions" in report([result], 1, 60, 0, tmp_path).read_text()
+    r_ref = 10.0
+    assert converged_at(np.full(80, 9.0), r_ref) == 50
+    assert converged_at(np.r_[np.full(60, -5.0), np.full(100, 9.0)], r_ref) == 96  # 36 nines
+    assert converged_at(np.full(80, 1.0), r_ref) is None
