@@ -128,6 +128,33 @@ def cmd_building(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- scale ------------------------------------------------------------------------------
+
+def _register_scale(sub) -> None:
+    p = sub.add_parser("scale", help="learning against building size (generated buildings)",
+                       description="Run every method on generated buildings of each size "
+                                   "and write scale.png/pdf and REPORT.md (episodes to "
+                                   "convergence, env steps/s).")
+    p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
+    p.add_argument("--runs", type=int, default=3)
+    p.add_argument("--episodes", type=int, default=1000)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default results/scale)")
+    p.set_defaults(func=cmd_scale)
+
+
+def cmd_scale(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.scale import figure, report
+    from gdq_pddl.experiments.scale import run_size
+
+    out = args.out or Path("results/scale")
+    out.mkdir(parents=True, exist_ok=True)
+    results = [run_size(n, args.runs, args.episodes, args.seed) for n in args.sizes]
+    figure(results, args.episodes, out)
+    print(report(results, args.runs, args.episodes, args.seed, out))
+    return 0
+
+
 # --- plan -------------------------------------------------------------------------------
 
 def _register_plan(sub) -> None:
@@ -472,7 +499,8 @@ def _report(out: Path) -> None:
 
 COMMANDS: list[Callable] = [_register_problem, _register_building, _register_plan,
                             _register_planners, _register_run, _register_switch, _register_robot,
-                            _register_reproduce, _register_report, _register_knowledge]
+                            _register_reproduce, _register_report, _register_knowledge,
+                            _register_scale]
 
 if __name__ == "__main__":
     raise SystemExit(main())
