@@ -1,0 +1,56 @@
+"""The ``gdq-pddl`` command line.
+
+Every subcommand turns bad input (a malformed file, an unknown position, task or
+planner) into one clear message on stderr and a non-zero exit, never a traceback.
+Subcommands live in :mod:`gdq_pddl.cli.planning` and :mod:`gdq_pddl.cli.experiments`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+
+from gdq_pddl.cli import experiments, planning
+from gdq_pddl.cli.common import EXIT_ERROR
+from gdq_pddl.errors import GdqError
+
+COMMANDS: list[Callable] = [
+    planning.register_problem, planning.register_building, planning.register_plan,
+    planning.register_planners, experiments.register_run, experiments.register_switch,
+    experiments.register_robot, experiments.register_reproduce, experiments.register_report,
+    experiments.register_knowledge, experiments.register_scale,
+]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``gdq-pddl``; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not hasattr(args, "func"):
+        parser.print_help()
+        return EXIT_ERROR
+    try:
+        return args.func(args)
+    except GdqError as exc:
+        print(f"gdq-pddl: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except KeyboardInterrupt:
+        print("gdq-pddl: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # output piped into `head` and closed early: not an error
+        sys.stderr.close()
+        return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="gdq-pddl",
+        description="Guided Dyna-Q: reinforcement learning whose exploration is guided by "
+                    "a PDDL planner. Start with `gdq-pddl plan --task C` to see the plans "
+                    "the learner is given, then `gdq-pddl run --task C`.")
+    sub = parser.add_subparsers(title="commands", metavar="COMMAND")
+    for register in COMMANDS:
+        register(sub)
+    return parser
+

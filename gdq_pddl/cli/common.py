@@ -1,0 +1,108 @@
+"""What the subcommands share: task and run options, validation, running and reporting."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from gdq_pddl.errors import GdqError
+
+EXIT_ERROR, EXIT_NO_PLAN = 2, 1
+
+
+def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
+    p.add_argument("--task", help="a task of the world file (office: A B C D E X)")
+    p.add_argument("--start", help="start position or landmark (with --goal, instead of --task)")
+    p.add_argument("--goal", help="goal position or landmark")
+    if world:
+        p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+
+
+def world_and_task(args: argparse.Namespace):
+    from gdq_pddl.world import load_world
+
+    world = load_world(args.world)
+    if args.task is None and args.start is None and args.goal is None:
+        raise GdqError("give --task, or --start and --goal")
+    task = world.resolve(args.task, args.start, args.goal)
+    if task.start == task.goal:
+        raise GdqError(f"start and goal are the same position ({task.start})")
+    return world, task
+
+
+def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
+              episodes: int = 2500, runs: int = 10) -> None:
+    from gdq_pddl.experiments import METHODS, PAPER_METHODS
+
+    p.add_argument("--method", nargs="+", metavar="M", default=list(methods or PAPER_METHODS),
+                   help=f"methods to compare (from: {', '.join(METHODS)})")
+    p.add_argument("--episodes", type=int, default=episodes, help="episodes per run (per task)")
+    p.add_argument("--runs", type=int, default=runs, help="independent runs per method")
+    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
+    exec_args(p)
+
+
+def exec_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--jobs", type=int, help="parallel processes (default: all cores)")
+    p.add_argument("--out", type=Path, help="output folder (default: results/<command>)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run in --out (same command line)")
+    p.add_argument("--executor", choices=("local", "ray"), default="local",
+                   help="local processes, or a Ray cluster")
+    p.add_argument("--address", help="Ray cluster address (default: start a local instance)")
+    p.add_argument("--no-report", action="store_true", help="skip figures, tables and report")
+
+
+def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
+    """The --method names, validated and without repeats; also checks --episodes/--runs."""
+    from gdq_pddl.experiments import METHODS
+
+    unknown = [m for m in args.method if m not in METHODS]
+    if unknown:
+        raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
+    if args.episodes < 1 or args.runs < 1:
+        raise GdqError("--episodes and --runs must be at least 1")
+    return tuple(dict.fromkeys(args.method))
+
+
+def experiment_kw(args: argparse.Namespace) -> dict:
+    """Experiment fields from the run options (methods, runs, seed, planner)."""
+    return {"methods": checked_methods(args), "runs": args.runs, "seed": args.seed,
+            "planner": args.planner}
+
+
+def check_planner(name: str) -> None:
+    from gdq_pddl.planning import get_planner
+
+    get_planner(name)  # fail now, with the list of known planners, not inside a worker
+
+
+def office_report(out: Path) -> str:
+    """Figures, tables and REPORT.md of an office output folder; returns what was written."""
+    from gdq_pddl.analysis import make_all
+
+    paths = make_all(out)
+    report = next((p for p in paths if p.name == "REPORT.md"), None)
+    return f"wrote {len(paths)} figures, tables and reports" + \
+        (f"; read {report}" if report else "")
+
+
+def execute(experiments, args: argparse.Namespace, name: str,
+            report: Callable[[Path], str] = office_report) -> int:
+    """Run ``experiments`` into --out (default results/<name>), then ``report`` on it."""
+    import time
+
+    from gdq_pddl.experiments import run_experiments
+
+    out = args.out or Path("results") / name
+    t0 = time.perf_counter()
+    run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
+                    address=args.address, resume=args.resume)
+    print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
+          f"{time.perf_counter() - t0:.1f} s; results in {out}/episodes.csv")
+    if not args.no_report:
+        print(report(out))
+    return 0
+

@@ -1,0 +1,200 @@
+"""Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, report."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from gdq_pddl.cli.common import (
+    check_planner,
+    checked_methods,
+    exec_args,
+    execute,
+    experiment_kw,
+    office_report,
+    run_args,
+    task_args,
+    world_and_task,
+)
+from gdq_pddl.errors import GdqError
+
+
+def register_run(sub) -> None:
+    p = sub.add_parser("run", help="compare methods on one task",
+                       description="Each method learns the task from scratch --runs times for "
+                                   "--episodes episodes. Writes episodes.csv, figures and "
+                                   "REPORT.md to --out.")
+    task_args(p)
+    p.add_argument("--domain", type=Path,
+                   help="a PDDL domain: with --problem and --dynamics, learn on that problem "
+                        "instead of an office task (see docs/domains.md)")
+    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
+    p.add_argument("--dynamics", type=Path,
+                   help="the dynamics file (TOML) of --domain: success, failure, costs")
+    run_args(p)
+    p.set_defaults(func=cmd_run)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import Experiment
+
+    if args.domain or args.problem or args.dynamics:
+        return _run_pddl(args)
+    world, task = world_and_task(args)
+    kw = experiment_kw(args)
+    check_planner(args.planner)
+    spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
+    exp = Experiment("run", ((spec, args.episodes),), world=str(args.world or "office"), **kw)
+    return execute([exp], args, f"run-{task.name}")
+
+
+def _run_pddl(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.generic import write_generic_report
+    from gdq_pddl.experiments import Experiment
+    from gdq_pddl.experiments.work import load_pddl_instance
+
+    if not (args.domain and args.problem and args.dynamics):
+        raise GdqError("a PDDL run needs --domain, --problem and --dynamics")
+    if args.task or args.start or args.goal or args.world:
+        raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
+                       "its start and goal from --problem")
+    files = tuple(str(p) for p in (args.domain, args.problem, args.dynamics))
+    instance = load_pddl_instance(files)  # check the files (and size) before any worker
+    instance.model  # noqa: B018
+    kw = experiment_kw(args)
+    check_planner(args.planner)
+    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
+    return execute([exp], args, f"run-{instance.name}",
+                   report=lambda out: f"wrote {write_generic_report(out)}")
+
+
+def register_switch(sub) -> None:
+    p = sub.add_parser("switch", help="change the task halfway (the paper's Hypothesis III)",
+                       description="Learn --from for --episodes episodes, then --to for as many; "
+                                   "GDQ keeps its learned model and replans for the new goal.")
+    p.add_argument("--from", dest="first", default="C", help="first task (default C)")
+    p.add_argument("--to", dest="second", default="D", help="second task (default D)")
+    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    run_args(p)
+    p.set_defaults(func=cmd_switch)
+
+
+def cmd_switch(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import switch_experiment
+    from gdq_pddl.world import load_world
+
+    world = load_world(args.world)
+    first, second = world.task(args.first).name, world.task(args.second).name
+    kw = experiment_kw(args)
+    check_planner(args.planner)
+    exp = switch_experiment(first, second, args.episodes, world=str(args.world or "office"), **kw)
+    return execute([exp], args, exp.name)
+
+
+def register_robot(sub) -> None:
+    p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
+                       description="Task X on the office with area 5 forbidden, 10 actions per "
+                                   "trial, R_max 1000, durations as costs, alpha 0.5.")
+    run_args(p, methods=("GDQ", "Dyna-Q", "GDQ-code"), episodes=30, runs=10)
+    p.set_defaults(func=cmd_robot)
+
+
+def cmd_robot(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from gdq_pddl.experiments import robot_experiment
+
+    kw = experiment_kw(args)
+    check_planner(args.planner)
+    exp = robot_experiment(runs=kw.pop("runs"), **kw)
+    exp = replace(exp, schedule=(("X", args.episodes),))
+    return execute([exp], args, "robot")
+
+
+def register_reproduce(sub) -> None:
+    p = sub.add_parser("reproduce", help="every experiment of the paper, with figures and report",
+                       description="Tasks A-D (2500 episodes x 10 runs), the switches C->D and "
+                                   "C->E (5000 episodes), the robot protocol; then figures, the "
+                                   "area-visit table and REPORT.md in --out.")
+    p.add_argument("--quick", action="store_true", help="300 episodes x 3 runs: a first look")
+    p.add_argument("--seed", type=int, default=0, help="base seed")
+    exec_args(p)
+    p.set_defaults(func=cmd_reproduce)
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import paper_protocol
+
+    name = "reproduce-quick" if args.quick else "reproduce"
+    return execute(paper_protocol(quick=args.quick, seed=args.seed), args, name)
+
+
+def register_knowledge(sub) -> None:
+    from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS
+
+    p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
+                       description="Task C with a door locked in reality but usable in the "
+                                   "knowledge (d3, d1), a corridor only reality has, and a "
+                                   "control; each also with accurate knowledge. Writes "
+                                   "episodes.csv, figures and REPORT.md to --out.")
+    p.add_argument("--episodes", type=int, default=1500, help="episodes per run")
+    p.add_argument("--runs", type=int, default=10, help="independent runs per method and case")
+    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
+                   help="methods to compare")
+    exec_args(p)
+    p.set_defaults(func=cmd_knowledge)
+
+
+def cmd_knowledge(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments.knowledge import knowledge_experiments
+
+    exps = knowledge_experiments(args.episodes, args.runs, args.seed, checked_methods(args))
+    command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
+
+    def report(out: Path) -> str:
+        from gdq_pddl.analysis.knowledge import make_knowledge_report
+
+        paths = make_knowledge_report(out, command)
+        return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
+
+    return execute(exps, args, "knowledge", report)
+
+
+def register_report(sub) -> None:
+    p = sub.add_parser("report", help="redraw figures, tables and REPORT.md of an output folder")
+    p.add_argument("out", type=Path, help="an output folder of run/switch/robot/reproduce")
+    p.set_defaults(func=cmd_report)
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    if not (args.out / "episodes.csv").exists():
+        raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
+    office_report(args.out)
+    return 0
+
+
+def register_scale(sub) -> None:
+    p = sub.add_parser("scale", help="learning against building size (generated buildings)",
+                       description="Run every method on generated buildings of each size "
+                                   "and write scale.png/pdf and REPORT.md (episodes to "
+                                   "convergence, env steps/s).")
+    p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
+    p.add_argument("--runs", type=int, default=3)
+    p.add_argument("--episodes", type=int, default=1000)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, help="output folder (default results/scale)")
+    p.set_defaults(func=cmd_scale)
+
+
+def cmd_scale(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.scale import figure, report
+    from gdq_pddl.experiments.scale import run_size
+
+    out = args.out or Path("results/scale")
+    out.mkdir(parents=True, exist_ok=True)
+    results = [run_size(n, args.runs, args.episodes, args.seed) for n in args.sizes]
+    figure(results, args.episodes, out)
+    print(report(results, args.runs, args.episodes, args.seed, out))
+    return 0
+
