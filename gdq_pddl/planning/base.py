@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import enum
+import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
+from gdq_pddl.errors import PlanningError
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.pddl.parser import parse_domain, parse_problem
@@ -94,6 +96,35 @@ class PlanningProblem:
         """The problem's goal as the fluent atoms that must hold."""
         return self.task.atoms(self.task.goal_pos)
 
+    def query(self, planner: str, start: State | None, goal: State | None, tolerance: float,
+              *options: object) -> Query:
+        """Resolve a query against the grounded task (every backend starts here).
+
+        Raises :class:`~gdq_pddl.errors.PlanningError` for a negative tolerance or a start
+        atom the problem does not have; a goal no action can ever make true gives a
+        query whose ``goal`` is None (a "no plan" answer, not an error).
+        """
+        if tolerance < 0:
+            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
+        key = (planner, start, goal, tolerance, *options)
+        task = self.task
+        if start is None:
+            s0 = task.init
+        else:
+            try:
+                s0 = task.mask(start)
+            except KeyError as exc:
+                known = ", ".join(task.facts[:8])
+                raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start "
+                                    f"state (fluent atoms look like: {known}, ...)") from None
+        if goal is None:
+            masks = (task.goal_pos, task.goal_neg) if task.goal_possible else None
+        elif set(goal) <= task.fact_index.keys():
+            masks = (task.mask(goal), 0)
+        else:  # a fluent atom no action ever makes true
+            masks = None
+        return Query(key, s0, masks, self._results.get(key), time.perf_counter())
+
     def cached(self, key: tuple) -> PlanResult | None:
         return self._results.get(key)
 
@@ -107,6 +138,22 @@ class PlanningProblem:
 
         return write_problem(self, start if start is not None else self.init,
                              goal if goal is not None else self.goal)
+
+
+@dataclass(frozen=True)
+class Query:
+    """One planning query, resolved by :meth:`PlanningProblem.query`."""
+
+    key: tuple
+    """The cache key: planner, start, goal, tolerance and the planner's options."""
+    start: int
+    """The start state as a bitmask of the grounded task."""
+    goal: tuple[int, int] | None
+    """(must hold, must not hold) bitmasks, or None when the goal can never hold."""
+    hit: PlanResult | None
+    """The cached answer to this very query, if any."""
+    started: float
+    """``time.perf_counter()`` when the query was made (for the time_s metric)."""
 
 
 @runtime_checkable

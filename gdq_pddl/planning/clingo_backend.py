@@ -84,21 +84,10 @@ class ClingoPlanner:
     def solve(self, problem: PlanningProblem, start: State | None = None,
               goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
         """Plans from ``start`` (default: the problem's init) to ``goal`` (default: its goal)."""
-        if tolerance < 0:
-            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
-        key = (self.name, start, goal, tolerance, self.max_plans)
-        hit = problem.cached(key)
-        if hit is not None:
-            return hit
-        t0 = time.perf_counter()
-        task = problem.task
-        s0 = task.init if start is None else _mask(problem, start)
-        if goal is None:
-            gmask = (task.goal_pos, task.goal_neg) if task.goal_possible else None
-        elif set(goal) <= task.fact_index.keys():
-            gmask = (task.mask(goal), 0)
-        else:  # a fluent atom no action ever makes true
-            gmask = None
+        q = problem.query(self.name, start, goal, tolerance, self.max_plans)
+        if q.hit is not None:
+            return q.hit
+        key, t0, task, s0, gmask = q.key, q.started, problem.task, q.start, q.goal
         distance = None if gmask is None else _distance(task, s0, gmask)
         if distance is None:
             return problem.remember(key, PlanResult(
@@ -213,9 +202,3 @@ def _bits(mask: int):
         yield low.bit_length() - 1
         mask ^= low
 
-
-def _mask(problem: PlanningProblem, atoms: State) -> int:
-    try:
-        return problem.task.mask(atoms)
-    except KeyError as exc:
-        raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start state") from None

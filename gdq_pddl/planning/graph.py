@@ -23,7 +23,6 @@ import warnings
 
 import networkx as nx
 
-from gdq_pddl.errors import PlanningError
 from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
 from gdq_pddl.planning.heuristic import INFINITE, hmax_for
 
@@ -48,22 +47,11 @@ class GraphPlanner:
     def solve(self, problem: PlanningProblem, start: State | None = None,
               goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
         """Plans from ``start`` (default: the problem's init) to ``goal`` (default: its goal)."""
-        if tolerance < 0:
-            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
-        key = (self.name, start, goal, tolerance, self.max_plans)
-        hit = problem.cached(key)
-        if hit is not None:
-            return hit
-        t0 = time.perf_counter()
-        task = problem.task
-        s0 = task.init if start is None else _mask(problem, start)
-        if goal is None:
-            gmask = (task.goal_pos, task.goal_neg)
-        elif set(goal) <= task.fact_index.keys():
-            gmask = (_mask(problem, goal), 0)
-        else:  # a fluent atom no action ever makes true
-            return problem.remember(key, self._none(t0, 0))
-        if goal is None and not task.goal_possible:
+        q = problem.query(self.name, start, goal, tolerance, self.max_plans)
+        if q.hit is not None:
+            return q.hit
+        key, t0, task, s0, gmask = q.key, q.started, problem.task, q.start, q.goal
+        if gmask is None:
             return problem.remember(key, self._none(t0, 0))
         graph, goals, depth = self._explore(problem, s0, gmask, tolerance)
         if not goals:
@@ -203,11 +191,3 @@ def _bounded_paths(graph: nx.DiGraph, source: int, bound: int):
 
     yield from walk(source)
 
-
-def _mask(problem: PlanningProblem, atoms: State) -> int:
-    try:
-        return problem.task.mask(atoms)
-    except KeyError as exc:
-        known = ", ".join(problem.task.facts[:8])
-        raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start or goal "
-                            f"state (fluent atoms look like: {known}, ...)") from None

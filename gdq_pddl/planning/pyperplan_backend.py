@@ -43,17 +43,11 @@ class PyperplanPlanner:
     def solve(self, problem: PlanningProblem, start: State | None = None,
               goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
         """One shortest plan from ``start`` (default: init) to ``goal`` (default: the goal)."""
-        if tolerance < 0:
-            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
-        key = (self.name, start, goal, tolerance)
-        hit = problem.cached(key)
-        if hit is not None:
-            return hit
-        t0 = time.perf_counter()
-        task = problem.task
-        if goal is None and not task.goal_possible or (
-                goal is not None and not set(goal) <= task.fact_index.keys()):
-            # a goal no action can make true: no need to ask pyperplan
+        q = problem.query(self.name, start, goal, tolerance)
+        if q.hit is not None:
+            return q.hit
+        key, t0 = q.key, q.started
+        if q.goal is None:  # a goal no action can make true: no need to ask pyperplan
             return problem.remember(key, self._none(t0))
         from gdq_pddl.planning.validate import up_action_name, up_problem
 
