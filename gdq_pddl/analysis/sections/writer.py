@@ -1,0 +1,91 @@
+"""What every section of ``REPORT.md`` writes with: the options, the line buffer
+(:class:`Writer`) and the number formats."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from gdq_pddl.analysis.data import is_gdq
+from gdq_pddl.analysis.sections.verdicts import Verdicts
+from gdq_pddl.analysis.stats import Comparison
+from gdq_pddl.analysis.study import Study
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    """Windows and thresholds of the report's statistics."""
+
+    window: int = 50
+    """Moving-average window (episodes) for milestones and curves."""
+    early_window: int = 500
+    """Hypothesis I also compares the mean return over the first this many episodes."""
+    final_window: int = 250
+    """Learning as a fraction of V*: mean return over the last this many episodes."""
+    switch_window: int = 250
+    """Hypothesis III: mean return over the first this many episodes after the switch."""
+    route_window: int = 50
+    route_share: float = 0.5
+    """Task C convergence: from which episode at least this share of the last
+    ``route_window`` episodes follow the best route successfully, to the end."""
+    robot_window: int = 5
+    robot_share: float = 0.6
+    """Robot convergence: the same with a short window (30 trials)."""
+    seed: int = 20240501
+
+
+FIGURE_DIR, TABLE_DIR = "figures", "tables"
+
+
+def fmt(x: float, digits: int = 3) -> str:
+    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}g}"
+
+
+def route_str(areas: Sequence[int]) -> str:
+    return "->".join(map(str, areas)) if areas else "(none)"
+
+
+def pct(x: float) -> str:
+    return "n/a" if math.isnan(x) else f"{x:.1%}"
+
+
+class Writer:
+    """Accumulates Markdown lines, the hypothesis verdicts and the skipped parts."""
+
+    def __init__(self, study: Study, opts: ReportOptions, out_dir: Path) -> None:
+        self.study, self.opts, self.out_dir = study, opts, out_dir
+        self.lines: list[str] = []
+        self.verdicts = Verdicts()
+        self.notes: list[str] = []
+
+    def add(self, *lines: str) -> None:
+        self.lines.extend(lines)
+
+    def figure(self, stem: str, caption: str) -> None:
+        path = self.out_dir / FIGURE_DIR / f"{stem}.png"
+        if path.exists():
+            self.add(f"![{caption}]({FIGURE_DIR}/{stem}.png)", "")
+
+    def comparisons(self, comps: Sequence[Comparison], unit: str = "") -> None:
+        for c in comps:
+            self.add(f"  - {c.describe(unit)}")
+        self.add("")
+
+    def verdict_line(self, hypothesis: str, case: str, comps: Sequence[Comparison],
+                     basis: str, variant: str = "GDQ") -> str:
+        """Record ``variant``'s verdict on a case and write its bullet (the paper's GDQ
+        under the case name, a variant as ``case, variant``)."""
+        v, reason = self.verdicts.record(hypothesis, case, basis, variant, comps)
+        label = case if variant == "GDQ" else f"{case}, {variant}"
+        self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})")
+        return v
+
+    def variants(self, experiment: str) -> list[str]:
+        """GDQ and its variants present in ``experiment`` (the paper's GDQ first)."""
+        return [m for m in self.study.methods(experiment) if is_gdq(m)]
+
+    def note(self, what: str, why: str) -> None:
+        self.notes.append(f"{what}: skipped, {why}.")
+        self.add(f"_Skipped: {why}._", "")
