@@ -1,0 +1,155 @@
+"""``REPORT.md`` of the wrong-knowledge experiments: per case the measurements defined
+in :mod:`gdq_pddl.analysis.knowledge`, every sentence generated from them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.analysis.knowledge_cases import CaseResult, MethodResult
+from gdq_pddl.analysis.knowledge_measures import (
+    ACCURATE,
+    FINAL,
+    FRACTION,
+    WINDOW,
+    WRONG,
+    RouteStep,
+    threshold,
+)
+
+
+def _ep(value: float) -> str:
+    if np.isnan(value):
+        return "n/a"
+    return "never" if not np.isfinite(value) else f"{value:.0f}"
+
+
+def _extra(acc: MethodResult | None, wrong: MethodResult | None) -> str:
+    if acc is None or wrong is None:
+        return "n/a"
+    a, w = acc.median, wrong.median
+    if np.isfinite(a) and np.isfinite(w):
+        return f"{w - a:+.0f}"
+    if np.isfinite(a):
+        return "never converges"
+    if np.isfinite(w):
+        return "converges only with wrong knowledge"
+    return "neither converges"
+
+
+def _frac(values: list[float], v_star: float) -> str:
+    if not values:
+        return "n/a"
+    m = float(np.mean(values))
+    return f"{m / v_star:.2f}" if v_star > 0 else f"{m:.2f}"
+
+
+def _route_summary(r: MethodResult) -> str:
+    counts: dict[tuple[int, ...], int] = {}
+    for route in r.routes:
+        counts[route] = counts.get(route, 0) + 1
+    parts = [f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
+             for k, v in sorted(counts.items(), key=lambda kv: -kv[1])]
+    return ", ".join(parts) or "n/a"
+
+
+def _check_summary(steps: list[RouteStep], attr: str) -> str:
+    missing = [f"{s.state} ({' / '.join(s.optimal)})" for s in steps if not getattr(s, attr)]
+    if not missing:
+        return "yes, at every step"
+    return "no, not at " + "; ".join(missing)
+
+
+def _findings(case: CaseResult) -> list[str]:
+    out = []
+    for m in case.methods:
+        a, w = case.results[ACCURATE].get(m), case.results[WRONG].get(m)
+        if a is None or w is None:
+            continue
+        out.append(
+            f"**{m}**: greedy policy on the optimal route in {w.on_route}/{w.runs} runs with "
+            f"wrong knowledge, {a.on_route}/{a.runs} with accurate; converged in "
+            f"{w.converged}/{w.runs} vs {a.converged}/{a.runs} runs (median episode "
+            f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}).")
+    steps = case.checks[WRONG]
+    excluded = [s for s in steps if not s.darling_allowed]
+    if excluded:
+        out.append("DARLING's allowed set (wrong knowledge) excludes every optimal action at "
+                   + ", ".join(s.state for s in excluded) + ".")
+    else:
+        out.append("DARLING's allowed set (wrong knowledge) contains an optimal action at "
+                   "every step of the optimal route.")
+    return out
+
+
+def write_report(cases: list[CaseResult], out: Path, command: str = "gdq-pddl knowledge"
+                 ) -> Path:
+    """``REPORT.md``: per case the measurements described in the module docstring."""
+    lines = [
+        "# Knowledge that disagrees with the world",
+        "",
+        f"Command: `{command}`. The env simulates the *real* world; the learners' knowledge "
+        "(PDDL problem, plans) is built from the *knowledge* world. Each case is run twice on "
+        "the same real world: with wrong knowledge, and with accurate knowledge (built from "
+        "the real world) as the reference. V* and the optimal route come from value "
+        "iteration on the real world.",
+        "",
+        "Definitions (measured, see `gdq_pddl/analysis/knowledge.py`):",
+        "",
+        f"- *converged at episode e*: e is the first episode at which the trailing {WINDOW}"
+        f"-episode mean return of a run reaches V* - {1 - FRACTION:.2f} |V*| (first passage; "
+        "'stays above until the end' measured mostly the last exploration dip). The median "
+        "is over runs, unconverged runs counting as 'never'; *extra* = median with wrong "
+        "knowledge - median with accurate knowledge. The control case's extra episodes "
+        "show the noise of this comparison.",
+        "- *on route*: the final greedy policy, walked along likeliest outcomes in the real "
+        "world, reaches the goal along the optimal policy's area route.",
+        "- *policy value*: the exact expected return of the final greedy policy in the real "
+        "world, as a fraction of V* (the raw value when V* <= 0).",
+        f"- *final return*: mean return of the last {FINAL} episodes over all runs.",
+        "",
+        "Figures: `knowledge_curves.png` (learning curves; solid: wrong knowledge, dashed: "
+        "accurate), `knowledge_convergence.png` (convergence episodes).",
+        "",
+    ]
+    for case in cases:
+        lines += [
+            f"## {case.name}",
+            "",
+            case.description + "." if case.description else "",
+            "",
+            f"- real world `{case.real}`, knowledge world `{case.knowledge}`, task "
+            f"{case.task.name} ({case.task.start} -> {case.task.goal})",
+            f"- V* = {case.v_star:.3f}; convergence threshold {threshold(case.v_star):.3f}",
+            f"- optimal route: {' '.join(case.optimal_positions)} (areas "
+            f"{'-'.join(map(str, case.optimal_areas))})",
+            "",
+            "| method | on route (wrong / accurate) | converged runs | median convergence "
+            "episode | extra episodes | policy value | final return | greedy routes (wrong) |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for m in case.methods:
+            a, w = case.results[ACCURATE].get(m), case.results[WRONG].get(m)
+            if a is None or w is None:
+                continue
+            lines.append(
+                f"| {m} | {w.on_route}/{w.runs} / {a.on_route}/{a.runs} | "
+                f"{w.converged} / {a.converged} | {_ep(w.median)} / {_ep(a.median)} | "
+                f"{_extra(a, w)} | {_frac(w.policy_values, case.v_star)} / "
+                f"{_frac(a.policy_values, case.v_star)} | {w.final_return:.2f} / "
+                f"{a.final_return:.2f} | {_route_summary(w)} |")
+        lines += ["", "(pairs are wrong knowledge / accurate knowledge)", "",
+                  "Does the knowledge contain the true optimum? Along the optimal route:", "",
+                  "| knowledge | DARLING allows an optimal action | an optimal action starts a "
+                  "shortest plan (GDQ) | ... a plan within 1.3x (GDQ-code) |",
+                  "|---|---|---|---|"]
+        for kind in (WRONG, ACCURATE):
+            steps = case.checks[kind]
+            lines.append(f"| {kind} | {_check_summary(steps, 'darling_allowed')} | "
+                         f"{_check_summary(steps, 'in_shortest_plans')} | "
+                         f"{_check_summary(steps, 'in_tolerant_plans')} |")
+        lines += ["", "Findings:", ""] + [f"- {f}" for f in _findings(case)] + [""]
+    path = out / "REPORT.md"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    return path
