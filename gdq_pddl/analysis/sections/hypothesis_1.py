@@ -10,9 +10,9 @@ from gdq_pddl.analysis.stats import compare, first_positive, run_means, verdict,
 
 def write(w: Writer) -> None:
     study, opts = w.study, w.opts
-    w.add("## Hypothesis I: GDQ collects more reward (tasks A-D)", "")
-    if not study.has(TASKS_EXPERIMENT):
-        w.note("Hypothesis I", "the tasks experiment (A-D) is missing")
+    if not w.section("Hypothesis I: GDQ collects more reward (tasks A-D)",
+                     study.has(TASKS_EXPERIMENT), "Hypothesis I",
+                     "the tasks experiment (A-D) is missing"):
         return
     w.figure("learning_curves", "learning curves, tasks A-D")
     ep = study.episodes

@@ -11,9 +11,9 @@ from gdq_pddl.analysis.tables import area_table, run_area_totals, to_markdown
 
 def write(w: Writer) -> None:
     study = w.study
-    w.add("## Hypothesis II: GDQ avoids irrelevant areas", "")
-    if not study.has(TASKS_EXPERIMENT):
-        w.note("Hypothesis II", "the tasks experiment (A-D) is missing")
+    if not w.section("Hypothesis II: GDQ avoids irrelevant areas",
+                     study.has(TASKS_EXPERIMENT), "Hypothesis II",
+                     "the tasks experiment (A-D) is missing"):
         return
     table = area_table(study)
     w.add("Area visits summed over a run, mean (SE) over runs; bold: fewest visits "

@@ -8,10 +8,9 @@ from gdq_pddl.analysis.stats import compare, first_positive, run_means
 
 def write(w: Writer) -> None:
     study, opts = w.study, w.opts
-    w.add("## Hypothesis III: GDQ adapts faster to a goal change", "")
     exps = study.switch_experiments
-    if not exps:
-        w.note("Hypothesis III", "no switch experiment (switch-C-D, switch-C-E)")
+    if not w.section("Hypothesis III: GDQ adapts faster to a goal change", bool(exps),
+                     "Hypothesis III", "no switch experiment (switch-C-D, switch-C-E)"):
         return
     w.figure("switch_curves", "goal change")
     n = opts.switch_window

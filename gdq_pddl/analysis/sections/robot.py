@@ -14,10 +14,9 @@ from gdq_pddl.analysis.stats import route_indicator, settles
 
 def write(w: Writer) -> None:
     study, opts = w.study, w.opts
-    w.add("## Robot protocol (simulated)", "")
     exp = ROBOT_EXPERIMENT
-    if not study.has(exp):
-        w.note("Robot protocol", "the robot experiment is missing")
+    if not w.section("Robot protocol (simulated)", study.has(exp), "Robot protocol",
+                     "the robot experiment is missing"):
         return
     ep = study.episodes
     tasks = ep.tasks(exp)

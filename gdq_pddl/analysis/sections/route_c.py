@@ -15,10 +15,10 @@ from gdq_pddl.analysis.stats import convergence_episode
 
 def write(w: Writer) -> None:
     study, opts = w.study, w.opts
-    w.add("## Task C: route finding", "")
     exp = TASKS_EXPERIMENT
-    if not study.has(exp) or "C" not in study.episodes.tasks(exp):
-        w.note("Task C routes", "Task C is not in the tasks experiment")
+    if not w.section("Task C: route finding",
+                     study.has(exp) and "C" in study.episodes.tasks(exp),
+                     "Task C routes", "Task C is not in the tasks experiment"):
         return
     world = study.world(exp)
     best = study.truth(exp, "C").optimal_route_areas

@@ -9,11 +9,11 @@ from gdq_pddl.analysis.stats import compare, mean_se, run_means
 
 def write(w: Writer) -> None:
     study = w.study
-    w.add("## The paper's GDQ vs the authors'-code variant (GDQ-code)", "")
     exp = TASKS_EXPERIMENT
     methods = study.methods(exp) if study.has(exp) else []
-    if "GDQ" not in methods or "GDQ-code" not in methods:
-        w.note("GDQ vs GDQ-code", "the tasks experiment lacks GDQ or GDQ-code")
+    if not w.section("The paper's GDQ vs the authors'-code variant (GDQ-code)",
+                     "GDQ" in methods and "GDQ-code" in methods, "GDQ vs GDQ-code",
+                     "the tasks experiment lacks GDQ or GDQ-code"):
         return
     w.add("Mean return per episode over all episodes, mean (SE) over runs; the "
           "difference is GDQ - GDQ-code.", "",

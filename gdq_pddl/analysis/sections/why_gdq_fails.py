@@ -18,9 +18,9 @@ def write(w: Writer) -> None:
     and how its episodes end."""
     study = w.study
     exp = TASKS_EXPERIMENT
-    w.add("## Why the paper's GDQ fails here", "")
-    if not study.has(exp) or not {"GDQ", "GDQ-code"} & set(study.methods(exp)):
-        w.note("Why the paper's GDQ fails", "the tasks experiment has no GDQ runs")
+    if not w.section("Why the paper's GDQ fails here",
+                     study.has(exp) and bool({"GDQ", "GDQ-code"} & set(study.methods(exp))),
+                     "Why the paper's GDQ fails", "the tasks experiment has no GDQ runs"):
         return
     tasks = study.episodes.tasks(exp)
     task = "C" if "C" in tasks else tasks[0]

@@ -86,6 +86,14 @@ class Writer:
         """GDQ and its variants present in ``experiment`` (the paper's GDQ first)."""
         return [m for m in self.study.methods(experiment) if is_gdq(m)]
 
+    def section(self, title: str, available: bool, what: str, why: str) -> bool:
+        """Write the heading ``## title``; when the section's data is not ``available``,
+        note ``what`` as skipped because ``why`` and return False (the section ends)."""
+        self.add(f"## {title}", "")
+        if not available:
+            self.note(what, why)
+        return available
+
     def note(self, what: str, why: str) -> None:
         self.notes.append(f"{what}: skipped, {why}.")
         self.add(f"_Skipped: {why}._", "")
