@@ -5,6 +5,7 @@ both experiments (accurate and wrong knowledge) of every method, measured with
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -69,6 +70,14 @@ class CaseResult:
     """``{ACCURATE|WRONG: {method: MethodResult}}``."""
     checks: dict[str, list[RouteStep]]
     """``{ACCURATE|WRONG: route check}``."""
+
+    def paired(self) -> Iterator[tuple[str, MethodResult, MethodResult]]:
+        """``(method, accurate, wrong)`` for each method with results in both experiments,
+        in method order."""
+        for m in self.methods:
+            a, w = self.results[ACCURATE].get(m), self.results[WRONG].get(m)
+            if a is not None and w is not None:
+                yield m, a, w
 
 
 def _experiments(out: Path) -> dict[str, dict]:

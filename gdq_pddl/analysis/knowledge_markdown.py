@@ -63,10 +63,7 @@ def _check_summary(steps: list[RouteStep], attr: str) -> str:
 
 def _findings(case: CaseResult) -> list[str]:
     out = []
-    for m in case.methods:
-        a, w = case.results[ACCURATE].get(m), case.results[WRONG].get(m)
-        if a is None or w is None:
-            continue
+    for m, a, w in case.paired():
         out.append(
             f"**{m}**: greedy policy on the optimal route in {w.on_route}/{w.runs} runs with "
             f"wrong knowledge, {a.on_route}/{a.runs} with accurate; converged in "
@@ -129,10 +126,7 @@ def write_report(cases: list[CaseResult], out: Path, command: str = "gdq-pddl kn
             "episode | extra episodes | policy value | final return | greedy routes (wrong) |",
             "|---|---|---|---|---|---|---|---|",
         ]
-        for m in case.methods:
-            a, w = case.results[ACCURATE].get(m), case.results[WRONG].get(m)
-            if a is None or w is None:
-                continue
+        for m, a, w in case.paired():
             lines.append(
                 f"| {m} | {w.on_route}/{w.runs} / {a.on_route}/{a.runs} | "
                 f"{w.converged} / {a.converged} | {_ep(w.median)} / {_ep(a.median)} | "
