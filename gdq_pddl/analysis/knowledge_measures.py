@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gdq_pddl.analysis.routes import likeliest_next
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.solve import expected_costs, solve_task
 from gdq_pddl.world import Task, World
@@ -126,12 +127,8 @@ def route_check(real: World, knowledge: World, task: Task,
             darling_allowed=bool(allowed[obs, best].any()),
             in_shortest_plans=bool(shortest[obs, best].any()),
             in_tolerant_plans=bool(tolerant[obs, best].any())))
-        i = fs * model.n_actions + int(solution.policy[t, fs])
-        lo, hi = model.ptr[i], model.ptr[i + 1]
-        k = lo + int(np.argmax(model.prob[lo:hi]))
-        if model.stuck[k]:
+        nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
+        if nxt is None or model.pos_of[nxt] == solution.goal_pos:
             break
-        fs = int(model.next[k])
-        if model.pos_of[fs] == solution.goal_pos:
-            break
+        fs = nxt
     return out

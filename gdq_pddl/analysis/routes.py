@@ -10,13 +10,13 @@ consecutive repeats: ``p0 p2 p4 p8 p5 p6 p7 p17`` is areas ``1 3 2 6``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, solve_task
 from gdq_pddl.world import Task, World
 
@@ -52,37 +52,58 @@ def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[in
     return tuple(out)
 
 
+def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
+    """The full state that ``action`` in full state ``fs`` most likely leads to (ties: the
+    first listed outcome); None when that outcome is stuck."""
+    i = fs * model.n_actions + action
+    lo, hi = model.ptr[i], model.ptr[i + 1]
+    k = lo + int(np.argmax(model.prob[lo:hi]))
+    return None if model.stuck[k] else int(model.next[k])
+
+
+def _follow(world: World, model: ModelArrays, fs: int, first: str, goal_pos: int,
+            action_at: Callable[[int, int], int | None], steps: int,
+            stop_on_loop: bool) -> Route:
+    """Walk from full state ``fs`` (at position ``first``) along likeliest outcomes, taking
+    ``action_at(step, fs)`` (None: no policy there) for at most ``steps`` actions; with
+    ``stop_on_loop``, stop when a full state repeats."""
+    positions = [first]
+    seen = {fs}
+    for step in range(steps):
+        action = action_at(step, fs)
+        if action is None:
+            return Route(tuple(positions), False, "no-policy")
+        nxt = likeliest_next(model, fs, action)
+        if nxt is None:
+            return Route(tuple(positions), False, "stuck")
+        fs = nxt
+        positions.append(world.positions[model.pos_of[fs]])
+        if model.pos_of[fs] == goal_pos:
+            return Route(tuple(positions), True, "goal")
+        if stop_on_loop:
+            if fs in seen:
+                return Route(tuple(positions), False, "loop")
+            seen.add(fs)
+    return Route(tuple(positions), False, "limit")
+
+
 def walk_policy(world: World, policy: Mapping[int, int] | np.ndarray, start: str, goal: str,
                 max_steps: int = MAX_ROUTE_STEPS) -> Route:
     """Follow ``policy`` (learner state -> action) along likeliest outcomes; see module doc."""
     model = compile_model(world)
     goal_pos = world.index[world.position(goal)]
     fs = full_state(world, world.position(start))
-    positions = [world.positions[model.pos_of[fs]]]
-    seen = {fs}
-    for _ in range(max_steps):
+
+    def action_at(_step: int, fs: int) -> int | None:
         obs = int(model.obs_of[fs])
         if isinstance(policy, np.ndarray):
             if obs >= len(policy) or policy[obs] < 0:
-                return Route(tuple(positions), False, "no-policy")
-            action = int(policy[obs])
-        else:
-            if obs not in policy:
-                return Route(tuple(positions), False, "no-policy")
-            action = int(policy[obs])
-        i = fs * model.n_actions + action
-        lo, hi = model.ptr[i], model.ptr[i + 1]
-        k = lo + int(np.argmax(model.prob[lo:hi]))
-        if model.stuck[k]:
-            return Route(tuple(positions), False, "stuck")
-        fs = int(model.next[k])
-        positions.append(world.positions[model.pos_of[fs]])
-        if model.pos_of[fs] == goal_pos:
-            return Route(tuple(positions), True, "goal")
-        if fs in seen:
-            return Route(tuple(positions), False, "loop")
-        seen.add(fs)
-    return Route(tuple(positions), False, "limit")
+                return None
+            return int(policy[obs])
+        return int(policy[obs]) if obs in policy else None
+
+    return _follow(world, model, fs, world.positions[model.pos_of[fs]], goal_pos, action_at,
+                   max_steps, stop_on_loop=True)
 
 
 def resolve_task_label(world: World, label: str) -> Task:
@@ -102,18 +123,9 @@ def optimal_route(world: World, task: Task | str) -> Route:
     t = resolve_task_label(world, task) if isinstance(task, str) else task
     model = compile_model(world)
     solution, fs = solve_task(world, t, model)
-    positions = [t.start]
-    for step in range(model.step_limit):
-        i = fs * model.n_actions + int(solution.policy[step, fs])
-        lo, hi = model.ptr[i], model.ptr[i + 1]
-        k = lo + int(np.argmax(model.prob[lo:hi]))
-        if model.stuck[k]:
-            return Route(tuple(positions), False, "stuck")
-        fs = int(model.next[k])
-        positions.append(world.positions[model.pos_of[fs]])
-        if model.pos_of[fs] == solution.goal_pos:
-            return Route(tuple(positions), True, "goal")
-    return Route(tuple(positions), False, "limit")
+    return _follow(world, model, fs, t.start, solution.goal_pos,
+                   lambda step, fs: int(solution.policy[step, fs]), model.step_limit,
+                   stop_on_loop=False)
 
 
 @dataclass(frozen=True)
