@@ -21,6 +21,18 @@ The outcomes come from the same per-action rule as the full model
 so on the office an episode is bit-identical to one of :class:`OfficeEnv` (tested).
 This is a second model kind, for worlds too large for the full one; value iteration
 (V*) still needs the full model and so small worlds.
+
+Why :func:`compact_step` is not :func:`gdq_pddl.envs.model.env_step`: the two models
+index outcomes by different states. ``env_step`` looks up the pair of a *full* state (an
+int whose next value is read from ``next``, every pair listing at least a no-op), which
+is what a PDDL model (:mod:`gdq_pddl.envs.pddl_env`, no positions or doors) and value
+iteration need; ``compact_step`` looks up the pair of a *learner* state derived from the
+position and a mutable open-door array, and a pair may list nothing. Folding either into
+the other would make the office and PDDL path carry the door array and the extra
+lookups of every step, or make the compact one enumerate ``2**n_doors`` states. What the
+rule is, they share: the outcome draw (:func:`gdq_pddl.envs.model.draw_outcome`) and the
+cost, reward and episode end (:func:`gdq_pddl.envs.model.finish_step`), and one compiled
+episode loop (:mod:`gdq_pddl.learners.runner`) serves both.
 """
 
 from __future__ import annotations
@@ -34,15 +46,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.model import (
-    CAUSE_GOAL,
-    CAUSE_NONE,
-    CAUSE_STUCK,
-    CAUSE_TIMEOUT,
-    CAUSES,
-    _outcomes,
-    sample_cost,
-)
+from gdq_pddl.envs.model import CAUSES, _outcomes, draw_outcome, finish_step
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import COST_KINDS, VERBS, World
 
@@ -142,7 +146,7 @@ def observe_state(m: CompactModel, pos: int, doors: np.ndarray) -> int:
     return m.state_of[pos, 1 if d >= 0 and doors[d] else 0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: int,
                  goal_pos: int, rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
     """Take ``action`` at ``pos`` (``doors[d]``: door ``d`` open; updated in place).
@@ -150,27 +154,13 @@ def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: i
     Returns ``(next position, reward, terminated, truncated, cause)``; draws what
     :func:`gdq_pddl.envs.model.env_step` draws, in the same order.
     """
-    s = observe_state(m, pos, doors)
-    i = s * m.n_actions + action
-    k, end = m.ptr[i], m.ptr[i + 1]
-    u = rng.random()
+    k = draw_outcome(m.ptr, m.prob, observe_state(m, pos, doors) * m.n_actions + action, rng)
     nxt, stuck = pos, False
-    if end > k:
-        acc = m.prob[k]
-        while u >= acc and k < end - 1:
-            k += 1
-            acc += m.prob[k]
+    if k >= 0:
         nxt, stuck = m.next_pos[k], m.stuck[k]
         if m.opens[k]:
             doors[m.door_of_pos[pos]] = 1
-    cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
-    if stuck:
-        return nxt, -m.r_max, True, False, CAUSE_STUCK
-    if nxt == goal_pos:
-        return nxt, m.r_max, True, False, CAUSE_GOAL
-    if t + 1 >= m.step_limit:
-        return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
-    return nxt, -cost, False, False, CAUSE_NONE
+    return finish_step(m, action, nxt, stuck, nxt == goal_pos, t, rng)
 
 
 class CompactEnv(gym.Env[int, int]):

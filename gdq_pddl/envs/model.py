@@ -163,7 +163,42 @@ def sample_cost(kind: int, a: float, b: float, rng: np.random.Generator) -> floa
     return max(0.0, a + b * rng.standard_normal())
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
+def draw_outcome(ptr: np.ndarray, prob: np.ndarray, i: int, rng: np.random.Generator) -> int:
+    """Draw one uniform and return the index of the outcome of pair ``i`` it selects from
+    the CSR arrays ``ptr``/``prob`` (-1 if the pair lists no outcome).
+
+    The one outcome draw of both model kinds (:func:`env_step`,
+    :func:`gdq_pddl.envs.compact.compact_step`).
+    """
+    k, end = ptr[i], ptr[i + 1]
+    u = rng.random()
+    if end == k:
+        return -1
+    acc = prob[k]
+    while u >= acc and k < end - 1:
+        k += 1
+        acc += prob[k]
+    return k
+
+
+@numba.njit(cache=True, inline="always")
+def finish_step(m, action: int, nxt: int, stuck: bool, at_goal: bool, t: int,
+                rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """Draw the cost of ``action`` and return ``(nxt, reward, terminated, truncated, cause)``
+    for a step that led to ``nxt``: the reward and episode-end rule of both model kinds
+    (``m``: :class:`ModelArrays` or :class:`~gdq_pddl.envs.compact.CompactModel`)."""
+    cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
+    if stuck:
+        return nxt, -m.r_max, True, False, CAUSE_STUCK
+    if at_goal:
+        return nxt, m.r_max, True, False, CAUSE_GOAL
+    if t + 1 >= m.step_limit:
+        return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
+    return nxt, -cost, False, False, CAUSE_NONE
+
+
+@numba.njit(cache=True, inline="always")
 def env_step(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
              rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
     """Take ``action`` in full state ``fs`` at step ``t`` (0-based) of an episode.
@@ -171,19 +206,6 @@ def env_step(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
     Returns ``(next full state, reward, terminated, truncated, cause)``. Draws exactly
     one uniform for the outcome, then one cost draw if the cost is not constant.
     """
-    i = fs * m.n_actions + action
-    k, end = m.ptr[i], m.ptr[i + 1]
-    u = rng.random()
-    acc = m.prob[k]
-    while u >= acc and k < end - 1:
-        k += 1
-        acc += m.prob[k]
+    k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + action, rng)  # never -1 here
     nxt = m.next[k]
-    cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
-    if m.stuck[k]:
-        return nxt, -m.r_max, True, False, CAUSE_STUCK
-    if m.pos_of[nxt] == goal_pos:
-        return nxt, m.r_max, True, False, CAUSE_GOAL
-    if t + 1 >= m.step_limit:
-        return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
-    return nxt, -cost, False, False, CAUSE_NONE
+    return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)

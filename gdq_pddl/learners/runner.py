@@ -8,6 +8,9 @@ Two paths with identical results for the same seeds:
   (the office, or a PDDL domain) and the learner one of
   :mod:`gdq_pddl.learners.agents`: one compiled loop calling
   :func:`gdq_pddl.envs.model.env_step` and the same :mod:`~gdq_pddl.learners.core` rules.
+  The same loop, compiled for a :class:`~gdq_pddl.envs.compact.CompactModel`, calls
+  :func:`gdq_pddl.envs.compact.compact_step` instead
+  (:func:`gdq_pddl.learners.compact_runner.run_compact`).
 
 Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
 ``env.reset(seed=...)`` before calling), learner randomness from ``rng``. Neither path
@@ -21,8 +24,11 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numba
 import numpy as np
+from numba import types
+from numba.extending import overload
 
 from gdq_pddl.envs.base import ModelEnv
+from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
 from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.learners import core
 from gdq_pddl.learners.agents import Learner, TabularLearner
@@ -100,33 +106,113 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
 def _run_fast(learner: TabularLearner, env: gym.Env, n_episodes: int,
               rng: np.random.Generator) -> EpisodeRecords:
     office: ModelEnv = env.unwrapped  # type: ignore[assignment]
-    n_areas = _n_areas(env)
+    return run_compiled(office.model, int(office.start_state), int(office.goal_pos),
+                        _NO_DOORS, learner, office.np_random, n_episodes, rng, _n_areas(env))
+
+
+_NO_DOORS = np.zeros(1, dtype=np.uint8)  # a ModelArrays state carries its doors itself
+
+
+def run_compiled(model: ModelArrays | CompactModel, start: int, goal_pos: int,
+                 doors: np.ndarray, learner: TabularLearner, env_rng: np.random.Generator,
+                 n_episodes: int, rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
+    """The compiled loop over either model kind: ``start`` is a full state of a
+    :class:`ModelArrays` (``doors`` unused) or a position of a
+    :class:`~gdq_pddl.envs.compact.CompactModel` (``doors``: its open-door array,
+    cleared at the start of every episode); ``n_areas`` columns of area visits."""
     returns = np.zeros(n_episodes)
     steps = np.zeros(n_episodes, dtype=np.int64)
     success = np.zeros(n_episodes, dtype=np.bool_)
     areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
-    _episodes(office.model, int(office.start_state), int(office.goal_pos), learner.tables,
-              learner.params, office.np_random, rng, returns, steps, success, areas)
+    _episodes(model, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
+              returns, steps, success, areas)
     return EpisodeRecords(returns, steps, success, areas)
 
 
+# What the loop needs of a model kind, one implementation per kind, picked by numba from
+# the model's type when the loop is compiled: the hidden state an episode starts in, the
+# learner state it shows, one step (env_step / compact_step) and the area of a state.
+# inline="always" (here and on the step functions) keeps the loop as fast as one written
+# per kind; as plain calls it lost 10-20 % steps/s (benchmarks/learners.py speed).
+def _restart(m, start, doors):
+    raise NotImplementedError  # compiled code only (see the overloads below)
+
+
+def _observe(m, state, doors):
+    raise NotImplementedError
+
+
+def _step(m, state, doors, action, t, goal_pos, rng):
+    raise NotImplementedError
+
+
+def _area(m, state):
+    raise NotImplementedError
+
+
+def _kind(m) -> type | None:
+    return m.instance_class if isinstance(m, types.BaseNamedTuple) else None
+
+
+@overload(_restart, inline="always")
+def _restart_impl(m, start, doors):
+    if _kind(m) is ModelArrays:
+        return lambda m, start, doors: start
+    if _kind(m) is CompactModel:
+        def restart(m, start, doors):
+            doors[:] = 0
+            return start
+        return restart
+    return None
+
+
+@overload(_observe, inline="always")
+def _observe_impl(m, state, doors):
+    if _kind(m) is ModelArrays:
+        return lambda m, state, doors: m.obs_of[state]
+    if _kind(m) is CompactModel:
+        return lambda m, state, doors: observe_state(m, state, doors)
+    return None
+
+
+@overload(_step, inline="always")
+def _step_impl(m, state, doors, action, t, goal_pos, rng):
+    if _kind(m) is ModelArrays:
+        return lambda m, state, doors, action, t, goal_pos, rng: env_step(
+            m, state, action, t, goal_pos, rng)
+    if _kind(m) is CompactModel:
+        return lambda m, state, doors, action, t, goal_pos, rng: compact_step(
+            m, state, doors, action, t, goal_pos, rng)
+    return None
+
+
+@overload(_area, inline="always")
+def _area_impl(m, state):
+    if _kind(m) is ModelArrays:
+        return lambda m, state: m.area_of_pos[m.pos_of[state]]
+    if _kind(m) is CompactModel:
+        return lambda m, state: m.area_of_pos[state]
+    return None
+
+
 @numba.njit(cache=True)
-def _episodes(m: ModelArrays, start: int, goal_pos: int, t: core.Tables, p: core.Params,
+def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p: core.Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
               steps: np.ndarray, success: np.ndarray, areas: np.ndarray) -> None:
     """The compiled episode loop (same calls, in the same order, as the Python loop)."""
     for ep in range(len(returns)):
-        fs = start
-        s = m.obs_of[fs]
+        state = _restart(m, start, doors)
+        s = _observe(m, state, doors)
         step = 0
         while True:
             a = core.act(t, p, s, rng)
-            fs, r, terminated, truncated, cause = env_step(m, fs, a, step, goal_pos, env_rng)
-            s2 = m.obs_of[fs]
+            state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
+                                                           env_rng)
+            s2 = _observe(m, state, doors)
             core.observe(t, p, s, a, r, s2, terminated, truncated, rng)
             step += 1
             returns[ep] += r
-            area = m.area_of_pos[m.pos_of[fs]]
+            area = _area(m, state)
             if area > 0:
                 areas[ep, area - 1] += 1
             if terminated or truncated:
