@@ -111,3 +111,34 @@ def test_knowledge_and_reality_agree_on_every_move():
                 assert moved == (a in planned), (p, open_doors, abstraction.spaces.action_name(a))
                 if a in planned:
                     assert model.obs_of[likeliest] == planned[a]
+
+
+def test_grounding_and_a_pddl_run_do_not_depend_on_the_hash_seed():
+    """Ground action order (a PDDL env's action indices) must be the same in every process."""
+    import os
+    import subprocess
+    import sys
+
+    script = """
+import numpy as np
+from gdq_pddl.pddl import ground, parse_domain, parse_problem
+from gdq_pddl.resources import data_file
+from gdq_pddl.envs.pddl_env import PDDLEnv
+from gdq_pddl.learners import make_learner, run_episodes
+from gdq_pddl.learners.context import pddl_task_context
+d = data_file("domains", "keys.pddl").read_text()
+p = data_file("problems", "keys-1.pddl").read_text()
+domain = parse_domain(d)
+print([op.name for op in ground(domain, parse_problem(p, domain)).ops])
+env = PDDLEnv(str(data_file("domains", "keys.pddl")), str(data_file("problems", "keys-1.pddl")),
+              str(data_file("dynamics", "keys.toml")))
+env.reset(seed=0)
+learner = make_learner("gdq", pddl_task_context(env.instance), variant="code")
+print(run_episodes(learner, env, 30, np.random.default_rng(0)).returns.tolist())
+"""
+    outs = [subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                           env=dict(os.environ, PYTHONHASHSEED=seed), timeout=300)
+            for seed in ("1", "2", "3")]
+    for out in outs:
+        assert out.returncode == 0, out.stderr[-2000:]
+    assert outs[0].stdout == outs[1].stdout == outs[2].stdout

@@ -168,7 +168,9 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
         idx = indexes.get((pred, positions))
         if idx is None:
             idx = defaultdict(list)
-            for tup in static_tuples.get(pred, ()):
+            # sorted: set order follows Python's per-process string hashing, and the
+            # order of ground actions (a PDDL env's action indices) must not
+            for tup in sorted(static_tuples.get(pred, ())):
                 idx[tuple(tup[i] for i in positions)].append(tup)
             indexes[(pred, positions)] = idx
         return idx.get(key, ())
