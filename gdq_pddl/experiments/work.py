@@ -73,12 +73,18 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
         env = OfficeEnv(world=world, start=task.start, goal=task.goal)
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
+    return _unit_result(parts, [resolve_task(world, t).name for t, _ in exp.schedule], exp,
+                        learner)
+
+
+def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.ndarray]:
+    """What a unit returns: its episodes' records, the tasks in force and the final policy."""
     return {
         "returns": np.concatenate([p.returns for p in parts]),
         "steps": np.concatenate([p.steps for p in parts]),
         "success": np.concatenate([p.success for p in parts]),
         "areas": np.concatenate([p.area_visits for p in parts]),
-        "tasks": np.array([resolve_task(world, s).name for s, _ in exp.schedule]),
+        "tasks": np.array(tasks),
         "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
         "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
     }
@@ -110,15 +116,7 @@ def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:
             learner.start_task(context)
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
-    return {
-        "returns": np.concatenate([p.returns for p in parts]),
-        "steps": np.concatenate([p.steps for p in parts]),
-        "success": np.concatenate([p.success for p in parts]),
-        "areas": np.concatenate([p.area_visits for p in parts]),
-        "tasks": np.array([s for s, _ in exp.schedule]),
-        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
-        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
-    }
+    return _unit_result(parts, [t for t, _ in exp.schedule], exp, learner)
 
 
 def warm_up(units: list[Unit]) -> None:
