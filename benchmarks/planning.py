@@ -16,23 +16,14 @@ imports excluded. The authors' released planner (clingo in a subprocess per quer
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
+
+from _timing import median_ms  # benchmarks/_timing.py (this folder is on sys.path)
 
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
 from gdq_pddl.world import load_world
-
-
-def median_ms(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1000)
-    return statistics.median(times)
 
 
 def main() -> None:

@@ -20,23 +20,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import statistics
-import time
+
+from _timing import median_ms  # benchmarks/_timing.py (this folder is on sys.path)
 
 from gdq_pddl.buildings import building_world
 from gdq_pddl.learners.context import _domain_text
 from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.world import Task
-
-
-def median_ms(fn, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append((time.perf_counter() - t0) * 1000)
-    return statistics.median(times)
 
 
 def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dict]:
