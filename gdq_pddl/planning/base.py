@@ -8,7 +8,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import NamedTuple, Protocol, runtime_checkable
 
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.pddl.grounding import GroundTask, ground
@@ -107,6 +107,9 @@ class PlanningProblem:
         if tolerance < 0:
             raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
         key = (planner, start, goal, tolerance, *options)
+        hit = self._results.get(key)
+        if hit is not None:  # answered before: skip resolving the masks
+            return Query(key, -1, None, hit, time.perf_counter())
         task = self.task
         if start is None:
             s0 = task.init
@@ -123,7 +126,7 @@ class PlanningProblem:
             masks = (task.mask(goal), 0)
         else:  # a fluent atom no action ever makes true
             masks = None
-        return Query(key, s0, masks, self._results.get(key), time.perf_counter())
+        return Query(key, s0, masks, None, time.perf_counter())
 
     def cached(self, key: tuple) -> PlanResult | None:
         return self._results.get(key)
@@ -140,14 +143,14 @@ class PlanningProblem:
                              goal if goal is not None else self.goal)
 
 
-@dataclass(frozen=True)
-class Query:
-    """One planning query, resolved by :meth:`PlanningProblem.query`."""
+class Query(NamedTuple):
+    """One planning query, resolved by :meth:`PlanningProblem.query` (a tuple: cheap to
+    build, since a cache hit should cost about a microsecond)."""
 
     key: tuple
     """The cache key: planner, start, goal, tolerance and the planner's options."""
     start: int
-    """The start state as a bitmask of the grounded task."""
+    """The start state as a bitmask of the grounded task (-1 when ``hit`` answers it)."""
     goal: tuple[int, int] | None
     """(must hold, must not hold) bitmasks, or None when the goal can never hold."""
     hit: PlanResult | None
