@@ -124,19 +124,41 @@ def test_unit_seeds_depend_only_on_identity():
     assert a == b and len(set(a)) == 4
 
 
+# The test owns its Ray cluster: a head started with --block in its own process group,
+# inside a loopback-only network namespace, with a private --temp-dir (sessions and
+# sockets live there, and a namespace does not separate them; the path must stay
+# short: Ray puts unix sockets in it). It is stopped by signalling that group, never
+# with `ray stop`, which kills every Ray process on the machine.
 RAY_SCRIPT = """
-import subprocess, sys
+import os, signal, socket, subprocess, sys, tempfile, time
 from pathlib import Path
 from gdq_pddl.experiments import run_experiments, task_experiments
 exps = task_experiments(tasks=("C",), episodes=20, runs=2, methods=("GDQ", "Q-learning"))
 subprocess.run(["ip", "link", "set", "lo", "up"], check=True)
-subprocess.run(["ray", "start", "--head", "--port=6399", "--num-cpus=2",
-                "--include-dashboard=false", "--disable-usage-stats"], check=True,
-               capture_output=True)
+temp = tempfile.mkdtemp(prefix="gdqray", dir="/tmp")
+head = subprocess.Popen(["ray", "start", "--head", "--block", "--port=6399", "--num-cpus=2",
+                         "--include-dashboard=false", "--disable-usage-stats",
+                         f"--temp-dir={temp}"], stdout=subprocess.DEVNULL,
+                        stderr=subprocess.PIPE, text=True, start_new_session=True)
 try:
+    deadline = time.monotonic() + 120
+    while True:
+        if head.poll() is not None:
+            sys.exit("ray start failed: " + head.stderr.read()[-3000:])
+        try:
+            socket.create_connection(("127.0.0.1", 6399), timeout=1).close()
+            break
+        except OSError:
+            if time.monotonic() > deadline:
+                sys.exit("the Ray head did not come up within 120 s")
+            time.sleep(0.5)
     run_experiments(exps, Path(sys.argv[1]), executor="ray", address="127.0.0.1:6399")
 finally:
-    subprocess.run(["ray", "stop", "--force"], capture_output=True)
+    os.killpg(head.pid, signal.SIGTERM)
+    try:
+        head.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(head.pid, signal.SIGKILL)
 """
 
 
