@@ -46,9 +46,17 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.model import CAUSES, _outcomes, draw_outcome, finish_step
+from gdq_pddl.envs.model import (
+    CAUSES,
+    _outcomes,
+    cost_arrays,
+    draw_outcome,
+    finish_step,
+    merge_outcomes,
+    outcome_csr,
+)
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import COST_KINDS, VERBS, World
+from gdq_pddl.world import VERBS, World
 
 
 class CompactModel(NamedTuple):
@@ -92,30 +100,21 @@ def compile_compact(world: World) -> CompactModel:
     spaces = LearnerSpaces(world)
     n_states, n_actions = spaces.n_states, spaces.n_actions
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
-    counts = np.zeros(n_states * n_actions, dtype=np.int64)
-    prob: list[float] = []
-    nxt: list[int] = []
-    opens: list[bool] = []
-    stuck: list[bool] = []
-    for s, (p, is_open) in enumerate(spaces.states):
-        door = world.door_at.get(p)
-        mask = 1 << door_ids[door.name] if door is not None and is_open else 0
-        for a, verb, q in _applicable(world, spaces, p):
-            merged: dict[tuple[int, bool, bool], float] = {}
-            for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q):
-                if pr > 0.0:
-                    key = (world.index[np_], nm != mask, st)
-                    merged[key] = merged.get(key, 0.0) + pr
-            if list(merged) == [(world.index[p], False, False)]:
-                continue  # a no-op after all: leave the pair empty
-            for (target, op, st), pr in merged.items():
-                nxt.append(target)
-                opens.append(op)
-                stuck.append(st)
-                prob.append(pr)
-            counts[s * n_actions + a] = len(merged)
-    ptr = np.zeros(n_states * n_actions + 1, dtype=np.int64)
-    np.cumsum(counts, out=ptr[1:])
+
+    def pairs():
+        for s, (p, is_open) in enumerate(spaces.states):
+            door = world.door_at.get(p)
+            mask = 1 << door_ids[door.name] if door is not None and is_open else 0
+            for a, verb, q in _applicable(world, spaces, p):
+                merged = merge_outcomes(
+                    ((world.index[np_], nm != mask, st), pr)
+                    for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q))
+                if list(merged) == [(world.index[p], False, False)]:
+                    continue  # a no-op after all: leave the pair empty
+                yield s * n_actions + a, merged
+
+    ptr, prob, (nxt, opens, stuck) = outcome_csr(n_states * n_actions, pairs(),
+                                                 (np.int64, np.bool_, np.bool_))
     costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
     door_of = np.array([door_ids[world.door_at[p].name] if p in world.door_at else -1
                         for p in world.positions], dtype=np.int64)
@@ -123,12 +122,7 @@ def compile_compact(world: World) -> CompactModel:
                          for p in world.positions], dtype=np.int64)
     return CompactModel(
         n_actions=n_actions, r_max=float(world.r_max), step_limit=int(world.step_limit),
-        ptr=ptr, prob=np.array(prob, dtype=np.float64),
-        next_pos=np.array(nxt, dtype=np.int64), opens=np.array(opens, dtype=np.bool_),
-        stuck=np.array(stuck, dtype=np.bool_),
-        cost_kind=np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
-        cost_a=np.array([c.a for c in costs], dtype=np.float64),
-        cost_b=np.array([c.b for c in costs], dtype=np.float64),
+        ptr=ptr, prob=prob, next_pos=nxt, opens=opens, stuck=stuck, **cost_arrays(costs),
         door_of_pos=door_of, state_of=state_of,
         pos_of_state=np.array([world.index[p] for p, _ in spaces.states], dtype=np.int64),
         area_of_pos=np.array([world.area_of.get(p, 0) for p in world.positions],

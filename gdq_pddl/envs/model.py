@@ -13,13 +13,14 @@ and one of a step (:func:`env_step`).
 from __future__ import annotations
 
 import weakref
-from typing import NamedTuple
+from collections.abc import Hashable, Iterable
+from typing import NamedTuple, TypeVar
 
 import numba
 import numpy as np
 
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import COST_KINDS, VERBS, World
+from gdq_pddl.world import COST_KINDS, VERBS, CostDist, World
 
 CAUSE_NONE, CAUSE_STUCK, CAUSE_GOAL, CAUSE_TIMEOUT = 0, 1, 2, 3
 CAUSES = ("", "stuck", "goal", "timeout")
@@ -80,6 +81,49 @@ def _outcomes(world: World, door_ids: dict[str, int], p: str, mask: int, verb: s
     return noop
 
 
+K = TypeVar("K", bound=Hashable)
+
+
+def merge_outcomes(outcomes: Iterable[tuple[K, float]]) -> dict[K, float]:
+    """``{outcome: probability}`` of ``(outcome, probability)`` pairs: equal outcomes
+    summed in the order given, those of probability 0 dropped, first appearance first."""
+    merged: dict[K, float] = {}
+    for key, pr in outcomes:
+        if pr > 0.0:
+            merged[key] = merged.get(key, 0.0) + pr
+    return merged
+
+
+def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
+                dtypes: tuple[type, ...]) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The CSR arrays of per-pair outcome lists, as every compiled model kind stores them.
+
+    ``pairs`` yields ``(pair index, {outcome: probability})`` in increasing pair order
+    (a pair not yielded lists no outcome); an outcome is a tuple of fields, typed by
+    ``dtypes``. Returns ``ptr`` (int64[n_pairs + 1]: outcomes of pair ``i`` are
+    ``ptr[i]:ptr[i+1]``), ``prob`` (float64) and one array per outcome field.
+    """
+    counts = np.zeros(n_pairs, dtype=np.int64)
+    keys: list[tuple] = []
+    prob: list[float] = []
+    for i, merged in pairs:
+        counts[i] = len(merged)
+        keys += merged
+        prob += merged.values()
+    ptr = np.zeros(n_pairs + 1, dtype=np.int64)
+    np.cumsum(counts, out=ptr[1:])
+    fields = [np.array([key[j] for key in keys], dtype=dt) for j, dt in enumerate(dtypes)]
+    return ptr, np.array(prob, dtype=np.float64), fields
+
+
+def cost_arrays(costs: list[CostDist]) -> dict[str, np.ndarray]:
+    """``cost_kind``, ``cost_a`` and ``cost_b`` of every model kind, from one
+    :class:`~gdq_pddl.world.CostDist` per action."""
+    return {"cost_kind": np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
+            "cost_a": np.array([c.a for c in costs], dtype=np.float64),
+            "cost_b": np.array([c.b for c in costs], dtype=np.float64)}
+
+
 _COMPILED: dict[int, tuple[weakref.ref, ModelArrays]] = {}
 
 
@@ -105,31 +149,27 @@ def _compile(world: World) -> ModelArrays:
     n_pos, n_doors = len(world.positions), len(world.doors)
     n_masks = 1 << n_doors
     n_full, n_actions = n_pos * n_masks, spaces.n_actions
-    ptr = np.zeros(n_full * n_actions + 1, dtype=np.int64)
-    prob: list[float] = []
-    nxt: list[int] = []
-    stuck: list[bool] = []
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
     obs_of = np.zeros(n_full, dtype=np.int64)
     pos_of = np.zeros(n_full, dtype=np.int64)
-    parts = [spaces.action_parts(a) for a in range(n_actions)]
     for fs in range(n_full):
         pi, mask = divmod(fs, n_masks)
         p = world.positions[pi]
         door = world.door_at.get(p)
         pos_of[fs] = pi
         obs_of[fs] = spaces.state(p, door is not None and bool(mask >> door_ids[door.name] & 1))
-        for a, (verb, q) in enumerate(parts):
-            merged: dict[tuple[int, bool], float] = {}
-            for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q):
-                if pr > 0.0:
-                    key = (world.index[np_] * n_masks + nm, st)
-                    merged[key] = merged.get(key, 0.0) + pr
-            for (target, st), pr in merged.items():
-                nxt.append(target)
-                stuck.append(st)
-                prob.append(pr)
-            ptr[fs * n_actions + a + 1] = len(prob)
+    parts = [spaces.action_parts(a) for a in range(n_actions)]
+
+    def pairs():
+        for fs in range(n_full):
+            pi, mask = divmod(fs, n_masks)
+            p = world.positions[pi]
+            for a, (verb, q) in enumerate(parts):
+                yield fs * n_actions + a, merge_outcomes(
+                    [((world.index[np_] * n_masks + nm, st), pr)
+                     for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q)])
+
+    ptr, prob, (nxt, stuck) = outcome_csr(n_full * n_actions, pairs(), (np.int64, np.bool_))
     costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
     area = np.array([world.area_of.get(p, 0) for p in world.positions], dtype=np.int64)
     return ModelArrays(
@@ -138,12 +178,10 @@ def _compile(world: World) -> ModelArrays:
         r_max=float(world.r_max),
         step_limit=int(world.step_limit),
         ptr=ptr,
-        prob=np.array(prob, dtype=np.float64),
-        next=np.array(nxt, dtype=np.int64),
-        stuck=np.array(stuck, dtype=np.bool_),
-        cost_kind=np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
-        cost_a=np.array([c.a for c in costs], dtype=np.float64),
-        cost_b=np.array([c.b for c in costs], dtype=np.float64),
+        prob=prob,
+        next=nxt,
+        stuck=stuck,
+        **cost_arrays(costs),
         obs_of=obs_of,
         pos_of=pos_of,
         area_of_pos=area,

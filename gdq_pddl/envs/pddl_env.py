@@ -46,11 +46,10 @@ from gymnasium.spaces import Discrete
 
 from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.model import ModelArrays
+from gdq_pddl.envs.model import ModelArrays, cost_arrays, merge_outcomes, outcome_csr
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
-from gdq_pddl.world import COST_KINDS
 
 GOAL_POS = 1
 """``pos_of`` of a goal state in a PDDL model (0 elsewhere); what ``env_step`` compares."""
@@ -122,38 +121,27 @@ def compile_pddl_model(graph: StateGraph, dynamics: Dynamics) -> ModelArrays:
     parts = [split_action(op.name) for op in ops]
     outcomes = [dynamics.outcomes(schema, args) for schema, args in parts]
     schema_of = [schema for schema, _ in parts]
-    ptr = np.zeros(graph.n_states * n_ops + 1, dtype=np.int64)
-    prob: list[float] = []
-    nxt: list[int] = []
-    stuck: list[bool] = []
-    for s in range(graph.n_states):
-        applicable = dict(graph.edges(s))  # op -> next state (goal states: none)
-        for k in range(n_ops):
-            t = applicable.get(k)
-            if t is None:
-                merged = {(s, False): 1.0}
-            else:
-                o = outcomes[k]
-                rest = max(0.0, 1.0 - o.success - o.stuck)
-                merged = {}
-                for key, p in _split(s, t, o, rest, applicable, schema_of):
-                    if p > 0.0:
-                        merged[key] = merged.get(key, 0.0) + p
-            for (target, st), p in merged.items():
-                nxt.append(target)
-                stuck.append(st)
-                prob.append(p)
-            ptr[s * n_ops + k + 1] = len(prob)
-    costs = [o.cost for o in outcomes]
+
+    def pairs():
+        for s in range(graph.n_states):
+            applicable = dict(graph.edges(s))  # op -> next state (goal states: none)
+            for k in range(n_ops):
+                t = applicable.get(k)
+                if t is None:
+                    yield s * n_ops + k, {(s, False): 1.0}
+                else:
+                    o = outcomes[k]
+                    rest = max(0.0, 1.0 - o.success - o.stuck)
+                    yield s * n_ops + k, merge_outcomes(
+                        _split(s, t, o, rest, applicable, schema_of))
+
+    ptr, prob, (nxt, stuck) = outcome_csr(graph.n_states * n_ops, pairs(),
+                                          (np.int64, np.bool_))
     pos_of = np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64)
     return ModelArrays(
         n_actions=n_ops, n_doors=0, r_max=float(dynamics.r_max),
-        step_limit=int(dynamics.step_limit), ptr=ptr,
-        prob=np.array(prob, dtype=np.float64), next=np.array(nxt, dtype=np.int64),
-        stuck=np.array(stuck, dtype=np.bool_),
-        cost_kind=np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
-        cost_a=np.array([c.a for c in costs], dtype=np.float64),
-        cost_b=np.array([c.b for c in costs], dtype=np.float64),
+        step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
+        **cost_arrays([o.cost for o in outcomes]),
         obs_of=np.arange(graph.n_states, dtype=np.int64), pos_of=pos_of,
         area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
 
