@@ -40,14 +40,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any, NamedTuple
 
-import gymnasium as gym
 import numba
 import numpy as np
-from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
+from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
-    CAUSES,
     _outcomes,
     cost_arrays,
     draw_outcome,
@@ -157,7 +155,7 @@ def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: i
     return finish_step(m, action, nxt, stuck, nxt == goal_pos, t, rng)
 
 
-class CompactEnv(gym.Env[int, int]):
+class CompactEnv(CompiledEnv):
     """The office-like env of any world over a :class:`CompactModel`.
 
     Same spaces, rewards, episode ends and random draws as
@@ -180,27 +178,20 @@ class CompactEnv(gym.Env[int, int]):
         self.goal_pos = self.world.index[self.task.goal]
         self.start_pos = self.world.index[self.task.start]
         self.doors = np.zeros(max(1, len(self.world.doors)), dtype=np.uint8)
-        self._pos, self._t, self._cause, self._done = self.start_pos, 0, "", True
+        self._begin()
 
-    def reset(self, *, seed: int | None = None,
-              options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
-        super().reset(seed=seed)
+    def _restart(self) -> None:
         self.doors[:] = 0
-        self._pos, self._t, self._cause, self._done = self.start_pos, 0, "", False
-        return int(observe_state(self.model, self._pos, self.doors)), self._info()
+        self._pos = self.start_pos
 
-    def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
-        if self._done:
-            raise ResetNeeded("the episode is over (or never began): call reset() first")
-        a = int(action)
-        if not 0 <= a < self.model.n_actions:
-            raise ValueError(f"action must be in [0, {self.model.n_actions}), got {action!r}")
+    def _advance(self, a: int) -> tuple[float, bool, bool, int]:
         pos, reward, terminated, truncated, cause = compact_step(
             self.model, self._pos, self.doors, a, self._t, self.goal_pos, self.np_random)
-        self._pos, self._t, self._cause = int(pos), self._t + 1, CAUSES[cause]
-        self._done = bool(terminated or truncated)
-        return (int(observe_state(self.model, self._pos, self.doors)), float(reward),
-                bool(terminated), bool(truncated), self._info())
+        self._pos = int(pos)
+        return reward, terminated, truncated, cause
+
+    def _observe(self) -> int:
+        return int(observe_state(self.model, self._pos, self.doors))
 
     def _info(self) -> dict[str, Any]:
         return {"position": self.world.positions[self._pos],
