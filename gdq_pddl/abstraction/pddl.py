@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from gdq_pddl.abstraction.table import PlanTable
+from gdq_pddl.abstraction.table import PlanTable, pack_plans
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.pddl.reachable import StateGraph
 from gdq_pddl.planning.base import State
@@ -72,26 +72,16 @@ def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
     dist = graph.distances
     names = [op.name for op in graph.task.ops]
     edges = [graph.edges(s) for s in range(graph.n_states)]
-    plan_ptr, pair_ptr = [0], [0]
-    pair_s: list[int] = []
-    pair_a: list[int] = []
-    first = np.zeros((graph.n_states, len(names)), dtype=np.bool_)
+    plans: list[list[list[tuple[int, int]]]] = []
     capped = False
     for s in range(graph.n_states):
+        plans.append([])
         if dist[s] > 0:
             bound = math.floor((1 + tolerance) * dist[s] + 1e-9)
-            plans, cut = _paths(s, edges, dist, bound, max_plans)
+            plans[s], cut = _paths(s, edges, dist, bound, max_plans)
             capped |= cut
-            plans.sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))
-            for plan in plans:
-                first[s, plan[0][1]] = True
-                pair_s += [x for x, _ in plan]
-                pair_a += [a for _, a in plan]
-                pair_ptr.append(len(pair_s))
-        plan_ptr.append(len(pair_ptr) - 1)
-    return PlanTable(np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
-                     np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64),
-                     first, dist.astype(np.int64, copy=True), capped)
+            plans[s].sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))
+    return pack_plans(len(names), plans, dist.astype(np.int64, copy=True), capped)
 
 
 def _paths(start: int, edges: list[list[tuple[int, int]]], dist: np.ndarray, bound: int,

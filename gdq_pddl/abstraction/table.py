@@ -75,6 +75,28 @@ class PlanTable:
         return out
 
 
+def pack_plans(n_actions: int, plans: list[list[list[tuple[int, int]]]], length: np.ndarray,
+               capped: bool) -> PlanTable:
+    """The :class:`PlanTable` of ``plans[s]``, the plans from each learner state ``s`` as
+    lists of learner ``(state, action)`` pairs (empty plans are left out)."""
+    plan_ptr, pair_ptr = [0], [0]
+    pair_s: list[int] = []
+    pair_a: list[int] = []
+    first = np.zeros((len(plans), n_actions), dtype=np.bool_)
+    for s, state_plans in enumerate(plans):
+        for pairs in state_plans:
+            if not pairs:
+                continue
+            first[s, pairs[0][1]] = True
+            pair_s += [p for p, _ in pairs]
+            pair_a += [a for _, a in pairs]
+            pair_ptr.append(len(pair_s))
+        plan_ptr.append(len(pair_ptr) - 1)
+    return PlanTable(np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
+                     np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64),
+                     first, length, capped)
+
+
 def build_plan_table(abstraction: Abstraction, problem: PlanningProblem, planner: Planner,
                      goal: State, tolerance: float = 0.0,
                      states: list[int] | None = None) -> PlanTable:
@@ -83,27 +105,14 @@ def build_plan_table(abstraction: Abstraction, problem: PlanningProblem, planner
     results: dict[int, PlanResult] = {}
     for s in which:
         results[s] = planner.solve(problem, abstraction.planner_state(s), goal, tolerance)
-    plan_ptr = [0]
-    pair_ptr = [0]
-    pair_s: list[int] = []
-    pair_a: list[int] = []
-    first = np.zeros((abstraction.n_states, abstraction.n_actions), dtype=np.bool_)
+    plans: list[list[list[tuple[int, int]]]] = []
     length = np.full(abstraction.n_states, -1, dtype=np.int64)
     capped = False
     for s in range(abstraction.n_states):
         result = results.get(s)
+        plans.append([])
         if result is not None and result.status is Status.SOLVED:
             capped |= result.capped
             length[s] = result.length
-            for plan in result.plans:
-                pairs = plan_pairs(abstraction, plan)
-                if not pairs:
-                    continue
-                first[s, pairs[0][1]] = True
-                pair_s += [p for p, _ in pairs]
-                pair_a += [a for _, a in pairs]
-                pair_ptr.append(len(pair_s))
-        plan_ptr.append(len(pair_ptr) - 1)
-    return PlanTable(np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
-                     np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64),
-                     first, length, capped)
+            plans[s] = [plan_pairs(abstraction, plan) for plan in result.plans]
+    return pack_plans(abstraction.n_actions, plans, length, capped)
