@@ -14,6 +14,9 @@ from collections.abc import Callable, Sequence
 from gdq_pddl.cli import experiments, planning
 from gdq_pddl.cli.common import EXIT_ERROR
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.runner import RunInterrupted
+
+EXIT_INTERRUPTED = 130  # the shell's convention for a program ended by SIGINT
 
 COMMANDS: list[Callable] = [
     planning.register_problem, planning.register_building, planning.register_plan,
@@ -32,12 +35,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_ERROR
     try:
         return args.func(args)
+    except RunInterrupted as exc:  # Ctrl-C during a run: say how to go on
+        print(f"gdq-pddl: {exc}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except GdqError as exc:
         print(f"gdq-pddl: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:
         print("gdq-pddl: interrupted", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     except BrokenPipeError:  # output piped into `head` and closed early: not an error
         sys.stderr.close()
         return 0

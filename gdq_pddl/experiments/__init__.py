@@ -11,8 +11,8 @@ from gdq_pddl.experiments.protocol import (
     switch_experiment,
     task_experiments,
 )
-from gdq_pddl.experiments.runner import ResultsError, run_experiments
+from gdq_pddl.experiments.runner import ResultsError, RunInterrupted, run_experiments
 
-__all__ = ["METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError", "Unit",
-           "paper_protocol", "robot_experiment", "run_experiments", "switch_experiment",
+__all__ = ["METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError", "RunInterrupted",
+           "Unit", "paper_protocol", "robot_experiment", "run_experiments", "switch_experiment",
            "task_experiments"]

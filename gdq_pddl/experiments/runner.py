@@ -21,7 +21,6 @@ import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict
 from multiprocessing import get_context
 from pathlib import Path
@@ -35,6 +34,10 @@ from gdq_pddl.experiments.work import run_unit
 
 class ResultsError(GdqError):
     """An output folder cannot be used as asked."""
+
+
+class RunInterrupted(ResultsError):
+    """The run was interrupted (Ctrl-C); what finished is saved and ``--resume`` goes on."""
 
 
 def config_of(experiments: list[Experiment]) -> dict:
@@ -119,7 +122,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
     except KeyboardInterrupt:
         bar.close()
         done = len(list(units_dir.glob("*.npz"))) if units_dir.exists() else 0
-        raise ResultsError(f"interrupted: {done} of {total} runs are saved in {out}; "
+        raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
                            "continue with the same command and --resume") from None
     bar.close()
     collect(out, experiments)
@@ -151,27 +154,26 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the driver handles Ctrl-C for everyone
 
 
+def _run_indexed(job: tuple[int, Unit]) -> tuple[int, dict[str, np.ndarray]]:
+    return job[0], run_unit(job[1])
+
+
 def _processes(units: list[Unit], jobs: int):
     # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
     from gdq_pddl.experiments.work import warm_up
 
     warm_up(units)
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=get_context("fork"),
-                               initializer=_ignore_sigint)
+    # multiprocessing.Pool, not ProcessPoolExecutor: on Ctrl-C the workers in flight are
+    # terminated, and an executor whose workers were terminated can hang the interpreter
+    # at exit (its manager thread waits on a half-written result pipe).
+    pool = get_context("fork").Pool(jobs, initializer=_ignore_sigint)
     try:
-        futures = {pool.submit(run_unit, u): u for u in units}
-        pending = set(futures)
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for f in done:
-                yield futures[f], f.result()
+        for i, result in pool.imap_unordered(_run_indexed, enumerate(units)):
+            yield units[i], result
+        pool.close()
     finally:
-        # on an interrupt, do not wait for the runs in flight: stop their processes
-        workers = list((getattr(pool, "_processes", None) or {}).values())
-        pool.shutdown(wait=False, cancel_futures=True)
-        for proc in workers:
-            if proc.is_alive():
-                proc.terminate()
+        pool.terminate()
+        pool.join()
 
 
 def _ray(units: list[Unit], jobs: int | None, address: str | None):
