@@ -124,6 +124,18 @@ def test_interrupt_message_says_how_to_resume(tmp_path):
     assert "--resume" in err and "Traceback" not in err, err[-2000:]
 
 
+def test_resume_removes_files_a_killed_write_left(tmp_path):
+    """A kill between writing a unit and renaming it leaves a temporary file behind."""
+    exps = task_experiments(tasks=("C",), episodes=5, runs=2, methods=("Q-learning",))
+    run_experiments(exps, tmp_path, jobs=1)
+    (tmp_path / "units" / next((tmp_path / "units").glob("*.npz")).name).unlink()
+    stale = tmp_path / "units" / ".tasks__C__Q-learning__run0.npz.k1ll3d.tmp"
+    stale.write_bytes(b"half a file")
+    run_experiments(exps, tmp_path, jobs=1, resume=True)
+    assert not stale.exists()
+    assert len(list((tmp_path / "units").glob("*.npz"))) == 2
+
+
 def test_unit_seeds_depend_only_on_identity():
     exp = Experiment("tasks", (("C", 5),), ("GDQ", "Q-learning"), runs=2)
     a = [u.seeds()[0].random() for u in exp.units()]

@@ -93,6 +93,10 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool) -> list[Unit
                                "--resume needs the same command line")
     elif resume and (out / "units").exists():
         raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
+    # a run killed in the middle of a write leaves its temporary file (never a unit file:
+    # those appear only by an atomic rename); remove them before going on
+    for stale in (out / "units").glob(".*.tmp") if (out / "units").exists() else ():
+        stale.unlink(missing_ok=True)
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
     units = [u for e in experiments for u in e.units()]
