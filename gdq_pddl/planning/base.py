@@ -128,9 +128,6 @@ class PlanningProblem:
             masks = None
         return Query(key, s0, masks, None, time.perf_counter())
 
-    def cached(self, key: tuple) -> PlanResult | None:
-        return self._results.get(key)
-
     def remember(self, key: tuple, result: PlanResult) -> PlanResult:
         self._results[key] = result
         return result

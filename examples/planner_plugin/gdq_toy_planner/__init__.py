@@ -10,7 +10,6 @@ from __future__ import annotations
 import time
 from collections import deque
 
-from gdq_pddl.errors import PlanningError
 from gdq_pddl.planning import Plan, PlanningProblem, PlanResult, State, Status
 
 
@@ -28,26 +27,14 @@ class ToyPlanner:
     def solve(self, problem: PlanningProblem, start: State | None = None,
               goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
         """A shortest plan from ``start`` (default: init) to ``goal`` (default: the goal)."""
-        if tolerance < 0:
-            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
-        key = (self.name, start, goal, tolerance)
-        hit = problem.cached(key)
-        if hit is not None:  # results are cached per problem, keyed by the query
-            return hit
-        t0 = time.perf_counter()
-        task = problem.task
-        try:
-            s0 = task.init if start is None else task.mask(start)
-        except KeyError as exc:
-            raise PlanningError(f"unknown atom {exc.args[0]} in the start state") from None
-        if goal is None:
-            target = (task.goal_pos, task.goal_neg) if task.goal_possible else None
-        elif set(goal) <= task.fact_index.keys():
-            target = (task.mask(goal), 0)
-        else:  # an atom no action can make true
-            target = None
-        path = None if target is None else _bfs(task, s0, target)
-        metrics = {"time_s": time.perf_counter() - t0}
+        # checks the tolerance and start atoms, resolves start and goal to bitmasks of the
+        # grounded task (goal None: it can never hold) and looks up the result cache
+        q = problem.query(self.name, start, goal, tolerance)
+        if q.hit is not None:
+            return q.hit
+        key, task = q.key, problem.task
+        path = None if q.goal is None else _bfs(task, q.start, q.goal)
+        metrics = {"time_s": time.perf_counter() - q.started}
         if path is None:
             return problem.remember(key, PlanResult(Status.NO_PLAN, (), self.name, metrics))
         states, actions = path
