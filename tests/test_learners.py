@@ -137,6 +137,44 @@ def test_code_variant_sets_r_max_on_plan_pairs_only(ctx_c):
     assert learner.params.backup == core.BACKUP_SAMPLE
 
 
+def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
+    learner = GDQ(ctx_c, GDQConfig(variant="code", n_backups=0))
+    t, p = learner.tables, learner.params
+    rng = np.random.default_rng(0)
+    s, a = (int(x[0]) for x in np.nonzero(learner.optimistic_pairs))
+    t.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
+    core.recompute_all_v(t)
+    core.model_backup(t, p, s, a, rng)
+    assert t.q[s, a] == 50.0  # never tried: left alone
+    s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
+    t.visits[s, a] = 1  # one recorded ordinary step to s2 at cost 2
+    t.counts[s, a, s2] = 1
+    t.cost_sum[s, a], t.cost_n[s, a] = 2.0, 1
+    t.q[s2, :] = 10.0
+    core.recompute_v(t, s2)
+    core.model_backup(t, p, s, a, rng)
+    target = -2.0 + p.gamma * 10.0
+    assert t.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
+
+
+def test_code_variant_task_switch_carries_known_pairs_into_q(ctx_c):
+    learner = GDQ(ctx_c, GDQConfig(variant="code"))
+    env = OfficeEnv(task="C")
+    env.reset(seed=0)
+    run_episodes(learner, env, 200, np.random.default_rng(0))
+    learner.start_task(office_task_context(WORLD, "D"))
+    t, p = learner.tables, learner.params
+    known = t.known[:t.n_known[0]]
+    s, a = known // ctx_c.n_actions, known % ctx_c.n_actions
+    keep = ~t.goal[s]
+    assert keep.sum() > 10
+    fixed = [core.expected_value(t, p, int(i), int(j), t.v) for i, j in zip(s[keep], a[keep],
+                                                                           strict=True)]
+    assert np.allclose(t.q[s[keep], a[keep]], fixed, atol=1e-6)  # a fixed point
+    untried = (t.visits == 0) & ~learner.optimistic_pairs
+    assert np.all(t.q[untried] == 0.0)
+
+
 # --- the model ----------------------------------------------------------------------------
 
 def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
@@ -151,9 +189,9 @@ def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     rng = np.random.default_rng(0)
     for k in range(m + 1):
         assert core.expected_value(t, p, s, a, v) == optimistic, f"changed after {k} visits"
-        sample = core.sample_outcome(t, p, s, a, rng)
-        assert sample == (ctx_c.r_max, ctx_c.s0, False)
         learner.observe(s, a, -1.0, s2, False, False, rng)
+        # sample-based backups (the code variant) replay experience from the first trial
+        assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
     # m + 1 visits: the learned model (always -1 to s2) takes over
     assert learner.visits[s, a] == m + 1
     assert core.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
@@ -376,4 +414,6 @@ def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
     assert np.allclose(learner.q[opt], ctx_c.r_max)
     assert np.all(learner.q[~opt] == 0.0)
     t, p = learner.tables, learner.params
-    assert core.sample_outcome(t, p, ctx_c.s0, 0, np.random.default_rng(0))[2]
+    s, a = (int(x[0]) for x in np.nonzero(opt))
+    high = np.full(ctx_c.n_states, 100.0)
+    assert core.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation

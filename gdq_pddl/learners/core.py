@@ -27,9 +27,11 @@ with ``T = counts / visits`` and ``P_stuck = stuck / visits``. A step-limit time
 not part of this Markov model (its transition is counted, its -R_max is not). No backup
 bootstraps through a terminal transition: reaching G or getting stuck ends the sum.
 
-A pair is *known* when ``visits > m``. GDQ's unknown pairs use the optimistic model of
-OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max`` on OptInit's plan pairs (``opt_r``),
-0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
+A pair is *known* when ``visits > m``. In expected backups (the paper's GDQ) unknown
+pairs use the optimistic model of OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max``
+on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
+Sample-based backups (the authors' code) only replay recorded outcomes of pairs tried
+at least once and leave untried pairs alone.
 
 ``v[s]`` is kept equal to ``max`` of ``q[s, a]`` over the allowed actions of ``s`` by
 :func:`set_q`, the only writer of single Q entries.
@@ -242,29 +244,35 @@ def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float
 @numba.njit(cache=True)
 def sample_outcome(t: Tables, p: Params, s: int, a: int,
                    rng: np.random.Generator) -> tuple[float, int, bool]:
-    """One ``(reward, next state, terminal)`` drawn from the model for ``(s, a)``."""
-    n = t.visits[s, a]
-    if n > p.m:
-        k = rng.integers(0, n)
-        if k < t.stuck[s, a]:
-            return -p.r_max, s, True
-        k -= t.stuck[s, a]
-        for s2 in range(t.counts.shape[2]):
-            k -= t.counts[s, a, s2]
-            if k < 0:
-                if t.goal[s2]:
-                    return p.r_max, s2, True
-                return -mean_cost(t, s, a), s2, False
-    r = p.r_max if t.opt_r[s, a] else 0.0
-    return r, p.s0, p.opt_continue == 0.0
+    """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
+
+    The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
+    (stuck, goal, or an ordinary step at the pair's mean cost), never the optimistic model.
+    """
+    k = rng.integers(0, t.visits[s, a])
+    if k < t.stuck[s, a]:
+        return -p.r_max, s, True
+    k -= t.stuck[s, a]
+    for s2 in range(t.counts.shape[2]):
+        k -= t.counts[s, a, s2]
+        if k < 0:
+            if t.goal[s2]:
+                return p.r_max, s2, True
+            return -mean_cost(t, s, a), s2, False
+    return -mean_cost(t, s, a), s, False  # unreachable: counts + stuck == visits
 
 
 @numba.njit(cache=True)
 def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator) -> None:
-    """One simulated update of ``(s, a)``: expected, or TD on a sampled outcome."""
+    """One simulated update of ``(s, a)``.
+
+    ``BACKUP_EXPECTED``: assign the expected backup under the model (learned for known
+    pairs, optimistic otherwise). ``BACKUP_SAMPLE`` (the authors' code): a TD update on an
+    outcome replayed from experience; a pair never tried is left alone.
+    """
     if p.backup == BACKUP_EXPECTED:
         set_q(t, s, a, expected_value(t, p, s, a, t.v))
-    else:
+    elif t.visits[s, a] > 0:
         r, s2, terminal = sample_outcome(t, p, s, a, rng)
         target = r if terminal else r + p.gamma * t.v[s2]
         td_update(t, s, a, target, p.alpha)
@@ -373,3 +381,24 @@ def seed_plan_pairs(t: Tables, value: float) -> None:
             if t.opt_r[s, a]:
                 t.q[s, a] = value
     recompute_all_v(t)
+
+
+@numba.njit(cache=True)
+def iterate_known(t: Tables, p: Params, tol: float = 1e-9, max_sweeps: int = 10_000) -> None:
+    """Value iteration over the known pairs only: sweep ``Q(s,a) <- expected backup`` with
+    the learned model until no entry moves by more than ``tol``. The authors' code runs
+    this after seeding the plan pairs, so on a new task what was learned about the world
+    is carried into Q; on a first task nothing is known and it does nothing."""
+    n_actions = t.q.shape[1]
+    nk = t.n_known[0]
+    for _ in range(max_sweeps):
+        delta = 0.0
+        for j in range(nk):
+            s, a = t.known[j] // n_actions, t.known[j] % n_actions
+            if t.goal[s]:
+                continue
+            x = expected_value(t, p, s, a, t.v)
+            delta = max(delta, abs(x - t.q[s, a]))
+            set_q(t, s, a, x)
+        if delta < tol:
+            break
