@@ -23,8 +23,7 @@ Side by side (paper | code):
   in H(s0), else 0 | none: the optimism is only in the initial Q.
 - Q after OptInit: policy iteration on that model (known pairs: learned model) until pi
   is stable, and Q <- its Q for every (s, a) | Q <- 0, then Q(s,a) <- R_max on the plan
-  pairs, then value iteration over the known pairs with the learned model (which does
-  nothing on a first task; after a task switch it carries the learned world into Q).
+  pairs; no policy iteration.
 - Real step: epsilon-greedy on Q, TD update with alpha, count in the model | the same.
 - N backups per step, each on a random transition of a random plan from the current
   state: expected backup, assigned, ``Q(s,a) <- sum_s' T(s,a,s') (R or gamma V(s'))`` |
@@ -292,7 +291,6 @@ class GDQ(TabularLearner):
             self.policy = core.policy_iteration(self.tables, self.params)
         else:
             core.seed_plan_pairs(self.tables, self.params.r_max)
-            core.iterate_known(self.tables, self.params)
             self.policy = core.greedy(self.tables)
 
     @property

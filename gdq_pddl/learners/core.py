@@ -381,24 +381,3 @@ def seed_plan_pairs(t: Tables, value: float) -> None:
             if t.opt_r[s, a]:
                 t.q[s, a] = value
     recompute_all_v(t)
-
-
-@numba.njit(cache=True)
-def iterate_known(t: Tables, p: Params, tol: float = 1e-9, max_sweeps: int = 10_000) -> None:
-    """Value iteration over the known pairs only: sweep ``Q(s,a) <- expected backup`` with
-    the learned model until no entry moves by more than ``tol``. The authors' code runs
-    this after seeding the plan pairs, so on a new task what was learned about the world
-    is carried into Q; on a first task nothing is known and it does nothing."""
-    n_actions = t.q.shape[1]
-    nk = t.n_known[0]
-    for _ in range(max_sweeps):
-        delta = 0.0
-        for j in range(nk):
-            s, a = t.known[j] // n_actions, t.known[j] % n_actions
-            if t.goal[s]:
-                continue
-            x = expected_value(t, p, s, a, t.v)
-            delta = max(delta, abs(x - t.q[s, a]))
-            set_q(t, s, a, x)
-        if delta < tol:
-            break
