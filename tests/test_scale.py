@@ -12,6 +12,7 @@ from gdq_pddl.cli import main
 from gdq_pddl.envs.compact import CompactEnv, compile_compact
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.envs.solve_compact import next_states, solve_compact_task
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.compact_runner import run_compact
 from gdq_pddl.learners.context import _domain_text
@@ -41,13 +42,53 @@ def test_buildings_have_mixed_doors_and_sensible_limits(n):
     world = building_world(n, 0)
     assert len(world.positions) == n
     labels = {d.label for d in world.doors}
-    assert {"easy", "difficult", "most difficult"} <= labels
+    assert {"easy", "most difficult"} <= labels  # the task's forced door among easy ones
+    if n >= 300:  # doors that jam are drawn 1 time in 10
+        assert "difficult" in labels
     assert len({(d.success, d.stuck) for d in world.doors}) >= 3
     assert world.r_max == world.step_limit
     b = generate(n, 0)
     graph = _graph(b)
     for s, g in b.tasks.values():
         assert 2 * _distances(graph, s)[g] <= world.step_limit
+    ends = {p for t in world.tasks.values() for p in (t.start, t.goal)}
+    rooms = [set(room) for room in b.rooms if set(room) & ends]
+    for d in world.doors:  # the start and goal rooms' doors never jam by chance
+        if any(set(d.sides) & room for room in rooms) and d.label != "most difficult":
+            assert d.stuck == 0.0
+
+
+def _likeliest_route(world, task):
+    """Positions the reference policy visits when every action has its likeliest
+    outcome (the robot never slips), from the start to the goal, and its actions."""
+    model = compile_compact(world)
+    solution = solve_compact_task(world, task, model)
+    closed, _ = next_states(model)
+    t = world.tasks[task]
+    s = int(model.state_of[world.index[t.start], 0])
+    route = [t.start]
+    for step in range(world.step_limit):
+        i = s * model.n_actions + int(solution.policy[step, s])
+        lo, hi = model.ptr[i], model.ptr[i + 1]
+        k = lo + int(np.argmax(model.prob[lo:hi]))
+        s = int(closed[k])
+        pos = world.positions[int(model.pos_of_state[s])]
+        if pos != route[-1]:
+            route.append(pos)
+        if pos == t.goal:
+            return route, step + 1
+    raise AssertionError("the likeliest route does not reach the goal")
+
+
+def test_the_forced_door_makes_the_best_route_longer_than_a_shortest_plan():
+    world = building_world(100, 0)
+    hard = [d for d in world.doors if d.label == "most difficult"]
+    assert len(hard) == 1
+    for task in "AB":  # B is A reversed: the same door is on its shortest route
+        route, actions = _likeliest_route(world, task)
+        assert not set(hard[0].sides) <= set(route)  # the best route avoids the door
+        ctx = office_task_context(world, task)
+        assert actions > ctx.plans.length[ctx.s0]  # and is no shortest plan
 
 
 def _bfs_plans(task, s0: int, goal: tuple[int, int]) -> set[tuple[str, ...]]:
