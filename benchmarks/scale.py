@@ -14,16 +14,28 @@ L         shortest plan length; states: nodes of the pruned state graph; generat
 
 Times are medians of --repeats runs in milliseconds (imports and numba compilation
 excluded: one untimed warm-up query first).
+
+Then the learners at each size (skip with ``--no-learners``): env steps per second of
+each method of ``gdq-pddl scale`` (learner and compact env, the compiled loop, one core)
+over ``--episodes`` episodes of task A from a fresh learner, median of ``--repeats``
+runs after an untimed warm-up run, and the seconds to build the task context (plan
+tables for every learner state).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import time
 
+import numpy as np
 from _timing import median_ms  # benchmarks/_timing.py (this folder is on sys.path)
 
 from gdq_pddl.buildings import building_world
+from gdq_pddl.envs.compact import CompactEnv
+from gdq_pddl.experiments.scale import METHODS
+from gdq_pddl.learners import make_learner, office_task_context
+from gdq_pddl.learners.compact_runner import run_compact
 from gdq_pddl.learners.context import _domain_text
 from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
@@ -63,6 +75,28 @@ def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dic
     return out
 
 
+def learner_speed(n: int, seed: int, episodes: int, repeats: int) -> dict[str, float]:
+    """Env steps per second of each method on task A of the ``n``-position building."""
+    world = building_world(n, seed)
+    t0 = time.perf_counter()
+    ctx = office_task_context(world, "A", darling_tolerance=0.0)
+    out = {"context_s": time.perf_counter() - t0}
+    env = CompactEnv(task="A", world=world)
+    gamma = 1.0 - 1.0 / world.step_limit
+    for name, (method, config) in METHODS.items():
+        rates = []
+        for r in range(repeats + 1):
+            learner = make_learner(method, ctx, gamma=gamma, **config)
+            env.reset(seed=r)
+            t1 = time.perf_counter()
+            records = run_compact(learner, env, episodes if r else 2, np.random.default_rng(r))
+            if r:  # run 0 compiles
+                rates.append(records.steps.sum() / (time.perf_counter() - t1))
+            del learner
+        out[name] = float(np.median(rates))
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
@@ -70,6 +104,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--tolerance-up-to", type=int, default=300,
                         help="measure tolerance 0.3 only up to this size (1000: ~100 s a query)")
+    parser.add_argument("--episodes", type=int, default=200,
+                        help="episodes per learner speed run")
+    parser.add_argument("--no-learners", action="store_true", help="planning only")
     args = parser.parse_args()
     print(f"{'positions':>9} {'doors':>5} {'task':>4} {'cold ms':>8} {'warm ms':>8} "
           f"{'L':>4} {'states':>6} {'generated':>9} {'plans':>5} {'tol0.3 ms':>9} "
@@ -80,6 +117,16 @@ def main() -> None:
                   f"{r['warm_ms']:>8.1f} {r['L']:>4} {r['states']:>6} {r['generated']:>9} "
                   f"{r['plans']:>5} {r['tol_ms']:>9.1f} {r['tol_plans']:>5} "
                   f"{r['tol_states']:>6}")
+
+    if args.no_learners:
+        return
+    print(f"\nlearners, env steps/s (median of {args.repeats} x {args.episodes} episodes, "
+          "task A, one core)")
+    print(f"{'positions':>9} {'context s':>9} " + " ".join(f"{m:>11}" for m in METHODS))
+    for n in args.sizes:
+        r = learner_speed(n, args.seed, args.episodes, args.repeats)
+        print(f"{n:>9} {r['context_s']:>9.1f} " + " ".join(f"{r[m]:>11,.0f}" for m in METHODS),
+              flush=True)
 
 
 if __name__ == "__main__":
