@@ -147,9 +147,8 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     core.model_backup(t, p, s, a, rng)
     assert t.q[s, a] == 50.0  # never tried: left alone
     s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
-    t.visits[s, a] = 1  # one recorded ordinary step to s2 at cost 2
-    t.counts[s, a, s2] = 1
-    t.cost_sum[s, a], t.cost_n[s, a] = 2.0, 1
+    core.record(t, p, s, a, -2.0, s2, False, False)  # one ordinary step to s2 at cost 2
+    assert learner.successors(s, a) == {s2: 1} and t.visits[s, a] == 1
     t.q[s2, :] = 10.0
     core.recompute_v(t, s2)
     core.model_backup(t, p, s, a, rng)
@@ -201,9 +200,111 @@ def test_model_is_goal_independent_counts(ctx_c):
     learner.observe(3, 7, -20.0, 4, False, True, rng)  # timeout: transition counted
     learner.observe(3, 7, -2.0, 4, False, False, rng)  # ordinary step, cost 2
     t = learner.tables
-    assert t.counts[3, 7, goal] == 1 and t.counts[3, 7, 4] == 2 and t.stuck[3, 7] == 1
+    assert learner.successors(3, 7) == {4: 2, goal: 1} and t.stuck[3, 7] == 1
+    assert learner.counts[3, 7, goal] == 1 and learner.counts[3, 7, 4] == 2
+    assert learner.counts.sum() == 3
     assert t.visits[3, 7] == 4
     assert t.cost_n[3, 7] == 1 and t.cost_sum[3, 7] == 2.0
+
+
+def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
+    learner = DynaQ(ctx_c, DynaQConfig(n_backups=0))
+    t, rng = learner.tables, np.random.default_rng(0)
+    assert learner.max_successors == ctx_c.max_successors >= 4
+    order = [9, 2, 30, 2, 0, 9, 2]  # four successors, recorded out of order
+    for s2 in order:
+        learner.observe(1, 5, -1.0, s2, False, False, rng)
+    expected = {s2: order.count(s2) for s2 in sorted(set(order))}
+    n = len(expected)
+    slots = t.slots[1, 5]
+    assert list(slots[:n] >> core.SLOT_SHIFT) == sorted(expected)  # sorted, first slots
+    assert list(slots[:n] & core.COUNT_MASK) == [expected[s2] for s2 in sorted(expected)]
+    assert np.all(slots[n:] == 0)
+    assert learner.successors(1, 5) == expected
+    dense = np.zeros((ctx_c.n_states, ctx_c.n_actions, ctx_c.n_states), dtype=np.int64)
+    dense[1, 5, list(expected)] = list(expected.values())
+    assert np.array_equal(learner.counts, dense)
+    # the expected backup sums the successors in increasing order, as a dense loop does
+    v = np.linspace(-3.0, 7.0, ctx_c.n_states)
+    total = 0.0
+    for s2 in range(ctx_c.n_states):
+        if dense[1, 5, s2]:
+            total += dense[1, 5, s2] * (learner.params.gamma * v[s2] - 1.0)
+    learner.params = learner.params._replace(m=0)
+    assert core.expected_value(t, learner.params, 1, 5, v) == total / len(order)
+
+
+def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
+    learner = DynaQ(replace(ctx_c, max_successors=2), DynaQConfig(n_backups=0))
+    rng = np.random.default_rng(0)
+    for s2 in (7, 3, 7):
+        learner.observe(2, 4, -1.0, s2, False, False, rng)
+    with pytest.raises(ValueError, match="more distinct successors"):
+        learner.observe(2, 4, -1.0, 5, False, False, rng)
+    assert learner.successors(2, 4) == {3: 1, 7: 2}  # untouched by the failed record
+    assert learner.visits[2, 4] == 3
+    learner.reserve_successors(3)  # more slots keep what was recorded
+    assert learner.max_successors == 3 and learner.successors(2, 4) == {3: 1, 7: 2}
+    learner.observe(2, 4, -1.0, 5, False, False, rng)
+    assert learner.successors(2, 4) == {3: 1, 5: 1, 7: 2}
+
+
+def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
+    from gdq_pddl.learners.runner import _episodes
+
+    env = OfficeEnv(task="C")
+    tight = replace(ctx_c, max_successors=1)
+    learner = make_learner("dynaq", tight)
+    with pytest.raises(ValueError, match="more distinct successors"):
+        run(Recording(learner), env, 50, 0, fast=False)  # no TabularLearner: no reserve
+    learner = make_learner("dynaq", tight)
+    office = env.unwrapped
+    env.reset(seed=0)
+    n = 50
+    records = (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
+               np.zeros((n, 7), dtype=np.int64))
+    assert not _episodes(office.model, int(office.start_state), int(office.goal_pos),
+                         np.zeros(1, dtype=np.uint8), learner.tables, learner.params,
+                         office.np_random, np.random.default_rng(1), *records)
+    assert learner.visits.sum() == learner.counts.sum() + learner.tables.stuck.sum()
+
+
+def test_model_free_learners_allocate_no_transition_slots(ctx_c):
+    for learner in (QLearning(ctx_c), Darling(ctx_c)):
+        assert learner.max_successors == 0 and learner.tables.slots.nbytes == 0
+        learner.reserve_successors(10)
+        assert learner.max_successors == 0
+        run(learner, OfficeEnv(task="C"), 5, 0)
+        assert not learner.counts.any()
+
+
+def test_context_capacity_is_the_most_successors_of_any_pair(ctx_c):
+    from gdq_pddl.envs.compact import compile_compact
+    from gdq_pddl.envs.model import compile_model
+    from gdq_pddl.learners.context import successor_capacity
+
+    exact = successor_capacity(compile_model(WORLD))  # union over the full states
+    assert exact == successor_capacity(compile_compact(WORLD)) == ctx_c.max_successors
+    assert exact > int(np.diff(compile_compact(WORLD).ptr).max())  # > outcomes per pair
+    learner = make_learner("dynaq", ctx_c)
+    run(learner, OfficeEnv(task="C"), 300, 0)
+    n_successors = (learner.tables.slots != 0).sum(axis=2)
+    assert n_successors.max() <= exact
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_runners_give_the_learner_the_slots_its_env_needs(ctx_c, fast):
+    told = office_task_context(DET, "C")  # no slips: fewer successors than the office
+    assert told.max_successors < ctx_c.max_successors
+    small = make_learner("gdq", told, variant="code")
+    assert small.max_successors == told.max_successors
+    reference = make_learner("gdq", replace(told, max_successors=None), variant="code")
+    env = OfficeEnv(task="C")
+    a = run(small, env, 60, 3, fast=fast)
+    b = run(reference, env, 60, 3, fast=fast)
+    assert small.max_successors == ctx_c.max_successors
+    assert np.array_equal(a.returns, b.returns) and np.array_equal(small.q, reference.q)
+    assert np.array_equal(small.counts, reference.counts)
 
 
 # --- terminal transitions -----------------------------------------------------------------
@@ -327,7 +428,8 @@ def test_fast_path_equals_python_path(ctx_c, method, kw):
     for f in ("returns", "steps", "success", "area_visits"):
         assert np.array_equal(getattr(rf, f), getattr(rs, f)), f
     assert np.array_equal(fast.q, slow.q)
-    assert np.array_equal(fast.tables.counts, slow.tables.counts)
+    assert np.array_equal(fast.tables.slots, slow.tables.slots)  # the same slots, too
+    assert np.array_equal(fast.counts, slow.counts)
     assert rf.area_visits.sum() == rf.steps.sum()  # every office position has an area
     assert rf.area_visits.shape == (40, 7)
 

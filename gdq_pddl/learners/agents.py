@@ -86,6 +86,18 @@ from gdq_pddl.learners.config import (
 )
 from gdq_pddl.learners.context import TaskContext
 
+MODEL_BASED = (core.KIND_DYNAQ, core.KIND_GDQ)
+"""The learner kinds that record transitions (the others get no successor slots)."""
+
+MAX_DENSE_COUNTS = 50_000_000
+"""The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
+
+
+def _capacity(context: TaskContext) -> int:
+    """Successor slots per pair for ``context``: its ``max_successors``, or every state."""
+    k = context.max_successors
+    return context.n_states if k is None else max(1, int(k))
+
 
 @runtime_checkable
 class Learner(Protocol):
@@ -112,7 +124,8 @@ class TabularLearner:
     def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
         self.config = config
         n_s, n_a = context.n_states, context.n_actions
-        self._model = core.new_model(n_s, n_a)
+        self._model = core.new_model(n_s, n_a, _capacity(context),
+                                     transitions=self.kind in MODEL_BASED)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
         self.context = context
         self.tables, self.params = self._build(context)
@@ -174,6 +187,7 @@ class TabularLearner:
     def start_task(self, context: TaskContext) -> None:
         """Switch to a new task, keeping what the learner has learned (see module doc)."""
         self.context = context
+        self._model = self._slots(_capacity(context))
         self.tables, self.params = self._build(context)
         core.recompute_all_v(self.tables)
         self._init_task()
@@ -183,8 +197,9 @@ class TabularLearner:
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        core.observe(self.tables, self.params, int(s), int(a), float(r), int(s2),
-                     bool(terminated), bool(truncated), rng)
+        if not core.observe(self.tables, self.params, int(s), int(a), float(r), int(s2),
+                            bool(terminated), bool(truncated), rng):
+            raise ValueError(core.OVERFLOW)
 
     def greedy_policy(self) -> np.ndarray:
         """Per state, the lowest-index allowed action of maximal Q."""
@@ -202,8 +217,44 @@ class TabularLearner:
 
     @property
     def counts(self) -> np.ndarray:
-        """Model transition counts C[s, a, s'] (model-based learners only)."""
-        return self.tables.counts
+        """Model transition counts C[s, a, s'] as a new dense int64 array (all zero for the
+        model-free learners); refused past :data:`MAX_DENSE_COUNTS` entries (use
+        :meth:`successors`)."""
+        n_s, n_a = self.q.shape
+        if n_s * n_a * n_s > MAX_DENSE_COUNTS:
+            raise ValueError(f"a dense C[s, a, s'] of {n_s} x {n_a} x {n_s} entries is too "
+                             f"large; use successors(s, a)")
+        return core.dense_counts(self.tables.slots, n_s)
+
+    def successors(self, s: int, a: int) -> dict[int, int]:
+        """``{s': count}`` of the recorded transitions of ``(s, a)``, in increasing ``s'``."""
+        slots = self.tables.slots[s, a]
+        slots = slots[slots != 0]
+        return dict(zip((slots >> core.SLOT_SHIFT).tolist(),
+                        (slots & core.COUNT_MASK).tolist(), strict=True))
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes of the learner's arrays (allocated; the pages of pairs never tried are
+        never written, so the memory actually used can be much less)."""
+        return sum(x.nbytes for x in self.tables if isinstance(x, np.ndarray))
+
+    @property
+    def max_successors(self) -> int:
+        """Successor slots per pair of the model (0 for the model-free learners)."""
+        return int(self.tables.slots.shape[2])
+
+    def reserve_successors(self, k: int) -> None:
+        """Make room for ``k`` distinct successors per pair (model-based learners; the
+        recorded transitions are kept). The runners call it with what their env needs."""
+        if self.kind in MODEL_BASED and k > self.max_successors:
+            self._model = self._slots(k)
+            self.tables = self.tables._replace(slots=self._model["slots"])
+
+    def _slots(self, k: int) -> dict[str, np.ndarray]:
+        if self.kind not in MODEL_BASED:
+            return self._model
+        return core.with_successor_slots(self._model, k)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"

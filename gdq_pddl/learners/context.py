@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +36,11 @@ class TaskContext:
     """The tolerance ``darling_plans`` was built with."""
     name: str = ""
     """Human label, e.g. ``"C"``."""
+    max_successors: int | None = None
+    """The most distinct next learner states any (state, action) pair can have, from the
+    world's true model (:func:`successor_capacity`): how many successor slots per pair the
+    model-based learners allocate. A capacity, not knowledge the learners use; None:
+    every learner state (always enough, and as large as a dense model)."""
 
     @property
     def n_states(self) -> int:
@@ -66,6 +72,59 @@ def _domain_text() -> str:
         return (Path(gdq_pddl.__file__).resolve().parents[1] / "domains" /
                 "office.pddl").read_text(encoding="utf-8")
 
+
+def successor_capacity(model) -> int:
+    """The most distinct next learner states of one (learner state, action) pair in a
+    true model, at least 1: a :class:`~gdq_pddl.envs.model.ModelArrays` (exact: the
+    union over the full states a learner state stands for) or a
+    :class:`~gdq_pddl.envs.compact.CompactModel` (an upper bound: an outcome whose next
+    position has a door other than the one acted at may show it open or closed; a pair
+    with no outcome stays put). Cached per model."""
+    from gdq_pddl.envs.compact import CompactModel
+
+    hit = _CAPACITY.get(id(model.ptr))
+    if hit is not None and hit[0]() is model.ptr:
+        return hit[1]
+    n_pairs = len(model.ptr) - 1
+    pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
+    if isinstance(model, CompactModel):
+        n_states = len(model.pos_of_state)
+        pos = model.pos_of_state[pair // model.n_actions]
+        door = model.door_of_pos[pos]
+        was_open = (door >= 0) & (pair // model.n_actions == model.state_of[pos, 1])
+        nxt = model.next_pos
+        known = (model.door_of_pos[nxt] < 0) | (model.door_of_pos[nxt] == door)
+        first = model.state_of[nxt, (known & (was_open | model.opens)).astype(np.int64)]
+        second = np.where(known, first, model.state_of[nxt, 1])
+        keys = np.concatenate([pair * n_states + first, pair * n_states + second])
+    else:
+        n_states = int(model.obs_of.max()) + 1
+        learner_pair = model.obs_of[pair // model.n_actions] * model.n_actions + \
+            pair % model.n_actions
+        keys = learner_pair * n_states + model.obs_of[model.next]
+    per_pair = np.bincount(np.unique(keys) // n_states) if len(keys) else np.zeros(1)
+    capacity = max(1, int(per_pair.max()))
+    _CAPACITY[id(model.ptr)] = (weakref.ref(model.ptr), capacity)
+    return capacity
+
+
+_CAPACITY: dict[int, tuple[weakref.ref, int]] = {}
+
+
+def office_successor_capacity(world: World) -> int:
+    """:func:`successor_capacity` of the world's compact model (learner-level, so any
+    size of world), cached per world."""
+    hit = _WORLD_CAPACITY.get(id(world))
+    if hit is not None and hit[0]() is world:
+        return hit[1]
+    from gdq_pddl.envs.compact import compile_compact
+
+    capacity = successor_capacity(compile_compact(world))
+    _WORLD_CAPACITY[id(world)] = (weakref.ref(world), capacity)
+    return capacity
+
+
+_WORLD_CAPACITY: dict[int, tuple[weakref.ref, int]] = {}
 
 _TABLES: dict[tuple, PlanTable] = {}
 
@@ -108,14 +167,16 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
         s0=spaces.state(task.start), goal=goal,
         plans=office_plan_table(world, task.goal, planner, 0.0), r_max=float(world.r_max),
         darling_plans=office_plan_table(world, task.goal, planner, darling_tolerance),
-        darling_tolerance=float(darling_tolerance), name=task.name)
+        darling_tolerance=float(darling_tolerance), name=task.name,
+        max_successors=office_successor_capacity(world))
 
 
 _PDDL_TABLES: dict[tuple, tuple[object, PlanTable]] = {}
 
-MAX_MODEL_ENTRIES = 2_000_000_000
-"""The learners' model is dense (states x actions x states counts); past this many
-entries a PDDL task is refused with a clear message instead of exhausting memory."""
+MAX_TABLE_BYTES = 16_000_000_000
+"""A learner keeps arrays per (state, action) pair, with ``max_successors`` successor
+slots each (:func:`gdq_pddl.learners.core.table_bytes`); a PDDL task whose tables would
+exceed this is refused with a clear message instead of exhausting memory."""
 
 
 def pddl_plan_table(instance, planner: str = "graph", tolerance: float = 0.0) -> PlanTable:
@@ -148,14 +209,18 @@ def pddl_task_context(instance, planner: str = "graph",
     """The :class:`TaskContext` of a PDDL problem: learner states are its reachable states
     (0 is the initial one), actions its ground actions, goal where the problem's goal holds."""
     from gdq_pddl.errors import PlanningError
+    from gdq_pddl.learners.core import table_bytes
 
     n_s, n_a = instance.n_states, instance.n_actions
-    if n_s * n_s * n_a > MAX_MODEL_ENTRIES:
+    k = successor_capacity(instance.model)
+    if table_bytes(n_s, n_a, k) > MAX_TABLE_BYTES:
         raise PlanningError(f"{instance.problem.problem.source}: {n_s} reachable states x "
-                            f"{n_a} ground actions: the learners' dense model would need "
-                            f"{n_s * n_s * n_a * 8 / 1e9:.0f} GB; make the problem smaller")
+                            f"{n_a} ground actions (up to {k} successors each): the "
+                            f"learners' tables would need "
+                            f"{table_bytes(n_s, n_a, k) / 1e9:.0f} GB; make the problem "
+                            f"smaller")
     return TaskContext(
         s0=0, goal=np.asarray(instance.graph.is_goal, dtype=np.bool_),
         plans=pddl_plan_table(instance, planner, 0.0), r_max=float(instance.dynamics.r_max),
         darling_plans=pddl_plan_table(instance, planner, darling_tolerance),
-        darling_tolerance=float(darling_tolerance), name=instance.name)
+        darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k)

@@ -14,18 +14,37 @@ call these same functions, so each rule has a single definition.
 
 The model (goal-independent, so it survives a task switch)
 -------------------------------------------------------------
-``counts[s, a, s']`` transitions to learner state ``s'`` (goal, timeout and ordinary
-steps alike); ``stuck[s, a]`` trials that failed by getting stuck; ``visits[s, a]`` all
-trials; ``cost_sum / cost_n`` the mean step cost of ``(s, a)`` over steps with no goal,
-stuck or timeout event (pairs never seen in such a step use the mean over all pairs, or
-0 before any). The expected backup for the current goal states G is::
+Per pair ``(s, a)``: ``visits[s, a]`` all trials; ``stuck[s, a]`` trials that failed by
+getting stuck; ``cost_sum / cost_n`` the mean step cost over steps with no goal, stuck or
+timeout event (pairs never seen in such a step use the mean over all pairs, or 0 before
+any); and the transitions to learner states ``s'`` (goal, timeout and ordinary steps
+alike), sparse:
+
+- ``slots[s, a, j]``, ``j < K``: ``s' << 32 | count`` (int64, one load per slot;
+  :func:`slot_successor`, :func:`slot_count`); 0 is an empty slot. The occupied slots
+  come first, sorted by successor (:func:`record` inserts in order), so every loop over
+  them meets the successors in increasing ``s'`` exactly as a loop over a dense
+  ``counts[s, a, :]`` did: the same sums in the same order, the same sampled outcomes.
+- ``K`` is a capacity, the most distinct successors any pair can have
+  (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`, from the world's true
+  model; the runners raise it to what the env they run in needs). Memory is
+  ``S x A x K`` slots instead of ``S x A x S`` counts, and ``np.zeros`` leaves the pages
+  of untried pairs unwritten. The model-free learners get ``K = 0``: their
+  :func:`observe` returns before the model.
+- A transition that finds no free slot is not recorded at all: :func:`record` and
+  :func:`observe` return False and their callers (the learners' ``observe``, the
+  compiled episode loop) raise ValueError(:data:`OVERFLOW`). Not a raise in here: see
+  :func:`add_successor`.
+
+The expected backup for the current goal states G is::
 
     Q(s,a) = sum_s' T(s,a,s') * (R_max if s' in G else -cost(s,a) + gamma * V(s'))
              + P_stuck(s,a) * (-R_max)
 
-with ``T = counts / visits`` and ``P_stuck = stuck / visits``. A step-limit timeout is
-not part of this Markov model (its transition is counted, its -R_max is not). No backup
-bootstraps through a terminal transition: reaching G or getting stuck ends the sum.
+with ``T(s,a,s') = count / visits`` over the slots of ``(s, a)`` and
+``P_stuck = stuck / visits``. A step-limit timeout is not part of this Markov model (its
+transition is counted, its -R_max is not). No backup bootstraps through a terminal
+transition: reaching G or getting stuck ends the sum.
 
 A pair is *known* when ``visits > m``. In expected backups (the paper's GDQ) unknown
 pairs use the optimistic model of OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max``
@@ -77,7 +96,7 @@ class Tables(NamedTuple):
     n_allowed: np.ndarray  # int64[S]
     goal: np.ndarray  # bool[S], goal learner states of the current task
     opt_r: np.ndarray  # bool[S, A], OptInit's plan pairs (R = R_max in the optimistic model)
-    counts: np.ndarray  # int64[S, A, S]
+    slots: np.ndarray  # int64[S, A, K]: s' << 32 | count, sorted, 0 = empty (module doc)
     stuck: np.ndarray  # int64[S, A]
     visits: np.ndarray  # int64[S, A]
     cost_sum: np.ndarray  # float64[S, A]
@@ -91,10 +110,16 @@ class Tables(NamedTuple):
     pair_action: np.ndarray
 
 
-def new_model(n_states: int, n_actions: int) -> dict[str, np.ndarray]:
-    """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks."""
+def new_model(n_states: int, n_actions: int, max_successors: int,
+              transitions: bool = True) -> dict[str, np.ndarray]:
+    """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks.
+
+    ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
+    ``transitions`` is False (the model-free learners never record one).
+    """
+    k = int(max_successors) if transitions else 0
     return {
-        "counts": np.zeros((n_states, n_actions, n_states), dtype=np.int64),
+        "slots": np.zeros((n_states, n_actions, k), dtype=np.int64),
         "stuck": np.zeros((n_states, n_actions), dtype=np.int64),
         "visits": np.zeros((n_states, n_actions), dtype=np.int64),
         "cost_sum": np.zeros((n_states, n_actions), dtype=np.float64),
@@ -103,6 +128,51 @@ def new_model(n_states: int, n_actions: int) -> dict[str, np.ndarray]:
         "known": np.zeros(n_states * n_actions, dtype=np.int64),
         "n_known": np.zeros(1, dtype=np.int64),
     }
+
+
+def with_successor_slots(model: dict[str, np.ndarray],
+                         max_successors: int) -> dict[str, np.ndarray]:
+    """``model`` with at least ``max_successors`` slots per pair (a copy of the slot
+    array when it had fewer, the recorded transitions kept; else ``model`` itself)."""
+    slots = model["slots"]
+    n_states, n_actions, k = slots.shape
+    if max_successors <= k:
+        return model
+    wider = np.zeros((n_states, n_actions, max_successors), dtype=np.int64)
+    wider[:, :, :k] = slots
+    return {**model, "slots": wider}
+
+
+SLOT_SHIFT = 32
+COUNT_MASK = (1 << SLOT_SHIFT) - 1
+"""A slot is ``successor << SLOT_SHIFT | count``: successors below 2**31, counts up to
+2**32 - 1 per (pair, successor)."""
+
+
+@numba.njit(cache=True)
+def slot_successor(slot: int) -> int:
+    return slot >> SLOT_SHIFT
+
+
+@numba.njit(cache=True)
+def slot_count(slot: int) -> int:
+    return slot & COUNT_MASK
+
+
+def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
+    """The transition counts as a dense int64 ``[S, A, n_states]`` array."""
+    out = np.zeros((*slots.shape[:2], n_states), dtype=np.int64)
+    s, a, j = np.nonzero(slots)
+    out[s, a, slots[s, a, j] >> SLOT_SHIFT] = slots[s, a, j] & COUNT_MASK
+    return out
+
+
+def table_bytes(n_states: int, n_actions: int, max_successors: int,
+                transitions: bool = True) -> int:
+    """Bytes of a learner's per-pair arrays: Q, the allowed and optimistic masks, the
+    model's visits, stuck, costs and known list, and (``transitions``) the slots."""
+    per_pair = 8 * 6 + 2 + (8 * max_successors if transitions else 0)  # int64 slots
+    return n_states * n_actions * per_pair
 
 
 # --- Q table and its maximum -------------------------------------------------------------
@@ -191,14 +261,51 @@ def greedy(t: Tables) -> np.ndarray:
 
 # --- the model -----------------------------------------------------------------------------
 
+OVERFLOW = ("a (state, action) pair has more distinct successors than the learner's model "
+            "has slots (TaskContext.max_successors); give it more with reserve_successors")
+"""Why :func:`record` or :func:`observe` returned False (raised by their callers)."""
+
+
+@numba.njit(cache=True)
+def add_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
+    """Count one transition ``(s, a) -> s2`` in the slots of ``(s, a)``, keeping them
+    sorted by successor. False (nothing changed) when ``s2`` is new and every slot is
+    taken.
+
+    Takes the slot array, not :class:`Tables`, and returns a status instead of raising
+    (both measured): reading tuple fields inside a loop cost a reference count update
+    per read (the loop 4 x slower), and a callee that can raise makes every caller that
+    holds the tuple update the counts of all its arrays on each call.
+    """
+    key = np.int64(s2) << SLOT_SHIFT
+    n_slots = slots.shape[2]
+    for j in range(n_slots):
+        here = slots[s, a, j]
+        if here == 0:  # the first empty slot: s2 is new and larger than all before
+            slots[s, a, j] = key + 1
+            return True
+        if slot_successor(here) == s2:
+            slots[s, a, j] = here + 1
+            return True
+        if here > key:  # a larger successor: insert s2 here, shifting the rest up
+            if slots[s, a, n_slots - 1] != 0:
+                return False
+            for jj in range(n_slots - 1, j, -1):
+                slots[s, a, jj] = slots[s, a, jj - 1]
+            slots[s, a, j] = key + 1
+            return True
+    return False
+
+
 @numba.njit(cache=True)
 def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-           truncated: bool) -> None:
-    """Count one real transition in the goal-independent model."""
+           truncated: bool) -> bool:
+    """Count one real transition in the goal-independent model; False, and nothing
+    recorded, when its successor finds no free slot (:data:`OVERFLOW`)."""
     if terminated and not t.goal[s2]:
         t.stuck[s, a] += 1
-    else:
-        t.counts[s, a, s2] += 1
+    elif not add_successor(t.slots, s, a, s2):
+        return False
     if not terminated and not truncated:
         t.cost_sum[s, a] -= r
         t.cost_n[s, a] += 1
@@ -208,6 +315,7 @@ def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: 
     if t.visits[s, a] == p.m + 1:
         t.known[t.n_known[0]] = s * t.q.shape[1] + a
         t.n_known[0] += 1
+    return True
 
 
 @numba.njit(cache=True)
@@ -229,13 +337,17 @@ def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float
     if n > p.m:
         c = mean_cost(t, s, a)
         total = t.stuck[s, a] * -p.r_max
-        for s2 in range(t.counts.shape[2]):
-            k = t.counts[s, a, s2]
-            if k > 0:
-                if t.goal[s2]:
-                    total += k * p.r_max
-                else:
-                    total += k * (p.gamma * v[s2] - c)
+        slots, goal = t.slots, t.goal  # locals: a tuple field read in a loop costs more
+        for j in range(slots.shape[2]):  # successors in increasing order
+            here = slots[s, a, j]
+            if here == 0:
+                break
+            k = slot_count(here)
+            s2 = slot_successor(here)
+            if goal[s2]:
+                total += k * p.r_max
+            else:
+                total += k * (p.gamma * v[s2] - c)
         return total / n
     r = p.r_max if t.opt_r[s, a] else 0.0
     return r + p.opt_continue * p.gamma * v[p.s0]
@@ -253,9 +365,11 @@ def sample_outcome(t: Tables, p: Params, s: int, a: int,
     if k < t.stuck[s, a]:
         return -p.r_max, s, True
     k -= t.stuck[s, a]
-    for s2 in range(t.counts.shape[2]):
-        k -= t.counts[s, a, s2]
+    slots = t.slots  # a local: a tuple field read in a loop costs more
+    for j in range(slots.shape[2]):  # successors in increasing order
+        k -= slot_count(slots[s, a, j])
         if k < 0:
+            s2 = slot_successor(slots[s, a, j])
             if t.goal[s2]:
                 return p.r_max, s2, True
             return -mean_cost(t, s, a), s2, False
@@ -308,20 +422,24 @@ def backup_plans(t: Tables, p: Params, s: int, rng: np.random.Generator) -> bool
 
 @numba.njit(cache=True)
 def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-            truncated: bool, rng: np.random.Generator) -> None:
+            truncated: bool, rng: np.random.Generator) -> bool:
     """Everything a learner does after one real step ``(s, a, r, s2)``.
 
     TD update (a terminated or truncated step's target is ``r`` alone); then, for the
-    model-based learners, count the transition and run the N model backups.
+    model-based learners, count the transition and run the N model backups. False when
+    the model had no slot for the transition (:func:`record`; no backups then): the
+    callers raise ValueError(:data:`OVERFLOW`).
     """
     target = r if (terminated or truncated) else r + p.gamma * t.v[s2]
     td_update(t, s, a, target, p.alpha)
     if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
-        return
-    record(t, p, s, a, r, s2, terminated, truncated)
+        return True
+    if not record(t, p, s, a, r, s2, terminated, truncated):
+        return False
     if p.kind == KIND_GDQ and backup_plans(t, p, s, rng):
-        return
+        return True
     backup_known(t, p, rng)
+    return True
 
 
 # --- OptInit -------------------------------------------------------------------------------

@@ -12,6 +12,12 @@ Two paths with identical results for the same seeds:
   :func:`gdq_pddl.envs.compact.compact_step` instead
   (:func:`gdq_pddl.learners.compact_runner.run_compact`).
 
+Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
+its model needs in this env (``learner.reserve_successors`` with
+:func:`~gdq_pddl.learners.context.successor_capacity` of the env's true model): the task
+context's capacity comes from the world the learner was told about, which may differ
+from the one it runs in (a knowledge experiment).
+
 Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
 ``env.reset(seed=...)`` before calling), learner randomness from ``rng``. Neither path
 draws anything else, so for the same generators both consume the same numbers.
@@ -32,6 +38,7 @@ from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
 from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.learners import core
 from gdq_pddl.learners.agents import Learner, TabularLearner
+from gdq_pddl.learners.context import successor_capacity
 
 
 @dataclass(frozen=True)
@@ -81,6 +88,8 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator) -> EpisodeRecords:
     n_areas = _n_areas(env)
+    if isinstance(learner, TabularLearner):
+        learner.reserve_successors(successor_capacity(env.unwrapped.model))
     returns = np.zeros(n_episodes)
     steps = np.zeros(n_episodes, dtype=np.int64)
     success = np.zeros(n_episodes, dtype=np.bool_)
@@ -120,12 +129,14 @@ def run_compiled(model: ModelArrays | CompactModel, start: int, goal_pos: int,
     :class:`ModelArrays` (``doors`` unused) or a position of a
     :class:`~gdq_pddl.envs.compact.CompactModel` (``doors``: its open-door array,
     cleared at the start of every episode); ``n_areas`` columns of area visits."""
+    learner.reserve_successors(successor_capacity(model))
     returns = np.zeros(n_episodes)
     steps = np.zeros(n_episodes, dtype=np.int64)
     success = np.zeros(n_episodes, dtype=np.bool_)
     areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
-    _episodes(model, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
-              returns, steps, success, areas)
+    if not _episodes(model, start, goal_pos, doors, learner.tables, learner.params, env_rng,
+                     rng, returns, steps, success, areas):
+        raise ValueError(core.OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
@@ -198,8 +209,9 @@ def _area_impl(m, state):
 @numba.njit(cache=True)
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p: core.Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
-              steps: np.ndarray, success: np.ndarray, areas: np.ndarray) -> None:
-    """The compiled episode loop (same calls, in the same order, as the Python loop)."""
+              steps: np.ndarray, success: np.ndarray, areas: np.ndarray) -> bool:
+    """The compiled episode loop (same calls, in the same order, as the Python loop).
+    False when the learner's model ran out of successor slots (the loop stops there)."""
     for ep in range(len(returns)):
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)
@@ -209,7 +221,8 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            core.observe(t, p, s, a, r, s2, terminated, truncated, rng)
+            if not core.observe(t, p, s, a, r, s2, terminated, truncated, rng):
+                return False
             step += 1
             returns[ep] += r
             area = _area(m, state)
@@ -220,3 +233,4 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p
                 break
             s = s2
         steps[ep] = step
+    return True
