@@ -81,6 +81,7 @@ def successor_capacity(model) -> int:
     position has a door other than the one acted at may show it open or closed; a pair
     with no outcome stays put). Cached per model."""
     from gdq_pddl.envs.compact import CompactModel
+    from gdq_pddl.envs.solve_compact import next_states
 
     hit = _CAPACITY.get(id(model.ptr))
     if hit is not None and hit[0]() is model.ptr:
@@ -89,13 +90,7 @@ def successor_capacity(model) -> int:
     pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
     if isinstance(model, CompactModel):
         n_states = len(model.pos_of_state)
-        pos = model.pos_of_state[pair // model.n_actions]
-        door = model.door_of_pos[pos]
-        was_open = (door >= 0) & (pair // model.n_actions == model.state_of[pos, 1])
-        nxt = model.next_pos
-        known = (model.door_of_pos[nxt] < 0) | (model.door_of_pos[nxt] == door)
-        first = model.state_of[nxt, (known & (was_open | model.opens)).astype(np.int64)]
-        second = np.where(known, first, model.state_of[nxt, 1])
+        first, second = next_states(model)  # the two door states an outcome may show
         keys = np.concatenate([pair * n_states + first, pair * n_states + second])
     else:
         n_states = int(model.obs_of.max()) + 1
