@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.planning.base import State
 from gdq_pddl.spaces import LearnerSpaces
@@ -30,6 +32,28 @@ class OfficeAbstraction:
         p = at[0]
         door = self.world.door_at.get(p)
         return self.spaces.state(p, door is not None and f"(open {door.name})" in state)
+
+    def mask_reader(self, task) -> Callable[[int], int]:
+        """:meth:`learner_state` of a grounded state bitmask of ``task`` (a
+        :class:`~gdq_pddl.pddl.grounding.GroundTask` of this world), without building its
+        atoms: for code that maps many planner states."""
+        at = {task.fact_index[f"(at {p})"]: p for p in self.world.positions
+              if f"(at {p})" in task.fact_index}
+        opened = {p: task.fact_index.get(f"(open {d.name})")
+                  for p, d in self.world.door_at.items()}
+        at_mask = sum(1 << bit for bit in at)
+        state = self.spaces.state
+
+        def read(mask: int) -> int:
+            m = mask & at_mask
+            if not m or m & (m - 1):
+                raise AbstractionError(f"planner state {sorted(task.atoms(mask))} has no "
+                                       "single known (at ?p) atom")
+            p = at[m.bit_length() - 1]
+            bit = opened.get(p)
+            return state(p, bit is not None and bool(mask >> bit & 1))
+
+        return read
 
     def learner_action(self, action: str) -> int:
         """``(approach p0 p2 d1)`` -> ``approach p2``, ``(opendoor p2 d1)`` -> ``opendoor p2``."""

@@ -131,11 +131,22 @@ def _knowledge_key(world: World) -> tuple:
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 
 
+TOLERANT_KINDS = ("all", "routes")
+"""How a tolerant plan table is built: ``"all"``, every loop-free plan within the
+tolerance (the planner's); ``"routes"``, every shortest plan plus the shortest plan
+through each door any plan within the tolerance can cross
+(:func:`gdq_pddl.abstraction.routes.route_plan_table`, for buildings)."""
+
+
 def office_plan_table(world: World, goal: str, planner: str = "graph",
-                      tolerance: float = 0.0) -> PlanTable:
+                      tolerance: float = 0.0, kind: str = "all") -> PlanTable:
     """Plans from every learner state to ``goal``, cached per (knowledge, goal, planner,
-    tolerance) for the life of the process."""
-    key = (_knowledge_key(world), goal, planner, float(tolerance))
+    tolerance, kind) for the life of the process; ``kind`` as in :data:`TOLERANT_KINDS`."""
+    if kind not in TOLERANT_KINDS:
+        raise ValueError(f"unknown plan table kind {kind!r} (known: {', '.join(TOLERANT_KINDS)})")
+    if tolerance == 0:
+        kind = "all"  # the shortest plans either way
+    key = (_knowledge_key(world), goal, planner, float(tolerance), kind)
     table = _TABLES.get(key)
     if table is None:
         from gdq_pddl.pddl.office import office_problem
@@ -145,15 +156,25 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
         problem = PlanningProblem.from_texts(
             _domain_text(), office_problem(world, Task("plan-table", start, goal)))
         abstraction = OfficeAbstraction(world)
-        table = build_plan_table(abstraction, problem, get_planner(planner),
-                                 abstraction.goal(goal), tolerance)
+        if kind == "routes":
+            from gdq_pddl.abstraction.routes import route_plan_table
+
+            spaces = abstraction.spaces
+            crossings = {spaces.action("gothrough", p) for p in world.door_at}
+            table = route_plan_table(abstraction, problem,
+                                     office_plan_table(world, goal, planner, 0.0),
+                                     tolerance, crossings.__contains__)
+        else:
+            table = build_plan_table(abstraction, problem, get_planner(planner),
+                                     abstraction.goal(goal), tolerance)
         _TABLES[key] = table
     return table
 
 
 def office_task_context(world: World, task: Task | str, planner: str = "graph",
-                        darling_tolerance: float = 0.3) -> TaskContext:
-    """The :class:`TaskContext` of ``task`` (a Task or a task name) in an office world."""
+                        darling_tolerance: float = 0.3, darling_kind: str = "all") -> TaskContext:
+    """The :class:`TaskContext` of ``task`` (a Task or a task name) in an office world;
+    ``darling_kind`` says how its tolerant table is built (:data:`TOLERANT_KINDS`)."""
     if isinstance(task, str):
         task = world.task(task)
     spaces = LearnerSpaces(world)
@@ -161,7 +182,8 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
     return TaskContext(
         s0=spaces.state(task.start), goal=goal,
         plans=office_plan_table(world, task.goal, planner, 0.0), r_max=float(world.r_max),
-        darling_plans=office_plan_table(world, task.goal, planner, darling_tolerance),
+        darling_plans=office_plan_table(world, task.goal, planner, darling_tolerance,
+                                        darling_kind),
         darling_tolerance=float(darling_tolerance), name=task.name,
         max_successors=office_successor_capacity(world))
 
