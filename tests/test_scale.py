@@ -183,7 +183,8 @@ def test_learning_smoke_on_100_positions(tmp_path):
     assert result.returns["DARLING"].shape == (1, 60)
     assert len(figure([result], 60, tmp_path)) == 2
     assert "100 positions" in report([result], 1, 60, 0, tmp_path).read_text()
-    r_ref = 10.0
-    assert converged_at(np.full(80, 9.0), r_ref) == 50
-    assert converged_at(np.r_[np.full(60, -5.0), np.full(100, 9.0)], r_ref) == 96  # 36 nines
-    assert converged_at(np.full(80, 1.0), r_ref) is None
+    threshold = 5.0
+    assert converged_at(np.full(80, 9.0), threshold) == 50
+    assert converged_at(np.r_[np.full(60, -5.0), np.full(100, 9.0)], threshold) == 96  # 36 nines
+    assert converged_at(np.full(80, 1.0), threshold) is None
+    assert result.r_fail < result.threshold < result.v_ref

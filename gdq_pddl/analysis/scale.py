@@ -6,13 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.experiments.scale import THRESHOLD, WINDOW, SizeResult, converged_at
+from gdq_pddl.experiments.scale import FRACTION, TOLERANCE, WINDOW, SizeResult
 
 
 def _median_conv(result: SizeResult, name: str) -> tuple[float | None, int]:
     """Median episodes to convergence over the converged runs, and how many converged."""
-    conv = [converged_at(r, result.r_ref) for r in result.returns[name]]
-    done = [c for c in conv if c is not None]
+    done = [c for c in result.converged(name) if c is not None]
     return (float(np.median(done)) if done else None), len(done)
 
 
@@ -63,18 +62,21 @@ def report(results: list[SizeResult], runs: int, episodes: int, seed: int, out: 
         f"{runs} run(s) x {episodes} episodes per method, compact model "
         "(`gdq_pddl.envs.compact`).", "",
         f"**Episodes to convergence**: the first episode from which the trailing {WINDOW}-"
-        f"episode moving average of the return stays >= {THRESHOLD} x R_ref to the end; "
-        "R_ref = r_max - (L - 1), the return of a shortest plan whose every action works. "
+        f"episode moving average of the return stays >= R_fail + {FRACTION} (V_ref - R_fail)"
+        " to the end; V_ref is the reference value (`gdq_pddl.envs.solve_compact`, a lower "
+        "bound on V*), R_fail = -r_max - (step_limit - 1) the return of a timeout. "
         "Median over the runs that converged (count in brackets). Discount "
-        "gamma = 1 - 1/step_limit; DARLING and GDQ-code use shortest plans only "
-        "(tolerance 0); see `gdq_pddl/experiments/scale.py` for why.", "",
+        f"gamma = 1 - 1/step_limit; DARLING and GDQ-code use door-route plans within "
+        f"{1 + TOLERANCE:g} x the shortest (`gdq_pddl.abstraction.routes`); see "
+        "`gdq_pddl/experiments/scale.py` for why.", "",
         "![episodes to convergence and steps/s](scale.png)", "",
     ]
     for r in results:
         lines += [f"## {r.positions} positions", "",
                   f"{r.doors} doors, {r.n_states} learner states x {r.n_actions} actions, "
                   f"shortest plan L = {r.plan_length}, step_limit = {r.step_limit}, "
-                  f"r_max = {r.r_max:g}, R_ref = {r.r_ref:g}; plan tables for every state "
+                  f"r_max = {r.r_max:g}, V_ref = {r.v_ref:.1f}, R_fail = {r.r_fail:g}, "
+                  f"threshold = {r.threshold:.1f}; plan tables for every state "
                   f"built in {r.context_s:.1f} s.", "",
                   "| method | episodes to convergence | mean return, last 100 | "
                   "success rate, last 100 | env steps/s |", "|---|---|---|---|---|"]
