@@ -137,75 +137,23 @@ def test_code_variant_sets_r_max_on_plan_pairs_only(ctx_c):
     assert learner.params.backup == core.BACKUP_SAMPLE
 
 
-def _last_plan_step(ctx, table):
-    """The (state, action) of the last step of the first plan from s0 (it reaches a goal)."""
-    k = table.plan_ptr[ctx.s0]
-    j = table.pair_ptr[k + 1] - 1
-    return int(table.pair_state[j]), int(table.pair_action[j])
-
-
-def test_code_variant_backs_up_the_most_frequent_successor_only_on_a_plan(ctx_c):
+def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     learner = GDQ(ctx_c, GDQConfig(variant="code", n_backups=0))
     t, p = learner.tables, learner.params
     rng = np.random.default_rng(0)
-    plan = ctx_c.darling_plans.plans_from(ctx_c.s0)[0]
-    (s, a), (s_next, _) = plan[0], plan[1]  # a first step and its planned successor
-    other = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s_next))[0])
-    t.q[:, :] = 50.0
+    s, a = (int(x[0]) for x in np.nonzero(learner.optimistic_pairs))
+    t.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
     core.recompute_all_v(t)
     core.model_backup(t, p, s, a, rng)
     assert t.q[s, a] == 50.0  # never tried: left alone
-    core.record(t, p, s, a, -20.0, s, True, False)  # stuck: not a successor
+    s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
+    core.record(t, p, s, a, -2.0, s2, False, False)  # one ordinary step to s2 at cost 2
+    assert learner.successors(s, a) == {s2: 1} and t.visits[s, a] == 1
+    t.q[s2, :] = 10.0
+    core.recompute_v(t, s2)
     core.model_backup(t, p, s, a, rng)
-    assert t.q[s, a] == 50.0 and core.mode_successor(t, s, a) == -1
-    core.record(t, p, s, a, -2.0, other, False, False)  # off the plan, seen first
-    core.record(t, p, s, a, -2.0, s_next, False, False)  # a tie: the first seen wins
-    assert core.mode_successor(t, s, a) == other
-    core.model_backup(t, p, s, a, rng)
-    assert t.q[s, a] == 50.0  # the most frequent outcome is not the planned one
-    core.record(t, p, s, a, -2.0, s_next, False, False)
-    assert core.mode_successor(t, s, a) == s_next
-    t.q[s_next, :] = 10.0
-    core.recompute_v(t, s_next)
-    core.model_backup(t, p, s, a, rng)
-    target = -2.0 + p.gamma * 10.0  # mean step cost, no stuck penalty
+    target = -2.0 + p.gamma * 10.0
     assert t.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
-
-
-def test_code_variant_h_grows_with_the_states_acted_in(ctx_c):
-    learner = GDQ(ctx_c, GDQConfig(variant="code", n_backups=0))
-    t, rng = learner.tables, np.random.default_rng(0)
-    assert np.flatnonzero(t.planned).tolist() == [ctx_c.s0]  # OptInit: plans from s0
-    table = ctx_c.darling_plans
-    s1 = next(s for s in range(ctx_c.n_states) if s != ctx_c.s0 and not ctx_c.goal[s]
-              and table.plan_ptr[s + 1] > table.plan_ptr[s]
-              and not any((s, a) in set(pl) for pl in table.plans_from(ctx_c.s0)
-                          for a in range(ctx_c.n_actions)))
-    (s, a), (s2, _) = table.plans_from(s1)[0][:2]
-    assert not core.on_plan(t, s, a, s2)  # a step of a plan from s1 only
-    learner.observe(s1, 0, -1.0, s1, False, False, rng)  # acting in s1 adds its plans
-    assert t.planned[s1] and core.on_plan(t, s, a, s2)
-    goal = int(np.flatnonzero(ctx_c.goal)[0])
-    last = _last_plan_step(ctx_c, table)
-    assert core.on_plan(t, *last, goal) and not core.on_plan(t, *last, s2)
-
-
-def test_code_variant_draws_from_experienced_pairs_in_order(ctx_c):
-    learner = GDQ(ctx_c, GDQConfig(variant="code"))
-    env = OfficeEnv(task="C")
-    run(learner, env, 30, 0)
-    t = learner.tables
-    seen = (learner.visits - t.stuck) > 0
-    states = t.exp_states[:t.n_exp_states[0]]
-    assert sorted(states.tolist()) == np.flatnonzero(seen.any(axis=1)).tolist()
-    for s in range(ctx_c.n_states):
-        acts = t.exp_actions[s, :t.n_exp_actions[s]]
-        assert sorted(acts.tolist()) == np.flatnonzero(seen[s]).tolist()
-    n_succ = (t.slots != 0).sum(axis=2)
-    for s, a in zip(*np.nonzero(n_succ), strict=True):
-        ranks = t.first_seen[s, a, :n_succ[s, a]]
-        assert sorted(ranks.tolist()) == list(range(n_succ[s, a]))
-    assert GDQ(ctx_c).tables.first_seen.size == 0  # the paper variant keeps no lists
 
 
 def test_code_variant_task_switch_keeps_the_model_and_reseeds_q(ctx_c):
@@ -235,9 +183,12 @@ def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     for k in range(m + 1):
         assert core.expected_value(t, p, s, a, v) == optimistic, f"changed after {k} visits"
         learner.observe(s, a, -1.0, s2, False, False, rng)
+        # sample-based backups (the code variant) replay experience from the first trial
+        assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
     # m + 1 visits: the learned model (always -1 to s2) takes over
     assert learner.visits[s, a] == m + 1
     assert core.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
+    assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
 
 
 def test_model_is_goal_independent_counts(ctx_c):
@@ -352,7 +303,6 @@ def test_runners_give_the_learner_the_slots_its_env_needs(ctx_c, fast):
     a = run(small, env, 60, 3, fast=fast)
     b = run(reference, env, 60, 3, fast=fast)
     assert small.max_successors == ctx_c.max_successors
-    assert small.tables.first_seen.shape == small.tables.slots.shape  # widened together
     assert np.array_equal(a.returns, b.returns) and np.array_equal(small.q, reference.q)
     assert np.array_equal(small.counts, reference.counts)
 
@@ -371,17 +321,15 @@ def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
     for _ in range(2):
         learner.observe(6, 9, -20.0, 6, True, False, rng)
     assert core.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
-    # GDQ-code's backup of a plan's last step with inflated V must not exceed R_max either
-    code = GDQ(ctx_c, GDQConfig(variant="code", n_backups=0, alpha=1.0))
-    s, a = _last_plan_step(ctx_c, ctx_c.darling_plans)
-    for _ in range(2):
-        code.observe(s, a, 20.0, goal, True, False, rng)
-    t = code.tables
+    assert core.sample_outcome(t, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
+    assert core.sample_outcome(t, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
+    # the sample-based backup with inflated V must not exceed R_max either
     t.q[:, :] = 1000.0
     core.recompute_all_v(t)
-    t.q[s, a] = 0.0
-    core.model_backup(t, code.params, s, a, rng)
-    assert t.q[s, a] == ctx_c.r_max
+    t.q[5, 9] = 0.0
+    sample = core.Params(**{**p._asdict(), "backup": core.BACKUP_SAMPLE, "alpha": 1.0})
+    core.model_backup(t, sample, 5, 9, rng)
+    assert t.q[5, 9] == ctx_c.r_max
 
 
 def test_real_terminal_and_truncated_steps_do_not_bootstrap(ctx_c):

@@ -25,30 +25,19 @@ Side by side (paper | code):
   is stable, and Q <- its Q for every (s, a) | Q <- 0, then Q(s,a) <- R_max on the plan
   pairs; no policy iteration.
 - Real step: epsilon-greedy on Q, TD update with alpha, count in the model | the same.
-- N backups per step | N tries per step.
-  Paper: each on a random transition of a random plan from the current state, an
-  expected backup, assigned: ``Q(s,a) <- sum_s' T(s,a,s') (R or gamma V(s'))``.
-  Code: each on a uniformly random state with a recorded (not stuck) transition and a
-  uniformly random action it has one for; a TD update with alpha towards the pair's most
-  frequent successor s' (the first seen among equally frequent ones) at its mean step
-  cost, ``-cost + gamma V(s')`` (R_max if s' is a goal), made only when ``(s, a) -> s'``
-  is a step of a plan in H so far, where H is the plans from s0 and from every state
-  acted in; otherwise the try does nothing. Stuck trials are not in this model.
+- N backups per step, each on a random transition of a random plan from the current
+  state: expected backup, assigned, ``Q(s,a) <- sum_s' T(s,a,s') (R or gamma V(s'))`` |
+  a TD update with alpha on one ``(r, s')`` replayed from the pair's recorded outcomes;
+  a pair never tried gets no backup.
 
-Where the code column comes from: the SPEC describes the released code's OptInit and
-its sample-based backups; the rest is the authors' public GDQ agent (read, not copied).
-Its model only counts the transitions of steps that did not end the episode (in its
-world reaching the goal does not, the step after it does; getting stuck does), and its
-simulated update is the certainty-equivalent TD step above, filtered by the set of plan
-transitions of every state it has planned from. Our goal steps end the episode with
-R_max, so a goal successor's target is R_max, as in the real update. Not reproduced:
-that set outliving a task switch, and the authors' planner (see ``docs/decisions.md``).
-Earlier versions of this package backed up plan pairs from the current state, first
-with the paper's optimistic model, then replaying a sampled recorded outcome, stuck
-trials (-R_max) included; both departed from the released agent, and the second learned
-faster than the released agent's rule on Task C (mean return 7.26 against 5.41 over the
-first 300 episodes, 100 runs): the stuck penalty it replayed is what the released
-agent's backups never see.
+Where the code column comes from. The SPEC describes the released code's OptInit and
+its sample-based backups; the authors' public GDQ agent (read, not copied) also shows
+what a backup draws: only pairs already experienced, with their mean observed reward and
+an observed successor, kept to transitions that lie on a plan. An earlier version of
+this package backed up untried plan pairs with the paper's optimistic model instead
+(``R_max`` and a jump to s0); with the code's seeding that inflates plan pairs towards
+``R_max / (1 - gamma)`` as the paper's variant does, and it made GDQ-code reach a
+positive 50-episode average on Task C at episode ~120 instead of ~60.
 
 Policy iteration in OptInit (a decision). Algorithm 1, read literally, evaluates only
 ``Q(s, pi(s))`` and then takes ``argmax_a Q(s, a)`` over a table whose other entries
@@ -72,9 +61,8 @@ Other decisions where the paper is silent:
 
 - H is re-planned from the state the action was taken in (Alg. 2 line 12 uses the
   ``s`` of line 1), by a lookup in the task's :class:`PlanTable`.
-- When the current state has no plan (a planner that finds nothing), the paper variant's
-  N backups go to uniformly random known pairs, as in Dyna-Q, so it still plans with what
-  it learned (the code variant's backups never depend on the current state's plans).
+- When the current state has no plan (a planner that finds nothing), GDQ's N backups go
+  to uniformly random known pairs, as in Dyna-Q, so it still plans with what it learned.
 - ``start_task``: GDQ keeps its model (counts) and reruns OptInit for the new goal
   (known pairs with the learned model, unknown with the optimistic one; Q <- 0 first).
   The baselines keep their Q table (they are not told the task changed other than
@@ -137,8 +125,7 @@ class TabularLearner:
         self.config = config
         n_s, n_a = context.n_states, context.n_actions
         self._model = core.new_model(n_s, n_a, _capacity(context),
-                                     transitions=self.kind in MODEL_BASED,
-                                     experience=self._replays_experience())
+                                     transitions=self.kind in MODEL_BASED)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
         self.context = context
         self.tables, self.params = self._build(context)
@@ -168,11 +155,6 @@ class TabularLearner:
     def _opt_continue(self) -> float:
         return 1.0
 
-    def _replays_experience(self) -> bool:
-        """Whether the learner's backups are GDQ-code's (:func:`core.backup_experience`),
-        which need the experience lists and the steps of H as (s, a, s') transitions."""
-        return False
-
     # -- interface ---------------------------------------------------------------------
     def _build(self, context: TaskContext) -> tuple[core.Tables, core.Params]:
         if (context.n_states, context.n_actions) != self.q.shape:
@@ -184,8 +166,6 @@ class TabularLearner:
         for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
             lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
             opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
-        steps = _plan_steps(plans, context.n_actions) if self._replays_experience() else \
-            _NO_STEPS
         tables = core.Tables(
             q=self.q, v=np.zeros(len(self.q)), allowed=allowed,
             n_allowed=allowed.sum(axis=1).astype(np.int64),
@@ -194,10 +174,7 @@ class TabularLearner:
             plan_ptr=np.ascontiguousarray(plans.plan_ptr, dtype=np.int64),
             pair_ptr=np.ascontiguousarray(plans.pair_ptr, dtype=np.int64),
             pair_state=np.ascontiguousarray(plans.pair_state, dtype=np.int64),
-            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64),
-            **steps,
-            planned=np.zeros(context.n_states if self._replays_experience() else 0,
-                             dtype=np.bool_))
+            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64))
         c = self.config
         params = core.Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
@@ -272,8 +249,7 @@ class TabularLearner:
         recorded transitions are kept). The runners call it with what their env needs."""
         if self.kind in MODEL_BASED and k > self.max_successors:
             self._model = self._slots(k)
-            self.tables = self.tables._replace(slots=self._model["slots"],
-                                               first_seen=self._model["first_seen"])
+            self.tables = self.tables._replace(slots=self._model["slots"])
 
     def _slots(self, k: int) -> dict[str, np.ndarray]:
         if self.kind not in MODEL_BASED:
@@ -282,34 +258,6 @@ class TabularLearner:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"
-
-
-_NO_STEPS = {"step_key": np.zeros(0, dtype=np.int64), "step_ptr": np.zeros(1, dtype=np.int64),
-             "step_origin": np.zeros(0, dtype=np.int64),
-             "step_next": np.zeros(0, dtype=np.int64)}
-
-
-def _plan_steps(plans: PlanTable, n_actions: int) -> dict[str, np.ndarray]:
-    """Every step of every plan in ``plans`` as a transition ``(s, a) -> s'``, grouped by
-    the pair key ``s * n_actions + a`` (sorted): the plan's start state and ``s'``, the
-    next step's state or -1 (the last step reaches a goal state)."""
-    n_plans = len(plans.pair_ptr) - 1
-    per_plan = np.diff(plans.pair_ptr)
-    origin_of_plan = np.repeat(np.arange(len(plans.plan_ptr) - 1, dtype=np.int64),
-                               np.diff(plans.plan_ptr))
-    origin = np.repeat(origin_of_plan, per_plan)
-    state = np.asarray(plans.pair_state, dtype=np.int64)
-    nxt = np.empty_like(state)
-    nxt[:-1] = state[1:]
-    if n_plans:
-        nxt[plans.pair_ptr[1:] - 1] = -1  # each plan's last step
-    key = state * n_actions + np.asarray(plans.pair_action, dtype=np.int64)
-    order = np.argsort(key, kind="stable")
-    uniq, first = np.unique(key[order], return_index=True)
-    return {"step_key": uniq.astype(np.int64),
-            "step_ptr": np.append(first, len(key)).astype(np.int64),
-            "step_origin": np.ascontiguousarray(origin[order]),
-            "step_next": np.ascontiguousarray(nxt[order])}
 
 
 class QLearning(TabularLearner):
@@ -387,9 +335,6 @@ class GDQ(TabularLearner):
     def _opt_continue(self) -> float:
         return 1.0 if self.config.optimistic_successor == "start" else 0.0
 
-    def _replays_experience(self) -> bool:
-        return self.config.variant == "code"
-
     def _init_task(self) -> None:
         """OptInit (Algorithm 1), or the authors' code's shortcut."""
         self.q[:, :] = 0.0
@@ -397,7 +342,6 @@ class GDQ(TabularLearner):
             self.policy = core.policy_iteration(self.tables, self.params)
         else:
             core.seed_plan_pairs(self.tables, self.params.r_max)
-            self.tables.planned[self.context.s0] = True  # H starts as the plans from s0
             self.policy = core.greedy(self.tables)
 
     @property

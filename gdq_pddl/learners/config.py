@@ -63,13 +63,11 @@ class GDQConfig(LearnerConfig):
     """Guided Dyna-Q (the paper's Algorithms 1-3)."""
 
     n_backups: int = 5
-    """N: backups per real step (the authors' code used 5), each on a random transition of
-    a random plan from the current state; ``"code"``: N tries on random experienced pairs,
-    made only on plan transitions (:mod:`gdq_pddl.learners.agents`)."""
+    """N: backups per real step, each on a random transition of a random plan from the
+    current state (the authors' code used 5)."""
     m: int = 5
     """A pair is *known* once tried more than ``m`` times: from then on its R and T come
-    from the learned model, before that from the optimistic model (authors' code: 5; the
-    ``"code"`` variant's backups use no threshold, as the authors' agent's do not)."""
+    from the learned model, before that from the optimistic model (authors' code: 5)."""
     variant: GDQVariant = "paper"
     """``"paper"``: OptInit runs policy iteration on the optimistic model and backups are
     expected (full) Bellman backups. ``"code"``: as the authors' released code, OptInit

@@ -49,13 +49,8 @@ transition: reaching G or getting stuck ends the sum.
 A pair is *known* when ``visits > m``. In expected backups (the paper's GDQ) unknown
 pairs use the optimistic model of OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max``
 on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
-Sample-based backups (the authors' code, :func:`backup_experience`) use no threshold and
-no optimistic model: a TD update towards a pair's most frequent recorded successor at its
-mean step cost, only for transitions on a plan in H so far (the plans from every state in
-``planned``, steps looked up in ``step_key``/``step_ptr``); stuck trials are not part of
-that model. ``first_seen`` ranks each slot's successor by first observation (ties of the
-most frequent successor go to the first seen), ``exp_states``/``exp_actions`` list the
-states and pairs with a recorded successor, in order, for the uniform draws.
+Sample-based backups (the authors' code) only replay recorded outcomes of pairs tried
+at least once and leave untried pairs alone.
 
 ``v[s]`` is kept equal to ``max`` of ``q[s, a]`` over the allowed actions of ``s`` by
 :func:`set_q`, the only writer of single Q entries.
@@ -113,30 +108,16 @@ class Tables(NamedTuple):
     pair_ptr: np.ndarray
     pair_state: np.ndarray
     pair_action: np.ndarray
-    # GDQ-code only (empty for every other learner; module doc, "GDQ-code's backups"):
-    first_seen: np.ndarray  # int32[S, A, K]: rank of each slot's first observation
-    exp_states: np.ndarray  # int64[S]: states with a non-stuck transition, in order
-    n_exp_states: np.ndarray  # int64[1]
-    exp_actions: np.ndarray  # int32[S, A]: per state, its actions with one, in order
-    n_exp_actions: np.ndarray  # int64[S]
-    step_key: np.ndarray  # int64[n]: sorted pair keys s * A + a of the plan steps in H
-    step_ptr: np.ndarray  # int64[n + 1]: the steps of step_key[i], CSR
-    step_origin: np.ndarray  # int64[steps]: the state whose plan holds the step
-    step_next: np.ndarray  # int64[steps]: the step's planned successor, -1: a goal state
-    planned: np.ndarray  # bool[S]: states whose plans' steps are on the list (H so far)
 
 
 def new_model(n_states: int, n_actions: int, max_successors: int,
-              transitions: bool = True, experience: bool = False) -> dict[str, np.ndarray]:
+              transitions: bool = True) -> dict[str, np.ndarray]:
     """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks.
 
     ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
-    ``transitions`` is False (the model-free learners never record one). ``experience``:
-    also the lists GDQ-code's backups draw from and the first-seen rank of each slot
-    (empty arrays otherwise).
+    ``transitions`` is False (the model-free learners never record one).
     """
     k = int(max_successors) if transitions else 0
-    n_s, n_a, k_e = (n_states, n_actions, k) if experience else (0, 0, 0)
     return {
         "slots": np.zeros((n_states, n_actions, k), dtype=np.int64),
         "stuck": np.zeros((n_states, n_actions), dtype=np.int64),
@@ -146,11 +127,6 @@ def new_model(n_states: int, n_actions: int, max_successors: int,
         "cost_all": np.zeros(2, dtype=np.float64),
         "known": np.zeros(n_states * n_actions, dtype=np.int64),
         "n_known": np.zeros(1, dtype=np.int64),
-        "first_seen": np.zeros((n_s, n_a, k_e), dtype=np.int32),
-        "exp_states": np.zeros(n_s, dtype=np.int64),
-        "n_exp_states": np.zeros(1, dtype=np.int64),
-        "exp_actions": np.zeros((n_s, n_a), dtype=np.int32),
-        "n_exp_actions": np.zeros(n_s, dtype=np.int64),
     }
 
 
@@ -164,12 +140,7 @@ def with_successor_slots(model: dict[str, np.ndarray],
         return model
     wider = np.zeros((n_states, n_actions, max_successors), dtype=np.int64)
     wider[:, :, :k] = slots
-    out = {**model, "slots": wider}
-    if model["first_seen"].shape[0]:  # GDQ-code: the ranks stay aligned with the slots
-        ranks = np.zeros((n_states, n_actions, max_successors), dtype=np.int32)
-        ranks[:, :, :k] = model["first_seen"]
-        out["first_seen"] = ranks
-    return out
+    return {**model, "slots": wider}
 
 
 SLOT_SHIFT = 32
@@ -335,8 +306,6 @@ def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: 
         t.stuck[s, a] += 1
     elif not add_successor(t.slots, s, a, s2):
         return False
-    elif t.first_seen.shape[0]:
-        note_experience(t, s, a, s2)
     if not terminated and not truncated:
         t.cost_sum[s, a] -= r
         t.cost_n[s, a] += 1
@@ -347,34 +316,6 @@ def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: 
         t.known[t.n_known[0]] = s * t.q.shape[1] + a
         t.n_known[0] += 1
     return True
-
-
-@numba.njit(cache=True)
-def note_experience(t: Tables, s: int, a: int, s2: int) -> None:
-    """GDQ-code's bookkeeping after ``add_successor`` counted ``(s, a) -> s2`` (not stuck):
-    the first-seen rank of a new successor (its slot and the later ones shifted as
-    :func:`add_successor` shifted theirs) and the lists of experienced states and pairs.
-    Called before ``visits`` counts the step."""
-    slots, ranks = t.slots, t.first_seen
-    n = 0
-    j_new = -1
-    for j in range(slots.shape[2]):
-        here = slots[s, a, j]
-        if here == 0:
-            break
-        if slot_successor(here) == s2 and slot_count(here) == 1:
-            j_new = j
-        n += 1
-    if j_new >= 0:
-        for jj in range(n - 1, j_new, -1):
-            ranks[s, a, jj] = ranks[s, a, jj - 1]
-        ranks[s, a, j_new] = n - 1  # n - 1 successors were seen before this one
-    if t.visits[s, a] == t.stuck[s, a]:  # the pair's first step that is not stuck
-        if t.n_exp_actions[s] == 0:
-            t.exp_states[t.n_exp_states[0]] = s
-            t.n_exp_states[0] += 1
-        t.exp_actions[s, t.n_exp_actions[s]] = a
-        t.n_exp_actions[s] += 1
 
 
 @numba.njit(cache=True)
@@ -413,34 +354,26 @@ def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float
 
 
 @numba.njit(cache=True)
-def mode_successor(t: Tables, s: int, a: int) -> int:
-    """The most frequent recorded successor of ``(s, a)`` (stuck trials are not
-    successors), the first one seen among equally frequent ones; -1 if none."""
-    best, best_count, best_rank = -1, 0, 0
-    slots, ranks = t.slots, t.first_seen  # locals: a tuple field read in a loop costs more
-    for j in range(slots.shape[2]):
-        here = slots[s, a, j]
-        if here == 0:
-            break
-        c = slot_count(here)
-        if c > best_count or (c == best_count and ranks[s, a, j] < best_rank):
-            best, best_count, best_rank = slot_successor(here), c, ranks[s, a, j]
-    return best
+def sample_outcome(t: Tables, p: Params, s: int, a: int,
+                   rng: np.random.Generator) -> tuple[float, int, bool]:
+    """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
 
-
-@numba.njit(cache=True)
-def on_plan(t: Tables, s: int, a: int, s2: int) -> bool:
-    """Whether ``(s, a) -> s2`` is a step of a plan from a state in ``planned`` (a last
-    step's successor is any goal state)."""
-    key = s * t.q.shape[1] + a
-    i = np.searchsorted(t.step_key, key)
-    if i == len(t.step_key) or t.step_key[i] != key:
-        return False
-    for k in range(t.step_ptr[i], t.step_ptr[i + 1]):
-        nxt = t.step_next[k]
-        if t.planned[t.step_origin[k]] and (nxt == s2 or (nxt < 0 and t.goal[s2])):
-            return True
-    return False
+    The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
+    (stuck, goal, or an ordinary step at the pair's mean cost), never the optimistic model.
+    """
+    k = rng.integers(0, t.visits[s, a])
+    if k < t.stuck[s, a]:
+        return -p.r_max, s, True
+    k -= t.stuck[s, a]
+    slots = t.slots  # a local: a tuple field read in a loop costs more
+    for j in range(slots.shape[2]):  # successors in increasing order
+        k -= slot_count(slots[s, a, j])
+        if k < 0:
+            s2 = slot_successor(slots[s, a, j])
+            if t.goal[s2]:
+                return p.r_max, s2, True
+            return -mean_cost(t, s, a), s2, False
+    return -mean_cost(t, s, a), s, False  # unreachable: counts + stuck == visits
 
 
 @numba.njit(cache=True)
@@ -448,19 +381,15 @@ def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator)
     """One simulated update of ``(s, a)``.
 
     ``BACKUP_EXPECTED``: assign the expected backup under the model (learned for known
-    pairs, optimistic otherwise). ``BACKUP_SAMPLE`` (the authors' code): a TD update with
-    alpha towards the pair's most frequent successor at its mean step cost, only when that
-    transition is a step of a plan in H so far (:func:`on_plan`); a pair with no recorded
-    successor is left alone. A goal successor's target is R_max (no bootstrap).
+    pairs, optimistic otherwise). ``BACKUP_SAMPLE`` (the authors' code): a TD update on an
+    outcome replayed from experience; a pair never tried is left alone.
     """
     if p.backup == BACKUP_EXPECTED:
         set_q(t, s, a, expected_value(t, p, s, a, t.v))
-        return
-    s2 = mode_successor(t, s, a)
-    if s2 < 0 or not on_plan(t, s, a, s2):
-        return
-    target = p.r_max if t.goal[s2] else p.gamma * t.v[s2] - mean_cost(t, s, a)
-    td_update(t, s, a, target, p.alpha)
+    elif t.visits[s, a] > 0:
+        r, s2, terminal = sample_outcome(t, p, s, a, rng)
+        target = r if terminal else r + p.gamma * t.v[s2]
+        td_update(t, s, a, target, p.alpha)
 
 
 @numba.njit(cache=True)
@@ -473,20 +402,6 @@ def backup_known(t: Tables, p: Params, rng: np.random.Generator) -> None:
     for _ in range(p.n_backups):
         i = t.known[rng.integers(0, nk)]
         model_backup(t, p, i // n_actions, i % n_actions, rng)
-
-
-@numba.njit(cache=True)
-def backup_experience(t: Tables, p: Params, rng: np.random.Generator) -> None:
-    """GDQ-code planning: N tries, each on a uniformly random state with a recorded
-    successor and a uniformly random action it has one for (:func:`model_backup`, which
-    updates only transitions on a plan)."""
-    n = t.n_exp_states[0]
-    if n == 0:
-        return
-    for _ in range(p.n_backups):
-        s = t.exp_states[rng.integers(0, n)]
-        a = t.exp_actions[s, rng.integers(0, t.n_exp_actions[s])]
-        model_backup(t, p, s, a, rng)
 
 
 @numba.njit(cache=True)
@@ -521,13 +436,8 @@ def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated:
         return True
     if not record(t, p, s, a, r, s2, terminated, truncated):
         return False
-    if p.kind == KIND_GDQ:
-        if p.backup == BACKUP_SAMPLE:  # the authors' code: H grows by the plans from s
-            t.planned[s] = True
-            backup_experience(t, p, rng)
-            return True
-        if backup_plans(t, p, s, rng):
-            return True
+    if p.kind == KIND_GDQ and backup_plans(t, p, s, rng):
+        return True
     backup_known(t, p, rng)
     return True
 
