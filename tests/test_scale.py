@@ -186,5 +186,6 @@ def test_learning_smoke_on_100_positions(tmp_path):
     threshold = 5.0
     assert converged_at(np.full(80, 9.0), threshold) == 50
     assert converged_at(np.r_[np.full(60, -5.0), np.full(100, 9.0)], threshold) == 96  # 36 nines
+    assert converged_at(np.r_[np.full(60, 9.0), np.full(100, -5.0)], threshold) == 50  # first
     assert converged_at(np.full(80, 1.0), threshold) is None
     assert result.r_fail < result.threshold < result.v_ref

@@ -61,9 +61,9 @@ def report(results: list[SizeResult], runs: int, episodes: int, seed: int, out: 
         f"Generated buildings (`gdq-pddl building --positions N --seed {seed}`), task A, "
         f"{runs} run(s) x {episodes} episodes per method, compact model "
         "(`gdq_pddl.envs.compact`).", "",
-        f"**Episodes to convergence**: the first episode from which the trailing {WINDOW}-"
-        f"episode moving average of the return stays >= R_fail + {FRACTION} (V_ref - R_fail)"
-        " to the end; V_ref is the reference value (`gdq_pddl.envs.solve_compact`, a lower "
+        f"**Episodes to convergence**: the first episode at which the trailing {WINDOW}-"
+        f"episode moving average of the return reaches R_fail + {FRACTION} (V_ref - R_fail); "
+        "V_ref is the reference value (`gdq_pddl.envs.solve_compact`, a lower "
         "bound on V*), R_fail = -r_max - (step_limit - 1) the return of a timeout. "
         "Median over the runs that converged (count in brackets). Discount "
         f"gamma = 1 - 1/step_limit; DARLING and GDQ-code use door-route plans within "

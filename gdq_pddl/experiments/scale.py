@@ -15,10 +15,15 @@ Decisions, where the office protocol does not carry over:
 - **Discount** ``gamma = 1 - 1 / step_limit`` (the office: 0.95 = 1 - 1/20). With the
   office's 0.95, a goal 65 actions away is worth 0.95**65 x r_max, about 2, less than the
   step costs on the way: no learner would go for it.
-- **Episodes to convergence**: the first episode ``e`` from which the trailing 50-episode
-  moving average of the return stays at or above ``R_fail + 0.9 (V_ref - R_fail)``
-  (nine tenths of the way from the worst return to the best value) until the last
-  episode; a run that never gets there counts as not converged (``> episodes``).
+- **Episodes to convergence**: the first episode at which the trailing 50-episode moving
+  average of the return reaches ``R_fail + 0.9 (V_ref - R_fail)`` (nine tenths of the
+  way from the worst return to the reference), the issue's own measure for the office
+  ("the 50-episode moving average first turned positive at episode ~84"); a run that
+  never gets there counts as not converged (``> episodes``). Not "stays above it to the
+  end": episodes succeed or time out (returns ~300 apart at 1000 positions), so the
+  average of a learner that has settled varies by +-20 and dips under any threshold
+  near its level again and again (measured: under that rule DARLING at 300 positions
+  "converged" at episodes 4764-4994 of 5000, whatever it did before).
 - **Door-route plans** for DARLING and GDQ-code: tolerance 1.3 x as on the office, but
   the table holds every shortest plan plus the shortest plan through each door that a
   plan within 1.3 x can cross (:func:`gdq_pddl.abstraction.routes.route_plan_table`),
@@ -105,12 +110,8 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
     if len(returns) < window:
         return None
     avg = np.convolve(returns, np.ones(window) / window, mode="valid")
-    bad = np.flatnonzero(avg < threshold)
-    if len(bad) == 0:
-        return window
-    if bad[-1] == len(avg) - 1:
-        return None
-    return int(bad[-1] + 1 + window)
+    hit = np.flatnonzero(avg >= threshold)
+    return int(hit[0] + window) if len(hit) else None
 
 
 def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
