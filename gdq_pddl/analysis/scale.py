@@ -31,9 +31,10 @@ def figure(results: list[SizeResult], episodes: int, out: Path) -> list[Path]:
             if name not in r.returns:
                 continue
             med, _ = _median_conv(r, name)
-            (xs if med is not None else open_x).append(r.positions)
-            if med is not None:
-                ys.append(med)
+            xs.append(r.positions)  # NaN breaks the line where a size did not converge
+            ys.append(med if med is not None else np.nan)
+            if med is None:
+                open_x.append(r.positions)
             sx.append(r.positions)
             sy.append(r.steps_per_s[name])
         color = f"C{i}"

@@ -180,8 +180,8 @@ def register_scale(sub) -> None:
                                    "and write scale.png/pdf and REPORT.md (episodes to "
                                    "convergence, env steps/s).")
     p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
-    p.add_argument("--runs", type=int, default=3)
-    p.add_argument("--episodes", type=int, default=1000)
+    p.add_argument("--runs", type=int, default=5)
+    p.add_argument("--episodes", type=int, default=5000)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
     p.set_defaults(func=cmd_scale)
