@@ -175,7 +175,7 @@ def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
 
 def test_learning_smoke_on_100_positions(tmp_path):
     from gdq_pddl.analysis.scale import figure, report
-    from gdq_pddl.experiments.scale import converged_at, run_size
+    from gdq_pddl.experiments.scale import converged_at, run_size, save_size
 
     result = run_size(100, 1, 60, methods=["DARLING", "Q-learning"], log=lambda *a: None)
     assert set(result.returns) == {"DARLING", "Q-learning"}
@@ -183,6 +183,10 @@ def test_learning_smoke_on_100_positions(tmp_path):
     assert result.returns["DARLING"].shape == (1, 60)
     assert len(figure([result], 60, tmp_path)) == 2
     assert "100 positions" in report([result], 1, 60, 0, tmp_path).read_text()
+    save_size(result, tmp_path / "size-100.npz")
+    saved = np.load(tmp_path / "size-100.npz")
+    assert np.array_equal(saved["returns/DARLING"], result.returns["DARLING"])
+    assert float(saved["threshold"]) == result.threshold
     threshold = 5.0
     assert converged_at(np.full(80, 9.0), threshold) == 50
     assert converged_at(np.r_[np.full(60, -5.0), np.full(100, 9.0)], threshold) == 96  # 36 nines

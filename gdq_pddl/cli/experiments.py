@@ -189,11 +189,14 @@ def register_scale(sub) -> None:
 
 def cmd_scale(args: argparse.Namespace) -> int:
     from gdq_pddl.analysis.scale import figure, report
-    from gdq_pddl.experiments.scale import run_size
+    from gdq_pddl.experiments.scale import run_size, save_size
 
     out = args.out or Path("results/scale")
     out.mkdir(parents=True, exist_ok=True)
-    results = [run_size(n, args.runs, args.episodes, args.seed) for n in args.sizes]
+    results = []
+    for n in args.sizes:  # each size's raw returns are on disk as soon as it is done
+        results.append(run_size(n, args.runs, args.episodes, args.seed))
+        save_size(results[-1], out / f"size-{n}.npz")
     figure(results, args.episodes, out)
     print(report(results, args.runs, args.episodes, args.seed, out))
     return 0

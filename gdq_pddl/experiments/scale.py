@@ -153,3 +153,12 @@ def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
         log(f"  {name}: {out.steps_per_s[name]:,.0f} steps/s, tables "
             f"{out.table_mb[name]:,.0f} MB, converged at {conv}")
     return out
+
+
+def save_size(result: SizeResult, path) -> None:
+    """The raw returns and successes of every method at one size, with the size's
+    figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``)."""
+    arrays = {f"returns/{k}": v for k, v in result.returns.items()}
+    arrays |= {f"success/{k}": v for k, v in result.success.items()}
+    np.savez_compressed(path, positions=result.positions, v_ref=result.v_ref,
+                        r_fail=result.r_fail, threshold=result.threshold, **arrays)
