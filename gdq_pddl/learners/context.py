@@ -133,9 +133,9 @@ def _knowledge_key(world: World) -> tuple:
 
 TOLERANT_KINDS = ("all", "routes")
 """How a tolerant plan table is built: ``"all"``, every loop-free plan within the
-tolerance (the planner's); ``"routes"``, every shortest plan plus the shortest plan
-through each door any plan within the tolerance can cross
-(:func:`gdq_pddl.abstraction.routes.route_plan_table`, for buildings)."""
+tolerance (the planner's); ``"routes"``, every shortest plan plus one plan per door
+route within the tolerance (:func:`gdq_pddl.abstraction.routes.route_plan_table`, for
+buildings, where every plan is too many)."""
 
 
 def office_plan_table(world: World, goal: str, planner: str = "graph",
