@@ -13,14 +13,12 @@ shortest plan; with tolerance ``t`` every loop-free plan of at most
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from gdq_pddl.abstraction.table import PlanTable, pack_plans
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.pddl.reachable import StateGraph
-from gdq_pddl.planning.base import State
+from gdq_pddl.planning.base import State, length_bound
 
 
 class PDDLAbstraction:
@@ -77,7 +75,7 @@ def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
     for s in range(graph.n_states):
         plans.append([])
         if dist[s] > 0:
-            bound = math.floor((1 + tolerance) * dist[s] + 1e-9)
+            bound = length_bound(int(dist[s]), tolerance)
             plans[s], cut = _paths(s, edges, dist, bound, max_plans)
             capped |= cut
             plans[s].sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))

@@ -40,7 +40,6 @@ goal is the shortest plan's, and prunes the depth-first search over routes.
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Callable
 
@@ -49,20 +48,21 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
 
 from gdq_pddl.abstraction.table import Abstraction, PlanTable, pack_plans
-from gdq_pddl.planning.base import PlanningProblem
+from gdq_pddl.planning.base import PlanningProblem, length_bound
 
 Edge = tuple[int, int, int, str]
 """A knowledge edge: learner state, learner action, next learner state, ground action."""
 
 
-def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem) -> list[Edge]:
+def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem,
+                    read: Callable[[int], int] | None = None) -> list[Edge]:
     """Every learner ``(s, a, s')`` the planner's knowledge allows, with its ground action.
 
     A ground action maps to one learner action, so each pair has at most one next state;
     if two ground actions map to the same pair, the first (ground order) is kept.
     """
     task = problem.task
-    read = _reader(abstraction, task)
+    read = read or _reader(abstraction, task)
     edges: list[Edge] = []
     for s in range(abstraction.n_states):
         seen: set[int] = set()
@@ -90,7 +90,8 @@ def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
     if tolerance < 0:
         raise ValueError(f"tolerance must be >= 0, got {tolerance}")
     n = abstraction.n_states
-    edges = knowledge_edges(abstraction, problem)
+    read = _reader(abstraction, problem.task)
+    edges = knowledge_edges(abstraction, problem, read)
     length = shortest.length
     by_pair = {(s, a): (s2, op) for s, a, s2, op in edges}
     inner = [(s, a, s2) for s, a, s2, _ in edges if not branch(a)]
@@ -99,7 +100,7 @@ def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
                 if branch(a) and length[s2] >= 0 and s2 != s]
     b_s = np.array([b[0] for b in branches], dtype=np.int64)
     b_rest = np.array([1 + length[b[2]] for b in branches], dtype=np.float64)
-    replay = _Replay(abstraction, problem, by_pair, length)
+    replay = _Replay(problem, by_pair, length, read)
     plans: list[list[list[tuple[int, int]]]] = []
     capped = shortest.capped
     for x in range(n):
@@ -107,7 +108,7 @@ def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
         plans.append(own)
         if length[x] <= 0:
             continue
-        bound = math.floor((1 + tolerance) * length[x] + 1e-9)
+        bound = length_bound(int(length[x]), tolerance)
         seen = {tuple(p) for p in own}
         start = problem.task.mask(abstraction.planner_state(x))
         extra: list[list[tuple[int, int]]] = []
@@ -139,10 +140,10 @@ class _Legs:
         self.step: dict[tuple[int, int], int] = {}
         for s, a, s2 in inner:  # sorted: the lowest action between two states
             self.step.setdefault((s, s2), a)
-        self.goals = goals
         if len(goals):
-            self.to_goal = self.dist[:, goals].min(axis=1)
-            self.nearest_goal = goals[self.dist[:, goals].argmin(axis=1)]
+            to_goals = self.dist[:, goals]
+            self.to_goal = to_goals.min(axis=1)
+            self.nearest_goal = goals[to_goals.argmin(axis=1)]
         else:
             self.to_goal = np.full(n, np.inf)
             self.nearest_goal = np.full(n, -1)
@@ -197,14 +198,12 @@ def _reader(abstraction: Abstraction, task) -> Callable[[int], int]:
 class _Replay:
     """Checks a learner-pair plan in the planner's semantics (see the module docstring)."""
 
-    def __init__(self, abstraction: Abstraction, problem: PlanningProblem,
-                 by_pair: dict, length: np.ndarray) -> None:
-        self.abstraction = abstraction
-        self.task = problem.task
-        self.ops = {op.name: op for op in self.task.ops}
+    def __init__(self, problem: PlanningProblem, by_pair: dict, length: np.ndarray,
+                 read: Callable[[int], int]) -> None:
+        self.ops = {op.name: op for op in problem.task.ops}
         self.by_pair = by_pair
         self.length = length
-        self.read = _reader(abstraction, self.task)
+        self.read = read
 
     def valid(self, plan: list[tuple[int, int]], x: int, start: int) -> bool:
         """Loop-free, ends at the first goal state, and replays in the planner's semantics."""

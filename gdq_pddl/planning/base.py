@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import math
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -17,6 +18,12 @@ from gdq_pddl.pddl.parser import parse_domain, parse_problem
 
 State = frozenset[str]
 """A planner state: the fluent atoms that hold, e.g. ``{"(at p0)", "(closed d0)", ...}``."""
+
+
+def length_bound(shortest: int, tolerance: float) -> int:
+    """The most actions a plan within ``tolerance`` may have: ``floor((1 + tolerance) x
+    shortest)``, with the rounding every backend and plan table shares."""
+    return math.floor((1 + tolerance) * shortest + 1e-9)
 
 
 class Status(enum.StrEnum):

@@ -19,14 +19,20 @@ clingo is an optional dependency (``pip install gdq_pddl[clingo]``), imported la
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from collections import deque
 from typing import Any
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+from gdq_pddl.planning.base import (
+    Plan,
+    PlanningProblem,
+    PlanResult,
+    State,
+    Status,
+    length_bound,
+)
 
 ENCODING = """
 #program base.
@@ -137,7 +143,7 @@ class ClingoPlanner:
                 ctl.solve(on_model=on_model)
                 ctl.release_external(query)
                 if found and bound is None:
-                    bound = math.floor((1 + tolerance) * horizon + 1e-9)
+                    bound = length_bound(horizon, tolerance)
                     shortest = horizon
                 if capped or (bound is not None and horizon >= bound):
                     return found, shortest, horizon + 1, capped

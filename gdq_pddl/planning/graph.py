@@ -23,7 +23,14 @@ import warnings
 
 import networkx as nx
 
-from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+from gdq_pddl.planning.base import (
+    Plan,
+    PlanningProblem,
+    PlanResult,
+    State,
+    Status,
+    length_bound,
+)
 from gdq_pddl.planning.heuristic import INFINITE, hmax_for
 
 _SINK = -1
@@ -59,7 +66,7 @@ class GraphPlanner:
         if tolerance == 0:
             paths = nx.all_shortest_paths(graph, s0, _SINK)
         else:
-            paths = _bounded_paths(graph, s0, math.floor((1 + tolerance) * depth + 1e-9))
+            paths = _bounded_paths(graph, s0, length_bound(depth, tolerance))
         plans, capped = self._expand(task, graph, paths)
         if capped:
             warnings.warn(f"graph planner: more than {self.max_plans} plans within tolerance "
@@ -98,7 +105,7 @@ class GraphPlanner:
         shortest = _astar(task, s0, goal, h)
         if shortest is None:
             return graph, [], 0
-        bound = math.floor((1 + tolerance) * shortest + 1e-9)
+        bound = length_bound(shortest, tolerance)
         depth_of = {s0: 0}
         layer, depth, goals = [s0], 0, []
         if task.is_goal(s0, goal):
