@@ -35,6 +35,7 @@ METHOD_COLOURS = {
     "GDQ": "#d62728",
     "GDQ-code": "#ff9896",
     "DARLING": "#2ca02c",
+    "DARLING-code": "#98df8a",
     "Dyna-Q": "#1f77b4",
     "Q-learning": "#7f7f7f",
 }

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-METHOD_ORDER = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+METHOD_ORDER = ("GDQ", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q", "Q-learning")
 """The order methods are listed in every figure and table (unknown ones follow, sorted)."""
 
 TASKS_EXPERIMENT = "tasks"

@@ -33,10 +33,11 @@ def world_and_task(args: argparse.Namespace):
 
 def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
               episodes: int = 2500, runs: int = 10) -> None:
-    from gdq_pddl.experiments import METHODS
+    from gdq_pddl.experiments import DEFAULT_METHODS, METHODS
 
     # both GDQ variants by default, as reproduce: the paper's and the authors' code's
-    p.add_argument("--method", nargs="+", metavar="M", default=list(methods or METHODS),
+    p.add_argument("--method", nargs="+", metavar="M",
+                   default=list(methods or DEFAULT_METHODS),
                    help=f"methods to compare (from: {', '.join(METHODS)})")
     p.add_argument("--episodes", type=int, default=episodes, help="episodes per run (per task)")
     p.add_argument("--runs", type=int, default=runs, help="independent runs per method")

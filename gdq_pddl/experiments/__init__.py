@@ -1,6 +1,7 @@
 """Experiments: the paper's protocol, run in parallel, resumable, collected as CSV/JSON."""
 
 from gdq_pddl.experiments.protocol import (
+    DEFAULT_METHODS,
     METHODS,
     PAPER_METHODS,
     Experiment,
@@ -13,6 +14,6 @@ from gdq_pddl.experiments.protocol import (
 )
 from gdq_pddl.experiments.runner import ResultsError, RunInterrupted, run_experiments
 
-__all__ = ["METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError", "RunInterrupted",
-           "Unit", "paper_protocol", "robot_experiment", "run_experiments", "switch_experiment",
-           "task_experiments"]
+__all__ = ["DEFAULT_METHODS", "METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError",
+           "RunInterrupted", "Unit", "paper_protocol", "robot_experiment", "run_experiments",
+           "switch_experiment", "task_experiments"]

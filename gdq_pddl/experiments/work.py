@@ -45,8 +45,8 @@ def make_learner(method: str, context, hyper: Hyper):
     if method not in METHODS:
         raise GdqError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
     common = {"alpha": hyper.alpha, "gamma": hyper.gamma, "epsilon": hyper.epsilon}
-    if method == "GDQ-code":
-        return learner_by_name("gdq", context, variant="code", **common)
+    if method.endswith("-code"):  # GDQ-code, DARLING-code
+        return learner_by_name(method.removesuffix("-code"), context, variant="code", **common)
     return learner_by_name(method, context, **common)
 
 

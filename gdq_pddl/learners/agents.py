@@ -11,6 +11,18 @@ Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state
 - :class:`Darling`: Q-learning restricted, at every state, to the actions that start a
   plan within the length tolerance (1.3 x shortest) from that state, both when acting
   (exploration included) and in the max of the update; all actions where no plan exists.
+  ``variant="code"`` is DARLING as the GDQ authors' released agent runs it (read, not
+  copied): the greedy choice and the update's max range over every action (untried ones
+  at 0), and any action that does not start a plan, greedy or exploratory, is replaced
+  by a uniformly random one that does. Untried actions keep Q = 0, so wherever the plan
+  actions' values are still negative the greedy choice is a non-plan action, replaced by
+  a random plan action: it walks at random among plan actions until the values along a
+  route turn positive (and the zeros floor every state's value in the update). It
+  learns much more slowly: on Task C, first 300 episodes, 100 runs, mean return 0.67
+  against 7.54 for the paper variant, the 50-episode average of the mean curve turning
+  positive at episode 170 against 58 (the issue's measurement of the released code:
+  ~231). It is a baseline for reading the paper's curves, not part of the paper
+  protocol (``gdq-pddl run --method DARLING-code``).
 - :class:`GDQ`: Guided Dyna-Q, below.
 
 GDQ, the paper's algorithm (``variant="paper"``, the default) and the authors' code
@@ -144,7 +156,12 @@ class TabularLearner:
 
     # -- per-learner hooks -------------------------------------------------------------
     def _allowed(self, context: TaskContext) -> np.ndarray:
+        """What the max in the update and the greedy choice range over, per state."""
         return np.ones((context.n_states, context.n_actions), dtype=np.bool_)
+
+    def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
+        """What the learner may execute, per state (:mod:`~gdq_pddl.learners.core`)."""
+        return allowed
 
     def _plans(self, context: TaskContext) -> PlanTable:
         """H: the plans this learner backs up (GDQ may ask for plans within a tolerance)."""
@@ -171,14 +188,15 @@ class TabularLearner:
             raise ValueError(f"task has {context.n_states} states x {context.n_actions} "
                              f"actions, the learner {self.q.shape}")
         allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
+        guide = np.ascontiguousarray(self._guide(context, allowed), dtype=np.bool_)
         plans = self._plans(context)
         opt_r = np.zeros_like(allowed)
         for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
             lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
             opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
         tables = core.Tables(
-            q=self.q, v=np.zeros(len(self.q)), allowed=allowed,
-            n_allowed=allowed.sum(axis=1).astype(np.int64),
+            q=self.q, v=np.zeros(len(self.q)), allowed=allowed, guide=guide,
+            n_guide=guide.sum(axis=1).astype(np.int64),
             goal=np.ascontiguousarray(context.goal, dtype=np.bool_), opt_r=opt_r,
             **self._model,
             plan_ptr=np.ascontiguousarray(plans.plan_ptr, dtype=np.int64),
@@ -247,7 +265,9 @@ class TabularLearner:
     def nbytes(self) -> int:
         """Bytes of the learner's arrays (allocated; the pages of pairs never tried are
         never written, so the memory actually used can be much less)."""
-        return sum(x.nbytes for x in self.tables if isinstance(x, np.ndarray))
+        # guide is usually the allowed array itself: count each array once
+        arrays = {id(x): x for x in self.tables if isinstance(x, np.ndarray)}
+        return sum(x.nbytes for x in arrays.values())
 
     @property
     def max_successors(self) -> int:
@@ -301,7 +321,9 @@ class Darling(TabularLearner):
     def __init__(self, context: TaskContext, config: DarlingConfig | None = None) -> None:
         super().__init__(context, config or DarlingConfig())
 
-    def _allowed(self, context: TaskContext) -> np.ndarray:
+    def _plan_actions(self, context: TaskContext) -> np.ndarray:
+        """Per state, the actions that start a plan within the tolerance (all actions
+        where there is no plan)."""
         table = context.darling_plans
         if table is None:
             raise ValueError("DARLING needs a task context with darling_plans")
@@ -311,6 +333,16 @@ class Darling(TabularLearner):
                              f"{context.darling_tolerance}, the config {self.config.tolerance}")
         allowed = np.array(table.first_actions, dtype=np.bool_, copy=True)
         allowed[~allowed.any(axis=1)] = True  # no plan from there: every action
+        return allowed
+
+    def _allowed(self, context: TaskContext) -> np.ndarray:
+        if self.config.variant == "code":  # the max ranges over every action
+            return super()._allowed(context)
+        return self._plan_actions(context)
+
+    def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
+        if self.config.variant == "code":
+            return self._plan_actions(context)
         return allowed
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 GDQVariant = Literal["paper", "code"]
+DarlingVariant = Literal["paper", "code"]
 
 
 @dataclass(frozen=True)
@@ -108,8 +109,18 @@ class DarlingConfig(LearnerConfig):
     tolerance: float = 0.3
     """Plans up to (1 + tolerance) x the shortest length define the allowed actions;
     the task context's DARLING plan table must have been built with this tolerance."""
+    variant: DarlingVariant = "paper"
+    """``"paper"``: Leonetti et al.'s DARLING as the SPEC states it; the plan actions are
+    the only ones it may choose, when exploring and in the max of the update alike.
+    ``"code"``: as the GDQ authors' released DARLING agent runs it, a baseline for
+    comparing with their published curves, not DARLING as defined: the greedy choice and
+    the update's max range over *all* actions (untried ones at 0), and an action that is
+    not a plan action (the greedy one, or an epsilon draw) is replaced by a uniformly
+    random plan action. See :mod:`gdq_pddl.learners.agents`."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.tolerance < 0:
             raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")
+        if self.variant not in ("paper", "code"):
+            raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")

@@ -3,7 +3,8 @@
 Every learner (Q-learning, Dyna-Q, DARLING, GDQ) is the same data, :class:`Tables`, plus
 scalar :class:`Params` whose ``kind`` selects which rules run after a real step:
 
-- :func:`act`: epsilon-greedy over the allowed actions with random tie-breaking;
+- :func:`act`: epsilon-greedy with random tie-breaking (over the allowed actions; see
+  ``guide`` below for the one learner that acts differently);
 - :func:`observe`: the TD update on the real transition, then (model-based learners)
   :func:`record` in the model and N :func:`model_backup` calls;
 - :func:`expected_value`: the expected Bellman backup of one pair with the model;
@@ -55,6 +56,12 @@ at least once and leave untried pairs alone.
 ``v[s]`` is kept equal to ``max`` of ``q[s, a]`` over the allowed actions of ``s`` by
 :func:`set_q`, the only writer of single Q entries.
 
+``allowed`` is what the max ranges over (the update's target and the greedy choice);
+``guide`` is what the agent may execute (exploration draws uniformly from it, and a
+greedy action outside it is replaced by such a draw). They are the same array for every
+learner except DARLING as the GDQ authors' code runs it, whose max ranges over all
+actions while it may only execute plan actions.
+
 Randomness comes only from the ``np.random.Generator`` passed in.
 """
 
@@ -92,8 +99,9 @@ class Tables(NamedTuple):
 
     q: np.ndarray  # float64[S, A]
     v: np.ndarray  # float64[S], max of q over allowed actions
-    allowed: np.ndarray  # bool[S, A]
-    n_allowed: np.ndarray  # int64[S]
+    allowed: np.ndarray  # bool[S, A], what the max (v, greedy) ranges over
+    guide: np.ndarray  # bool[S, A], what may be executed (module doc); usually `allowed`
+    n_guide: np.ndarray  # int64[S]
     goal: np.ndarray  # bool[S], goal learner states of the current task
     opt_r: np.ndarray  # bool[S, A], OptInit's plan pairs (R = R_max in the optimistic model)
     slots: np.ndarray  # int64[S, A, K]: s' << 32 | count, sorted, 0 = empty (module doc)
@@ -169,9 +177,10 @@ def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
 
 def table_bytes(n_states: int, n_actions: int, max_successors: int,
                 transitions: bool = True) -> int:
-    """Bytes of a learner's per-pair arrays: Q, the allowed and optimistic masks, the
-    model's visits, stuck, costs and known list, and (``transitions``) the slots."""
-    per_pair = 8 * 6 + 2 + (8 * max_successors if transitions else 0)  # int64 slots
+    """Bytes of a learner's per-pair arrays at most: Q, the allowed, guide and optimistic
+    masks, the model's visits, stuck, costs and known list, and (``transitions``) the
+    slots."""
+    per_pair = 8 * 6 + 3 + (8 * max_successors if transitions else 0)  # int64 slots
     return n_states * n_actions * per_pair
 
 
@@ -215,19 +224,29 @@ def td_update(t: Tables, s: int, a: int, target: float, alpha: float) -> None:
 # --- acting --------------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
-    """Epsilon-greedy over the allowed actions of ``s``, ties broken uniformly at random.
+def _draw_guided(t: Tables, s: int, rng: np.random.Generator) -> int:
+    """A uniformly random action of ``guide[s]``."""
+    k = rng.integers(0, t.n_guide[s])
+    for a in range(t.q.shape[1]):
+        if t.guide[s, a]:
+            if k == 0:
+                return a
+            k -= 1
+    return 0  # unreachable: n_guide[s] counts guide[s]
 
-    Draws one uniform, then one integer when exploring or when several actions tie.
+
+@numba.njit(cache=True)
+def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
+    """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
+
+    With probability epsilon a uniform action of ``guide[s]``; else a uniformly chosen
+    maximiser of Q over ``allowed[s]``, replaced by a uniform action of ``guide[s]`` if
+    it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, then one
+    integer when exploring or when several actions tie, and one more for a replacement.
     """
     n_actions = t.q.shape[1]
     if rng.random() < p.epsilon:
-        k = rng.integers(0, t.n_allowed[s])
-        for a in range(n_actions):
-            if t.allowed[s, a]:
-                if k == 0:
-                    return a
-                k -= 1
+        return _draw_guided(t, s, rng)
     best = t.v[s]
     ties = 0
     last = 0
@@ -235,27 +254,31 @@ def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
         if t.allowed[s, a] and t.q[s, a] == best:
             ties += 1
             last = a
-    if ties == 1:
-        return last
-    k = rng.integers(0, ties)
-    for a in range(n_actions):
-        if t.allowed[s, a] and t.q[s, a] == best:
-            if k == 0:
-                return a
-            k -= 1
+    if ties > 1:
+        k = rng.integers(0, ties)
+        for a in range(n_actions):
+            if t.allowed[s, a] and t.q[s, a] == best:
+                if k == 0:
+                    last = a
+                    break
+                k -= 1
+    if not t.guide[s, last]:
+        return _draw_guided(t, s, rng)
     return last
 
 
 @numba.njit(cache=True)
 def greedy(t: Tables) -> np.ndarray:
-    """The greedy policy: per state, the lowest-index allowed action of maximal Q."""
+    """The greedy policy: per state, the lowest-index action of maximal Q among those it
+    may execute (``guide``; the allowed actions for every learner but DARLING-code)."""
     n_states, n_actions = t.q.shape
     out = np.zeros(n_states, dtype=np.int64)
     for s in range(n_states):
+        best = -np.inf
         for a in range(n_actions):
-            if t.allowed[s, a] and t.q[s, a] == t.v[s]:
+            if t.guide[s, a] and t.q[s, a] > best:
+                best = t.q[s, a]
                 out[s] = a
-                break
     return out
 
 
