@@ -2,6 +2,7 @@
 
     python benchmarks/learners.py speed      # steps/s per method, fast path, median of 5
     python benchmarks/learners.py results    # 300 episodes x 5 runs, mean return per method
+    python benchmarks/learners.py results --runs 100   # the same, with more runs
     python benchmarks/learners.py            # both
 
 Speed counts env steps (learner + env, compiled loop) after a JIT warm-up run.
@@ -30,6 +31,8 @@ METHODS: dict[str, tuple[str, dict]] = {
 DIAGNOSTICS: dict[str, tuple[str, dict]] = {
     # not the paper: optimistic pairs end the episode instead of leading back to s0
     "GDQ (paper, terminal optimism)": ("gdq", {"optimistic_successor": "terminal"}),
+    # DARLING as the GDQ authors' released agent runs it (where the issue's ~231 comes from)
+    "DARLING (released code)": ("darling", {"variant": "code"}),
 }
 
 
@@ -72,6 +75,7 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
     """Mean return per method over ``runs`` runs of ``episodes`` episodes."""
     env, ctx = _env_and_context(task)
     out = {}
+    per_run_means: dict[str, np.ndarray] = {}
     print(f"Task {task}: {runs} runs x {episodes} episodes")
     print(f"{'method':30s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
           f"{'success':>8s} {'MA50 > 0 at':>12s}")
@@ -86,6 +90,7 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
         per_run = ret.mean(axis=1)
         succ = np.mean([c.success.mean() for c in curves])
         cross = first_positive(ret.mean(axis=0))
+        per_run_means[label] = per_run
         out[label] = {"mean": float(per_run.mean()),
                       "se": float(per_run.std(ddof=1) / np.sqrt(runs)) if runs > 1 else 0.0,
                       "last50": float(ret[:, -50:].mean()), "success": float(succ),
@@ -93,6 +98,13 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
         r = out[label]
         print(f"{label:30s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
               f"{r['success']:>8.2f} {str(cross) if cross else 'never':>12s}", flush=True)
+    if runs > 1:  # run k of every method shares its env and learner seeds: paired
+        print("GDQ (code) minus each baseline, mean over runs (paired s.e.):")
+        for label, means in per_run_means.items():
+            if label.startswith("GDQ"):
+                continue
+            d = per_run_means["GDQ (code)"] - means
+            print(f"  - {label:28s} {d.mean():+8.2f} ({d.std(ddof=1) / np.sqrt(runs):.2f})")
     return out
 
 
