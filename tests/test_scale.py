@@ -193,3 +193,90 @@ def test_learning_smoke_on_100_positions(tmp_path):
     assert converged_at(np.r_[np.full(60, 9.0), np.full(100, -5.0)], threshold) == 50  # first
     assert converged_at(np.full(80, 1.0), threshold) is None
     assert result.r_fail < result.threshold < result.v_ref
+
+
+QUIET = {"log": lambda *a: None, "progress": False}
+SMALL = {"sizes": [40], "runs": 2, "episodes": 30, "methods": ["DARLING", "Q-learning"]}
+
+
+def _interrupt_after(monkeypatch, k: int) -> list:
+    """Make the scale runs raise KeyboardInterrupt (as Ctrl-C) once ``k`` units are done;
+    returns the list of the units started."""
+    from gdq_pddl.experiments import scale
+
+    real, started = getattr(scale.run_one, "real", scale.run_one), []
+
+    def run_one(setting, name, key, episodes):
+        if len(started) == k:
+            raise KeyboardInterrupt
+        started.append((name, key))
+        return real(setting, name, key, episodes)
+
+    run_one.real = real
+    monkeypatch.setattr(scale, "run_one", run_one)
+    return started
+
+
+def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypatch):
+    from gdq_pddl.experiments.runner import RunInterrupted
+    from gdq_pddl.experiments.scale import run_scale
+
+    fresh = run_scale(tmp_path / "fresh", **SMALL, **QUIET)[0]
+    cut = tmp_path / "cut"
+    _interrupt_after(monkeypatch, 3)
+    with pytest.raises(RunInterrupted, match=r"3 of 4 runs are saved .*--resume"):
+        run_scale(cut, **SMALL, **QUIET)
+    units = cut / "units" / "size-40"
+    assert len(list(units.glob("*.npz"))) == 3 and not (cut / "size-40.npz").exists()
+    started = _interrupt_after(monkeypatch, 99)
+    resumed = run_scale(cut, **SMALL, resume=True, **QUIET)[0]
+    assert started == [("Q-learning", (0, 40, 1, 1))]  # only the missing unit ran
+    for name in SMALL["methods"]:
+        assert np.array_equal(resumed.returns[name], fresh.returns[name])
+        assert np.array_equal(resumed.success[name], fresh.success[name])
+        saved = [np.load(units / f"{name}-{run}.npz") for run in range(2)]
+        steps = sum(int(u["steps"]) for u in saved)
+        assert resumed.steps_per_s[name] == steps / sum(float(u["wall_s"]) for u in saved)
+    a, b = np.load(cut / "size-40.npz"), np.load(tmp_path / "fresh" / "size-40.npz")
+    assert sorted(a.files) == sorted(b.files)
+    for key in a.files:
+        assert a[key].dtype == b[key].dtype and np.array_equal(a[key], b[key]), key
+    assert (cut / "REPORT.md").exists() and (cut / "scale.png").exists()
+    assert not list(cut.glob("**/.*.tmp"))
+
+
+def test_scale_results_need_resume_and_the_same_configuration(tmp_path):
+    from gdq_pddl.experiments.runner import ResultsError
+    from gdq_pddl.experiments.scale import run_scale
+
+    kw = {"sizes": [40], "runs": 1, "episodes": 5, "methods": ["Q-learning"], **QUIET}
+    run_scale(tmp_path, **kw)
+    with pytest.raises(ResultsError, match="holds results: continue them with --resume"):
+        run_scale(tmp_path, **kw)
+    with pytest.raises(ResultsError, match=r"different configuration \(episodes 5 there, 6 now"):
+        run_scale(tmp_path, **kw | {"episodes": 6}, resume=True)
+    with pytest.raises(ResultsError, match="cannot add or drop sizes"):
+        run_scale(tmp_path, **kw | {"sizes": [40, 60]}, resume=True)
+    before = (tmp_path / "units" / "size-40" / "Q-learning-0.npz").stat().st_mtime_ns
+    run_scale(tmp_path, **kw, resume=True)  # nothing left to run: redraws the report
+    assert (tmp_path / "units" / "size-40" / "Q-learning-0.npz").stat().st_mtime_ns == before
+
+
+def test_scale_cli_says_how_to_resume_without_a_traceback(tmp_path, monkeypatch, capsys):
+    import shlex
+
+    out = tmp_path / "a folder"  # the command it prints must survive the shell
+    argv = ["scale", "--sizes", "40", "--runs", "1", "--episodes", "5", "--out", str(out)]
+    _interrupt_after(monkeypatch, 2)
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert err.startswith("gdq-pddl: interrupted: 2 of 5 runs are saved in")
+    command = err.split("continue with: ")[1].strip()
+    assert command == shlex.join(["gdq-pddl", *argv[:-2], "--seed", "0", "--out", str(out),
+                                  "--resume"])
+    started = _interrupt_after(monkeypatch, 99)
+    assert main(shlex.split(command)[1:]) == 0
+    assert len(started) == 3 and (out / "REPORT.md").exists()
+    assert main(argv) == 2  # without --resume: refused
+    assert "continue them with --resume" in capsys.readouterr().err

@@ -178,26 +178,32 @@ def register_scale(sub) -> None:
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
                        description="Run every method on generated buildings of each size "
                                    "and write scale.png/pdf and REPORT.md (episodes to "
-                                   "convergence, env steps/s).")
-    p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000])
-    p.add_argument("--runs", type=int, default=5)
-    p.add_argument("--episodes", type=int, default=5000)
-    p.add_argument("--seed", type=int, default=0)
+                                   "convergence, env steps/s). Each finished run is saved "
+                                   "in --out as it ends (units/size-N/), so an interrupted "
+                                   "run goes on with --resume.")
+    p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000],
+                   help="building sizes in positions (default 100 300 1000)")
+    p.add_argument("--runs", type=int, default=5, help="independent runs per method and size")
+    p.add_argument("--episodes", type=int, default=5000, help="episodes per run")
+    p.add_argument("--seed", type=int, default=0,
+                   help="building and base seed (each run derives its own)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run in --out (same command line; "
+                        "sizes cannot be added)")
     p.set_defaults(func=cmd_scale)
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    from gdq_pddl.analysis.scale import figure, report
-    from gdq_pddl.experiments.scale import run_size, save_size
+    import shlex
+
+    from gdq_pddl.experiments.scale import run_scale
 
     out = args.out or Path("results/scale")
-    out.mkdir(parents=True, exist_ok=True)
-    results = []
-    for n in args.sizes:  # each size's raw returns are on disk as soon as it is done
-        results.append(run_size(n, args.runs, args.episodes, args.seed))
-        save_size(results[-1], out / f"size-{n}.npz")
-    figure(results, args.episodes, out)
-    print(report(results, args.runs, args.episodes, args.seed, out))
+    command = shlex.join(["gdq-pddl", "scale", "--sizes", *map(str, args.sizes),
+                          "--runs", str(args.runs), "--episodes", str(args.episodes),
+                          "--seed", str(args.seed), "--out", str(out), "--resume"])
+    run_scale(out, args.sizes, args.runs, args.episodes, args.seed, resume=args.resume,
+              command=command)
+    print(out / "REPORT.md")
     return 0
-

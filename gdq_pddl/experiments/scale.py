@@ -4,7 +4,24 @@ For each size N (default 100, 300, 1000) the building of ``gdq-pddl building
 --positions N --seed S`` and its task A (start and goal in rooms far apart), each method
 runs ``runs`` times for ``episodes`` episodes over the compact model
 (:mod:`gdq_pddl.envs.compact`; the full-state model would need ``2**n_doors`` states).
-Seeds come from ``(seed, N, method, run)`` only.
+Seeds come from ``(seed, N, method index, run)`` only, so a run gives the same returns
+whether it ran straight through or was interrupted and resumed.
+
+:func:`run_scale` (``gdq-pddl scale``) writes to its output folder, as the office
+runner (:mod:`gdq_pddl.experiments.runner`) does::
+
+    config.json           sizes, runs, episodes, seed, methods and package versions
+    units/size-N/size.json    the building, learner tables and plan-table time of size N
+    units/size-N/<method>-<run>.npz
+                          one finished run, written atomically as soon as it is done:
+                          returns, success (per episode), steps, wall_s, table_mb
+    size-N.npz            every run of size N (:func:`save_size`), once its units are done
+    scale.png/pdf, REPORT.md  at the end, from the units
+
+An interrupted run (Ctrl-C, or killed) loses at most the run in flight; ``--resume``
+checks that the configuration is the same and runs only the missing units (it cannot add
+sizes: those go into another folder). Env steps/s are the saved runs' steps over their
+wall time, so a resumed run's size files, figure and report are made the same way.
 
 Decisions, where the office protocol does not carry over:
 
@@ -45,14 +62,26 @@ Decisions, where the office protocol does not carry over:
 
 from __future__ import annotations
 
+import json
+import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.buildings import building_world
+from gdq_pddl.buildings import building_world, generate
 from gdq_pddl.envs.compact import CompactEnv
 from gdq_pddl.envs.solve_compact import reference_value
+from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.runner import (
+    ResultsError,
+    RunInterrupted,
+    atomic_write,
+    save_unit,
+    versions,
+)
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.compact_runner import run_compact
 
@@ -114,51 +143,210 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
     return int(hit[0] + window) if len(hit) else None
 
 
-def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
-             methods: list[str] | None = None, log=print) -> SizeResult:
-    """Run every method at one size (see the module docstring)."""
+def size_context(positions: int, seed: int) -> tuple[dict, tuple]:
+    """The building of ``positions`` positions, its task context and env (what a run
+    needs), and the size's description: the first fields of :class:`SizeResult`, JSON-able.
+    """
     world = building_world(positions, seed)
     t0 = time.perf_counter()
     ctx = office_task_context(world, "A", darling_tolerance=TOLERANCE, darling_kind="routes")
     context_s = time.perf_counter() - t0
     env = CompactEnv(task="A", world=world)
-    out = SizeResult(positions, len(world.doors), ctx.n_states, ctx.n_actions,
-                     int(ctx.plans.length[ctx.s0]), world.step_limit, world.r_max,
-                     reference_value(world, "A"), context_s)
-    log(f"{positions} positions: {len(world.doors)} doors, {ctx.n_states} states x "
-        f"{ctx.n_actions} actions, L = {out.plan_length}, V_ref = {out.v_ref:.1f}, "
-        f"plans for every state in {context_s:.1f} s")
-    for mi, name in enumerate(methods or list(METHODS)):
-        method, config = METHODS[name]
-        returns = np.zeros((runs, episodes))
-        success = np.zeros((runs, episodes), dtype=np.bool_)
-        steps, wall = 0, 0.0
-        for run in range(runs):
-            ss = np.random.SeedSequence([seed, positions, mi, run])
-            env_seed, learner_seed = ss.generate_state(2)
-            learner = make_learner(method, ctx, gamma=1.0 - 1.0 / world.step_limit, **config)
-            out.table_mb[name] = learner.nbytes / 1e6
-            env.reset(seed=int(env_seed))
-            t1 = time.perf_counter()
-            records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
-            wall += time.perf_counter() - t1
-            steps += int(records.steps.sum())
-            returns[run] = records.returns
-            success[run] = records.success
-            del learner
-        out.returns[name] = returns
-        out.success[name] = success
+    header = {"positions": positions, "doors": len(world.doors), "n_states": int(ctx.n_states),
+              "n_actions": int(ctx.n_actions), "plan_length": int(ctx.plans.length[ctx.s0]),
+              "step_limit": int(world.step_limit), "r_max": float(world.r_max),
+              "v_ref": float(reference_value(world, "A")), "context_s": context_s}
+    return header, (world, ctx, env)
+
+
+def describe(header: dict) -> str:
+    """One line about a size (its building, learner tables and plans)."""
+    return (f"{header['positions']} positions: {header['doors']} doors, {header['n_states']} "
+            f"states x {header['n_actions']} actions, L = {header['plan_length']}, "
+            f"V_ref = {header['v_ref']:.1f}, plans for every state in "
+            f"{header['context_s']:.1f} s")
+
+
+def run_one(setting: tuple, name: str, key: tuple[int, int, int, int],
+            episodes: int) -> dict[str, np.ndarray]:
+    """One run of method ``name`` in ``setting`` (from :func:`size_context`), seeded by
+    ``key = (seed, positions, method index, run)`` only: the arrays of a unit file."""
+    world, ctx, env = setting
+    method, config = METHODS[name]
+    env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
+    learner = make_learner(method, ctx, gamma=1.0 - 1.0 / world.step_limit, **config)
+    env.reset(seed=int(env_seed))
+    t1 = time.perf_counter()
+    records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
+    wall = time.perf_counter() - t1
+    return {"returns": np.asarray(records.returns, dtype=np.float64),
+            "success": np.asarray(records.success, dtype=np.bool_),
+            "steps": np.int64(records.steps.sum()), "wall_s": np.float64(wall),
+            "table_mb": np.float64(learner.nbytes / 1e6)}
+
+
+def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
+             runs: int) -> SizeResult:
+    """A size's :class:`SizeResult` from its description and its (method, run) units;
+    env steps/s of a method is its runs' steps over their wall time."""
+    out = SizeResult(**header)
+    for name in methods:
+        done = [units[name, run] for run in range(runs)]
+        out.returns[name] = np.stack([u["returns"] for u in done])
+        out.success[name] = np.stack([u["success"] for u in done]).astype(np.bool_)
+        steps = sum(int(u["steps"]) for u in done)
+        wall = sum(float(u["wall_s"]) for u in done)
         out.steps_per_s[name] = steps / wall if wall > 0 else float("nan")
-        conv = out.converged(name)
-        log(f"  {name}: {out.steps_per_s[name]:,.0f} steps/s, tables "
-            f"{out.table_mb[name]:,.0f} MB, converged at {conv}")
+        out.table_mb[name] = float(done[-1]["table_mb"])
     return out
+
+
+def summary(result: SizeResult) -> list[str]:
+    """One line per method: env steps/s, table size, episodes to convergence."""
+    return [f"  {name}: {result.steps_per_s[name]:,.0f} steps/s, tables "
+            f"{result.table_mb[name]:,.0f} MB, converged at {result.converged(name)}"
+            for name in result.returns]
+
+
+def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
+             methods: list[str] | None = None, log=print) -> SizeResult:
+    """Run every method at one size in memory (see the module docstring; nothing saved:
+    :func:`run_scale` saves each run as it finishes)."""
+    methods = list(methods or METHODS)
+    header, setting = size_context(positions, seed)
+    log(describe(header))
+    units = {(name, run): run_one(setting, name, (seed, positions, mi, run), episodes)
+             for mi, name in enumerate(methods) for run in range(runs)}
+    result = assemble(header, units, methods, runs)
+    for line in summary(result):
+        log(line)
+    return result
 
 
 def save_size(result: SizeResult, path) -> None:
     """The raw returns and successes of every method at one size, with the size's
-    figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``)."""
+    figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``).
+    Written atomically."""
     arrays = {f"returns/{k}": v for k, v in result.returns.items()}
     arrays |= {f"success/{k}": v for k, v in result.success.items()}
-    np.savez_compressed(path, positions=result.positions, v_ref=result.v_ref,
-                        r_fail=result.r_fail, threshold=result.threshold, **arrays)
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as fh:
+            np.savez_compressed(fh, positions=result.positions, v_ref=result.v_ref,
+                                r_fail=result.r_fail, threshold=result.threshold, **arrays)
+
+    atomic_write(Path(path), write)
+
+
+def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int = 0,
+              methods: list[str] | None = None, resume: bool = False, progress: bool = True,
+              log: Callable[[str], None] | None = None,
+              command: str | None = None) -> list[SizeResult]:
+    """Run every size into ``out``, each (size, method, run) saved as it finishes; then
+    ``size-N.npz``, ``scale.png/pdf`` and ``REPORT.md`` from the saved runs.
+
+    ``resume=True`` checks that ``out/config.json`` holds the same configuration and
+    runs only the missing units. On Ctrl-C raises :class:`RunInterrupted`, whose message
+    says how to continue (``command``, the command line with ``--resume``).
+    """
+    from tqdm import tqdm
+
+    log = log or tqdm.write  # clears the progress bar, writes, draws it again
+    methods = list(methods or METHODS)
+    _check(sizes, runs, episodes, seed, methods)
+    out = Path(out)
+    _prepare(out, {"sizes": list(sizes), "runs": runs, "episodes": episodes, "seed": seed,
+                   "methods": methods}, resume)
+    results = []
+    try:
+        for n in sizes:
+            results.append(_size_into(out, n, runs, episodes, seed, methods, progress, log))
+            save_size(results[-1], out / f"size-{n}.npz")
+        from gdq_pddl.analysis.scale import figure, report
+
+        figure(results, episodes, out)
+        report(results, runs, episodes, seed, out)
+    except KeyboardInterrupt:
+        done = len(list((out / "units").glob("size-*/*.npz")))
+        total = len(sizes) * len(methods) * runs
+        raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
+                             f"continue with: {command or 'the same command and --resume'}"
+                             ) from None
+    return results
+
+
+def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[str]) -> None:
+    """Bad arguments fail before anything is written or run."""
+    if runs < 1 or episodes < 1:
+        raise GdqError("--runs and --episodes must be at least 1")
+    if not sizes or len(set(sizes)) != len(sizes):
+        raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown or len(set(methods)) != len(methods):
+        raise GdqError(f"methods must be different ones of {', '.join(METHODS)}, got {methods}")
+    for n in sizes:
+        generate(n, seed)  # a WorldError says what is wrong with the size
+
+
+def _prepare(out: Path, config: dict, resume: bool) -> None:
+    """Refuse a folder that holds results (without --resume) or other results (with it);
+    remove what a killed write left; write ``config.json``."""
+    cfg_path = out / "config.json"
+    held = cfg_path.exists() or (out / "units").exists() or any(out.glob("size-*.npz"))
+    if held and not resume:
+        raise ResultsError(f"{out} holds results: continue them with --resume, "
+                           "or choose another --out")
+    if held:
+        if not cfg_path.exists():
+            raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
+        old = json.loads(cfg_path.read_text())
+        differ = [f"{k} {old.get(k)} there, {v} now" for k, v in config.items()
+                  if old.get(k) != v]
+        if differ:
+            hint = ("; --resume cannot add or drop sizes: run other sizes into another --out"
+                    if old.get("sizes") != config["sizes"] else "")
+            raise ResultsError(f"{out} holds results of a different configuration "
+                               f"({'; '.join(differ)}): --resume needs the same command "
+                               f"line{hint}")
+    # a run killed in the middle of a write leaves its temporary file (never a unit file:
+    # those appear only by an atomic rename)
+    for stale in out.glob("**/.*.tmp"):
+        stale.unlink(missing_ok=True)
+    config = config | {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
+    atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
+
+
+def _size_into(out: Path, n: int, runs: int, episodes: int, seed: int, methods: list[str],
+               progress: bool, log: Callable[[str], None]) -> SizeResult:
+    """Run the units of size ``n`` missing in ``out/units/size-N/``, then read them all."""
+    from tqdm import tqdm
+
+    folder = out / "units" / f"size-{n}"
+    paths = {(name, run): folder / f"{name}-{run}.npz" for name in methods for run in range(runs)}
+    missing = [key for key, path in paths.items() if not path.exists()]
+    header_path = folder / "size.json"
+    bar = tqdm(total=len(paths), initial=len(paths) - len(missing), unit="run",
+               desc=f"{n} positions", dynamic_ncols=True,
+               disable=not progress or not sys.stderr.isatty())
+    try:
+        header = json.loads(header_path.read_text()) if header_path.exists() else None
+        if missing or header is None:
+            built, setting = size_context(n, seed)
+            if header is None:  # the first measurement stays, so a resumed report is the same
+                header = built
+                atomic_write(header_path, lambda tmp: tmp.write_text(json.dumps(header)))
+        log(describe(header))
+        for name, run in missing:
+            unit = run_one(setting, name, (seed, n, methods.index(name), run), episodes)
+            save_unit(paths[name, run], unit)
+            bar.update(1)
+    finally:
+        bar.close()
+    units = {}
+    for key, path in paths.items():
+        with np.load(path) as saved:
+            units[key] = {k: saved[k] for k in saved.files}
+    result = assemble(header, units, methods, runs)
+    for line in summary(result):
+        log(line)
+    return result
