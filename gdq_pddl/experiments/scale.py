@@ -167,6 +167,10 @@ def describe(header: dict) -> str:
             f"{header['context_s']:.1f} s")
 
 
+_WARMED: set[str] = set()
+"""Methods whose compiled episode loop this process has already run once."""
+
+
 def run_one(setting: tuple, name: str, key: tuple[int, int, int, int],
             episodes: int) -> dict[str, np.ndarray]:
     """One run of method ``name`` in ``setting`` (from :func:`size_context`), seeded by
@@ -174,8 +178,13 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int, int],
     world, ctx, env = setting
     method, config = METHODS[name]
     env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
-    learner = make_learner(method, ctx, gamma=1.0 - 1.0 / world.step_limit, **config)
-    env.reset(seed=int(env_seed))
+    gamma = 1.0 - 1.0 / world.step_limit
+    if name not in _WARMED:  # numba loads the compiled loop on first use: not timed
+        run_compact(make_learner(method, ctx, gamma=gamma, **config), env, 1,
+                    np.random.default_rng(0))
+        _WARMED.add(name)
+    learner = make_learner(method, ctx, gamma=gamma, **config)
+    env.reset(seed=int(env_seed))  # after the warm-up: the results do not depend on it
     t1 = time.perf_counter()
     records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
     wall = time.perf_counter() - t1
