@@ -6,65 +6,115 @@ size of the learner's problem, the planner's shortest plan length, the optimal v
 (value iteration on the true model, from ``optimal.json``) and, per method, the mean
 return per episode over all episodes and over the last 10% of them (mean over runs with
 its standard error), and the success rate.
+
+:func:`summarise` and :func:`optimal_entry` are shared with the office report's
+*Methods compared* section (:mod:`gdq_pddl.analysis.sections.methods`).
 """
 
 from __future__ import annotations
 
-import csv
-import json
 import math
-from collections import defaultdict
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gdq_pddl.analysis.data import load_optimal
+from gdq_pddl.analysis.episodes import Episodes, load_episodes
+from gdq_pddl.analysis.stats import run_means
 
 
-def method_summary(out: Path) -> dict[tuple[str, str], dict[str, float]]:
-    """Per (task, method): mean return (all / last 10% of episodes) over runs, their
-    standard errors, the success rate and the number of runs."""
-    per_run: dict[tuple[str, str, str], list[tuple[float, int]]] = defaultdict(list)
-    with open(out / "episodes.csv", encoding="utf-8", newline="") as fh:
-        for row in csv.DictReader(fh):
-            key = (row["task"], row["method"], row["run"])
-            per_run[key].append((float(row["return"]), int(row["success"])))
-    grouped: dict[tuple[str, str], list[list[tuple[float, int]]]] = defaultdict(list)
-    for (task, method, _), rows in per_run.items():
-        grouped[(task, method)].append(rows)
-    summary = {}
-    for key, runs in grouped.items():
-        means = [sum(r for r, _ in rows) / len(rows) for rows in runs]
-        tails = []
-        for rows in runs:
-            tail = rows[-max(1, len(rows) // 10):]
-            tails.append(sum(r for r, _ in tail) / len(tail))
-        success = sum(s for rows in runs for _, s in rows) / sum(len(rows) for rows in runs)
-        summary[key] = {"mean": _mean(means), "se": _se(means), "last": _mean(tails),
-                        "last_se": _se(tails), "success": success, "runs": len(runs),
-                        "episodes": len(runs[0])}
+@dataclass(frozen=True)
+class MethodSummary:
+    """One method on one task: per-run mean returns summarised over runs."""
+
+    runs: int
+    episodes: int
+    """Episodes per run (the longest run's)."""
+    tail: int
+    """Episodes in the last 10%: ``max(1, episodes // 10)``."""
+    mean: float
+    """Mean over runs of the run's mean return per episode (all episodes)."""
+    se: float
+    """Its standard error over runs (NaN with a single run)."""
+    last: float
+    """The same over each run's last :attr:`tail` episodes."""
+    last_se: float
+    success: float
+    """Share of all episodes of all runs that reached the goal (NaN: no column)."""
+
+
+def summarise(returns: np.ndarray, success: np.ndarray | None = None) -> MethodSummary:
+    """The :class:`MethodSummary` of ``returns[runs, episodes]`` (and the matching 0/1
+    ``success`` matrix, if any)."""
+    runs, episodes = returns.shape
+    tail = max(1, episodes // 10)
+    means, lasts = run_means(returns), run_means(returns, episodes - tail)
+    rate = float(np.nanmean(success)) if success is not None and success.size else math.nan
+    return MethodSummary(runs, episodes, tail, _mean(means), _se(means), _mean(lasts),
+                         _se(lasts), rate)
+
+
+def task_summary(ep: Episodes, experiment: str, method: str, task: str) -> MethodSummary | None:
+    """:func:`summarise` of one (experiment, method, task) slice (None: no episodes)."""
+    returns = ep.matrix("return", experiment, method, task)
+    if returns.size == 0:
+        return None
+    success = ep.matrix("success", experiment, method, task) if "success" in ep.values \
+        else None
+    return summarise(returns, success)
+
+
+def method_summary(out: Path) -> dict[tuple[str, str], MethodSummary]:
+    """Per (task, method) of ``out/episodes.csv``: the :class:`MethodSummary` (a PDDL
+    run has one experiment; with several, the first that has the pair)."""
+    ep = load_episodes(Path(out) / "episodes.csv")
+    summary: dict[tuple[str, str], MethodSummary] = {}
+    for exp in ep.experiments:
+        for task in ep.tasks(exp):
+            for method in ep.methods(exp):
+                s = summary.get((task, method)) or task_summary(ep, exp, method, task)
+                if s is not None:
+                    summary[(task, method)] = s
     return summary
 
 
-def _mean(xs: list[float]) -> float:
-    return sum(xs) / len(xs)
+def optimal_entry(optimal: Mapping[str, Mapping[str, Any]], task: str,
+                  world: str | None = None) -> Mapping[str, Any]:
+    """The ``optimal.json`` facts of task label ``task`` (empty when absent).
+
+    The runner keys a task ``task`` in the office and ``task@world`` elsewhere (a PDDL
+    task ``task@problem file``), and each entry names its ``world``; with ``world``
+    given, only an entry of that world matches.
+    """
+    return next((v for k, v in optimal.items() if k.split("@", 1)[0] == task
+                 and (world is None or v.get("world", world) == world)), {})
 
 
-def _se(xs: list[float]) -> float:
-    if len(xs) < 2:
-        return float("nan")
-    m = _mean(xs)
-    return math.sqrt(sum((x - m) ** 2 for x in xs) / (len(xs) - 1) / len(xs))
+def _mean(xs: np.ndarray) -> float:
+    xs = xs[~np.isnan(xs)]
+    return float(np.mean(xs)) if xs.size else math.nan
 
 
-def _fmt(x: float) -> str:
+def _se(xs: np.ndarray) -> float:
+    xs = xs[~np.isnan(xs)]
+    return float(np.std(xs, ddof=1) / math.sqrt(xs.size)) if xs.size >= 2 else math.nan
+
+
+def fmt2(x: float) -> str:
+    """Two decimals, ``n/a`` for NaN."""
     return "n/a" if math.isnan(x) else f"{x:.2f}"
 
 
 def generic_report(out: Path) -> str:
     """The Markdown text of the report of output folder ``out``."""
-    optimal = json.loads((out / "optimal.json").read_text()) \
-        if (out / "optimal.json").exists() else {}
+    optimal = load_optimal(out)
     summary = method_summary(out)
     lines = ["# Run on a PDDL domain", ""]
     for task in sorted({t for t, _ in summary}):
-        info = next((v for k, v in optimal.items() if k.split("@", 1)[0] == task), {})
+        info = optimal_entry(optimal, task)
         lines += [f"## {task}", ""]
         if info:
             lines += [f"- domain `{info.get('domain')}`, problem `{info.get('problem')}`, "
@@ -75,18 +125,18 @@ def generic_report(out: Path) -> str:
                       f"- optimal value V* (expected return from the start, value iteration "
                       f"on the true model): {info.get('v_star', float('nan')):.2f}", ""]
         rows = sorted(((m, s) for (t, m), s in summary.items() if t == task),
-                      key=lambda ms: -ms[1]["mean"])
+                      key=lambda ms: -ms[1].mean)
         n = rows[0][1]
-        lines += [f"Mean return per episode, mean over {n['runs']} runs (standard error); "
-                  f"{n['episodes']} episodes per run; last 10%: the final "
-                  f"{max(1, n['episodes'] // 10)} episodes.", "",
+        lines += [f"Mean return per episode, mean over {n.runs} runs (standard error); "
+                  f"{n.episodes} episodes per run; last 10%: the final "
+                  f"{n.tail} episodes.", "",
                   "| method | mean return (SE) | last 10% (SE) | success rate |",
                   "|---|---|---|---|"]
         best = rows[0][0]
         for method, s in rows:
             name = f"**{method}**" if method == best else method
-            lines.append(f"| {name} | {_fmt(s['mean'])} ({_fmt(s['se'])}) | "
-                         f"{_fmt(s['last'])} ({_fmt(s['last_se'])}) | {s['success']:.2f} |")
+            lines.append(f"| {name} | {fmt2(s.mean)} ({fmt2(s.se)}) | "
+                         f"{fmt2(s.last)} ({fmt2(s.last_se)}) | {s.success:.2f} |")
         lines.append("")
     return "\n".join(lines)
 

@@ -3,7 +3,8 @@
 Every verdict is computed from the data by :func:`gdq_pddl.analysis.stats.verdict` (GDQ
 against each baseline, one number per run, Welch's t-test and a bootstrap CI); nothing
 is hard-coded. Experiments missing from the folder (a ``--quick`` run without switches
-or robot) are skipped with a note.
+or robot) are skipped with a note; experiments no paper section covers (``gdq-pddl run``)
+get the *Methods compared* section (:mod:`.sections.methods`) instead of verdicts.
 
 The sections are in :mod:`gdq_pddl.analysis.sections`; this module runs them in order
 and puts the verdict summary after the method paragraph.
@@ -20,6 +21,7 @@ from gdq_pddl.analysis.sections import (
     hypothesis_1,
     hypothesis_2,
     hypothesis_3,
+    methods,
     robot,
     route_c,
     variants,
@@ -32,7 +34,7 @@ from gdq_pddl.analysis.tables import make_tables
 
 __all__ = ["OptInitValues", "ReportOptions", "make_all", "optinit_values", "write_report"]
 
-SECTIONS = (header, ground_truth, hypothesis_1, hypothesis_2, hypothesis_3, route_c,
+SECTIONS = (header, methods, ground_truth, hypothesis_1, hypothesis_2, hypothesis_3, route_c,
             variants, why_gdq_fails, robot)
 """The report's sections in order (modules with ``write(w)``)."""
 DEFAULT_OPTIONS = ReportOptions()

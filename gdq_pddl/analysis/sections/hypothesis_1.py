@@ -4,7 +4,7 @@ return first turns positive."""
 from __future__ import annotations
 
 from gdq_pddl.analysis.data import TASKS_EXPERIMENT
-from gdq_pddl.analysis.sections.writer import Writer, fmt
+from gdq_pddl.analysis.sections.writer import Writer, milestone_str
 from gdq_pddl.analysis.stats import compare, first_positive, run_means, verdict, verdict_reason
 
 
@@ -58,7 +58,6 @@ def milestones(w: Writer) -> None:
         for m in methods:
             r = study.returns(TASKS_EXPERIMENT, m, task)
             ms = first_positive(r, window)
-            cells.append(f"{fmt(ms.on_mean_curve, 5)} ({fmt(ms.mean_of_reached, 4)}; "
-                         f"{ms.reached}/{len(ms.per_run)})")
+            cells.append(milestone_str(ms))
         w.add(f"| {task} | " + " | ".join(cells) + " |")
     w.add("")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from gdq_pddl.analysis.sections.writer import Writer, fmt
+from gdq_pddl.analysis.sections.writer import Writer, milestone_str
 from gdq_pddl.analysis.stats import compare, first_positive, run_means
 
 
@@ -48,6 +48,5 @@ def write(w: Writer) -> None:
         parts = []
         for m in ep.methods(exp):
             ms = first_positive(study.returns(exp, m, new), opts.window)
-            parts.append(f"{m} {fmt(ms.on_mean_curve, 5)} "
-                         f"({fmt(ms.mean_of_reached, 4)}; {ms.reached}/{len(ms.per_run)})")
+            parts.append(f"{m} {milestone_str(ms)}")
         w.add("  Recovery episode: " + "; ".join(parts) + ".", "")

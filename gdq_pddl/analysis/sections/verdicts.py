@@ -26,10 +26,17 @@ class Case:
 
 
 class Verdicts:
-    """The cases in the order the sections met them, ``(hypothesis, case) -> Case``."""
+    """The cases in the order the sections met them, ``(hypothesis, case) -> Case``.
 
-    def __init__(self) -> None:
+    ``gdq_runs`` says whether the data hold any GDQ run at all, so that a folder without
+    cases (no tasks or switch experiment) is not summarised as having no GDQ runs;
+    :attr:`elsewhere` names the sections that compare GDQ outside the hypotheses.
+    """
+
+    def __init__(self, gdq_runs: bool = True) -> None:
         self.cases: dict[tuple[str, str], Case] = {}
+        self.gdq_runs = gdq_runs
+        self.elsewhere: list[str] = []
 
     def record(self, hypothesis: str, case: str, basis: str, variant: str,
                comps: Sequence[Comparison]) -> tuple[str, str]:
@@ -47,10 +54,15 @@ class Verdicts:
         return order_methods(found)
 
     def counts(self) -> str:
-        """``paper GDQ: k of n cases hold; authors'-code GDQ: j of m cases hold``."""
+        """``paper GDQ: k of n cases hold; authors'-code GDQ: j of m cases hold``, or
+        why there is no verdict."""
         variants = self.variants()
         if not variants:
-            return "No verdicts (no GDQ runs in the data)."
+            if not self.gdq_runs:
+                return "No verdicts (no GDQ runs in the data)."
+            see = "".join(f"; see '{s}'" for s in self.elsewhere)
+            return ("No paper-hypothesis verdicts: this folder has no tasks or switch "
+                    f"experiment with GDQ runs{see}.")
         parts = []
         for v in variants:
             cases = [c for c in self.cases.values() if v in c.verdicts]
@@ -59,21 +71,22 @@ class Verdicts:
         return "; ".join(parts) + "."
 
     def section(self, notes: Sequence[str]) -> list[str]:
-        """The ``## Verdicts`` section: the table, the counts and the skipped parts."""
-        variants = self.variants() or ["GDQ"]
-        summary = ["## Verdicts", "",
-                   "| Hypothesis | Case | " + " | ".join(
-                       f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
-                       for v in variants) + " | Basis |",
-                   "|---|---|" + "---|" * len(variants) + "---|"]
-        for c in self.cases.values():
-            cells = [f"**{c.verdicts[v]}**" if v in c.verdicts else "–" for v in variants]
-            reasons = "; ".join(f"{v} {c.reasons[v]}" for v in variants if v in c.reasons)
-            summary.append(f"| {c.hypothesis} | {c.case} | " + " | ".join(cells)
-                           + f" | {c.basis}: {reasons} |")
-        if not self.cases:
-            summary.append("| – | – | " + "no data | " * len(variants) + "– |")
-        summary += ["", self.counts(), ""]
+        """The ``## Verdicts`` section: the table (when there are cases), the counts and
+        the skipped parts."""
+        summary = ["## Verdicts", ""]
+        if self.cases:
+            variants = self.variants()
+            summary += ["| Hypothesis | Case | " + " | ".join(
+                            f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
+                            for v in variants) + " | Basis |",
+                        "|---|---|" + "---|" * len(variants) + "---|"]
+            for c in self.cases.values():
+                cells = [f"**{c.verdicts[v]}**" if v in c.verdicts else "–" for v in variants]
+                reasons = "; ".join(f"{v} {c.reasons[v]}" for v in variants if v in c.reasons)
+                summary.append(f"| {c.hypothesis} | {c.case} | " + " | ".join(cells)
+                               + f" | {c.basis}: {reasons} |")
+            summary.append("")
+        summary += [self.counts(), ""]
         if notes:
             summary += ["Skipped parts:", "", *[f"- {n}" for n in notes], ""]
         return summary

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from gdq_pddl.analysis.data import is_gdq
 from gdq_pddl.analysis.sections.verdicts import Verdicts
-from gdq_pddl.analysis.stats import Comparison
+from gdq_pddl.analysis.stats import Comparison, Milestone
 from gdq_pddl.analysis.study import Study
 
 
@@ -43,6 +43,13 @@ def fmt(x: float, digits: int = 3) -> str:
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}g}"
 
 
+def milestone_str(ms: Milestone) -> str:
+    """A milestone on the mean curve, then in brackets the mean over the runs that reach
+    it and how many do: ``55 (61.5; 4/5)``."""
+    return (f"{fmt(ms.on_mean_curve, 5)} ({fmt(ms.mean_of_reached, 4)}; "
+            f"{ms.reached}/{len(ms.per_run)})")
+
+
 def route_str(areas: Sequence[int]) -> str:
     return "->".join(map(str, areas)) if areas else "(none)"
 
@@ -57,7 +64,7 @@ class Writer:
     def __init__(self, study: Study, opts: ReportOptions, out_dir: Path) -> None:
         self.study, self.opts, self.out_dir = study, opts, out_dir
         self.lines: list[str] = []
-        self.verdicts = Verdicts()
+        self.verdicts = Verdicts(any(is_gdq(m) for m in study.episodes.methods()))
         self.notes: list[str] = []
 
     def add(self, *lines: str) -> None:
