@@ -555,3 +555,14 @@ def test_methods_section_on_a_real_run(tmp_path):
     assert f"V* = {v_star:.2f}" in section
     assert "| **GDQ-code** | 2 |" in section or "| GDQ-code | 2 |" in section
     assert "  - GDQ-code - Q-learning = " in section
+
+
+def test_a_run_experiment_gets_its_learning_curves_linked_from_the_report(tmp_path):
+    from gdq_pddl.experiments import Experiment, run_experiments
+
+    exp = Experiment("run", (("C", 60),), runs=2, methods=("GDQ-code", "Q-learning"))
+    out = run_experiments([exp], tmp_path, jobs=1, progress=False)
+    paths = make_all(out)
+    assert out / "figures" / "learning_curves_run.png" in paths
+    assert "![learning curves, run](figures/learning_curves_run.png)" in (
+        out / "REPORT.md").read_text()

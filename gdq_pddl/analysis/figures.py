@@ -25,6 +25,7 @@ from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
+from gdq_pddl.analysis.sections.methods import curves_stem, uncovered  # noqa: E402
 from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
 from gdq_pddl.analysis.study import Study  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
@@ -142,9 +143,11 @@ def _task_title(study: Study, experiment: str, task: str) -> str:
 
 
 def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
-                    fraction_of_vstar: bool = False) -> list[Path]:
-    """Tasks A-D: return per episode (or return / V*), mean over runs +- SE, smoothed."""
-    exp = TASKS_EXPERIMENT
+                    fraction_of_vstar: bool = False,
+                    experiment: str = TASKS_EXPERIMENT) -> list[Path]:
+    """Return per episode (or return / V*) of each task of ``experiment`` (the paper's
+    tasks A-D by default), mean over runs +- SE, smoothed."""
+    exp = experiment
     if not study.has(exp):
         return []
     ep = study.episodes
@@ -166,9 +169,12 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     what = "return / V*" if fraction_of_vstar else "return per episode"
-    fig.suptitle(f"{what}: mean over runs +- SE, {opts.window}-episode moving average",
+    sep = "\n" if len(tasks) == 1 else ": "  # one panel is too narrow for one line
+    fig.suptitle(f"{what}{sep}mean over runs +- SE, {opts.window}-episode moving average",
                  fontsize=11)
     stem = "fraction_of_vstar" if fraction_of_vstar else "learning_curves"
+    if exp != TASKS_EXPERIMENT:
+        stem = curves_stem(exp) if not fraction_of_vstar else f"{stem}_{slug(exp)}"
     return _save(fig, out_dir, stem, opts)
 
 
@@ -376,6 +382,8 @@ def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
     paths: list[Path] = []
     paths += learning_curves(study, target, opts)
     paths += learning_curves(study, target, opts, fraction_of_vstar=True)
+    for exp in uncovered(study):  # gdq-pddl run, ...: their curves too
+        paths += learning_curves(study, target, opts, experiment=exp)
     paths += switch_curves(study, target, opts)
     paths += visit_heatmaps(study, target, opts)
     paths += task_routes(study, target, opts)

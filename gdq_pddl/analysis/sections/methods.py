@@ -10,6 +10,7 @@ the PDDL report and the hypotheses agree on every definition.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -28,6 +29,11 @@ def uncovered(study: Study) -> list[str]:
     return [e for e in study.episodes.experiments
             if e not in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)
             and not e.startswith(SWITCH_PREFIX)]
+
+
+def curves_stem(experiment: str) -> str:
+    """The file stem of an uncovered experiment's learning-curve figure."""
+    return "learning_curves_" + (re.sub(r"[^A-Za-z0-9]+", "_", experiment).strip("_") or "x")
 
 
 def write(w: Writer) -> None:
@@ -51,6 +57,7 @@ def write(w: Writer) -> None:
           "episodes and over the last 10%: Welch's t-test and bootstrap CI as in the "
           "Method paragraph.", "")
     for exp in exps:
+        w.figure(curves_stem(exp), f"learning curves, {exp}")
         for task in w.study.episodes.tasks(exp):
             write_task(w, exp, task)
 
