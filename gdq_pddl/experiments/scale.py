@@ -321,6 +321,8 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
     # those appear only by an atomic rename)
     for stale in out.glob("**/.*.tmp"):
         stale.unlink(missing_ok=True)
+    if held:  # keep the record of the run being continued (its versions, its start)
+        return
     config = config | {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
 
