@@ -65,6 +65,13 @@ class PlanTable:
     def has_plan(self) -> np.ndarray:
         return self.length >= 0
 
+    def allowed_actions(self) -> np.ndarray:
+        """DARLING's allowed set, a new bool array: ``first_actions``, and every action
+        in the states without a plan."""
+        allowed = np.array(self.first_actions, dtype=np.bool_, copy=True)
+        allowed[~allowed.any(axis=1)] = True
+        return allowed
+
     def plans_from(self, state: int) -> list[list[tuple[int, int]]]:
         """The plans from ``state`` as lists of learner pairs (for inspection and tests)."""
         out = []

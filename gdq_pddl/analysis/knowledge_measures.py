@@ -109,8 +109,7 @@ def route_check(real: World, knowledge: World, task: Task,
     from gdq_pddl.spaces import LearnerSpaces
 
     ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
-    allowed = np.array(ctx.darling_plans.first_actions, dtype=np.bool_, copy=True)
-    allowed[~allowed.any(axis=1)] = True  # DARLING: every action where there is no plan
+    allowed = ctx.darling_plans.allowed_actions()
     shortest = ctx.plans.first_actions
     tolerant = ctx.darling_plans.first_actions
     model = compile_model(real)

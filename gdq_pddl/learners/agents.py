@@ -331,9 +331,7 @@ class Darling(TabularLearner):
                 context.darling_tolerance, self.config.tolerance):
             raise ValueError(f"the context's DARLING plans use tolerance "
                              f"{context.darling_tolerance}, the config {self.config.tolerance}")
-        allowed = np.array(table.first_actions, dtype=np.bool_, copy=True)
-        allowed[~allowed.any(axis=1)] = True  # no plan from there: every action
-        return allowed
+        return table.allowed_actions()
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
         if self.config.variant == "code":  # the max ranges over every action
