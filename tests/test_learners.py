@@ -30,8 +30,10 @@ from gdq_pddl.world import Task, load_world
 
 WORLD = load_world()
 DET = deterministic_world(WORLD)
+LITERAL = GDQConfig(variant="literal")
+
 ALL = [("qlearning", {}), ("dynaq", {}), ("darling", {}), ("darling", {"variant": "code"}),
-       ("gdq", {}), ("gdq", {"variant": "code"})]
+       ("gdq", {}), ("gdq", {"variant": "literal"}), ("gdq", {"variant": "code"})]
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +86,7 @@ def greedy_walk(learner, world, task: str, limit: int) -> tuple[list[tuple[int, 
     return taken, info["cause"]
 
 
-@pytest.mark.parametrize("config", [GDQConfig(variant="paper"),
+@pytest.mark.parametrize("config", [GDQConfig(variant="literal"),
                                     GDQConfig(variant="code", plan_tolerance=0.0)])
 def test_optinit_greedy_policy_follows_a_shortest_plan(config):
     ctx = office_task_context(DET, "C")
@@ -100,7 +102,7 @@ def test_optinit_greedy_policy_follows_a_shortest_plan(config):
 def test_code_variant_plans_within_the_authors_tolerance():
     """GDQ-code's H holds plans up to 1.3 x the shortest: the 9-step easy-door route too."""
     ctx = office_task_context(DET, "C")
-    code, paper = GDQ(ctx, GDQConfig(variant="code")), GDQ(ctx)
+    code, paper = GDQ(ctx, GDQConfig(variant="code")), GDQ(ctx, LITERAL)
     assert code.config.plan_tolerance == pytest.approx(0.3)
     assert paper.config.plan_tolerance == 0.0
     sp = LearnerSpaces(DET)
@@ -117,7 +119,7 @@ def test_code_variant_plans_within_the_authors_tolerance():
 
 
 def test_optinit_policy_iteration_values_of_the_optimistic_model(ctx_c):
-    learner = GDQ(ctx_c)
+    learner = GDQ(ctx_c, LITERAL)
     r_max, gamma = ctx_c.r_max, learner.config.gamma
     top = r_max / (1 - gamma)  # optimistic pairs loop back to s0 without ending
     opt = learner.optimistic_pairs
@@ -172,7 +174,7 @@ def test_code_variant_task_switch_keeps_the_model_and_reseeds_q(ctx_c):
 
 def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     m = 5
-    learner = GDQ(ctx_c, GDQConfig(m=m, n_backups=0))
+    learner = GDQ(ctx_c, GDQConfig(variant="literal", m=m, n_backups=0))
     t, p = learner.tables, learner.params
     s, a = next(zip(*np.nonzero(learner.optimistic_pairs), strict=True))
     s, a = int(s), int(a)
@@ -263,9 +265,9 @@ def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
     n = 50
     records = (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
                np.zeros((n, 7), dtype=np.int64))
-    assert not _episodes(office.model, int(office.start_state), int(office.goal_pos),
-                         np.zeros(1, dtype=np.uint8), learner.tables, learner.params,
-                         office.np_random, np.random.default_rng(1), *records)
+    assert _episodes(office.model, int(office.start_state), int(office.goal_pos),
+                     np.zeros(1, dtype=np.uint8), learner.tables, learner.params,
+                     office.np_random, np.random.default_rng(1), *records, 0, 0) == -1
     assert learner.visits.sum() == learner.counts.sum() + learner.tables.stuck.sum()
 
 
@@ -486,12 +488,15 @@ def test_runner_works_through_gymnasium_make(ctx_c):
 
 # --- no plans, task switch ----------------------------------------------------------------
 
-def test_gdq_without_any_plan_runs_and_learns():
+@pytest.mark.parametrize("variant", ["literal", "code"])
+def test_gdq_without_any_plan_runs_and_learns(variant):
+    """The plan-based variants with an empty H: Dyna-Q with extra steps, still learning.
+    (The default variant plans on its prior model, not on H: tests/test_gdq_model.py.)"""
     task = Task("near", "p0", "p2")
     ctx = office_task_context(DET, task)
     empty = empty_plan_table(ctx.n_states, ctx.n_actions)
     ctx = replace(ctx, plans=empty, darling_plans=empty)
-    learner = GDQ(ctx)
+    learner = GDQ(ctx, GDQConfig(variant=variant))
     assert not learner.optimistic_pairs.any()
     env = OfficeEnv(start="p0", goal="p2", world=DET)
     rec = run(learner, env, 150, 2)
@@ -544,7 +549,7 @@ def test_make_learner_rejects_unknown_methods_and_bad_configs(ctx_c):
 
 
 def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
-    learner = GDQ(ctx_c, GDQConfig(optimistic_successor="terminal"))
+    learner = GDQ(ctx_c, GDQConfig(variant="literal", optimistic_successor="terminal"))
     opt = learner.optimistic_pairs
     assert np.allclose(learner.q[opt], ctx_c.r_max)
     assert np.all(learner.q[~opt] == 0.0)

@@ -108,8 +108,16 @@ from gdq_pddl.learners.config import (
 )
 from gdq_pddl.learners.context import TaskContext
 
-MODEL_BASED = (core.KIND_DYNAQ, core.KIND_GDQ)
+MODEL_BASED = (core.KIND_DYNAQ, core.KIND_GDQ, core.KIND_PRIOR)
 """The learner kinds that record transitions (the others get no successor slots)."""
+
+_I0 = np.zeros(0, dtype=np.int64)
+_NO_PRIOR: dict[str, np.ndarray] = {
+    "prior_next": np.zeros((0, 0), dtype=np.int64), "pp_ptr": _I0, "pp_pair": _I0,
+    "rev_head": _I0, "rev_next": _I0, "rev_pair": _I0, "rev_n": np.zeros(1, dtype=np.int64),
+    "heap": _I0, "heap_pos": _I0, "heap_prio": np.zeros(0), "heap_n": np.zeros(1, np.int64)}
+"""The :class:`core.Tables` fields of GDQ's default variant, for the other learners (never
+read by them; the two counters are never written either)."""
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
@@ -182,6 +190,14 @@ class TabularLearner:
     def _opt_continue(self) -> float:
         return 1.0
 
+    def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
+        """The :class:`core.Tables` fields only GDQ's default variant uses (empty here)."""
+        return _NO_PRIOR
+
+    def _extra_params(self) -> dict[str, float]:
+        """:class:`core.Params` fields beyond the shared ones (their defaults here)."""
+        return {}
+
     # -- interface ---------------------------------------------------------------------
     def _build(self, context: TaskContext) -> tuple[core.Tables, core.Params]:
         if (context.n_states, context.n_actions) != self.q.shape:
@@ -202,14 +218,15 @@ class TabularLearner:
             plan_ptr=np.ascontiguousarray(plans.plan_ptr, dtype=np.int64),
             pair_ptr=np.ascontiguousarray(plans.pair_ptr, dtype=np.int64),
             pair_state=np.ascontiguousarray(plans.pair_state, dtype=np.int64),
-            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64))
+            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64),
+            **self._prior_arrays(context))
         c = self.config
         params = core.Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
             n_backups=int(self._n_backups()), m=int(self._m()),
             backup=int(self._backup_mode()), s0=int(context.s0),
-            opt_continue=float(self._opt_continue()))
+            opt_continue=float(self._opt_continue()), **self._extra_params())
         return tables, params
 
     def start_task(self, context: TaskContext) -> None:
@@ -231,7 +248,7 @@ class TabularLearner:
 
     def greedy_policy(self) -> np.ndarray:
         """Per state, the lowest-index allowed action of maximal Q."""
-        return core.greedy(self.tables)
+        return core.greedy(self.tables, self.params)
 
     @property
     def v(self) -> np.ndarray:
@@ -344,13 +361,28 @@ class Darling(TabularLearner):
         return allowed
 
 
+def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
+    """The context's plans within ``tolerance`` (its shortest plans for 0)."""
+    if not tolerance:
+        return context.plans
+    if context.darling_plans is None or context.darling_tolerance is None or \
+            not np.isclose(context.darling_tolerance, tolerance):
+        raise ValueError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
+                         f"tolerant plan table was built with that tolerance (it has "
+                         f"{context.darling_tolerance})")
+    return context.darling_plans
+
+
 class GDQ(TabularLearner):
-    kind = core.KIND_GDQ
+    kind = core.KIND_PRIOR
     name = "GDQ"
     config: GDQConfig
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        super().__init__(context, config or GDQConfig())
+        config = config or GDQConfig()
+        self.kind = core.KIND_PRIOR if config.variant == "model" else core.KIND_GDQ
+        self._rev_capacity = 0
+        super().__init__(context, config)
 
     def _n_backups(self) -> int:
         return self.config.n_backups
@@ -359,35 +391,122 @@ class GDQ(TabularLearner):
         return self.config.m
 
     def _backup_mode(self) -> int:
-        return core.BACKUP_EXPECTED if self.config.variant == "paper" else core.BACKUP_SAMPLE
+        return core.BACKUP_SAMPLE if self.config.variant == "code" else core.BACKUP_EXPECTED
 
     def _plans(self, context: TaskContext) -> PlanTable:
-        tolerance = self.config.plan_tolerance
-        if not tolerance:
+        if self.config.variant == "model":
             return context.plans
-        if context.darling_plans is None or context.darling_tolerance is None or \
-                not np.isclose(context.darling_tolerance, tolerance):
-            raise ValueError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
-                             f"tolerant plan table was built with that tolerance (it has "
-                             f"{context.darling_tolerance})")
-        return context.darling_plans
+        return _tolerant_plans(context, self.config.plan_tolerance)
 
     def _opt_continue(self) -> float:
         return 1.0 if self.config.optimistic_successor == "start" else 0.0
 
+    def _extra_params(self) -> dict[str, float]:
+        if self.kind != core.KIND_PRIOR:
+            return {}
+        c = self.config
+        return {"explore_all": float(c.explore_all), "prior_cost": float(c.prior_cost),
+                "sweep_threshold": float(c.sweep_threshold),
+                "prior_weight": float(c.prior_weight)}
+
+    def _allowed(self, context: TaskContext) -> np.ndarray:
+        if self.kind != core.KIND_PRIOR:
+            return super()._allowed(context)
+        return self._prior(context).applicable  # OptInit adds the known pairs
+
+    def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
+        if self.kind != core.KIND_PRIOR:
+            return allowed
+        if self.config.explore == "plans":
+            return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions()
+        guide = self._prior(context).applicable
+        guide[~guide.any(axis=1)] = True  # nothing applicable: explore every action
+        return guide
+
+    @staticmethod
+    def _prior(context: TaskContext):
+        if context.prior is None:
+            raise ValueError("GDQ's default variant plans on the knowledge's prior model, and "
+                             "this task context has none (build it with office_task_context "
+                             "or pddl_task_context, or pass prior=...)")
+        if context.prior.next_state.shape != (context.n_states, context.n_actions):
+            raise ValueError(f"the context's prior model is {context.prior.next_state.shape},"
+                             f" its task {context.n_states} states x {context.n_actions} "
+                             "actions")
+        return context.prior
+
+    def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
+        if self.kind != core.KIND_PRIOR:
+            return _NO_PRIOR
+        prior = self._prior(context)
+        n_s = context.n_states
+        pp_ptr, pp_pair = prior.predecessors()
+        capacity = max(self._rev_capacity,
+                       self._rev_needed() + core.rev_room(self._model["slots"].shape[2], 64))
+        self._rev_capacity = capacity
+        return {"prior_next": np.ascontiguousarray(prior.next_state, dtype=np.int64),
+                "pp_ptr": pp_ptr, "pp_pair": pp_pair,
+                "rev_head": np.full(n_s, -1, dtype=np.int64),
+                "rev_next": np.full(capacity, -1, dtype=np.int64),
+                "rev_pair": np.zeros(capacity, dtype=np.int64),
+                "rev_n": np.zeros(1, dtype=np.int64),
+                "heap": np.zeros(n_s, dtype=np.int64),
+                "heap_pos": np.full(n_s, -1, dtype=np.int64),
+                "heap_prio": np.zeros(n_s), "heap_n": np.zeros(1, dtype=np.int64)}
+
+    def _rev_needed(self) -> int:
+        """At least the reverse-index entries the known pairs need: the recorded successors
+        of every pair tried, and one prior successor each."""
+        slots, visits = self._model["slots"], self._model["visits"]
+        tried = visits > 0
+        return int(np.count_nonzero(slots[tried])) + int(np.count_nonzero(tried))
+
+    def reserve_reverse(self, entries: int) -> None:
+        """Make room for ``entries`` more reverse-index entries (GDQ's default variant;
+        the runners call it with what the coming steps can add)."""
+        t = self.tables
+        if self.kind != core.KIND_PRIOR or len(t.rev_pair) - int(t.rev_n[0]) >= entries:
+            return
+        capacity = max(2 * len(t.rev_pair), int(t.rev_n[0]) + entries)
+        rev_next = np.full(capacity, -1, dtype=np.int64)
+        rev_pair = np.zeros(capacity, dtype=np.int64)
+        rev_next[:len(t.rev_next)] = t.rev_next
+        rev_pair[:len(t.rev_pair)] = t.rev_pair
+        self._rev_capacity = capacity
+        self.tables = t._replace(rev_next=rev_next, rev_pair=rev_pair)
+
+    def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+                rng: np.random.Generator) -> None:
+        if self.kind == core.KIND_PRIOR:
+            self.reserve_reverse(core.rev_room(self.max_successors))
+        super().observe(s, a, r, s2, terminated, truncated, rng)
+
     def _init_task(self) -> None:
-        """OptInit (Algorithm 1), or the authors' code's shortcut."""
+        """OptInit: value iteration on the hybrid model (``model``), Algorithm 1 read
+        literally (``literal``) or the authors' code's shortcut (``code``)."""
         self.q[:, :] = 0.0
-        if self.config.variant == "paper":
+        if self.kind == core.KIND_PRIOR:
+            tol = 1e-9 * max(1.0, self.params.r_max)
+            if core.prior_optinit(self.tables, self.params, tol, 1_000_000) < 0:
+                raise AssertionError("reverse index sized too small")  # _prior_arrays
+        elif self.config.variant == "literal":
             self.policy = core.policy_iteration(self.tables, self.params)
+            return
         else:
             core.seed_plan_pairs(self.tables, self.params.r_max)
-            self.policy = core.greedy(self.tables)
+        self.policy = core.greedy(self.tables, self.params)
 
     @property
     def optimistic_pairs(self) -> np.ndarray:
-        """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model)."""
+        """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model of the
+        ``literal`` variant; Q = R_max in the ``code`` variant's OptInit)."""
         return self.tables.opt_r
+
+    @property
+    def applicable(self) -> np.ndarray:
+        """bool[S, A]: what the knowledge says can do something (``model``; exploration
+        draws from it), a view of the prior."""
+        return self._prior(self.context).applicable
 
 
 METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig]]] = {

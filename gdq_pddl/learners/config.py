@@ -11,7 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-GDQVariant = Literal["paper", "code"]
+GDQVariant = Literal["model", "literal", "code"]
+GDQ_VARIANTS: tuple[str, ...] = ("model", "literal", "code")
 DarlingVariant = Literal["paper", "code"]
 
 
@@ -61,45 +62,99 @@ class DynaQConfig(LearnerConfig):
 
 @dataclass(frozen=True)
 class GDQConfig(LearnerConfig):
-    """Guided Dyna-Q (the paper's Algorithms 1-3)."""
+    """Guided Dyna-Q. Three variants (:mod:`gdq_pddl.learners.agents` compares them):
 
-    n_backups: int = 5
-    """N: backups per real step, each on a random transition of a random plan from the
-    current state (the authors' code used 5)."""
-    m: int = 5
-    """A pair is *known* once tried more than ``m`` times: from then on its R and T come
-    from the learned model, before that from the optimistic model (authors' code: 5)."""
-    variant: GDQVariant = "paper"
-    """``"paper"``: OptInit runs policy iteration on the optimistic model and backups are
-    expected (full) Bellman backups. ``"code"``: as the authors' released code, OptInit
-    sets Q to R_max on plan pairs and backups are sample-based TD updates with alpha.
-    See :mod:`gdq_pddl.learners.agents` for the side-by-side comparison."""
+    - ``"model"`` (the default): the paper's idea done soundly. The action knowledge is
+      an optimistic *prior model* over every (state, action) pair; real experience
+      replaces it pair by pair; prioritised sweeping plans on the hybrid model.
+    - ``"literal"``: the paper's Algorithms 1-3 read literally (OptInit's policy
+      iteration on a model where every optimistic pair leads back to s0; N expected
+      backups along plans per step). It does not learn: its values inflate to
+      R_max / (1 - gamma).
+    - ``"code"``: as the authors' released code (Q <- R_max on plan pairs, N sample
+      backups along plans within 1.3 x the shortest per step).
 
+    The ``model`` defaults were chosen on tasks A-D (and, for ``explore_all``, the
+    corridor the knowledge lacks) only; ``docs/decisions.md`` has the measurements.
+    """
+
+    variant: GDQVariant = "model"
+    """Which GDQ (above)."""
+    n_backups: int | None = None
+    """N: simulated backups per real step. ``model``: pair values recomputed by
+    prioritised sweeping (default 10; 40 measured no better on tasks A-D);
+    ``literal`` and ``code``: backups of a random transition of a random plan from the
+    current state (default 5, the authors' code)."""
+    m: int | None = None
+    """A knowledge-applicable pair is *known* once tried more than ``m`` times: from then
+    on its model is learned, before that the optimistic one. Default 0 for ``model``
+    (known after one trial, the prior kept as ``prior_weight`` pseudo-observations), 5
+    for the others (the authors' code). In ``model`` a pair the knowledge says does
+    nothing is known after its first trial whatever ``m``."""
+    prior_weight: float = 1.0
+    """``model`` only: a known pair's model is the posterior mean with the prior as this
+    many pseudo-observations, ``(w * prior + n * learned) / (w + n)`` after ``n``
+    trials. It keeps one unlucky early trial (a door that failed twice) from writing off
+    a route for good; 0 is the plain empirical model (measured on tasks A-D: 1 is
+    better than 0, and 0.5 or 2 no different from 1)."""
+    explore: Literal["plans", "applicable"] = "plans"
+    """``model`` only: what exploring steps draw from (but for the ``explore_all`` share):
+    ``"plans"``, the first actions of the plans within ``plan_tolerance`` from the
+    current state (DARLING's set; every action in a state with no plan);
+    ``"applicable"``, every action the knowledge says can do something here (measured
+    worse on every task A-D: it wanders off the routes)."""
+    explore_all: float = 0.1
+    """``model`` only: this share of exploring steps draws from every action instead,
+    one never tried in the current state first (any action once all were). Above 0 the
+    knowledge never forbids an action: a capability it lacks (a corridor only reality
+    has) is found, sooner the larger the share, at a cost of about 0.04 return per
+    episode per 0.1 on tasks A-D (``docs/decisions.md``)."""
+    prior_cost: float = 1.0
+    """``model`` only: the step cost the prior model charges. The knowledge counts
+    actions (the planner ignores costs), so one step costs 1 in its units."""
+    sweep_threshold: float = 1e-6
+    """``model`` only: a state-value change smaller than this is not propagated."""
     optimistic_successor: Literal["start", "terminal"] = "start"
-    """Where an optimistic (unknown) pair leads. ``"start"``: to s0, as Algorithm 1's
-    ``T(s, a, s0) = 1`` (so optimistic values reach R_max / (1 - gamma)). ``"terminal"``:
-    nowhere, the optimistic reward ends the episode (values bounded by R_max). Not in
-    the paper; offered to show where the paper variant's excess optimism comes from."""
+    """``literal`` only: where an optimistic (unknown) pair leads. ``"start"``: to s0, as
+    Algorithm 1's ``T(s, a, s0) = 1`` (so optimistic values reach R_max / (1 - gamma)).
+    ``"terminal"``: nowhere, the optimistic reward ends the episode (values bounded by
+    R_max). Not in the paper; offered to show where the excess optimism comes from."""
     plan_tolerance: float | None = None
     """H holds every loop-free plan up to ``(1 + plan_tolerance)`` x the shortest length.
-    None means the variant's own setting: 0 for ``"paper"`` (the paper plans "a set of the
-    shortest plans") and 0.3 for ``"code"`` (the authors' released planner returned
-    plans up to 1.3 x the shortest). The task context must hold a plan table built with
-    that tolerance (its ``darling_plans``)."""
+    None means the variant's own setting: 0 for ``"literal"`` (the paper plans "a set of
+    the shortest plans"), 0.3 for ``"code"`` (the authors' released planner returned
+    plans up to 1.3 x the shortest) and for ``"model"``, which plans on its prior over
+    every pair and uses these plans only to explore. The task context must hold a plan
+    table built with that tolerance (its ``darling_plans``)."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.variant == "paper":
+            raise ValueError("GDQ variant 'paper' is now called 'literal' (the paper's "
+                             "Algorithms 1-3 read literally); the default is 'model'")
+        if self.variant not in GDQ_VARIANTS:
+            raise ValueError(f"variant must be one of {', '.join(GDQ_VARIANTS)}, got "
+                             f"{self.variant!r}")
+        model = self.variant == "model"
+        for name, default in (("n_backups", 10 if model else 5), ("m", 0 if model else 5),
+                              ("plan_tolerance", 0.0 if self.variant == "literal" else 0.3)):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, default)
         if self.n_backups < 0 or self.m < 0:
             raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
         if self.optimistic_successor not in ("start", "terminal"):
             raise ValueError("optimistic_successor must be 'start' or 'terminal', got "
                              f"{self.optimistic_successor!r}")
-        if self.variant not in ("paper", "code"):
-            raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
-        if self.plan_tolerance is None:
-            object.__setattr__(self, "plan_tolerance", 0.0 if self.variant == "paper" else 0.3)
-        if self.plan_tolerance < 0:
+        if not self.plan_tolerance >= 0:
             raise ValueError(f"plan_tolerance must be >= 0, got {self.plan_tolerance}")
+        if self.explore not in ("plans", "applicable"):
+            raise ValueError(f"explore must be 'plans' or 'applicable', got {self.explore!r}")
+        if not 0.0 <= self.explore_all <= 1.0:
+            raise ValueError(f"explore_all must be in [0, 1], got {self.explore_all}")
+        for name in ("prior_weight", "prior_cost", "sweep_threshold"):
+            value = getattr(self, name)
+            if not (0.0 <= value < float("inf")):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
 
 
 @dataclass(frozen=True)

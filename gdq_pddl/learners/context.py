@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.abstraction import OfficeAbstraction, PlanTable, build_plan_table
+from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph, prior_from_task
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World
 
@@ -41,6 +42,10 @@ class TaskContext:
     world's true model (:func:`successor_capacity`): how many successor slots per pair the
     model-based learners allocate. A capacity, not knowledge the learners use; None:
     every learner state (always enough, and as large as a dense model)."""
+    prior: PriorModel | None = None
+    """The action knowledge as a deterministic model over every learner pair (where each
+    action leads if the knowledge is right; :mod:`gdq_pddl.abstraction.prior`): what
+    GDQ's default variant plans on. None: not built (that variant then refuses)."""
 
     @property
     def n_states(self) -> int:
@@ -149,12 +154,9 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
     key = (_knowledge_key(world), goal, planner, float(tolerance), kind)
     table = _TABLES.get(key)
     if table is None:
-        from gdq_pddl.pddl.office import office_problem
-        from gdq_pddl.planning import PlanningProblem, get_planner
+        from gdq_pddl.planning import get_planner
 
-        start = next(p for p in world.positions if p != goal)
-        problem = PlanningProblem.from_texts(
-            _domain_text(), office_problem(world, Task("plan-table", start, goal)))
+        problem = _office_planning_problem(world, goal)
         abstraction = OfficeAbstraction(world)
         if kind == "routes":
             from gdq_pddl.abstraction.routes import route_plan_table
@@ -171,6 +173,33 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
     return table
 
 
+def _office_planning_problem(world: World, goal: str):
+    """The knowledge of ``world`` as a :class:`~gdq_pddl.planning.PlanningProblem` with
+    goal ``goal`` (and any other position as its start)."""
+    from gdq_pddl.pddl.office import office_problem
+    from gdq_pddl.planning import PlanningProblem
+
+    start = next(p for p in world.positions if p != goal)
+    return PlanningProblem.from_texts(
+        _domain_text(), office_problem(world, Task("plan-table", start, goal)))
+
+
+_PRIORS: dict[tuple, PriorModel] = {}
+
+
+def office_prior(world: World) -> PriorModel:
+    """The prior model of an office world's knowledge (goal-independent), cached per
+    knowledge for the life of the process."""
+    key = _knowledge_key(world)
+    prior = _PRIORS.get(key)
+    if prior is None:
+        task = _office_planning_problem(world, world.positions[-1]).task
+        abstraction = OfficeAbstraction(world)
+        prior = _PRIORS[key] = prior_from_task(abstraction, task,
+                                               abstraction.mask_reader(task))
+    return prior
+
+
 def office_task_context(world: World, task: Task | str, planner: str = "graph",
                         darling_tolerance: float = 0.3, darling_kind: str = "all") -> TaskContext:
     """The :class:`TaskContext` of ``task`` (a Task or a task name) in an office world;
@@ -185,7 +214,7 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
         darling_plans=office_plan_table(world, task.goal, planner, darling_tolerance,
                                         darling_kind),
         darling_tolerance=float(darling_tolerance), name=task.name,
-        max_successors=office_successor_capacity(world))
+        max_successors=office_successor_capacity(world), prior=office_prior(world))
 
 
 _PDDL_TABLES: dict[tuple, tuple[object, PlanTable]] = {}
@@ -240,4 +269,5 @@ def pddl_task_context(instance, planner: str = "graph",
         s0=0, goal=np.asarray(instance.graph.is_goal, dtype=np.bool_),
         plans=pddl_plan_table(instance, planner, 0.0), r_max=float(instance.dynamics.r_max),
         darling_plans=pddl_plan_table(instance, planner, darling_tolerance),
-        darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k)
+        darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
+        prior=prior_from_graph(instance.graph))

@@ -72,7 +72,9 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ = 0, 1, 2, 3
+KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ, KIND_PRIOR = 0, 1, 2, 3, 4
+"""``KIND_GDQ``: GDQ's ``literal`` and ``code`` variants (backups along plans);
+``KIND_PRIOR``: GDQ's default, planning on the knowledge's prior model (section below)."""
 BACKUP_EXPECTED, BACKUP_SAMPLE = 0, 1
 
 
@@ -92,6 +94,14 @@ class Params(NamedTuple):
     """The task's start learner state (target of the optimistic transitions)."""
     opt_continue: float = 1.0
     """1: an optimistic transition leads to s0 (the paper); 0: it ends the episode."""
+    explore_all: float = 0.0
+    """Share of exploring steps that draw from every action instead of ``guide``."""
+    prior_cost: float = 1.0
+    """Step cost of a pair still on the prior model (``KIND_PRIOR``)."""
+    sweep_threshold: float = 0.0
+    """Smallest change of a state value that prioritised sweeping propagates."""
+    prior_weight: float = 0.0
+    """Pseudo-observations of the prior in a known pair's model (``KIND_PRIOR``)."""
 
 
 class Tables(NamedTuple):
@@ -116,6 +126,18 @@ class Tables(NamedTuple):
     pair_ptr: np.ndarray
     pair_state: np.ndarray
     pair_action: np.ndarray
+    # KIND_PRIOR only (empty arrays for the other kinds; see "Planning on the prior")
+    prior_next: np.ndarray  # int64[S, A]: the knowledge's successor, -1 = no change
+    pp_ptr: np.ndarray  # int64[S + 1]: applicable pairs by prior successor (CSR) ...
+    pp_pair: np.ndarray  # int64[E]: ... as s * A + a
+    rev_head: np.ndarray  # int64[S]: first reverse entry of a successor state, -1 none
+    rev_next: np.ndarray  # int64[C]: next entry of the same successor, -1 none
+    rev_pair: np.ndarray  # int64[C]: the known pair s * A + a of an entry
+    rev_n: np.ndarray  # int64[1]: entries used
+    heap: np.ndarray  # int64[S]: states whose value change awaits propagation (max-heap)
+    heap_pos: np.ndarray  # int64[S]: a state's place in ``heap``, -1 when not queued
+    heap_prio: np.ndarray  # float64[S]: a queued state's priority (size of its value change)
+    heap_n: np.ndarray  # int64[1]
 
 
 def new_model(n_states: int, n_actions: int, max_successors: int,
@@ -189,11 +211,19 @@ def table_bytes(n_states: int, n_actions: int, max_successors: int,
 @numba.njit(cache=True)
 def recompute_v(t: Tables, s: int) -> None:
     """``v[s] <- max`` of ``q[s, a]`` over the allowed actions."""
+    _recompute_v(t.q, t.v, t.allowed, s)
+
+
+# The rules that run in inner loops take arrays, not Tables: a call that takes the tuple
+# costs a reference count update per array it holds (measured: GDQ's default variant's
+# backup took 650 ns through Tables, 60 ns on arrays).
+@numba.njit(cache=True, inline="always")
+def _recompute_v(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int) -> None:
     best = -np.inf
-    for a in range(t.q.shape[1]):
-        if t.allowed[s, a] and t.q[s, a] > best:
-            best = t.q[s, a]
-    t.v[s] = best
+    for a in range(q.shape[1]):
+        if allowed[s, a] and q[s, a] > best:
+            best = q[s, a]
+    v[s] = best
 
 
 @numba.njit(cache=True)
@@ -205,14 +235,20 @@ def recompute_all_v(t: Tables) -> None:
 @numba.njit(cache=True)
 def set_q(t: Tables, s: int, a: int, value: float) -> None:
     """``q[s, a] <- value``, keeping ``v`` exact."""
-    old = t.q[s, a]
-    t.q[s, a] = value
-    if not t.allowed[s, a]:
+    _set_q(t.q, t.v, t.allowed, s, a, value)
+
+
+@numba.njit(cache=True, inline="always")
+def _set_q(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
+           value: float) -> None:
+    old = q[s, a]
+    q[s, a] = value
+    if not allowed[s, a]:
         return
-    if value >= t.v[s]:
-        t.v[s] = value
-    elif old >= t.v[s]:
-        recompute_v(t, s)
+    if value >= v[s]:
+        v[s] = value
+    elif old >= v[s]:
+        _recompute_v(q, v, allowed, s)
 
 
 @numba.njit(cache=True)
@@ -236,16 +272,38 @@ def _draw_guided(t: Tables, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
+def _draw_untried(visits: np.ndarray, s: int, rng: np.random.Generator) -> int:
+    """A uniformly random action never tried in ``s``; any action once all were."""
+    n_actions = visits.shape[1]
+    n = 0
+    for a in range(n_actions):
+        n += visits[s, a] == 0
+    if n == 0:
+        return rng.integers(0, n_actions)
+    k = rng.integers(0, n)
+    for a in range(n_actions):
+        if visits[s, a] == 0:
+            if k == 0:
+                return a
+            k -= 1
+    return 0
+
+
+@numba.njit(cache=True)
 def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
 
-    With probability epsilon a uniform action of ``guide[s]``; else a uniformly chosen
-    maximiser of Q over ``allowed[s]``, replaced by a uniform action of ``guide[s]`` if
-    it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, then one
-    integer when exploring or when several actions tie, and one more for a replacement.
+    With probability epsilon a uniform action of ``guide[s]`` (or, for a share
+    ``explore_all`` of those steps, of every action); else a uniformly chosen maximiser
+    of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
+    if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
+    when exploring with ``explore_all > 0``, then one integer when exploring or when
+    several actions tie, and one more for a replacement.
     """
     n_actions = t.q.shape[1]
     if rng.random() < p.epsilon:
+        if p.explore_all > 0.0 and rng.random() < p.explore_all:
+            return _draw_untried(t.visits, s, rng)
         return _draw_guided(t, s, rng)
     best = t.v[s]
     ties = 0
@@ -262,21 +320,23 @@ def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
                     last = a
                     break
                 k -= 1
-    if not t.guide[s, last]:
+    if p.kind == KIND_DARLING and not t.guide[s, last]:
         return _draw_guided(t, s, rng)
     return last
 
 
 @numba.njit(cache=True)
-def greedy(t: Tables) -> np.ndarray:
+def greedy(t: Tables, p: Params) -> np.ndarray:
     """The greedy policy: per state, the lowest-index action of maximal Q among those it
-    may execute (``guide``; the allowed actions for every learner but DARLING-code)."""
+    may execute: the allowed ones (DARLING: ``guide``, which is ``allowed`` but for
+    DARLING-code)."""
     n_states, n_actions = t.q.shape
+    mask = t.guide if p.kind == KIND_DARLING else t.allowed
     out = np.zeros(n_states, dtype=np.int64)
     for s in range(n_states):
         best = -np.inf
         for a in range(n_actions):
-            if t.guide[s, a] and t.q[s, a] > best:
+            if mask[s, a] and t.q[s, a] > best:
                 best = t.q[s, a]
                 out[s] = a
     return out
@@ -343,10 +403,17 @@ def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: 
 
 @numba.njit(cache=True)
 def mean_cost(t: Tables, s: int, a: int) -> float:
-    if t.cost_n[s, a] > 0:
-        return t.cost_sum[s, a] / t.cost_n[s, a]
-    if t.cost_all[1] > 0:
-        return t.cost_all[0] / t.cost_all[1]
+    return _mean_cost(t.cost_sum, t.cost_n, t.cost_all, s, a)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s: int,
+               a: int) -> float:
+    """The mean step cost of ``(s, a)``; of every pair where it has none; else 0."""
+    if cost_n[s, a] > 0:
+        return cost_sum[s, a] / cost_n[s, a]
+    if cost_all[1] > 0:
+        return cost_all[0] / cost_all[1]
     return 0.0
 
 
@@ -356,24 +423,37 @@ def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float
 
     Known pairs (``visits > m``) use the learned model, unknown ones the optimistic one.
     """
-    n = t.visits[s, a]
-    if n > p.m:
-        c = mean_cost(t, s, a)
-        total = t.stuck[s, a] * -p.r_max
-        slots, goal = t.slots, t.goal  # locals: a tuple field read in a loop costs more
-        for j in range(slots.shape[2]):  # successors in increasing order
-            here = slots[s, a, j]
-            if here == 0:
-                break
-            k = slot_count(here)
-            s2 = slot_successor(here)
-            if goal[s2]:
-                total += k * p.r_max
-            else:
-                total += k * (p.gamma * v[s2] - c)
-        return total / n
+    if t.visits[s, a] > p.m:
+        return learned_value(t, p, s, a, v)
     r = p.r_max if t.opt_r[s, a] else 0.0
     return r + p.opt_continue * p.gamma * v[p.s0]
+
+
+@numba.njit(cache=True)
+def learned_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
+    with state values ``v``."""
+    return _learned(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal, v,
+                    s, a, p.r_max, p.gamma)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _learned(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray,
+             cost_n: np.ndarray, cost_all: np.ndarray, goal: np.ndarray, v: np.ndarray,
+             s: int, a: int, r_max: float, gamma: float) -> float:
+    c = _mean_cost(cost_sum, cost_n, cost_all, s, a)
+    total = stuck[s, a] * -r_max
+    for j in range(slots.shape[2]):  # successors in increasing order
+        here = slots[s, a, j]
+        if here == 0:
+            break
+        k = slot_count(here)
+        s2 = slot_successor(here)
+        if goal[s2]:
+            total += k * r_max
+        else:
+            total += k * (gamma * v[s2] - c)
+    return total / visits[s, a]
 
 
 @numba.njit(cache=True)
@@ -453,6 +533,8 @@ def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated:
     the model had no slot for the transition (:func:`record`; no backups then): the
     callers raise ValueError(:data:`OVERFLOW`).
     """
+    if p.kind == KIND_PRIOR:
+        return prior_observe(t, p, s, a, r, s2, terminated, truncated)
     target = r if (terminated or truncated) else r + p.gamma * t.v[s2]
     td_update(t, s, a, target, p.alpha)
     if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
@@ -522,3 +604,342 @@ def seed_plan_pairs(t: Tables, value: float) -> None:
             if t.opt_r[s, a]:
                 t.q[s, a] = value
     recompute_all_v(t)
+
+
+# --- Planning on the prior (GDQ's default variant, KIND_PRIOR) ------------------------------
+#
+# Every pair has a value from the *hybrid model*. A pair on the prior (``prior_next``)
+# succeeds deterministically, or changes nothing where the knowledge says the action does
+# nothing, at cost ``prior_cost``; reaching a goal pays R_max and ends the episode. A
+# knowledge-applicable pair is *known* after more than m trials (the prior's optimism
+# lasts that long), a knowledge-inapplicable one after its first trial (its prior, "no
+# change", is no optimism worth keeping, and a single trial that does something is news
+# the learner should plan with at once). A known pair's model is the posterior mean with
+# the prior as ``prior_weight`` pseudo-observations: its backup is
+# ``(n * learned + w * prior) / (n + w)`` after n trials.
+#
+# ``allowed`` (what v and the greedy choice range over) holds the knowledge-applicable
+# pairs and the known ones, so an action the knowledge says does nothing is never valued
+# above an applicable one before it has been tried; a state where nothing is applicable
+# allows every action. ``guide`` (what exploration draws from) holds the first actions of
+# the plans from each state (or the applicable ones); a share ``explore_all`` of the
+# exploring steps draws an action never tried in the state instead (:func:`act`).
+#
+# OptInit is value iteration on the hybrid model (:func:`prior_optinit`). After a real step
+# the learner records it, recomputes the stepped pair if it is known, and runs prioritised
+# sweeping: states whose value changed wait in a max-heap by the size of the change;
+# popping one recomputes every pair that can lead to it, i.e. the unknown applicable pairs
+# whose prior successor it is (``pp_ptr``/``pp_pair``, static) and the known pairs that
+# have reached it (the reverse index ``rev_*``, grown as pairs become known), until
+# ``n_backups`` pairs have been recomputed. The heap carries what is left to the next step.
+# There is no TD update: a pair's value is always its hybrid backup.
+
+
+@numba.njit(cache=True, inline="always")
+def _is_known(visits: np.ndarray, prior_next: np.ndarray, m: int, s: int, a: int) -> bool:
+    return visits[s, a] > (m if prior_next[s, a] >= 0 else 0)
+
+
+@numba.njit(cache=True)
+def prior_known(t: Tables, p: Params, s: int, a: int) -> bool:
+    """Whether ``(s, a)`` is valued by the learned model (see the section comment)."""
+    return _is_known(t.visits, t.prior_next, p.m, s, a)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _hybrid(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray,
+            cost_n: np.ndarray, cost_all: np.ndarray, goal: np.ndarray, v: np.ndarray,
+            prior_next: np.ndarray, p: Params, s: int, a: int) -> float:
+    s2 = prior_next[s, a]
+    if s2 < 0:
+        s2 = s
+    prior = p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+    if _is_known(visits, prior_next, p.m, s, a):
+        n = visits[s, a]
+        learned = _learned(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, s, a,
+                           p.r_max, p.gamma)
+        w = p.prior_weight
+        return (n * learned + w * prior) / (n + w)
+    return prior
+
+
+@numba.njit(cache=True)
+def hybrid_value(t: Tables, p: Params, s: int, a: int) -> float:
+    """The backup of ``(s, a)`` under the hybrid model, with the current ``v``."""
+    return _hybrid(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal, t.v,
+                   t.prior_next, p, s, a)
+
+
+@numba.njit(cache=True, inline="always")
+def _sift_up(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, i: int) -> None:
+    x = heap[i]
+    while i > 0:
+        parent = (i - 1) // 2
+        y = heap[parent]
+        if prio[y] >= prio[x]:
+            break
+        heap[i] = y
+        pos[y] = i
+        i = parent
+    heap[i] = x
+    pos[x] = i
+
+
+@numba.njit(cache=True, inline="always")
+def _sift_down(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, n: int, i: int) -> None:
+    x = heap[i]
+    while True:
+        c = 2 * i + 1
+        if c >= n:
+            break
+        if c + 1 < n and prio[heap[c + 1]] > prio[heap[c]]:
+            c += 1
+        y = heap[c]
+        if prio[y] <= prio[x]:
+            break
+        heap[i] = y
+        pos[y] = i
+        i = c
+    heap[i] = x
+    pos[x] = i
+
+
+@numba.njit(cache=True, inline="always")
+def _push(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarray, x: int,
+          change: float) -> None:
+    """Queue state ``x`` with priority ``change`` (raised to it if already queued)."""
+    if pos[x] >= 0:
+        if change > prio[x]:
+            prio[x] = change
+            _sift_up(heap, pos, prio, pos[x])
+        return
+    n = heap_n[0]
+    heap[n] = x
+    prio[x] = change
+    heap_n[0] = n + 1
+    _sift_up(heap, pos, prio, n)
+
+
+@numba.njit(cache=True, inline="always")
+def _pop(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarray) -> int:
+    """The queued state of highest priority, removed from the queue."""
+    x = heap[0]
+    n = heap_n[0] - 1
+    heap_n[0] = n
+    pos[x] = -1
+    if n > 0:
+        heap[0] = heap[n]
+        _sift_down(heap, pos, prio, n, 0)
+    return x
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _update(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, slots: np.ndarray,
+            stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray, cost_n: np.ndarray,
+            cost_all: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, heap: np.ndarray,
+            heap_pos: np.ndarray, heap_prio: np.ndarray, heap_n: np.ndarray, p: Params,
+            s: int, a: int) -> None:
+    """Recompute ``q[s, a]``; queue ``s`` if that moved its value by more than the sweep
+    threshold. A change of ``v[s]`` also revalues the untried pairs the knowledge says do
+    nothing in ``s`` (not allowed; their backup is ``-prior_cost + gamma * v[s]``), so
+    their Q is never above ``v[s]`` however ``v[s]`` falls."""
+    old = v[s]
+    _set_q(q, v, allowed, s, a, _hybrid(slots, stuck, visits, cost_sum, cost_n, cost_all,
+                                        goal, v, prior_next, p, s, a))
+    if v[s] != old:
+        stay = -p.prior_cost + p.gamma * v[s]
+        for b in range(q.shape[1]):
+            if not allowed[s, b]:
+                q[s, b] = stay
+    change = abs(v[s] - old)
+    if change > p.sweep_threshold:
+        _push(heap, heap_pos, heap_prio, heap_n, s, change)
+
+
+@numba.njit(cache=True, inline="always")
+def _rev_add(rev_head: np.ndarray, rev_next: np.ndarray, rev_pair: np.ndarray,
+             rev_n: np.ndarray, x: int, pair: int) -> bool:
+    """Record that known ``pair`` has reached state ``x``; False when the index is full."""
+    e = rev_n[0]
+    if e >= rev_pair.shape[0]:
+        return False
+    rev_pair[e] = pair
+    rev_next[e] = rev_head[x]
+    rev_head[x] = e
+    rev_n[0] = e + 1
+    return True
+
+
+@numba.njit(cache=True, inline="always")
+def _prior_successor(prior_next: np.ndarray, s: int, a: int) -> int:
+    """Where the prior says ``(s, a)`` leads (``s`` itself where it says "no change")."""
+    x = prior_next[s, a]
+    return s if x < 0 else x
+
+
+@numba.njit(cache=True)
+def _rev_add_pair(t: Tables, p: Params, s: int, a: int) -> bool:
+    """Index the states the newly known pair ``(s, a)``'s backup reads: its recorded
+    non-goal successors and, with ``prior_weight > 0``, its prior successor."""
+    slots, goal = t.slots, t.goal
+    rev_head, rev_next, rev_pair, rev_n = t.rev_head, t.rev_next, t.rev_pair, t.rev_n
+    pair = s * t.q.shape[1] + a
+    for j in range(slots.shape[2]):
+        here = slots[s, a, j]
+        if here == 0:
+            break
+        x = slot_successor(here)
+        if not goal[x] and not _rev_add(rev_head, rev_next, rev_pair, rev_n, x, pair):
+            return False
+    x = _prior_successor(t.prior_next, s, a)
+    if p.prior_weight > 0.0 and not goal[x] and not has_successor(slots, s, a, x):
+        return _rev_add(rev_head, rev_next, rev_pair, rev_n, x, pair)
+    return True
+
+
+@numba.njit(cache=True, inline="always")
+def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
+    """Whether ``(s, a) -> s2`` has been recorded."""
+    for j in range(slots.shape[2]):
+        here = slots[s, a, j]
+        if here == 0:
+            return False
+        if slot_successor(here) == s2:
+            return True
+    return False
+
+
+@numba.njit(cache=True, error_model="numpy")
+def prior_plan(t: Tables, p: Params, s: int, a: int) -> None:
+    """Revalue the real step's pair ``(s, a)`` if it is known, then sweep: recompute the
+    pairs leading to the most changed states until ``n_backups`` pairs are done (a popped
+    state's pairs are all done) or none is queued."""
+    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
+    slots, stuck, visits = t.slots, t.stuck, t.visits
+    cost_sum, cost_n, cost_all = t.cost_sum, t.cost_n, t.cost_all
+    prior_next, pp_ptr, pp_pair = t.prior_next, t.pp_ptr, t.pp_pair
+    rev_head, rev_next, rev_pair = t.rev_head, t.rev_next, t.rev_pair
+    heap, heap_pos, heap_prio, heap_n = t.heap, t.heap_pos, t.heap_prio, t.heap_n
+    n_actions = q.shape[1]
+    if _is_known(visits, prior_next, p.m, s, a):
+        _update(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                prior_next, heap, heap_pos, heap_prio, heap_n, p, s, a)
+    budget = p.n_backups
+    while budget > 0 and heap_n[0] > 0:
+        x = _pop(heap, heap_pos, heap_prio, heap_n)
+        for k in range(pp_ptr[x], pp_ptr[x + 1]):
+            pair = pp_pair[k]
+            ps, pa = pair // n_actions, pair % n_actions
+            if goal[ps] or _is_known(visits, prior_next, p.m, ps, pa):
+                continue  # goal rows keep 0; known pairs are in the reverse index
+            _update(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                    prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            budget -= 1
+        e = rev_head[x]
+        while e >= 0:
+            pair = rev_pair[e]
+            e = rev_next[e]
+            ps, pa = pair // n_actions, pair % n_actions
+            if goal[ps]:  # known before a task switch made its state a goal
+                continue
+            _update(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                    prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            budget -= 1
+
+
+@numba.njit(cache=True)
+def prior_observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+                  truncated: bool) -> bool:
+    """GDQ's default after one real step: record it, index what became known, plan
+    (:func:`prior_plan`). False when the model had no slot for the step or the reverse
+    index is full (the callers keep room: :func:`rev_room`)."""
+    # a successor not indexed yet (stuck and goal steps end the episode: never indexed;
+    # the prior successor is indexed from the start when the prior has weight)
+    new = not terminated and not has_successor(t.slots, s, a, s2) and not (
+        p.prior_weight > 0.0 and s2 == _prior_successor(t.prior_next, s, a))
+    if not record(t, p, s, a, r, s2, terminated, truncated):
+        return False
+    if _is_known(t.visits, t.prior_next, p.m, s, a):
+        if t.visits[s, a] == (p.m if t.prior_next[s, a] >= 0 else 0) + 1:  # just known
+            t.allowed[s, a] = True
+            if not _rev_add_pair(t, p, s, a):
+                return False
+        elif new and not _rev_add(t.rev_head, t.rev_next, t.rev_pair, t.rev_n, s2,
+                                  s * t.q.shape[1] + a):
+            return False
+    prior_plan(t, p, s, a)
+    return True
+
+
+def rev_room(max_successors: int, steps: int = 1) -> int:
+    """Reverse-index entries ``steps`` real steps can add at most (a pair becoming known
+    adds one per recorded successor and one for its prior successor, a known pair
+    reaching a new state one)."""
+    return steps * (max_successors + 1)
+
+
+@numba.njit(cache=True)
+def prior_optinit(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
+    """OptInit of GDQ's default: value iteration on the hybrid model (Gauss-Seidel sweeps
+    over the allowed pairs until no state value moves by more than ``tol``), then every
+    other pair's Q from the converged values, the reverse index rebuilt for the known
+    pairs and the queue emptied. Goal rows are 0. Returns the number of sweeps, or -1 when
+    the reverse index is too small (the caller sizes it for the known pairs)."""
+    n_states, n_actions = t.q.shape
+    q, v, allowed, goal, visits, prior_next = t.q, t.v, t.allowed, t.goal, t.visits, \
+        t.prior_next
+    ptr = np.zeros(n_states + 1, dtype=np.int64)
+    for s in range(n_states):
+        n = 0
+        for a in range(n_actions):
+            ok = prior_next[s, a] >= 0 or _is_known(visits, prior_next, p.m, s, a)
+            allowed[s, a] = ok
+            n += ok
+        if n == 0:
+            allowed[s, :] = True
+            n = n_actions
+        ptr[s + 1] = ptr[s] + (0 if goal[s] else n)
+    pairs = np.empty(ptr[n_states], dtype=np.int64)
+    for s in range(n_states):
+        if goal[s]:
+            continue
+        k = ptr[s]
+        for a in range(n_actions):
+            if allowed[s, a]:
+                pairs[k] = a
+                k += 1
+    q[:, :] = 0.0
+    v[:] = 0.0
+    sweeps = 0
+    while sweeps < max_sweeps:
+        sweeps += 1
+        delta = 0.0
+        for s in range(n_states):
+            if goal[s]:
+                continue
+            best = -np.inf
+            for k in range(ptr[s], ptr[s + 1]):
+                a = pairs[k]
+                x = hybrid_value(t, p, s, a)
+                q[s, a] = x
+                if x > best:
+                    best = x
+            delta = max(delta, abs(best - v[s]))
+            v[s] = best
+        if delta <= tol:
+            break
+    for s in range(n_states):
+        if goal[s]:
+            continue
+        for a in range(n_actions):
+            if not allowed[s, a]:
+                q[s, a] = hybrid_value(t, p, s, a)
+    t.rev_head[:] = -1
+    t.rev_n[0] = 0
+    for s in range(n_states):
+        for a in range(n_actions):
+            if _is_known(visits, prior_next, p.m, s, a) and not _rev_add_pair(t, p, s, a):
+                return -1
+    t.heap_pos[:] = -1
+    t.heap_n[0] = 0
+    return sweeps

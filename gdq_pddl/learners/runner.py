@@ -134,9 +134,18 @@ def run_compiled(model: ModelArrays | CompactModel, start: int, goal_pos: int,
     steps = np.zeros(n_episodes, dtype=np.int64)
     success = np.zeros(n_episodes, dtype=np.bool_)
     areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
-    if not _episodes(model, start, goal_pos, doors, learner.tables, learner.params, env_rng,
-                     rng, returns, steps, success, areas):
-        raise ValueError(core.OVERFLOW)
+    # GDQ's reverse index grows between episodes: the loop stops before an episode that
+    # might not fit (one episode adds at most `room` entries) and is called again.
+    room = core.rev_room(learner.max_successors, int(model.step_limit))
+    reserve = getattr(learner, "reserve_reverse", None)
+    ep = 0
+    while ep < n_episodes:
+        if reserve is not None:
+            reserve(room)
+        ep = _episodes(model, start, goal_pos, doors, learner.tables, learner.params,
+                       env_rng, rng, returns, steps, success, areas, ep, room)
+        if ep < 0:
+            raise ValueError(core.OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
@@ -209,10 +218,16 @@ def _area_impl(m, state):
 @numba.njit(cache=True)
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p: core.Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
-              steps: np.ndarray, success: np.ndarray, areas: np.ndarray) -> bool:
-    """The compiled episode loop (same calls, in the same order, as the Python loop).
-    False when the learner's model ran out of successor slots (the loop stops there)."""
-    for ep in range(len(returns)):
+              steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
+              room: int) -> int:
+    """The compiled episode loop (same calls, in the same order, as the Python loop) from
+    episode ``first``. Returns the number of episodes when all are done; -1 when the
+    learner's model ran out of successor slots (the loop stops there); an episode index
+    when GDQ's reverse index has less than ``room`` free entries before that episode (the
+    caller grows it and calls again from there)."""
+    for ep in range(first, len(returns)):
+        if p.kind == core.KIND_PRIOR and len(t.rev_pair) - t.rev_n[0] < room:
+            return ep
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)
         step = 0
@@ -222,7 +237,7 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p
                                                            env_rng)
             s2 = _observe(m, state, doors)
             if not core.observe(t, p, s, a, r, s2, terminated, truncated, rng):
-                return False
+                return -1
             step += 1
             returns[ep] += r
             area = _area(m, state)
@@ -233,4 +248,4 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p
                 break
             s = s2
         steps[ep] = step
-    return True
+    return len(returns)

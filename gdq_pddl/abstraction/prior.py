@@ -1,0 +1,110 @@
+"""The action knowledge as a deterministic model over learner (state, action) pairs.
+
+GDQ's default variant plans on this *prior model* before it has any experience: for every
+learner state ``s`` and learner action ``a`` it says where ``a`` leads if the knowledge
+is right. The planner's state graph gives it: ``O^-1(s)`` is the planner state of ``s``,
+each ground action applicable there is mapped by O to a learner action, and its successor
+planner state by O to a learner state. Where the knowledge says ``a`` does nothing (no
+applicable ground action maps to it), the prior says "no change" and the pair is
+*knowledge-inapplicable*.
+
+It is goal-independent, so one prior serves every task of a world (the learner decides
+which of its states are goals), and it holds no probabilities or costs: the knowledge
+has none (PDDL), which is what makes it optimistic.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from gdq_pddl.errors import AbstractionError
+
+NO_CHANGE = -1
+"""``PriorModel.next_state`` of a knowledge-inapplicable pair."""
+
+
+@dataclass(frozen=True, eq=False)
+class PriorModel:
+    """Where each learner action leads in each learner state, according to the knowledge."""
+
+    next_state: np.ndarray
+    """int64[n_states, n_actions]: the learner state ``a`` leads to from ``s`` if the
+    knowledge is right, or :data:`NO_CHANGE` where the knowledge says ``a`` does nothing."""
+
+    @property
+    def n_states(self) -> int:
+        return int(self.next_state.shape[0])
+
+    @property
+    def n_actions(self) -> int:
+        return int(self.next_state.shape[1])
+
+    @property
+    def applicable(self) -> np.ndarray:
+        """bool[n_states, n_actions]: the knowledge says the action can do something."""
+        return self.next_state != NO_CHANGE
+
+    def predecessors(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(ptr, pairs)``: the applicable pairs ``s * n_actions + a`` whose prior successor
+        is ``x`` are ``pairs[ptr[x]:ptr[x + 1]]``, in increasing pair order."""
+        flat = self.next_state.ravel()
+        pairs = np.flatnonzero(flat != NO_CHANGE)
+        succ = flat[pairs]
+        order = np.argsort(succ, kind="stable")
+        ptr = np.zeros(self.n_states + 1, dtype=np.int64)
+        np.add.at(ptr, succ + 1, 1)
+        return np.cumsum(ptr), pairs[order].astype(np.int64)
+
+
+def prior_from_edges(n_states: int, n_actions: int,
+                     edges: Iterable[tuple[int, str, int, int]]) -> PriorModel:
+    """The prior of ``(learner state, ground action name, learner action, learner next
+    state)`` edges; raises :class:`AbstractionError` when O maps two ground actions
+    applicable in one state to one learner action with different successors."""
+    nxt = np.full((n_states, n_actions), NO_CHANGE, dtype=np.int64)
+    names: dict[tuple[int, int], str] = {}
+    for s, name, a, s2 in edges:
+        here = nxt[s, a]
+        if here != NO_CHANGE and here != s2:
+            raise AbstractionError(
+                f"ground actions {names[s, a]} and {name} both map to learner action {a} in "
+                f"learner state {s} but lead to different learner states ({here}, {s2}): "
+                "O must map the planner's actions one to one in every state")
+        nxt[s, a] = s2
+        names[s, a] = name
+    return PriorModel(nxt)
+
+
+def prior_from_task(abstraction, task, read_state: Callable[[int], int] | None = None
+                    ) -> PriorModel:
+    """The prior of an abstraction over a grounded task (any
+    :class:`~gdq_pddl.abstraction.Abstraction`): every ground action applicable in each
+    learner state's planner state, mapped through O. Atoms of ``O^-1(s)`` the task cannot
+    reach (an open door the knowledge says never opens) are left out of its mask.
+    ``read_state`` maps a state bitmask to a learner state (default: through its atoms)."""
+    if read_state is None:
+        def read_state(mask: int) -> int:
+            return abstraction.learner_state(task.atoms(mask))
+
+    def edges():
+        for s in range(abstraction.n_states):
+            atoms = abstraction.planner_state(s)
+            mask = task.mask({x for x in atoms if x in task.fact_index})
+            for op, nxt in task.successors(mask):
+                yield s, op.name, abstraction.learner_action(op.name), read_state(nxt)
+
+    return prior_from_edges(abstraction.n_states, abstraction.n_actions, edges())
+
+
+def prior_from_graph(graph) -> PriorModel:
+    """The prior of a PDDL problem whose learner states are the reachable planner states
+    (:class:`~gdq_pddl.pddl.reachable.StateGraph`; O is the identity): its edges. Goal
+    states have none (they end the episode)."""
+    n_actions = len(graph.task.ops)
+    nxt = np.full((graph.n_states, n_actions), NO_CHANGE, dtype=np.int64)
+    src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
+    nxt[src, graph.edge_op] = graph.edge_next
+    return PriorModel(nxt)
