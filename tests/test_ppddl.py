@@ -491,3 +491,45 @@ def test_cli_most_likely_and_plan(tmp_path, capsys):
     assert main(["run", "--domain", str(tmp_path / "d.pddl"), "--problem",
                  str(tmp_path / "p.pddl"), "--dynamics", str(tmp_path / "o.toml")]) == 2
     assert "o.toml: actions.wade.success: " in capsys.readouterr().err
+
+
+def test_a_strips_domain_s_stated_cost_is_the_default_of_its_dynamics_file():
+    domain = """(define (domain line) (:requirements :strips :action-costs)
+      (:predicates (at1) (at2) (at3))
+      (:functions (total-cost))
+      (:action a :parameters () :precondition (at1)
+        :effect (and (at2) (not (at1)) (increase (total-cost) 3)))
+      (:action b :parameters () :precondition (at2)
+        :effect (and (at3) (not (at2)) (increase (total-cost) 3))))"""
+    problem = "(define (problem l) (:domain line) (:init (at1)) (:goal (at3)))"
+    dynamics = "[actions.a]\nsuccess = 0.5\n[actions.b]\ncost = 0.5\n"
+    inst = PDDLInstance.from_texts(domain, problem, dynamics)
+    assert not inst.ppddl and inst.dynamics.outcomes("a", ()).success == 0.5
+    assert expected_costs(inst.model).tolist() == [3.0, 0.5]
+
+
+def test_ppddl_runs_do_not_depend_on_the_hash_seed(tmp_path):
+    """Ground actions, planner actions and outcomes come out in one order in every process."""
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "d.pddl").write_text(HIKE_DOMAIN)
+    (tmp_path / "p.pddl").write_text(HIKE_PROBLEM)
+    script = f"""
+import numpy as np
+from gdq_pddl.envs.pddl_env import PDDLEnv
+from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
+env = PDDLEnv({str(tmp_path / "d.pddl")!r}, {str(tmp_path / "p.pddl")!r})
+inst = env.instance
+print([op.name for op in inst.problem.task.ops], inst.model.prob.tolist())
+env.reset(seed=0)
+learner = make_learner("gdq", pddl_task_context(inst), variant="code")
+print(run_episodes(learner, env, 20, np.random.default_rng(0)).returns.tolist())
+"""
+    outs = [subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                           env=dict(os.environ, PYTHONHASHSEED=seed), timeout=300)
+            for seed in ("1", "2")]
+    for out in outs:
+        assert out.returncode == 0, out.stderr[-2000:]
+    assert outs[0].stdout == outs[1].stdout
