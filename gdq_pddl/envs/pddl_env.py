@@ -96,7 +96,7 @@ class PDDLInstance:
         overlay = None if dynamics is None else load_dynamics(
             dynamics, planning.source_domain, planning.problem,
             overlay=planning.source_domain.probabilistic)
-        return cls._checked(planning, overlay, max_states)
+        return cls._built(planning, overlay, max_states)
 
     @classmethod
     def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
@@ -107,10 +107,10 @@ class PDDLInstance:
         overlay = None if dynamics is None else parse_dynamics(
             dynamics, planning.source_domain, planning.problem,
             overlay=planning.source_domain.probabilistic)
-        return cls._checked(planning, overlay, max_states)
+        return cls._built(planning, overlay, max_states)
 
     @classmethod
-    def _checked(cls, planning: PlanningProblem, overlay: Dynamics | None,
+    def _built(cls, planning: PlanningProblem, overlay: Dynamics | None,
                  max_states: int) -> PDDLInstance:
         domain = planning.source_domain
         if overlay is None and not domain.probabilistic:

@@ -1,4 +1,5 @@
-"""A PPDDL problem grounded twice over one set of facts: reality and the planner's view.
+"""A PPDDL problem grounded once into two tasks over one set of facts: reality and the
+planner's view.
 
 Reality is the probabilistic model: every ground action of the domain with all its
 outcomes (:class:`ProbabilisticTask`, the learner's actions). The planner's knowledge is
