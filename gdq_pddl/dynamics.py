@@ -24,6 +24,12 @@ An object override applies to every ground action of the schema that has the obj
 among its arguments; when several arguments have one, the leftmost wins. Keys it does
 not give come from the schema's table. :func:`load_dynamics` checks everything against
 the domain and problem and names the file and key of every error, as world files do.
+
+A cost the file does not give is the one the domain states (``(increase (total-cost)
+X)``), else 1. For a PPDDL domain the file is an *overlay* (``overlay=True``): the
+domain gives the outcomes, so ``success``, ``stuck`` and ``failure`` are errors, and
+the file gives only what PPDDL cannot say: ``r_max`` and ``step_limit`` (they replace
+the domain's), costs (they replace the domain's; a distribution, say).
 """
 
 from __future__ import annotations
@@ -52,7 +58,8 @@ class Outcomes:
     """What the remaining ``1 - success - stuck`` does: ``"nothing"``, or the schemas
     whose applicable ground actions it picks one of at random (a slip). ``"stuck"``
     means ``stuck = 1 - success`` (nothing remains)."""
-    cost: CostDist = field(default_factory=CostDist)
+    cost: CostDist | None = None
+    """None: not given; the cost the domain states, else 1."""
 
 
 @dataclass(frozen=True)
@@ -68,6 +75,8 @@ class Dynamics:
     """Per schema, per object: overrides."""
     name: str = ""
     description: str = ""
+    stated: frozenset[str] = frozenset()
+    """The ``[dynamics]`` keys the file gives (the others are defaults)."""
 
     def outcomes(self, schema: str, args: tuple[str, ...]) -> Outcomes:
         """The outcomes of the ground action ``(schema *args)``."""
@@ -84,8 +93,10 @@ def split_action(name: str) -> tuple[str, tuple[str, ...]]:
     return parts[0], tuple(parts[1:])
 
 
-def load_dynamics(path: str | Path, domain: Domain, problem: Problem) -> Dynamics:
-    """Read and validate a dynamics file against ``domain`` and ``problem``.
+def load_dynamics(path: str | Path, domain: Domain, problem: Problem,
+                  overlay: bool = False) -> Dynamics:
+    """Read and validate a dynamics file (an overlay for a PPDDL domain: ``overlay``)
+    against ``domain`` and ``problem``.
 
     Raises :class:`WorldError` naming the file and key of the first problem found.
     """
@@ -94,27 +105,33 @@ def load_dynamics(path: str | Path, domain: Domain, problem: Problem) -> Dynamic
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise WorldError(str(path), "", f"cannot read: {exc.strerror}") from None
-    return parse_dynamics(text, domain, problem, source=str(path))
+    return parse_dynamics(text, domain, problem, source=str(path), overlay=overlay)
 
 
 def parse_dynamics(text: str, domain: Domain, problem: Problem,
-                   source: str = "<string>") -> Dynamics:
+                   source: str = "<string>", overlay: bool = False) -> Dynamics:
     """Validate the TOML ``text`` of a dynamics file; ``source`` names it in errors."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise WorldError(source, "", f"not valid TOML: {exc}") from None
-    return _DynamicsValidator(source, raw, domain, problem).dynamics()
+    return _DynamicsValidator(source, raw, domain, problem, overlay).dynamics()
+
+
+OUTCOME_KEYS = ("success", "stuck", "failure")
+"""What a dynamics file says about outcomes, and an overlay may not (the domain does)."""
 
 
 class _DynamicsValidator(_Validator):
     """The world file's checks (types, probabilities, costs) plus the domain's names."""
 
     def __init__(self, source: str, raw: dict[str, Any], domain: Domain,
-                 problem: Problem) -> None:
+                 problem: Problem, overlay: bool = False) -> None:
         super().__init__(source, raw)
         self.schemas = {a.name: a for a in domain.actions}
         self.objects = problem.objects
+        self.overlay = overlay
+        self.domain_source = domain.source
 
     def dynamics(self) -> Dynamics:
         for key in self.raw:
@@ -155,13 +172,19 @@ class _DynamicsValidator(_Validator):
             objects[schema] = per
         return Dynamics(self.source, r_max, limit, actions, objects,
                         self.get(d, "name", "dynamics.name", str, ""),
-                        self.get(d, "description", "dynamics.description", str, ""))
+                        self.get(d, "description", "dynamics.description", str, ""),
+                        frozenset(d))
 
     def outcomes(self, table: Mapping[str, Any], key: str, base: Outcomes) -> Outcomes:
         for k in table:
             if k not in ("success", "stuck", "failure", "cost", "objects"):
                 raise self.fail(f"{key}.{k}", "unknown key (expected success, stuck, failure, "
                                 "cost, objects)")
+            if self.overlay and k in OUTCOME_KEYS:
+                raise self.fail(f"{key}.{k}", f"{self.domain_source} is a PPDDL domain: its "
+                                "probabilistic effects give the outcomes (a failed trial: "
+                                "an outcome that makes (stuck) true), so an overlay gives "
+                                "only cost, r_max and step_limit")
         success = self.probability(table, "success", f"{key}.success") \
             if "success" in table else base.success
         failure = self.failure(table, key) if "failure" in table else base.failure

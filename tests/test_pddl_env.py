@@ -256,7 +256,7 @@ def test_cli_pddl_errors(tmp_path, capsys):
     (tmp_path / "p.pddl").write_text(LAMPS_PROBLEM)
     assert main(["run", "--domain", str(tmp_path / "d.pddl"), "--problem",
                  str(tmp_path / "p.pddl")]) == 2
-    assert "needs --domain, --problem and --dynamics" in capsys.readouterr().err
+    assert "d.pddl is a STRIPS domain" in capsys.readouterr().err
     assert main(["run", "--domain", str(tmp_path / "d.pddl"), "--problem",
                  str(tmp_path / "p.pddl"), "--dynamics", str(tmp_path / "f.toml")]) == 2
     assert "f.toml: actions.fly: unknown action schema" in capsys.readouterr().err

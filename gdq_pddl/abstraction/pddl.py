@@ -1,7 +1,10 @@
 """O for a generic PDDL problem: the learner state *is* the planner state.
 
 The learner of a PDDL env (:mod:`gdq_pddl.envs.pddl_env`) sees every reachable planner
-state as one index and acts with the ground actions, so O is a lookup both ways.
+state as one index and acts with the ground actions, so O is a lookup both ways. For a
+PPDDL domain the planner's actions are outcomes of the ground actions (its
+determinisation, :mod:`gdq_pddl.pddl.ppddl`): O maps each to the ground action it is an
+outcome of, e.g. ``(move_o2 a b)`` to ``(move a b)``.
 
 :func:`graph_plan_table` builds the plan table of every state at once from the reachable
 state graph and one backward BFS (:mod:`gdq_pddl.pddl.reachable`), with the ``graph``
@@ -17,6 +20,7 @@ import numpy as np
 
 from gdq_pddl.abstraction.table import PlanTable, pack_plans
 from gdq_pddl.errors import AbstractionError
+from gdq_pddl.pddl.ppddl import ProbabilisticTask
 from gdq_pddl.pddl.reachable import StateGraph
 from gdq_pddl.planning.base import State, length_bound
 
@@ -29,6 +33,8 @@ class PDDLAbstraction:
         self.task = graph.task
         self.n_states = graph.n_states
         self.n_actions = len(graph.task.ops)
+        self.origin = graph.task.origin if isinstance(graph.task, ProbabilisticTask) else {}
+        """Planner action -> the learner's ground action (PPDDL; empty: the same names)."""
 
     def learner_state(self, state: State) -> int:
         """The index of a reachable planner state."""
@@ -43,9 +49,10 @@ class PDDLAbstraction:
         return i
 
     def learner_action(self, action: str) -> int:
-        """The index of a ground action, e.g. ``"(move r1 r2)"``."""
+        """The index of a ground action, e.g. ``"(move r1 r2)"``, or of the ground action
+        a planner action of a PPDDL domain is an outcome of."""
         try:
-            return self.graph.op_index[action]
+            return self.graph.op_index[self.origin.get(action, action)]
         except KeyError:
             raise AbstractionError(f"planner action {action!r} is not a ground action of "
                                    "the problem") from None

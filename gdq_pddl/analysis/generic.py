@@ -108,6 +108,16 @@ def fmt2(x: float) -> str:
     return "n/a" if math.isnan(x) else f"{x:.2f}"
 
 
+def _reality(info: dict) -> str:
+    """Where reality comes from: the dynamics file, or a PPDDL domain (and its overlay)."""
+    if not info.get("determinisation"):
+        return f"dynamics `{info.get('dynamics')}`"
+    overlay = f"overlay `{info['dynamics']}`" if info.get("dynamics") else "no overlay"
+    return (f"PPDDL: reality is the domain's probabilistic model ({overlay}; r_max "
+            f"{info.get('r_max'):g}, step limit {info.get('step_limit')}), the planner knows "
+            f"its {info['determinisation']} determinisation")
+
+
 def generic_report(out: Path) -> str:
     """The Markdown text of the report of output folder ``out``."""
     optimal = load_optimal(out)
@@ -118,7 +128,7 @@ def generic_report(out: Path) -> str:
         lines += [f"## {task}", ""]
         if info:
             lines += [f"- domain `{info.get('domain')}`, problem `{info.get('problem')}`, "
-                      f"dynamics `{info.get('dynamics')}`",
+                      + _reality(info),
                       f"- learner: {info.get('states')} states (every reachable planner "
                       f"state), {info.get('actions')} actions (ground actions)",
                       f"- shortest plan: {info.get('shortest_plan')} actions",

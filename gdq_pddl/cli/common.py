@@ -19,6 +19,15 @@ def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
         p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
 
 
+def determinisation_arg(p: argparse.ArgumentParser) -> None:
+    from gdq_pddl.pddl.ppddl import DETERMINISATIONS
+
+    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=DETERMINISATIONS[0],
+                   help="what the planner knows of a PPDDL domain: every outcome of an "
+                        "action is a planner action (all-outcomes, the default), or only its "
+                        "most likely one (most-likely)")
+
+
 def world_and_task(args: argparse.Namespace):
     from gdq_pddl.world import load_world
 

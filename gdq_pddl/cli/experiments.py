@@ -8,6 +8,7 @@ from pathlib import Path
 from gdq_pddl.cli.common import (
     check_planner,
     checked_methods,
+    determinisation_arg,
     exec_args,
     execute,
     experiment_kw,
@@ -26,11 +27,14 @@ def register_run(sub) -> None:
                                    "REPORT.md to --out.")
     task_args(p)
     p.add_argument("--domain", type=Path,
-                   help="a PDDL domain: with --problem and --dynamics, learn on that problem "
-                        "instead of an office task (see docs/domains.md)")
+                   help="a PDDL domain: with --problem, learn on that problem instead of an "
+                        "office task; a STRIPS domain needs --dynamics, a PPDDL domain is "
+                        "its own reality (see docs/domains.md)")
     p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
     p.add_argument("--dynamics", type=Path,
-                   help="the dynamics file (TOML) of --domain: success, failure, costs")
+                   help="the dynamics file (TOML) of --domain: success, failure, costs; for "
+                        "a PPDDL domain an optional overlay: r_max, step_limit, costs")
+    determinisation_arg(p)
     run_args(p)
     p.set_defaults(func=cmd_run)
 
@@ -53,12 +57,14 @@ def _run_pddl(args: argparse.Namespace) -> int:
     from gdq_pddl.experiments import Experiment
     from gdq_pddl.experiments.work import load_pddl_instance
 
-    if not (args.domain and args.problem and args.dynamics):
-        raise GdqError("a PDDL run needs --domain, --problem and --dynamics")
+    if not (args.domain and args.problem):
+        raise GdqError("a PDDL run needs --domain and --problem (and --dynamics for a STRIPS "
+                       "domain)")
     if args.task or args.start or args.goal or args.world:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
-    files = tuple(str(p) for p in (args.domain, args.problem, args.dynamics))
+    files = (str(args.domain), str(args.problem),
+             "" if args.dynamics is None else str(args.dynamics), args.determinisation)
     instance = load_pddl_instance(files)  # check the files (and size) before any worker
     instance.model  # noqa: B018
     kw = experiment_kw(args)

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from gdq_pddl.cli.common import EXIT_NO_PLAN, task_args, world_and_task
+from gdq_pddl.cli.common import EXIT_NO_PLAN, determinisation_arg, task_args, world_and_task
 
 
 def register_problem(sub) -> None:
@@ -76,6 +76,7 @@ def register_plan(sub) -> None:
     p.add_argument("--domain", type=Path, help="PDDL domain file (default: the office domain)")
     p.add_argument("--problem", type=Path,
                    help="PDDL problem file (instead of --task/--start/--goal; no learner mapping)")
+    determinisation_arg(p)
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_plan)
 
@@ -87,7 +88,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     abstraction = None
     if args.problem is not None:
         domain = args.domain or _shipped_domain()
-        problem = PlanningProblem.from_files(domain, args.problem)
+        problem = PlanningProblem.from_files(domain, args.problem, args.determinisation)
         start = goal = None
     else:
         from gdq_pddl.abstraction import OfficeAbstraction

@@ -1,8 +1,12 @@
-"""Any STRIPS + typing PDDL domain as a Gymnasium environment, with a dynamics file.
+"""Any PDDL domain as a Gymnasium environment: a STRIPS domain with a dynamics file, or
+a PPDDL domain (its probabilistic effects are reality), with an optional overlay.
 
-The PDDL domain and problem are the robot's knowledge; the dynamics file
-(:mod:`gdq_pddl.dynamics`) is reality: how often each ground action works, what a
-failure does, what it costs, the rewards and the step limit. The env's true model is
+For a STRIPS domain, the domain and problem are the robot's knowledge and the dynamics
+file (:mod:`gdq_pddl.dynamics`) is reality: how often each ground action works, what a
+failure does, what it costs, the rewards and the step limit. For a PPDDL domain, reality
+is the domain's probabilistic model (:mod:`gdq_pddl.pddl.ppddl`), the knowledge its
+determinisation, and the overlay (the dynamics file without outcomes) gives r_max, the
+step limit and costs where the domain does not. The env's true model is
 compiled once into the same :class:`~gdq_pddl.envs.model.ModelArrays` as the office's,
 so it steps through the same :func:`~gdq_pddl.envs.model.env_step`, the fast episode
 runner works on it and :func:`gdq_pddl.envs.solve.solve` gives its V*.
@@ -25,9 +29,17 @@ last allowed action (truncated, after ``step_limit`` actions), otherwise minus t
 action's cost.
 
 ## Outcomes of an applicable ground action
-With probability ``success`` its PDDL effect; with ``stuck`` the trial fails; the rest
-does nothing, or (a slip) the effect of a uniformly random applicable ground action of
-the schemas the dynamics file lists.
+With a dynamics file: with probability ``success`` its PDDL effect; with ``stuck`` the
+trial fails; the rest does nothing, or (a slip) the effect of a uniformly random
+applicable ground action of the schemas the dynamics file lists. PPDDL: each outcome of
+its probabilistic effect with its probability (the leftover: nothing; an outcome that
+makes ``(stuck)`` true: the trial fails).
+
+## Costs, r_max and the step limit
+A ground action's cost: the dynamics file's (or overlay's), else the domain's
+``(increase (total-cost) X)``, else 1. A PPDDL problem's ``r_max``: the overlay's, else
+its ``(:goal-reward N)``, else 20; its step limit: the overlay's, else
+``max(20, ceil(2.5 L))``, L the fewest actions that can reach the goal.
 
 ## Information
 ``info`` holds ``area`` (always 0), ``cause``, ``full_state`` (= the observation) and
@@ -36,7 +48,8 @@ the schemas the dynamics file lists.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -48,50 +61,118 @@ from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_act
 from gdq_pddl.envs.base import ModelEnv
 from gdq_pddl.envs.model import ModelArrays, cost_arrays, merge_outcomes, outcome_csr
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
+from gdq_pddl.world import CostDist
 
 GOAL_POS = 1
 """``pos_of`` of a goal state in a PDDL model (0 elsewhere); what ``env_step`` compares."""
 
+DEFAULT_R_MAX, MIN_STEP_LIMIT, STEP_LIMIT_FACTOR = 20.0, 20, 2.5
+"""A PPDDL problem's r_max and step limit when neither the problem nor an overlay says."""
+
 
 @dataclass(frozen=True, eq=False)
 class PDDLInstance:
-    """A domain, a problem and their dynamics: grounded, explored and compiled once."""
+    """A domain, a problem and their dynamics: grounded, explored and compiled once.
+
+    ``overlay`` is the dynamics file as given (None: none; allowed for a PPDDL domain
+    only); :attr:`dynamics` is reality's r_max and step limit resolved from it and the
+    domain.
+    """
 
     problem: PlanningProblem
-    dynamics: Dynamics
+    overlay: Dynamics | None
     max_states: int = MAX_STATES
 
     @classmethod
-    def from_files(cls, domain: str | Path, problem: str | Path, dynamics: str | Path,
-                   max_states: int = MAX_STATES) -> PDDLInstance:
-        """Read and check the three files (errors name the file and line or key)."""
-        planning = PlanningProblem.from_files(domain, problem)
-        return cls(planning, load_dynamics(dynamics, planning.domain, planning.problem),
-                   max_states)
+    def from_files(cls, domain: str | Path, problem: str | Path,
+                   dynamics: str | Path | None = None, max_states: int = MAX_STATES,
+                   determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
+        """Read and check the files (errors name the file and line or key). A PPDDL
+        domain needs no dynamics file; its planner knows its ``determinisation``."""
+        planning = PlanningProblem.from_files(domain, problem, _checked(determinisation))
+        overlay = None if dynamics is None else load_dynamics(
+            dynamics, planning.source_domain, planning.problem,
+            overlay=planning.source_domain.probabilistic)
+        return cls._built(planning, overlay, max_states)
 
     @classmethod
-    def from_texts(cls, domain: str, problem: str, dynamics: str,
-                   max_states: int = MAX_STATES) -> PDDLInstance:
-        planning = PlanningProblem.from_texts(domain, problem)
-        return cls(planning, parse_dynamics(dynamics, planning.domain, planning.problem),
-                   max_states)
+    def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
+                   max_states: int = MAX_STATES,
+                   determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
+        planning = PlanningProblem.from_texts(domain, problem,
+                                              determinisation=_checked(determinisation))
+        overlay = None if dynamics is None else parse_dynamics(
+            dynamics, planning.source_domain, planning.problem,
+            overlay=planning.source_domain.probabilistic)
+        return cls._built(planning, overlay, max_states)
+
+    @classmethod
+    def _built(cls, planning: PlanningProblem, overlay: Dynamics | None,
+                 max_states: int) -> PDDLInstance:
+        domain = planning.source_domain
+        if overlay is None and not domain.probabilistic:
+            raise PlanningError(f"{domain.source} is a STRIPS domain: it says what actions do "
+                                "when they work, not how often they do; give its dynamics "
+                                "file (--dynamics), or write its outcomes in PPDDL "
+                                "(docs/domains.md)")
+        return cls(planning, overlay, max_states)
 
     @property
     def name(self) -> str:
         """The problem's name."""
         return self.problem.problem.name
 
+    @property
+    def ppddl(self) -> bool:
+        """Whether the domain is PPDDL (reality is its probabilistic model)."""
+        return self.problem.source_domain.probabilistic
+
+    @property
+    def determinisation(self) -> str | None:
+        """What the planner knows of a PPDDL domain (None: a STRIPS domain)."""
+        return getattr(self.problem.learner_task, "determinisation", None)
+
+    @cached_property
+    def dynamics(self) -> Dynamics:
+        """Reality's r_max and step limit (and the dynamics file's outcomes, if STRIPS)."""
+        if not self.ppddl:
+            assert self.overlay is not None
+            return self.overlay
+        overlay = self.overlay or Dynamics(source="")
+        r_max = overlay.r_max if "r_max" in overlay.stated else \
+            (self.problem.problem.goal_reward or DEFAULT_R_MAX)
+        limit = overlay.step_limit if "step_limit" in overlay.stated else \
+            default_step_limit(self.graph)
+        return replace(overlay, r_max=r_max, step_limit=limit)
+
     @cached_property
     def graph(self) -> StateGraph:
         """Reachable states and their successors (raises past ``max_states``)."""
-        return reachable_graph(self.problem.task, self.max_states, self.problem.problem.source)
+        return reachable_graph(self.problem.learner_task, self.max_states,
+                               self.problem.problem.source)
+
+    @cached_property
+    def costs(self) -> list[CostDist]:
+        """The cost of every ground action (see the module docstring)."""
+        names = [op.name for op in self.graph.task.ops]
+        stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
+        out = []
+        for name, domain_cost in zip(names, stated, strict=True):
+            given = self.overlay.outcomes(*split_action(name)).cost if self.overlay else None
+            out.append(given or (CostDist("const", domain_cost) if domain_cost is not None
+                                 else CostDist()))
+        return out
 
     @cached_property
     def model(self) -> ModelArrays:
         """The true model (read-only arrays)."""
-        model = compile_pddl_model(self.graph, self.dynamics)
+        if self.ppddl:
+            model = compile_ppddl_model(self.graph, self.costs, self.dynamics)
+        else:
+            model = compile_pddl_model(self.graph, self.dynamics, self.costs)
         for array in model:
             if isinstance(array, np.ndarray):
                 array.setflags(write=False)
@@ -103,24 +184,54 @@ class PDDLInstance:
 
     @property
     def n_actions(self) -> int:
-        return len(self.problem.task.ops)
+        return len(self.graph.task.ops)
 
     def action_name(self, a: int) -> str:
         """The ground action ``a``, e.g. ``"(move r1 r2)"``."""
-        return self.problem.task.ops[a].name
+        return self.graph.task.ops[a].name
 
     def atoms(self, s: int) -> frozenset[str]:
         """The fluent atoms of state ``s``."""
-        return self.problem.task.atoms(self.graph.states[s])
+        return self.graph.task.atoms(self.graph.states[s])
 
 
-def compile_pddl_model(graph: StateGraph, dynamics: Dynamics) -> ModelArrays:
-    """The dynamics of every (reachable state, ground action) pair as :class:`ModelArrays`."""
+def _checked(determinisation: str) -> str:
+    if determinisation not in DETERMINISATIONS:
+        raise PlanningError(f"unknown determinisation {determinisation!r} (known: "
+                            f"{', '.join(DETERMINISATIONS)})")
+    return determinisation
+
+
+def default_step_limit(graph: StateGraph) -> int:
+    """``max(20, ceil(2.5 L))``, L the fewest actions from the initial state to the goal in
+    reality (breadth first over every outcome; 20 if no outcome ever reaches it)."""
+    task = graph.task
+    depth = {graph.states[0]: 0}
+    frontier = [graph.states[0]]
+    while frontier:
+        nxt = []
+        for s in frontier:
+            if task.is_goal(s):
+                return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth[s]))
+            for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)):
+                if t not in depth:
+                    depth[t] = depth[s] + 1
+                    nxt.append(t)
+        frontier = nxt
+    return MIN_STEP_LIMIT
+
+
+def compile_pddl_model(graph: StateGraph, dynamics: Dynamics,
+                       costs: list[CostDist] | None = None) -> ModelArrays:
+    """The dynamics of every (reachable state, ground action) pair as :class:`ModelArrays`
+    (``costs``: one per ground action; default: the dynamics file's, else 1)."""
     ops = graph.task.ops
     n_ops = len(ops)
     parts = [split_action(op.name) for op in ops]
     outcomes = [dynamics.outcomes(schema, args) for schema, args in parts]
     schema_of = [schema for schema, _ in parts]
+    if costs is None:
+        costs = [o.cost or CostDist() for o in outcomes]
 
     def pairs():
         for s in range(graph.n_states):
@@ -135,13 +246,42 @@ def compile_pddl_model(graph: StateGraph, dynamics: Dynamics) -> ModelArrays:
                     yield s * n_ops + k, merge_outcomes(
                         _split(s, t, o, rest, applicable, schema_of))
 
-    ptr, prob, (nxt, stuck) = outcome_csr(graph.n_states * n_ops, pairs(),
-                                          (np.int64, np.bool_))
+    return _model(graph, pairs(), costs, dynamics)
+
+
+def compile_ppddl_model(graph: StateGraph, costs: list[CostDist],
+                        dynamics: Dynamics) -> ModelArrays:
+    """The true model of a PPDDL problem: every outcome of every applicable ground action
+    (``graph.task`` is a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`)."""
+    task = graph.task
+    n_ops = len(task.ops)
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    index = graph.index
+
+    def pairs():
+        for s, state in enumerate(graph.states):
+            here = {} if graph.is_goal[s] else {op_pos[id(op)]: op
+                                                for op in task.applicable(state)}
+            for k in range(n_ops):
+                op = here.get(k)
+                if op is None:
+                    yield s * n_ops + k, {(s, False): 1.0}
+                else:
+                    yield s * n_ops + k, merge_outcomes(
+                        ((s, True) if o.stuck else (index[o.apply(state)], False),
+                         o.probability) for o in op.outcomes)
+
+    return _model(graph, pairs(), costs, dynamics)
+
+
+def _model(graph: StateGraph, pairs, costs: list[CostDist], dynamics: Dynamics) -> ModelArrays:
+    n_ops = len(graph.task.ops)
+    ptr, prob, (nxt, stuck) = outcome_csr(graph.n_states * n_ops, pairs, (np.int64, np.bool_))
     pos_of = np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64)
     return ModelArrays(
         n_actions=n_ops, n_doors=0, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
-        **cost_arrays([o.cost for o in outcomes]),
+        **cost_arrays(costs),
         obs_of=np.arange(graph.n_states, dtype=np.int64), pos_of=pos_of,
         area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
 
@@ -171,9 +311,9 @@ class PDDLEnv(ModelEnv):
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
                              f"or None, got {render_mode!r}")
         if instance is None:
-            if domain is None or problem is None or dynamics is None:
-                raise PlanningError("PDDLEnv needs domain, problem and dynamics files "
-                                    "(or an instance)")
+            if domain is None or problem is None:
+                raise PlanningError("PDDLEnv needs domain and problem files (and a dynamics "
+                                    "file for a STRIPS domain), or an instance")
             instance = PDDLInstance.from_files(domain, problem, dynamics)
         self.instance = instance
         self.model = instance.model

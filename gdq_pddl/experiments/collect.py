@@ -106,7 +106,9 @@ def pddl_optimal(exp: Experiment) -> dict:
     shortest = int(instance.graph.distances[0])
     return {f"{spec}@{exp.pddl[1]}": {
         "world": "pddl", "domain": exp.pddl[0], "problem": exp.pddl[1],
-        "dynamics": exp.pddl[2], "v_star": v_star, "shortest_plan": shortest,
+        "dynamics": exp.pddl[2], "determinisation": instance.determinisation,
+        "r_max": instance.dynamics.r_max, "step_limit": instance.dynamics.step_limit,
+        "v_star": v_star, "shortest_plan": shortest,
         "states": instance.n_states, "actions": instance.n_actions,
         "relevant_areas": [], "irrelevant_areas_paper": [], "expected_area_visits": {},
     } for spec, _ in exp.schedule}

@@ -55,10 +55,12 @@ class Experiment:
     """The world the learners' knowledge (PDDL problem, plans) is built from, named like
     ``world`` (also ``office:<variant>``, see :mod:`gdq_pddl.experiments.knowledge`);
     None: ``world`` itself, accurate knowledge. Not part of unit keys or seeds."""
-    pddl: tuple[str, str, str] | None = None
-    """``(domain, problem, dynamics)`` file paths: learn on that PDDL problem through the
-    generic env (:mod:`gdq_pddl.envs.pddl_env`) instead of an office world; ``world``
-    and ``knowledge`` are then unused and each schedule entry names the problem."""
+    pddl: tuple[str, ...] | None = None
+    """``(domain, problem, dynamics)`` file paths, optionally with a fourth entry, the
+    determinisation of a PPDDL domain (default ``all-outcomes``; dynamics ``""``: none,
+    for a PPDDL domain): learn on that PDDL problem through the generic env
+    (:mod:`gdq_pddl.envs.pddl_env`) instead of an office world; ``world`` and
+    ``knowledge`` are then unused and each schedule entry names the problem."""
 
     @property
     def episodes(self) -> int:

@@ -91,11 +91,15 @@ def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.nd
 
 
 @cache
-def load_pddl_instance(files: tuple[str, str, str]):
-    """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``."""
+def load_pddl_instance(files: tuple[str, ...]):
+    """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``
+    or ``(domain, problem, dynamics, determinisation)`` (dynamics ``""``: none)."""
     from gdq_pddl.envs.pddl_env import PDDLInstance
 
-    return PDDLInstance.from_files(*files)
+    domain, problem, dynamics, *determinisation = files
+    return PDDLInstance.from_files(domain, problem, dynamics or None,
+                                   determinisation=determinisation[0] if determinisation
+                                   else "all-outcomes")
 
 
 def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:

@@ -63,15 +63,24 @@ class GroundTask:
             out[key].append(op)
         return {k: tuple(v) for k, v in out.items()}
 
-    def successors(self, state: int) -> list[tuple[GroundOp, int]]:
-        """``(op, next state)`` for every operator applicable in ``state``."""
+    def applicable(self, state: int) -> list[GroundOp]:
+        """Every operator whose precondition holds in ``state``."""
         out = []
         table = self.ops_by_fact
         for key in (-1, *_bits(state)):
             for op in table.get(key, ()):
                 if state & op.pre == op.pre and not state & op.neg:
-                    out.append((op, (state & ~op.dele) | op.add))
+                    out.append(op)
         return out
+
+    def successors(self, state: int) -> list[tuple[GroundOp, int]]:
+        """``(op, next state)`` for every operator applicable in ``state``."""
+        return [(op, (state & ~op.dele) | op.add) for op in self.applicable(state)]
+
+    def outcome_states(self, state: int) -> list[int]:
+        """States reality can reach from ``state`` besides :meth:`successors`' (none here;
+        a PPDDL task's actions have outcomes the planner does not know of)."""
+        return []
 
     def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
         pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
@@ -98,6 +107,9 @@ def _bits(mask: int):
 
 def ground(domain: Domain, problem: Problem) -> GroundTask:
     """Ground ``problem``; see the module docstring for how."""
+    if any(a.outcomes for a in domain.actions):
+        raise ValueError("a PPDDL domain has no single effect per action: ground it with "
+                         "gdq_pddl.pddl.ppddl.ground_ppddl")
     fluent = domain.fluent_predicates()
     statics = {a for a in problem.init if a.predicate not in fluent}
     static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)

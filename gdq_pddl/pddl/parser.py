@@ -1,4 +1,14 @@
-"""A PDDL reader for STRIPS with typing (plus negative preconditions and equality).
+"""A PDDL reader for STRIPS with typing (plus negative preconditions and equality), and
+for the part of PPDDL that gdq_pddl reads (``docs/domains.md``, "PPDDL").
+
+PPDDL (Younes and Littman, 2004): ``(probabilistic p1 e1 p2 e2 ...)`` effects, nested
+or side by side under ``and``, with rational probabilities (``0.25``, ``1/4``) that sum
+to at most 1 (the rest: no effect); action costs as ``(increase (total-cost) X)`` or
+``(decrease (reward) X)``, X a number or a function term valued in the problem's
+``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in the problem. A 0-ary
+predicate ``stuck`` marks a failed trial: an outcome that makes ``(stuck)`` true ends
+the episode. Each probabilistic action's effect is flattened here into its
+distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`).
 
 It reads a domain and a problem into the small frozen types of :mod:`gdq_pddl.pddl.model`
 and checks that they fit together. Every error is a :class:`~gdq_pddl.errors.PDDLError`
@@ -11,12 +21,21 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
+from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
 
-SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality"}
+SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality",
+             ":probabilistic-effects", ":action-costs", ":rewards"}
+STUCK = "stuck"
+"""The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
+COST_FLUENTS = ("total-cost", "reward")
+"""The numeric fluents an effect may change: the action's cost, in either convention."""
+MAX_OUTCOMES = 4096
+"""Most outcomes one action's effect may flatten into (independent probabilistic effects
+multiply)."""
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s()]+|\s+")
 
 
@@ -161,7 +180,7 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     r = _Reader(text, source)
     name, body = r.header(r.tree(), "domain")
     sec = r.sections(body)
-    known = {":requirements", ":types", ":constants", ":predicates"}
+    known = {":requirements", ":types", ":constants", ":predicates", ":functions"}
     for key, node in sec.items():
         if key not in known and not key.startswith(":action"):
             raise r.fail(node.line, f"{key.split('0')[0]} is not supported "
@@ -197,14 +216,41 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
             for _, t in params:
                 _check_type(r, types, t, node.line)
             predicates[pname] = tuple(t for _, t in params)
+    functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
     actions = []
     for key, node in sec.items():
         if key.startswith(":action"):
-            actions.append(_action(r, node, predicates, types, constants, reqs))
+            actions.append(_action(r, node, predicates, types, constants, reqs, functions))
     names = [a.name for a in actions]
     if len(set(names)) != len(names):
         raise r.fail(None, f"duplicate action names in {sorted(names)}")
-    return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source)
+    return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source,
+                  functions)
+
+
+def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str, tuple[str, ...]]:
+    """``(:functions (f ?x - t) - number (total-cost))`` -> ``{f: (t,), total-cost: ()}``."""
+    out: dict[str, tuple[str, ...]] = {}
+    items = node.items[1:]
+    i = 0
+    while i < len(items):
+        item = items[i]
+        if not item.is_list:
+            if item.symbol != "-" or i + 1 >= len(items) or items[i + 1].symbol != "number":
+                raise r.fail(item.line, "expected a function (name ?x - type ...) or "
+                             f"'- number' after one, found {item.text()}")
+            i += 2
+            continue
+        head = r.lst(item, "a function (name ?x - type ...)")
+        if not head:
+            raise r.fail(item.line, "expected a function name")
+        fname = r.symbol(head[0], "a function name")
+        params = r.typed_list(head[1:], variables=True)
+        for _, t in params:
+            _check_type(r, types, t, item.line)
+        out[fname] = tuple(t for _, t in params)
+        i += 1
+    return out
 
 
 def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> None:
@@ -213,7 +259,8 @@ def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> 
 
 
 def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-            types: dict[str, str | None], constants: dict[str, str], reqs: set[str]) -> Action:
+            types: dict[str, str | None], constants: dict[str, str], reqs: set[str],
+            functions: dict[str, tuple[str, ...]]) -> Action:
     items = node.items
     assert items is not None
     if len(items) < 2:
@@ -236,8 +283,190 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     scope = dict(params) | constants
     ctx = f"action {name}"
     pre = _literals(r, fields.get(":precondition"), predicates, types, scope, ctx, reqs, True)
-    eff = _literals(r, fields.get(":effect"), predicates, types, scope, ctx, reqs, False)
-    return Action(name, tuple(params), tuple(pre), tuple(eff), node.line)
+    reader = _Effects(r, predicates, types, scope, ctx, functions)
+    branches = reader.effect(fields.get(":effect"), inside=False)
+    if not reader.probabilistic:
+        return Action(name, tuple(params), tuple(pre), branches[0][1], node.line,
+                      cost=tuple(reader.costs))
+    return Action(name, tuple(params), tuple(pre), (), node.line,
+                  _outcomes(branches, predicates), tuple(reader.costs))
+
+
+Branches = list[tuple[Fraction, tuple[Literal, ...]]]
+"""An effect as a distribution: ``(probability, literals)`` pairs summing to 1."""
+
+
+class _Effects:
+    """Reads one action's effect into :data:`Branches`, and its cost terms."""
+
+    def __init__(self, r: _Reader, predicates: dict[str, tuple[str, ...]],
+                 types: dict[str, str | None], scope: dict[str, str], ctx: str,
+                 functions: dict[str, tuple[str, ...]]) -> None:
+        self.r, self.predicates, self.types, self.scope = r, predicates, types, scope
+        self.ctx, self.functions = ctx, functions
+        self.costs: list[CostTerm] = []
+        self.probabilistic = False
+
+    def effect(self, node: Node | None, inside: bool) -> Branches:
+        """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
+        r, ctx = self.r, self.ctx
+        if node is None:
+            return [(Fraction(1), ())]
+        items = r.lst(node, "an effect")
+        if not items:
+            return [(Fraction(1), ())]
+        head = items[0].symbol
+        if head == "and":
+            out: Branches = [(Fraction(1), ())]
+            for sub in items[1:]:
+                out = _product(out, self.effect(sub, inside))
+                if len(out) > MAX_OUTCOMES:
+                    raise r.fail(node.line, f"{ctx}: the effect has more than {MAX_OUTCOMES} "
+                                 "outcomes (independent probabilistic effects multiply)")
+            return out
+        if head == "probabilistic":
+            return self.probabilistic_effect(node, items)
+        if head in ("increase", "decrease"):
+            if inside:
+                raise r.fail(node.line, f"{ctx}: a cost inside (probabilistic ...) is not "
+                             "supported: an action's cost cannot depend on its outcome; "
+                             "state it outside the probabilistic effect")
+            self.costs.append(self.cost(node, items))
+            return [(Fraction(1), ())]
+        if head == "not":
+            if len(items) != 2 or not items[1].is_list or not items[1].items or \
+                    items[1].items[0].symbol in _CONNECTIVES:
+                raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
+            atom = _atom(r, items[1], self.predicates, self.types, self.scope, ctx)
+            if atom.predicate == STUCK and self.predicates[STUCK] == ():
+                raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) "
+                             "marks a failed trial, which ends the episode")
+            return [(Fraction(1), (Literal(atom, False),))]
+        if head == "=":
+            raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
+        if head in _CONNECTIVES:
+            hint = " (FOND); give probabilities with (probabilistic ...)" \
+                if head == "oneof" else ""
+            raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported in an effect"
+                         f"{hint} (gdq_pddl reads STRIPS effects and PPDDL's probabilistic "
+                         "ones)")
+        return [(Fraction(1), (Literal(_atom(r, node, self.predicates, self.types,
+                                             self.scope, ctx), True),))]
+
+    def probabilistic_effect(self, node: Node, items: tuple[Node, ...]) -> Branches:
+        """``(probabilistic p1 e1 ...)``: each ``e_i`` with ``p_i``; the rest, no effect."""
+        r, ctx = self.r, self.ctx
+        self.probabilistic = True
+        pairs = items[1:]
+        if not pairs or len(pairs) % 2:
+            raise r.fail(node.line, f"{ctx}: expected (probabilistic p1 e1 p2 e2 ...): pairs "
+                         "of a probability and an effect")
+        out: Branches = []
+        total = Fraction(0)
+        for p_node, e_node in zip(pairs[::2], pairs[1::2], strict=True):
+            p = _probability(r, p_node, ctx)
+            total += p
+            out += [(p * q, lits) for q, lits in self.effect(e_node, inside=True)]
+        if total > 1:
+            raise r.fail(node.line, f"{ctx}: the probabilities of (probabilistic ...) sum to "
+                         f"{float(total):g}; they must sum to at most 1 (the rest means no "
+                         "effect)")
+        if total < 1:
+            out.append((1 - total, ()))
+        return out
+
+    def cost(self, node: Node, items: tuple[Node, ...]) -> CostTerm:
+        """The term an ``(increase (total-cost) X)`` / ``(decrease (reward) X)`` adds."""
+        r, ctx = self.r, self.ctx
+        head = items[0].symbol
+        target = items[1] if len(items) == 3 else None
+        fluent = target.items[0].symbol if target is not None and target.is_list and \
+            len(target.items) == 1 else None
+        if fluent not in COST_FLUENTS:
+            raise r.fail(node.line, f"{ctx}: expected ({head} (total-cost) X) or ({head} "
+                         f"(reward) X); other numeric fluents are not supported, found "
+                         f"{node.text()}")
+        if (head, fluent) == ("decrease", "total-cost"):
+            raise r.fail(node.line, f"{ctx}: (decrease (total-cost) ...): a cost must be >= 0")
+        if (head, fluent) == ("increase", "reward"):
+            raise r.fail(node.line, f"{ctx}: (increase (reward) ...): a reward for an action is "
+                         "not supported; rewards are +r_max at the goal and minus each "
+                         "action's cost (give costs with (decrease (reward) X))")
+        value = items[2]
+        if not value.is_list:
+            number = _number(value.symbol)
+            if number is None or number < 0:
+                raise r.fail(value.line, f"{ctx}: expected a cost >= 0 (a number or a "
+                             f"function term), found {value.symbol!r}")
+            return float(number)
+        term = r.lst(value, "a function term")
+        fname = term[0].symbol if term and not term[0].is_list else ""
+        if fname not in self.functions or fname in COST_FLUENTS:
+            raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
+                         f"declared in :functions), found {value.text()}")
+        args = tuple(r.symbol(a, "a term") for a in term[1:])
+        want = self.functions[fname]
+        if len(args) != len(want):
+            raise r.fail(value.line, f"{ctx}: {fname} takes {len(want)} argument(s), got "
+                         f"{len(args)}")
+        for a, t in zip(args, want, strict=True):
+            if a not in self.scope:
+                raise r.fail(value.line, f"{ctx}: unknown term {a!r} in ({fname} ...)")
+            if not is_subtype(self.types, self.scope[a], t):
+                raise r.fail(value.line, f"{ctx}: {a} is a {self.scope[a]}, but {fname} "
+                             f"expects a {t}")
+        return Atom(fname, args)
+
+
+_CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
+                "increase", "decrease", "and", "not", "=")
+
+
+def _product(a: Branches, b: Branches) -> Branches:
+    """Two independent effects together: every pair of their outcomes."""
+    return [(p * q, la + lb) for p, la in a for q, lb in b]
+
+
+def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tuple[Outcome, ...]:
+    """Flattened branches as outcomes: equal effects merged (first appearance first), those
+    of probability 0 dropped, every outcome that makes (stuck) true one stuck outcome."""
+    stuck = Atom(STUCK, ())
+    is_stuck_domain = predicates.get(STUCK) == ()
+    merged: dict[tuple, Fraction] = {}
+    for p, lits in branches:
+        if p == 0:
+            continue
+        if is_stuck_domain and Literal(stuck, True) in lits:
+            key: tuple = ("stuck",)
+        else:
+            unique = tuple(dict.fromkeys(lits))
+            key = ("effect", frozenset(unique), unique)
+        merged[key] = merged.get(key, Fraction(0)) + p
+    out = []
+    for key, p in merged.items():
+        if key[0] == "stuck":
+            out.append(Outcome(float(p), (), True))
+        else:
+            out.append(Outcome(float(p), key[2]))
+    return tuple(out)
+
+
+def _number(text: str) -> Fraction | None:
+    """``"0.25"``, ``".5"``, ``"1/4"`` or ``"3"`` as an exact fraction (None: not a number)."""
+    try:
+        return Fraction(text)
+    except (ValueError, ZeroDivisionError):
+        return None
+
+
+def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
+    value = _number(node.symbol) if not node.is_list else None
+    if value is None:
+        raise r.fail(node.line, f"{ctx}: expected a probability (a number such as 0.25 or "
+                     f"1/4), found {node.text()}")
+    if not 0 <= value <= 1:
+        raise r.fail(node.line, f"{ctx}: a probability must be in [0, 1], got {node.symbol}")
+    return value
 
 
 def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
@@ -261,12 +490,16 @@ def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ..
         inner = _literals(r, items[1], predicates, types, scope, ctx, reqs, precondition)
         if len(inner) != 1 or not inner[0].positive:
             raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
+        # PPDDL domains (pddlgym's, for one) use them without declaring the requirement
         if precondition and inner[0].atom.predicate != "=" and \
-                ":negative-preconditions" not in reqs:
+                not reqs & {":negative-preconditions", ":probabilistic-effects"}:
             raise r.fail(node.line, f"{ctx}: a negative precondition needs the "
                          ":negative-preconditions requirement")
         return [Literal(inner[0].atom, False)]
-    if head in ("or", "imply", "forall", "exists", "when", "increase", "decrease"):
+    if head == "probabilistic":
+        raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
+                     f"{'precondition' if ctx.startswith('action') else 'goal'}")
+    if head in ("or", "imply", "forall", "exists", "when", "increase", "decrease", "oneof"):
         raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported (STRIPS with typing only)")
     if head == "=":
         if not precondition:
@@ -278,7 +511,18 @@ def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ..
             if a not in scope:
                 raise r.fail(node.line, f"{ctx}: unknown term {a!r}")
         return [Literal(Atom("=", args), True)]
-    return [Literal(_atom(r, node, predicates, types, scope, ctx), True)]
+    atom = _atom(r, node, predicates, types, scope, ctx)
+    _not_stuck(r, atom, predicates, node.line, ctx)
+    return [Literal(atom, True)]
+
+
+def _not_stuck(r: _Reader, atom: Atom, predicates: dict[str, tuple[str, ...]], line: int,
+               ctx: str) -> None:
+    """(stuck) only in effects: it marks a failed trial, never part of a state."""
+    if atom.predicate == STUCK and predicates.get(STUCK) == ():
+        raise r.fail(line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes it "
+                     "true ends the episode), so it cannot be a precondition, a goal or "
+                     "initially true; rename the predicate if it is an ordinary fluent")
 
 
 def _atom(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
@@ -319,7 +563,8 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
     name, body = r.header(r.tree(), "problem")
     sec = r.sections(body)
     for key, node in sec.items():
-        if key not in (":domain", ":objects", ":init", ":goal", ":requirements"):
+        if key not in (":domain", ":objects", ":init", ":goal", ":requirements",
+                       ":goal-reward", ":metric"):
             raise r.fail(node.line, f"{key} is not supported in a problem")
     if ":domain" not in sec:
         raise r.fail(None, "expected (:domain NAME)")
@@ -335,15 +580,79 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
             if o in objects:
                 raise r.fail(sec[":objects"].line, f"object {o} is declared twice")
             objects[o] = t
-    init = []
+    init, values = [], {}
     for node in sec[":init"].items[1:] if ":init" in sec else ():
-        init.append(_atom(r, node, domain.predicates, domain.types, objects, "init"))
+        head = node.items[0].symbol if node.is_list and node.items else ""
+        if head == "=":
+            term, value = _init_value(r, node, domain, objects)
+            values[term] = value
+            continue
+        if head == "probabilistic":
+            raise r.fail(node.line, "init: a probabilistic initial state is not supported "
+                         "(the learner starts in one state)")
+        atom = _atom(r, node, domain.predicates, domain.types, objects, "init")
+        _not_stuck(r, atom, domain.predicates, node.line, "init")
+        init.append(atom)
+    goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
+    if ":metric" in sec:
+        _metric(r, sec[":metric"])
     if ":goal" not in sec:
         raise r.fail(None, "expected (:goal ...)")
     goal = _literals(r, sec[":goal"].items[1] if len(sec[":goal"].items) == 2 else None,
                      domain.predicates, domain.types, objects, "goal",
                      set(domain.requirements), True)
-    return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source)
+    return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source, values,
+                   goal_reward)
+
+
+def _init_value(r: _Reader, node: Node, domain: Domain,
+                objects: dict[str, str]) -> tuple[str, float]:
+    """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
+    items = node.items
+    assert items is not None
+    term = items[1] if len(items) == 3 else None
+    head = term.items if term is not None and term.is_list else None
+    if not head or head[0].is_list:
+        raise r.fail(node.line, f"init: expected (= (FUNCTION ARGS...) NUMBER), found "
+                     f"{node.text()}")
+    fname = head[0].symbol
+    if fname in COST_FLUENTS:  # (= (total-cost) 0): where the sum starts; not needed
+        return f"({fname})", 0.0
+    if fname not in domain.functions:
+        raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
+                     f"{', '.join(sorted(domain.functions)) or 'none'})")
+    args = tuple(r.symbol(a, "an object") for a in head[1:])
+    want = domain.functions[fname]
+    if len(args) != len(want):
+        raise r.fail(node.line, f"init: {fname} takes {len(want)} argument(s), got {len(args)}")
+    for a, t in zip(args, want, strict=True):
+        if a not in objects:
+            raise r.fail(node.line, f"init: unknown object {a!r} in ({fname} ...)")
+        if not is_subtype(domain.types, objects[a], t):
+            raise r.fail(node.line, f"init: {a} is a {objects[a]}, but {fname} expects a {t}")
+    value = _number(items[2].symbol) if not items[2].is_list else None
+    if value is None:
+        raise r.fail(node.line, f"init: expected a number for ({fname} ...), found "
+                     f"{items[2].text()}")
+    return str(Atom(fname, args)), float(value)
+
+
+def _goal_reward(r: _Reader, node: Node) -> float:
+    items = node.items
+    assert items is not None
+    value = _number(items[1].symbol) if len(items) == 2 and not items[1].is_list else None
+    if value is None or value <= 0:
+        raise r.fail(node.line, f"expected (:goal-reward N) with N > 0, found {node.text()}")
+    return float(value)
+
+
+def _metric(r: _Reader, node: Node) -> None:
+    """Only the metrics that mean "pay the action costs": the others change the task."""
+    text = node.text()
+    if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
+        raise r.fail(node.line, f"{text} is not supported: gdq_pddl's return is +r_max at "
+                     "the goal minus the action costs, (:metric minimize (total-cost)) or "
+                     "(:metric maximize (reward))")
 
 
 def read_domain(path: str | Path) -> Domain:

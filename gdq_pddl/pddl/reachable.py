@@ -4,7 +4,11 @@
 sequence of ground operators can reach, *without expanding goal states* (a plan ends
 where the goal first holds, as in the ``graph`` planner). States are numbered in BFS
 order (the initial state is 0); the edges of state ``i`` are ``(op index, next state)``
-pairs, one per applicable operator, in the order of :attr:`GroundTask.ops`.
+pairs, one per applicable operator, in the order of :attr:`GroundTask.ops`. For a PPDDL
+task (:class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`) the states are those reality
+reaches (every outcome of every action), numbered after the edges' states, and the edges
+are the planner's knowledge: one per applicable ground action and outcome its
+determinisation keeps, so a state may have several edges with one op.
 
 :func:`goal_distances` is one backward BFS over that graph: every state's shortest
 number of actions to the goal (-1: the goal cannot be reached from it). Together they
@@ -90,18 +94,28 @@ def reachable_graph(task: GroundTask, max_states: int = MAX_STATES,
                 j = index.get(t)
                 if j is None:
                     if len(states) >= max_states:
-                        raise PlanningError(
-                            f"{source}: more than {max_states} reachable states; the learners "
-                            "are tabular, so make the problem smaller (fewer objects)")
+                        raise _too_many(source, max_states)
                     j = index[t] = len(states)
                     states.append(t)
                     queue.append(t)
                 ops.append(op_pos[id(op)])
                 nxt.append(j)
+            for t in task.outcome_states(s):  # reality beyond the knowledge (PPDDL)
+                if t not in index:
+                    if len(states) >= max_states:
+                        raise _too_many(source, max_states)
+                    index[t] = len(states)
+                    states.append(t)
+                    queue.append(t)
         ptr.append(len(ops))
     return StateGraph(task, tuple(states), np.array(ptr, dtype=np.int64),
                       np.array(ops, dtype=np.int64), np.array(nxt, dtype=np.int64),
                       np.array(goal, dtype=np.bool_))
+
+
+def _too_many(source: str, max_states: int) -> PlanningError:
+    return PlanningError(f"{source}: more than {max_states} reachable states; the learners "
+                         "are tabular, so make the problem smaller (fewer objects)")
 
 
 def goal_distances(graph: StateGraph) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""Write a grounded problem back as PDDL, with another start state or goal.
+"""Write PDDL text: a grounded problem with another start state or goal, and the
+STRIPS domain and problem of a PPDDL domain's determinisation.
 
 Backends that run an external planner (pyperplan, clingo) and the plan validator need
 the problem as text for each query; this writes it from the parsed problem's objects,
@@ -8,6 +9,8 @@ its static facts and the query's fluent atoms.
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
+
+from gdq_pddl.pddl.model import Domain, Literal, Problem
 
 if TYPE_CHECKING:
     from gdq_pddl.planning.base import PlanningProblem, State
@@ -27,3 +30,48 @@ def write_problem(problem: PlanningProblem, start: State, goal: State) -> str:
             f"  (:objects\n{objects})\n"
             "  (:init\n" + "\n".join(f"    {a}" for a in init) + ")\n"
             f"  (:goal (and {goal_text})))\n")
+
+
+def write_domain(domain: Domain) -> str:
+    """PDDL text of a STRIPS domain (the planner's determinisation of a PPDDL domain)."""
+    reqs = set(domain.requirements) | {":strips"}
+    if any(not lit.positive and lit.atom.predicate != "=" for a in domain.actions
+           for lit in a.precondition):
+        reqs.add(":negative-preconditions")
+    if any(lit.atom.predicate == "=" for a in domain.actions for lit in a.precondition):
+        reqs.add(":equality")
+    types = [t for t in domain.types if t != "object"]
+    if types:
+        reqs.add(":typing")
+    lines = [f"(define (domain {domain.name})", f"  (:requirements {' '.join(sorted(reqs))})"]
+    if types:
+        lines.append("  (:types " + " ".join(f"{t} - {domain.types[t]}" for t in types) + ")")
+    if domain.constants:
+        lines.append("  (:constants " + " ".join(f"{c} - {t}" for c, t in
+                                                 domain.constants.items()) + ")")
+    lines.append("  (:predicates")
+    for name, arg_types in domain.predicates.items():
+        params = " ".join(f"?x{i} - {t}" for i, t in enumerate(arg_types))
+        lines.append(f"    ({name}{' ' + params if params else ''})")
+    lines.append("  )")
+    for a in domain.actions:
+        params = " ".join(f"{p} - {t}" for p, t in a.parameters)
+        lines += [f"  (:action {a.name}", f"    :parameters ({params})",
+                  f"    :precondition (and {_literals(a.precondition)})",
+                  f"    :effect (and {_literals(a.effect)}))"]
+    return "\n".join(lines) + ")\n"
+
+
+def write_parsed_problem(problem: Problem, domain: Domain) -> str:
+    """PDDL text of a parsed problem without its numeric parts (function values, goal
+    reward, metric): what a planner of the domain's determinisation reads."""
+    objects = "\n".join(f"    {o} - {t}" for o, t in problem.objects.items()
+                        if o not in domain.constants)
+    init = "\n".join(f"    {a}" for a in sorted(problem.init, key=str))
+    return (f"(define (problem {problem.name})\n  (:domain {problem.domain})\n"
+            f"  (:objects\n{objects})\n  (:init\n{init})\n"
+            f"  (:goal (and {_literals(problem.goal)})))\n")
+
+
+def _literals(lits: tuple[Literal, ...]) -> str:
+    return " ".join(str(lit.atom) if lit.positive else f"(not {lit.atom})" for lit in lits)

@@ -66,32 +66,59 @@ class PlanResult:
 
 
 class PlanningProblem:
-    """A parsed domain and problem; grounded on first use, then shared by all queries."""
+    """A parsed domain and problem; grounded on first use, then shared by all queries.
+
+    For a PPDDL domain (:meth:`from_texts` tells), ``domain``, ``domain_text`` and
+    ``task`` are its determinisation, what every planner reads; ``source_domain`` is the
+    PPDDL domain and ``learner_task`` reality's :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`
+    (for a STRIPS domain both are the same as ``domain`` and ``task``).
+    """
 
     def __init__(self, domain: Domain, problem: Problem, domain_text: str = "",
-                 problem_text: str = "") -> None:
+                 problem_text: str = "", source_domain: Domain | None = None,
+                 tasks: tuple[GroundTask, GroundTask] | None = None) -> None:
         self.domain, self.problem = domain, problem
         self.domain_text, self.problem_text = domain_text, problem_text
+        self.source_domain = source_domain or domain
+        if tasks is not None:  # (learner's, planner's): a PPDDL problem, grounded already
+            self.__dict__["learner_task"], self.__dict__["task"] = tasks
         self._results: dict[tuple, PlanResult] = {}
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
-                   problem_source: str = "<problem>") -> PlanningProblem:
+                   problem_source: str = "<problem>",
+                   determinisation: str = "all-outcomes") -> PlanningProblem:
+        """Parse a domain and problem. A PPDDL domain is grounded with all its outcomes
+        and planned on through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source)
-        return cls(domain, problem, domain_text, problem_text)
+        if not domain.probabilistic:
+            return cls(domain, problem, domain_text, problem_text)
+        from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
+        from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
+
+        det = determinise(domain, determinisation)
+        return cls(det, problem, write_domain(det), write_parsed_problem(problem, domain),
+                   domain, ground_ppddl(domain, problem, determinisation))
 
     @classmethod
-    def from_files(cls, domain_path: str | Path, problem_path: str | Path) -> PlanningProblem:
+    def from_files(cls, domain_path: str | Path, problem_path: str | Path,
+                   determinisation: str = "all-outcomes") -> PlanningProblem:
         from gdq_pddl.pddl.parser import _read
 
         return cls.from_texts(_read(domain_path), _read(problem_path), str(domain_path),
-                              str(problem_path))
+                              str(problem_path), determinisation)
 
     @cached_property
     def task(self) -> GroundTask:
-        """The grounded problem (computed once)."""
+        """The grounded problem the planners search (computed once)."""
         return ground(self.domain, self.problem)
+
+    @cached_property
+    def learner_task(self) -> GroundTask:
+        """The grounded problem whose ops are the learner's actions (a STRIPS domain's:
+        :attr:`task`)."""
+        return self.task
 
     @property
     def init(self) -> State:
