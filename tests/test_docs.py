@@ -28,3 +28,17 @@ def test_tutorial_code_blocks_run(capsys):
     assert namespace["results"]["code"] > namespace["results"]["paper"]
     assert namespace["lengths"] == [8, 9, 10]
     assert "approach p2" in namespace["first"]
+
+
+def test_readme_code_blocks_run_and_list_every_env_id(monkeypatch):
+    from gdq_pddl.envs import ENV_IDS
+
+    readme = DOCS.parent / "README.md"
+    text = readme.read_text(encoding="utf-8")
+    for env_id in ENV_IDS:
+        assert f'gymnasium.make("{env_id}"' in text, f"README has no example for {env_id}"
+    monkeypatch.chdir(DOCS.parent)  # its paths are relative to the repository root
+    namespace: dict = {"__name__": "readme"}
+    for i, block in enumerate(python_blocks(readme)):
+        exec(compile(block, f"README.md block {i + 1}", "exec"), namespace)
+    assert namespace["info"]["action_mask"].dtype.name == "int8"

@@ -186,10 +186,12 @@ def test_inapplicable_action_costs_a_step_and_changes_nothing() -> None:
 def test_info_fields() -> None:
     env = gymnasium.make(ENV_ID, task="A")
     obs, info = env.reset(seed=1)
+    mask = info.pop("action_mask")  # tests/test_gym_conventions.py checks its values
+    assert mask.dtype == np.int8 and mask.shape == (95,)
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
                     env.unwrapped.start_state, "step": 0}
     obs, reward, terminated, truncated, info = act(env, "approach", "p15")
-    assert set(info) == {"position", "area", "cause", "full_state", "step"}
+    assert set(info) == {"action_mask", "position", "area", "cause", "full_state", "step"}
     assert info["step"] == 1 and info["cause"] == ""
     assert info["position"] in ("p15", "p11", "p14")
     assert env.unwrapped.model.obs_of[info["full_state"]] == obs
