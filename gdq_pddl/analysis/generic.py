@@ -20,13 +20,16 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from gdq_pddl.analysis.data import load_config
 from gdq_pddl.analysis.episodes import Episodes
 from gdq_pddl.analysis.stats import run_means
+
+if TYPE_CHECKING:
+    from gdq_pddl.analysis.sections.writer import ReportOptions
 
 
 @dataclass(frozen=True)
@@ -97,12 +100,12 @@ def fmt2(x: float) -> str:
     return "n/a" if math.isnan(x) else f"{x:.2f}"
 
 
-def generic_report(out: Path, opts=None) -> str:
+def generic_report(out: Path, opts: ReportOptions | None = None) -> str:
     """The Markdown text of the report of output folder ``out``: per problem its facts,
     the learning curves (when ``figures/`` has them, :func:`make_generic_report`) and the
     office report's per-method table with milestones and comparisons
-    (:func:`gdq_pddl.analysis.sections.methods.write_task`); ``opts`` a
-    :class:`~gdq_pddl.analysis.sections.writer.ReportOptions`."""
+    (:func:`gdq_pddl.analysis.sections.methods.write_task`), with ``opts``' windows
+    (default :class:`ReportOptions`)."""
     from gdq_pddl.analysis.sections.methods import curves_stem, definitions, write_task
     from gdq_pddl.analysis.sections.writer import ReportOptions, Writer
     from gdq_pddl.analysis.stats import ALPHA
