@@ -1,4 +1,4 @@
-; The robot's action knowledge for office navigation (Hayamizu et al., AAAI 2021).
+; The robot's action knowledge for office navigation (Hayamizu et al., ICAPS 2021).
 ; Goal-independent and cheap: how positions connect, that a door must be open before
 ; the robot goes through it, and that it must stand at a door to ask for it to be
 ; opened. No probabilities, no costs: the planner ignores them, the learner learns them.

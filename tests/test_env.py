@@ -186,10 +186,12 @@ def test_inapplicable_action_costs_a_step_and_changes_nothing() -> None:
 def test_info_fields() -> None:
     env = gymnasium.make(ENV_ID, task="A")
     obs, info = env.reset(seed=1)
+    mask = info.pop("action_mask")  # tests/test_gym_conventions.py checks its values
+    assert mask.dtype == np.int8 and mask.shape == (95,)
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
                     env.unwrapped.start_state, "step": 0}
     obs, reward, terminated, truncated, info = act(env, "approach", "p15")
-    assert set(info) == {"position", "area", "cause", "full_state", "step"}
+    assert set(info) == {"action_mask", "position", "area", "cause", "full_state", "step"}
     assert info["step"] == 1 and info["cause"] == ""
     assert info["position"] in ("p15", "p11", "p14")
     assert env.unwrapped.model.obs_of[info["full_state"]] == obs
@@ -240,3 +242,49 @@ def test_render_without_mode_returns_none() -> None:
     env.reset(seed=0)
     with pytest.warns(UserWarning):
         assert env.render() is None
+
+
+def test_greedy_target_reads_a_q_table_on_the_map(office) -> None:
+    from gdq_pddl.envs.render import greedy_target
+    from gdq_pddl.spaces import LearnerSpaces
+
+    spaces = LearnerSpaces(office)
+    masks = OfficeEnv(task="C").action_masks
+    q = np.zeros((spaces.n_states, spaces.n_actions))
+    assert greedy_target(spaces, q, "p0") is None  # every action ties
+    q[spaces.state("p0"), spaces.action("approach", "p2")] = 1.0
+    assert greedy_target(spaces, q, "p0", masks) == "p2"
+    # opening the door leads on through it: the open state's greedy action
+    q[spaces.state("p2"), spaces.action("opendoor", "p2")] = 1.0
+    assert greedy_target(spaces, q, "p2") is None  # nothing preferred behind the door
+    q[spaces.state("p2", True), spaces.action("gothrough", "p4")] = 1.0
+    assert greedy_target(spaces, q, "p2", masks) == "p4"
+    # arrived through a door (the closed state has no preference): the open state's
+    q[spaces.state("p4", True), spaces.action("goto", "p8")] = 1.0
+    assert greedy_target(spaces, q, "p4", masks) == "p8"
+    # a greedy action that does nothing there: stay, or one the masks rule out
+    q[spaces.state("p8"), spaces.action("stay", "p8")] = 1.0
+    assert greedy_target(spaces, q, "p8") == ""
+    q[spaces.state("p8"), spaces.action("goto", "p17")] = 2.0  # not a neighbour of p8
+    assert greedy_target(spaces, q, "p8") == "p17"
+    assert greedy_target(spaces, q, "p8", masks) == ""
+
+
+def test_draw_q_draws_one_arrow_per_greedy_move(office) -> None:
+    from matplotlib.figure import Figure
+
+    from gdq_pddl.envs.render import MapPainter
+    from gdq_pddl.learners import office_task_context
+
+    painter = MapPainter(office)
+    context = office_task_context(office, "C")
+    q = np.zeros((context.n_states, context.n_actions))
+    first_plan = context.plans.plans_from(context.s0)[0]  # p0 -> p1 -> p3 ...: Q = 1 on it
+    for s, a in first_plan:
+        q[s, a] = 1.0
+    ax = Figure().add_subplot()
+    mapping = painter.draw_q(ax, q, masks=OfficeEnv(task="C").action_masks)
+    arrows = [c for c in ax.get_children() if type(c).__name__ == "Annotation"]
+    # p0 -> p1, through d0 to p3, p3 -> p5, p5 -> p6, through d3 to p7, p7 -> p17
+    assert len(arrows) == 6
+    assert mapping.norm.vmin == 0.0 and mapping.norm.vmax == 1.0

@@ -3,10 +3,12 @@
 The runner writes, per output folder:
 
 - ``episodes.csv``: one row per episode, columns ``experiment, method, task, run,
-  episode, return, steps, success, area_1 .. area_k``;
+  episode, return, steps, success``, then ``area_1 .. area_k`` in an office folder (a
+  PDDL run has none; older PDDL folders have columns of zeros);
 - ``config.json``: the run's configuration (only a few keys are read, all optional);
 - ``policies.csv``: ``experiment, method, task, run, state, action``, the final greedy
-  policy of each run;
+  policy of each run, and (since the names were added; not read here)
+  ``state_name, action_name``;
 - ``optimal.json``: ``{task: {"v_star", "relevant_areas", ...}}``.
 
 :func:`load_episodes` (in :mod:`.episodes`) reads ``episodes.csv`` once (about 600k rows

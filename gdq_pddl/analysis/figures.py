@@ -138,6 +138,8 @@ def _task(study: Study, experiment: str, task: str) -> Task | None:
 
 
 def _task_title(study: Study, experiment: str, task: str) -> str:
+    if study.is_pddl(experiment):
+        return f"problem {task}"
     t = _task(study, experiment, task)
     return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"Task {task}"
 
@@ -154,15 +156,16 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     tasks = ep.tasks(exp)
     fig, axes = _grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
-        v_star = study.truth(exp, task).v_star
+        v_star = study.v_star(exp, task)
         scale = v_star if fraction_of_vstar else 1.0
         for method in ep.methods(exp):
             m = ep.matrix("return", exp, method, task)
             if m.size:
                 _band(ax, ep.episode_numbers(exp, method, task), m, method, opts.window, scale)
         ref = 1.0 if fraction_of_vstar else v_star
-        ax.axhline(ref, color="black", ls="--", lw=0.8, label="V*" if not fraction_of_vstar
-                   else "V* (= 1)")
+        if not math.isnan(ref):
+            ax.axhline(ref, color="black", ls="--", lw=0.8,
+                       label="V*" if not fraction_of_vstar else "V* (= 1)")
         ax.set_title(_task_title(study, exp, task), fontsize=10)
         ax.set_xlabel("episode")
         ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")

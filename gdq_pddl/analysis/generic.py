@@ -1,11 +1,14 @@
-"""A short REPORT.md for a run on a PDDL domain (``gdq-pddl run --domain ...``).
+"""The report of a run on a PDDL domain (``gdq-pddl run --domain ...``), and the
+per-method summary it shares with the office report.
 
 The office's report (:mod:`gdq_pddl.analysis.report`) is about areas, the paper's tasks
-and hypotheses; a generic domain has none of those. This one lists, per problem, the
+and hypotheses; a generic domain has none of those. This one gives, per problem, the
 size of the learner's problem, the planner's shortest plan length, the optimal value V*
-(value iteration on the true model, from ``optimal.json``) and, per method, the mean
-return per episode over all episodes and over the last 10% of them (mean over runs with
-its standard error), and the success rate.
+(value iteration on the true model, from ``optimal.json``), the learning curves, and the
+office report's *Methods compared* table: per method the mean return per episode over
+all episodes and over the last 10% of them (mean over runs with its standard error), the
+success rate and the episode the moving average turns positive, then each GDQ variant
+tested against each baseline.
 
 :func:`summarise` and :func:`optimal_entry` are shared with the office report's
 *Methods compared* section (:mod:`gdq_pddl.analysis.sections.methods`).
@@ -17,13 +20,16 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from gdq_pddl.analysis.data import load_optimal
-from gdq_pddl.analysis.episodes import Episodes, load_episodes
+from gdq_pddl.analysis.data import load_config
+from gdq_pddl.analysis.episodes import Episodes
 from gdq_pddl.analysis.stats import run_means
+
+if TYPE_CHECKING:
+    from gdq_pddl.analysis.sections.writer import ReportOptions
 
 
 @dataclass(frozen=True)
@@ -67,20 +73,6 @@ def task_summary(ep: Episodes, experiment: str, method: str, task: str) -> Metho
     return summarise(returns, success)
 
 
-def method_summary(out: Path) -> dict[tuple[str, str], MethodSummary]:
-    """Per (task, method) of ``out/episodes.csv``: the :class:`MethodSummary` (a PDDL
-    run has one experiment; with several, the first that has the pair)."""
-    ep = load_episodes(Path(out) / "episodes.csv")
-    summary: dict[tuple[str, str], MethodSummary] = {}
-    for exp in ep.experiments:
-        for task in ep.tasks(exp):
-            for method in ep.methods(exp):
-                s = summary.get((task, method)) or task_summary(ep, exp, method, task)
-                if s is not None:
-                    summary[(task, method)] = s
-    return summary
-
-
 def optimal_entry(optimal: Mapping[str, Mapping[str, Any]], task: str,
                   world: str | None = None) -> Mapping[str, Any]:
     """The ``optimal.json`` facts of task label ``task`` (empty when absent).
@@ -118,42 +110,70 @@ def _reality(info: dict) -> str:
             f"its {info['determinisation']} determinisation")
 
 
-def generic_report(out: Path) -> str:
-    """The Markdown text of the report of output folder ``out``."""
-    optimal = load_optimal(out)
-    summary = method_summary(out)
-    lines = ["# Run on a PDDL domain", ""]
-    for task in sorted({t for t, _ in summary}):
-        info = optimal_entry(optimal, task)
-        lines += [f"## {task}", ""]
-        if info:
-            lines += [f"- domain `{info.get('domain')}`, problem `{info.get('problem')}`, "
+def generic_report(out: Path, opts: ReportOptions | None = None) -> str:
+    """The Markdown text of the report of output folder ``out``: per problem its facts,
+    the learning curves (when ``figures/`` has them, :func:`make_generic_report`) and the
+    office report's per-method table with milestones and comparisons
+    (:func:`gdq_pddl.analysis.sections.methods.write_task`), with ``opts``' windows
+    (default :class:`ReportOptions`)."""
+    from gdq_pddl.analysis.sections.methods import curves_stem, definitions, write_task
+    from gdq_pddl.analysis.sections.writer import ReportOptions, Writer
+    from gdq_pddl.analysis.stats import ALPHA
+    from gdq_pddl.analysis.study import Study
+
+    opts = opts or ReportOptions()
+    study = Study.open(out)
+    w = Writer(study, opts, Path(out))
+    w.add("# Run on a PDDL domain", "",
+          f"{definitions(opts.window)} Welch's t-test (two-sided) and a percentile "
+          f"bootstrap 95% CI of the difference in means over runs (10,000 resamples, seed "
+          f"{opts.seed}); a difference counts when the CI excludes 0 and p < {ALPHA}.", "")
+    for exp in study.episodes.experiments:
+        w.add(f"## {exp}", "")
+        w.figure(curves_stem(exp), f"learning curves, {exp}")
+        for task in study.episodes.tasks(exp):
+            info = optimal_entry(study.optimal, task)
+            if info:
+                w.add(f"- domain `{info.get('domain')}`, problem `{info.get('problem')}`, "
                       + _reality(info),
                       f"- learner: {info.get('states')} states (every reachable planner "
                       f"state), {info.get('actions')} actions (ground actions)",
                       f"- shortest plan: {info.get('shortest_plan')} actions",
-                      f"- optimal value V* (expected return from the start, value iteration "
-                      f"on the true model): {info.get('v_star', float('nan')):.2f}", ""]
-        rows = sorted(((m, s) for (t, m), s in summary.items() if t == task),
-                      key=lambda ms: -ms[1].mean)
-        n = rows[0][1]
-        lines += [f"Mean return per episode, mean over {n.runs} runs (standard error); "
-                  f"{n.episodes} episodes per run; last 10%: the final "
-                  f"{n.tail} episodes.", "",
-                  "| method | mean return (SE) | last 10% (SE) | success rate |",
-                  "|---|---|---|---|"]
-        best = rows[0][0]
-        for method, s in rows:
-            name = f"**{method}**" if method == best else method
-            lines.append(f"| {name} | {fmt2(s.mean)} ({fmt2(s.se)}) | "
-                         f"{fmt2(s.last)} ({fmt2(s.last_se)}) | {s.success:.2f} |")
-        lines.append("")
-    return "\n".join(lines)
+                      f"- optimal value V* (expected return from the start, value "
+                      f"iteration on the true model): {info.get('v_star', math.nan):.2f}",
+                      "")
+            write_task(w, exp, task)
+    return "\n".join(w.lines)
 
 
 def write_generic_report(out: Path) -> Path:
-    """Write ``out/REPORT.md`` for a PDDL run and return its path."""
+    """Write ``out/REPORT.md`` for a PDDL run and return its path (embedding the figures
+    already in ``out/figures``)."""
     out = Path(out)
     path = out / "REPORT.md"
     path.write_text(generic_report(out), encoding="utf-8")
     return path
+
+
+def make_generic_report(out: Path) -> list[Path]:
+    """The learning-curve figures (``figures/learning_curves_<experiment>.png`` and
+    ``.pdf``) and ``REPORT.md`` of a PDDL run's output folder; returns every path written."""
+    from gdq_pddl.analysis.figures import learning_curves
+    from gdq_pddl.analysis.study import Study
+
+    out = Path(out)
+    study = Study.open(out)
+    paths: list[Path] = []
+    for exp in study.episodes.experiments:
+        paths += learning_curves(study, out / "figures", experiment=exp)
+    paths.append(write_generic_report(out))
+    return paths
+
+
+def is_pddl_folder(out: Path) -> bool:
+    """Whether every experiment of an output folder's ``config.json`` ran on a PDDL
+    problem (``gdq-pddl run --domain``)."""
+    from gdq_pddl.analysis.study import PDDL_WORLD
+
+    experiments = load_config(out).experiments
+    return bool(experiments) and all(e.get("world") == PDDL_WORLD for e in experiments)

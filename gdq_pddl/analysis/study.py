@@ -29,7 +29,11 @@ from gdq_pddl.analysis.routes import (
     task_truth,
     walk_policy,
 )
+from gdq_pddl.errors import GdqError
 from gdq_pddl.world import Task, World
+
+PDDL_WORLD = "pddl"
+"""The ``world`` the runner records for an experiment on a PDDL problem."""
 
 
 @dataclass(frozen=True)
@@ -117,9 +121,27 @@ class Study:
             self._worlds[spec] = load_world_spec(spec)
         return self._worlds[spec]
 
+    def is_pddl(self, experiment: str) -> bool:
+        """Whether ``experiment`` ran on a PDDL problem (``gdq-pddl run --domain``), which
+        has no world file, areas or positions."""
+        return self.config.world_spec(experiment) == PDDL_WORLD
+
     def task(self, experiment: str, label: str) -> Task:
-        """The task a ``task`` column label names in ``experiment``'s world."""
+        """The task a ``task`` column label names in ``experiment``'s world (a
+        :class:`GdqError` for a PDDL experiment: it has no world)."""
+        if self.is_pddl(experiment):
+            raise GdqError(f"experiment {experiment!r} ran on a PDDL problem: no world task")
         return resolve_task_label(self.world(experiment), label)
+
+    def v_star(self, experiment: str, task: str) -> float:
+        """V* of ``task``: :meth:`truth`'s, or for a PDDL experiment ``optimal.json``'s
+        (NaN when absent)."""
+        if not self.is_pddl(experiment):
+            return self.truth(experiment, task).v_star
+        from gdq_pddl.analysis.generic import optimal_entry
+
+        value = optimal_entry(self.optimal, task, PDDL_WORLD).get("v_star")
+        return float(value) if isinstance(value, (int, float)) else float("nan")
 
     def truth(self, experiment: str, task: str) -> TaskTruth:
         """V*, relevant areas and optimal route of ``task`` in ``experiment``'s world.

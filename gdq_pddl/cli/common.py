@@ -45,11 +45,14 @@ def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
     from gdq_pddl.experiments import DEFAULT_METHODS, METHODS
 
     # both GDQ variants by default, as reproduce: the paper's and the authors' code's
-    p.add_argument("--method", nargs="+", metavar="M",
-                   default=list(methods or DEFAULT_METHODS),
-                   help=f"methods to compare (from: {', '.join(METHODS)})")
-    p.add_argument("--episodes", type=int, default=episodes, help="episodes per run (per task)")
-    p.add_argument("--runs", type=int, default=runs, help="independent runs per method")
+    default = list(methods or DEFAULT_METHODS)
+    p.add_argument("--method", nargs="+", metavar="M", default=default,
+                   help=f"methods to compare (default: {' '.join(default)}; "
+                        f"from: {', '.join(METHODS)})")
+    p.add_argument("--episodes", type=int, default=episodes,
+                   help=f"episodes per run (per task; default {episodes})")
+    p.add_argument("--runs", type=int, default=runs,
+                   help=f"independent runs per method (default {runs})")
     p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
     p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
     exec_args(p)

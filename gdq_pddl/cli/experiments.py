@@ -53,7 +53,6 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
-    from gdq_pddl.analysis.generic import write_generic_report
     from gdq_pddl.experiments import Experiment
     from gdq_pddl.experiments.work import load_pddl_instance
 
@@ -70,8 +69,15 @@ def _run_pddl(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
     check_planner(args.planner)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
-    return execute([exp], args, f"run-{instance.name}",
-                   report=lambda out: f"wrote {write_generic_report(out)}")
+    return execute([exp], args, f"run-{instance.name}", report=pddl_report)
+
+
+def pddl_report(out: Path) -> str:
+    """Figures and REPORT.md of a PDDL run's output folder; returns what was written."""
+    from gdq_pddl.analysis.generic import make_generic_report
+
+    paths = make_generic_report(out)
+    return f"wrote {len(paths) - 1} figures and {paths[-1]}"
 
 
 def register_switch(sub) -> None:
@@ -169,14 +175,17 @@ def cmd_knowledge(args: argparse.Namespace) -> int:
 
 def register_report(sub) -> None:
     p = sub.add_parser("report", help="redraw figures, tables and REPORT.md of an output folder")
-    p.add_argument("out", type=Path, help="an output folder of run/switch/robot/reproduce")
+    p.add_argument("out", type=Path,
+                   help="an output folder of run (office or PDDL), switch, robot or reproduce")
     p.set_defaults(func=cmd_report)
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.generic import is_pddl_folder
+
     if not (args.out / "episodes.csv").exists():
         raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
-    office_report(args.out)
+    print(pddl_report(args.out) if is_pddl_folder(args.out) else office_report(args.out))
     return 0
 
 

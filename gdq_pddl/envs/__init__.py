@@ -8,22 +8,32 @@
     env = gymnasium.make("gdq_pddl/Office-v0", start="p0", goal="p17")
     env = gymnasium.make("gdq_pddl/Office-v0", world="my_building.toml", task="A")
 
+and ``gdq_pddl/PDDL-v0``, any PDDL problem under a dynamics file
+(:mod:`gdq_pddl.envs.pddl_env`)::
+
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain="d.pddl", problem="p.pddl",
+                         dynamics="d.toml")
+
 No ``max_episode_steps`` is registered: the env counts its own steps and ends an episode
-at the world's ``step_limit`` with the failure reward ``-r_max``; a ``TimeLimit`` wrapper
-would duplicate that, and with a fixed number it would be wrong for a world file whose
-step limit differs from the office's 20.
+at the world's (or the dynamics file's) ``step_limit`` with the failure reward
+``-r_max``; a ``TimeLimit`` wrapper would duplicate that, and with a fixed number it
+would be wrong for a world file whose step limit differs from the office's 20.
 """
 
 from __future__ import annotations
 
 OFFICE_ID = "gdq_pddl/Office-v0"
+PDDL_ID = "gdq_pddl/PDDL-v0"
+ENV_IDS = {OFFICE_ID: "gdq_pddl.envs.office:OfficeEnv",
+           PDDL_ID: "gdq_pddl.envs.pddl_env:PDDLEnv"}
+"""Every env id this package registers, and its entry point."""
 
 
 def register_envs() -> None:
     """Register the package's envs with Gymnasium (a second call does nothing)."""
     import gymnasium
 
-    if OFFICE_ID in gymnasium.registry:
-        return
-    gymnasium.register(id=OFFICE_ID, entry_point="gdq_pddl.envs.office:OfficeEnv",
-                       max_episode_steps=None)
+    for env_id, entry_point in ENV_IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=None)

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
+import numpy as np
 from gymnasium.error import ResetNeeded
 
 from gdq_pddl.envs.model import CAUSES, ModelArrays, env_step
@@ -76,11 +77,19 @@ class CompiledEnv(gym.Env[int, int]):
 
 class ModelEnv(CompiledEnv):
     """Base class of the envs over :class:`ModelArrays`: subclasses set ``model``,
-    ``start_state``, ``goal_pos`` and the spaces, and may extend :meth:`_info`."""
+    ``start_state``, ``goal_pos`` and the spaces, implement :attr:`action_masks`, and
+    may extend :meth:`_info`."""
 
     model: ModelArrays
     start_state: int
     goal_pos: int
+
+    @property
+    def action_masks(self) -> np.ndarray:
+        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
+        can do something in the learner state (:mod:`gdq_pddl.abstraction.masks`); row
+        ``obs`` is ``info["action_mask"]``."""
+        raise NotImplementedError
 
     def transition_arrays(self) -> ModelArrays:
         """The true model (CSR outcomes over full states) for value iteration.
@@ -103,9 +112,12 @@ class ModelEnv(CompiledEnv):
         return int(self.model.obs_of[self._fs])
 
     def _info(self) -> dict[str, Any]:
-        """``area`` (0: none), ``cause``, ``full_state`` and ``step``."""
+        """``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
+        new data on every call), ``area`` (0: none), ``cause``, ``full_state`` and
+        ``step``."""
         pos = int(self.model.pos_of[self._fs])
         return {
+            "action_mask": self.action_masks[self.model.obs_of[self._fs]].copy(),
             "area": int(self.model.area_of_pos[pos]),
             "cause": self._cause,
             "full_state": self._fs,

@@ -37,6 +37,7 @@ episode loop (:mod:`gdq_pddl.learners.runner`) serves both.
 
 from __future__ import annotations
 
+from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -159,8 +160,9 @@ class CompactEnv(CompiledEnv):
     """The office-like env of any world over a :class:`CompactModel`.
 
     Same spaces, rewards, episode ends and random draws as
-    :class:`gdq_pddl.envs.office.OfficeEnv`; ``info`` has ``position``, ``area``,
-    ``cause``, ``step`` and ``open_doors`` (door indices), not ``full_state``.
+    :class:`gdq_pddl.envs.office.OfficeEnv`; ``info`` has ``action_mask`` (as the
+    office's), ``position``, ``area``, ``cause``, ``step`` and ``open_doors`` (door
+    indices), not ``full_state``.
     """
 
     metadata = {"render_modes": []}
@@ -193,7 +195,15 @@ class CompactEnv(CompiledEnv):
     def _observe(self) -> int:
         return int(observe_state(self.model, self._pos, self.doors))
 
+    @cached_property
+    def action_masks(self) -> np.ndarray:
+        """As :attr:`gdq_pddl.envs.office.OfficeEnv.action_masks`."""
+        from gdq_pddl.envs.office import office_action_masks
+
+        return office_action_masks(self.world, self.task)
+
     def _info(self) -> dict[str, Any]:
-        return {"position": self.world.positions[self._pos],
+        return {"action_mask": self.action_masks[self._observe()].copy(),
+                "position": self.world.positions[self._pos],
                 "area": int(self.model.area_of_pos[self._pos]), "cause": self._cause,
                 "step": self._t, "open_doors": tuple(np.flatnonzero(self.doors).tolist())}

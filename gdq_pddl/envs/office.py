@@ -30,9 +30,13 @@ actions (20 for the office) with reward ``-r_max``: the env counts its own steps
 ``TimeLimit`` wrapper is needed (or registered).
 
 ## Information
-``info`` holds ``position`` (name), ``area`` (int, 0 if none), ``cause`` (``""``,
-``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and ``step`` (actions
-taken so far).
+``info`` holds ``action_mask``, ``position`` (name), ``area`` (int, 0 if none),
+``cause`` (``""``, ``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and
+``step`` (actions taken so far). ``action_mask`` (``int8[n_actions]``, as in
+Gymnasium's Taxi) is 1 for the actions the robot's PDDL knowledge says can do something
+in the observed state: a ground action applicable there maps to it. ``stay`` is never 1
+(the knowledge has no such action). Use it as
+``env.action_space.sample(mask=info["action_mask"])``.
 
 ## Arguments
 ``task`` (a task name of the world, default ``"C"``) or ``start`` and ``goal``
@@ -46,6 +50,8 @@ dynamics, with randomness from ``self.np_random`` only.
 
 from __future__ import annotations
 
+import weakref
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -101,6 +107,31 @@ def pick_task(world: World, task: str | None, start: str | None, goal: str | Non
     return chosen
 
 
+def office_action_masks(world: World, task: Task) -> np.ndarray:
+    """``int8[n_states, n_actions]``, read-only: the actions the office's knowledge
+    (``domains/office.pddl`` on ``world``'s problem for ``task``) says can do something
+    in each learner state, through O (:mod:`gdq_pddl.abstraction.masks`). Cached per
+    (world object, start): an experiment makes an env per run, and grounding the
+    knowledge costs milliseconds."""
+    key = (id(world), task.start)
+    hit = _MASKS.get(key)
+    if hit is not None and hit[0]() is world:
+        return hit[1]
+    from gdq_pddl.abstraction import OfficeAbstraction
+    from gdq_pddl.abstraction.masks import knowledge_action_mask
+    from gdq_pddl.pddl.office import office_problem
+    from gdq_pddl.planning.base import PlanningProblem
+    from gdq_pddl.resources import domain_text
+
+    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, task))
+    masks = knowledge_action_mask(OfficeAbstraction(world), problem.task)
+    _MASKS[key] = (weakref.ref(world), masks)
+    return masks
+
+
+_MASKS: dict[tuple[int, str], tuple[weakref.ref, np.ndarray]] = {}
+
+
 class OfficeEnv(ModelEnv):
     """A robot in an office reaching a goal position (see the module docstring)."""
 
@@ -123,6 +154,10 @@ class OfficeEnv(ModelEnv):
         self.start_state = full_state(self.world, self.task.start)
         self._begin()
         self._painter: MapPainter | None = None
+
+    @cached_property
+    def action_masks(self) -> np.ndarray:
+        return office_action_masks(self.world, self.task)
 
     def decode(self, fs: int) -> tuple[str, frozenset[str]]:
         """``(position name, names of the open doors)`` of a full state."""

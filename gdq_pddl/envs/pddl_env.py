@@ -11,6 +11,17 @@ compiled once into the same :class:`~gdq_pddl.envs.model.ModelArrays` as the off
 so it steps through the same :func:`~gdq_pddl.envs.model.env_step`, the fast episode
 runner works on it and :func:`gdq_pddl.envs.solve.solve` gives its V*.
 
+Registered as ``gdq_pddl/PDDL-v0``::
+
+    gymnasium.make("gdq_pddl/PDDL-v0", domain="my.pddl", problem="p1.pddl",
+                   dynamics="my.toml")
+    gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
+
+``domain``, ``problem`` and ``dynamics`` are file paths, or names of the shipped files
+(a bare name without a suffix that is not an existing file: ``domains/<name>.pddl``,
+``problems/<name>.pddl``, ``gdq_pddl/data/dynamics/<name>.toml``); a shipped domain
+given without ``dynamics`` gets the shipped dynamics of the same name.
+
 ## Action space
 ``Discrete(n_ops)``: the ground actions of the problem, in the grounder's order
 (``env.unwrapped.action_name(a)``). An action whose precondition does not hold costs its
@@ -42,8 +53,9 @@ its ``(:goal-reward N)``, else 20; its step limit: the overlay's, else
 ``max(20, ceil(2.5 L))``, L the fewest actions that can reach the goal.
 
 ## Information
-``info`` holds ``area`` (always 0), ``cause``, ``full_state`` (= the observation) and
-``step``.
+``info`` holds ``action_mask``, ``area`` (always 0), ``cause``, ``full_state`` (= the
+observation) and ``step``. ``action_mask`` (``int8[n_actions]``, as in Gymnasium's
+Taxi) is 1 for the ground actions whose precondition holds in the state.
 """
 
 from __future__ import annotations
@@ -178,6 +190,14 @@ class PDDLInstance:
                 array.setflags(write=False)
         return model
 
+    @cached_property
+    def action_masks(self) -> np.ndarray:
+        """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
+        applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
+        from gdq_pddl.abstraction.masks import graph_action_mask
+
+        return graph_action_mask(self.graph)
+
     @property
     def n_states(self) -> int:
         return self.graph.n_states
@@ -299,6 +319,57 @@ def _split(s: int, t: int, o, rest: float, applicable: dict[int, int],
     return out
 
 
+SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
+           "dynamics": ("dynamics", ".toml")}
+"""Where the shipped files of each kind are (under ``gdq_pddl/data/``), and their suffix."""
+
+
+def shipped_names(kind: str) -> list[str]:
+    """The names of the shipped files of ``kind`` (``domain``, ``problem``, ``dynamics``)."""
+    from gdq_pddl.resources import data_file
+
+    folder, suffix = SHIPPED[kind]
+    return sorted(f.name.removesuffix(suffix) for f in data_file(folder).iterdir()
+                  if f.name.endswith(suffix))
+
+
+def _shipped(kind: str, value: str | Path):
+    """The shipped file (a Traversable) that ``value`` names, or None when ``value`` is
+    a path: a bare name without a suffix that is not an existing file names one."""
+    from gdq_pddl.resources import data_file
+
+    path = Path(value)
+    if not isinstance(value, str) or path.suffix or path.name != value or path.exists():
+        return None
+    folder, suffix = SHIPPED[kind]
+    found = data_file(folder, value + suffix)
+    if not found.is_file():
+        raise PlanningError(f"{kind} {value!r}: no such file, and no shipped {kind} of that "
+                            f"name (shipped: {', '.join(shipped_names(kind))})")
+    return found
+
+
+def load_instance(domain: str | Path | None, problem: str | Path | None,
+                  dynamics: str | Path | None = None) -> PDDLInstance:
+    """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
+    ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
+    dynamics file."""
+    from contextlib import ExitStack
+    from importlib.resources import as_file
+
+    if domain is None or problem is None:
+        raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
+                            f"domains {', '.join(shipped_names('domain'))}; problems "
+                            f"{', '.join(shipped_names('problem'))})")
+    if dynamics is None and _shipped("domain", domain) is not None:
+        dynamics = str(domain)
+    with ExitStack() as stack:  # no dynamics: a PPDDL domain (from_files says otherwise)
+        paths = [value if value is None or (found := _shipped(kind, value)) is None
+                 else stack.enter_context(as_file(found))
+                 for kind, value in zip(SHIPPED, (domain, problem, dynamics), strict=True)]
+        return PDDLInstance.from_files(*paths)
+
+
 class PDDLEnv(ModelEnv):
     """A PDDL problem under a dynamics file (see the module docstring)."""
 
@@ -311,10 +382,7 @@ class PDDLEnv(ModelEnv):
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
                              f"or None, got {render_mode!r}")
         if instance is None:
-            if domain is None or problem is None:
-                raise PlanningError("PDDLEnv needs domain and problem files (and a dynamics "
-                                    "file for a STRIPS domain), or an instance")
-            instance = PDDLInstance.from_files(domain, problem, dynamics)
+            instance = load_instance(domain, problem, dynamics)
         self.instance = instance
         self.model = instance.model
         self.observation_space = Discrete(instance.n_states)
@@ -323,6 +391,10 @@ class PDDLEnv(ModelEnv):
         self.goal_pos = GOAL_POS
         self.start_state = 0
         self._begin()
+
+    @property
+    def action_masks(self) -> np.ndarray:
+        return self.instance.action_masks
 
     def action_name(self, a: int) -> str:
         return self.instance.action_name(a)

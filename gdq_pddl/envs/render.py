@@ -1,17 +1,29 @@
-"""Pictures of an office world: a text map (``ansi``) and an image (``rgb_array``).
+"""Pictures of an office world: a text map (``ansi``), an image (``rgb_array``) and a
+learner's Q table on the map (:meth:`MapPainter.draw_q`).
 
-Both take a :class:`Frame` (what to show) and know nothing about the env, so they can
-draw any world a user loads. The image layout is a Kamada-Kawai layout of the position
-graph (deterministic: no random seed involved), computed once per :class:`MapPainter`.
+The first two take a :class:`Frame` (what to show) and know nothing about the env, so
+they can draw any world a user loads. The image layout is a Kamada-Kawai layout of the
+position graph (deterministic: no random seed involved), computed once per
+:class:`MapPainter`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+MOVES = ("goto", "approach", "gothrough")
+"""The verbs whose position is where the robot goes."""
 
 
 @dataclass(frozen=True)
@@ -117,3 +129,80 @@ class MapPainter:
         ax.margins(0.08)
         canvas.draw()
         return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+
+    def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
+               norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
+        """Draw a learner's Q table (``float[n_states, n_actions]`` of this world) on ``ax``.
+
+        Each position is coloured by its best ``max_a Q`` over its learner states, and
+        an arrow points to where its greedy action leads (:func:`greedy_target`). With
+        ``masks`` (an env's ``action_masks``), a greedy action the knowledge says does
+        nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
+        range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
+        """
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.colors import Normalize
+
+        w, xy = self.world, self.xy
+        spaces = LearnerSpaces(w)
+        values = np.array([max(q[spaces.state(p, is_open)].max() for is_open in (False, True))
+                           for p in w.positions])
+        if norm is None:
+            low, high = float(values.min()), float(values.max())
+            norm = Normalize(low, high if high > low else low + 1.0)
+        mapping = ScalarMappable(norm=norm, cmap=cmap)
+        door_edges = {frozenset(d.sides) for d in w.doors}
+        for a, b in w.edges:
+            door = frozenset((a, b)) in door_edges
+            ax.plot(*zip(xy[a], xy[b], strict=True), color="#8c564b" if door else "#999999",
+                    lw=3.0 if door else 1.2, ls=":" if door else "-", zorder=1)
+        for p in w.positions:
+            greedy = greedy_target(spaces, q, p, masks)
+            if greedy == "":
+                ax.scatter(*xy[p], s=500, marker="x", color="#d62728", lw=1.5, zorder=4)
+            elif greedy is not None:
+                ax.annotate("", xy=xy[greedy], xytext=xy[p], zorder=4,
+                            arrowprops={"arrowstyle": "-|>", "color": "#d62728", "lw": 1.8,
+                                        "shrinkA": 8, "shrinkB": 8})
+        pts = np.array([xy[p] for p in w.positions])
+        ax.scatter(pts[:, 0], pts[:, 1], s=260, c=mapping.to_rgba(values),
+                   edgecolors="#333333", linewidths=0.8, zorder=3)
+        for p, v in zip(w.positions, norm(values), strict=True):
+            ax.text(*xy[p], p[1:] if p[1:].isdigit() else p, fontsize=6, ha="center",
+                    va="center", zorder=5, color="white" if v < 0.5 else "black")
+        ax.set_axis_off()
+        ax.set_aspect("equal")
+        ax.margins(0.08)
+        return mapping
+
+
+def greedy_target(spaces: LearnerSpaces, q: np.ndarray, position: str,
+                  masks: np.ndarray | None = None) -> str | None:
+    """Where the greedy action of ``q`` takes the robot from ``position``.
+
+    The state with the door closed first; when its actions all tie, or its greedy
+    action opens the door, the open-door state's (the robot arrives through a door with
+    it open, and goes on through it after opening it). Returns the position moved to;
+    ``""`` when the greedy action does nothing (``stay``, or, with ``masks``, an action
+    the knowledge says does nothing there); None when every action ties, or the greedy
+    action opens the door and the open-door state has no preference.
+    """
+    state = spaces.state(position)
+    a = _greedy(q[state])
+    opens = a is not None and spaces.action_parts(a)[0] == "opendoor"
+    if (a is None or opens) and position in spaces.world.door_at:
+        inside = spaces.state(position, True)
+        b = _greedy(q[inside])
+        if b is not None:
+            state, a, opens = inside, b, False
+    if a is None or opens:
+        return None
+    verb, target = spaces.action_parts(a)
+    if verb not in MOVES or target == position or (masks is not None and not masks[state, a]):
+        return ""
+    return target
+
+
+def _greedy(row: np.ndarray) -> int | None:
+    """The first action of maximal Q; None when every action ties."""
+    return None if row.max() == row.min() else int(row.argmax())

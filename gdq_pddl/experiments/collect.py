@@ -1,9 +1,20 @@
-"""Turn the per-unit files of an output folder into its CSV and JSON results."""
+"""Turn the per-unit files of an output folder into its CSV and JSON results.
+
+``episodes.csv`` has the columns :data:`EPISODE_COLUMNS`, then, when an office
+experiment is among them, ``area_1 .. area_7``: the steps of the episode that end in
+each area of the world file (a PDDL domain has no areas, so a folder of PDDL runs has
+no such columns). ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
+action per learner state, by index and by name (``state_name``: ``p1 (door open)`` in
+the office, the state's fluent atoms for a PDDL domain; ``action_name``: ``gothrough
+p3``, or the ground action ``(move c11 c12)``).
+"""
 
 from __future__ import annotations
 
+import csv
 import io
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +24,8 @@ from gdq_pddl.experiments.work import load_world_named, resolve_task
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
+POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "state_name",
+                  "action_name")
 N_AREAS = 7
 
 
@@ -21,23 +34,33 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     from gdq_pddl.experiments.runner import atomic_write
 
     units = [u for e in experiments for u in e.units()]
-    header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, N_AREAS + 1))))
+    n_areas = N_AREAS if any(e.pddl is None for e in experiments) else 0
+    header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, n_areas + 1))))
 
     def write_episodes(tmp: Path) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(header + "\n")
             for unit in units:
                 data = np.load(out / "units" / f"{unit.key}.npz")
-                fh.write(_episode_rows(unit.experiment.name, unit.method, unit.run, data))
+                fh.write(_episode_rows(unit.experiment.name, unit.method, unit.run, data,
+                                       n_areas))
 
     def write_policies(tmp: Path) -> None:
+        namers: dict[tuple, tuple[Callable[[int], str], Callable[[int], str]]] = {}
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
-            fh.write("experiment,method,task,run,state,action\n")
+            writer = csv.writer(fh, lineterminator="\n")
+            writer.writerow(POLICY_COLUMNS)
             for unit in units:
+                exp = unit.experiment
+                key = (exp.world, exp.pddl and tuple(exp.pddl))
+                if key not in namers:
+                    namers[key] = _namers(exp)
+                state_name, action_name = namers[key]
                 data = np.load(out / "units" / f"{unit.key}.npz")
                 task = str(data["tasks"][-1])
-                for s, a in enumerate(data["policy"].tolist()):
-                    fh.write(f"{unit.experiment.name},{unit.method},{task},{unit.run},{s},{a}\n")
+                writer.writerows((exp.name, unit.method, task, unit.run, s, a, state_name(s),
+                                  action_name(a))
+                                 for s, a in enumerate(data["policy"].tolist()))
 
     atomic_write(out / "episodes.csv", write_episodes)
     atomic_write(out / "policies.csv", write_policies)
@@ -45,19 +68,33 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
 
 
-def _episode_rows(experiment: str, method: str, run: int, data) -> str:
-    """CSV rows of one unit (vectorised formatting: a full protocol has ~1M rows)."""
+def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]]:
+    """``(state name, action name)`` of learner indices in ``exp``'s world or problem."""
+    if exp.pddl is not None:
+        from gdq_pddl.experiments.work import load_pddl_instance
+
+        instance = load_pddl_instance(tuple(exp.pddl))
+        return (lambda s: " ".join(sorted(instance.atoms(s)))), instance.action_name
+    from gdq_pddl.spaces import LearnerSpaces
+
+    spaces = LearnerSpaces(load_world_named(exp.world))
+    return spaces.state_name, spaces.action_name
+
+
+def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int) -> str:
+    """CSV rows of one unit (vectorised formatting: a full protocol has ~1M rows), with
+    ``n_areas`` area columns."""
     n = len(data["returns"])
     tasks = np.repeat(data["tasks"], data["counts"])
-    areas = np.zeros((n, N_AREAS), dtype=np.int64)
-    k = min(N_AREAS, data["areas"].shape[1])
+    areas = np.zeros((n, n_areas), dtype=np.int64)
+    k = min(n_areas, data["areas"].shape[1])
     areas[:, :k] = data["areas"][:, :k]  # column k - 1 counts steps ending in area k
     buf = io.StringIO()
     prefix = np.char.add(f"{experiment},{method},", tasks.astype(str))
     cols = [prefix, np.full(n, str(run)), np.arange(1, n + 1).astype(str),
             np.char.mod("%.10g", data["returns"]), data["steps"].astype(str),
             data["success"].astype(np.int64).astype(str)]
-    cols += [areas[:, i].astype(str) for i in range(N_AREAS)]
+    cols += [areas[:, i].astype(str) for i in range(n_areas)]
     rows = cols[0]
     for c in cols[1:]:
         rows = np.char.add(np.char.add(rows, ","), c)

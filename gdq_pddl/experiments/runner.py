@@ -5,7 +5,7 @@ Layout of an output folder::
     config.json      the experiments, seeds and package versions
     units/*.npz      one finished (method, run) each, written atomically by the driver
     episodes.csv     one row per episode (written from units/ at the end)
-    policies.csv     each run's final greedy policy
+    policies.csv     each run's final greedy policy, by index and by name
     optimal.json     V* and area relevance of each task, from the true model
 
 A run that is interrupted (Ctrl-C, or killed) loses at most the units in flight;

@@ -36,26 +36,30 @@ def curves_stem(experiment: str) -> str:
     return "learning_curves_" + (re.sub(r"[^A-Za-z0-9]+", "_", experiment).strip("_") or "x")
 
 
+def definitions(window: int) -> str:
+    """What :func:`write_task`'s table and comparisons report (for the text above them)."""
+    return ("Per method: the runs; the mean return per episode over all the task's "
+            "episodes, mean over runs (standard error over runs); the same over each "
+            "run's last 10% of episodes; the success rate (share of all episodes of all "
+            "runs that reach the goal); and the episode of the task (1 = its first) at "
+            f"which the {window}-episode moving average of the mean curve over runs "
+            "first turns positive (in brackets: the mean over the runs that reach it, and "
+            "how many do; n/a: never within the data). Bold: the highest mean return. "
+            "Then each GDQ variant against each baseline (every method but GDQ and its "
+            "variants) on the per-run mean return, over all episodes and over the last "
+            "10%:")
+
+
 def write(w: Writer) -> None:
     """The section, or nothing at all when every experiment has its paper section."""
     exps = uncovered(w.study)
     if not exps:
         return
     w.verdicts.elsewhere.append(TITLE)
-    window = w.opts.window
     w.add(f"## {TITLE}", "",
           f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
-          "each task of the experiment. Per method: the runs; the mean return per episode "
-          "over all the task's episodes, mean over runs (standard error over runs); the "
-          "same over each run's last 10% of episodes; the success rate (share of all "
-          "episodes of all runs that reach the goal); and the episode of the task "
-          f"(1 = its first) at which the {window}-episode moving average of the mean "
-          "curve over runs first turns positive (in brackets: the mean over the runs "
-          "that reach it, and how many do; n/a: never within the data). Bold: the "
-          "highest mean return. Then each GDQ variant against each baseline (every "
-          "method but GDQ and its variants) on the per-run mean return, over all "
-          "episodes and over the last 10%: Welch's t-test and bootstrap CI as in the "
-          "Method paragraph.", "")
+          f"each task of the experiment. {definitions(w.opts.window)} Welch's t-test "
+          "and bootstrap CI as in the Method paragraph.", "")
     for exp in exps:
         w.figure(curves_stem(exp), f"learning curves, {exp}")
         for task in w.study.episodes.tasks(exp):

@@ -1,0 +1,61 @@
+"""Which learner actions the knowledge says can do something, in every learner state.
+
+An action *can do something* in learner state ``s`` when some ground planner action
+applicable in the planner state of ``s`` (O^-1) maps to it (O). The envs put the row of
+the current state in ``info["action_mask"]``, as Gymnasium's Taxi does; the arrays are
+``int8[n_states, n_actions]``, 1 where the action can do something, built once per env.
+
+- :func:`knowledge_action_mask`: through any :class:`~gdq_pddl.abstraction.Abstraction`
+  and the grounded task (the office: :class:`~gdq_pddl.abstraction.OfficeAbstraction`,
+  where ``stay`` has no planner counterpart and is never 1).
+- :func:`graph_action_mask`: a PDDL problem's reachable state graph, where a learner
+  state is a planner state and a learner action a ground action: its edges are the
+  applicable actions (goal states, which the graph does not expand, are asked of the
+  task directly).
+
+The mask says what the *knowledge* believes, not what reality does: an applicable action
+may still fail, and where knowledge and reality differ, the mask follows the knowledge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gdq_pddl.abstraction.table import Abstraction
+from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.reachable import StateGraph
+
+
+def knowledge_action_mask(abstraction: Abstraction, task: GroundTask) -> np.ndarray:
+    """``int8[n_states, n_actions]``: 1 where a ground action of ``task`` applicable in
+    ``abstraction.planner_state(s)`` maps to the learner action (read-only).
+
+    Atoms of a planner state that ``task`` does not have (no action can make them true
+    from its initial state) are left out, so such a state gets only what applies without
+    them; raises :class:`~gdq_pddl.errors.AbstractionError` for a ground action with no
+    learner counterpart.
+    """
+    index = task.fact_index
+    learner_action = {op.name: abstraction.learner_action(op.name) for op in task.ops}
+    mask = np.zeros((abstraction.n_states, abstraction.n_actions), dtype=np.int8)
+    for s in range(abstraction.n_states):
+        state = sum(1 << index[a] for a in abstraction.planner_state(s) if a in index)
+        for op, _ in task.successors(state):
+            mask[s, learner_action[op.name]] = 1
+    mask.setflags(write=False)
+    return mask
+
+
+def graph_action_mask(graph: StateGraph) -> np.ndarray:
+    """``int8[n_states, n_ops]``: 1 where the ground action is applicable in the
+    reachable state (read-only)."""
+    n_ops = len(graph.task.ops)
+    mask = np.zeros((graph.n_states, n_ops), dtype=np.int8)
+    source = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
+    mask[source, graph.edge_op] = 1
+    op_index = {id(op): k for k, op in enumerate(graph.task.ops)}
+    for s in np.flatnonzero(graph.is_goal):
+        for op, _ in graph.task.successors(graph.states[s]):
+            mask[s, op_index[id(op)]] = 1
+    mask.setflags(write=False)
+    return mask
