@@ -295,3 +295,25 @@ def test_gdq_runs_on_a_generated_building():
     env.reset(seed=0)
     rec = run_compact(learner, env, 300, np.random.default_rng(1))
     assert rec.success[-50:].mean() > 0.8
+
+
+def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_goal():
+    """A PPDDL domain's all-outcomes determinisation gives one ground action several
+    planner edges; the optimistic prior takes the best of them."""
+    from gdq_pddl.abstraction.prior import prior_from_graph
+    from test_ppddl import hike
+
+    graph = hike("all-outcomes").graph
+    prior = prior_from_graph(graph).next_state
+    dist = np.where(graph.distances < 0, np.inf, graph.distances)
+    several = 0
+    for s in range(graph.n_states):
+        outcomes: dict[int, list[int]] = {}
+        for op, nxt in graph.edges(s):
+            outcomes.setdefault(op, []).append(nxt)
+        for op, nexts in outcomes.items():
+            several += len(nexts) > 1
+            best = min(nexts, key=lambda x: (dist[x], x))
+            assert prior[s, op] == best
+        assert (prior[s] != NO_CHANGE).sum() == len(outcomes)
+    assert several > 0

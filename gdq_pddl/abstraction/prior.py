@@ -102,9 +102,15 @@ def prior_from_task(abstraction, task, read_state: Callable[[int], int] | None =
 def prior_from_graph(graph) -> PriorModel:
     """The prior of a PDDL problem whose learner states are the reachable planner states
     (:class:`~gdq_pddl.pddl.reachable.StateGraph`; O is the identity): its edges. Goal
-    states have none (they end the episode)."""
+    states have none (they end the episode). Where the knowledge gives one action several
+    outcomes (a PPDDL domain's all-outcomes determinisation) the prior takes the one
+    closest to the goal, the optimistic choice (ties: the lowest state index)."""
     n_actions = len(graph.task.ops)
     nxt = np.full((graph.n_states, n_actions), NO_CHANGE, dtype=np.int64)
     src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
-    nxt[src, graph.edge_op] = graph.edge_next
+    dist = graph.distances.astype(np.float64)
+    dist[dist < 0] = np.inf
+    # the best edge of each (state, action) last, so that its assignment wins
+    order = np.lexsort((-graph.edge_next, -dist[graph.edge_next], graph.edge_op, src))
+    nxt[src[order], graph.edge_op[order]] = graph.edge_next[order]
     return PriorModel(nxt)
