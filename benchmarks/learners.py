@@ -25,12 +25,14 @@ METHODS: dict[str, tuple[str, dict]] = {
     "Q-learning": ("qlearning", {}),
     "Dyna-Q": ("dynaq", {}),
     "DARLING": ("darling", {}),
-    "GDQ (paper)": ("gdq", {}),
-    "GDQ (code)": ("gdq", {"variant": "code"}),
+    "GDQ": ("gdq", {}),
+    "GDQ-literal": ("gdq", {"variant": "literal"}),
+    "GDQ-code": ("gdq", {"variant": "code"}),
 }
 DIAGNOSTICS: dict[str, tuple[str, dict]] = {
     # not the paper: optimistic pairs end the episode instead of leading back to s0
-    "GDQ (paper, terminal optimism)": ("gdq", {"optimistic_successor": "terminal"}),
+    "GDQ-literal, terminal optimism": ("gdq", {"variant": "literal",
+                                               "optimistic_successor": "terminal"}),
     # DARLING as the GDQ authors' released agent runs it (where the issue's ~231 comes from)
     "DARLING (released code)": ("darling", {"variant": "code"}),
 }
@@ -99,12 +101,14 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
         print(f"{label:30s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
               f"{r['success']:>8.2f} {str(cross) if cross else 'never':>12s}", flush=True)
     if runs > 1:  # run k of every method shares its env and learner seeds: paired
-        print("GDQ (code) minus each baseline, mean over runs (paired s.e.):")
-        for label, means in per_run_means.items():
-            if label.startswith("GDQ"):
-                continue
-            d = per_run_means["GDQ (code)"] - means
-            print(f"  - {label:28s} {d.mean():+8.2f} ({d.std(ddof=1) / np.sqrt(runs):.2f})")
+        for gdq in ("GDQ", "GDQ-code"):
+            print(f"{gdq} minus each other method, mean over runs (paired s.e.):")
+            for label, means in per_run_means.items():
+                if label == gdq:
+                    continue
+                d = per_run_means[gdq] - means
+                print(f"  - {label:28s} {d.mean():+8.2f} "
+                      f"({d.std(ddof=1) / np.sqrt(runs):.2f})")
     return out
 
 

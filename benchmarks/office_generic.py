@@ -22,7 +22,8 @@ from gdq_pddl.learners import make_learner, office_task_context, pddl_task_conte
 from gdq_pddl.resources import data_file
 from gdq_pddl.world import load_world
 
-METHODS = (("GDQ-code", "gdq", {"variant": "code"}), ("DARLING", "darling", {}),
+METHODS = (("GDQ", "gdq", {}), ("GDQ-code", "gdq", {"variant": "code"}),
+           ("DARLING", "darling", {}),
            ("Dyna-Q", "dynaq", {}), ("Q-learning", "qlearning", {}))
 
 

@@ -28,7 +28,7 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World, builtin_world, load_world
 
 METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
-ROBOT_METHODS = ("GDQ", "Dyna-Q", "GDQ-code")  # robot_experiment's default methods
+ROBOT_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q")  # robot_experiment's default
 QUALITY = {"GDQ": 1.0, "GDQ-code": 0.9, "DARLING": 0.6, "Dyna-Q": 0.4, "Q-learning": 0.2}
 V_STAR = {"A": 14.6, "B": 15.7, "C": 11.5, "D": 11.4, "E": 14.6}
 RELEVANT = {"A": [2, 4, 6, 7], "B": [4, 7], "C": [1, 2, 3, 6], "D": [1, 3, 4, 7],
@@ -245,7 +245,7 @@ def test_report_has_a_verdict_per_hypothesis_and_task(full):
     assert "| Q-learning | 0/2 (0%)" in text
     assert "Dyna-Q reached the goal at least once within 30 trials in 0 of 2 runs" in text
     assert "Skipped" not in text
-    assert "| robot | office_robot | X x 30 | GDQ, Dyna-Q, GDQ-code | 2 | 1 |" in text
+    assert "| robot | office_robot | X x 30 | GDQ, GDQ-literal, GDQ-code, Dyna-Q | 2 | 1 |" in text
     robot = text[text.index("## Robot protocol"):]
     assert all(f"| {m} | 2 |" in robot for m in ROBOT_METHODS)
     assert "V* = 900.0" in text  # read from optimal.json's X@office_robot
@@ -328,11 +328,12 @@ def test_gdq_code_verdict_flips_when_its_data_flip(tmp_path):
     text = write_report(out).read_text()
     code, paper = _code_verdicts(text), _report_verdicts(text)
     assert code["Task B"] == "does not hold" and code["Task A"] == "holds"
-    assert paper["Task B"] == "holds"  # the paper GDQ's data did not change
+    assert paper["Task B"] == "holds"  # GDQ's data did not change
     assert "- **Task B, GDQ-code: does not hold**: GDQ-code " in text
     held_paper = sum(v == "holds" for v in paper.values())
     held_code = sum(v == "holds" for v in code.values())
-    summary = re.search(r"^\*\*Summary\.\*\* paper GDQ \(`GDQ`\): (\d+) of (\d+) cases hold; "
+    summary = re.search(r"^\*\*Summary\.\*\* GDQ, knowledge as a prior model \(`GDQ`\): "
+                        r"(\d+) of (\d+) cases hold; "
                         r"authors'-code GDQ \(`GDQ-code`\): (\d+) of (\d+) cases hold\.$",
                         text, re.M)
     assert summary is not None
@@ -343,10 +344,14 @@ def test_gdq_code_verdict_flips_when_its_data_flip(tmp_path):
 def test_why_section_reports_measured_optinit_values(full):
     out, _ = full
     text = (out / "REPORT.md").read_text()
-    why = text[text.index("## Why the paper's GDQ fails here"):text.index("## Robot protocol")]
+    why = text[text.index("## Why the paper's GDQ read literally fails here"):
+               text.index("## Robot protocol")]
     # the office: R_max 20, gamma 0.95 -> 20 / 0.05 = 400 and 0.95 * 400 = 380
     assert "R_max = 20, gamma = 0.95" in why and "R_max / (1 - gamma) = 400" in why
-    assert "| GDQ | 400 | 380 | 95 |" in why
+    assert "| GDQ-literal | 400 | 380 | 95 |" in why
+    # GDQ: the return of a shortest plan (8 actions on Task C) if every action worked
+    v8 = -sum(0.95 ** k for k in range(7)) + 0.95 ** 7 * 20
+    assert f"| GDQ | {v8:.4g} | " in why
     assert "| GDQ-code | 20 | 0 | 95 |" in why
     # the step-limit shares come from episodes.csv (the fake GDQ mostly succeeds)
     ep = load_episodes(out)
@@ -363,7 +368,7 @@ def test_optinit_values_follow_the_hyperparameters(tmp_path):
     (out / "config.json").write_text(json.dumps(config))
     init = optinit_values(Study.open(out), "tasks", "C")
     assert init.gamma == 0.9 and init.r_max == 20.0
-    greedy, median, _ = init.values["GDQ"]
+    greedy, median, _ = init.values["GDQ-literal"]
     assert greedy == pytest.approx(20 / 0.1) and median == pytest.approx(0.9 * 20 / 0.1)
 
 
@@ -542,7 +547,7 @@ def test_paper_experiments_get_no_methods_section(full):
     out, _ = full
     text = (out / "REPORT.md").read_text()
     assert "Methods compared" not in text
-    assert text.count("**Summary.** paper GDQ (`GDQ`): ") == 1
+    assert text.count("**Summary.** GDQ, knowledge as a prior model (`GDQ`): ") == 1
 
 
 def test_methods_section_on_a_real_run(tmp_path):

@@ -300,8 +300,9 @@ def test_gdq_runs_on_a_generated_building():
 def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_goal():
     """A PPDDL domain's all-outcomes determinisation gives one ground action several
     planner edges; the optimistic prior takes the best of them."""
-    from gdq_pddl.abstraction.prior import prior_from_graph
     from test_ppddl import hike
+
+    from gdq_pddl.abstraction.prior import prior_from_graph
 
     graph = hike("all-outcomes").graph
     prior = prior_from_graph(graph).next_state

@@ -34,13 +34,14 @@ from gdq_pddl.world import Task, World  # noqa: E402
 
 METHOD_COLOURS = {
     "GDQ": "#d62728",
+    "GDQ-literal": "#ff7f0e",
     "GDQ-code": "#ff9896",
     "DARLING": "#2ca02c",
     "DARLING-code": "#98df8a",
     "Dyna-Q": "#1f77b4",
     "Q-learning": "#7f7f7f",
 }
-_EXTRA = ("#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf", "#ff7f0e")
+_EXTRA = ("#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
 
 
 def method_colour(method: str) -> str:

@@ -99,12 +99,16 @@ class RouteStep:
     darling_allowed: bool
     in_shortest_plans: bool
     in_tolerant_plans: bool
+    in_prior: bool = False
+    """An optimal action is one the knowledge says can do something here (GDQ's prior
+    model values it before it is tried)."""
 
 
 def route_check(real: World, knowledge: World, task: Task,
                 darling_tolerance: float = 0.3) -> list[RouteStep]:
     """Along the likeliest route of the true optimal policy in ``real``: are the optimal
-    actions in DARLING's allowed set / in GDQ's plans, with knowledge from ``knowledge``?"""
+    actions in DARLING's allowed set / in the plans / applicable in GDQ's prior model,
+    with knowledge from ``knowledge``?"""
     from gdq_pddl.learners.context import office_task_context
     from gdq_pddl.spaces import LearnerSpaces
 
@@ -125,7 +129,8 @@ def route_check(real: World, knowledge: World, task: Task,
             optimal=tuple(spaces.action_name(int(a)) for a in best),
             darling_allowed=bool(allowed[obs, best].any()),
             in_shortest_plans=bool(shortest[obs, best].any()),
-            in_tolerant_plans=bool(tolerant[obs, best].any())))
+            in_tolerant_plans=bool(tolerant[obs, best].any()),
+            in_prior=bool(ctx.prior.applicable[obs, best].any())))
         nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
         if nxt is None or model.pos_of[nxt] == solution.goal_pos:
             break

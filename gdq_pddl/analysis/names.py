@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-METHOD_ORDER = ("GDQ", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q", "Q-learning")
+METHOD_ORDER = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
+                "Q-learning")
 """The order methods are listed in every figure and table (unknown ones follow, sorted)."""
 
 TASKS_EXPERIMENT = "tasks"
@@ -21,5 +22,5 @@ def order_methods(methods: Iterable[str]) -> list[str]:
 
 
 def is_gdq(method: str) -> bool:
-    """GDQ or one of its variants (``GDQ-code``): not a baseline."""
+    """GDQ or one of its variants (``GDQ-literal``, ``GDQ-code``): not a baseline."""
     return method == "GDQ" or method.startswith("GDQ-")

@@ -107,7 +107,7 @@ def register_robot(sub) -> None:
     p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
                        description="Task X on the office with area 5 forbidden, 10 actions per "
                                    "trial, R_max 1000, durations as costs, alpha 0.5.")
-    run_args(p, methods=("GDQ", "Dyna-Q", "GDQ-code"), episodes=30, runs=10)
+    run_args(p, methods=("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"), episodes=30, runs=10)
     p.set_defaults(func=cmd_robot)
 
 

@@ -87,6 +87,7 @@ from gdq_pddl.learners.compact_runner import run_compact
 
 METHODS: dict[str, tuple[str, dict]] = {
     "GDQ": ("gdq", {}),
+    "GDQ-literal": ("gdq", {"variant": "literal"}),
     "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.3}),
     "DARLING": ("darling", {"tolerance": 0.3}),
     "Dyna-Q": ("dynaq", {}),

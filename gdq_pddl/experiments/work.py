@@ -45,8 +45,10 @@ def make_learner(method: str, context, hyper: Hyper):
     if method not in METHODS:
         raise GdqError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
     common = {"alpha": hyper.alpha, "gamma": hyper.gamma, "epsilon": hyper.epsilon}
-    if method.endswith("-code"):  # GDQ-code, DARLING-code
-        return learner_by_name(method.removesuffix("-code"), context, variant="code", **common)
+    for variant in ("code", "literal"):  # GDQ-code, DARLING-code, GDQ-literal
+        if method.endswith(f"-{variant}"):
+            return learner_by_name(method.removesuffix(f"-{variant}"), context,
+                                   variant=variant, **common)
     return learner_by_name(method, context, **common)
 
 

@@ -40,8 +40,10 @@ def write(w: Writer) -> None:
               "")
     w.add(
         "**Method.** The unit of analysis is the run. For each comparison every run "
-        "contributes one number; each GDQ variant (`GDQ`, the paper's algorithm; "
-        "`GDQ-code`, the authors' released code) is compared on its own with each "
+        "contributes one number; each GDQ variant (`GDQ`, the library's: the action "
+        "knowledge as an optimistic prior model; `GDQ-literal`, the paper's Algorithms "
+        "1-3 read literally; `GDQ-code`, the authors' released code) is compared on its "
+        "own with each "
         "baseline (every method but GDQ and its variants) by Welch's t-test "
         "(two-sided) and a percentile bootstrap "
         f"95% CI of the difference in means (10,000 resamples, seed {w.opts.seed}). "

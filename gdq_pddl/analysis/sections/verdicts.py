@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from gdq_pddl.analysis.data import order_methods
 from gdq_pddl.analysis.stats import HOLDS, Comparison, verdict, verdict_reason
 
-VARIANT_NAMES = {"GDQ": "paper GDQ", "GDQ-code": "authors'-code GDQ"}
+VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper's GDQ read "
+                 "literally", "GDQ-code": "authors'-code GDQ"}
 """How the verdict summary names the GDQ variants."""
 
 
@@ -54,8 +55,8 @@ class Verdicts:
         return order_methods(found)
 
     def counts(self) -> str:
-        """``paper GDQ: k of n cases hold; authors'-code GDQ: j of m cases hold``, or
-        why there is no verdict."""
+        """``GDQ, ... (`GDQ`): k of n cases hold; ...`` per variant, or why there is no
+        verdict."""
         variants = self.variants()
         if not variants:
             if not self.gdq_runs:

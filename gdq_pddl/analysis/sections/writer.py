@@ -82,15 +82,15 @@ class Writer:
 
     def verdict_line(self, hypothesis: str, case: str, comps: Sequence[Comparison],
                      basis: str, variant: str = "GDQ") -> str:
-        """Record ``variant``'s verdict on a case and write its bullet (the paper's GDQ
-        under the case name, a variant as ``case, variant``)."""
+        """Record ``variant``'s verdict on a case and write its bullet (GDQ under the case
+        name, a variant as ``case, variant``)."""
         v, reason = self.verdicts.record(hypothesis, case, basis, variant, comps)
         label = case if variant == "GDQ" else f"{case}, {variant}"
         self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})")
         return v
 
     def variants(self, experiment: str) -> list[str]:
-        """GDQ and its variants present in ``experiment`` (the paper's GDQ first)."""
+        """GDQ and its variants present in ``experiment`` (GDQ first)."""
         return [m for m in self.study.methods(experiment) if is_gdq(m)]
 
     def section(self, title: str, available: bool, what: str, why: str) -> bool:
