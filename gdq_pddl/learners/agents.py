@@ -384,6 +384,20 @@ class GDQ(TabularLearner):
         self._rev_capacity = 0
         super().__init__(context, config)
 
+    @property
+    def q(self) -> np.ndarray:
+        """The Q table, float64[n_states, n_actions]. In the default variant an untried
+        action the knowledge says does nothing is worth its prior backup, one step that
+        changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
+        entries, so they are filled in here, when the table is read."""
+        if self.kind == core.KIND_PRIOR and hasattr(self, "tables"):
+            core.prior_fill_untried(self.tables, self.params)
+        return self._q
+
+    @q.setter
+    def q(self, value: np.ndarray) -> None:
+        self._q = value
+
     def _n_backups(self) -> int:
         return self.config.n_backups
 

@@ -82,7 +82,8 @@ class GDQConfig(LearnerConfig):
     """Which GDQ (above)."""
     n_backups: int | None = None
     """N: simulated backups per real step. ``model``: pair values recomputed by
-    prioritised sweeping (default 10; 40 measured no better on tasks A-D);
+    prioritised sweeping (default 5: on tasks A-D 1, 2, 5, 10 and 40 learn alike, and
+    each costs time, ``benchmarks/learners.py speed``);
     ``literal`` and ``code``: backups of a random transition of a random plan from the
     current state (default 5, the authors' code)."""
     m: int | None = None
@@ -136,7 +137,7 @@ class GDQConfig(LearnerConfig):
             raise ValueError(f"variant must be one of {', '.join(GDQ_VARIANTS)}, got "
                              f"{self.variant!r}")
         model = self.variant == "model"
-        for name, default in (("n_backups", 10 if model else 5), ("m", 0 if model else 5),
+        for name, default in (("n_backups", 5), ("m", 0 if model else 5),
                               ("plan_tolerance", 0.0 if self.variant == "literal" else 0.3)):
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)

@@ -740,17 +740,11 @@ def _update(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, slots: np.ndarray
             heap_pos: np.ndarray, heap_prio: np.ndarray, heap_n: np.ndarray, p: Params,
             s: int, a: int) -> None:
     """Recompute ``q[s, a]``; queue ``s`` if that moved its value by more than the sweep
-    threshold. A change of ``v[s]`` also revalues the untried pairs the knowledge says do
-    nothing in ``s`` (not allowed; their backup is ``-prior_cost + gamma * v[s]``), so
-    their Q is never above ``v[s]`` however ``v[s]`` falls."""
+    threshold. (The untried pairs the knowledge says do nothing are not allowed: nothing
+    here reads their Q, which :func:`prior_fill_untried` fills in when it is read.)"""
     old = v[s]
     _set_q(q, v, allowed, s, a, _hybrid(slots, stuck, visits, cost_sum, cost_n, cost_all,
                                         goal, v, prior_next, p, s, a))
-    if v[s] != old:
-        stay = -p.prior_cost + p.gamma * v[s]
-        for b in range(q.shape[1]):
-            if not allowed[s, b]:
-                q[s, b] = stay
     change = abs(v[s] - old)
     if change > p.sweep_threshold:
         _push(heap, heap_pos, heap_prio, heap_n, s, change)
@@ -876,6 +870,21 @@ def rev_room(max_successors: int, steps: int = 1) -> int:
     adds one per recorded successor and one for its prior successor, a known pair
     reaching a new state one)."""
     return steps * (max_successors + 1)
+
+
+@numba.njit(cache=True)
+def prior_fill_untried(t: Tables, p: Params) -> None:
+    """Q of every pair that is not allowed (untried, and the knowledge says it does
+    nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]``; goal rows
+    stay 0. The sweeps never read these entries, so they leave them to this."""
+    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
+    for s in range(q.shape[0]):
+        if goal[s]:
+            continue
+        stay = -p.prior_cost + p.gamma * v[s]
+        for a in range(q.shape[1]):
+            if not allowed[s, a]:
+                q[s, a] = stay
 
 
 @numba.njit(cache=True)
