@@ -1,0 +1,111 @@
+"""How GDQ's default settings were chosen: tasks A-D only, and the corridor case.
+
+    python benchmarks/gdq_settings.py tasks            # each setting's return on A-D
+    python benchmarks/gdq_settings.py corridor         # explore_all vs the corridor
+    python benchmarks/gdq_settings.py                  # both
+
+``tasks``: every setting differs from the default in one field; for each, the mean
+return per episode over the first 300 episodes of tasks A-D, minus DARLING's, paired
+runs (env seeded 1000 + run, learner 2000 + run, as ``benchmarks/learners.py``).
+``corridor``: reality has a corridor p8-p17 that the knowledge lacks (``gdq-pddl
+knowledge``'s ``passage`` case, Task C); for each share of exploring steps that ignores
+the knowledge, in how many runs the final greedy policy takes the corridor, and the mean
+return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.learners import make_learner, office_task_context, run_episodes
+from gdq_pddl.world import World, load_world
+
+SETTINGS: dict[str, dict] = {
+    "default": {},
+    "m = 1": {"m": 1},
+    "m = 3": {"m": 3},
+    "prior_weight = 0": {"prior_weight": 0.0},
+    "prior_weight = 0.5": {"prior_weight": 0.5},
+    "prior_weight = 2": {"prior_weight": 2.0},
+    "explore = applicable": {"explore": "applicable"},
+    "explore_all = 0": {"explore_all": 0.0},
+    "explore_all = 0.25": {"explore_all": 0.25},
+    "n_backups = 1": {"n_backups": 1},
+    "n_backups = 10": {"n_backups": 10},
+    "n_backups = 40": {"n_backups": 40},
+}
+"""The default and its one-field variations (GDQConfig fields)."""
+
+
+def mean_returns(world: World, real: World, task: str, method: str, config: dict,
+                 runs: int, episodes: int) -> np.ndarray:
+    """float[runs]: each run's mean return per episode (knowledge from ``world``, the env
+    simulating ``real``)."""
+    ctx = office_task_context(world, task)
+    env = OfficeEnv(world=real, task=task)
+    out = np.zeros(runs)
+    for run in range(runs):
+        env.reset(seed=1000 + run)
+        learner = make_learner(method, ctx, **config)
+        out[run] = run_episodes(learner, env, episodes, np.random.default_rng(2000 + run)
+                                ).returns.mean()
+    return out
+
+
+def tasks(runs: int = 40, episodes: int = 300) -> None:
+    world = load_world()
+    names = ("A", "B", "C", "D")
+    darling = {t: mean_returns(world, world, t, "darling", {}, runs, episodes) for t in names}
+    print(f"Tasks A-D, {runs} runs x {episodes} episodes: mean return per episode minus "
+          "DARLING's (paired s.e.)")
+    print(f"{'setting':22s}" + "".join(f"{'task ' + t:>16s}" for t in names) + f"{'mean':>8s}")
+    print(f"{'DARLING':22s}" + "".join(f"{darling[t].mean():>16.2f}" for t in names))
+    for label, config in SETTINGS.items():
+        diffs = [mean_returns(world, world, t, "gdq", config, runs, episodes) - darling[t]
+                 for t in names]
+        cells = "".join(f"{d.mean():>+9.2f} ({d.std(ddof=1) / np.sqrt(runs):.2f})"
+                        for d in diffs)
+        print(f"{label:22s}{cells}{np.mean([d.mean() for d in diffs]):>+8.2f}", flush=True)
+
+
+def corridor(runs: int = 10, episodes: int = 3000) -> None:
+    from gdq_pddl.experiments.knowledge import PASSAGE, derived_world
+    from gdq_pddl.spaces import LearnerSpaces
+
+    real, world = derived_world("office:passage"), load_world()
+    spaces = LearnerSpaces(real)
+    at, corridor_action = spaces.state(PASSAGE[0]), spaces.action("goto", PASSAGE[1])
+    ctx = office_task_context(world, "C")
+    env = OfficeEnv(world=real, task="C")
+    print(f"Corridor {PASSAGE[0]}-{PASSAGE[1]} only reality has (Task C), {runs} runs x "
+          f"{episodes} episodes: runs whose final greedy policy takes it; mean return")
+    for label, method, config in (("Dyna-Q (no knowledge)", "dynaq", {}),
+                                  *((f"GDQ, explore_all = {x:g}", "gdq", {"explore_all": x})
+                                    for x in (0.0, 0.05, 0.1, 0.25, 0.5))):
+        found, means = 0, []
+        for run in range(runs):
+            env.reset(seed=1000 + run)
+            learner = make_learner(method, ctx, **config)
+            rec = run_episodes(learner, env, episodes, np.random.default_rng(2000 + run))
+            found += int(learner.greedy_policy()[at] == corridor_action)
+            means.append(rec.returns.mean())
+        print(f"{label:26s} {found:>3d}/{runs}  {np.mean(means):7.2f}", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", nargs="?", choices=["tasks", "corridor", "all"], default="all")
+    parser.add_argument("--runs", type=int, help="runs per setting (tasks 40, corridor 10)")
+    parser.add_argument("--episodes", type=int, help="episodes per run (300 / 3000)")
+    args = parser.parse_args()
+    if args.what in ("tasks", "all"):
+        tasks(args.runs or 40, args.episodes or 300)
+    if args.what in ("corridor", "all"):
+        corridor(args.runs or 10, args.episodes or 3000)
+
+
+if __name__ == "__main__":
+    main()
