@@ -32,7 +32,7 @@ SETTINGS: dict[str, dict] = {
     "prior_weight = 2": {"prior_weight": 2.0},
     "explore = applicable": {"explore": "applicable"},
     "explore_all = 0": {"explore_all": 0.0},
-    "explore_all = 0.25": {"explore_all": 0.25},
+    "explore_all = 0.1": {"explore_all": 0.1},
     "n_backups = 1": {"n_backups": 1},
     "n_backups = 10": {"n_backups": 10},
     "n_backups = 40": {"n_backups": 40},
@@ -84,7 +84,7 @@ def corridor(runs: int = 10, episodes: int = 3000) -> None:
           f"{episodes} episodes: runs whose final greedy policy takes it; mean return")
     for label, method, config in (("Dyna-Q (no knowledge)", "dynaq", {}),
                                   *((f"GDQ, explore_all = {x:g}", "gdq", {"explore_all": x})
-                                    for x in (0.0, 0.05, 0.1, 0.25, 0.5))):
+                                    for x in (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.5))):
         found, means = 0, []
         for run in range(runs):
             env.reset(seed=1000 + run)

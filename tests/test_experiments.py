@@ -136,11 +136,18 @@ def test_resume_removes_files_a_killed_write_left(tmp_path):
     assert len(list((tmp_path / "units").glob("*.npz"))) == 2
 
 
-def test_unit_seeds_depend_only_on_identity():
+def test_unit_seeds_depend_only_on_identity_and_pair_the_methods():
     exp = Experiment("tasks", (("C", 5),), ("GDQ", "Q-learning"), runs=2)
-    a = [u.seeds()[0].random() for u in exp.units()]
-    b = [u.seeds()[0].random() for u in exp.units()]
-    assert a == b and len(set(a)) == 4
+    a = [(u.method, u.run, u.seeds()[0].random(), u.seeds()[1]) for u in exp.units()]
+    b = [(u.method, u.run, u.seeds()[0].random(), u.seeds()[1]) for u in exp.units()]
+    assert a == b
+    by_run = {}
+    for method, run, learner, env in a:
+        by_run.setdefault(run, set()).add((learner, env))
+    assert all(len(seeds) == 1 for seeds in by_run.values())  # paired across methods
+    assert len({next(iter(seeds)) for seeds in by_run.values()}) == 2  # runs differ
+    other = Experiment("tasks", (("D", 5),), ("GDQ",), runs=1).units()[0].seeds()[1]
+    assert other != a[0][3]  # and so do experiments
 
 
 # The test owns its Ray cluster: a head started with --block in its own process group,

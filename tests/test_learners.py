@@ -557,3 +557,21 @@ def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
     s, a = (int(x[0]) for x in np.nonzero(opt))
     high = np.full(ctx_c.n_states, 100.0)
     assert core.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation
+
+
+def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):
+    """The fast loop's cache bakes in the rules it calls from other files; an edit of
+    any of them must drop the whole cache (gdq_pddl/_jit_cache.py)."""
+    from gdq_pddl import _jit_cache
+
+    for folder in _jit_cache.JIT_FOLDERS:
+        (tmp_path / folder / "__pycache__").mkdir(parents=True)
+        (tmp_path / folder / "mod.py").write_text("x = 1\n")
+    cached = tmp_path / "learners" / "__pycache__" / "runner._episodes-1.py311.nbi"
+    cached.write_text("stale")
+    assert _jit_cache.refresh(tmp_path)  # no stamp yet: dropped, stamp written
+    assert not cached.exists()
+    cached.write_text("fresh")
+    assert not _jit_cache.refresh(tmp_path) and cached.exists()  # nothing changed
+    (tmp_path / "learners" / "mod.py").write_text("x = 2\n")  # a callee changes
+    assert _jit_cache.refresh(tmp_path) and not cached.exists()

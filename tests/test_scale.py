@@ -271,7 +271,7 @@ def test_scale_cli_says_how_to_resume_without_a_traceback(tmp_path, monkeypatch,
     assert main(argv) == 130
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    assert err.startswith("gdq-pddl: interrupted: 2 of 5 runs are saved in")
+    assert err.startswith("gdq-pddl: interrupted: 2 of 6 runs are saved in")
     command = err.split("continue with: ")[1].strip()
     assert command == shlex.join(["gdq-pddl", *argv[:-2], "--seed", "0", "--out", str(out),
                                   "--resume"])
