@@ -277,6 +277,6 @@ def test_scale_cli_says_how_to_resume_without_a_traceback(tmp_path, monkeypatch,
                                   "--resume"])
     started = _interrupt_after(monkeypatch, 99)
     assert main(shlex.split(command)[1:]) == 0
-    assert len(started) == 3 and (out / "REPORT.md").exists()
+    assert len(started) == 4 and (out / "REPORT.md").exists()
     assert main(argv) == 2  # without --resume: refused
     assert "continue them with --resume" in capsys.readouterr().err
