@@ -245,6 +245,15 @@ def test_a_world_file_gives_its_own_pairs(tmp_path, capsys):
     assert f"--world {world}" in report and "d->a (task C)" in report
 
 
+def test_one_method_gives_a_table_and_no_comparison(tmp_path):
+    out = tmp_path / "one"
+    assert main(["pairs", "--pairs", "p3->p13", "--method", "Q-learning", "--runs", "2",
+                 "--episodes", "5", "--jobs", "1", "--out", str(out)]) == 0
+    assert read_csv(out / "tables" / "pairs.csv")[0].keys() >= {"mean_Q-learning", "v_star"}
+    assert "nothing to compare" in (out / "REPORT.md").read_text()
+    assert not (out / "figures" / "pairs.png").exists()
+
+
 def runs_of(d: np.ndarray) -> PairRuns:
     """A PairRuns whose GDQ minus baseline is ``d[pair, run]`` (baseline all 0)."""
     means = np.stack([d, np.zeros_like(d)], axis=1)

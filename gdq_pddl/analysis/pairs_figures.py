@@ -37,7 +37,7 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
         grid[at[res.facts[p]["start"]], at[res.facts[p]["goal"]]] = diff.mean[i]
     limit = float(np.nanmax(np.abs(grid))) if np.isfinite(grid).any() else 0.0
     limit = limit or 1.0  # symmetric about 0: white is no difference
-    cmap = plt.get_cmap("RdBu").with_extremes(bad="#d9d9d9")
+    cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
     image = ax.imshow(grid, cmap=cmap, vmin=-limit, vmax=limit)
     for i, p in enumerate(res.pairs):
         r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]

@@ -96,9 +96,12 @@ def _losses(res: PairRuns, diffs: list[Differences]) -> list[str]:
     lost = [i for i in range(len(res.pairs)) if any(d.outcome[i] == LOSS for d in diffs)]
     if not lost:
         return [*lines, "Nowhere: no pair's interval lies below 0 against any baseline.", ""]
-    lines.append(f"{len(lost)} pairs, where {ref} minus the baseline is significantly "
-                 "negative against at least one baseline (mean difference, its interval):")
-    lines.append("")
+    worst = min((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
+                 if d.outcome[i] == LOSS)
+    lines += [f"{len(lost)} pairs, where {ref} minus the baseline is significantly negative "
+              "against at least one baseline (mean difference, its interval); the largest "
+              f"loss is {number(worst[0], sign=True)} per episode ({worst[2]} against "
+              f"{worst[1]}):", ""]
     for i in lost:
         parts = [f"{d.baseline} {number(d.mean[i], sign=True)} [{number(d.low[i], sign=True)}, "
                  f"{number(d.high[i], sign=True)}]" for d in diffs if d.outcome[i] == LOSS]

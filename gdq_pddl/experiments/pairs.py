@@ -10,9 +10,10 @@ from the pair and the run only (run ``r`` of every method on a pair starts from 
 same seeds, so differences between methods are paired).
 
 What is kept differs from the other commands: at 342 x 5 x 10 x 300 an ``episodes.csv``
-would have 5.1M rows (about 230 MB), and a unit's area visits are four fifths of its
-file. So a unit keeps only its returns and successes (:func:`run_pair_unit`) and the
-folder's collected result is one row per run (:func:`collect_pairs`)::
+would have 5.1M rows (240 MB, measured on one pair and scaled), and the units another
+410 MB, most of it area visits. So a unit keeps only its returns and successes (3 KB
+instead of 24; :func:`run_pair_unit`) and the folder's collected result is one row per
+run (:func:`collect_pairs`)::
 
     config.json   the experiments (one per pair), seeds and package versions
     units/*.npz   one (pair, method, run): ``returns`` (float64) and ``success`` (bool)
