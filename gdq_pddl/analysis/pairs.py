@@ -100,8 +100,10 @@ def load_pair_runs(out: Path) -> PairRuns:
     return PairRuns(pairs, methods, means, facts, config, world.positions)
 
 
-def mean_se(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and standard error (ddof 1; NaN with one value) over the last axis."""
+def over_runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard error (ddof 1) over the last axis, the runs. Unlike
+    :func:`gdq_pddl.analysis.stats.mean_se`, one run has no standard error (NaN, shown
+    ``n/a``), not 0: a single run is no evidence of a difference."""
     n = x.shape[-1]
     se = x.std(axis=-1, ddof=1) / math.sqrt(n) if n > 1 else np.full(x.shape[:-1], np.nan)
     return x.mean(axis=-1), se
@@ -124,7 +126,7 @@ def differences(res: PairRuns, baseline: str) -> Differences:
     """Paired differences ``reference - baseline`` on every pair."""
     ref, base = res.methods.index(res.reference), res.methods.index(baseline)
     d = res.means[:, ref, :] - res.means[:, base, :]
-    mean, se = mean_se(d)
+    mean, se = over_runs(d)
     n = d.shape[-1]
     half = sps.t.ppf((1 + LEVEL) / 2, n - 1) * se if n > 1 else np.full_like(mean, np.nan)
     low, high = mean - half, mean + half
@@ -177,7 +179,7 @@ def table_columns(res: PairRuns) -> list[str]:
 
 def table_rows(res: PairRuns, diffs: list[Differences]) -> list[list]:
     """One row per pair: facts, each method's mean (se) and each difference."""
-    means, ses = mean_se(res.means)
+    means, ses = over_runs(res.means)
     rows = []
     for i, p in enumerate(res.pairs):
         f = res.facts[p]
@@ -198,7 +200,7 @@ def table_markdown(res: PairRuns, diffs: list[Differences]) -> str:
     head = ["pair", "tuning", "shortest plan", "V*", *res.methods,
             *(f"{ref} - {d.baseline}" for d in diffs)]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    means, ses = mean_se(res.means)
+    means, ses = over_runs(res.means)
     for i, p in enumerate(res.pairs):
         f = res.facts[p]
         tuning = f.get("tuning")
