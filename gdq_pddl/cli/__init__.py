@@ -23,6 +23,7 @@ COMMANDS: list[Callable] = [
     planning.register_planners, experiments.register_run, experiments.register_switch,
     experiments.register_robot, experiments.register_reproduce, experiments.register_report,
     experiments.register_knowledge, experiments.register_scale,
+    experiments.register_pairs,
 ]
 
 

@@ -104,8 +104,11 @@ def office_report(out: Path) -> str:
 
 
 def execute(experiments, args: argparse.Namespace, name: str,
-            report: Callable[[Path], str] = office_report) -> int:
-    """Run ``experiments`` into --out (default results/<name>), then ``report`` on it."""
+            report: Callable[[Path], str] = office_report, results: str = "episodes.csv",
+            **run_kw) -> int:
+    """Run ``experiments`` into --out (default results/<name>), then ``report`` on it;
+    ``results`` names the collected file, ``run_kw`` goes to ``run_experiments`` (its
+    ``work`` and ``collect``)."""
     import time
 
     from gdq_pddl.experiments import run_experiments
@@ -113,9 +116,9 @@ def execute(experiments, args: argparse.Namespace, name: str,
     out = args.out or Path("results") / name
     t0 = time.perf_counter()
     run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
-                    address=args.address, resume=args.resume)
+                    address=args.address, resume=args.resume, **run_kw)
     print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
-          f"{time.perf_counter() - t0:.1f} s; results in {out}/episodes.csv")
+          f"{time.perf_counter() - t0:.1f} s; results in {out}/{results}")
     if not args.no_report:
         print(report(out))
     return 0

@@ -1,4 +1,5 @@
-"""Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, report."""
+"""Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, pairs,
+report."""
 
 from __future__ import annotations
 
@@ -176,13 +177,18 @@ def cmd_knowledge(args: argparse.Namespace) -> int:
 def register_report(sub) -> None:
     p = sub.add_parser("report", help="redraw figures, tables and REPORT.md of an output folder")
     p.add_argument("out", type=Path,
-                   help="an output folder of run (office or PDDL), switch, robot or reproduce")
+                   help="an output folder of run (office or PDDL), switch, robot, reproduce "
+                        "or pairs")
     p.set_defaults(func=cmd_report)
 
 
 def cmd_report(args: argparse.Namespace) -> int:
     from gdq_pddl.analysis.generic import is_pddl_folder
+    from gdq_pddl.analysis.pairs import is_pairs_folder
 
+    if is_pairs_folder(args.out):
+        print(pairs_report(args.out))
+        return 0
     if not (args.out / "episodes.csv").exists():
         raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
     print(pddl_report(args.out) if is_pddl_folder(args.out) else office_report(args.out))
@@ -222,3 +228,47 @@ def cmd_scale(args: argparse.Namespace) -> int:
               command=command)
     print(out / "REPORT.md")
     return 0
+
+
+def register_pairs(sub) -> None:
+    p = sub.add_parser("pairs", help="every method on every ordered start/goal pair",
+                       description="Each method learns each ordered (start, goal) pair of the "
+                                   "world (342 in the office) --runs times for --episodes "
+                                   "episodes, with the paper's hyperparameters and paired "
+                                   "seeds. Writes runs.csv, a table of GDQ minus each "
+                                   "baseline per pair, its figure and REPORT.md to --out.")
+    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    p.add_argument("--pairs", nargs="+", metavar="START->GOAL",
+                   help="only these pairs (quote them: --pairs 'p3->p13 p10->p0')")
+    p.add_argument("--sample", type=int, metavar="K",
+                   help="only K pairs drawn at random with --seed")
+    run_args(p, episodes=300, runs=10)
+    p.set_defaults(func=cmd_pairs)
+
+
+def cmd_pairs(args: argparse.Namespace) -> int:
+    from gdq_pddl.experiments import pairs
+    from gdq_pddl.world import load_world
+
+    world = load_world(args.world)
+    if args.pairs and args.sample is not None:
+        raise GdqError("give --pairs or --sample, not both")
+    if args.pairs:
+        chosen = pairs.parse_pairs(world, args.pairs)
+    elif args.sample is not None:
+        chosen = pairs.sample_pairs(world, args.sample, args.seed)
+    else:
+        chosen = pairs.all_pairs(world)
+    kw = experiment_kw(args)
+    check_planner(args.planner)
+    exps = pairs.pair_experiments(chosen, args.episodes, world=str(args.world or "office"), **kw)
+    return execute(exps, args, "pairs", pairs_report, results="runs.csv",
+                   work=pairs.run_pair_unit, collect=pairs.collect_pairs)
+
+
+def pairs_report(out: Path) -> str:
+    """Table, figure and REPORT.md of a pairs folder; returns what was written."""
+    from gdq_pddl.analysis.pairs import make_pairs_report
+
+    paths = make_pairs_report(out)
+    return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"

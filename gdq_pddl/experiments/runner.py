@@ -10,6 +10,11 @@ Layout of an output folder::
 
 A run that is interrupted (Ctrl-C, or killed) loses at most the units in flight;
 ``resume=True`` checks that the configuration is the same and runs only what is missing.
+
+What a unit returns and what is collected at the end can be swapped (``work`` and
+``collect`` of :func:`run_experiments`): ``gdq-pddl pairs`` keeps only returns and
+successes per unit and collects one row per run instead of one per episode
+(:mod:`gdq_pddl.experiments.pairs`).
 """
 
 from __future__ import annotations
@@ -106,11 +111,18 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool) -> list[Unit
     return [u for u in units if not (out / "units" / f"{u.key}.npz").exists()]
 
 
+Work = Callable[[Unit], dict[str, np.ndarray]]
+"""What runs one unit (a module-level function: worker processes and Ray pickle it by name)."""
+
+
 def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None = None,
                     executor: str = "local", address: str | None = None,
-                    resume: bool = False, progress: bool = True) -> Path:
-    """Run every unit of ``experiments`` not yet in ``out``, then collect the results."""
-    from gdq_pddl.experiments.collect import collect
+                    resume: bool = False, progress: bool = True, work: Work = run_unit,
+                    collect: Callable[[Path, list[Experiment]], None] | None = None) -> Path:
+    """Run every unit of ``experiments`` not yet in ``out`` with ``work``, then collect the
+    results with ``collect`` (default: :func:`gdq_pddl.experiments.collect.collect`)."""
+    if collect is None:
+        from gdq_pddl.experiments.collect import collect
 
     out = Path(out)
     pending = prepare(out, experiments, resume)
@@ -120,7 +132,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
     bar = _progress(total, total - len(pending), progress)
     units_dir = out / "units"
     try:
-        for unit, result in _execute(pending, jobs, executor, address):
+        for unit, result in _execute(pending, jobs, executor, address, work):
             save_unit(units_dir / f"{unit.key}.npz", result)
             bar.update(1)
     except KeyboardInterrupt:
@@ -140,29 +152,29 @@ def _progress(total: int, initial: int, enabled: bool):
                 disable=not enabled or not sys.stderr.isatty())
 
 
-def _execute(units: list[Unit], jobs: int | None, executor: str,
-             address: str | None) -> Iterable[tuple[Unit, dict[str, np.ndarray]]]:
+def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | None,
+             work: Work = run_unit) -> Iterable[tuple[Unit, dict[str, np.ndarray]]]:
     if not units:
         return iter(())
     if executor == "ray":
-        return _ray(units, jobs, address)
+        return _ray(units, jobs, address, work)
     if executor != "local":
         raise ResultsError(f"unknown executor {executor!r} (known: local, ray)")
     jobs = jobs or os.cpu_count() or 1
     if jobs == 1 or len(units) == 1:
-        return ((u, run_unit(u)) for u in units)
-    return _processes(units, jobs)
+        return ((u, work(u)) for u in units)
+    return _processes(units, jobs, work)
 
 
 def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the driver handles Ctrl-C for everyone
 
 
-def _run_indexed(job: tuple[int, Unit]) -> tuple[int, dict[str, np.ndarray]]:
-    return job[0], run_unit(job[1])
+def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray]]:
+    return job[0], job[2](job[1])
 
 
-def _processes(units: list[Unit], jobs: int):
+def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
     # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
     from gdq_pddl.experiments.work import warm_up
 
@@ -172,7 +184,8 @@ def _processes(units: list[Unit], jobs: int):
     # at exit (its manager thread waits on a half-written result pipe).
     pool = get_context("fork").Pool(jobs, initializer=_ignore_sigint)
     try:
-        for i, result in pool.imap_unordered(_run_indexed, enumerate(units)):
+        tagged = ((i, u, work) for i, u in enumerate(units))
+        for i, result in pool.imap_unordered(_run_indexed, tagged):
             yield units[i], result
         pool.close()
     finally:
@@ -180,7 +193,7 @@ def _processes(units: list[Unit], jobs: int):
         pool.join()
 
 
-def _ray(units: list[Unit], jobs: int | None, address: str | None):
+def _ray(units: list[Unit], jobs: int | None, address: str | None, work: Work = run_unit):
     try:
         import ray
     except ImportError:
@@ -196,7 +209,7 @@ def _ray(units: list[Unit], jobs: int | None, address: str | None):
         except Exception as exc:  # connection refused, bad address ...
             raise ResultsError(f"cannot reach a Ray cluster at {address or 'local'}: "
                                f"{exc}") from None
-    remote = ray.remote(run_unit)
+    remote = ray.remote(work)
     try:
         refs = {remote.remote(u): u for u in units}
         pending = list(refs)

@@ -1,0 +1,153 @@
+"""Every ordered (start, goal) pair of a world: ``gdq-pddl pairs``.
+
+Settings were chosen on tasks A-D only (SPEC section 4); this evaluation runs every
+method, with the paper's hyperparameters (:class:`~gdq_pddl.experiments.protocol.Hyper`),
+on each of the ``n (n - 1)`` ordered pairs of distinct positions (342 in the office).
+Each pair is one :class:`~gdq_pddl.experiments.protocol.Experiment` named ``pairs``
+with schedule ``(("p3->p13", episodes),)``, so the office runner does the work: units
+in parallel (``--jobs``, Ray), saved as they finish, ``--resume``, Ctrl-C, and seeds
+from the pair and the run only (run ``r`` of every method on a pair starts from the
+same seeds, so differences between methods are paired).
+
+What is kept differs from the other commands: at 342 x 5 x 10 x 300 an ``episodes.csv``
+would have 5.1M rows (240 MB, measured on one pair and scaled), and the units another
+410 MB, most of it area visits. So a unit keeps only its returns and successes (3 KB
+instead of 24; :func:`run_pair_unit`) and the folder's collected result is one row per
+run (:func:`collect_pairs`)::
+
+    config.json   the experiments (one per pair), seeds and package versions
+    units/*.npz   one (pair, method, run): ``returns`` (float64) and ``success`` (bool)
+                  per episode
+    runs.csv      one row per (pair, method, run), :data:`RUN_COLUMNS`: the run's mean
+                  return and success rate over its episodes (exact: ``repr`` of the float)
+    optimal.json  per pair: start, goal, shortest plan length, V* (value iteration on the
+                  true model), and the tuning task (A-D) it is, if any
+
+:mod:`gdq_pddl.analysis.pairs` turns ``runs.csv`` and ``optimal.json`` into the table,
+figure and ``REPORT.md``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.protocol import Experiment, Unit
+from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
+from gdq_pddl.world import World, WorldError
+
+PAIRS_EXPERIMENT = "pairs"
+"""The name of every experiment of a pairs folder (not ``run``: its seeds and reports
+are its own)."""
+TUNING_TASKS = ("A", "B", "C", "D")
+"""The tasks every setting was chosen on; their pairs are marked in the table."""
+RUN_COLUMNS = ("pair", "start", "goal", "method", "run", "episodes", "mean_return",
+               "success_rate")
+
+
+def pair_spec(start: str, goal: str) -> str:
+    return f"{start}->{goal}"
+
+
+def all_pairs(world: World) -> list[str]:
+    """Every ordered pair of distinct positions, starts and goals in the world's order."""
+    return [pair_spec(s, g) for s in world.positions for g in world.positions if s != g]
+
+
+def parse_pairs(world: World, items: Sequence[str]) -> list[str]:
+    """``--pairs`` (each item one or more ``START->GOAL`` separated by spaces or commas;
+    landmarks allowed) as canonical specs, without repeats, in :func:`all_pairs`'s order.
+    Raises :class:`GdqError` naming the bad item."""
+    found = set()
+    for item in (w for text in items for w in re.split(r"[\s,]+", text) if w):
+        start, sep, goal = item.partition("->")
+        if not (sep and start and goal):
+            raise GdqError(f"--pairs: {item!r} is not START->GOAL (e.g. p3->p13)")
+        try:
+            s, g = world.position(start), world.position(goal)
+        except WorldError as exc:
+            raise GdqError(f"--pairs: {item}: {exc}") from None
+        if s == g:
+            raise GdqError(f"--pairs: {item}: start and goal are the same position ({s})")
+        found.add(pair_spec(s, g))
+    if not found:
+        raise GdqError("--pairs: no pair given")
+    return [p for p in all_pairs(world) if p in found]
+
+
+def sample_pairs(world: World, k: int, seed: int) -> list[str]:
+    """``k`` pairs drawn without replacement (``default_rng(seed)``), in canonical order."""
+    pairs = all_pairs(world)
+    if not 1 <= k <= len(pairs):
+        raise GdqError(f"--sample: {k} is not between 1 and {len(pairs)} (the ordered pairs "
+                       f"of {world.source})")
+    chosen = np.random.default_rng(seed).choice(len(pairs), size=k, replace=False)
+    return [pairs[i] for i in np.sort(chosen)]
+
+
+def pair_experiments(pairs: Sequence[str], episodes: int, **kw) -> list[Experiment]:
+    """One experiment per pair (``kw``: the other :class:`Experiment` fields)."""
+    return [Experiment(PAIRS_EXPERIMENT, ((p, episodes),), **kw) for p in pairs]
+
+
+def run_pair_unit(unit: Unit) -> dict[str, np.ndarray]:
+    """:func:`~gdq_pddl.experiments.work.run_unit`, keeping only returns and successes."""
+    result = run_unit(unit)
+    return {"returns": result["returns"], "success": result["success"]}
+
+
+def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
+    """Write ``runs.csv`` and ``optimal.json`` of a pairs folder from ``out/units``."""
+    from gdq_pddl.experiments.runner import atomic_write
+
+    def write_runs(tmp: Path) -> None:
+        with open(tmp, "w", encoding="utf-8", newline="") as fh:
+            writer = csv.writer(fh, lineterminator="\n")
+            writer.writerow(RUN_COLUMNS)
+            for exp in experiments:
+                pair = exp.schedule[0][0]
+                start, goal = pair.split("->")
+                for unit in exp.units():
+                    data = np.load(out / "units" / f"{unit.key}.npz")
+                    returns, success = data["returns"], data["success"]
+                    writer.writerow((pair, start, goal, unit.method, unit.run, len(returns),
+                                     repr(float(np.mean(returns))),
+                                     repr(float(np.mean(success)))))
+
+    atomic_write(out / "runs.csv", write_runs)
+    facts = pair_facts(experiments)
+    atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(facts, indent=2)))
+
+
+def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
+    """Per pair of ``experiments`` (all in one world): start, goal, the shortest plan's
+    length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
+    from gdq_pddl.envs.model import compile_model, full_state
+    from gdq_pddl.envs.solve import solve
+    from gdq_pddl.learners.context import office_plan_table
+    from gdq_pddl.spaces import LearnerSpaces
+
+    if not experiments:
+        return {}
+    world = load_world_named(experiments[0].world)
+    tuning = {(t.start, t.goal): name for name, t in world.tasks.items() if name in TUNING_TASKS}
+    spaces, model = LearnerSpaces(world), compile_model(world)
+    tasks = [resolve_task(world, e.schedule[0][0]) for e in experiments]
+    out: dict[str, dict] = {}
+    for goal in dict.fromkeys(t.goal for t in tasks):  # one value iteration per goal
+        v = solve(model, world.index[goal]).V[0]
+        table = office_plan_table(world, goal, experiments[0].planner)
+        for t in (t for t in tasks if t.goal == goal):
+            out[pair_spec(t.start, t.goal)] = {
+                "start": t.start, "goal": t.goal,
+                "shortest_plan": int(table.length[spaces.state(t.start)]),
+                "v_star": float(v[full_state(world, t.start)]),
+                "tuning": tuning.get((t.start, t.goal)),
+            }
+    return {p: out[p] for p in (pair_spec(t.start, t.goal) for t in tasks)}
