@@ -142,7 +142,7 @@ def test_unit_seeds_depend_only_on_identity_and_pair_the_methods():
     b = [(u.method, u.run, u.seeds()[0].random(), u.seeds()[1]) for u in exp.units()]
     assert a == b
     by_run = {}
-    for method, run, learner, env in a:
+    for _method, run, learner, env in a:
         by_run.setdefault(run, set()).add((learner, env))
     assert all(len(seeds) == 1 for seeds in by_run.values())  # paired across methods
     assert len({next(iter(seeds)) for seeds in by_run.values()}) == 2  # runs differ

@@ -318,3 +318,17 @@ def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_
             assert prior[s, op] == best
         assert (prior[s] != NO_CHANGE).sum() == len(outcomes)
     assert several > 0
+
+
+def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_task(ctx_c):
+    """The closed form from the goal distances is the prior's fixed point."""
+    learner = GDQ(ctx_c)
+    t, p = learner.tables, learner.params
+    init = core.prior_values(t, p)
+    assert np.allclose(init, learner.v, atol=1e-9)
+    assert core.prior_optinit(t, p, 1e-9, 1000) == 1
+    # a state that cannot reach the goal by the knowledge's actions: -c / (1 - gamma)
+    dead = PriorModel(np.where(np.arange(ctx_c.n_states)[:, None] == ctx_c.s0, NO_CHANGE,
+                               ctx_c.prior.next_state))
+    cut = GDQ(replace(ctx_c, prior=dead))
+    assert cut.v[ctx_c.s0] == pytest.approx(-p.prior_cost / (1 - p.gamma))

@@ -888,11 +888,50 @@ def prior_fill_untried(t: Tables, p: Params) -> None:
 
 
 @numba.njit(cache=True)
+def prior_values(t: Tables, p: Params) -> np.ndarray:
+    """The state values of the prior model alone: a state ``d`` prior steps from the goal
+    is worth R_max for d = 1 and ``-prior_cost + gamma * V_{d-1}`` beyond (backward
+    breadth-first search over the prior's edges); one that cannot reach it
+    ``-prior_cost / (1 - gamma)``; a goal 0."""
+    n_states, n_actions = t.q.shape
+    goal, pp_ptr, pp_pair = t.goal, t.pp_ptr, t.pp_pair
+    dist = np.full(n_states, -1, dtype=np.int64)
+    queue = np.empty(n_states, dtype=np.int64)
+    head, tail = 0, 0
+    for s in range(n_states):
+        if goal[s]:
+            dist[s] = 0
+            queue[tail] = s
+            tail += 1
+    while head < tail:
+        x = queue[head]
+        head += 1
+        for k in range(pp_ptr[x], pp_ptr[x + 1]):
+            ps = pp_pair[k] // n_actions
+            if dist[ps] < 0:
+                dist[ps] = dist[x] + 1
+                queue[tail] = ps
+                tail += 1
+    longest = 0
+    for s in range(n_states):
+        longest = max(longest, dist[s])
+    by_distance = np.zeros(longest + 1)
+    for d in range(1, longest + 1):
+        by_distance[d] = p.r_max if d == 1 else -p.prior_cost + p.gamma * by_distance[d - 1]
+    out = np.empty(n_states)
+    for s in range(n_states):
+        out[s] = by_distance[dist[s]] if dist[s] >= 0 else -p.prior_cost / (1.0 - p.gamma)
+    return out
+
+
+@numba.njit(cache=True)
 def prior_optinit(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
     """OptInit of GDQ's default: value iteration on the hybrid model (Gauss-Seidel sweeps
     over the allowed pairs until no state value moves by more than ``tol``), then every
     other pair's Q from the converged values, the reverse index rebuilt for the known
-    pairs and the queue emptied. Goal rows are 0. Returns the number of sweeps, or -1 when
+    pairs and the queue emptied. Goal rows are 0. The sweeps start from the prior's own
+    values (:func:`prior_values`), exact when no pair is known yet, so a first task
+    takes one sweep however large the world. Returns the number of sweeps, or -1 when
     the reverse index is too small (the caller sizes it for the known pairs)."""
     n_states, n_actions = t.q.shape
     q, v, allowed, goal, visits, prior_next = t.q, t.v, t.allowed, t.goal, t.visits, \
@@ -918,7 +957,7 @@ def prior_optinit(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
                 pairs[k] = a
                 k += 1
     q[:, :] = 0.0
-    v[:] = 0.0
+    v[:] = prior_values(t, p)
     sweeps = 0
     while sweeps < max_sweeps:
         sweeps += 1
