@@ -46,8 +46,9 @@ from gymnasium.spaces import Discrete
 
 from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.model import ModelArrays, cost_arrays, merge_outcomes, outcome_csr
-from gdq_pddl.errors import PlanningError
+from gdq_pddl.envs.model import PAIR_BYTES, ModelArrays, cost_arrays, merge_outcomes, outcome_csr
+from gdq_pddl.errors import PlanningError, WorldError
+from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
 
@@ -85,8 +86,11 @@ class PDDLInstance:
 
     @cached_property
     def graph(self) -> StateGraph:
-        """Reachable states and their successors (raises past ``max_states``)."""
-        return reachable_graph(self.problem.task, self.max_states, self.problem.problem.source)
+        """Reachable states and their successors; raises past ``max_states``, and for a
+        task nothing can be learnt on (:func:`check_task`)."""
+        graph = reachable_graph(self.problem.task, self.max_states, self.problem.problem.source)
+        check_task(self.problem, graph, self.dynamics)
+        return graph
 
     @cached_property
     def model(self) -> ModelArrays:
@@ -114,10 +118,60 @@ class PDDLInstance:
         return self.problem.task.atoms(self.graph.states[s])
 
 
+def check_task(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics) -> None:
+    """Refuse a problem whose goal is empty, holds in the initial state or cannot be
+    reached, and a step limit below the shortest plan: in each, no episode could teach the
+    learner anything, and the results would look like a success (or a certain failure).
+
+    Raises :class:`PlanningError` naming the problem file, or a
+    :class:`~gdq_pddl.errors.WorldError` naming the dynamics file's ``step_limit``.
+    """
+    source = problem.problem.source
+    if not problem.problem.goal:
+        raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
+                            "there is nothing to learn; give a goal")
+    if graph.is_goal[0]:
+        raise PlanningError(f"{source}: the goal already holds in the initial state: every "
+                            "episode would be over before it begins")
+    if not graph.is_goal.any():
+        never = never_true(problem)
+        why = (f"{never} can never hold (no action makes it true, and the initial state "
+               "does not have it)" if never else
+               f"none of the {graph.n_states} states reachable from the initial state "
+               "satisfies it")
+        raise PlanningError(f"{source}: no plan: the goal cannot be reached from the "
+                            f"initial state: {why}")
+    shortest = int(graph.distances[0])
+    if shortest > dynamics.step_limit:
+        raise WorldError(dynamics.source, "dynamics.step_limit",
+                         f"{dynamics.step_limit} is less than the shortest plan of {source} "
+                         f"({shortest} actions): no episode can reach the goal")
+
+
+def never_true(problem: PlanningProblem) -> str:
+    """The first goal literal of ``problem`` that can never hold ("" if none is)."""
+    task = problem.task
+    for lit in problem.problem.goal:
+        atom = str(lit.atom)
+        text = atom if lit.positive else f"(not {atom})"
+        if lit.atom.predicate == "=":
+            if (lit.atom.args[0] == lit.atom.args[1]) != lit.positive:
+                return text
+        elif lit.atom.predicate not in problem.domain.fluent_predicates():
+            if (atom in task.statics) != lit.positive:
+                return text
+        elif lit.positive and atom not in task.fact_index:
+            return atom
+    return ""
+
+
 def compile_pddl_model(graph: StateGraph, dynamics: Dynamics) -> ModelArrays:
     """The dynamics of every (reachable state, ground action) pair as :class:`ModelArrays`."""
     ops = graph.task.ops
     n_ops = len(ops)
+    check_memory(graph.n_states * n_ops * PAIR_BYTES,
+                 f"{dynamics.source}: the true model of {graph.n_states} states x {n_ops} "
+                 "ground actions", "make the problem smaller (fewer objects)")
     parts = [split_action(op.name) for op in ops]
     outcomes = [dynamics.outcomes(schema, args) for schema, args in parts]
     schema_of = [schema for schema, _ in parts]

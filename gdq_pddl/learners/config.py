@@ -11,9 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from gdq_pddl.limits import check_count, check_real
+
 GDQVariant = Literal["paper", "code"]
 DarlingVariant = Literal["paper", "code"]
 
+MAX_BACKUPS = 1_000_000
+"""The most model backups per real step a config accepts (each costs about a
+microsecond; the paper's settings are 3-5)."""
 
 @dataclass(frozen=True)
 class LearnerConfig:
@@ -28,12 +33,9 @@ class LearnerConfig:
     """Probability of a uniformly random (allowed) action instead of the greedy one."""
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.alpha <= 1.0:
-            raise ValueError(f"alpha must be in (0, 1], got {self.alpha}")
-        if not 0.0 <= self.gamma < 1.0:
-            raise ValueError(f"gamma must be in [0, 1), got {self.gamma}")
-        if not 0.0 <= self.epsilon <= 1.0:
-            raise ValueError(f"epsilon must be in [0, 1], got {self.epsilon}")
+        check_real("alpha", self.alpha, 0.0, 1.0, low_open=True)
+        check_real("gamma", self.gamma, 0.0, 1.0, high_open=True)
+        check_real("epsilon", self.epsilon, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -55,8 +57,8 @@ class DynaQConfig(LearnerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.n_backups < 0 or self.m < 0:
-            raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+        check_count("n_backups", self.n_backups, MAX_BACKUPS)
+        check_count("m", self.m)  # at most MAX_COUNT, as int64 holds
 
 
 @dataclass(frozen=True)
@@ -120,7 +122,6 @@ class DarlingConfig(LearnerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.tolerance < 0:
-            raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")
+        check_real("tolerance", self.tolerance, 0.0)
         if self.variant not in ("paper", "code"):
             raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
+from gdq_pddl.inputs import read_text
 from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
 
 SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality"}
@@ -284,6 +285,8 @@ def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ..
 def _atom(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
           types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Atom:
     items = r.lst(node, "an atom")
+    if not items:
+        raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
     name = r.symbol(items[0], "a predicate name")
     if name not in predicates:
         raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
@@ -335,13 +338,17 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
             if o in objects:
                 raise r.fail(sec[":objects"].line, f"object {o} is declared twice")
             objects[o] = t
-    init = []
-    for node in sec[":init"].items[1:] if ":init" in sec else ():
-        init.append(_atom(r, node, domain.predicates, domain.types, objects, "init"))
+    if ":init" not in sec:
+        raise r.fail(None, "expected (:init ...), the initial state")
+    init = [_atom(r, node, domain.predicates, domain.types, objects, "init")
+            for node in sec[":init"].items[1:]]
     if ":goal" not in sec:
         raise r.fail(None, "expected (:goal ...)")
-    goal = _literals(r, sec[":goal"].items[1] if len(sec[":goal"].items) == 2 else None,
-                     domain.predicates, domain.types, objects, "goal",
+    gnode = sec[":goal"]
+    if len(gnode.items) != 2:
+        raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
+                     f"{len(gnode.items) - 1}")
+    goal = _literals(r, gnode.items[1], domain.predicates, domain.types, objects, "goal",
                      set(domain.requirements), True)
     return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source)
 
@@ -357,7 +364,4 @@ def read_problem(path: str | Path, domain: Domain) -> Problem:
 
 
 def _read(path: str | Path) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise PDDLError(str(path), None, f"cannot read: {exc.strerror}") from None
+    return read_text(path, lambda src, msg: PDDLError(src, None, msg))
