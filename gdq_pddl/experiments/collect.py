@@ -18,7 +18,7 @@ N_AREAS = 7
 
 def collect(out: Path, experiments: list[Experiment]) -> None:
     """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write
+    from gdq_pddl.experiments.runner import atomic_write, read_unit
 
     units = [u for e in experiments for u in e.units()]
     header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, N_AREAS + 1))))
@@ -27,14 +27,15 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(header + "\n")
             for unit in units:
-                data = np.load(out / "units" / f"{unit.key}.npz")
-                fh.write(_episode_rows(unit.experiment.name, unit.method, unit.run, data))
+                data = read_unit(out, unit)
+                for chunk in _episode_rows(unit.experiment.name, unit.method, unit.run, data):
+                    fh.write(chunk)
 
     def write_policies(tmp: Path) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write("experiment,method,task,run,state,action\n")
             for unit in units:
-                data = np.load(out / "units" / f"{unit.key}.npz")
+                data = read_unit(out, unit)
                 task = str(data["tasks"][-1])
                 for s, a in enumerate(data["policy"].tolist()):
                     fh.write(f"{unit.experiment.name},{unit.method},{task},{unit.run},{s},{a}\n")
@@ -45,25 +46,33 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
 
 
-def _episode_rows(experiment: str, method: str, run: int, data) -> str:
-    """CSV rows of one unit (vectorised formatting: a full protocol has ~1M rows)."""
+CHUNK = 50_000
+"""Episodes formatted at once: numpy's string arrays take about 4 kB per episode, so a
+unit of millions of episodes is written in chunks of this many."""
+
+
+def _episode_rows(experiment: str, method: str, run: int, data):
+    """CSV rows of one unit, in pieces of at most :data:`CHUNK` rows (vectorised
+    formatting: a full protocol has ~1M rows)."""
     n = len(data["returns"])
     tasks = np.repeat(data["tasks"], data["counts"])
-    areas = np.zeros((n, N_AREAS), dtype=np.int64)
     k = min(N_AREAS, data["areas"].shape[1])
-    areas[:, :k] = data["areas"][:, :k]  # column k - 1 counts steps ending in area k
-    buf = io.StringIO()
-    prefix = np.char.add(f"{experiment},{method},", tasks.astype(str))
-    cols = [prefix, np.full(n, str(run)), np.arange(1, n + 1).astype(str),
-            np.char.mod("%.10g", data["returns"]), data["steps"].astype(str),
-            data["success"].astype(np.int64).astype(str)]
-    cols += [areas[:, i].astype(str) for i in range(N_AREAS)]
-    rows = cols[0]
-    for c in cols[1:]:
-        rows = np.char.add(np.char.add(rows, ","), c)
-    buf.write("\n".join(rows.tolist()))
-    buf.write("\n")
-    return buf.getvalue()
+    for lo in range(0, n, CHUNK):
+        hi = min(n, lo + CHUNK)
+        areas = np.zeros((hi - lo, N_AREAS), dtype=np.int64)
+        areas[:, :k] = data["areas"][lo:hi, :k]  # column k - 1 counts steps ending in area k
+        buf = io.StringIO()
+        prefix = np.char.add(f"{experiment},{method},", tasks[lo:hi].astype(str))
+        cols = [prefix, np.full(hi - lo, str(run)), np.arange(lo + 1, hi + 1).astype(str),
+                np.char.mod("%.10g", data["returns"][lo:hi]), data["steps"][lo:hi].astype(str),
+                data["success"][lo:hi].astype(np.int64).astype(str)]
+        cols += [areas[:, i].astype(str) for i in range(N_AREAS)]
+        rows = cols[0]
+        for c in cols[1:]:
+            rows = np.char.add(np.char.add(rows, ","), c)
+        buf.write("\n".join(rows.tolist()))
+        buf.write("\n")
+        yield buf.getvalue()
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
