@@ -170,7 +170,8 @@ class World:
 
     def resolve(self, task: str | None = None, start: str | None = None,
                 goal: str | None = None) -> Task:
-        """A task by name, or an ad-hoc one from ``start``/``goal`` names."""
+        """A task by name, or an ad-hoc one from ``start``/``goal`` names (refused when
+        they are the same position, or the goal cannot be reached from the start)."""
         if task is not None:
             if start is not None or goal is not None:
                 raise WorldError(self.source, "", "give a task or a start and goal, not both")
@@ -178,6 +179,9 @@ class World:
         if start is None or goal is None:
             raise WorldError(self.source, "", "give a task, or both a start and a goal")
         s, g = self.position(start), self.position(goal)
+        if s == g:
+            raise WorldError(self.source, "", f"start and goal are the same position ({s}); "
+                             "the episode would be over before it begins")
         why = self.unreachable(s, g)
         if why:
             raise WorldError(self.source, "", f"goal {g} cannot be reached from {s}: {why}")

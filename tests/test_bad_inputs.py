@@ -296,6 +296,10 @@ def test_sizes_past_memory_are_refused_up_front(capsys, tmp_path, argv, names):
 def test_scale_sizes_past_memory_are_refused(capsys, tmp_path):
     code, out = cli(capsys, "scale", "--sizes", "100000", "--out", tmp_path / "o")
     refused(code, out, "--sizes 100000", "would need")
+    code, out = cli(capsys, "scale", "--runs", "1000000000", "--out", tmp_path / "o")
+    refused(code, out, "--runs 1,000,000,000", "would need")
+    code, out = cli(capsys, "scale", "--episodes", "1000000000000", "--out", tmp_path / "o")
+    refused(code, out, "--episodes 1,000,000,000,000", "would need")
     code, out = cli(capsys, "building", "--positions", "10000000000", "--out", tmp_path / "b")
     refused(code, out, "positions = 10,000,000,000", "would need")
 
@@ -517,6 +521,20 @@ def test_report_on_a_pddl_run_folder(capsys, tmp_path):
 
 
 # --- the API --------------------------------------------------------------------------------
+
+def test_run_episodes_refuses_what_memory_cannot_hold():
+    import gymnasium
+
+    from gdq_pddl.errors import SizeError
+    from gdq_pddl.learners import QLearning, office_task_context, run_episodes
+
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    learner = QLearning(office_task_context(env.unwrapped.world, "C"))
+    with pytest.raises(SizeError, match="n_episodes = 1,000,000,000,000"):
+        run_episodes(learner, env, 10**12, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="n_episodes"):
+        run_episodes(learner, env, 2.5, np.random.default_rng(0))
+
 
 @pytest.mark.parametrize("action", [2.5, np.float64(2.0), "2", True, -1, 95, None])
 def test_env_step_refuses_what_is_not_an_action(action):

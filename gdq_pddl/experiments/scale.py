@@ -289,7 +289,7 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
 
 def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
-    from gdq_pddl.experiments.checks import EPISODE_BYTES
+    from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
     from gdq_pddl.learners.core import table_bytes
 
     check_count("runs", runs)
@@ -298,6 +298,9 @@ def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
+    # a size's returns and successes of every run of every method are held together
+    check_memory(len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES), f"--runs {runs:,} x "
+                 f"--episodes {episodes:,} x {len(methods)} methods", "give fewer --runs")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
     unknown = [m for m in methods if m not in METHODS]
