@@ -20,11 +20,12 @@ def whole(low: int) -> Callable[[str], int]:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if not low <= value <= MAX_COUNT:
+        if value < low:
             raise argparse.ArgumentTypeError(f"must be a whole number >= {low}, got {text}")
+        if value > MAX_COUNT:
+            raise argparse.ArgumentTypeError(f"must be at most {MAX_COUNT:_}, got {text}")
         return value
 
-    parse.__name__ = f"whole number >= {low}"
     return parse
 
 
