@@ -40,6 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.errors import WorldError
+from gdq_pddl.limits import check_memory
+from gdq_pddl.outputs import output_folder
 from gdq_pddl.world import Task, World, parse_world
 
 DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
@@ -57,6 +59,8 @@ policy of a 300-position building failed more often than it arrived. The "most
 difficult" kind is placed on purpose instead (see :func:`_tasks`)."""
 
 MIN_POSITIONS = 40
+POSITION_BYTES = 2000
+"""Memory per position while a building is generated and validated (measured: 1.2 kB)."""
 STEP_FACTOR = 2.5
 
 
@@ -89,9 +93,13 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
     """
     if positions < MIN_POSITIONS:
         raise WorldError("building", "positions", f"need at least {MIN_POSITIONS}, got {positions}")
+    check_memory(positions * POSITION_BYTES, f"positions = {positions:,}: generating the "
+                 "building", "give fewer positions")
     k = positions // 8 if doors is None else doors
     if k < 3:
         raise WorldError("building", "doors", f"need at least 3 doors, got {k}")
+    if seed < 0:
+        raise WorldError("building", "seed", f"must be >= 0, got {seed}")
     rng = np.random.default_rng(seed)
     n_fire = max(1, round(k / 6))
     n_second = max(1, round(k / 6))
@@ -361,8 +369,8 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     b = generate(positions, seed, doors)
     text = to_toml(b)
     world = parse_world(text, source=f"{b.name}.toml (generated)")
-    out = Path(out)
-    (out / "problems").mkdir(parents=True, exist_ok=True)
+    out = output_folder(out)
+    output_folder(out / "problems")
     world_path = out / f"{b.name}.toml"
     world_path.write_text(text, encoding="utf-8")
     (out / "domain.pddl").write_text(_domain_text(), encoding="utf-8")

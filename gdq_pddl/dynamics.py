@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from gdq_pddl.errors import WorldError
+from gdq_pddl.inputs import read_text
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.world import CostDist, _Validator
 
@@ -100,11 +101,7 @@ def load_dynamics(path: str | Path, domain: Domain, problem: Problem,
 
     Raises :class:`WorldError` naming the file and key of the first problem found.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise WorldError(str(path), "", f"cannot read: {exc.strerror}") from None
+    text = read_text(path, lambda src, msg: WorldError(src, "", msg))
     return parse_dynamics(text, domain, problem, source=str(path), overlay=overlay)
 
 
@@ -142,12 +139,8 @@ class _DynamicsValidator(_Validator):
             if key not in ("r_max", "step_limit", "name", "description"):
                 raise self.fail(f"dynamics.{key}", "unknown key (expected r_max, step_limit, "
                                 "name, description)")
-        r_max = self.get(d, "r_max", "dynamics.r_max", float, 20.0)
-        if r_max <= 0:
-            raise self.fail("dynamics.r_max", f"must be > 0, got {r_max}")
-        limit = self.get(d, "step_limit", "dynamics.step_limit", int, 20)
-        if limit < 1:
-            raise self.fail("dynamics.step_limit", f"must be >= 1, got {limit}")
+        r_max = self.positive(d, "r_max", "dynamics.r_max", 20.0)
+        limit = self.count(d, "step_limit", "dynamics.step_limit", 20)
         actions, objects = {}, {}
         for schema, table in self.get(self.raw, "actions", "actions", dict, {}).items():
             key = f"actions.{schema}"
@@ -212,7 +205,7 @@ class _DynamicsValidator(_Validator):
             raise self.fail(f"{key}.failure", f'expected "nothing", "stuck" or a non-empty '
                             f"list of action schemas, got {value!r}")
         for s in value:
-            if s not in self.schemas:
+            if not isinstance(s, str) or s not in self.schemas:
                 raise self.fail(f"{key}.failure", f"unknown action schema {s!r} (the domain "
                                 f"has: {', '.join(self.schemas)})")
         return tuple(value)

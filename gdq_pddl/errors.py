@@ -15,18 +15,24 @@ class WorldError(GdqError):
     """A world file is malformed or inconsistent."""
 
     def __init__(self, source: str, key: str, message: str) -> None:
-        self.source, self.key = source, key
+        self.source, self.key, self.message = source, key, message
         where = f"{source}: {key}: " if key else f"{source}: "
         super().__init__(where + message)
+
+    def __reduce__(self):  # raised in a worker process, it travels back pickled
+        return type(self), (self.source, self.key, self.message)
 
 
 class PDDLError(GdqError):
     """A PDDL file cannot be parsed, or a problem does not match its domain."""
 
     def __init__(self, source: str, line: int | None, message: str) -> None:
-        self.source, self.line = source, line
+        self.source, self.line, self.message = source, line, message
         where = f"{source}:{line}: " if line is not None else f"{source}: "
         super().__init__(where + message)
+
+    def __reduce__(self):
+        return type(self), (self.source, self.line, self.message)
 
 
 class PlanningError(GdqError):
@@ -35,3 +41,23 @@ class PlanningError(GdqError):
 
 class AbstractionError(GdqError):
     """A planner state or action has no counterpart in the learner's spaces."""
+
+
+class ConfigError(GdqError, ValueError):
+    """A parameter (a command-line option, an argument of the API) is out of range.
+
+    Also a :class:`ValueError`, so code that checks arguments the usual way catches it.
+    """
+
+
+class ResultsError(GdqError):
+    """An output folder, or a file in it, cannot be used as asked (damaged, held by
+    another process, of another configuration)."""
+
+
+class OutputError(GdqError):
+    """An output file or folder cannot be written where asked."""
+
+
+class SizeError(GdqError, MemoryError):
+    """A computation would need more memory than the machine has (said up front)."""

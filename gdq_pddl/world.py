@@ -9,14 +9,19 @@ error, so a user editing a door never meets a traceback.
 
 from __future__ import annotations
 
+import difflib
+import math
+import re
 import tomllib
-from collections.abc import Mapping
+from collections import deque
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
 from gdq_pddl.errors import WorldError
+from gdq_pddl.inputs import read_text
 from gdq_pddl.resources import world_text
 
 VERBS: tuple[str, ...] = ("goto", "approach", "opendoor", "gothrough", "stay")
@@ -26,6 +31,30 @@ DOOR_VERBS = ("opendoor", "gothrough")
 
 COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
 """Numeric codes of cost distributions, as the compiled simulator reads them."""
+
+MAX_NUMBER = 1e15
+"""The largest magnitude a number of a world or dynamics file may have: far beyond any
+reward or cost, and small enough that a return (a sum over an episode's steps) and
+``r_max / (1 - gamma)`` stay finite."""
+
+KEYS: dict[str, tuple[str, ...]] = {
+    "": ("world", "costs", "doors", "areas", "landmarks", "tasks"),
+    "world": ("name", "description", "step_limit", "r_max", "navigation_success",
+              "positions", "adjacency", "forbidden_areas"),
+    "door": ("sides", "success", "stuck", "label", "cost"),
+    "task": ("start", "goal", "irrelevant_areas"),
+    "uniform": ("dist", "low", "high"),
+    "normal": ("dist", "mean", "sd"),
+}
+"""The keys each table of a world file may have (cost tables: by distribution)."""
+
+PDDL_NAME = re.compile(r"[a-z][a-z0-9_-]*")
+"""What a position or door name must look like: it becomes a PDDL object, and PDDL
+reads names case-insensitively (``P1`` and ``p1`` would be one object)."""
+
+LABEL = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
+"""What a world or task name must look like: it goes into PDDL problem names, file names
+and CSV columns."""
 
 
 @dataclass(frozen=True)
@@ -125,7 +154,7 @@ class World:
         """Resolve a position or landmark name; raise :class:`WorldError` if unknown."""
         if name in self.index:
             return name
-        if name in self.landmarks:
+        if self.landmarks.get(name) in self.index:
             return self.landmarks[name]
         known = ", ".join(self.positions)
         raise WorldError(self.source, "", f"unknown position {name!r} (known: {known}; "
@@ -141,7 +170,8 @@ class World:
 
     def resolve(self, task: str | None = None, start: str | None = None,
                 goal: str | None = None) -> Task:
-        """A task by name, or an ad-hoc one from ``start``/``goal`` names."""
+        """A task by name, or an ad-hoc one from ``start``/``goal`` names (refused when
+        they are the same position, or the goal cannot be reached from the start)."""
         if task is not None:
             if start is not None or goal is not None:
                 raise WorldError(self.source, "", "give a task or a start and goal, not both")
@@ -149,7 +179,43 @@ class World:
         if start is None or goal is None:
             raise WorldError(self.source, "", "give a task, or both a start and a goal")
         s, g = self.position(start), self.position(goal)
+        if s == g:
+            raise WorldError(self.source, "", f"start and goal are the same position ({s}); "
+                             "the episode would be over before it begins")
+        why = self.unreachable(s, g)
+        if why:
+            raise WorldError(self.source, "", f"goal {g} cannot be reached from {s}: {why}")
         return Task(name=f"{s}-{g}", start=s, goal=g)
+
+    def reachable(self, start: str) -> set[str]:
+        """The positions the robot can get to from ``start`` (walking, and through doors
+        that can open: ``success > 0``)."""
+        links: dict[str, list[str]] = {p: list(ns) for p, ns in self.walk_neighbours.items()}
+        for d in self.doors:
+            if d.success > 0:
+                a, b = d.sides
+                links[a].append(b)
+                links[b].append(a)
+        return _component(start, links)
+
+    def unreachable(self, start: str, goal: str) -> str:
+        """Why ``goal`` cannot be reached from ``start`` ("" when it can)."""
+        if goal in self.reachable(start):
+            return ""
+        locked = sorted(d.name for d in self.doors if d.success <= 0)
+        return ("every way there crosses a door that never opens (success = 0: "
+                f"{', '.join(locked)})" if locked else "no way leads there")
+
+
+def _component(start: str, links: Mapping[str, Iterable[str]]) -> set[str]:
+    """The nodes reachable from ``start`` over ``links`` (breadth first)."""
+    seen, queue = {start}, deque([start])
+    while queue:
+        for n in links[queue.popleft()]:
+            if n not in seen:
+                seen.add(n)
+                queue.append(n)
+    return seen
 
 
 def load_world(path: str | Path | None = None) -> World:
@@ -160,11 +226,8 @@ def load_world(path: str | Path | None = None) -> World:
     if path is None:
         return parse_world(world_text("office"), source="office.toml (built in)")
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise WorldError(str(path), "", f"cannot read: {exc.strerror}") from None
-    return parse_world(text, source=str(path))
+    return parse_world(read_text(path, lambda src, msg: WorldError(src, "", msg)),
+                       source=str(path))
 
 
 def builtin_world(name: str) -> World:
@@ -182,13 +245,29 @@ def parse_world(text: str, source: str = "<string>") -> World:
 
 
 class _Validator:
-    """Checks one parsed TOML document and builds the :class:`World`."""
+    """Checks one parsed TOML document and builds the :class:`World`.
+
+    Strict: every table and key must be one the format has (:data:`KEYS`), every number
+    finite and at most :data:`MAX_NUMBER` in size; each error names the key at fault.
+    """
 
     def __init__(self, source: str, raw: dict[str, Any]) -> None:
         self.source, self.raw = source, raw
 
     def fail(self, key: str, message: str) -> WorldError:
         return WorldError(self.source, key, message)
+
+    def known_keys(self, table: Mapping[str, Any], path: str, allowed: Iterable[str],
+                   what: str = "key") -> None:
+        """Refuse a key of ``table`` not in ``allowed`` (a misspelling would be ignored)."""
+        allowed = tuple(allowed)
+        for key in table:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, allowed, n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                where = f"{path}.{key}" if path else key
+                raise self.fail(where, f"unknown {what} ({hint}expected one of: "
+                                f"{', '.join(allowed)})")
 
     def get(self, table: Mapping[str, Any], key: str, path: str, kind: type | tuple,
             default: Any = ...) -> Any:
@@ -203,6 +282,26 @@ class _Validator:
             names = (kind,) if isinstance(kind, type) else kind
             name = " or ".join(k.__name__ for k in names)
             raise self.fail(path, f"expected {name}, got {value!r}")
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.finite(value, path)
+        return value
+
+    def finite(self, value: float, path: str) -> None:
+        """Refuse NaN, infinities and numbers past :data:`MAX_NUMBER`."""
+        if not math.isfinite(value) or abs(value) > MAX_NUMBER:
+            raise self.fail(path, f"expected a finite number of at most {MAX_NUMBER:g} in "
+                            f"size, got {value!r}")
+
+    def positive(self, table: Mapping[str, Any], key: str, path: str, default: float) -> float:
+        value = self.get(table, key, path, float, default)
+        if value <= 0:
+            raise self.fail(path, f"must be > 0, got {value}")
+        return value
+
+    def count(self, table: Mapping[str, Any], key: str, path: str, default: int) -> int:
+        value = self.get(table, key, path, int, default)
+        if value < 1:
+            raise self.fail(path, f"must be >= 1, got {value}")
         return value
 
     def probability(self, table: Mapping[str, Any], key: str, path: str) -> float:
@@ -212,50 +311,64 @@ class _Validator:
         return value
 
     def pos(self, name: Any, path: str) -> str:
-        if not isinstance(name, str) or name not in self.positions:
+        if not isinstance(name, str) or name not in self.position_set:
             raise self.fail(path, f"unknown position {name!r}")
         return name
 
+    def name(self, value: Any, path: str, pattern: re.Pattern, what: str) -> str:
+        if not isinstance(value, str) or not pattern.fullmatch(value):
+            raise self.fail(path, f"expected {what}, got {value!r}")
+        return value
+
     def cost(self, value: Any, path: str) -> CostDist:
         if isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.finite(value, path)
             if value < 0:
                 raise self.fail(path, f"a cost must be >= 0, got {value}")
             return CostDist("const", float(value))
         if not isinstance(value, dict):
             raise self.fail(path, f"expected a number or a table with 'dist', got {value!r}")
         dist = value.get("dist")
+        if dist not in ("uniform", "normal"):
+            raise self.fail(f"{path}.dist", f"expected 'uniform' or 'normal', got {dist!r}")
+        self.known_keys(value, path, KEYS[dist])
         if dist == "uniform":
             low = self.get(value, "low", f"{path}.low", float)
             high = self.get(value, "high", f"{path}.high", float)
             if not 0 <= low <= high:
                 raise self.fail(path, f"need 0 <= low <= high, got low={low} high={high}")
             return CostDist("uniform", low, high)
-        if dist == "normal":
-            mean = self.get(value, "mean", f"{path}.mean", float)
-            sd = self.get(value, "sd", f"{path}.sd", float)
-            if sd < 0 or mean < 0:
-                raise self.fail(path, f"need mean >= 0 and sd >= 0, got {mean}, {sd}")
-            return CostDist("normal", mean, sd)
-        raise self.fail(f"{path}.dist", f"expected 'uniform' or 'normal', got {dist!r}")
+        mean = self.get(value, "mean", f"{path}.mean", float)
+        sd = self.get(value, "sd", f"{path}.sd", float)
+        if sd < 0 or mean < 0:
+            raise self.fail(path, f"need mean >= 0 and sd >= 0, got {mean}, {sd}")
+        return CostDist("normal", mean, sd)
 
     def world(self) -> World:
+        self.known_keys(self.raw, "", KEYS[""], "table")
         w = self.get(self.raw, "world", "world", dict)
+        self.known_keys(w, "world", KEYS["world"])
         names = self.get(w, "positions", "world.positions", list)
         for i, p in enumerate(names):
-            if not isinstance(p, str) or not p:
-                raise self.fail(f"world.positions[{i}]", f"expected a name, got {p!r}")
-        if len(set(names)) != len(names):
+            self.name(p, f"world.positions[{i}]", PDDL_NAME,
+                      "a position name (lower case letters, digits, - and _, from a letter)")
+        if len(set(names)) < len(names):
             dup = sorted({p for p in names if names.count(p) > 1})
             raise self.fail("world.positions", f"duplicate positions {dup}")
+        if not names:
+            raise self.fail("world.positions", "need at least one position")
         self.positions = tuple(names)
+        self.position_set = frozenset(names)
         forbidden = self.forbidden_positions(w)
         edges = self.edges(w, forbidden)
         doors = self.doors(edges, forbidden)
         areas = self.areas(forbidden)
         landmarks = self.landmarks()
         kept = tuple(p for p in self.positions if p not in forbidden)
+        self.connected(kept, edges)
         world = World(
-            name=self.get(w, "name", "world.name", str, "world"),
+            name=self.name(self.get(w, "name", "world.name", str, "world"), "world.name", LABEL,
+                           "a name of letters, digits, - and _"),
             source=self.source,
             positions=kept,
             edges=edges,
@@ -264,8 +377,8 @@ class _Validator:
             landmarks=landmarks,
             tasks={},
             costs=self.costs(),
-            step_limit=self.step_limit(w),
-            r_max=self.get(w, "r_max", "world.r_max", float, 20.0),
+            step_limit=self.count(w, "step_limit", "world.step_limit", 20),
+            r_max=self.positive(w, "r_max", "world.r_max", 20.0),
             navigation_success=self.probability(w, "navigation_success",
                                                 "world.navigation_success")
             if "navigation_success" in w else 0.95,
@@ -274,19 +387,34 @@ class _Validator:
         object.__setattr__(world, "tasks", self.tasks(world, forbidden))
         return world
 
-    def step_limit(self, w: Mapping[str, Any]) -> int:
-        limit = self.get(w, "step_limit", "world.step_limit", int, 20)
-        if limit < 1:
-            raise self.fail("world.step_limit", f"must be >= 1, got {limit}")
-        return limit
+    def connected(self, kept: tuple[str, ...], edges: tuple) -> None:
+        """Refuse positions no adjacency links to the rest (a forgotten edge)."""
+        links: dict[str, list[str]] = {p: [] for p in kept}
+        for a, b in edges:
+            links[a].append(b)
+            links[b].append(a)
+        order = {p: i for i, p in enumerate(kept)}
+        parts, left = [], set(kept)
+        while left:
+            part = _component(min(left, key=order.__getitem__), links)
+            parts.append(sorted(part, key=order.__getitem__))
+            left -= part
+        if len(parts) > 1:
+            parts.sort(key=len)
+            cut = ", ".join(" ".join(p) for p in parts[:-1])
+            raise self.fail("world.adjacency", f"position(s) {cut} cut off from the rest of "
+                            f"the world (no adjacency links them to {parts[-1][0]}); add the "
+                            "missing edge or remove them")
 
     def forbidden_positions(self, w: Mapping[str, Any]) -> frozenset[str]:
         areas = self.get(self.raw, "areas", "areas", dict, {})
         out: set[str] = set()
         for i, a in enumerate(self.get(w, "forbidden_areas", "world.forbidden_areas", list, [])):
-            if str(a) not in areas:
+            members = areas.get(str(a)) if isinstance(a, int) and not isinstance(a, bool) \
+                else None
+            if not isinstance(members, list):
                 raise self.fail(f"world.forbidden_areas[{i}]", f"unknown area {a!r}")
-            out.update(areas[str(a)])
+            out.update(p for p in members if isinstance(p, str))
         return frozenset(out)
 
     def edges(self, w: Mapping[str, Any], forbidden: frozenset[str]) -> tuple:
@@ -311,8 +439,13 @@ class _Validator:
         out, used = [], {}
         for name, d in table.items():
             key = f"doors.{name}"
+            self.name(name, key, PDDL_NAME, "a door name (lower case letters, digits, - and "
+                      "_, from a letter)")
+            if name in self.position_set:
+                raise self.fail(key, f"{name} is a position's name; a door needs its own")
             if not isinstance(d, dict):
                 raise self.fail(key, f"expected a table, got {d!r}")
+            self.known_keys(d, key, KEYS["door"])
             sides = self.get(d, "sides", f"{key}.sides", list)
             if len(sides) != 2 or sides[0] == sides[1]:
                 raise self.fail(f"{key}.sides",
@@ -332,12 +465,12 @@ class _Validator:
                     raise self.fail(f"{key}.cost.{verb}",
                                     f"expected one of {', '.join(DOOR_VERBS)}")
                 costs[verb] = self.cost(value, f"{key}.cost.{verb}")
+            label = self.get(d, "label", f"{key}.label", str, "")
             if a in forbidden or b in forbidden:
                 continue
             if frozenset((a, b)) not in edge_set:
                 raise self.fail(f"{key}.sides", f"{a} and {b} are not adjacent")
-            out.append(Door(name, (a, b), success, stuck,
-                            self.get(d, "label", f"{key}.label", str, ""), costs))
+            out.append(Door(name, (a, b), success, stuck, label, costs))
         return tuple(out)
 
     def areas(self, forbidden: frozenset[str]) -> dict[int, tuple[str, ...]]:
@@ -345,10 +478,9 @@ class _Validator:
         owner: dict[str, str] = {}
         for name, members in self.get(self.raw, "areas", "areas", dict, {}).items():
             key = f"areas.{name}"
-            try:
-                number = int(name)
-            except ValueError:
-                raise self.fail(key, "area names must be whole numbers") from None
+            if not re.fullmatch(r"[1-9][0-9]*", name):
+                raise self.fail(key, "area names must be whole numbers from 1 (no leading 0)")
+            number = int(name)
             if not isinstance(members, list):
                 raise self.fail(key, f"expected a list of positions, got {members!r}")
             for p in members:
@@ -361,22 +493,28 @@ class _Validator:
 
     def landmarks(self) -> dict[str, str]:
         table = self.get(self.raw, "landmarks", "landmarks", dict, {})
+        for k in table:
+            if k in self.position_set:
+                raise self.fail(f"landmarks.{k}", f"{k} is a position's name; a landmark "
+                                "needs its own")
         return {k: self.pos(v, f"landmarks.{k}") for k, v in table.items()}
 
     def costs(self) -> dict[str, CostDist]:
         table = self.get(self.raw, "costs", "costs", dict, {})
-        for verb in table:
-            if verb not in VERBS:
-                raise self.fail(f"costs.{verb}",
-                                f"unknown verb; expected one of {', '.join(VERBS)}")
+        self.known_keys(table, "costs", VERBS, "verb")
         return {v: self.cost(table.get(v, 1.0), f"costs.{v}") for v in VERBS}
 
     def tasks(self, world: World, forbidden: frozenset[str]) -> dict[str, Task]:
-        out = {}
+        out: dict[str, Task] = {}
         for name, t in self.get(self.raw, "tasks", "tasks", dict, {}).items():
             key = f"tasks.{name}"
+            self.name(name, key, LABEL, "a task name of letters, digits, - and _")
+            if name.upper() in out:
+                raise self.fail(key, f"task names ignore case: {name} is task "
+                                f"{name.upper()} again")
             if not isinstance(t, dict):
                 raise self.fail(key, f"expected a table, got {t!r}")
+            self.known_keys(t, key, KEYS["task"])
             ends = []
             for end in ("start", "goal"):
                 value = self.get(t, end, f"{key}.{end}", str)
@@ -385,9 +523,16 @@ class _Validator:
                     why = "is in a forbidden area" if p in forbidden else "is not a position"
                     raise self.fail(f"{key}.{end}", f"{value!r} {why} (nor a landmark)")
                 ends.append(p)
+            if ends[0] == ends[1]:
+                raise self.fail(key, f"start and goal are the same position ({ends[0]}); "
+                                "every episode would be over before it begins")
+            why = world.unreachable(*ends)
+            if why:
+                raise self.fail(f"{key}.goal", f"{ends[1]} cannot be reached from "
+                                f"{ends[0]}: {why}")
             irr = self.get(t, "irrelevant_areas", f"{key}.irrelevant_areas", list, [])
             for a in irr:
-                if a not in world.areas:
+                if not isinstance(a, int) or isinstance(a, bool) or a not in world.areas:
                     raise self.fail(f"{key}.irrelevant_areas", f"unknown area {a!r}")
             out[name.upper()] = Task(name.upper(), ends[0], ends[1], tuple(irr))
         return out

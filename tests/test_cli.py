@@ -77,15 +77,28 @@ def test_malformed_domain_names_file_and_line(capsys, tmp_path):
 
 
 def test_unreachable_goal_is_a_no_plan_status(capsys, tmp_path):
+    from gdq_pddl.resources import data_file
+
+    problem = tmp_path / "cut.pddl"
+    text = data_file("problems", "keys-1.pddl").read_text(encoding="utf-8")
+    for edge in ("(adj c25 c35)", "(adj c34 c35)"):  # no way into the goal cell
+        text = text.replace(edge, "")
+    problem.write_text(text)
+    code, out, err = run(capsys, "plan", "--domain", str(data_file("domains", "keys.pddl")),
+                         "--problem", str(problem), "--json")
+    assert code == 1
+    assert json.loads(out)["status"] == "no-plan" and "no plan" in err
+
+
+def test_a_world_with_a_position_cut_off_is_refused(capsys, tmp_path):
     world = tmp_path / "cut.toml"
     from gdq_pddl.resources import world_text
 
     text = world_text("office").replace('["p7", "p17"], ', "").replace('["p10", "p17"],', "")
     world.write_text(text.replace('["p17", "p18"],', ""))
-    code, out, err = run(capsys, "plan", "--start", "p0", "--goal", "p17", "--world", str(world),
-                         "--json")
-    assert code == 1
-    assert json.loads(out)["status"] == "no-plan" and "no plan" in err
+    code, _, err = run(capsys, "plan", "--start", "p0", "--goal", "p17", "--world", str(world))
+    assert code == 2
+    assert f"{world}: world.adjacency: position(s) p17 cut off" in err
 
 
 def test_problem_command_writes_the_shipped_file(capsys):

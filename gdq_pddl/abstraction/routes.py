@@ -66,7 +66,10 @@ def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem,
     edges: list[Edge] = []
     for s in range(abstraction.n_states):
         seen: set[int] = set()
-        state = task.mask(abstraction.planner_state(s))
+        atoms = abstraction.planner_state(s)
+        if not atoms <= task.fact_index.keys():
+            continue  # a state the problem can never be in (behind a locked door)
+        state = task.mask(atoms)
         for op, nxt in task.successors(state):
             a = abstraction.learner_action(op.name)
             if a in seen:

@@ -107,11 +107,17 @@ def pack_plans(n_actions: int, plans: list[list[list[tuple[int, int]]]], length:
 def build_plan_table(abstraction: Abstraction, problem: PlanningProblem, planner: Planner,
                      goal: State, tolerance: float = 0.0,
                      states: list[int] | None = None) -> PlanTable:
-    """Plan from every learner state (or those in ``states``) to ``goal``."""
+    """Plan from every learner state (or those in ``states``) to ``goal``.
+
+    A learner state the problem can never be in (an atom of it is unreachable from the
+    problem's initial state: a room behind a locked door) has no plan."""
     which = range(abstraction.n_states) if states is None else states
+    known = problem.task.fact_index.keys()
     results: dict[int, PlanResult] = {}
     for s in which:
-        results[s] = planner.solve(problem, abstraction.planner_state(s), goal, tolerance)
+        start = abstraction.planner_state(s)
+        if start <= known:
+            results[s] = planner.solve(problem, start, goal, tolerance)
     plans: list[list[list[tuple[int, int]]]] = []
     length = np.full(abstraction.n_states, -1, dtype=np.int64)
     capped = False

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from gdq_pddl.analysis.episodes import CATEGORICAL, Episodes, load_episodes
+from gdq_pddl.analysis.episodes import CATEGORICAL, Episodes, damaged_file, load_episodes
 from gdq_pddl.analysis.names import (
     METHOD_ORDER,
     ROBOT_EXPERIMENT,
@@ -87,7 +87,7 @@ def load_config(out_dir: str | Path) -> RunConfig:
         return RunConfig()
     try:
         raw = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError:
+    except ValueError:  # JSONDecodeError, UnicodeDecodeError: the analysis does without
         return RunConfig()
     if not isinstance(raw, dict):
         return RunConfig()
@@ -152,10 +152,13 @@ def load_policies(out_dir: str | Path) -> Policies | None:
     path = Path(out_dir) / "policies.csv"
     if not path.exists():
         return None
-    with path.open(newline="", encoding="utf-8") as f:
-        reader = csv.DictReader(f)
-        rows = tuple((r["experiment"], r["method"], r["task"], int(float(r["run"])),
-                      int(float(r["state"])), int(float(r["action"]))) for r in reader)
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            reader = csv.DictReader(f)
+            rows = tuple((r["experiment"], r["method"], r["task"], int(float(r["run"])),
+                          int(float(r["state"])), int(float(r["action"]))) for r in reader)
+    except (KeyError, TypeError, ValueError, csv.Error) as exc:  # a missing cell or column
+        raise damaged_file(path, f"{type(exc).__name__}: {exc}") from None
     return Policies(rows)
 
 
@@ -164,6 +167,9 @@ def load_optimal(out_dir: str | Path) -> dict[str, dict[str, Any]]:
     path = Path(out_dir) / "optimal.json"
     if not path.exists():
         return {}
-    raw = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError
+        raise damaged_file(path, f"not JSON: {exc}") from None
     return {str(k): v for k, v in raw.items() if isinstance(v, dict)} if isinstance(
         raw, dict) else {}

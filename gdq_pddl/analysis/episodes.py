@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.analysis.names import order_methods
+from gdq_pddl.errors import ResultsError
 
 CATEGORICAL = ("experiment", "method", "task")
 """Text columns of ``episodes.csv`` (stored as codes into sorted labels)."""
@@ -160,16 +161,27 @@ def load_episodes(path: str | Path) -> Episodes:
     path = Path(path)
     if path.is_dir():
         path = path / "episodes.csv"
-    with path.open(newline="", encoding="utf-8") as f:
-        try:
-            header = [h.strip() for h in next(csv.reader(f))]
-        except StopIteration:
-            raise ValueError(f"{path}: empty file, expected a header row") from None
-    missing = [c for c in (*CATEGORICAL, "run", "episode", "return") if c not in header]
-    if missing:
-        raise ValueError(f"{path}: missing columns {missing} (header: {header})")
-    fast = _load_fast(path, header)
-    return fast if fast is not None else _load_csv(path, header)
+    try:
+        with path.open(newline="", encoding="utf-8") as f:
+            header = [h.strip() for h in next(csv.reader(f), [])]
+        if not header:
+            raise damaged_file(path, "empty file, expected a header row")
+        missing = [c for c in (*CATEGORICAL, "run", "episode", "return") if c not in header]
+        if missing:
+            raise damaged_file(path, f"missing columns {missing} (header: {header})")
+        fast = _load_fast(path, header)
+        return fast if fast is not None else _load_csv(path, header)
+    except OSError as exc:
+        raise ResultsError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise damaged_file(path, str(exc)) from None
+
+
+def damaged_file(path: Path, why: str) -> ResultsError:
+    """The error of an unreadable results file (``episodes.csv``, ``policies.csv``,
+    ``optimal.json``: the runner makes them from ``units/``)."""
+    return ResultsError(f"{path} is damaged ({why}); the run's units/ rebuild it: give the "
+                        "command that made it again, with --resume")
 
 
 _LABEL_WIDTH = 32
@@ -219,7 +231,13 @@ def _load_csv(path: Path, header: list[str]) -> Episodes:
     with path.open(newline="", encoding="utf-8") as f:
         reader = csv.reader(f)
         next(reader)
-        rows = [r for r in reader if r]
+        rows = []
+        for r in reader:
+            if r and len(r) != len(header):
+                raise damaged_file(path, f"line {reader.line_num} has {len(r)} fields, the "
+                               f"header {len(header)}")
+            if r:
+                rows.append(r)
     columns = list(zip(*rows, strict=True)) if rows else [() for _ in header]
     codes: dict[str, np.ndarray] = {}
     labels: dict[str, tuple[str, ...]] = {}
@@ -228,8 +246,20 @@ def _load_csv(path: Path, header: list[str]) -> Episodes:
         if name in CATEGORICAL:
             labels[name], codes[name] = _encode(col)
         else:
-            values[name] = _floats(col)
+            try:
+                values[name] = _floats(col)
+            except ValueError:
+                bad = next(v for v in col if not _is_number(v))
+                raise damaged_file(path, f"column {name}: {bad!r} is not a number") from None
     return Episodes(codes=codes, labels=labels, values=values)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text or "nan")
+    except ValueError:
+        return False
+    return True
 
 
 def _encode(col: Sequence[str]) -> tuple[tuple[str, ...], np.ndarray]:

@@ -1,7 +1,8 @@
 """The ``gdq-pddl`` command line.
 
 Every subcommand turns bad input (a malformed file, an unknown position, task or
-planner) into one clear message on stderr and a non-zero exit, never a traceback.
+planner, an unusable output folder, sizes past memory) into one clear message on stderr
+naming the file, key or option at fault, and a non-zero exit, never a traceback.
 Subcommands live in :mod:`gdq_pddl.cli.planning` and :mod:`gdq_pddl.cli.experiments`.
 """
 
@@ -48,6 +49,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and closed early: not an error
         sys.stderr.close()
         return 0
+    except OSError as exc:  # a disk filling up, a folder removed under a running command
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"gdq-pddl: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except MemoryError:
+        print("gdq-pddl: error: out of memory; give smaller sizes (--runs, --episodes, "
+              "the world's step_limit)", file=sys.stderr)
+        return EXIT_ERROR
 
 
 def build_parser() -> argparse.ArgumentParser:

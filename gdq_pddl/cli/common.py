@@ -11,6 +11,47 @@ from gdq_pddl.errors import GdqError
 EXIT_ERROR, EXIT_NO_PLAN = 2, 1
 
 
+def whole(low: int) -> Callable[[str], int]:
+    """An argparse type: a whole number >= ``low`` (and small enough for int64)."""
+    from gdq_pddl.limits import MAX_COUNT
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {low}, got {text}")
+        if value > MAX_COUNT:
+            raise argparse.ArgumentTypeError(f"must be at most {MAX_COUNT:_}, got {text}")
+        return value
+
+    return parse
+
+
+def finite_nonnegative(text: str) -> float:
+    """An argparse type: a finite number >= 0 (not nan, not inf)."""
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return value
+
+
+POSITIVE, NONNEGATIVE = whole(1), whole(0)
+
+
+def note(message: str) -> None:
+    """A line for the user on stderr (stdout stays the results)."""
+    import sys
+
+    print(f"gdq-pddl: {message}", file=sys.stderr)
+
+
 def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
     p.add_argument("--task", help="a task of the world file (office: A B C D E X)")
     p.add_argument("--start", help="start position or landmark (with --goal, instead of --task)")
@@ -49,17 +90,19 @@ def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
                         f"from: {', '.join(METHODS)})")
-    p.add_argument("--episodes", type=int, default=episodes,
+    p.add_argument("--episodes", type=POSITIVE, default=episodes,
                    help=f"episodes per run (per task; default {episodes})")
-    p.add_argument("--runs", type=int, default=runs,
+    p.add_argument("--runs", type=POSITIVE, default=runs,
                    help=f"independent runs per method (default {runs})")
-    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0,
+                   help="base seed (each run derives its own)")
     p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
     exec_args(p)
 
 
 def exec_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--jobs", type=int, help="parallel processes (default: all cores)")
+    p.add_argument("--jobs", type=POSITIVE,
+                   help="parallel processes (default: all cores; never more than the runs)")
     p.add_argument("--out", type=Path, help="output folder (default: results/<command>)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out (same command line)")
@@ -70,14 +113,12 @@ def exec_args(p: argparse.ArgumentParser) -> None:
 
 
 def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
-    """The --method names, validated and without repeats; also checks --episodes/--runs."""
+    """The --method names, validated and without repeats."""
     from gdq_pddl.experiments import METHODS
 
     unknown = [m for m in args.method if m not in METHODS]
     if unknown:
         raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
-    if args.episodes < 1 or args.runs < 1:
-        raise GdqError("--episodes and --runs must be at least 1")
     return tuple(dict.fromkeys(args.method))
 
 
@@ -112,11 +153,15 @@ def execute(experiments, args: argparse.Namespace, name: str,
     import time
 
     from gdq_pddl.experiments import run_experiments
+    from gdq_pddl.experiments.checks import check_report_size, check_sizes
 
     out = args.out or Path("results") / name
+    check_sizes(experiments, args.jobs or 1)  # the runs first: their message names options
+    if not args.no_report:
+        check_report_size(experiments)
     t0 = time.perf_counter()
     run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
-                    address=args.address, resume=args.resume, **run_kw)
+                    address=args.address, resume=args.resume, log=note, **run_kw)
     print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
           f"{time.perf_counter() - t0:.1f} s; results in {out}/{results}")
     if not args.no_report:

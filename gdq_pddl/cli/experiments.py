@@ -7,6 +7,8 @@ import argparse
 from pathlib import Path
 
 from gdq_pddl.cli.common import (
+    NONNEGATIVE,
+    POSITIVE,
     check_planner,
     checked_methods,
     determinisation_arg,
@@ -130,7 +132,7 @@ def register_reproduce(sub) -> None:
                                    "C->E (5000 episodes), the robot protocol; then figures, the "
                                    "area-visit table and REPORT.md in --out.")
     p.add_argument("--quick", action="store_true", help="300 episodes x 3 runs: a first look")
-    p.add_argument("--seed", type=int, default=0, help="base seed")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0, help="base seed")
     exec_args(p)
     p.set_defaults(func=cmd_reproduce)
 
@@ -150,9 +152,10 @@ def register_knowledge(sub) -> None:
                                    "knowledge (d3, d1), a corridor only reality has, and a "
                                    "control; each also with accurate knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
-    p.add_argument("--episodes", type=int, default=1500, help="episodes per run")
-    p.add_argument("--runs", type=int, default=10, help="independent runs per method and case")
-    p.add_argument("--seed", type=int, default=0, help="base seed (each run derives its own)")
+    p.add_argument("--episodes", type=POSITIVE, default=1500, help="episodes per run")
+    p.add_argument("--runs", type=POSITIVE, default=10, help="independent runs per method and case")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0,
+                   help="base seed (each run derives its own)")
     p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
                    help="methods to compare")
     exec_args(p)
@@ -183,15 +186,28 @@ def register_report(sub) -> None:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    from gdq_pddl.analysis.data import load_config
     from gdq_pddl.analysis.generic import is_pddl_folder
     from gdq_pddl.analysis.pairs import is_pairs_folder
+    from gdq_pddl.outputs import output_folder
 
     if is_pairs_folder(args.out):
+        output_folder(args.out, "report")  # figures and REPORT.md go there
         print(pairs_report(args.out))
         return 0
-    if not (args.out / "episodes.csv").exists():
-        raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl?")
-    print(pddl_report(args.out) if is_pddl_folder(args.out) else office_report(args.out))
+    if not (args.out / "episodes.csv").is_file():
+        raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl "
+                       "run, switch, robot, reproduce, knowledge or pairs?")
+    output_folder(args.out, "report")  # figures and REPORT.md go there
+    if is_pddl_folder(args.out):  # gdq-pddl run --domain ...
+        print(pddl_report(args.out))
+    elif any(e.get("knowledge") for e in load_config(args.out).experiments):
+        from gdq_pddl.analysis.knowledge import make_knowledge_report
+
+        paths = make_knowledge_report(args.out, "gdq-pddl knowledge (see config.json)")
+        print(f"wrote {len(paths)} figures and reports; read {args.out / 'REPORT.md'}")
+    else:
+        print(office_report(args.out))
     return 0
 
 
@@ -202,11 +218,11 @@ def register_scale(sub) -> None:
                                    "convergence, env steps/s). Each finished run is saved "
                                    "in --out as it ends (units/size-N/), so an interrupted "
                                    "run goes on with --resume.")
-    p.add_argument("--sizes", type=int, nargs="+", default=[100, 300, 1000],
+    p.add_argument("--sizes", type=POSITIVE, nargs="+", default=[100, 300, 1000],
                    help="building sizes in positions (default 100 300 1000)")
-    p.add_argument("--runs", type=int, default=5, help="independent runs per method and size")
-    p.add_argument("--episodes", type=int, default=5000, help="episodes per run")
-    p.add_argument("--seed", type=int, default=0,
+    p.add_argument("--runs", type=POSITIVE, default=5, help="independent runs per method and size")
+    p.add_argument("--episodes", type=POSITIVE, default=5000, help="episodes per run")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0,
                    help="building and base seed (each run derives its own)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
     p.add_argument("--resume", action="store_true",
@@ -263,7 +279,8 @@ def cmd_pairs(args: argparse.Namespace) -> int:
     check_planner(args.planner)
     exps = pairs.pair_experiments(chosen, args.episodes, world=str(args.world or "office"), **kw)
     return execute(exps, args, "pairs", pairs_report, results="runs.csv",
-                   work=pairs.run_pair_unit, collect=pairs.collect_pairs)
+                   work=pairs.run_pair_unit, collect=pairs.collect_pairs,
+                   unit_arrays=pairs.PAIR_ARRAYS)
 
 
 def pairs_report(out: Path) -> str:

@@ -7,7 +7,15 @@ import json
 import sys
 from pathlib import Path
 
-from gdq_pddl.cli.common import EXIT_NO_PLAN, determinisation_arg, task_args, world_and_task
+from gdq_pddl.cli.common import (
+    EXIT_NO_PLAN,
+    NONNEGATIVE,
+    POSITIVE,
+    determinisation_arg,
+    finite_nonnegative,
+    task_args,
+    world_and_task,
+)
 
 
 def register_problem(sub) -> None:
@@ -22,13 +30,13 @@ def register_problem(sub) -> None:
 
 
 def cmd_problem(args: argparse.Namespace) -> int:
+    from gdq_pddl.outputs import output_file, output_folder
     from gdq_pddl.pddl.office import office_problem
     from gdq_pddl.world import load_world
 
     if args.all:
         world = load_world(args.world)
-        out = args.out or Path("problems")
-        out.mkdir(parents=True, exist_ok=True)
+        out = output_folder(args.out or Path("problems"))
         for name, task in world.tasks.items():
             path = out / f"task-{name.lower()}.pddl"
             path.write_text(office_problem(world, task), encoding="utf-8")
@@ -37,7 +45,7 @@ def cmd_problem(args: argparse.Namespace) -> int:
     world, task = world_and_task(args)
     text = office_problem(world, task)
     if args.out:
-        args.out.write_text(text, encoding="utf-8")
+        output_file(args.out).write_text(text, encoding="utf-8")
     else:
         sys.stdout.write(text)
     return 0
@@ -48,9 +56,9 @@ def register_building(sub) -> None:
                        description="Write a generated building: a world file (TOML), the "
                                    "office domain and a PDDL problem per task. The same "
                                    "--positions, --seed and --doors give the same files.")
-    p.add_argument("--positions", type=int, required=True, help="number of positions")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--doors", type=int, help="number of doors (default positions // 8)")
+    p.add_argument("--positions", type=POSITIVE, required=True, help="number of positions")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0, help="random seed (default 0)")
+    p.add_argument("--doors", type=NONNEGATIVE, help="number of doors (default positions // 8)")
     p.add_argument("--out", type=Path, help="output folder (default results/building)")
     p.set_defaults(func=cmd_building)
 
@@ -71,7 +79,7 @@ def register_plan(sub) -> None:
                                    "each plan with the learner state/action each step maps to.")
     task_args(p)
     p.add_argument("--planner", default="graph", help="planner backend (see `gdq-pddl planners`)")
-    p.add_argument("--tolerance", type=float, default=0.0,
+    p.add_argument("--tolerance", type=finite_nonnegative, default=0.0,
                    help="also every loop-free plan up to (1+T) x the shortest length")
     p.add_argument("--domain", type=Path, help="PDDL domain file (default: the office domain)")
     p.add_argument("--problem", type=Path,
@@ -121,6 +129,9 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if result.status is not Status.SOLVED:
         print("gdq-pddl: no plan: the goal cannot be reached from the start", file=sys.stderr)
         return EXIT_NO_PLAN
+    if result.length == 0:
+        print("gdq-pddl: warning: the goal already holds at the start (or is empty): the plan "
+              "has no action, and `gdq-pddl run` refuses such a task", file=sys.stderr)
     return 0
 
 

@@ -16,6 +16,7 @@ not a :class:`ModelEnv`.
 
 from __future__ import annotations
 
+import operator
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
@@ -50,9 +51,13 @@ class CompiledEnv(gym.Env[int, int]):
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
         if self._done:
             raise ResetNeeded("the episode is over (or never began): call reset() first")
-        a = int(action)
-        if not 0 <= a < self.model.n_actions:
-            raise ValueError(f"action must be in [0, {self.model.n_actions}), got {action!r}")
+        try:  # an int or a numpy integer; 2.5 (or 2.0) is not an action
+            a = operator.index(action) if not isinstance(action, bool) else None
+        except TypeError:
+            a = None
+        if a is None or not 0 <= a < self.model.n_actions:
+            raise ValueError(f"action must be an integer in [0, {self.model.n_actions}), "
+                             f"got {action!r}")
         reward, terminated, truncated, cause = self._advance(a)
         self._t, self._cause = self._t + 1, CAUSES[cause]
         self._done = bool(terminated or truncated)

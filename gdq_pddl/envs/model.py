@@ -19,8 +19,13 @@ from typing import NamedTuple, TypeVar
 import numba
 import numpy as np
 
+from gdq_pddl.limits import check_memory
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import COST_KINDS, VERBS, CostDist, World
+
+PAIR_BYTES = 150
+"""Memory one (state, action) pair takes while a model is compiled: its outcomes are
+gathered as Python tuples and floats (at least one per pair) before becoming arrays."""
 
 CAUSE_NONE, CAUSE_STUCK, CAUSE_GOAL, CAUSE_TIMEOUT = 0, 1, 2, 3
 CAUSES = ("", "stuck", "goal", "timeout")
@@ -149,6 +154,11 @@ def _compile(world: World) -> ModelArrays:
     n_pos, n_doors = len(world.positions), len(world.doors)
     n_masks = 1 << n_doors
     n_full, n_actions = n_pos * n_masks, spaces.n_actions
+    check_memory(n_full * n_actions * PAIR_BYTES,
+                 f"{world.source}: {n_doors} doors: the simulator's true model ({n_pos} "
+                 f"positions x 2**{n_doors} door states x {n_actions} actions)",
+                 "give the world fewer doors (generated buildings run on a compact model: "
+                 "gdq-pddl scale)")
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
     obs_of = np.zeros(n_full, dtype=np.int64)
     pos_of = np.zeros(n_full, dtype=np.int64)

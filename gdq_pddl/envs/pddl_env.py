@@ -71,8 +71,9 @@ from gymnasium.spaces import Discrete
 
 from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.model import ModelArrays, cost_arrays, merge_outcomes, outcome_csr
-from gdq_pddl.errors import PlanningError
+from gdq_pddl.envs.model import PAIR_BYTES, ModelArrays, cost_arrays, merge_outcomes, outcome_csr
+from gdq_pddl.errors import PlanningError, WorldError
+from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
@@ -152,19 +153,25 @@ class PDDLInstance:
         """Reality's r_max and step limit (and the dynamics file's outcomes, if STRIPS)."""
         if not self.ppddl:
             assert self.overlay is not None
-            return self.overlay
-        overlay = self.overlay or Dynamics(source="")
-        r_max = overlay.r_max if "r_max" in overlay.stated else \
-            (self.problem.problem.goal_reward or DEFAULT_R_MAX)
-        limit = overlay.step_limit if "step_limit" in overlay.stated else \
-            default_step_limit(self.graph)
-        return replace(overlay, r_max=r_max, step_limit=limit)
+            dynamics = self.overlay
+        else:
+            overlay = self.overlay or Dynamics(source="")
+            r_max = overlay.r_max if "r_max" in overlay.stated else \
+                (self.problem.problem.goal_reward or DEFAULT_R_MAX)
+            limit = overlay.step_limit if "step_limit" in overlay.stated else \
+                default_step_limit(self.graph)
+            dynamics = replace(overlay, r_max=r_max, step_limit=limit)
+        check_step_limit(self.problem, self.graph, dynamics)
+        return dynamics
 
     @cached_property
     def graph(self) -> StateGraph:
-        """Reachable states and their successors (raises past ``max_states``)."""
-        return reachable_graph(self.problem.learner_task, self.max_states,
-                               self.problem.problem.source)
+        """Reachable states and their successors; raises past ``max_states``, and for a
+        task nothing can be learnt on (:func:`check_goal`)."""
+        graph = reachable_graph(self.problem.learner_task, self.max_states,
+                                self.problem.problem.source)
+        check_goal(self.problem, graph)
+        return graph
 
     @cached_property
     def costs(self) -> list[CostDist]:
@@ -180,7 +187,12 @@ class PDDLInstance:
 
     @cached_property
     def model(self) -> ModelArrays:
-        """The true model (read-only arrays)."""
+        """The true model (read-only arrays); refused up front past the memory it would
+        need."""
+        check_memory(self.n_states * self.n_actions * PAIR_BYTES,
+                     f"{self.dynamics.source or self.problem.problem.source}: the true model "
+                     f"of {self.n_states} states x {self.n_actions} ground actions",
+                     "make the problem smaller (fewer objects)")
         if self.ppddl:
             model = compile_ppddl_model(self.graph, self.costs, self.dynamics)
         else:
@@ -239,6 +251,57 @@ def default_step_limit(graph: StateGraph) -> int:
                     nxt.append(t)
         frontier = nxt
     return MIN_STEP_LIMIT
+
+
+def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
+    """Refuse a problem whose goal is empty, holds in the initial state or cannot be
+    reached: in each, no episode could teach the learner anything, and the results would
+    look like a success (or a certain failure). Raises :class:`PlanningError` naming the
+    problem file."""
+    source = problem.problem.source
+    if not problem.problem.goal:
+        raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
+                            "there is nothing to learn; give a goal")
+    if graph.is_goal[0]:
+        raise PlanningError(f"{source}: the goal already holds in the initial state: every "
+                            "episode would be over before it begins")
+    if not graph.is_goal.any():
+        never = never_true(problem)
+        why = (f"{never} can never hold (no action makes it true, and the initial state "
+               "does not have it)" if never else
+               f"none of the {graph.n_states} states reachable from the initial state "
+               "satisfies it")
+        raise PlanningError(f"{source}: no plan: the goal cannot be reached from the "
+                            f"initial state: {why}")
+
+
+def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics) -> None:
+    """Refuse a step limit below the shortest plan (no episode could reach the goal),
+    with a :class:`~gdq_pddl.errors.WorldError` naming the dynamics file's
+    ``step_limit``."""
+    shortest = int(graph.distances[0])
+    if shortest > dynamics.step_limit:
+        raise WorldError(dynamics.source or problem.problem.source, "dynamics.step_limit",
+                         f"{dynamics.step_limit} is less than the shortest plan of "
+                         f"{problem.problem.source} ({shortest} actions): no episode can "
+                         "reach the goal")
+
+
+def never_true(problem: PlanningProblem) -> str:
+    """The first goal literal of ``problem`` that can never hold ("" if none is)."""
+    task = problem.task
+    for lit in problem.problem.goal:
+        atom = str(lit.atom)
+        text = atom if lit.positive else f"(not {atom})"
+        if lit.atom.predicate == "=":
+            if (lit.atom.args[0] == lit.atom.args[1]) != lit.positive:
+                return text
+        elif lit.atom.predicate not in problem.domain.fluent_predicates():
+            if (atom in task.statics) != lit.positive:
+                return text
+        elif lit.positive and atom not in task.fact_index:
+            return atom
+    return ""
 
 
 def compile_pddl_model(graph: StateGraph, dynamics: Dynamics,

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.stats import norm
 
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.limits import check_memory
 from gdq_pddl.world import COST_KINDS, Task, World
 
 TIE_TOLERANCE = 1e-9
@@ -57,8 +58,24 @@ def expected_costs(model: ModelArrays) -> np.ndarray:
     return out
 
 
+def check_solvable(model: ModelArrays, where: str = "") -> None:
+    """Raise :class:`~gdq_pddl.errors.SizeError` if :func:`solve` on ``model`` would need
+    more memory than the machine has. ``where`` names the step limit's file and key (the
+    message says ``step_limit = N`` otherwise)."""
+    n_full, limit = model.obs_of.shape[0], model.step_limit
+    per_step = n_full * (model.n_actions + 2) * 8 + len(model.prob) * 8 * 4
+    check_memory((limit + 1) * per_step,
+                 f"{where or 'step_limit'} = {limit}: V* by value iteration ({n_full} states x "
+                 f"{model.n_actions} actions at each of the {limit} steps)",
+                 "use a smaller step_limit")
+
+
 def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
-    """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``."""
+    """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``.
+
+    Raises :class:`~gdq_pddl.errors.SizeError` up front when the tables (``Q`` is
+    ``step_limit x states x actions``) would not fit in memory."""
+    check_solvable(model)
     n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
     n_full = model.obs_of.shape[0]
     counts = np.diff(model.ptr)

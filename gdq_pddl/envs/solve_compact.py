@@ -57,6 +57,7 @@ import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel, compile_compact
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
+from gdq_pddl.limits import check_memory
 from gdq_pddl.world import Task, World
 
 
@@ -165,6 +166,9 @@ def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
     ``step_limit`` x (learner states + listed outcomes); see the module docstring.
     """
     n_states, n_actions, limit = model.pos_of_state.shape[0], model.n_actions, model.step_limit
+    check_memory((limit + 1) * n_states * 16,
+                 f"step_limit = {limit}: the reference value ({n_states} states at each of "
+                 f"the {limit} steps)", "use a smaller step_limit")
     cost = expected_costs(model)  # reads only cost_kind, cost_a and cost_b
     first_stay, cheapest_stay, stay_cost = _stay_actions(model, cost)
     pairs = np.flatnonzero(np.diff(model.ptr) > 0)

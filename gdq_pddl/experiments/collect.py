@@ -31,7 +31,7 @@ N_AREAS = 7
 
 def collect(out: Path, experiments: list[Experiment]) -> None:
     """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write
+    from gdq_pddl.experiments.runner import atomic_write, read_unit
 
     units = [u for e in experiments for u in e.units()]
     n_areas = N_AREAS if any(e.pddl is None for e in experiments) else 0
@@ -41,9 +41,10 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(header + "\n")
             for unit in units:
-                data = np.load(out / "units" / f"{unit.key}.npz")
-                fh.write(_episode_rows(unit.experiment.name, unit.method, unit.run, data,
-                                       n_areas))
+                data = read_unit(out, unit)
+                for chunk in _episode_rows(unit.experiment.name, unit.method, unit.run, data,
+                                           n_areas):
+                    fh.write(chunk)
 
     def write_policies(tmp: Path) -> None:
         namers: dict[tuple, tuple[Callable[[int], str], Callable[[int], str]]] = {}
@@ -56,7 +57,7 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
                 if key not in namers:
                     namers[key] = _namers(exp)
                 state_name, action_name = namers[key]
-                data = np.load(out / "units" / f"{unit.key}.npz")
+                data = read_unit(out, unit)
                 task = str(data["tasks"][-1])
                 writer.writerows((exp.name, unit.method, task, unit.run, s, a, state_name(s),
                                   action_name(a))
@@ -81,26 +82,33 @@ def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]
     return spaces.state_name, spaces.action_name
 
 
-def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int) -> str:
-    """CSV rows of one unit (vectorised formatting: a full protocol has ~1M rows), with
-    ``n_areas`` area columns."""
+CHUNK = 50_000
+"""Episodes formatted at once: numpy's string arrays take about 4 kB per episode, so a
+unit of millions of episodes is written in chunks of this many."""
+
+
+def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
+    """CSV rows of one unit with ``n_areas`` area columns, in pieces of at most
+    :data:`CHUNK` rows (vectorised formatting: a full protocol has ~1M rows)."""
     n = len(data["returns"])
     tasks = np.repeat(data["tasks"], data["counts"])
-    areas = np.zeros((n, n_areas), dtype=np.int64)
     k = min(n_areas, data["areas"].shape[1])
-    areas[:, :k] = data["areas"][:, :k]  # column k - 1 counts steps ending in area k
-    buf = io.StringIO()
-    prefix = np.char.add(f"{experiment},{method},", tasks.astype(str))
-    cols = [prefix, np.full(n, str(run)), np.arange(1, n + 1).astype(str),
-            np.char.mod("%.10g", data["returns"]), data["steps"].astype(str),
-            data["success"].astype(np.int64).astype(str)]
-    cols += [areas[:, i].astype(str) for i in range(n_areas)]
-    rows = cols[0]
-    for c in cols[1:]:
-        rows = np.char.add(np.char.add(rows, ","), c)
-    buf.write("\n".join(rows.tolist()))
-    buf.write("\n")
-    return buf.getvalue()
+    for lo in range(0, n, CHUNK):
+        hi = min(n, lo + CHUNK)
+        areas = np.zeros((hi - lo, n_areas), dtype=np.int64)
+        areas[:, :k] = data["areas"][lo:hi, :k]  # column k - 1 counts steps ending in area k
+        buf = io.StringIO()
+        prefix = np.char.add(f"{experiment},{method},", tasks[lo:hi].astype(str))
+        cols = [prefix, np.full(hi - lo, str(run)), np.arange(lo + 1, hi + 1).astype(str),
+                np.char.mod("%.10g", data["returns"][lo:hi]), data["steps"][lo:hi].astype(str),
+                data["success"][lo:hi].astype(np.int64).astype(str)]
+        cols += [areas[:, i].astype(str) for i in range(n_areas)]
+        rows = cols[0]
+        for c in cols[1:]:
+            rows = np.char.add(np.char.add(rows, ","), c)
+        buf.write("\n".join(rows.tolist()))
+        buf.write("\n")
+        yield buf.getvalue()
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:

@@ -96,15 +96,19 @@ def pair_experiments(pairs: Sequence[str], episodes: int, **kw) -> list[Experime
     return [Experiment(PAIRS_EXPERIMENT, ((p, episodes),), **kw) for p in pairs]
 
 
+PAIR_ARRAYS = ("returns", "success")
+"""What :func:`run_pair_unit` saves of a unit."""
+
+
 def run_pair_unit(unit: Unit) -> dict[str, np.ndarray]:
     """:func:`~gdq_pddl.experiments.work.run_unit`, keeping only returns and successes."""
     result = run_unit(unit)
-    return {"returns": result["returns"], "success": result["success"]}
+    return {k: result[k] for k in PAIR_ARRAYS}
 
 
 def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
     """Write ``runs.csv`` and ``optimal.json`` of a pairs folder from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write
+    from gdq_pddl.experiments.runner import atomic_write, read_unit
 
     def write_runs(tmp: Path) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
@@ -114,7 +118,7 @@ def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
                 pair = exp.schedule[0][0]
                 start, goal = pair.split("->")
                 for unit in exp.units():
-                    data = np.load(out / "units" / f"{unit.key}.npz")
+                    data = read_unit(out, unit, PAIR_ARRAYS)
                     returns, success = data["returns"], data["success"]
                     writer.writerow((pair, start, goal, unit.method, unit.run, len(returns),
                                      repr(float(np.mean(returns))),

@@ -13,6 +13,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.limits import check_count
+
 METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
            "Q-learning")
 """Learning methods by name. ``GDQ`` is the library's GDQ (the knowledge as an optimistic
@@ -69,6 +72,24 @@ class Experiment:
     for a PPDDL domain): learn on that PDDL problem through the generic env
     (:mod:`gdq_pddl.envs.pddl_env`) instead of an office world; ``world`` and
     ``knowledge`` are then unused and each schedule entry names the problem."""
+
+    def __post_init__(self) -> None:
+        """Refuse what no run can be made of (a :class:`~gdq_pddl.errors.ConfigError`,
+        naming the field), before any unit runs."""
+        check_count("runs", self.runs)
+        check_count("seed", self.seed)
+        if self.runs < 1:
+            raise ConfigError(f"runs must be at least 1, got {self.runs}")
+        if not self.schedule:
+            raise ConfigError(f"experiment {self.name}: the schedule is empty")
+        for task, episodes in self.schedule:
+            check_count(f"episodes of {task}", episodes)
+            if episodes < 1:
+                raise ConfigError(f"episodes of {task} must be at least 1, got {episodes}")
+        unknown = [m for m in self.methods if m not in METHODS]
+        if unknown or not self.methods:
+            raise ConfigError(f"unknown method {unknown[0] if unknown else None!r} "
+                              f"(known: {', '.join(METHODS)})")
 
     @property
     def episodes(self) -> int:

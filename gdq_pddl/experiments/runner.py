@@ -9,7 +9,12 @@ Layout of an output folder::
     optimal.json     V* and area relevance of each task, from the true model
 
 A run that is interrupted (Ctrl-C, or killed) loses at most the units in flight;
-``resume=True`` checks that the configuration is the same and runs only what is missing.
+``resume=True`` checks that the configuration and the content of every input file are
+the same and runs only what is missing. One process at a time writes a folder
+(:class:`~gdq_pddl.experiments.folder.FolderLock`); everything that can be checked
+without running (:func:`~gdq_pddl.experiments.checks.preflight`) is checked before the
+folder is touched, and a run that fails before saving any unit leaves no ``config.json``
+that would block the corrected command.
 
 What a unit returns and what is collected at the end can be swapped (``work`` and
 ``collect`` of :func:`run_experiments`): ``gdq-pddl pairs`` keeps only returns and
@@ -32,13 +37,22 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.experiments.folder import (
+    FolderLock,
+    ResultsError,
+    changed_input,
+    close_inherited_locks,
+    input_hashes,
+    load_unit,
+    read_config,
+)
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import run_unit
+from gdq_pddl.limits import check_count
+from gdq_pddl.outputs import output_folder
 
-
-class ResultsError(GdqError):
-    """An output folder cannot be used as asked."""
+__all__ = ["ResultsError", "RunInterrupted", "run_experiments"]
 
 
 class RunInterrupted(ResultsError):
@@ -84,20 +98,85 @@ def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
     atomic_write(path, write)
 
 
-def prepare(out: Path, experiments: list[Experiment], resume: bool) -> list[Unit]:
-    """Check or create ``out``; return the units still to run."""
-    config = config_of(experiments)
+def input_files(experiments: list[Experiment]) -> list[str]:
+    """The files the experiments read: world files, or PDDL domain, problem, dynamics."""
+    files: list[str] = []
+    for e in experiments:
+        if e.pddl is not None:
+            files += e.pddl
+            continue
+        files += [w for w in (e.world, e.knowledge) if w and w not in ("office", "office_robot")
+                  and not w.startswith("office:")]
+    return files
+
+
+def unit_path(out: Path, unit: Unit) -> Path:
+    return out / "units" / f"{unit.key}.npz"
+
+
+UNIT_ARRAYS = ("returns", "steps", "success", "areas", "tasks", "counts", "policy")
+"""What :func:`~gdq_pddl.experiments.work.run_unit` saves of a unit."""
+PER_EPISODE = ("returns", "steps", "success", "areas")
+"""The arrays with one entry per episode."""
+
+
+def read_unit(out: Path, unit: Unit, arrays: tuple[str, ...] = UNIT_ARRAYS
+              ) -> dict[str, np.ndarray]:
+    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming its file if damaged
+    (an array missing, or one per episode of the wrong length)."""
+    n = unit.experiment.episodes
+    return load_unit(unit_path(out, unit), f"{unit.method}, run {unit.run} of "
+                     f"{unit.experiment.name}",
+                     {k: n if k in PER_EPISODE else -1 for k in arrays})
+
+
+def _held(out: Path) -> bool:
+    """Whether ``out`` holds results: a saved unit, or the collected episodes."""
+    units = out / "units"
+    return (out / "episodes.csv").exists() or units.is_dir() and any(units.glob("*.npz"))
+
+
+def _difference(old: object, new: list) -> str:
+    """What differs between two ``experiments`` lists of config.json, in words."""
+    if not isinstance(old, list) or len(old) != len(new):
+        return "the experiments differ"
+    for o, n in zip(old, new, strict=True):
+        if not isinstance(o, dict):
+            return "the experiments differ"
+        for key, value in n.items():
+            if o.get(key) != value:
+                return f"experiment {n.get('name')}: {key} was {o.get(key)}, now {value}"
+    return "the experiments differ"
+
+
+def prepare(out: Path, experiments: list[Experiment], resume: bool,
+            arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
+    """Check or create ``out``; return the units still to run (on ``resume``, every saved
+    unit is read first: one without ``arrays`` is named as damaged)."""
+    config = config_of(experiments) | {"inputs": input_hashes(input_files(experiments))}
     cfg_path = out / "config.json"
-    if cfg_path.exists():
-        old = json.loads(cfg_path.read_text())
+    if resume and not cfg_path.exists():
+        if _held(out):
+            raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
+        raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
+                           "there); to start one, give the same command without --resume")
+    if cfg_path.exists() and (resume or _held(out)):
         if not resume:
             raise ResultsError(f"{out} already holds results: continue them with --resume, "
                                "or choose another --out")
-        if old.get("experiments") != json.loads(json.dumps(config))["experiments"]:
-            raise ResultsError(f"{out} holds results of a different configuration; "
-                               "--resume needs the same command line")
-    elif resume and (out / "units").exists():
-        raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
+        old = read_config(cfg_path)
+        new = json.loads(json.dumps(config["experiments"]))
+        if old.get("experiments") != new:
+            raise ResultsError(f"{out} holds results of a different configuration "
+                               f"({_difference(old.get('experiments'), new)}); --resume "
+                               "needs the same command line")
+        inputs = old.get("inputs") if isinstance(old.get("inputs"), dict) else {}
+        changed = changed_input(inputs, config["inputs"])
+        if changed:
+            raise ResultsError(f"{changed} changed since the run in {out} began (its content "
+                               "differs from what config.json records): resuming would mix "
+                               "results of both versions; restore it, or start again in "
+                               "another --out")
     # a run killed in the middle of a write leaves its temporary file (never a unit file:
     # those appear only by an atomic rename); remove them before going on
     for stale in (out / "units").glob(".*.tmp") if (out / "units").exists() else ():
@@ -108,7 +187,21 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool) -> list[Unit
     keys = [u.key for u in units]
     if len(set(keys)) != len(keys):
         raise ResultsError("two experiments share a name and schedule; give them distinct names")
-    return [u for u in units if not (out / "units" / f"{u.key}.npz").exists()]
+    done = [u for u in units if unit_path(out, u).exists()]
+    if resume:
+        for u in done:  # a damaged unit file: say which, before running the others
+            read_unit(out, u, arrays)
+    return [u for u in units if not unit_path(out, u).exists()]
+
+
+def check_jobs(jobs: int | None) -> int:
+    """The number of processes ``jobs`` asks for (None: every core); ConfigError if < 1."""
+    if jobs is None:
+        return os.cpu_count() or 1
+    check_count("jobs", jobs)
+    if jobs < 1:
+        raise ConfigError(f"jobs must be at least 1, got {jobs}")
+    return jobs
 
 
 Work = Callable[[Unit], dict[str, np.ndarray]]
@@ -117,15 +210,49 @@ Work = Callable[[Unit], dict[str, np.ndarray]]
 
 def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None = None,
                     executor: str = "local", address: str | None = None,
-                    resume: bool = False, progress: bool = True, work: Work = run_unit,
-                    collect: Callable[[Path, list[Experiment]], None] | None = None) -> Path:
-    """Run every unit of ``experiments`` not yet in ``out`` with ``work``, then collect the
-    results with ``collect`` (default: :func:`gdq_pddl.experiments.collect.collect`)."""
+                    resume: bool = False, progress: bool = True, work: Work | None = None,
+                    collect: Callable[[Path, list[Experiment]], None] | None = None,
+                    log: Callable[[str], None] | None = None,
+                    unit_arrays: tuple[str, ...] = UNIT_ARRAYS) -> Path:
+    """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
+    :func:`run_unit`), then collect the results with ``collect`` (default:
+    :func:`gdq_pddl.experiments.collect.collect`).
+
+    ``log`` (if given) is told how many runs are left and on how many processes;
+    ``unit_arrays`` are the arrays ``work`` saves (what ``--resume`` checks saved units
+    for).
+    """
+    from gdq_pddl.experiments.checks import preflight
+
+    work = work or run_unit  # read at call time: tests replace run_unit
     if collect is None:
         from gdq_pddl.experiments.collect import collect
 
     out = Path(out)
-    pending = prepare(out, experiments, resume)
+    wanted = check_jobs(jobs)
+    preflight(experiments, wanted)
+    output_folder(out)
+    with FolderLock(out):
+        pending = prepare(out, experiments, resume, unit_arrays)
+        processes = min(wanted, max(1, len(pending)))
+        if log is not None and executor == "local":
+            capped = f" (--jobs {jobs} capped at the runs to do)" if jobs and jobs > processes \
+                else ""
+            log(f"{len(pending)} run(s) to do on {processes} process(es){capped}")
+        try:
+            _run_pending(out, experiments, pending, processes if executor == "local" else jobs,
+                         executor, address, progress, work)
+            collect(out, experiments)
+        except Exception:
+            if not resume and not _held(out):  # nothing saved: leave no config.json behind
+                (out / "config.json").unlink(missing_ok=True)
+            raise
+    return out
+
+
+def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
+                 jobs: int | None, executor: str, address: str | None, progress: bool,
+                 work: Work = run_unit) -> None:
     total = sum(e.runs * len(e.methods) for e in experiments)
     # the longest units first, so the last ones to finish are short
     pending.sort(key=lambda u: -u.experiment.episodes)
@@ -139,10 +266,8 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
         bar.close()
         done = len(list(units_dir.glob("*.npz"))) if units_dir.exists() else 0
         raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
-                           "continue with the same command and --resume") from None
+                             "continue with the same command and --resume") from None
     bar.close()
-    collect(out, experiments)
-    return out
 
 
 def _progress(total: int, initial: int, enabled: bool):
@@ -166,8 +291,9 @@ def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | 
     return _processes(units, jobs, work)
 
 
-def _ignore_sigint() -> None:
+def _init_worker() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the driver handles Ctrl-C for everyone
+    close_inherited_locks()
 
 
 def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray]]:
@@ -182,7 +308,7 @@ def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
     # multiprocessing.Pool, not ProcessPoolExecutor: on Ctrl-C the workers in flight are
     # terminated, and an executor whose workers were terminated can hang the interpreter
     # at exit (its manager thread waits on a half-written result pipe).
-    pool = get_context("fork").Pool(jobs, initializer=_ignore_sigint)
+    pool = get_context("fork").Pool(jobs, initializer=_init_worker)
     try:
         tagged = ((i, u, work) for i, u in enumerate(units))
         for i, result in pool.imap_unordered(_run_indexed, tagged):

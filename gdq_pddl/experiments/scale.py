@@ -75,15 +75,12 @@ from gdq_pddl.buildings import building_world, generate
 from gdq_pddl.envs.compact import CompactEnv
 from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
-from gdq_pddl.experiments.runner import (
-    ResultsError,
-    RunInterrupted,
-    atomic_write,
-    save_unit,
-    versions,
-)
+from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, read_config
+from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.compact_runner import run_compact
+from gdq_pddl.limits import check_count, check_memory
+from gdq_pddl.outputs import output_folder
 
 METHODS: dict[str, tuple[str, dict]] = {
     "GDQ": ("gdq", {}),
@@ -264,37 +261,56 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or METHODS)
     _check(sizes, runs, episodes, seed, methods)
-    out = Path(out)
-    _prepare(out, {"sizes": list(sizes), "runs": runs, "episodes": episodes, "seed": seed,
-                   "methods": methods}, resume)
-    results = []
-    try:
-        for n in sizes:
-            results.append(_size_into(out, n, runs, episodes, seed, methods, progress, log))
-            save_size(results[-1], out / f"size-{n}.npz")
-        from gdq_pddl.analysis.scale import figure, report
+    out = output_folder(out)
+    rerun = command or "the same command and --resume"
+    with FolderLock(out):
+        _prepare(out, {"sizes": list(sizes), "runs": runs, "episodes": episodes, "seed": seed,
+                       "methods": methods}, resume)
+        results = []
+        try:
+            for n in sizes:
+                results.append(_size_into(out, n, runs, episodes, seed, methods, progress, log,
+                                          rerun))
+                save_size(results[-1], out / f"size-{n}.npz")
+            from gdq_pddl.analysis.scale import figure, report
 
-        figure(results, episodes, out)
-        report(results, runs, episodes, seed, out)
-    except KeyboardInterrupt:
-        done = len(list((out / "units").glob("size-*/*.npz")))
-        total = len(sizes) * len(methods) * runs
-        raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
-                             f"continue with: {command or 'the same command and --resume'}"
-                             ) from None
+            figure(results, episodes, out)
+            report(results, runs, episodes, seed, out)
+        except KeyboardInterrupt:
+            done = len(list((out / "units").glob("size-*/*.npz")))
+            total = len(sizes) * len(methods) * runs
+            raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
+                                 f"continue with: {rerun}") from None
+        except Exception:
+            if not resume and not any((out / "units").glob("size-*/*.npz")):
+                (out / "config.json").unlink(missing_ok=True)  # nothing saved: no blocker
+            raise
     return results
 
 
 def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
+    from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
+    from gdq_pddl.learners.core import table_bytes
+
+    check_count("runs", runs)
+    check_count("episodes", episodes)
+    check_count("seed", seed)
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
+    check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
+    # a size's returns and successes of every run of every method are held together
+    check_memory(len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES), f"--runs {runs:,} x "
+                 f"--episodes {episodes:,} x {len(methods)} methods", "give fewer --runs")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
     unknown = [m for m in methods if m not in METHODS]
     if unknown or len(set(methods)) != len(methods):
         raise GdqError(f"methods must be different ones of {', '.join(METHODS)}, got {methods}")
     for n in sizes:
+        # a learner's tables: about 1.25 n states x 5 n actions, 8 successor slots
+        check_memory(table_bytes(n + n // 4, 5 * n, 8), f"--sizes {n}: a learner's tables "
+                     f"at {n:,} positions", "give smaller --sizes")
         generate(n, seed)  # a WorldError says what is wrong with the size
 
 
@@ -306,10 +322,13 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
     if held and not resume:
         raise ResultsError(f"{out} holds results: continue them with --resume, "
                            "or choose another --out")
+    if resume and not held:
+        raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
+                           "there); to start one, give the same command without --resume")
     if held:
         if not cfg_path.exists():
             raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
-        old = json.loads(cfg_path.read_text())
+        old = read_config(cfg_path)
         differ = [f"{k} {old.get(k)} there, {v} now" for k, v in config.items()
                   if old.get(k) != v]
         if differ:
@@ -328,8 +347,19 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
     atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
 
 
+def _read_header(path: Path, rerun: str) -> dict:
+    """A size's ``size.json``; :class:`ResultsError` naming it if it is damaged."""
+    header = read_config(path)
+    missing = [k for k in ("positions", "doors", "n_states", "n_actions", "plan_length",
+                           "step_limit", "r_max", "v_ref", "context_s") if k not in header]
+    if missing:
+        raise ResultsError(f"{path} is damaged (no {missing[0]!r}): delete it and run "
+                           f"{rerun} to measure the size again")
+    return header
+
+
 def _size_into(out: Path, n: int, runs: int, episodes: int, seed: int, methods: list[str],
-               progress: bool, log: Callable[[str], None]) -> SizeResult:
+               progress: bool, log: Callable[[str], None], rerun: str) -> SizeResult:
     """Run the units of size ``n`` missing in ``out/units/size-N/``, then read them all."""
     from tqdm import tqdm
 
@@ -341,7 +371,7 @@ def _size_into(out: Path, n: int, runs: int, episodes: int, seed: int, methods: 
                desc=f"{n} positions", dynamic_ncols=True,
                disable=not progress or not sys.stderr.isatty())
     try:
-        header = json.loads(header_path.read_text()) if header_path.exists() else None
+        header = _read_header(header_path, rerun) if header_path.exists() else None
         if missing or header is None:
             built, setting = size_context(n, seed)
             if header is None:  # the first measurement stays, so a resumed report is the same
@@ -354,10 +384,10 @@ def _size_into(out: Path, n: int, runs: int, episodes: int, seed: int, methods: 
             bar.update(1)
     finally:
         bar.close()
-    units = {}
-    for key, path in paths.items():
-        with np.load(path) as saved:
-            units[key] = {k: saved[k] for k in saved.files}
+    expect = {"returns": episodes, "success": episodes, "steps": -1, "wall_s": -1,
+              "table_mb": -1}
+    units = {(name, run): load_unit(path, f"{name}, run {run} at {n} positions", expect, rerun)
+             for (name, run), path in paths.items()}
     result = assemble(header, units, methods, runs)
     for line in summary(result):
         log(line)

@@ -11,10 +11,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from gdq_pddl.limits import check_count, check_real
+
 GDQVariant = Literal["model", "literal", "code"]
 GDQ_VARIANTS: tuple[str, ...] = ("model", "literal", "code")
 DarlingVariant = Literal["paper", "code"]
 
+MAX_BACKUPS = 1_000_000
+"""The most model backups per real step a config accepts (each costs about a
+microsecond; the paper's settings are 3-5)."""
 
 @dataclass(frozen=True)
 class LearnerConfig:
@@ -29,12 +34,9 @@ class LearnerConfig:
     """Probability of a uniformly random (allowed) action instead of the greedy one."""
 
     def __post_init__(self) -> None:
-        if not 0.0 < self.alpha <= 1.0:
-            raise ValueError(f"alpha must be in (0, 1], got {self.alpha}")
-        if not 0.0 <= self.gamma < 1.0:
-            raise ValueError(f"gamma must be in [0, 1), got {self.gamma}")
-        if not 0.0 <= self.epsilon <= 1.0:
-            raise ValueError(f"epsilon must be in [0, 1], got {self.epsilon}")
+        check_real("alpha", self.alpha, 0.0, 1.0, low_open=True)
+        check_real("gamma", self.gamma, 0.0, 1.0, high_open=True)
+        check_real("epsilon", self.epsilon, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -56,8 +58,8 @@ class DynaQConfig(LearnerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.n_backups < 0 or self.m < 0:
-            raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+        check_count("n_backups", self.n_backups, MAX_BACKUPS)
+        check_count("m", self.m)  # at most MAX_COUNT, as int64 holds
 
 
 @dataclass(frozen=True)
@@ -144,21 +146,17 @@ class GDQConfig(LearnerConfig):
                               ("plan_tolerance", 0.0 if self.variant == "literal" else 0.3)):
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
-        if self.n_backups < 0 or self.m < 0:
-            raise ValueError(f"n_backups and m must be >= 0, got {self.n_backups}, {self.m}")
+        check_count("n_backups", self.n_backups, MAX_BACKUPS)
+        check_count("m", self.m)
+        check_real("plan_tolerance", self.plan_tolerance, 0.0)
         if self.optimistic_successor not in ("start", "terminal"):
             raise ValueError("optimistic_successor must be 'start' or 'terminal', got "
                              f"{self.optimistic_successor!r}")
-        if not self.plan_tolerance >= 0:
-            raise ValueError(f"plan_tolerance must be >= 0, got {self.plan_tolerance}")
         if self.explore not in ("plans", "applicable"):
             raise ValueError(f"explore must be 'plans' or 'applicable', got {self.explore!r}")
-        if not 0.0 <= self.explore_all <= 1.0:
-            raise ValueError(f"explore_all must be in [0, 1], got {self.explore_all}")
+        check_real("explore_all", self.explore_all, 0.0, 1.0)
         for name in ("prior_weight", "prior_cost", "sweep_threshold"):
-            value = getattr(self, name)
-            if not (0.0 <= value < float("inf")):
-                raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+            check_real(name, getattr(self, name), 0.0)
 
 
 @dataclass(frozen=True)
@@ -179,7 +177,6 @@ class DarlingConfig(LearnerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if self.tolerance < 0:
-            raise ValueError(f"tolerance must be >= 0, got {self.tolerance}")
+        check_real("tolerance", self.tolerance, 0.0)
         if self.variant not in ("paper", "code"):
             raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")

@@ -39,6 +39,7 @@ from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.learners import core
 from gdq_pddl.learners.agents import Learner, TabularLearner
 from gdq_pddl.learners.context import successor_capacity
+from gdq_pddl.limits import check_count, check_memory
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,9 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     ``fast=None`` picks the compiled loop when possible; ``True`` demands it and
     ``False`` forces the Python loop (both give the same results).
     """
+    check_count("n_episodes", n_episodes)
+    check_memory(n_episodes * (17 + 8 * _n_areas(env)), f"n_episodes = {n_episodes:,}: the "
+                 "episode records", "run fewer episodes at a time")
     can_fast = isinstance(env.unwrapped, ModelEnv) and isinstance(learner, TabularLearner)
     if fast is None:
         fast = can_fast

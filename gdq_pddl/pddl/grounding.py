@@ -83,6 +83,10 @@ class GroundTask:
         return []
 
     def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
+        """Whether ``goal`` (default: the problem's) holds in ``state``; never, for a
+        problem goal that can never hold (:attr:`goal_possible`)."""
+        if goal is None and not self.goal_possible:
+            return False
         pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
         return state & pos == pos and not state & neg
 

@@ -25,6 +25,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
+from gdq_pddl.inputs import read_text
 from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
 
 SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality",
@@ -528,6 +529,8 @@ def _not_stuck(r: _Reader, atom: Atom, predicates: dict[str, tuple[str, ...]], l
 def _atom(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
           types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Atom:
     items = r.lst(node, "an atom")
+    if not items:
+        raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
     name = r.symbol(items[0], "a predicate name")
     if name not in predicates:
         raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
@@ -580,8 +583,10 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
             if o in objects:
                 raise r.fail(sec[":objects"].line, f"object {o} is declared twice")
             objects[o] = t
+    if ":init" not in sec:
+        raise r.fail(None, "expected (:init ...), the initial state")
     init, values = [], {}
-    for node in sec[":init"].items[1:] if ":init" in sec else ():
+    for node in sec[":init"].items[1:]:
         head = node.items[0].symbol if node.is_list and node.items else ""
         if head == "=":
             term, value = _init_value(r, node, domain, objects)
@@ -598,8 +603,11 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
         _metric(r, sec[":metric"])
     if ":goal" not in sec:
         raise r.fail(None, "expected (:goal ...)")
-    goal = _literals(r, sec[":goal"].items[1] if len(sec[":goal"].items) == 2 else None,
-                     domain.predicates, domain.types, objects, "goal",
+    gnode = sec[":goal"]
+    if len(gnode.items) != 2:
+        raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
+                     f"{len(gnode.items) - 1}")
+    goal = _literals(r, gnode.items[1], domain.predicates, domain.types, objects, "goal",
                      set(domain.requirements), True)
     return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source, values,
                    goal_reward)
@@ -666,7 +674,4 @@ def read_problem(path: str | Path, domain: Domain) -> Problem:
 
 
 def _read(path: str | Path) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise PDDLError(str(path), None, f"cannot read: {exc.strerror}") from None
+    return read_text(path, lambda src, msg: PDDLError(src, None, msg))

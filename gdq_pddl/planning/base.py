@@ -134,12 +134,14 @@ class PlanningProblem:
               *options: object) -> Query:
         """Resolve a query against the grounded task (every backend starts here).
 
-        Raises :class:`~gdq_pddl.errors.PlanningError` for a negative tolerance or a start
+        Raises :class:`~gdq_pddl.errors.PlanningError` for a negative or non-finite
+        tolerance or a start
         atom the problem does not have; a goal no action can ever make true gives a
         query whose ``goal`` is None (a "no plan" answer, not an error).
         """
-        if tolerance < 0:
-            raise PlanningError(f"tolerance must be >= 0, got {tolerance}")
+        if not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool) or \
+                not math.isfinite(tolerance) or tolerance < 0:
+            raise PlanningError(f"tolerance must be a finite number >= 0, got {tolerance!r}")
         key = (planner, start, goal, tolerance, *options)
         hit = self._results.get(key)
         if hit is not None:  # answered before: skip resolving the masks

@@ -1,0 +1,144 @@
+"""An output folder as the runners use it: locked, its config and unit files checked.
+
+What both runners (:mod:`gdq_pddl.experiments.runner` and
+:mod:`gdq_pddl.experiments.scale`) share about the folder they write:
+
+- :class:`FolderLock`: one process at a time per folder (a second ``--resume`` started
+  while the first runs would run the same units again);
+- :func:`read_config`: ``config.json`` read back, or one clear error if it is damaged;
+- :func:`input_hashes` / :func:`changed_input`: the content of every input file, so a
+  resume refuses inputs edited since the run began (one world for some runs and another
+  for the rest);
+- :func:`load_unit`: a unit file read back, or an error naming it and saying how to
+  rerun that one unit.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.errors import ResultsError
+from gdq_pddl.inputs import file_hash
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover (not POSIX: no lock, as before)
+    fcntl = None
+
+LOCK_NAME = ".lock"
+
+__all__ = ["FolderLock", "ResultsError", "changed_input", "close_inherited_locks",
+           "input_hashes", "load_unit", "read_config"]
+
+
+_HELD: set[int] = set()
+"""File descriptors of the locks this process holds (forked workers close them)."""
+
+
+class FolderLock:
+    """An exclusive, non-blocking lock on ``folder/.lock`` for the ``with`` block.
+
+    The lock is the operating system's (``flock``): it ends with the process, however the
+    process ends, so a killed run never leaves a folder locked. Entering raises
+    :class:`ResultsError` naming the process that holds it. The lock file stays (removing
+    it would let a third process lock a file nobody else sees).
+    """
+
+    def __init__(self, folder: Path) -> None:
+        self.path = Path(folder) / LOCK_NAME
+        self.fd: int | None = None
+
+    def __enter__(self) -> FolderLock:
+        if fcntl is None:
+            return self
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+            os.close(fd)
+            raise ResultsError(f"{self.path.parent} is in use by another gdq-pddl process "
+                               f"(pid {holder}, lock {self.path}): wait for it to end, or "
+                               "choose another --out") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self.fd = fd
+        _HELD.add(fd)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.fd is not None:
+            _HELD.discard(self.fd)
+            os.close(self.fd)  # releases the lock
+            self.fd = None
+
+
+def close_inherited_locks() -> None:
+    """In a forked worker: close the parent's lock descriptors (the lock stays the
+    parent's, and a worker outliving a killed parent does not keep the folder locked)."""
+    for fd in list(_HELD):
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _HELD.clear()
+
+
+def read_config(path: Path) -> dict:
+    """``config.json`` as a dict; :class:`ResultsError` naming it if it is not one."""
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ResultsError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except ValueError as exc:  # JSONDecodeError, UnicodeDecodeError
+        raise ResultsError(f"{path} is damaged (not JSON: {exc}); it records what the "
+                           "folder holds, so --resume cannot go on: start again in another "
+                           "--out") from None
+    if not isinstance(raw, dict):
+        raise ResultsError(f"{path} is damaged (a JSON {type(raw).__name__}, not an "
+                           "object); --resume cannot go on: start again in another --out")
+    return raw
+
+
+def input_hashes(files: Iterable[str]) -> dict[str, str]:
+    """``{file: "sha256:..."}`` of every input file (in order, without repeats)."""
+    return {f: file_hash(f) for f in dict.fromkeys(files)}
+
+
+def changed_input(old: Mapping, new: Mapping[str, str]) -> str | None:
+    """The first input file whose hash differs between ``old`` (from a config.json; a
+    config from before hashes were recorded has none) and ``new``; None if none."""
+    return next((f for f, h in new.items() if f in old and old[f] != h), None)
+
+
+def load_unit(path: Path, what: str, expect: Mapping[str, int],
+              rerun: str = "the same command with --resume") -> dict[str, np.ndarray]:
+    """The arrays of the unit file ``path``; :class:`ResultsError` if it is damaged.
+
+    ``expect`` maps each array the unit must hold to its length along the first axis
+    (-1: any length); ``what`` names the unit (method and run) in the message.
+    """
+    try:
+        with np.load(path) as saved:
+            data = {k: saved[k] for k in saved.files}
+    except FileNotFoundError:
+        raise ResultsError(f"{path} ({what}) is missing: rerun it with {rerun}") from None
+    except Exception as exc:  # zipfile, numpy format and OS errors of a damaged file
+        raise _damaged(path, what, f"{type(exc).__name__}: {exc}", rerun) from None
+    for key, length in expect.items():
+        if key not in data:
+            raise _damaged(path, what, f"no array {key!r}", rerun)
+        shape = data[key].shape
+        if length >= 0 and (not shape or shape[0] != length):
+            raise _damaged(path, what, f"{key} has {shape[0] if shape else 0} entries, "
+                           f"expected {length}", rerun)
+    return data
+
+
+def _damaged(path: Path, what: str, why: str, rerun: str) -> ResultsError:
+    return ResultsError(f"{path} ({what}) is damaged ({why}): delete it and run {rerun} to "
+                        "rerun that run alone")

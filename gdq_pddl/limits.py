@@ -1,0 +1,85 @@
+"""Sizes checked before anything is allocated, and numbers checked before they are used.
+
+A world file's ``step_limit``, ``--episodes`` or ``--runs`` can ask for arrays no machine
+holds. Each place that allocates in proportion to one of them estimates the bytes first
+(:func:`check_memory`) and raises :class:`~gdq_pddl.errors.SizeError` naming the
+setting, the size it would need and the memory there is, instead of growing until the
+operating system kills the process or numpy fails deep inside a computation.
+
+The range checks (:func:`check_real`, :func:`check_count`) are what every configuration
+dataclass and option calls, so a NaN, ``2.5`` backups or ``10**12`` of them is refused
+where it is given, not deep inside a compiled loop.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+
+from gdq_pddl.errors import ConfigError, SizeError
+
+MAX_COUNT = 2**62
+"""The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""
+
+FALLBACK_MEMORY = 16 * 1024**3
+"""What :func:`physical_memory` assumes where the system does not say."""
+
+
+def physical_memory() -> int:
+    """Bytes of physical memory of this machine (``FALLBACK_MEMORY`` if unknown).
+
+    ``GDQ_PDDL_MEMORY`` (bytes) overrides it, for tests and for sharing a machine.
+    """
+    override = os.environ.get("GDQ_PDDL_MEMORY")
+    if override and override.isdigit():
+        return int(override)
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return FALLBACK_MEMORY
+
+
+def human_bytes(n: float) -> str:
+    """``1.5 GB``, ``17.7 TB``: decimal units, three significant digits."""
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if abs(n) < 1000 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1000
+    return f"{n:.3g} PB"  # pragma: no cover (the loop always returns)
+
+
+def check_memory(need: float, what: str, fix: str) -> None:
+    """Raise :class:`SizeError` if ``need`` bytes exceed the machine's memory.
+
+    ``what`` says what needs them (``"world.step_limit = 2000000000: V* ..."``, naming the
+    setting at fault) and ``fix`` what to change.
+    """
+    have = physical_memory()
+    if need > have:
+        raise SizeError(f"{what} would need {human_bytes(need)} of memory, more than this "
+                        f"machine has ({human_bytes(have)}); {fix}")
+
+
+def check_real(name: str, value: object, low: float, high: float = math.inf,
+               low_open: bool = False, high_open: bool = False) -> None:
+    """Raise :class:`~gdq_pddl.errors.ConfigError` (a ValueError) unless ``value`` is a
+    finite real number (not a bool) in the interval from ``low`` to ``high``, open at
+    the ends ``low_open`` / ``high_open`` say."""
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) \
+        and math.isfinite(value)
+    if ok:
+        ok = (value > low if low_open else value >= low) and \
+            (value < high if high_open else value <= high)
+    if not ok:
+        where = f"{'>' if low_open else '>='} {low:g}" if math.isinf(high) else \
+            f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+        raise ConfigError(f"{name} must be a finite number {where}, got {value!r}")
+
+
+def check_count(name: str, value: object, high: int = MAX_COUNT) -> None:
+    """Raise :class:`~gdq_pddl.errors.ConfigError` (a ValueError) unless ``value`` is an
+    integer (``int`` or a numpy integer, not a bool and not ``2.0``) in ``[0, high]``."""
+    if not isinstance(value, numbers.Integral) or isinstance(value, bool) or \
+            not 0 <= value <= high:
+        raise ConfigError(f"{name} must be a whole number in [0, {high:_}], got {value!r}")

@@ -1,0 +1,624 @@
+"""Hostile inputs, end to end: each is refused with one clear line, never in silence.
+
+Every case runs through the command line (``gdq_pddl.cli.main`` in this process, so the
+suite stays fast) and is handled when (issue 12): the exit status is non-zero, no
+traceback is printed, and the message names the file, key or value at fault. The world
+and dynamics cases also go through the API (``load_world``, ``PDDLInstance``), which must
+raise the package's own error with the same names.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gdq_pddl.cli import main
+from gdq_pddl.errors import GdqError
+from gdq_pddl.resources import data_file, world_text
+
+OFFICE = world_text("office")
+KEYS_DOMAIN = data_file("domains", "keys.pddl").read_text(encoding="utf-8")
+KEYS_PROBLEM = data_file("problems", "keys-1.pddl").read_text(encoding="utf-8")
+KEYS_DYNAMICS = data_file("dynamics", "keys.toml").read_text(encoding="utf-8")
+FAST = ["--episodes", "3", "--runs", "1", "--method", "Q-learning", "--jobs", "1"]
+
+
+def cli(capsys, *argv) -> tuple[int, str]:
+    """Exit status and everything printed; an exception escaping main fails the test."""
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse's errors
+        code = exc.code
+    out = capsys.readouterr()
+    return code, out.out + out.err
+
+
+def refused(code, text: str, *names: str) -> None:
+    assert code not in (0, None), text
+    assert "Traceback" not in text, text
+    for name in names:
+        assert name in text, f"{name!r} not named in: {text}"
+
+
+def edit(text: str, old: str, new: str) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+# --- world files -------------------------------------------------------------------------
+
+CUT_P5 = edit(edit(OFFICE, '["p3", "p5"],', ""), '["p5", "p6"], ["p5", "p8"],', "")
+GOAL_BEHIND_LOCKED = edit(edit(edit(
+    OFFICE, "success = 0.6\nstuck = 0.4", "success = 0.0\nstuck = 0.0"),
+    "success = 0.95\nstuck = 0.0", "success = 0.0\nstuck = 0.0"), '\n  ["p17", "p18"],', "")
+
+WORLDS = {
+    "misspelled-world-key": (edit(OFFICE, "navigation_success = 0.95", "navigation_sucess = 0.9"),
+                             ["world.navigation_sucess", "navigation_success"]),
+    "misspelled-table": (edit(OFFICE, "[world]", "[wrold]"), ["wrold"]),
+    "misspelled-door-key": (edit(OFFICE, "success = 0.6\nstuck = 0.2", "sucess = 0.6"),
+                            ["doors.d0.sucess"]),
+    "misspelled-task-key": (edit(OFFICE, 'goal = "P3"\nirrelevant_areas = [1, 2, 3]',
+                                 'goall = "P3"'), ["tasks.A.goall"]),
+    "misspelled-cost-key": (edit(OFFICE, "stay = 1.0", 'stay = {dist = "normal", mean = 1, '
+                                 "sdd = 1}"), ["costs.stay.sdd"]),
+    "unknown-verb": (edit(OFFICE, "stay = 1.0", "wait = 1.0"), ["costs.wait"]),
+    "r_max-nan": (edit(OFFICE, "r_max = 20.0", "r_max = nan"), ["world.r_max", "nan"]),
+    "r_max-inf": (edit(OFFICE, "r_max = 20.0", "r_max = inf"), ["world.r_max", "inf"]),
+    "r_max-negative": (edit(OFFICE, "r_max = 20.0", "r_max = -20.0"), ["world.r_max", "-20"]),
+    "r_max-huge": (edit(OFFICE, "r_max = 20.0", "r_max = 1e300"), ["world.r_max"]),
+    "cost-inf": (edit(OFFICE, "goto = 1.0", "goto = inf"), ["costs.goto", "inf"]),
+    "cost-nan-in-table": (edit(OFFICE, "goto = 1.0", 'goto = {dist = "uniform", low = 1, '
+                               "high = nan}"), ["costs.goto.high", "nan"]),
+    "probability-nan": (edit(OFFICE, "success = 0.6\nstuck = 0.2", "success = nan"),
+                        ["doors.d0.success", "nan"]),
+    "navigation-nan": (edit(OFFICE, "navigation_success = 0.95", "navigation_success = nan"),
+                       ["world.navigation_success"]),
+    "step_limit-float": (edit(OFFICE, "step_limit = 20 ", "step_limit = 20.5 "),
+                         ["world.step_limit", "20.5"]),
+    "task-case-duplicate": (OFFICE + '\n[tasks.c]\nstart = "p3"\ngoal = "p5"\n',
+                            ["tasks.c", "task C"]),
+    "task-start-is-goal": (edit(OFFICE, 'start = "P3"\ngoal = "P1"', 'start = "P3"\ngoal = "p17"'),
+                           ["tasks.E", "p17"]),
+    "area-leading-zero": (edit(OFFICE, '1 = ["p0"', '01 = ["p0"'), ["areas.01"]),
+    "area-zero": (edit(OFFICE, '1 = ["p0"', '0 = ["p0"'), ["areas.0"]),
+    "forbidden-unknown-area": (edit(OFFICE, 'r_max = 20.0', 'r_max = 20.0\nforbidden_areas = [9]'),
+                               ["world.forbidden_areas[0]", "9"]),
+    "landmark-named-as-position": (edit(OFFICE, 'P1 = "p14"', 'p1 = "p14"'), ["landmarks.p1"]),
+    "position-upper-case": (OFFICE.replace('"p0"', '"P0"'), ["world.positions[0]", "P0"]),
+    "irrelevant-area-list": (edit(OFFICE, "irrelevant_areas = [1, 2, 3]\n",
+                                  "irrelevant_areas = [[1]]\n"), ["tasks.A.irrelevant_areas"]),
+    "position-cut-off": (CUT_P5, ["world.adjacency", "p5", "cut off"]),
+    "goal-behind-locked-doors": (GOAL_BEHIND_LOCKED, ["tasks.A.goal", "p17", "d2", "d3"]),
+}
+
+
+@pytest.mark.parametrize("case", list(WORLDS))
+def test_bad_world_file_is_refused_by_run(capsys, tmp_path, case):
+    text, names = WORLDS[case]
+    world = tmp_path / "w.toml"
+    world.write_text(text, encoding="utf-8")
+    code, out = cli(capsys, "run", "--world", world, "--task", "C", *FAST,
+                    "--out", tmp_path / "o")
+    refused(code, out, str(world), *names)
+    assert not (tmp_path / "o" / "config.json").exists()
+
+
+@pytest.mark.parametrize("case", list(WORLDS))
+def test_bad_world_file_is_refused_by_the_api(tmp_path, case):
+    from gdq_pddl.world import load_world
+
+    text, names = WORLDS[case]
+    world = tmp_path / "w.toml"
+    world.write_text(text, encoding="utf-8")
+    with pytest.raises(GdqError) as info:
+        load_world(world)
+    for name in (str(world), *names):
+        assert name in str(info.value)
+
+
+def test_the_goal_cut_off_by_locked_doors_is_refused_for_an_ad_hoc_task(capsys, tmp_path):
+    text = GOAL_BEHIND_LOCKED.split("[tasks.A]")[0]  # no task of the file reaches p17
+    world = tmp_path / "w.toml"
+    world.write_text(text, encoding="utf-8")
+    code, out = cli(capsys, "run", "--world", world, "--start", "p0", "--goal", "p17", *FAST,
+                    "--out", tmp_path / "o")
+    refused(code, out, str(world), "p17", "d2", "d3")
+    from gdq_pddl.envs.office import OfficeEnv
+
+    with pytest.raises(GdqError, match="p17"):
+        OfficeEnv(world=world, start="p0", goal="p17")
+
+
+@pytest.mark.parametrize(("limit", "names"), [
+    ("7", ["world.step_limit", "7", "task C", "8 actions"]),
+    ("2000000000", ["world.step_limit", "2000000000", "GB"]),
+    ("99999999999999", ["world.step_limit", "99999999999999"]),
+])
+def test_step_limits_no_episode_or_no_memory_allows_are_refused(capsys, tmp_path, limit, names):
+    world = tmp_path / "w.toml"
+    world.write_text(edit(OFFICE, "step_limit = 20 ", f"step_limit = {limit} "), "utf-8")
+    code, out = cli(capsys, "run", "--world", world, "--task", "C", *FAST,
+                    "--out", tmp_path / "o")
+    refused(code, out, str(world), *names)
+
+
+def test_non_utf8_world_names_the_file(capsys, tmp_path):
+    world = tmp_path / "latin1.toml"
+    world.write_bytes(OFFICE.replace('"difficult"', '"schwierig \xe4"').encode("latin-1"))
+    code, out = cli(capsys, "plan", "--world", world, "--task", "C")
+    refused(code, out, str(world), "UTF-8")
+    world.write_bytes(b"\x00\xff\xfe binary")
+    code, out = cli(capsys, "run", "--world", world, "--task", "C", *FAST,
+                    "--out", tmp_path / "o")
+    refused(code, out, str(world))
+
+
+# --- PDDL problems and dynamics files ---------------------------------------------------
+
+PROBLEMS = {
+    "goal-never-true": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (key-at red c35))"),
+                        ["problem.pddl", "(key-at red c35)", "never"]),
+    "goal-room-cut-off": (edit(edit(edit(edit(KEYS_PROBLEM, "(adj c25 c35)", ""),
+                                          "(adj c34 c35)", ""), "(adj c35 c34)", ""),
+                               "(adj c35 c25)", ""), ["problem.pddl", "cannot be reached"]),
+    "goal-holds-at-start": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (at c11))"),
+                            ["problem.pddl", "already holds"]),
+    "goal-empty": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (and))"),
+                   ["problem.pddl", "empty"]),
+    "goal-two-formulas": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (at c35) (at c34))"),
+                          ["problem.pddl", ":goal"]),
+    "empty-atom-in-init": (edit(KEYS_PROBLEM, "(at c11)", "(at c11) ()"),
+                           ["problem.pddl:", "()"]),
+    "no-init": (KEYS_PROBLEM[:KEYS_PROBLEM.index("  (:init")] + "  (:goal (at c35)))\n",
+                ["problem.pddl", ":init"]),
+}
+DYNAMICS = {
+    "r_max-nan": (edit(KEYS_DYNAMICS, "r_max = 20.0", "r_max = nan"), ["dynamics.r_max", "nan"]),
+    "r_max-inf": (edit(KEYS_DYNAMICS, "r_max = 20.0", "r_max = inf"), ["dynamics.r_max", "inf"]),
+    "r_max-negative": (edit(KEYS_DYNAMICS, "r_max = 20.0", "r_max = -1.0"),
+                       ["dynamics.r_max", "-1"]),
+    "cost-inf": (edit(KEYS_DYNAMICS, "[actions.pickup]\ncost = 1.0",
+                      "[actions.pickup]\ncost = inf"),
+                 ["actions.pickup.cost", "inf"]),
+    "cost-table-nan": (edit(KEYS_DYNAMICS, "low = 2.0", "low = nan"),
+                       ["actions.move.objects.c22.cost.low", "nan"]),
+    "cost-table-unknown-key": (edit(KEYS_DYNAMICS, "low = 2.0", "lo = 2.0"),
+                               ["actions.move.objects.c22.cost.lo", "unknown key"]),
+    "success-nan": (edit(KEYS_DYNAMICS, "success = 0.95", "success = nan"),
+                    ["actions.move.success", "nan"]),
+    "failure-nested-list": (edit(KEYS_DYNAMICS, "success = 0.95", 'success = 0.95\nfailure = '
+                                 '[["move"]]'), ["actions.move.failure"]),
+    "step_limit-below-shortest-plan": (edit(KEYS_DYNAMICS, "step_limit = 25", "step_limit = 5"),
+                                       ["dynamics.step_limit", "5", "8 actions"]),
+    "step_limit-past-memory": (edit(KEYS_DYNAMICS, "step_limit = 25", "step_limit = 3000000000"),
+                               ["dynamics.step_limit", "3000000000"]),
+}
+
+
+def pddl_files(tmp_path: Path, problem: str = KEYS_PROBLEM, dynamics: str = KEYS_DYNAMICS):
+    files = (tmp_path / "domain.pddl", tmp_path / "problem.pddl", tmp_path / "dynamics.toml")
+    for path, text in zip(files, (KEYS_DOMAIN, problem, dynamics), strict=True):
+        path.write_text(text, encoding="utf-8")
+    return files
+
+
+def pddl_run(capsys, tmp_path, files, *extra):
+    d, p, y = files
+    return cli(capsys, "run", "--domain", d, "--problem", p, "--dynamics", y, *FAST,
+               "--out", tmp_path / "o", *extra)
+
+
+@pytest.mark.parametrize("case", list(PROBLEMS))
+def test_bad_problem_is_refused(capsys, tmp_path, case):
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+
+    text, names = PROBLEMS[case]
+    files = pddl_files(tmp_path, problem=text)
+    code, out = pddl_run(capsys, tmp_path, files)
+    refused(code, out, *names)
+    assert not (tmp_path / "o" / "config.json").exists()
+    with pytest.raises(GdqError) as info:
+        PDDLInstance.from_files(*files).model  # noqa: B018
+    assert all(n in str(info.value) for n in names)
+
+
+@pytest.mark.parametrize("case", list(DYNAMICS))
+def test_bad_dynamics_is_refused(capsys, tmp_path, case):
+    text, names = DYNAMICS[case]
+    files = pddl_files(tmp_path, dynamics=text)
+    code, out = pddl_run(capsys, tmp_path, files)
+    refused(code, out, str(files[2]), *names)
+
+
+@pytest.mark.parametrize("which", [0, 1, 2])
+def test_non_utf8_pddl_inputs_name_the_file(capsys, tmp_path, which):
+    files = pddl_files(tmp_path)
+    files[which].write_bytes(b"; \xe9t\xe9\n" + files[which].read_bytes())
+    code, out = pddl_run(capsys, tmp_path, files)
+    refused(code, out, str(files[which]), "UTF-8")
+
+
+def test_plan_still_answers_no_plan_and_warns_on_an_empty_plan(capsys, tmp_path):
+    d, p, _ = pddl_files(tmp_path, problem=PROBLEMS["goal-holds-at-start"][0])
+    code, out = cli(capsys, "plan", "--domain", d, "--problem", p)
+    assert code == 0 and "warning" in out and "already holds" in out
+    d, p, _ = pddl_files(tmp_path, problem=PROBLEMS["goal-never-true"][0])
+    code, out = cli(capsys, "plan", "--domain", d, "--problem", p)
+    assert code == 1 and "no plan" in out
+
+
+# --- numbers on the command line ------------------------------------------------------------
+
+@pytest.mark.parametrize(("argv", "names"), [
+    (["run", "--task", "C", "--jobs", "-2"], ["--jobs", "-2"]),
+    (["run", "--task", "C", "--jobs", "0"], ["--jobs", "0"]),
+    (["run", "--task", "C", "--jobs", "two"], ["--jobs", "two"]),
+    (["run", "--task", "C", "--seed", "-1"], ["--seed", "-1"]),
+    (["run", "--task", "C", "--episodes", "0"], ["--episodes", "0"]),
+    (["run", "--task", "C", "--runs", "-3"], ["--runs", "-3"]),
+    (["run", "--task", "C", "--episodes", "1e3"], ["--episodes", "1e3"]),
+    (["switch", "--seed", "-5"], ["--seed", "-5"]),
+    (["reproduce", "--seed", "-1"], ["--seed", "-1"]),
+    (["knowledge", "--runs", "0"], ["--runs", "0"]),
+    (["scale", "--sizes", "0"], ["--sizes", "0"]),
+    (["scale", "--episodes", "-1"], ["--episodes", "-1"]),
+    (["building", "--positions", "-5"], ["--positions", "-5"]),
+    (["building", "--positions", "100", "--seed", "-1"], ["--seed", "-1"]),
+    (["plan", "--task", "C", "--tolerance", "nan"], ["--tolerance", "nan"]),
+    (["plan", "--task", "C", "--tolerance", "inf"], ["--tolerance", "inf"]),
+    (["plan", "--task", "C", "--tolerance", "-0.5"], ["--tolerance", "-0.5"]),
+])
+def test_bad_numbers_on_the_command_line(capsys, argv, names):
+    code, out = cli(capsys, *argv)
+    refused(code, out, *names)
+
+
+@pytest.mark.parametrize(("argv", "names"), [
+    (["--episodes", "1000000000000", "--runs", "1"], ["--episodes", "1,000,000,000,000"]),
+    (["--runs", "1000000000"], ["--runs", "1,000,000,000"]),
+    (["--episodes", "100000", "--runs", "100000"], ["the report", "--no-report"]),
+])
+def test_sizes_past_memory_are_refused_up_front(capsys, tmp_path, argv, names):
+    t0 = time.perf_counter()
+    code, out = cli(capsys, "run", "--task", "C", *argv, "--out", tmp_path / "o")
+    refused(code, out, *names, "would need", "memory")
+    assert time.perf_counter() - t0 < 10
+    assert not (tmp_path / "o").exists()
+
+
+def test_scale_sizes_past_memory_are_refused(capsys, tmp_path):
+    code, out = cli(capsys, "scale", "--sizes", "100000", "--out", tmp_path / "o")
+    refused(code, out, "--sizes 100000", "would need")
+    code, out = cli(capsys, "scale", "--runs", "1000000000", "--out", tmp_path / "o")
+    refused(code, out, "--runs 1,000,000,000", "would need")
+    code, out = cli(capsys, "scale", "--episodes", "1000000000000", "--out", tmp_path / "o")
+    refused(code, out, "--episodes 1,000,000,000,000", "would need")
+    code, out = cli(capsys, "building", "--positions", "10000000000", "--out", tmp_path / "b")
+    refused(code, out, "positions = 10,000,000,000", "would need")
+
+
+def test_jobs_are_capped_at_the_runs_and_said(capsys, tmp_path):
+    code, out = cli(capsys, "run", "--task", "C", "--episodes", "3", "--runs", "2",
+                    "--method", "Q-learning", "--jobs", "40", "--out", tmp_path / "o",
+                    "--no-report")
+    assert code == 0, out
+    assert "2 run(s) to do on 2 process(es) (--jobs 40 capped" in out
+
+
+# --- where the results go ----------------------------------------------------------------
+
+def _out_cases(tmp_path: Path) -> dict[str, Path]:
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x")
+    return {"existing-file": a_file, "under-a-file": a_file / "sub", "proc": Path("/proc/gdq"),
+            "sys": Path("/sys/gdq"), "dev-null": Path("/dev/null")}
+
+
+@pytest.mark.parametrize("case", ["existing-file", "under-a-file", "proc", "sys", "dev-null"])
+@pytest.mark.parametrize("command", [
+    ["run", "--task", "C", *FAST], ["switch", "--episodes", "2", "--runs", "1"],
+    ["building", "--positions", "100"], ["scale", "--sizes", "100", "--runs", "1"],
+    ["problem", "--all"]])
+def test_unusable_output_folders(capsys, tmp_path, case, command):
+    out = _out_cases(tmp_path)[case]
+    code, text = cli(capsys, *command, "--out", out)
+    refused(code, text, "--out", str(out))
+
+
+@pytest.mark.parametrize("case", ["a-folder", "under-a-file", "proc"])
+def test_unusable_problem_output_file(capsys, tmp_path, case):
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x")
+    out = {"a-folder": tmp_path, "under-a-file": a_file / "x.pddl",
+           "proc": Path("/proc/gdq.pddl")}[case]
+    code, text = cli(capsys, "problem", "--task", "C", "--out", out)
+    refused(code, text, "--out", str(out))
+
+
+def test_problem_out_in_a_new_folder_is_written(capsys, tmp_path):
+    code, _ = cli(capsys, "problem", "--task", "C", "--out", tmp_path / "new" / "c.pddl")
+    assert code == 0 and (tmp_path / "new" / "c.pddl").read_text().startswith(";")
+
+
+# --- --resume and damaged results folders ----------------------------------------------
+
+def _run(capsys, out, *extra, world=None):
+    w = ["--world", world] if world else []
+    return cli(capsys, "run", "--task", "C", *w, "--episodes", "4", "--runs", "2", "--method",
+               "Q-learning", "Dyna-Q", "--jobs", "1", "--no-report", "--out", out, *extra)
+
+
+@pytest.mark.parametrize("make", ["missing", "empty"])
+def test_resume_of_nothing_is_refused(capsys, tmp_path, make):
+    out = tmp_path / "o"
+    if make == "empty":
+        out.mkdir()
+    code, text = _run(capsys, out, "--resume")
+    refused(code, text, str(out), "without --resume")
+
+
+def test_resume_refuses_a_changed_world_file(capsys, tmp_path):
+    world = tmp_path / "w.toml"
+    world.write_text(OFFICE, encoding="utf-8")
+    out = tmp_path / "o"
+    assert _run(capsys, out, world=world)[0] == 0
+    world.write_text(edit(OFFICE, "success = 0.6\nstuck = 0.2", "success = 0.7\nstuck = 0.2"))
+    code, text = _run(capsys, out, "--resume", world=world)
+    refused(code, text, str(world), "changed")
+    world.write_text(OFFICE, encoding="utf-8")  # restored: the resume goes on
+    assert _run(capsys, out, "--resume", world=world)[0] == 0
+
+
+@pytest.mark.parametrize("which", [1, 2])
+def test_resume_refuses_changed_pddl_inputs(capsys, tmp_path, which):
+    files = pddl_files(tmp_path)
+    assert pddl_run(capsys, tmp_path, files, "--no-report")[0] == 0
+    files[which].write_text(files[which].read_text() + "; edited\n", "utf-8")
+    code, text = pddl_run(capsys, tmp_path, files, "--no-report", "--resume")
+    refused(code, text, str(files[which]), "changed")
+
+
+def _units(out: Path) -> list[Path]:
+    return sorted((out / "units").glob("*.npz"))
+
+
+@pytest.mark.parametrize("damage", ["truncated", "empty", "short", "missing-array"])
+def test_resume_names_a_damaged_unit_and_how_to_rerun_it(capsys, tmp_path, damage):
+    out = tmp_path / "o"
+    assert _run(capsys, out)[0] == 0
+    unit = _units(out)[1]
+    if damage == "truncated":
+        unit.write_bytes(unit.read_bytes()[:200])
+    elif damage == "empty":
+        unit.write_bytes(b"")
+    else:
+        with np.load(unit) as saved:
+            data = {k: saved[k] for k in saved.files}
+        if damage == "short":
+            data["returns"] = data["returns"][:2]
+        else:
+            del data["policy"]
+        np.savez(unit, **data)
+    code, text = _run(capsys, out, "--resume")
+    refused(code, text, unit.name, "delete it", "--resume")
+    unit.unlink()  # as the message says: the run is done again, and the rest kept
+    assert _run(capsys, out, "--resume")[0] == 0
+    assert len(_units(out)) == 4
+
+
+@pytest.mark.parametrize("content", ["{not json", "[1, 2]", "\xff"])
+def test_resume_names_a_damaged_config(capsys, tmp_path, content):
+    out = tmp_path / "o"
+    assert _run(capsys, out)[0] == 0
+    (out / "config.json").write_bytes(content.encode("latin-1"))
+    code, text = _run(capsys, out, "--resume")
+    refused(code, text, str(out / "config.json"), "damaged")
+
+
+def test_resume_names_what_differs(capsys, tmp_path):
+    out = tmp_path / "o"
+    assert _run(capsys, out)[0] == 0
+    code, text = cli(capsys, "run", "--task", "C", "--episodes", "5", "--runs", "2", "--method",
+                     "Q-learning", "Dyna-Q", "--jobs", "1", "--out", out, "--resume")
+    refused(code, text, "schedule")
+
+
+def test_scale_resume_names_damaged_files(capsys, tmp_path):
+    out = tmp_path / "s"
+    argv = ["scale", "--sizes", "100", "--runs", "1", "--episodes", "3", "--out", out]
+    code, text = cli(capsys, *argv, "--resume")
+    refused(code, text, str(out), "without --resume")
+    assert cli(capsys, *argv)[0] == 0
+    unit = next((out / "units" / "size-100").glob("*.npz"))
+    unit.write_bytes(b"PK")
+    refused(*cli(capsys, *argv, "--resume"), unit.name, "delete it")
+    unit.unlink()
+    (out / "config.json").write_text("[]")
+    refused(*cli(capsys, *argv, "--resume"), "config.json", "damaged")
+
+
+def test_a_run_that_fails_leaves_no_config_json_behind(tmp_path, monkeypatch):
+    from gdq_pddl.experiments import Experiment, run_experiments, runner
+
+    exps = [Experiment("tasks", (("C", 3),), methods=("Q-learning",), runs=2)]
+
+    def broken(unit):
+        raise GdqError("the planner went away")
+
+    monkeypatch.setattr(runner, "run_unit", broken)
+    with pytest.raises(GdqError, match="went away"):
+        run_experiments(exps, tmp_path, jobs=1, progress=False)
+    assert not (tmp_path / "config.json").exists()
+    monkeypatch.undo()
+    run_experiments(exps, tmp_path, jobs=1, progress=False)  # the corrected command
+    assert (tmp_path / "episodes.csv").exists()
+
+
+def test_a_second_process_on_one_folder_is_refused(capsys, tmp_path):
+    out = tmp_path / "o"
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "4000",
+            "--runs", "4", "--method", "GDQ", "--jobs", "1", "--no-report", "--out", str(out)]
+    first = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        deadline = time.time() + 120
+        while not (out / "config.json").exists() and time.time() < deadline:
+            time.sleep(0.1)
+        assert (out / "config.json").exists()
+        code, text = cli(capsys, *argv[3:], "--resume")
+        refused(code, text, str(out), "in use by another", str(first.pid))
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.wait()
+    code, text = cli(capsys, *argv[3:6], "--episodes", "4000", "--runs", "4", "--method",
+                     "GDQ", "--jobs", "1", "--no-report", "--out", out, "--resume")
+    assert code == 0, text  # the kill released the lock
+
+
+# --- report -------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def office_results(tmp_path_factory):
+    out = tmp_path_factory.mktemp("office") / "o"
+    assert main(["run", "--task", "C", "--episodes", "30", "--runs", "2", "--method",
+                 "Q-learning", "DARLING", "--jobs", "1", "--no-report", "--out",
+                 str(out)]) == 0
+    return out
+
+
+@pytest.mark.parametrize(("name", "damage"), [
+    ("episodes.csv", "truncated"), ("episodes.csv", "garbage"), ("episodes.csv", "latin-1"),
+    ("episodes.csv", "not a number"), ("policies.csv", "garbage"), ("optimal.json", "garbage"),
+])
+def test_report_on_damaged_results(capsys, tmp_path, office_results, name, damage):
+    import shutil
+
+    out = tmp_path / "copy"
+    shutil.copytree(office_results, out)
+    path = out / name
+    text = path.read_text()
+    path.write_bytes({"truncated": text[: len(text) // 2].encode(),
+                      "garbage": b"experiment,method\n\x01,,,\n{{{",
+                      "latin-1": b"experiment,m\xe9thode\n",
+                      "not a number": text.replace(",C,0,1,", ",C,0,one,", 1).encode(),
+                      }[damage])
+    code, out_text = cli(capsys, "report", out)
+    refused(code, out_text, str(path))
+
+
+def test_report_on_a_pddl_run_folder(capsys, tmp_path):
+    files = pddl_files(tmp_path)
+    assert pddl_run(capsys, tmp_path, files, "--no-report")[0] == 0
+    code, text = cli(capsys, "report", tmp_path / "o")
+    assert code == 0, text
+    assert "PDDL" in (tmp_path / "o" / "REPORT.md").read_text()
+
+
+# --- the API --------------------------------------------------------------------------------
+
+def test_run_episodes_refuses_what_memory_cannot_hold():
+    import gymnasium
+
+    from gdq_pddl.errors import SizeError
+    from gdq_pddl.learners import QLearning, office_task_context, run_episodes
+
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    learner = QLearning(office_task_context(env.unwrapped.world, "C"))
+    with pytest.raises(SizeError, match="n_episodes = 1,000,000,000,000"):
+        run_episodes(learner, env, 10**12, np.random.default_rng(0))
+    with pytest.raises(ValueError, match="n_episodes"):
+        run_episodes(learner, env, 2.5, np.random.default_rng(0))
+
+
+@pytest.mark.parametrize("action", [2.5, np.float64(2.0), "2", True, -1, 95, None])
+def test_env_step_refuses_what_is_not_an_action(action):
+    import gymnasium
+
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be an integer"):
+        env.step(action)
+    env.step(np.int64(3))  # numpy integers are actions
+
+
+@pytest.mark.parametrize(("config", "kwargs", "name"), [
+    ("DynaQConfig", {"n_backups": 2.5}, "n_backups"),
+    ("DynaQConfig", {"n_backups": 1e12}, "n_backups"),
+    ("DynaQConfig", {"n_backups": 10**12}, "n_backups"),
+    ("DynaQConfig", {"m": -1}, "m"),
+    ("DynaQConfig", {"m": 0.5}, "m"),
+    ("QLearningConfig", {"alpha": float("nan")}, "alpha"),
+    ("QLearningConfig", {"gamma": float("inf")}, "gamma"),
+    ("QLearningConfig", {"epsilon": "0.1"}, "epsilon"),
+    ("DarlingConfig", {"tolerance": float("nan")}, "tolerance"),
+    ("DarlingConfig", {"tolerance": float("inf")}, "tolerance"),
+])
+def test_learner_configs_refuse_non_numbers(config, kwargs, name):
+    from gdq_pddl.learners import config as configs
+
+    with pytest.raises(ValueError, match=name):
+        getattr(configs, config)(**kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [
+    ({"runs": 0}, "runs"), ({"runs": 2.5}, "runs"), ({"seed": -1}, "seed"),
+    ({"schedule": (("C", 0),)}, "episodes"), ({"schedule": (("C", 2.5),)}, "episodes"),
+    ({"methods": ("GDQ", "SARSA")}, "SARSA"),
+])
+def test_experiments_refuse_bad_fields(kwargs, name):
+    from gdq_pddl.experiments import Experiment
+
+    fields = {"name": "x", "schedule": (("C", 3),)} | kwargs
+    with pytest.raises(ValueError, match=name):
+        Experiment(**fields)
+
+
+@pytest.mark.parametrize("jobs", [0, -2, 2.5])
+def test_run_experiments_refuses_bad_jobs(tmp_path, jobs):
+    from gdq_pddl.experiments import Experiment, run_experiments
+
+    with pytest.raises(ValueError, match="jobs"):
+        run_experiments([Experiment("x", (("C", 3),), methods=("Q-learning",), runs=1)],
+                        tmp_path / "o", jobs=jobs)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("tolerance", [float("nan"), float("inf"), -1.0])
+def test_planner_tolerance_must_be_finite(tolerance):
+    from gdq_pddl.errors import PlanningError
+    from gdq_pddl.planning import PlanningProblem, get_planner
+
+    problem = PlanningProblem.from_texts(KEYS_DOMAIN, KEYS_PROBLEM)
+    with pytest.raises(PlanningError, match="tolerance"):
+        get_planner("graph").solve(problem, tolerance=tolerance)
+
+
+def test_value_iteration_refuses_up_front_what_memory_cannot_hold(monkeypatch):
+    from dataclasses import replace
+
+    from gdq_pddl.envs.solve import optimal_value
+    from gdq_pddl.errors import SizeError
+    from gdq_pddl.world import load_world
+
+    world = replace(load_world(None), step_limit=10**9)
+    with pytest.raises(SizeError, match="step_limit = 1000000000"):
+        optimal_value(world, "C")
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(10**6))  # a machine of 1 MB
+    with pytest.raises(SizeError, match="1 MB"):
+        optimal_value(load_world(None), "C")
+
+
+def test_the_shipped_and_generated_worlds_still_load():
+    """The strict validator still reads every shipped and generated world."""
+    from gdq_pddl.buildings import building_world
+    from gdq_pddl.world import builtin_world
+
+    for name in ("office", "office_robot"):
+        assert builtin_world(name).tasks
+    assert building_world(300, 1).tasks
