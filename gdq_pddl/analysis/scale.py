@@ -80,8 +80,9 @@ def _first_label(episodes: int) -> str:
 
 def figure(results: list[BuildingResult], episodes: int, out: Path) -> list[Path]:
     """:func:`draw` saved as ``out/scale.png`` and ``out/scale.pdf``; returns the paths."""
-    fig = draw(results, episodes)
     import matplotlib.pyplot as plt
+
+    fig = draw(results, episodes)
     paths = [out / "scale.png", out / "scale.pdf"]
     for p in paths:
         fig.savefig(p)
@@ -109,7 +110,7 @@ def draw(results: list[BuildingResult], episodes: int):
     ax, bx = axes[0], axes[-1]
 
     def panel(axis, name: str, i: int, n: int, value: Callable, whole: Callable,
-             open_at: float | None = None) -> None:
+              open_at: float | None = None) -> None:
         """One method in one panel: per building ``value(r) -> (y, err)``, over the size's
         buildings ``whole(group) -> y``; a None ``y`` is drawn open at ``open_at``."""
         colour, shift = method_colour(name), 10 ** (0.018 * (i - (n - 1) / 2))
@@ -128,13 +129,13 @@ def draw(results: list[BuildingResult], episodes: int):
 
     for i, name in enumerate(names):
         panel(ax, name, i, len(names), lambda r, m=name: (convergence([r], m)[0], None),
-             lambda g, m=name: convergence(g, m)[0], open_at=episodes * (1.04 + 0.025 * i))
-        panel(bx, name, i, len(names),
-             lambda r, m=name: (steps_per_s([r], m), None), lambda g, m=name: steps_per_s(g, m))
+              lambda g, m=name: convergence(g, m)[0], open_at=episodes * (1.04 + 0.025 * i))
+        panel(bx, name, i, len(names), lambda r, m=name: (steps_per_s([r], m), None),
+              lambda g, m=name: steps_per_s(g, m))
     for j, name in enumerate(others):
         panel(axes[1], name, j, len(others),
-             lambda r, m=name: paired_difference([r], REFERENCE, m),
-             lambda g, m=name: paired_difference(g, REFERENCE, m)[0])
+              lambda r, m=name: paired_difference([r], REFERENCE, m),
+              lambda g, m=name: paired_difference(g, REFERENCE, m)[0])
     ax.axhline(episodes, color="grey", lw=0.5, ls="--")
     ax.set_ylim(bottom=0, top=episodes * (1.08 + 0.025 * len(names)))
     ax.set(xscale="log", xlabel="positions", ylabel="episodes to convergence",

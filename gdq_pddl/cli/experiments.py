@@ -194,7 +194,7 @@ def register_scale(sub) -> None:
 
     default = list(DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
-                       description="Run every method on --buildings generated buildings of "
+                       description="Run each --method on --buildings generated buildings of "
                                    "each size (building seeds --seed, --seed + 1, ...) and "
                                    "write scale.png/pdf and REPORT.md (episodes to "
                                    "convergence, mean returns, GDQ minus each method, env "
