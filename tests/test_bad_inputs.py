@@ -432,11 +432,12 @@ def test_resume_names_what_differs(capsys, tmp_path):
 
 def test_scale_resume_names_damaged_files(capsys, tmp_path):
     out = tmp_path / "s"
-    argv = ["scale", "--sizes", "100", "--runs", "1", "--episodes", "3", "--out", out]
+    argv = ["scale", "--sizes", "40", "--buildings", "1", "--runs", "1", "--episodes", "3",
+            "--method", "DARLING", "Q-learning", "--out", out]
     code, text = cli(capsys, *argv, "--resume")
     refused(code, text, str(out), "without --resume")
     assert cli(capsys, *argv)[0] == 0
-    unit = next((out / "units" / "size-100").glob("*.npz"))
+    unit = next((out / "units" / "building-40-s0").glob("*.npz"))
     unit.write_bytes(b"PK")
     refused(*cli(capsys, *argv, "--resume"), unit.name, "delete it")
     unit.unlink()

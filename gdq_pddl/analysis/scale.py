@@ -1,53 +1,88 @@
-"""Figure and REPORT.md of the scale experiment (:mod:`gdq_pddl.experiments.scale`)."""
+"""Figure and REPORT.md of the scale experiment (:mod:`gdq_pddl.experiments.scale`).
+
+Every measure is given per building and, per size, over all its buildings: episodes to
+convergence (median over the converged runs, and how many converged), the mean return
+over the first :data:`~gdq_pddl.experiments.scale.FIRST` episodes and over all episodes
+(mean over runs), GDQ minus each other method in the first of those (paired runs: run
+``r`` of every method on a building has the same seeds; mean and s.e. of the per-run
+differences) and env steps/s (all runs' steps over their wall time).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.experiments.scale import FRACTION, TOLERANCE, WINDOW, SizeResult
+from gdq_pddl.analysis.names import order_methods
+from gdq_pddl.analysis.stats import mean_se
+from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
+
+REFERENCE = "GDQ"
+"""The method every other one is compared with, run by run."""
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+"""A building seed's marker (by its place among the seeds), in every panel."""
 
 
-def _median_conv(result: SizeResult, name: str) -> tuple[float | None, int]:
-    """Median episodes to convergence over the converged runs, and how many converged."""
-    done = [c for c in result.converged(name) if c is not None]
-    return (float(np.median(done)) if done else None), len(done)
+def by_size(results: list[BuildingResult]) -> dict[int, list[BuildingResult]]:
+    """The buildings of each size, sizes and seeds in the order they were run."""
+    out: dict[int, list[BuildingResult]] = {}
+    for r in results:
+        out.setdefault(r.positions, []).append(r)
+    return out
 
 
-def figure(results: list[SizeResult], episodes: int, out: Path) -> list[Path]:
-    """Episodes to convergence and env steps/s against size, per method (PNG + PDF)."""
-    import matplotlib
+def convergence(group: list[BuildingResult], name: str) -> tuple[float | None, int, int]:
+    """Median episodes to convergence over the converged runs of ``name`` on the buildings
+    of ``group``, how many converged and how many runs there were."""
+    runs = [c for r in group for c in r.converged(name)]
+    done = [c for c in runs if c is not None]
+    return (float(np.median(done)) if done else None), len(done), len(runs)
 
-    matplotlib.use("Agg")
+
+def first_means(group: list[BuildingResult], name: str) -> np.ndarray:
+    """Every run's mean return over its first episodes, building after building."""
+    return np.concatenate([r.first_mean(name) for r in group])
+
+
+def all_mean(group: list[BuildingResult], name: str) -> float:
+    """Mean over the runs of ``name`` on ``group`` of each run's mean return."""
+    return float(np.concatenate([r.returns[name].mean(axis=1) for r in group]).mean())
+
+
+def last_success(group: list[BuildingResult], name: str) -> float:
+    """Success rate of ``name`` over the last 100 episodes of all runs on ``group``."""
+    return float(np.mean([r.success[name][:, -100:].mean() for r in group]))
+
+
+def steps_per_s(group: list[BuildingResult], name: str) -> float:
+    """Env steps/s of ``name`` on ``group``: all its runs' steps over their wall time."""
+    wall = sum(r.wall_s[name] for r in group)
+    return sum(r.steps[name] for r in group) / wall if wall > 0 else float("nan")
+
+
+def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[float, float]:
+    """Mean and standard error of ``a`` minus ``b`` in each run's mean return over its
+    first episodes, run ``r`` against run ``r`` of the same building (same seeds)."""
+    mean, se = mean_se(first_means(group, a) - first_means(group, b))
+    return float(mean), float(se)
+
+
+def _names(results: list[BuildingResult]) -> list[str]:
+    return order_methods(n for r in results for n in r.returns)
+
+
+def _first_label(episodes: int) -> str:
+    """What the early-learning measure averages over, in a run of ``episodes``."""
+    return f"first {FIRST} episodes" if episodes > FIRST else f"{episodes} episodes (all)"
+
+
+def figure(results: list[BuildingResult], episodes: int, out: Path) -> list[Path]:
+    """:func:`draw` saved as ``out/scale.png`` and ``out/scale.pdf``; returns the paths."""
     import matplotlib.pyplot as plt
 
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4))
-    names = list(dict.fromkeys(n for r in results for n in r.returns))
-    for i, name in enumerate(names):
-        xs, ys, open_x = [], [], []
-        sx, sy = [], []
-        for r in results:
-            if name not in r.returns:
-                continue
-            med, _ = _median_conv(r, name)
-            xs.append(r.positions)  # NaN breaks the line where a size did not converge
-            ys.append(med if med is not None else np.nan)
-            if med is None:
-                open_x.append(r.positions)
-            sx.append(r.positions)
-            sy.append(r.steps_per_s[name])
-        color = f"C{i}"
-        ax.plot(xs, ys, "o-", color=color, label=name)
-        ax.plot(open_x, [episodes * (1.02 + 0.02 * i)] * len(open_x), "o", color=color,
-                fillstyle="none")
-        bx.plot(sx, sy, "o-", color=color, label=name)
-    ax.axhline(episodes, color="grey", lw=0.5, ls="--")
-    ax.set(xscale="log", xlabel="positions", ylabel="episodes to convergence",
-           title=f"open markers: not converged in {episodes} episodes")
-    bx.set(xscale="log", yscale="log", xlabel="positions", ylabel="env steps / s (one core)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    fig = draw(results, episodes)
     paths = [out / "scale.png", out / "scale.pdf"]
     for p in paths:
         fig.savefig(p)
@@ -55,42 +90,155 @@ def figure(results: list[SizeResult], episodes: int, out: Path) -> list[Path]:
     return paths
 
 
-def report(results: list[SizeResult], runs: int, episodes: int, seed: int, out: Path) -> Path:
-    """REPORT.md: the definitions, one table per size, and what was skipped."""
+def draw(results: list[BuildingResult], episodes: int):
+    """The figure: episodes to convergence, GDQ minus each other method in mean return over
+    the first episodes (when GDQ ran) and env steps/s against size; each building its own
+    marker, a line through each size's value over all its buildings."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
+
+    from gdq_pddl.analysis.figures import method_colour
+
+    names = _names(results)
+    others = [n for n in names if n != REFERENCE] if REFERENCE in names else []
+    sizes = by_size(results)
+    seeds = list(dict.fromkeys(r.seed for r in results))
+    fig, axes = plt.subplots(1, 3 if others else 2, figsize=(15 if others else 10, 4.6))
+    ax, bx = axes[0], axes[-1]
+
+    def panel(axis, name: str, i: int, n: int, value: Callable, whole: Callable,
+              open_at: float | None = None) -> None:
+        """One method in one panel: per building ``value(r) -> (y, err)``, over the size's
+        buildings ``whole(group) -> y``; a None ``y`` is drawn open at ``open_at``."""
+        colour, shift = method_colour(name), 10 ** (0.018 * (i - (n - 1) / 2))
+        for r in results:
+            y, err = value(r)
+            marker = MARKERS[seeds.index(r.seed) % len(MARKERS)]
+            x = r.positions * shift
+            if y is None:
+                axis.plot(x, open_at, marker, color=colour, fillstyle="none", ms=6)
+            else:
+                axis.errorbar(x, y, yerr=err, fmt=marker, color=colour, ms=5, capsize=2,
+                              lw=0.8)
+        ys = [whole(g) for g in sizes.values()]
+        axis.plot([n_ * shift for n_ in sizes], [np.nan if y is None else y for y in ys],
+                  "-", color=colour, lw=1.2, label=name)
+
+    for i, name in enumerate(names):
+        panel(ax, name, i, len(names), lambda r, m=name: (convergence([r], m)[0], None),
+              lambda g, m=name: convergence(g, m)[0], open_at=episodes * (1.04 + 0.025 * i))
+        panel(bx, name, i, len(names), lambda r, m=name: (steps_per_s([r], m), None),
+              lambda g, m=name: steps_per_s(g, m))
+    for j, name in enumerate(others):
+        panel(axes[1], name, j, len(others),
+              lambda r, m=name: paired_difference([r], REFERENCE, m),
+              lambda g, m=name: paired_difference(g, REFERENCE, m)[0])
+    ax.axhline(episodes, color="grey", lw=0.5, ls="--")
+    ax.set_ylim(bottom=0, top=episodes * (1.08 + 0.025 * len(names)))
+    ax.set(xscale="log", xlabel="positions", ylabel="episodes to convergence",
+           title=f"open markers: not converged in {episodes} episodes")
+    bx.set(xscale="log", yscale="log", xlabel="positions", ylabel="env steps / s (one core)")
+    if others:
+        cx = axes[1]
+        cx.axhline(0, color="black", lw=0.6)
+        cx.set(xscale="log", xlabel="positions",
+               ylabel=f"{REFERENCE} minus method, mean return",
+               title=f"{_first_label(episodes)}, paired runs (mean, s.e.)")
+        cx.set_yscale("symlog", linthresh=10)
+        cx.legend(fontsize=8, title=f"{REFERENCE} minus", title_fontsize=8)
+    handles = [plt.Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
+                          label=f"building seed {s}") for k, s in enumerate(seeds)]
+    ax.legend(fontsize=8, loc="center left")
+    bx.legend(handles=handles, fontsize=8, loc="lower left")
+    for axis in axes:
+        axis.set_xticks(list(sizes), [str(n) for n in sizes])
+        axis.xaxis.set_minor_formatter(NullFormatter())
+    fig.tight_layout()
+    return fig
+
+
+def _rows(results: list[BuildingResult]) -> list[tuple[str, list[BuildingResult]]]:
+    """Table rows: each building, then its size over all its buildings (when several)."""
+    rows = []
+    for n, group in by_size(results).items():
+        rows += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
+        if len(group) > 1:
+            rows.append((f"**{n} / all {len(group)}**", group))
+    return rows
+
+
+def _table(results: list[BuildingResult], columns: list[str],
+           cell: Callable[[list[BuildingResult], str], str]) -> list[str]:
+    """A markdown table: a row per building and per size, a column per method."""
+    lines = ["| positions / building | " + " | ".join(columns) + " |",
+             "|---|" + "---|" * len(columns)]
+    for label, group in _rows(results):
+        lines.append(f"| {label} | " + " | ".join(cell(group, c) for c in columns) + " |")
+    return lines + [""]
+
+
+def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -> Path:
+    """REPORT.md: the definitions, the buildings, and a table per measure."""
+    names = _names(results)
+    others = [n for n in names if n != REFERENCE] if REFERENCE in names else []
+    seeds = list(dict.fromkeys(r.seed for r in results))
+    first = _first_label(episodes)
+
+    def conv(group, name):
+        med, n, total = convergence(group, name)
+        return f"{med:.0f} ({n}/{total})" if med is not None else f"> {episodes} (0/{total})"
+
+    def diff(group, name):
+        mean, se = paired_difference(group, REFERENCE, name)
+        return f"{mean:+.1f} ± {se:.1f}"
+
     lines = [
         "# Learning against building size", "",
-        f"Generated buildings (`gdq-pddl building --positions N --seed {seed}`), task A, "
-        f"{runs} run(s) x {episodes} episodes per method, compact model "
-        "(`gdq_pddl.envs.compact`).", "",
+        f"Generated buildings (`gdq-pddl building --positions N --seed S`, S in "
+        f"{', '.join(map(str, seeds))}), task A, {runs} run(s) x {episodes} episodes per "
+        "method and building, compact model (`gdq_pddl.envs.compact`). Run r of every "
+        "method on a building has the same env and learner seeds (paired runs).", "",
         f"**Episodes to convergence**: the first episode at which the trailing {WINDOW}-"
         f"episode moving average of the return reaches R_fail + {FRACTION} (V_ref - R_fail); "
         "V_ref is the reference value (`gdq_pddl.envs.solve_compact`, a lower "
         "bound on V*), R_fail = -r_max - (step_limit - 1) the return of a timeout. "
-        "Median over the runs that converged (count in brackets). Discount "
+        "Median over the runs that converged (converged / runs in brackets). Discount "
         f"gamma = 1 - 1/step_limit; DARLING and GDQ-code use door-route plans within "
         f"{1 + TOLERANCE:g} x the shortest (`gdq_pddl.abstraction.routes`); see "
         "`gdq_pddl/experiments/scale.py` for why.", "",
-        "![episodes to convergence and steps/s](scale.png)", "",
+        "Each table has a row per building and, in bold, a row per size over all its "
+        "buildings (medians over all their converged runs; means over all their runs; "
+        "steps/s of all their runs).", "",
+        "![episodes to convergence, paired differences and steps/s](scale.png)", "",
+        "## Buildings", "",
+        "| positions / building | doors | learner states x actions | L | step limit | "
+        "r_max | V_ref | R_fail | threshold | plan tables (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for r in results:
-        lines += [f"## {r.positions} positions", "",
-                  f"{r.doors} doors, {r.n_states} learner states x {r.n_actions} actions, "
-                  f"shortest plan L = {r.plan_length}, step_limit = {r.step_limit}, "
-                  f"r_max = {r.r_max:g}, V_ref = {r.v_ref:.1f}, R_fail = {r.r_fail:g}, "
-                  f"threshold = {r.threshold:.1f}; plan tables for every state "
-                  f"built in {r.context_s:.1f} s.", "",
-                  "| method | episodes to convergence | mean return, last 100 | "
-                  "success rate, last 100 | env steps/s |", "|---|---|---|---|---|"]
-        for name in r.returns:
-            med, n = _median_conv(r, name)
-            conv = f"{med:.0f} ({n}/{runs})" if med is not None else f"> {episodes} (0/{runs})"
-            last = r.returns[name][:, -100:]
-            succ = r.success[name][:, -100:]
-            lines.append(f"| {name} | {conv} | {last.mean():.1f} | {succ.mean():.2f} | "
-                         f"{r.steps_per_s[name]:,.0f} |")
-        for name, why in r.skipped.items():
-            lines.append(f"| {name} | not run: {why} | | | |")
-        lines.append("")
+    lines += [f"| {r.positions} / seed {r.seed} | {r.doors} | {r.n_states} x {r.n_actions} | "
+              f"{r.plan_length} | {r.step_limit} | {r.r_max:g} | {r.v_ref:.1f} | "
+              f"{r.r_fail:g} | {r.threshold:.1f} | {r.context_s:.1f} |" for r in results]
+    lines += ["", "## Episodes to convergence", ""] + _table(results, names, conv)
+    lines += [f"## Mean return over the {first}", "",
+              "Mean over runs of each run's mean return.", ""]
+    lines += _table(results, names, lambda g, m: f"{first_means(g, m).mean():.1f}")
+    if others:
+        lines += [f"## {REFERENCE} minus each method: mean return over the {first}",
+                  "", f"Paired: run r of {REFERENCE} minus run r of the method on the same "
+                  "building; mean ± standard error over those differences (over all the "
+                  "size's runs in the bold rows).", ""]
+        lines += _table(results, others, diff)
+    lines += [f"## Mean return over all {episodes} episodes", ""]
+    lines += _table(results, names, lambda g, m: f"{all_mean(g, m):.1f}")
+    lines += ["## Success rate over the last 100 episodes", ""]
+    lines += _table(results, names, lambda g, m: f"{last_success(g, m):.2f}")
+    lines += ["## Env steps/s", "", "Steps of all runs over their wall time (the compiled "
+              "loop of learner and env, one core, the first episode of each method in a "
+              "process untimed).", ""]
+    lines += _table(results, names, lambda g, m: f"{steps_per_s(g, m):,.0f}")
     path = out / "REPORT.md"
     path.write_text("\n".join(lines), encoding="utf-8")
     return path

@@ -212,22 +212,36 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def register_scale(sub) -> None:
+    from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
+
+    default = list(DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
-                       description="Run every method on generated buildings of each size "
-                                   "and write scale.png/pdf and REPORT.md (episodes to "
-                                   "convergence, env steps/s). Each finished run is saved "
-                                   "in --out as it ends (units/size-N/), so an interrupted "
-                                   "run goes on with --resume.")
+                       description="Run each --method on --buildings generated buildings of "
+                                   "each size (building seeds --seed, --seed + 1, ...) and "
+                                   "write scale.png/pdf and REPORT.md (episodes to "
+                                   "convergence, mean returns, GDQ minus each method, env "
+                                   "steps/s). Each finished run is saved in --out as it ends "
+                                   "(units/building-N-sS/), so an interrupted run goes on "
+                                   "with --resume.")
     p.add_argument("--sizes", type=POSITIVE, nargs="+", default=[100, 300, 1000],
                    help="building sizes in positions (default 100 300 1000)")
-    p.add_argument("--runs", type=POSITIVE, default=5, help="independent runs per method and size")
-    p.add_argument("--episodes", type=POSITIVE, default=5000, help="episodes per run")
+    p.add_argument("--buildings", type=POSITIVE, default=2,
+                   help="buildings per size: building seeds --seed, --seed + 1, ... "
+                        "(default 2)")
+    p.add_argument("--method", nargs="+", metavar="M", default=default,
+                   help=f"methods to compare (default: {' '.join(default)}; "
+                        f"from: {', '.join(METHODS)})")
+    p.add_argument("--runs", type=POSITIVE, default=5,
+                   help="runs per method and building, paired across methods (default 5)")
+    p.add_argument("--episodes", type=POSITIVE, default=5000,
+                   help="episodes per run (default 5000)")
     p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="building and base seed (each run derives its own)")
+                   help="the first building seed (each run derives its own seeds from its "
+                        "building, size and run number)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
     p.add_argument("--resume", action="store_true",
-                   help="continue an interrupted run in --out (same command line; "
-                        "sizes cannot be added)")
+                   help="continue an interrupted run in --out (same command line; sizes, "
+                        "buildings and methods cannot be added)")
     p.set_defaults(func=cmd_scale)
 
 
@@ -237,11 +251,13 @@ def cmd_scale(args: argparse.Namespace) -> int:
     from gdq_pddl.experiments.scale import run_scale
 
     out = args.out or Path("results/scale")
+    methods = list(dict.fromkeys(args.method))
     command = shlex.join(["gdq-pddl", "scale", "--sizes", *map(str, args.sizes),
+                          "--buildings", str(args.buildings), "--method", *methods,
                           "--runs", str(args.runs), "--episodes", str(args.episodes),
                           "--seed", str(args.seed), "--out", str(out), "--resume"])
-    run_scale(out, args.sizes, args.runs, args.episodes, args.seed, resume=args.resume,
-              command=command)
+    run_scale(out, args.sizes, args.runs, args.episodes, args.seed, buildings=args.buildings,
+              methods=methods, resume=args.resume, command=command)
     print(out / "REPORT.md")
     return 0
 

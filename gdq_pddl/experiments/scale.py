@@ -1,30 +1,48 @@
 """Learning against building size: every method on generated buildings of N positions.
 
-For each size N (default 100, 300, 1000) the building of ``gdq-pddl building
---positions N --seed S`` and its task A (start and goal in rooms far apart), each method
-runs ``runs`` times for ``episodes`` episodes over the compact model
-(:mod:`gdq_pddl.envs.compact`; the full-state model would need ``2**n_doors`` states).
-Seeds come from ``(seed, N, method index, run)`` only, so a run gives the same returns
-whether it ran straight through or was interrupted and resumed.
+For each size N (default 100, 300, 1000) and each of ``buildings`` building seeds
+``S = seed, seed + 1, ...`` (default 2), the building of ``gdq-pddl building --positions N
+--seed S`` and its task A (start and goal in rooms far apart): each method runs ``runs``
+times for ``episodes`` episodes over the compact model (:mod:`gdq_pddl.envs.compact`; the
+full-state model would need ``2**n_doors`` states). Run ``r`` on building ``S`` of size
+``N`` is seeded by ``(S, N, r)`` only: every method's run ``r`` on a building starts from
+the same env and learner seeds (paired runs, common random numbers), and a run gives the
+same returns whether it ran straight through or was interrupted and resumed, whatever
+other sizes, buildings or methods the command holds.
 
 :func:`run_scale` (``gdq-pddl scale``) writes to its output folder, as the office
 runner (:mod:`gdq_pddl.experiments.runner`) does::
 
-    config.json           sizes, runs, episodes, seed, methods and package versions
-    units/size-N/size.json    the building, learner tables and plan-table time of size N
-    units/size-N/<method>-<run>.npz
+    config.json           sizes, buildings, runs, episodes, seed, methods, package versions
+    units/building-N-sS/building.json
+                          the building, learner tables and plan-table time of one building
+    units/building-N-sS/<method>-<run>.npz
                           one finished run, written atomically as soon as it is done:
                           returns, success (per episode), steps, wall_s, table_mb
-    size-N.npz            every run of size N (:func:`save_size`), once its units are done
+    building-N-sS.npz     every run on that building (:func:`save_building`), once its
+                          units are done
     scale.png/pdf, REPORT.md  at the end, from the units
 
 An interrupted run (Ctrl-C, or killed) loses at most the run in flight; ``--resume``
 checks that the configuration is the same and runs only the missing units (it cannot add
-sizes: those go into another folder). Env steps/s are the saved runs' steps over their
-wall time, so a resumed run's size files, figure and report are made the same way.
+sizes, buildings or methods: those go into another folder). Env steps/s are the saved
+runs' steps over their wall time, so a resumed run's building files, figure and report
+are made the same way.
 
 Decisions, where the office protocol does not carry over:
 
+- **Buildings per size**: ``--buildings K`` consecutive seeds from ``--seed`` (not a list
+  of seeds): ``K`` is the number the question is about ("at least two building seeds per
+  size"), and building ``S`` is the one ``gdq-pddl building --seed S`` writes. The
+  default ``--seed 0`` keeps the building of the one-building runs before this option.
+- **Paired runs**: a run's seeds come from its building, size and number, not from the
+  method, so run ``r`` of every method starts from the same env and learner seeds and
+  the report's GDQ-minus-method differences are taken run by run (the office protocol
+  does the same, :meth:`gdq_pddl.experiments.protocol.Unit.seeds`). Nor do they depend
+  on the other buildings, sizes or methods of the command, so building ``S`` of a run
+  with ``--seed 0 --buildings 2`` and of one with ``--seed S --buildings 1`` agree.
+- **Early learning**: the mean return over the first :data:`FIRST` (300) episodes, as
+  issue 11 judges GDQ against DARLING on the office, besides episodes to convergence.
 - **Reference value** ``V_ref``: the pessimistic value iteration of
   :func:`gdq_pddl.envs.solve_compact.reference_value`, a proven lower bound on V* (equal
   to it on the office), since V* itself needs ``2**n_doors`` door masks. The worst
@@ -77,29 +95,27 @@ from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, read_config
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
+from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.compact_runner import run_compact
 from gdq_pddl.limits import check_count, check_memory
 from gdq_pddl.outputs import output_folder
 
-METHODS: dict[str, tuple[str, dict]] = {
-    "GDQ": ("gdq", {}),
-    "GDQ-literal": ("gdq", {"variant": "literal"}),
-    "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.3}),
-    "DARLING": ("darling", {"tolerance": 0.3}),
-    "Dyna-Q": ("dynaq", {}),
-    "Q-learning": ("qlearning", {}),
-}
 WINDOW = 50
 FRACTION = 0.9
 TOLERANCE = 0.3
+FIRST = 300
+"""Episodes of the early-learning measure: the mean return over the first ``FIRST``
+episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
 
 
 @dataclass
-class SizeResult:
-    """Everything measured at one building size."""
+class BuildingResult:
+    """Everything measured on one building."""
 
     positions: int
+    seed: int
+    """The building seed (``gdq-pddl building --seed``)."""
     doors: int
     n_states: int
     n_actions: int
@@ -111,11 +127,17 @@ class SizeResult:
     context_s: float
     returns: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes
     success: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes, bool
-    steps_per_s: dict[str, float] = field(default_factory=dict)
+    steps: dict[str, int] = field(default_factory=dict)
+    """Env steps of all runs of a method."""
+    wall_s: dict[str, float] = field(default_factory=dict)
+    """Wall time of all runs of a method (the compiled loop only)."""
     table_mb: dict[str, float] = field(default_factory=dict)
     """Memory one learner allocates (``TabularLearner.nbytes``), in MB."""
-    skipped: dict[str, str] = field(default_factory=dict)
-    """Methods not run, with why (none since the learners' model is sparse)."""
+
+    @property
+    def name(self) -> str:
+        """The building's name, as ``gdq-pddl building`` names its file."""
+        return building_name(self.positions, self.seed)
 
     @property
     def r_fail(self) -> float:
@@ -127,9 +149,28 @@ class SizeResult:
         """The moving average a converged run stays at or above."""
         return self.r_fail + FRACTION * (self.v_ref - self.r_fail)
 
+    def steps_per_s(self, name: str) -> float:
+        """Env steps/s of ``name``: its runs' steps over their wall time."""
+        wall = self.wall_s[name]
+        return self.steps[name] / wall if wall > 0 else float("nan")
+
     def converged(self, name: str) -> list[int | None]:
         """Episodes to convergence of each run of ``name``."""
         return [converged_at(r, self.threshold) for r in self.returns[name]]
+
+    def first_mean(self, name: str) -> np.ndarray:
+        """Each run's mean return over its first :data:`FIRST` episodes."""
+        return self.returns[name][:, :FIRST].mean(axis=1)
+
+
+def building_name(positions: int, seed: int) -> str:
+    """``building-N-sS``: the name :func:`gdq_pddl.buildings.generate` gives a building."""
+    return f"building-{positions}-s{seed}"
+
+
+def building_seeds(seed: int, buildings: int) -> list[int]:
+    """The building seeds of a run: ``seed, seed + 1, ...``, ``buildings`` of them."""
+    return list(range(seed, seed + buildings))
 
 
 def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) -> int | None:
@@ -141,38 +182,40 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
     return int(hit[0] + window) if len(hit) else None
 
 
-def size_context(positions: int, seed: int) -> tuple[dict, tuple]:
-    """The building of ``positions`` positions, its task context and env (what a run
-    needs), and the size's description: the first fields of :class:`SizeResult`, JSON-able.
-    """
+def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
+    """The building of ``positions`` positions and seed ``seed``, its task context and env
+    (what a run needs), and its description: the first fields of :class:`BuildingResult`,
+    JSON-able."""
     world = building_world(positions, seed)
     t0 = time.perf_counter()
     ctx = office_task_context(world, "A", darling_tolerance=TOLERANCE, darling_kind="routes")
     context_s = time.perf_counter() - t0
     env = CompactEnv(task="A", world=world)
-    header = {"positions": positions, "doors": len(world.doors), "n_states": int(ctx.n_states),
-              "n_actions": int(ctx.n_actions), "plan_length": int(ctx.plans.length[ctx.s0]),
+    header = {"positions": positions, "seed": seed, "doors": len(world.doors),
+              "n_states": int(ctx.n_states), "n_actions": int(ctx.n_actions),
+              "plan_length": int(ctx.plans.length[ctx.s0]),
               "step_limit": int(world.step_limit), "r_max": float(world.r_max),
               "v_ref": float(reference_value(world, "A")), "context_s": context_s}
     return header, (world, ctx, env)
 
 
 def describe(header: dict) -> str:
-    """One line about a size (its building, learner tables and plans)."""
-    return (f"{header['positions']} positions: {header['doors']} doors, {header['n_states']} "
-            f"states x {header['n_actions']} actions, L = {header['plan_length']}, "
-            f"V_ref = {header['v_ref']:.1f}, plans for every state in "
-            f"{header['context_s']:.1f} s")
+    """One line about a building (its learner tables and plans)."""
+    return (f"{building_name(header['positions'], header['seed'])}: {header['doors']} doors, "
+            f"{header['n_states']} states x {header['n_actions']} actions, "
+            f"L = {header['plan_length']}, V_ref = {header['v_ref']:.1f}, plans for every "
+            f"state in {header['context_s']:.1f} s")
 
 
 _WARMED: set[str] = set()
 """Methods whose compiled episode loop this process has already run once."""
 
 
-def run_one(setting: tuple, name: str, key: tuple[int, int, int, int],
+def run_one(setting: tuple, name: str, key: tuple[int, int, int],
             episodes: int) -> dict[str, np.ndarray]:
-    """One run of method ``name`` in ``setting`` (from :func:`size_context`), seeded by
-    ``key = (seed, positions, method index, run)`` only: the arrays of a unit file."""
+    """One run of method ``name`` in ``setting`` (from :func:`building_context`), seeded by
+    ``key = (building seed, positions, run)`` only, the same for every method (paired
+    runs): the arrays of a unit file."""
     world, ctx, env = setting
     method, config = METHODS[name]
     env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
@@ -193,45 +236,44 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int, int],
 
 
 def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
-             runs: int) -> SizeResult:
-    """A size's :class:`SizeResult` from its description and its (method, run) units;
-    env steps/s of a method is its runs' steps over their wall time."""
-    out = SizeResult(**header)
+             runs: int) -> BuildingResult:
+    """A building's :class:`BuildingResult` from its description and its (method, run)
+    units."""
+    out = BuildingResult(**header)
     for name in methods:
         done = [units[name, run] for run in range(runs)]
         out.returns[name] = np.stack([u["returns"] for u in done])
         out.success[name] = np.stack([u["success"] for u in done]).astype(np.bool_)
-        steps = sum(int(u["steps"]) for u in done)
-        wall = sum(float(u["wall_s"]) for u in done)
-        out.steps_per_s[name] = steps / wall if wall > 0 else float("nan")
+        out.steps[name] = sum(int(u["steps"]) for u in done)
+        out.wall_s[name] = sum(float(u["wall_s"]) for u in done)
         out.table_mb[name] = float(done[-1]["table_mb"])
     return out
 
 
-def summary(result: SizeResult) -> list[str]:
+def summary(result: BuildingResult) -> list[str]:
     """One line per method: env steps/s, table size, episodes to convergence."""
-    return [f"  {name}: {result.steps_per_s[name]:,.0f} steps/s, tables "
+    return [f"  {name}: {result.steps_per_s(name):,.0f} steps/s, tables "
             f"{result.table_mb[name]:,.0f} MB, converged at {result.converged(name)}"
             for name in result.returns]
 
 
-def run_size(positions: int, runs: int, episodes: int, seed: int = 0,
-             methods: list[str] | None = None, log=print) -> SizeResult:
-    """Run every method at one size in memory (see the module docstring; nothing saved:
-    :func:`run_scale` saves each run as it finishes)."""
-    methods = list(methods or METHODS)
-    header, setting = size_context(positions, seed)
+def run_building(positions: int, seed: int, runs: int, episodes: int,
+                 methods: list[str] | None = None, log=print) -> BuildingResult:
+    """Run every method on one building in memory (see the module docstring; nothing
+    saved: :func:`run_scale` saves each run as it finishes)."""
+    methods = list(methods or DEFAULT_METHODS)
+    header, setting = building_context(positions, seed)
     log(describe(header))
-    units = {(name, run): run_one(setting, name, (seed, positions, mi, run), episodes)
-             for mi, name in enumerate(methods) for run in range(runs)}
+    units = {(name, run): run_one(setting, name, (seed, positions, run), episodes)
+             for name in methods for run in range(runs)}
     result = assemble(header, units, methods, runs)
     for line in summary(result):
         log(line)
     return result
 
 
-def save_size(result: SizeResult, path) -> None:
-    """The raw returns and successes of every method at one size, with the size's
+def save_building(result: BuildingResult, path) -> None:
+    """The raw returns and successes of every method on one building, with the building's
     figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``).
     Written atomically."""
     arrays = {f"returns/{k}": v for k, v in result.returns.items()}
@@ -239,18 +281,20 @@ def save_size(result: SizeResult, path) -> None:
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, positions=result.positions, v_ref=result.v_ref,
-                                r_fail=result.r_fail, threshold=result.threshold, **arrays)
+            np.savez_compressed(fh, positions=result.positions, seed=result.seed,
+                                v_ref=result.v_ref, r_fail=result.r_fail,
+                                threshold=result.threshold, **arrays)
 
     atomic_write(Path(path), write)
 
 
 def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int = 0,
-              methods: list[str] | None = None, resume: bool = False, progress: bool = True,
-              log: Callable[[str], None] | None = None,
-              command: str | None = None) -> list[SizeResult]:
-    """Run every size into ``out``, each (size, method, run) saved as it finishes; then
-    ``size-N.npz``, ``scale.png/pdf`` and ``REPORT.md`` from the saved runs.
+              buildings: int = 2, methods: list[str] | None = None, resume: bool = False,
+              progress: bool = True, log: Callable[[str], None] | None = None,
+              command: str | None = None) -> list[BuildingResult]:
+    """Run every building of every size into ``out``, each (size, building, method, run)
+    saved as it finishes; then ``building-N-sS.npz``, ``scale.png/pdf`` and ``REPORT.md``
+    from the saved runs. Returns the buildings' results, by size then seed.
 
     ``resume=True`` checks that ``out/config.json`` holds the same configuration and
     runs only the missing units. On Ctrl-C raises :class:`RunInterrupted`, whose message
@@ -259,47 +303,53 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
     from tqdm import tqdm
 
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
-    methods = list(methods or METHODS)
-    _check(sizes, runs, episodes, seed, methods)
+    methods = list(methods or DEFAULT_METHODS)
+    seeds = building_seeds(seed, buildings)
+    _check(sizes, runs, episodes, seeds, methods)
     out = output_folder(out)
     rerun = command or "the same command and --resume"
     with FolderLock(out):
-        _prepare(out, {"sizes": list(sizes), "runs": runs, "episodes": episodes, "seed": seed,
-                       "methods": methods}, resume)
+        _prepare(out, {"sizes": list(sizes), "buildings": buildings, "runs": runs,
+                       "episodes": episodes, "seed": seed, "methods": methods}, resume)
         results = []
         try:
             for n in sizes:
-                results.append(_size_into(out, n, runs, episodes, seed, methods, progress, log,
-                                          rerun))
-                save_size(results[-1], out / f"size-{n}.npz")
+                for s in seeds:
+                    results.append(_building_into(out, n, s, runs, episodes, methods,
+                                                  progress, log, rerun))
+                    save_building(results[-1], out / f"{results[-1].name}.npz")
             from gdq_pddl.analysis.scale import figure, report
 
             figure(results, episodes, out)
-            report(results, runs, episodes, seed, out)
+            report(results, runs, episodes, out)
         except KeyboardInterrupt:
-            done = len(list((out / "units").glob("size-*/*.npz")))
-            total = len(sizes) * len(methods) * runs
+            done = len(list((out / "units").glob("building-*/*.npz")))
+            total = len(sizes) * buildings * len(methods) * runs
             raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
                                  f"continue with: {rerun}") from None
         except Exception:
-            if not resume and not any((out / "units").glob("size-*/*.npz")):
+            if not resume and not any((out / "units").glob("building-*/*.npz")):
                 (out / "config.json").unlink(missing_ok=True)  # nothing saved: no blocker
             raise
     return results
 
 
-def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[str]) -> None:
+def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
+           methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
     from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
     from gdq_pddl.learners.core import table_bytes
 
     check_count("runs", runs)
     check_count("episodes", episodes)
-    check_count("seed", seed)
+    for s in seeds:
+        check_count("seed", s)
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
+    if not seeds:
+        raise GdqError("--buildings must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
-    # a size's returns and successes of every run of every method are held together
+    # a building's returns and successes of every run of every method are held together
     check_memory(len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES), f"--runs {runs:,} x "
                  f"--episodes {episodes:,} x {len(methods)} methods", "give fewer --runs")
     if not sizes or len(set(sizes)) != len(sizes):
@@ -311,14 +361,15 @@ def _check(sizes: list[int], runs: int, episodes: int, seed: int, methods: list[
         # a learner's tables: about 1.25 n states x 5 n actions, 8 successor slots
         check_memory(table_bytes(n + n // 4, 5 * n, 8), f"--sizes {n}: a learner's tables "
                      f"at {n:,} positions", "give smaller --sizes")
-        generate(n, seed)  # a WorldError says what is wrong with the size
+        for s in seeds:
+            generate(n, s)  # a WorldError says what is wrong with the size
 
 
 def _prepare(out: Path, config: dict, resume: bool) -> None:
     """Refuse a folder that holds results (without --resume) or other results (with it);
     remove what a killed write left; write ``config.json``."""
     cfg_path = out / "config.json"
-    held = cfg_path.exists() or (out / "units").exists() or any(out.glob("size-*.npz"))
+    held = cfg_path.exists() or (out / "units").exists() or any(out.glob("building-*.npz"))
     if held and not resume:
         raise ResultsError(f"{out} holds results: continue them with --resume, "
                            "or choose another --out")
@@ -332,8 +383,9 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
         differ = [f"{k} {old.get(k)} there, {v} now" for k, v in config.items()
                   if old.get(k) != v]
         if differ:
-            hint = ("; --resume cannot add or drop sizes: run other sizes into another --out"
-                    if old.get("sizes") != config["sizes"] else "")
+            grown = [k for k in ("sizes", "buildings", "methods") if old.get(k) != config[k]]
+            hint = (f"; --resume cannot add or drop {', '.join(grown)}: run them into "
+                    "another --out" if grown else "")
             raise ResultsError(f"{out} holds results of a different configuration "
                                f"({'; '.join(differ)}): --resume needs the same command "
                                f"line{hint}")
@@ -348,46 +400,46 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
 
 
 def _read_header(path: Path, rerun: str) -> dict:
-    """A size's ``size.json``; :class:`ResultsError` naming it if it is damaged."""
+    """A building's ``building.json``; :class:`ResultsError` naming it if it is damaged."""
     header = read_config(path)
     missing = [k for k in ("positions", "doors", "n_states", "n_actions", "plan_length",
                            "step_limit", "r_max", "v_ref", "context_s") if k not in header]
     if missing:
         raise ResultsError(f"{path} is damaged (no {missing[0]!r}): delete it and run "
-                           f"{rerun} to measure the size again")
+                           f"{rerun} to measure the building again")
     return header
 
 
-def _size_into(out: Path, n: int, runs: int, episodes: int, seed: int, methods: list[str],
-               progress: bool, log: Callable[[str], None], rerun: str) -> SizeResult:
-    """Run the units of size ``n`` missing in ``out/units/size-N/``, then read them all."""
+def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, methods: list[str],
+                   progress: bool, log: Callable[[str], None], rerun: str) -> BuildingResult:
+    """Run the units of building ``(n, seed)`` missing in ``out/units/building-N-sS/``,
+    then read them all."""
     from tqdm import tqdm
 
-    folder = out / "units" / f"size-{n}"
-    paths = {(name, run): folder / f"{name}-{run}.npz" for name in methods for run in range(runs)}
+    name = building_name(n, seed)
+    folder = out / "units" / name
+    paths = {(m, run): folder / f"{m}-{run}.npz" for m in methods for run in range(runs)}
     missing = [key for key, path in paths.items() if not path.exists()]
-    header_path = folder / "size.json"
-    bar = tqdm(total=len(paths), initial=len(paths) - len(missing), unit="run",
-               desc=f"{n} positions", dynamic_ncols=True,
-               disable=not progress or not sys.stderr.isatty())
+    header_path = folder / "building.json"
+    bar = tqdm(total=len(paths), initial=len(paths) - len(missing), unit="run", desc=name,
+               dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
     try:
         header = _read_header(header_path, rerun) if header_path.exists() else None
         if missing or header is None:
-            built, setting = size_context(n, seed)
+            built, setting = building_context(n, seed)
             if header is None:  # the first measurement stays, so a resumed report is the same
                 header = built
                 atomic_write(header_path, lambda tmp: tmp.write_text(json.dumps(header)))
         log(describe(header))
-        for name, run in missing:
-            unit = run_one(setting, name, (seed, n, methods.index(name), run), episodes)
-            save_unit(paths[name, run], unit)
+        for m, run in missing:
+            save_unit(paths[m, run], run_one(setting, m, (seed, n, run), episodes))
             bar.update(1)
     finally:
         bar.close()
     expect = {"returns": episodes, "success": episodes, "steps": -1, "wall_s": -1,
               "table_mb": -1}
-    units = {(name, run): load_unit(path, f"{name}, run {run} at {n} positions", expect, rerun)
-             for (name, run), path in paths.items()}
+    units = {(m, run): load_unit(path, f"{m}, run {run} of {name}", expect, rerun)
+             for (m, run), path in paths.items()}
     result = assemble(header, units, methods, runs)
     for line in summary(result):
         log(line)
