@@ -55,8 +55,6 @@ def make_learner(method: str, context, hyper: Hyper):
 def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
     from gdq_pddl.envs.office import OfficeEnv
-    from gdq_pddl.experiments.knowledge import knowledge_world
-    from gdq_pddl.learners.context import office_task_context
     from gdq_pddl.learners.runner import run_episodes
 
     exp = unit.experiment
@@ -67,7 +65,7 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     learner, parts = None, []
     for i, (spec, episodes) in enumerate(exp.schedule):
         task = resolve_task(world, spec)
-        context = office_task_context(knowledge_world(world, exp.knowledge), task, exp.planner)
+        context = _office_context(exp, world, spec)
         if learner is None:
             learner = make_learner(unit.method, context, exp.hyper)
         else:
@@ -126,14 +124,49 @@ def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:
 
 
 def warm_up(units: list[Unit]) -> None:
-    """Compile every kernel once in this process (so forked workers need not)."""
+    """Compile every kernel once in this process (so forked workers need not).
+
+    The episode loop compiles in a second process meanwhile
+    (:mod:`gdq_pddl.learners.precompile`): first every learner is built here (its OptInit
+    kernels), then, once the other process is done, one tiny run each loads the loop
+    from numba's cache.
+    """
     from dataclasses import replace
 
-    seen: set[tuple[str, str]] = set()
+    from gdq_pddl.learners import precompile
+
+    tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
-        if (u.experiment.world, u.method) in seen:
-            continue
-        seen.add((u.experiment.world, u.method))
-        tiny = replace(u.experiment, name="warm-up", schedule=((u.experiment.schedule[0][0], 2),),
-                       runs=1)
-        run_unit(Unit(tiny, u.method, 0))
+        if (u.experiment.world, u.method) not in tiny:
+            exp = replace(u.experiment, name="warm-up",
+                          schedule=((u.experiment.schedule[0][0], 2),), runs=1)
+            tiny[u.experiment.world, u.method] = Unit(exp, u.method, 0)
+    loop = precompile.start()
+    try:
+        for unit in tiny.values():
+            first_learner(unit)
+    finally:
+        precompile.wait(loop)
+    for unit in tiny.values():
+        run_unit(unit)
+
+
+def first_learner(unit: Unit):
+    """A learner of ``unit`` for its first task, OptInit done (what it learns from)."""
+    exp = unit.experiment
+    if exp.pddl is not None:
+        from gdq_pddl.learners.context import pddl_task_context
+
+        context = pddl_task_context(load_pddl_instance(tuple(exp.pddl)), exp.planner)
+    else:
+        context = _office_context(exp, load_world_named(exp.world), exp.schedule[0][0])
+    return make_learner(unit.method, context, exp.hyper)
+
+
+def _office_context(exp, world: World, spec: str):
+    """The task context of schedule entry ``spec`` of an office experiment."""
+    from gdq_pddl.experiments.knowledge import knowledge_world
+    from gdq_pddl.learners.context import office_task_context
+
+    task = resolve_task(world, spec)
+    return office_task_context(knowledge_world(world, exp.knowledge), task, exp.planner)

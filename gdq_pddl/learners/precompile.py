@@ -1,0 +1,56 @@
+"""Compile the episode loop in a process of its own: ``python -m gdq_pddl.learners.precompile``.
+
+The compiled episode loop (:func:`gdq_pddl.learners.runner._episodes`) is the largest
+kernel of the package, and numba compiles it on first use. The experiment runner starts
+this module in a second process before its own warm-up (:func:`start`) and compiles the
+learners' other kernels meanwhile; numba's on-disk cache hands the loop over. On two
+cores a first run then waits for the longer of the two compiles, not their sum. With a
+warm cache this only loads it and exits.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def compile_loop() -> None:
+    """Run one episode of a Q-learner on the office through the fast path: the loop's
+    signature is the same for every learner kind (one :class:`~gdq_pddl.learners.core.Tables`
+    type) on any :class:`~gdq_pddl.envs.model.ModelArrays` env."""
+    import numpy as np
+
+    from gdq_pddl.envs.office import OfficeEnv
+    from gdq_pddl.learners import make_learner, office_task_context, run_episodes
+    from gdq_pddl.world import builtin_world
+
+    world = builtin_world("office")
+    env = OfficeEnv(world=world, task="C")
+    env.reset(seed=0)
+    run_episodes(make_learner("qlearning", office_task_context(world, "C")), env, 1,
+                 np.random.default_rng(0), fast=True)
+
+
+def start() -> subprocess.Popen | None:
+    """Start :func:`compile_loop` in a new process (None if it cannot be started)."""
+    try:
+        return subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
+def wait(process: subprocess.Popen | None, timeout: float = 600.0) -> None:
+    """Wait for a process from :func:`start` (killed past ``timeout`` seconds: the caller
+    then compiles the loop itself, which is always correct)."""
+    if process is None:
+        return
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+if __name__ == "__main__":
+    compile_loop()
