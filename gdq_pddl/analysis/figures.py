@@ -8,8 +8,10 @@ colour in every figure (:func:`method_colour`).
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
+import os
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -380,20 +382,45 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
 
 def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
                  study: Study | None = None, fig_dir: str | Path | None = None) -> list[Path]:
-    """Every figure of an output folder into ``fig_dir`` (default ``out_dir/figures``)."""
+    """Every figure of an output folder into ``fig_dir`` (default ``out_dir/figures``),
+    drawn by two processes when the machine has two cores (:func:`_draw`)."""
     study = study or Study.open(out_dir)
     target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
-    paths: list[Path] = []
-    paths += learning_curves(study, target, opts)
-    paths += learning_curves(study, target, opts, fraction_of_vstar=True)
-    for exp in uncovered(study):  # gdq-pddl run, ...: their curves too
-        paths += learning_curves(study, target, opts, experiment=exp)
-    paths += switch_curves(study, target, opts)
-    paths += visit_heatmaps(study, target, opts)
-    paths += task_routes(study, target, opts)
+    jobs: list[tuple[Callable[..., list[Path]], dict]] = [
+        (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
+    jobs += [(learning_curves, {"experiment": exp}) for exp in uncovered(study)]
+    jobs += [(switch_curves, {}), (visit_heatmaps, {}), (task_routes, {})]
     if study.has(ROBOT_EXPERIMENT):
         tasks = study.episodes.tasks(ROBOT_EXPERIMENT)
         if tasks:
-            paths += task_routes(study, target, opts, ROBOT_EXPERIMENT, tasks[-1])
-    paths += robot_returns(study, target, opts)
-    return paths
+            jobs.append((task_routes, {"experiment": ROBOT_EXPERIMENT, "task": tasks[-1]}))
+    jobs.append((robot_returns, {}))
+    return [path for paths in _draw(jobs, study, target, opts) for path in paths]
+
+
+_JOBS: tuple = ()
+"""What the drawing processes of :func:`_draw` draw (inherited when they fork)."""
+
+
+def _draw(jobs: list, study: Study, target: Path, opts: FigureOptions) -> list[list[Path]]:
+    """Each job's figure, in job order. On two or more cores two forked processes share
+    the jobs (a full report's figures take several seconds of matplotlib); the study is
+    loaded once, before the fork, and each figure is written by the process that draws
+    it, so the files are the same either way."""
+    global _JOBS
+    if len(jobs) < 2 or (os.cpu_count() or 1) < 2 or mp.get_start_method(True) not in (
+            None, "fork"):
+        return [job(study, target, opts, **kw) for job, kw in jobs]
+    study.episodes  # noqa: B018  (load episodes.csv here, not once per process)
+    _JOBS = (jobs, study, target, opts)
+    try:
+        with mp.get_context("fork").Pool(2) as pool:
+            return pool.map(_draw_one, range(len(jobs)), chunksize=1)
+    finally:
+        _JOBS = ()
+
+
+def _draw_one(i: int) -> list[Path]:
+    jobs, study, target, opts = _JOBS
+    job, kw = jobs[i]
+    return job(study, target, opts, **kw)
