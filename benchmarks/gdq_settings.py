@@ -3,6 +3,7 @@
     python benchmarks/gdq_settings.py tasks            # each setting's return on A-D
     python benchmarks/gdq_settings.py corridor         # explore_all vs the corridor
     python benchmarks/gdq_settings.py                  # both
+    python benchmarks/gdq_settings.py losses results/pairs   # explain GDQ's losses there
 
 ``tasks``: every setting differs from the default in one field; for each, the mean
 return per episode over the first 300 episodes of tasks A-D, minus DARLING's, paired
@@ -11,6 +12,9 @@ runs (env seeded 1000 + run, learner 2000 + run, as ``benchmarks/learners.py``).
 knowledge``'s ``passage`` case, Task C); for each share of exploring steps that ignores
 the knowledge, in how many runs the final greedy policy takes the corridor, and the mean
 return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these figures.
+``losses``: a diagnostic, not a tuning step: on the pairs a ``gdq-pddl pairs`` folder
+counts as losses against DARLING, GDQ minus DARLING with the default and with
+``explore_all = 0`` (same seeds as ``tasks``).
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import numpy as np
 
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
-from gdq_pddl.world import World, load_world
+from gdq_pddl.world import Task, World, load_world
 
 SETTINGS: dict[str, dict] = {
     "default": {},
@@ -40,12 +44,13 @@ SETTINGS: dict[str, dict] = {
 """The default and its one-field variations (GDQConfig fields)."""
 
 
-def mean_returns(world: World, real: World, task: str, method: str, config: dict,
+def mean_returns(world: World, real: World, task, method: str, config: dict,
                  runs: int, episodes: int) -> np.ndarray:
     """float[runs]: each run's mean return per episode (knowledge from ``world``, the env
-    simulating ``real``)."""
+    simulating ``real``; ``task`` a name or a :class:`~gdq_pddl.world.Task`)."""
     ctx = office_task_context(world, task)
-    env = OfficeEnv(world=real, task=task)
+    env = OfficeEnv(world=real, task=task) if isinstance(task, str) else \
+        OfficeEnv(world=real, start=task.start, goal=task.goal)
     out = np.zeros(runs)
     for run in range(runs):
         env.reset(seed=1000 + run)
@@ -95,9 +100,36 @@ def corridor(runs: int = 10, episodes: int = 3000) -> None:
         print(f"{label:26s} {found:>3d}/{runs}  {np.mean(means):7.2f}", flush=True)
 
 
+def losses(folder: str, runs: int = 10, episodes: int = 300) -> None:
+    import csv
+    from pathlib import Path
+
+    with (Path(folder) / "tables" / "pairs.csv").open() as fh:
+        rows = [r for r in csv.DictReader(fh) if r["outcome_DARLING"] == "loss"]
+    if not rows:
+        print("GDQ loses to DARLING on no pair there")
+        return
+    world = load_world()
+    lengths = [int(r["shortest_plan"]) for r in rows]
+    print(f"{len(rows)} pairs where GDQ loses to DARLING; shortest plan: median "
+          f"{np.median(lengths):g}, longest {max(lengths)}; {runs} runs x {episodes} episodes")
+    for label, config in (("default", {}), ("explore_all = 0", {"explore_all": 0.0})):
+        diffs = []
+        for r in rows:
+            t = Task(f"{r['start']}->{r['goal']}", r["start"], r["goal"])
+            diffs.append((mean_returns(world, world, t, "gdq", config, runs, episodes)
+                          - mean_returns(world, world, t, "darling", {}, runs, episodes)).mean())
+        d = np.array(diffs)
+        print(f"GDQ ({label}) minus DARLING: mean {d.mean():+.3f}, below 0 on "
+              f"{(d < 0).sum()} of {len(d)}", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", nargs="?", choices=["tasks", "corridor", "all"], default="all")
+    parser.add_argument("what", nargs="?", choices=["tasks", "corridor", "losses", "all"],
+                        default="all")
+    parser.add_argument("folder", nargs="?", default="results/pairs",
+                        help="losses: a gdq-pddl pairs output folder")
     parser.add_argument("--runs", type=int, help="runs per setting (tasks 40, corridor 10)")
     parser.add_argument("--episodes", type=int, help="episodes per run (300 / 3000)")
     args = parser.parse_args()
@@ -105,6 +137,8 @@ def main() -> None:
         tasks(args.runs or 40, args.episodes or 300)
     if args.what in ("corridor", "all"):
         corridor(args.runs or 10, args.episodes or 3000)
+    if args.what == "losses":
+        losses(args.folder, args.runs or 10, args.episodes or 300)
 
 
 if __name__ == "__main__":
