@@ -25,8 +25,9 @@ world). :func:`make_knowledge_report` measures, per case and method,
 - **DARLING's allowed set** along the true optimal route: at each step, whether some
   optimal action (within 1e-9 of the best Q*) starts a plan within DARLING's tolerance
   from that learner state (``darling_plans.first_actions``; every action where the state
-  has no plan). The same check for GDQ's plans: does an optimal action start a shortest
-  plan (H of the paper variant) / a plan within 1.3x (H of the authors' code)?
+  has no plan). The same check for GDQ's prior (is an optimal action one the knowledge
+  says can do something?) and plans: does an optimal action start a shortest plan (H of
+  GDQ-literal) / a plan within 1.3x (H of GDQ-code)?
 
 Nothing in the report is typed in: every sentence is generated from these measurements.
 

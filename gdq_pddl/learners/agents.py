@@ -25,9 +25,25 @@ Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state
   protocol (``gdq-pddl run --method DARLING-code``).
 - :class:`GDQ`: Guided Dyna-Q, below.
 
-GDQ, the paper's algorithm (``variant="paper"``, the default) and the authors' code
----------------------------------------------------------------------------------------
-Side by side (paper | code):
+GDQ's default: the action knowledge as an optimistic prior model (``variant="model"``)
+-----------------------------------------------------------------------------------
+SPEC section 4's decision; the rules are in :mod:`gdq_pddl.learners.core` ("Planning on
+the prior"), the prior in :mod:`gdq_pddl.abstraction.prior`, the measurements behind its
+settings in ``docs/decisions.md``. Every (state, action) pair is valued by a model: the
+knowledge's (the planner's successor, or no change where its preconditions fail; one
+step costs 1; reaching the goal pays R_max and ends the episode) until the pair has been
+tried more than m times, then the learned one with the prior as ``prior_weight``
+pseudo-trials. OptInit is value iteration on that hybrid model, so before the first step
+the greedy policy follows a shortest plan; after every real step prioritised sweeping
+recomputes ``n_backups`` pair values. Exploring steps draw from the first actions of the
+plans within 1.3 x from the current state, a share ``explore_all`` of them from the
+actions never tried there. An action the knowledge says does nothing is outside the max
+until it has been tried.
+
+The two readings of the paper it is compared with
+-------------------------------------------------
+``variant="literal"`` (GDQ-literal: Algorithms 1-3 read literally) and ``variant="code"``
+(GDQ-code: the authors' released code), side by side (literal | code):
 
 - H, the plans: every shortest plan (the paper: "a set of the shortest plans") | every
   loop-free plan up to 1.3 x the shortest (the authors' planner's factor; their
@@ -58,10 +74,10 @@ s.e. 0.14), the gap coming almost entirely from not replaying stuck penalties. W
 the two the package should call "code" is an open question (``docs/decisions.md``).
 An earlier version of this package backed up untried plan pairs with the paper's
 optimistic model (``R_max`` and a jump to s0); with the code's seeding that inflates
-plan pairs towards ``R_max / (1 - gamma)`` as the paper's variant does, and it made
+plan pairs towards ``R_max / (1 - gamma)`` as GDQ-literal's do, and it made
 GDQ-code reach a positive 50-episode average on Task C at episode ~120 instead of ~60.
 
-Policy iteration in OptInit (a decision). Algorithm 1, read literally, evaluates only
+Policy iteration in GDQ-literal's OptInit (a decision). Algorithm 1, read literally, evaluates only
 ``Q(s, pi(s))`` and then takes ``argmax_a Q(s, a)`` over a table whose other entries
 are still the initial zeros, so it can lock onto a non-plan action whose 0 beats a
 negative estimate, and it never gives the learner Q values for the other actions. We
@@ -79,13 +95,13 @@ the plan pairs are worth ``R_max / (1 - gamma)`` (400 for the office) and every 
 pair ``gamma`` times that (380), far above any achievable return (at most R_max = 20).
 Real experience then has to pull these values down.
 
-Other decisions where the paper is silent:
+Other decisions where the paper is silent (GDQ-literal and GDQ-code):
 
 - H is re-planned from the state the action was taken in (Alg. 2 line 12 uses the
   ``s`` of line 1), by a lookup in the task's :class:`PlanTable`.
 - When the current state has no plan (a planner that finds nothing), GDQ's N backups go
   to uniformly random known pairs, as in Dyna-Q, so it still plans with what it learned.
-- ``start_task``: GDQ keeps its model (counts) and reruns OptInit for the new goal
+- ``start_task``: every GDQ keeps its model (counts) and reruns OptInit for the new goal
   (known pairs with the learned model, unknown with the optimistic one; Q <- 0 first).
   The baselines keep their Q table (they are not told the task changed other than
   through the goal states their backups use); DARLING recomputes its allowed sets.

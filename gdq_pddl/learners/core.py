@@ -47,7 +47,7 @@ with ``T(s,a,s') = count / visits`` over the slots of ``(s, a)`` and
 transition is counted, its -R_max is not). No backup bootstraps through a terminal
 transition: reaching G or getting stuck ends the sum.
 
-A pair is *known* when ``visits > m``. In expected backups (the paper's GDQ) unknown
+A pair is *known* when ``visits > m``. In expected backups (GDQ-literal) unknown
 pairs use the optimistic model of OptInit instead: ``T(s,a,s0) = 1`` and ``R = R_max``
 on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
 Sample-based backups (the authors' code) only replay recorded outcomes of pairs tried
