@@ -14,7 +14,7 @@ the knowledge, in how many runs the final greedy policy takes the corridor, and 
 return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these figures.
 ``losses``: a diagnostic, not a tuning step: on the pairs a ``gdq-pddl pairs`` folder
 counts as losses against DARLING, GDQ minus DARLING with the default and with
-``explore_all = 0`` (same seeds as ``tasks``).
+``explore_all = 0`` and with ``explore_all_last_step = False`` (same seeds as ``tasks``).
 """
 
 from __future__ import annotations
@@ -89,7 +89,9 @@ def corridor(runs: int = 10, episodes: int = 3000) -> None:
           f"{episodes} episodes: runs whose final greedy policy takes it; mean return")
     for label, method, config in (("Dyna-Q (no knowledge)", "dynaq", {}),
                                   *((f"GDQ, explore_all = {x:g}", "gdq", {"explore_all": x})
-                                    for x in (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.5))):
+                                    for x in (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.5)),
+                                  ("GDQ, 0.1, not last step", "gdq",
+                                   {"explore_all_last_step": False})):
         found, means = 0, []
         for run in range(runs):
             env.reset(seed=1000 + run)
@@ -113,7 +115,8 @@ def losses(folder: str, runs: int = 10, episodes: int = 300) -> None:
     lengths = [int(r["shortest_plan"]) for r in rows]
     print(f"{len(rows)} pairs where GDQ loses to DARLING; shortest plan: median "
           f"{np.median(lengths):g}, longest {max(lengths)}; {runs} runs x {episodes} episodes")
-    for label, config in (("default", {}), ("explore_all = 0", {"explore_all": 0.0})):
+    for label, config in (("default", {}), ("explore_all = 0", {"explore_all": 0.0}),
+                          ("explore_all_last_step = False", {"explore_all_last_step": False})):
         diffs = []
         for r in rows:
             t = Task(f"{r['start']}->{r['goal']}", r["start"], r["goal"])

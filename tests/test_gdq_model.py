@@ -252,6 +252,32 @@ def test_exploration_of_every_action_tries_the_untried_ones_first(ctx_c):
     assert len(again) > ctx_c.n_actions // 2
 
 
+def test_exploration_of_every_action_can_spare_the_last_step(ctx_c):
+    """With ``explore_all_last_step=False`` a state the knowledge takes to the goal in one
+    action explores only the plans' first actions; a state farther away still tries
+    untried actions."""
+    nxt = ctx_c.prior.next_state
+    reaches = (nxt != NO_CHANGE) & ctx_c.goal[np.where(nxt == NO_CHANGE, 0, nxt)]
+    last = [s for s in range(ctx_c.n_states) if reaches[s].any() and not ctx_c.goal[s]]
+    far = ctx_c.s0
+    assert last and not reaches[far].any()
+    config = GDQConfig(epsilon=1.0, explore_all=1.0, n_backups=0, explore_all_last_step=False)
+    learner = GDQ(ctx_c, config)
+    guide = ctx_c.darling_plans.allowed_actions()  # what exploration draws from
+
+    def explored(agent, s):
+        return {agent.act(s, rng) for _ in range(50)}
+
+    rng = np.random.default_rng(3)
+    for s in last:
+        assert explored(learner, s) <= set(np.flatnonzero(guide[s]))
+    assert not explored(learner, far) <= set(np.flatnonzero(guide[far]))
+    both = GDQ(ctx_c, replace(config, explore_all_last_step=True))
+    assert not explored(both, last[0]) <= set(np.flatnonzero(guide[last[0]]))
+    with pytest.raises(ValueError, match="explore_all_last_step"):
+        GDQConfig(explore_all_last_step=0)
+
+
 def test_a_context_without_prior_is_refused(ctx_c):
     with pytest.raises(ValueError, match="prior model"):
         GDQ(replace(ctx_c, prior=None))

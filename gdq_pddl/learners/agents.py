@@ -435,7 +435,9 @@ class GDQ(TabularLearner):
         if self.kind != core.KIND_PRIOR:
             return {}
         c = self.config
-        return {"explore_all": float(c.explore_all), "prior_cost": float(c.prior_cost),
+        return {"explore_all": float(c.explore_all),
+                "explore_all_last": float(c.explore_all_last_step),
+                "prior_cost": float(c.prior_cost),
                 "sweep_threshold": float(c.sweep_threshold),
                 "prior_weight": float(c.prior_weight)}
 

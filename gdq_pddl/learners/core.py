@@ -105,6 +105,9 @@ class Params(NamedTuple):
     """1: an optimistic transition leads to s0 (the paper); 0: it ends the episode."""
     explore_all: float = 0.0
     """Share of exploring steps that draw from every action instead of ``guide``."""
+    explore_all_last: float = 1.0
+    """0: no such draw in a state from which the knowledge reaches the goal in one action
+    (``KIND_PRIOR``)."""
     prior_cost: float = 1.0
     """Step cost of a pair still on the prior model (``KIND_PRIOR``)."""
     sweep_threshold: float = 0.0
@@ -298,12 +301,25 @@ def _draw_untried(visits: np.ndarray, s: int, rng: np.random.Generator) -> int:
     return 0
 
 
+@numba.njit(cache=True, inline="always")
+def _one_step_from_goal(t: Tables, p: Params, s: int) -> bool:
+    """Whether the knowledge reaches the goal from ``s`` in one action (``KIND_PRIOR``)."""
+    if p.kind != KIND_PRIOR:
+        return False
+    for a in range(t.prior_next.shape[1]):
+        s2 = t.prior_next[s, a]
+        if s2 >= 0 and t.goal[s2]:
+            return True
+    return False
+
+
 @numba.njit(cache=True)
 def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
 
     With probability epsilon a uniform action of ``guide[s]`` (or, for a share
-    ``explore_all`` of those steps, of every action); else a uniformly chosen maximiser
+    ``explore_all`` of those steps, of every action, unless ``explore_all_last`` is 0 and
+    the knowledge reaches the goal from ``s`` in one action); else a uniformly chosen maximiser
     of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
     if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
     when exploring with ``explore_all > 0``, then one integer when exploring or when
@@ -311,7 +327,8 @@ def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
     """
     n_actions = t.q.shape[1]
     if rng.random() < p.epsilon:
-        if p.explore_all > 0.0 and rng.random() < p.explore_all:
+        if p.explore_all > 0.0 and rng.random() < p.explore_all and (
+                p.explore_all_last > 0.0 or not _one_step_from_goal(t, p, s)):
             return _draw_untried(t.visits, s, rng)
         return _draw_guided(t, s, rng)
     best = t.v[s]
