@@ -1,4 +1,4 @@
-"""A PDDL domain of its own: a delivery robot, compared across the four methods.
+"""A PDDL domain of its own: a delivery robot, GDQ (and GDQ-code) against the baselines.
 
 What it shows: any STRIPS+typing domain becomes an env with a dynamics file
 (`PDDLEnv`), its learner states are the reachable planner states, and the learners and
@@ -36,8 +36,8 @@ def main(episodes: int, runs: int, problem: str, domain: str = "delivery") -> di
     print(f"{problem}: {instance.n_states} states, {instance.n_actions} ground actions, "
           f"shortest plan {instance.graph.distances[0]} actions, V* = {v_star:.2f}")
     means = {}
-    for method, config in (("gdq", {"variant": "code"}), ("darling", {}), ("dynaq", {}),
-                           ("qlearning", {})):
+    for method, config in (("gdq", {}), ("gdq", {"variant": "code"}), ("darling", {}),
+                           ("dynaq", {}), ("qlearning", {})):
         totals = []
         for run in range(runs):
             env.reset(seed=run)

@@ -28,7 +28,7 @@ def main(episodes: int, runs: int, problem: str) -> str:
     files = (shipped("domains", "keys.pddl"), shipped("problems", f"{problem}.pddl"),
              shipped("dynamics", "keys.toml"))
     exp = Experiment("keys", ((problem, episodes),), runs=runs, world="pddl", pddl=files,
-                     methods=("GDQ-code", "DARLING", "Dyna-Q", "Q-learning"))
+                     methods=("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning"))
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)
         report = generic_report(out)

@@ -1,8 +1,9 @@
 """Task E (p17 -> p14), after task C: the goal changes and GDQ keeps what it learnt.
 
 GDQ's model of the building (which moves work, which doors are hard) does not depend on
-the goal, so after the switch it reruns OptInit for the new goal with that model; the
-baselines only have a Q table tuned to the old goal.
+the goal, so after the switch it reruns OptInit for the new goal with that model; Q-learning
+only has a Q table tuned to the old goal, and Dyna-Q keeps its model but has no OptInit
+to replan with it.
 
     python examples/task_e.py --episodes 1000
 """

@@ -155,9 +155,17 @@ def test_an_inapplicable_action_is_known_after_its_first_trial(ctx_c):
 def _untried_inapplicable_below_v(learner) -> None:
     untried = ~learner.context.prior.applicable & (learner.visits == 0)
     untried[learner.context.goal] = False
-    allowed = learner.tables.allowed
-    assert not np.any(allowed & untried)
-    best = np.where(allowed, learner.q, -np.inf).max(axis=1)
+    t = learner.tables
+    assert not np.any(t.allowed & untried)
+    # the learner's own values, before the Q property fills the untried no-ops in: v and
+    # the greedy choice range over the allowed pairs only
+    raw_best = np.where(t.allowed, t.q, -np.inf).max(axis=1)
+    has = t.allowed.any(axis=1)
+    assert np.array_equal(t.v[has], raw_best[has])
+    policy = learner.greedy_policy()
+    assert not untried[np.arange(len(policy)), policy].any(), "greedy picks an untried no-op"
+    # and the Q table a user reads values them below v
+    best = np.where(t.allowed, learner.q, -np.inf).max(axis=1)
     rows, cols = np.nonzero(untried)
     assert np.all(learner.q[rows, cols] <= best[rows]), "an untried no-op valued above v"
 

@@ -102,12 +102,12 @@ def test_optinit_greedy_policy_follows_a_shortest_plan(config):
 def test_code_variant_plans_within_the_authors_tolerance():
     """GDQ-code's H holds plans up to 1.3 x the shortest: the 9-step easy-door route too."""
     ctx = office_task_context(DET, "C")
-    code, paper = GDQ(ctx, GDQConfig(variant="code")), GDQ(ctx, LITERAL)
+    code, literal = GDQ(ctx, GDQConfig(variant="code")), GDQ(ctx, LITERAL)
     assert code.config.plan_tolerance == pytest.approx(0.3)
-    assert paper.config.plan_tolerance == 0.0
+    assert literal.config.plan_tolerance == 0.0
     sp = LearnerSpaces(DET)
     p8_to_p5 = (sp.state("p8"), sp.action("goto", "p5"))  # only on the 1->3->2->6 route
-    assert code.optimistic_pairs[p8_to_p5] and not paper.optimistic_pairs[p8_to_p5]
+    assert code.optimistic_pairs[p8_to_p5] and not literal.optimistic_pairs[p8_to_p5]
     # every pair the greedy policy takes is on some plan (ties between plans may cycle
     # in a memoryless policy: only real experience breaks them)
     taken, _ = greedy_walk(code, DET, "C", 10)

@@ -110,7 +110,11 @@ def prior_from_graph(graph) -> PriorModel:
     src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
     dist = graph.distances.astype(np.float64)
     dist[dist < 0] = np.inf
-    # the best edge of each (state, action) last, so that its assignment wins
+    # sorted by (state, action), the best edge of each last; keep only those last edges
+    # (a fancy assignment with repeated indices has no defined winner)
     order = np.lexsort((-graph.edge_next, -dist[graph.edge_next], graph.edge_op, src))
-    nxt[src[order], graph.edge_op[order]] = graph.edge_next[order]
+    s, op, to = src[order], graph.edge_op[order], graph.edge_next[order]
+    last = np.ones(len(s), dtype=bool)
+    last[:-1] = (s[1:] != s[:-1]) | (op[1:] != op[:-1])
+    nxt[s[last], op[last]] = to[last]
     return PriorModel(nxt)

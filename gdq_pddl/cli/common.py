@@ -81,12 +81,12 @@ def world_and_task(args: argparse.Namespace):
     return world, task
 
 
-def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
+def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
               episodes: int = 2500, runs: int = 10) -> None:
+    """The options of a command that runs methods; ``out`` names its default --out."""
     from gdq_pddl.experiments import DEFAULT_METHODS, METHODS
 
-    # both GDQ variants by default, as reproduce: the paper's and the authors' code's
-    default = list(methods or DEFAULT_METHODS)
+    default = list(methods or DEFAULT_METHODS)  # GDQ, GDQ-code and the baselines
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
                         f"from: {', '.join(METHODS)})")
@@ -97,13 +97,14 @@ def run_args(p: argparse.ArgumentParser, methods: Sequence[str] | None = None,
     p.add_argument("--seed", type=NONNEGATIVE, default=0,
                    help="base seed (each run derives its own)")
     p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
-    exec_args(p)
+    exec_args(p, out)
 
 
-def exec_args(p: argparse.ArgumentParser) -> None:
+def exec_args(p: argparse.ArgumentParser, out: str) -> None:
+    """--jobs, --out (default ``out``), --resume and the executor's options."""
     p.add_argument("--jobs", type=POSITIVE,
                    help="parallel processes (default: all cores; never more than the runs)")
-    p.add_argument("--out", type=Path, help="output folder (default: results/<command>)")
+    p.add_argument("--out", type=Path, help=f"output folder (default: {out})")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out (same command line)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",

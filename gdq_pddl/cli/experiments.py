@@ -38,7 +38,7 @@ def register_run(sub) -> None:
                    help="the dynamics file (TOML) of --domain: success, failure, costs; for "
                         "a PPDDL domain an optional overlay: r_max, step_limit, costs")
     determinisation_arg(p)
-    run_args(p)
+    run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
     p.set_defaults(func=cmd_run)
 
 
@@ -90,7 +90,7 @@ def register_switch(sub) -> None:
     p.add_argument("--from", dest="first", default="C", help="first task (default C)")
     p.add_argument("--to", dest="second", default="D", help="second task (default D)")
     p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
-    run_args(p)
+    run_args(p, "results/switch-<from>-<to>")
     p.set_defaults(func=cmd_switch)
 
 
@@ -110,7 +110,8 @@ def register_robot(sub) -> None:
     p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
                        description="Task X on the office with area 5 forbidden, 10 actions per "
                                    "trial, R_max 1000, durations as costs, alpha 0.5.")
-    run_args(p, methods=("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"), episodes=30, runs=10)
+    run_args(p, "results/robot", methods=("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"),
+             episodes=30, runs=10)
     p.set_defaults(func=cmd_robot)
 
 
@@ -133,7 +134,7 @@ def register_reproduce(sub) -> None:
                                    "area-visit table and REPORT.md in --out.")
     p.add_argument("--quick", action="store_true", help="300 episodes x 3 runs: a first look")
     p.add_argument("--seed", type=NONNEGATIVE, default=0, help="base seed")
-    exec_args(p)
+    exec_args(p, "results/reproduce, or results/reproduce-quick with --quick")
     p.set_defaults(func=cmd_reproduce)
 
 
@@ -152,13 +153,15 @@ def register_knowledge(sub) -> None:
                                    "knowledge (d3, d1), a corridor only reality has, and a "
                                    "control; each also with accurate knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
-    p.add_argument("--episodes", type=POSITIVE, default=1500, help="episodes per run")
-    p.add_argument("--runs", type=POSITIVE, default=10, help="independent runs per method and case")
+    p.add_argument("--episodes", type=POSITIVE, default=1500,
+                   help="episodes per run (default 1500)")
+    p.add_argument("--runs", type=POSITIVE, default=10,
+                   help="independent runs per method and case (default 10)")
     p.add_argument("--seed", type=NONNEGATIVE, default=0,
                    help="base seed (each run derives its own)")
     p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
-                   help="methods to compare")
-    exec_args(p)
+                   help=f"methods to compare (default: {' '.join(KNOWLEDGE_METHODS)})")
+    exec_args(p, "results/knowledge")
     p.set_defaults(func=cmd_knowledge)
 
 
@@ -274,7 +277,7 @@ def register_pairs(sub) -> None:
                    help="only these pairs (quote them: --pairs 'p3->p13 p10->p0')")
     p.add_argument("--sample", type=int, metavar="K",
                    help="only K pairs drawn at random with --seed")
-    run_args(p, episodes=300, runs=10)
+    run_args(p, "results/pairs", episodes=300, runs=10)
     p.set_defaults(func=cmd_pairs)
 
 

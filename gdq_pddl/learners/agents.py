@@ -35,7 +35,8 @@ step costs 1; reaching the goal pays R_max and ends the episode) until the pair 
 tried more than m times, then the learned one with the prior as ``prior_weight``
 pseudo-trials. OptInit is value iteration on that hybrid model, so before the first step
 the greedy policy follows a shortest plan; after every real step prioritised sweeping
-recomputes ``n_backups`` pair values. Exploring steps draw from the first actions of the
+recomputes pair values until at least ``n_backups`` are done (it finishes each state it
+takes from the queue). Exploring steps draw from the first actions of the
 plans within 1.3 x from the current state, a share ``explore_all`` of them from the
 actions never tried there. An action the knowledge says does nothing is outside the max
 until it has been tried.
@@ -536,8 +537,9 @@ class GDQ(TabularLearner):
 
     @property
     def applicable(self) -> np.ndarray:
-        """bool[S, A]: what the knowledge says can do something (``model``; exploration
-        draws from it), a view of the prior."""
+        """bool[S, A]: what the knowledge says can do something (``model``; the max ranges
+        over it and the known pairs, exploration draws from it with ``explore=
+        "applicable"``), a view of the prior."""
         return self._prior(self.context).applicable
 
 

@@ -83,9 +83,10 @@ class GDQConfig(LearnerConfig):
     variant: GDQVariant = "model"
     """Which GDQ (above)."""
     n_backups: int | None = None
-    """N: simulated backups per real step. ``model``: pair values recomputed by
-    prioritised sweeping (default 5: on tasks A-D 1, 2, 5, 10 and 40 learn alike, and
-    each costs time, ``benchmarks/learners.py speed``);
+    """N: simulated backups per real step. ``model``: prioritised sweeping recomputes pair
+    values until at least N are done, finishing every state it takes from the queue
+    (so a step can recompute more than N; default 5: on tasks A-D 1, 5, 10 and 40 learn
+    alike, and each costs time, ``benchmarks/learners.py speed``);
     ``literal`` and ``code``: backups of a random transition of a random plan from the
     current state (default 5, the authors' code)."""
     m: int | None = None

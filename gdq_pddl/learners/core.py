@@ -57,10 +57,12 @@ at least once and leave untried pairs alone.
 :func:`set_q`, the only writer of single Q entries.
 
 ``allowed`` is what the max ranges over (the update's target and the greedy choice);
-``guide`` is what the agent may execute (exploration draws uniformly from it, and a
-greedy action outside it is replaced by such a draw). They are the same array for every
-learner except DARLING as the GDQ authors' code runs it, whose max ranges over all
-actions while it may only execute plan actions.
+``guide`` is what exploration draws uniformly from. They are the same array for every
+learner except two. DARLING as the GDQ authors' code runs it: its max ranges over all
+actions while it may only execute plan actions, so a greedy action outside ``guide`` is
+replaced by a draw from it (DARLING only). GDQ's default: ``allowed`` holds the
+knowledge-applicable and the known pairs, ``guide`` the first actions of the plans
+(section "Planning on the prior"); its greedy action is never replaced.
 
 Randomness comes only from the ``np.random.Generator`` passed in.
 
@@ -210,11 +212,14 @@ def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
 
 
 def table_bytes(n_states: int, n_actions: int, max_successors: int,
-                transitions: bool = True) -> int:
+                transitions: bool = True, prior: bool = True) -> int:
     """Bytes of a learner's per-pair arrays at most: Q, the allowed, guide and optimistic
-    masks, the model's visits, stuck, costs and known list, and (``transitions``) the
-    slots."""
+    masks, the model's visits, stuck, costs and known list, (``transitions``) the slots,
+    and (``prior``, GDQ's default) the prior's successors and reverse edges and, when
+    every pair is known, the reverse index (an entry of two int64 per successor)."""
     per_pair = 8 * 6 + 3 + (8 * max_successors if transitions else 0)  # int64 slots
+    if prior:
+        per_pair += 8 + 8 + 16 * (max_successors if transitions else 1)
     return n_states * n_actions * per_pair
 
 
