@@ -513,6 +513,32 @@ def test_report_on_damaged_results(capsys, tmp_path, office_results, name, damag
     refused(code, out_text, str(path))
 
 
+@pytest.mark.parametrize(("column", "value"), [
+    ("return", "nan"), ("return", "inf"), ("return", "-1e999"), ("steps", "-5"),
+    ("steps", "2.5"), ("success", "7"), ("episode", "0"), ("run", "-1"), ("area_1", "-3"),
+    (None, None),  # only the header
+])
+def test_report_refuses_values_no_run_writes(capsys, tmp_path, office_results, column, value):
+    import shutil
+
+    out = tmp_path / "copy"
+    shutil.copytree(office_results, out)
+    path = out / "episodes.csv"
+    lines = path.read_text().splitlines(keepends=True)
+    if column is None:
+        lines = lines[:1]
+    else:
+        header = lines[0].strip().split(",")
+        cells = lines[5].rstrip("\n").split(",")
+        cells[header.index(column)] = value
+        lines[5] = ",".join(cells) + "\n"
+    path.write_text("".join(lines))
+    code, text = cli(capsys, "report", out)
+    refused(code, text, str(path))
+    if column is not None:
+        assert f"line 6, column {column}" in text
+
+
 def test_report_on_a_pddl_run_folder(capsys, tmp_path):
     files = pddl_files(tmp_path)
     assert pddl_run(capsys, tmp_path, files, "--no-report")[0] == 0

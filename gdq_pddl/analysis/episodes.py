@@ -170,11 +170,40 @@ def load_episodes(path: str | Path) -> Episodes:
         if missing:
             raise damaged_file(path, f"missing columns {missing} (header: {header})")
         fast = _load_fast(path, header)
-        return fast if fast is not None else _load_csv(path, header)
+        episodes = fast if fast is not None else _load_csv(path, header)
     except OSError as exc:
         raise ResultsError(f"{path}: cannot read: {exc.strerror or exc}") from None
     except (UnicodeDecodeError, csv.Error) as exc:
         raise damaged_file(path, str(exc)) from None
+    _check_values(path, episodes)
+    return episodes
+
+
+_WHOLE = {"run": 0, "episode": 1, "steps": 0}
+"""Columns holding whole numbers, and their least value."""
+
+
+def _check_values(path: Path, episodes: Episodes) -> None:
+    """Refuse what the runner never writes: no rows, a value that is not finite (an
+    empty area cell is NaN and allowed), a run, episode or step count that is not a whole
+    number at least its least value, a success other than 0 or 1, a negative visit count.
+    A message names the column, the line and the value."""
+    n = len(episodes)
+    if n == 0:
+        raise damaged_file(path, "no episodes, only the header")
+    for name, col in episodes.values.items():
+        area = name.startswith("area_")
+        bad = ~np.isfinite(col) & ~(area & np.isnan(col))
+        if name in _WHOLE:
+            bad |= (col != np.floor(col)) | (col < _WHOLE[name])
+        elif name == "success":
+            bad |= (col != 0) & (col != 1)
+        elif area:
+            bad |= col < 0
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise damaged_file(path, f"line {i + 2}, column {name}: {float(col[i])!r} is not a "
+                               f"value a run writes")
 
 
 def damaged_file(path: Path, why: str) -> ResultsError:
