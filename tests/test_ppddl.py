@@ -161,6 +161,32 @@ def test_any_probabilistic_effect_is_a_distribution(effect):
 WALK_EFFECT = "(probabilistic 0.9 (and (at ?b) (not (at ?a))))"
 
 
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(1, 10**6), min_size=1, max_size=3), st.integers(7, 30),
+       st.booleans())
+def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, scientific):
+    """Property: probabilities written as decimals (``0.0000125``) or in scientific
+    notation (``125e-7``) that sum to 1 leave no "no effect" outcome, and one more of
+    10**-MAX_EXPONENT, the smallest a number may be written, makes the sum too large."""
+    from gdq_pddl.pddl.parser import MAX_EXPONENT
+
+    ks = [*weights, 10**digits - sum(weights)]
+    probs = [f"{k}e-{digits}" if scientific else f"0.{k:0{digits}d}" for k in ks]
+    effects = ["(at ?b)", "(not (at ?a))", "(trail ?b ?a)", "(not (trail ?a ?b))"]
+    pairs = " ".join(f"{p} {e}" for p, e in zip(probs, effects, strict=False))
+    walk = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs})")).actions[0]
+    assert all(o.effect for o in walk.outcomes)
+    assert sum(o.probability for o in walk.outcomes) == pytest.approx(1.0)
+    tiny = f"(probabilistic {pairs} 1e-{MAX_EXPONENT} (at ?a))"
+    with pytest.raises(PDDLError, match="they must sum to at most 1"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny))
+    with pytest.raises(PDDLError, match=f"1e-{MAX_EXPONENT + 1}: an exponent past"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny.replace(f"e-{MAX_EXPONENT}",
+                                                                   f"e-{MAX_EXPONENT + 1}")))
+
+
+
+
 @pytest.mark.parametrize(("old", "new", "line", "expected"), [
     ("0.5 (and (at ?b)", "0.7 (and (at ?b)", 15, "sum to 1.1; they must sum to at most 1"),
     ("0.3 (and (at ?down)", "-0.3 (and (at ?down)", 16, "a probability must be in [0, 1]"),
