@@ -344,6 +344,58 @@ def test_pddl_numbers_up_to_the_cap_are_read_and_repeated_values_are_one(tmp_pat
         PDDLInstance.from_files(*files)
 
 
+# --- reality against the knowledge -------------------------------------------------------
+
+KEYS_2 = data_file("problems", "keys-2.pddl").read_text(encoding="utf-8")
+NO_MOVE = edit(KEYS_DYNAMICS, "success = 0.95", "success = 0.0")
+RED_LOCK_NEVER = edit(KEYS_DYNAMICS, "success = 0.5\nstuck = 0.3", "success = 0.0\nstuck = 1.0")
+NO_LOCK = edit(edit(KEYS_DYNAMICS, "[actions.unlock]\nsuccess = 0.9", "[actions.unlock]\n"
+                    "success = 0.0"), "success = 0.5\nstuck = 0.3", "success = 0.0")
+REALITY = {  # the knowledge has plans, but no episode can reach the goal
+    "no-move-ever-works": (KEYS_PROBLEM, NO_MOVE, ["cannot be reached in reality",
+                                                   "knowledge has plans", "8 actions",
+                                                   "success = 0: actions.move"]),
+    "no-lock-ever-opens": (KEYS_PROBLEM, NO_LOCK, ["cannot be reached in reality",
+                                                  "actions.unlock"]),
+    "the-way-that-works-is-past-the-step-limit": (
+        KEYS_2, edit(RED_LOCK_NEVER, "step_limit = 25", "step_limit = 8"),
+        ["dynamics.step_limit", "8 is less than", "in reality (9 actions",
+         "shortest plan has 7"]),
+}
+
+
+@pytest.mark.parametrize("case", list(REALITY))
+def test_a_goal_reality_cannot_reach_is_refused_naming_the_dynamics_file(capsys, tmp_path,
+                                                                         case):
+    import gymnasium
+
+    from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+
+    problem, dynamics, names = REALITY[case]
+    files = pddl_files(tmp_path, problem=problem, dynamics=dynamics)
+    code, out = pddl_run(capsys, tmp_path, files)
+    refused(code, out, str(files[2]), *names)
+    assert not (tmp_path / "o" / "config.json").exists()
+    for build in (lambda: PDDLInstance.from_files(*files).model, lambda: PDDLEnv(*files),
+                  lambda: gymnasium.make("gdq_pddl/PDDL-v0", domain=files[0],
+                                         problem=files[1], dynamics=files[2])):
+        with pytest.raises(GdqError) as info:
+            build()
+        assert all(n in str(info.value) for n in (str(files[2]), *names)), str(info.value)
+
+
+@pytest.mark.parametrize(("problem", "dynamics", "steps"), [
+    (KEYS_PROBLEM, RED_LOCK_NEVER, 8),  # the blue door: as short as the red one
+    (KEYS_2, RED_LOCK_NEVER, 9),  # the blue door: longer than the red one's 7
+    (KEYS_PROBLEM, edit(NO_MOVE, "success = 0.0", 'success = 0.0\nfailure = ["move"]'), 8),
+])  # the last: every move fails, and slips into a random move, the intended one included
+def test_reality_that_still_reaches_the_goal_runs(tmp_path, problem, dynamics, steps):
+    from gdq_pddl.envs.pddl_env import PDDLInstance, reality_distances
+
+    inst = PDDLInstance.from_files(*pddl_files(tmp_path, problem=problem, dynamics=dynamics))
+    assert reality_distances(inst.model)[inst.graph.is_goal].min() == steps  # model built
+
+
 # --- numbers on the command line ------------------------------------------------------------
 
 @pytest.mark.parametrize(("argv", "names"), [

@@ -479,6 +479,48 @@ def test_the_env_takes_a_ppddl_domain_file_alone():
     assert env.instance.dynamics.step_limit == 20  # no overlay: max(20, ceil(2.5 x 7))
 
 
+def hike_files(tmp_path: Path, domain: str = HIKE_DOMAIN,
+               problem: str = HIKE_PROBLEM) -> tuple[Path, Path]:
+    files = (tmp_path / "hike.pddl", tmp_path / "hike-4.pddl")
+    for path, text in zip(files, (domain, problem), strict=True):
+        path.write_text(text, encoding="utf-8")
+    return files
+
+
+def test_a_step_limit_below_the_way_reality_reaches_the_goal_is_refused(tmp_path):
+    """Most-likely knows no way to e1 (wading mostly does nothing), so no plan is longer
+    than the step limit; reality's fewest actions (walk, wade, walk) are."""
+    domain = HIKE_DOMAIN.replace("0.5 (and (at ?b)", "0.2 (and (at ?b)")
+    problem = HIKE_PROBLEM.replace("(trail w4 e4) (trail e4 w4)", "")
+    short = PDDLInstance.from_texts(domain, problem, "[dynamics]\nstep_limit = 2\n",
+                                    determinisation="most-likely")
+    with pytest.raises(WorldError, match=r"<string>: dynamics.step_limit: 2 is less than the "
+                       r"fewest actions .* in reality \(3 actions; the knowledge has no plan"):
+        short.model  # noqa: B018
+    assert PDDLInstance.from_texts(domain, problem, "[dynamics]\nstep_limit = 3\n",
+                                   determinisation="most-likely").model.step_limit == 3
+
+
+@pytest.mark.parametrize(("which", "old", "new", "names"), [
+    (0, "(probabilistic 0.9 (and", "(probabilistic 0 (and", [
+        "hike.pddl", "(at e1) can never hold (no outcome of positive probability of"]),
+    (1, "(:goal (at e1))", "(:goal (and (at e1) (not (at e1))))", [
+        "hike-4.pddl", "(at e1) and (not (at e1)), which can never both hold"]),
+])
+def test_a_ppddl_goal_that_can_never_hold_says_why(tmp_path, capsys, which, old, new, names):
+    texts = [HIKE_DOMAIN, HIKE_PROBLEM]
+    assert old in texts[which]
+    texts[which] = texts[which].replace(old, new)
+    if which == 0:  # nor may the wader reach e1
+        texts[0] = texts[0].replace("0.5 (and (at ?b)", "0 (and (at ?b)")
+    d, p = hike_files(tmp_path, *texts)
+    assert main(["run", "--domain", str(d), "--problem", str(p), "--episodes", "2", "--runs",
+                 "1", "--jobs", "1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"gdq-pddl: error: {p}: no plan: the goal cannot be reached"), err
+    assert all(n in err for n in names), err
+
+
 def test_cli_runs_a_ppddl_domain_nobody_has_seen_without_a_dynamics_file(tmp_path):
     (tmp_path / "d.pddl").write_text(HIKE_DOMAIN)
     (tmp_path / "p.pddl").write_text(HIKE_PROBLEM)
