@@ -487,6 +487,24 @@ def hike_files(tmp_path: Path, domain: str = HIKE_DOMAIN,
     return files
 
 
+@pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
+def test_gymnasium_make_takes_the_determinisation(tmp_path, determinisation):
+    import gymnasium
+
+    d, p = hike_files(tmp_path)
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d), problem=str(p),
+                         determinisation=determinisation).unwrapped
+    check_env(env, skip_render_check=True)
+    assert env.instance.determinisation == determinisation
+    want = hike(determinisation).graph  # the planner's knowledge: the graph's edges
+    np.testing.assert_array_equal(env.instance.graph.edge_next, want.edge_next)
+    assert gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d),
+                          problem=str(p)).unwrapped.instance.determinisation == "all-outcomes"
+    with pytest.raises(PlanningError, match="unknown determinisation 'best'"):
+        gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d), problem=str(p),
+                       determinisation="best")
+
+
 def test_a_step_limit_below_the_way_reality_reaches_the_goal_is_refused(tmp_path):
     """Most-likely knows no way to e1 (wading mostly does nothing), so no plan is longer
     than the step limit; reality's fewest actions (walk, wade, walk) are."""

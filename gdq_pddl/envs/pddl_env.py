@@ -21,6 +21,9 @@ Registered as ``gdq_pddl/PDDL-v0``::
 (a bare name without a suffix that is not an existing file: ``domains/<name>.pddl``,
 ``problems/<name>.pddl``, ``gdq_pddl/data/dynamics/<name>.toml``); a shipped domain
 given without ``dynamics`` gets the shipped dynamics of the same name.
+``determinisation`` (``"all-outcomes"``, the default, or ``"most-likely"``; the CLI's
+``--determinisation``) is what the planner knows of a PPDDL domain
+(:mod:`gdq_pddl.pddl.ppddl`); a STRIPS domain's knowledge is the domain itself.
 
 ## Action space
 ``Discrete(n_ops)``: the ground actions of the problem, in the grounder's order
@@ -486,10 +489,11 @@ def _shipped(kind: str, value: str | Path):
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,
-                  dynamics: str | Path | None = None) -> PDDLInstance:
+                  dynamics: str | Path | None = None,
+                  determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
     """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
     ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
-    dynamics file."""
+    dynamics file; a PPDDL domain's planner knows its ``determinisation``."""
     from contextlib import ExitStack
     from importlib.resources import as_file
 
@@ -503,7 +507,7 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
         paths = [value if value is None or (found := _shipped(kind, value)) is None
                  else stack.enter_context(as_file(found))
                  for kind, value in zip(SHIPPED, (domain, problem, dynamics), strict=True)]
-        return PDDLInstance.from_files(*paths)
+        return PDDLInstance.from_files(*paths, determinisation=determinisation)
 
 
 class PDDLEnv(ModelEnv):
@@ -513,12 +517,13 @@ class PDDLEnv(ModelEnv):
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
                  dynamics: str | Path | None = None, instance: PDDLInstance | None = None,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None,
+                 determinisation: str = DETERMINISATIONS[0]) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
                              f"or None, got {render_mode!r}")
         if instance is None:
-            instance = load_instance(domain, problem, dynamics)
+            instance = load_instance(domain, problem, dynamics, determinisation)
         self.instance = instance
         self.model = instance.model
         self.observation_space = Discrete(instance.n_states)
