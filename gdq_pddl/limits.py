@@ -8,7 +8,8 @@ operating system kills the process or numpy fails deep inside a computation.
 
 The range checks (:func:`check_real`, :func:`check_count`) are what every configuration
 dataclass and option calls, so a NaN, ``2.5`` backups or ``10**12`` of them is refused
-where it is given, not deep inside a compiled loop.
+where it is given, not deep inside a compiled loop. Every number an input file gives
+(world, dynamics, PDDL) is at most :data:`MAX_NUMBER` in size.
 """
 
 from __future__ import annotations
@@ -18,6 +19,11 @@ import numbers
 import os
 
 from gdq_pddl.errors import ConfigError, SizeError
+
+MAX_NUMBER = 1e15
+"""The largest magnitude a number of an input file (world, dynamics, PDDL) may have: far
+beyond any reward or cost, and small enough that a return (a sum over an episode's
+steps) and ``r_max / (1 - gamma)`` stay finite."""
 
 MAX_COUNT = 2**62
 """The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""

@@ -22,6 +22,7 @@ from typing import Any
 
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
+from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.resources import world_text
 
 VERBS: tuple[str, ...] = ("goto", "approach", "opendoor", "gothrough", "stay")
@@ -31,11 +32,6 @@ DOOR_VERBS = ("opendoor", "gothrough")
 
 COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
 """Numeric codes of cost distributions, as the compiled simulator reads them."""
-
-MAX_NUMBER = 1e15
-"""The largest magnitude a number of a world or dynamics file may have: far beyond any
-reward or cost, and small enough that a return (a sum over an episode's steps) and
-``r_max / (1 - gamma)`` stay finite."""
 
 KEYS: dict[str, tuple[str, ...]] = {
     "": ("world", "costs", "doors", "areas", "landmarks", "tasks"),

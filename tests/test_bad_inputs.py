@@ -254,6 +254,148 @@ def test_plan_still_answers_no_plan_and_warns_on_an_empty_plan(capsys, tmp_path)
     assert code == 1 and "no plan" in out
 
 
+# --- numbers in PDDL files ---------------------------------------------------------------
+
+PPDDL_DOMAIN = data_file("domains", "keys-ppddl.pddl").read_text(encoding="utf-8")
+PPDDL_PROBLEM = data_file("problems", "keys-ppddl-1.pddl").read_text(encoding="utf-8")
+PICKUP = "(not (key-at ?k ?c)) (increase (total-cost) 1)))"
+MOVE = "(probabilistic 0.95 (and (at ?to)"
+MUD = "(= (move-cost c32 c22) 3.5)"
+REWARD = "(:goal-reward 20)"
+
+
+def _number_case(which: int, old: str, new: str, line: int, *names: str):
+    """(domain text, problem text, the edited file's index, its line, what is named)."""
+    texts = [PPDDL_DOMAIN, PPDDL_PROBLEM]
+    texts[which] = edit(texts[which], old, new)
+    return (*texts, which, line, names)
+
+
+PDDL_NUMBERS = {
+    "cost-past-a-float": _number_case(0, PICKUP, PICKUP.replace(" 1)", " 1e400)"), 36, "1e400",
+                                      "at most 1e+15"),
+    "cost-past-the-cap": _number_case(0, PICKUP, PICKUP.replace(" 1)", " 1e300)"), 36, "1e300"),
+    "cost-written-at-length": _number_case(0, PICKUP, PICKUP.replace(" 1)", f" 1{'0' * 120})"),
+                                           36, "121 characters"),
+    "probability-exponent": _number_case(0, MOVE, MOVE.replace("0.95", "1e-99999999"), 31,
+                                         "1e-99999999", "exponent"),
+    "probability-written-at-length": _number_case(0, MOVE, MOVE.replace("0.95", "0." + "0" * 200
+                                                                        + "95"), 31, "0.000"),
+    "function-value-past-a-float": _number_case(1, MUD, MUD.replace("3.5", "1e400"), 94,
+                                                "(move-cost c32 c22)", "1e400"),
+    "function-value-past-the-cap": _number_case(1, MUD, MUD.replace("3.5", "1e300"), 94,
+                                                "(move-cost c32 c22)", "1e300"),
+    "function-value-exponent": _number_case(1, MUD, MUD.replace("3.5", "35e-99999999"), 94,
+                                            "35e-99999999"),
+    "cost-start-past-a-float": _number_case(1, "(at c11)", "(at c11) (= (total-cost) 1e400)", 10,
+                                            "(total-cost)", "1e400"),
+    "goal-reward-past-a-float": _number_case(1, REWARD, "(:goal-reward 1e400)", 103,
+                                             ":goal-reward", "1e400"),
+    "goal-reward-past-the-cap": _number_case(1, REWARD, "(:goal-reward 1e300)", 103,
+                                             ":goal-reward", "1e300", "1e+300"),
+    "goal-reward-largest-float": _number_case(1, REWARD, "(:goal-reward 1.7e308)", 103,
+                                              "1.7e308"),
+    "function-given-two-values": _number_case(1, MUD, MUD + " (= (move-cost c32 c22) 7)", 94,
+                                              "(move-cost c32 c22)", "3.5 (line 94)", "7"),
+}
+
+
+def ppddl_files(tmp_path: Path, domain: str, problem: str) -> tuple[Path, Path]:
+    files = (tmp_path / "domain.pddl", tmp_path / "problem.pddl")
+    for path, text in zip(files, (domain, problem), strict=True):
+        path.write_text(text, encoding="utf-8")
+    return files
+
+
+@pytest.mark.parametrize("case", list(PDDL_NUMBERS))
+def test_pddl_numbers_past_the_limits_are_refused_at_their_line(capsys, tmp_path, case):
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+
+    domain, problem, which, line, names = PDDL_NUMBERS[case]
+    files = ppddl_files(tmp_path, domain, problem)
+    where = f"{files[which]}:{line}: "
+    t0 = time.perf_counter()
+    code, out = cli(capsys, "run", "--domain", files[0], "--problem", files[1], *FAST,
+                    "--out", tmp_path / "o")
+    refused(code, out, where, *names)
+    code, out = cli(capsys, "plan", "--domain", files[0], "--problem", files[1])
+    refused(code, out, where, *names)
+    with pytest.raises(GdqError) as info:
+        PDDLInstance.from_files(*files)
+    assert all(n in str(info.value) for n in (where, *names)), str(info.value)
+    assert time.perf_counter() - t0 < 10  # 1e-99999999 as a fraction took minutes
+
+
+def test_pddl_numbers_up_to_the_cap_are_read_and_repeated_values_are_one(tmp_path):
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+    from gdq_pddl.limits import MAX_NUMBER
+
+    cap = f"{int(MAX_NUMBER)}"
+    problem = edit(edit(PPDDL_PROBLEM, REWARD, f"(:goal-reward {cap})"), MUD,
+                   MUD + " (= (move-cost c32 c22) 7/2) (= (total-cost) 0)")
+    files = ppddl_files(tmp_path, edit(PPDDL_DOMAIN, PICKUP, PICKUP.replace(" 1)", " 1e15)")),
+                        problem)
+    inst = PDDLInstance.from_files(*files)
+    assert inst.dynamics.r_max == MAX_NUMBER
+    assert inst.problem.problem.values["(move-cost c32 c22)"] == 3.5
+    assert max(c.a for c in inst.costs) == MAX_NUMBER
+    files[1].write_text(edit(PPDDL_PROBLEM, REWARD, f"(:goal-reward {int(MAX_NUMBER) + 1})"))
+    with pytest.raises(GdqError, match=r"problem.pddl:103: .*1000000000000001"):
+        PDDLInstance.from_files(*files)
+
+
+# --- reality against the knowledge -------------------------------------------------------
+
+KEYS_2 = data_file("problems", "keys-2.pddl").read_text(encoding="utf-8")
+NO_MOVE = edit(KEYS_DYNAMICS, "success = 0.95", "success = 0.0")
+RED_LOCK_NEVER = edit(KEYS_DYNAMICS, "success = 0.5\nstuck = 0.3", "success = 0.0\nstuck = 1.0")
+NO_LOCK = edit(edit(KEYS_DYNAMICS, "[actions.unlock]\nsuccess = 0.9", "[actions.unlock]\n"
+                    "success = 0.0"), "success = 0.5\nstuck = 0.3", "success = 0.0")
+REALITY = {  # the knowledge has plans, but no episode can reach the goal
+    "no-move-ever-works": (KEYS_PROBLEM, NO_MOVE, ["cannot be reached in reality",
+                                                   "knowledge has plans", "8 actions",
+                                                   "success = 0: actions.move"]),
+    "no-lock-ever-opens": (KEYS_PROBLEM, NO_LOCK, ["cannot be reached in reality",
+                                                  "actions.unlock"]),
+    "the-way-that-works-is-past-the-step-limit": (
+        KEYS_2, edit(RED_LOCK_NEVER, "step_limit = 25", "step_limit = 8"),
+        ["dynamics.step_limit", "8 is less than", "in reality (9 actions",
+         "shortest plan has 7"]),
+}
+
+
+@pytest.mark.parametrize("case", list(REALITY))
+def test_a_goal_reality_cannot_reach_is_refused_naming_the_dynamics_file(capsys, tmp_path,
+                                                                         case):
+    import gymnasium
+
+    from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+
+    problem, dynamics, names = REALITY[case]
+    files = pddl_files(tmp_path, problem=problem, dynamics=dynamics)
+    code, out = pddl_run(capsys, tmp_path, files)
+    refused(code, out, str(files[2]), *names)
+    assert not (tmp_path / "o" / "config.json").exists()
+    for build in (lambda: PDDLInstance.from_files(*files).model, lambda: PDDLEnv(*files),
+                  lambda: gymnasium.make("gdq_pddl/PDDL-v0", domain=files[0],
+                                         problem=files[1], dynamics=files[2])):
+        with pytest.raises(GdqError) as info:
+            build()
+        assert all(n in str(info.value) for n in (str(files[2]), *names)), str(info.value)
+
+
+@pytest.mark.parametrize(("problem", "dynamics", "steps"), [
+    (KEYS_PROBLEM, RED_LOCK_NEVER, 8),  # the blue door: as short as the red one
+    (KEYS_2, RED_LOCK_NEVER, 9),  # the blue door: longer than the red one's 7
+    (KEYS_PROBLEM, edit(NO_MOVE, "success = 0.0", 'success = 0.0\nfailure = ["move"]'), 8),
+])  # the last: every move fails, and slips into a random move, the intended one included
+def test_reality_that_still_reaches_the_goal_runs(tmp_path, problem, dynamics, steps):
+    from gdq_pddl.envs.pddl_env import PDDLInstance, reality_distances
+
+    inst = PDDLInstance.from_files(*pddl_files(tmp_path, problem=problem, dynamics=dynamics))
+    assert reality_distances(inst.model)[inst.graph.is_goal].min() == steps  # model built
+
+
 # --- numbers on the command line ------------------------------------------------------------
 
 @pytest.mark.parametrize(("argv", "names"), [

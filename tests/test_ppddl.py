@@ -161,6 +161,32 @@ def test_any_probabilistic_effect_is_a_distribution(effect):
 WALK_EFFECT = "(probabilistic 0.9 (and (at ?b) (not (at ?a))))"
 
 
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(1, 10**6), min_size=1, max_size=3), st.integers(7, 30),
+       st.booleans())
+def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, scientific):
+    """Property: probabilities written as decimals (``0.0000125``) or in scientific
+    notation (``125e-7``) that sum to 1 leave no "no effect" outcome, and one more of
+    10**-MAX_EXPONENT, the smallest a number may be written, makes the sum too large."""
+    from gdq_pddl.pddl.parser import MAX_EXPONENT
+
+    ks = [*weights, 10**digits - sum(weights)]
+    probs = [f"{k}e-{digits}" if scientific else f"0.{k:0{digits}d}" for k in ks]
+    effects = ["(at ?b)", "(not (at ?a))", "(trail ?b ?a)", "(not (trail ?a ?b))"]
+    pairs = " ".join(f"{p} {e}" for p, e in zip(probs, effects, strict=False))
+    walk = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs})")).actions[0]
+    assert all(o.effect for o in walk.outcomes)
+    assert sum(o.probability for o in walk.outcomes) == pytest.approx(1.0)
+    tiny = f"(probabilistic {pairs} 1e-{MAX_EXPONENT} (at ?a))"
+    with pytest.raises(PDDLError, match="they must sum to at most 1"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny))
+    with pytest.raises(PDDLError, match=f"1e-{MAX_EXPONENT + 1}: an exponent past"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny.replace(f"e-{MAX_EXPONENT}",
+                                                                   f"e-{MAX_EXPONENT + 1}")))
+
+
+
+
 @pytest.mark.parametrize(("old", "new", "line", "expected"), [
     ("0.5 (and (at ?b)", "0.7 (and (at ?b)", 15, "sum to 1.1; they must sum to at most 1"),
     ("0.3 (and (at ?down)", "-0.3 (and (at ?down)", 16, "a probability must be in [0, 1]"),
@@ -451,6 +477,66 @@ def test_the_env_takes_a_ppddl_domain_file_alone():
     env = PDDLEnv(ROOT / "domains" / "keys-ppddl.pddl", ROOT / "problems" / "keys-ppddl-2.pddl")
     check_env(env, skip_render_check=True)
     assert env.instance.dynamics.step_limit == 20  # no overlay: max(20, ceil(2.5 x 7))
+
+
+def hike_files(tmp_path: Path, domain: str = HIKE_DOMAIN,
+               problem: str = HIKE_PROBLEM) -> tuple[Path, Path]:
+    files = (tmp_path / "hike.pddl", tmp_path / "hike-4.pddl")
+    for path, text in zip(files, (domain, problem), strict=True):
+        path.write_text(text, encoding="utf-8")
+    return files
+
+
+@pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
+def test_gymnasium_make_takes_the_determinisation(tmp_path, determinisation):
+    import gymnasium
+
+    d, p = hike_files(tmp_path)
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d), problem=str(p),
+                         determinisation=determinisation).unwrapped
+    check_env(env, skip_render_check=True)
+    assert env.instance.determinisation == determinisation
+    want = hike(determinisation).graph  # the planner's knowledge: the graph's edges
+    np.testing.assert_array_equal(env.instance.graph.edge_next, want.edge_next)
+    assert gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d),
+                          problem=str(p)).unwrapped.instance.determinisation == "all-outcomes"
+    with pytest.raises(PlanningError, match="unknown determinisation 'best'"):
+        gymnasium.make("gdq_pddl/PDDL-v0", domain=str(d), problem=str(p),
+                       determinisation="best")
+
+
+def test_a_step_limit_below_the_way_reality_reaches_the_goal_is_refused(tmp_path):
+    """Most-likely knows no way to e1 (wading mostly does nothing), so no plan is longer
+    than the step limit; reality's fewest actions (walk, wade, walk) are."""
+    domain = HIKE_DOMAIN.replace("0.5 (and (at ?b)", "0.2 (and (at ?b)")
+    problem = HIKE_PROBLEM.replace("(trail w4 e4) (trail e4 w4)", "")
+    short = PDDLInstance.from_texts(domain, problem, "[dynamics]\nstep_limit = 2\n",
+                                    determinisation="most-likely")
+    with pytest.raises(WorldError, match=r"<string>: dynamics.step_limit: 2 is less than the "
+                       r"fewest actions .* in reality \(3 actions; the knowledge has no plan"):
+        short.model  # noqa: B018
+    assert PDDLInstance.from_texts(domain, problem, "[dynamics]\nstep_limit = 3\n",
+                                   determinisation="most-likely").model.step_limit == 3
+
+
+@pytest.mark.parametrize(("which", "old", "new", "names"), [
+    (0, "(probabilistic 0.9 (and", "(probabilistic 0 (and", [
+        "hike.pddl", "(at e1) can never hold (no outcome of positive probability of"]),
+    (1, "(:goal (at e1))", "(:goal (and (at e1) (not (at e1))))", [
+        "hike-4.pddl", "(at e1) and (not (at e1)), which can never both hold"]),
+])
+def test_a_ppddl_goal_that_can_never_hold_says_why(tmp_path, capsys, which, old, new, names):
+    texts = [HIKE_DOMAIN, HIKE_PROBLEM]
+    assert old in texts[which]
+    texts[which] = texts[which].replace(old, new)
+    if which == 0:  # nor may the wader reach e1
+        texts[0] = texts[0].replace("0.5 (and (at ?b)", "0 (and (at ?b)")
+    d, p = hike_files(tmp_path, *texts)
+    assert main(["run", "--domain", str(d), "--problem", str(p), "--episodes", "2", "--runs",
+                 "1", "--jobs", "1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"gdq-pddl: error: {p}: no plan: the goal cannot be reached"), err
+    assert all(n in err for n in names), err
 
 
 def test_cli_runs_a_ppddl_domain_nobody_has_seen_without_a_dynamics_file(tmp_path):

@@ -14,6 +14,8 @@ and ``gdq_pddl/PDDL-v0``, any PDDL problem under a dynamics file
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="d.pddl", problem="p.pddl",
                          dynamics="d.toml")
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain="ppddl.pddl", problem="p.pddl",
+                         determinisation="most-likely")  # what the planner knows
 
 No ``max_episode_steps`` is registered: the env counts its own steps and ends an episode
 at the world's (or the dynamics file's) ``step_limit`` with the failure reward

@@ -21,6 +21,9 @@ Registered as ``gdq_pddl/PDDL-v0``::
 (a bare name without a suffix that is not an existing file: ``domains/<name>.pddl``,
 ``problems/<name>.pddl``, ``gdq_pddl/data/dynamics/<name>.toml``); a shipped domain
 given without ``dynamics`` gets the shipped dynamics of the same name.
+``determinisation`` (``"all-outcomes"``, the default, or ``"most-likely"``; the CLI's
+``--determinisation``) is what the planner knows of a PPDDL domain
+(:mod:`gdq_pddl.pddl.ppddl`); a STRIPS domain's knowledge is the domain itself.
 
 ## Action space
 ``Discrete(n_ops)``: the ground actions of the problem, in the grounder's order
@@ -74,6 +77,7 @@ from gdq_pddl.envs.base import ModelEnv
 from gdq_pddl.envs.model import PAIR_BYTES, ModelArrays, cost_arrays, merge_outcomes, outcome_csr
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.limits import check_memory
+from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
@@ -188,7 +192,7 @@ class PDDLInstance:
     @cached_property
     def model(self) -> ModelArrays:
         """The true model (read-only arrays); refused up front past the memory it would
-        need."""
+        need, and when no episode could reach the goal in it (:func:`check_reality`)."""
         check_memory(self.n_states * self.n_actions * PAIR_BYTES,
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
                      f"of {self.n_states} states x {self.n_actions} ground actions",
@@ -197,6 +201,7 @@ class PDDLInstance:
             model = compile_ppddl_model(self.graph, self.costs, self.dynamics)
         else:
             model = compile_pddl_model(self.graph, self.dynamics, self.costs)
+        check_reality(self.problem, self.graph, self.dynamics, model)
         for array in model:
             if isinstance(array, np.ndarray):
                 array.setflags(write=False)
@@ -257,7 +262,7 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
     """Refuse a problem whose goal is empty, holds in the initial state or cannot be
     reached: in each, no episode could teach the learner anything, and the results would
     look like a success (or a certain failure). Raises :class:`PlanningError` naming the
-    problem file."""
+    problem file (and a PPDDL domain, whose outcomes are reality)."""
     source = problem.problem.source
     if not problem.problem.goal:
         raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
@@ -267,9 +272,16 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
                             "episode would be over before it begins")
     if not graph.is_goal.any():
         never = never_true(problem)
-        why = (f"{never} can never hold (no action makes it true, and the initial state "
+        ppddl = problem.source_domain.probabilistic
+        actions = f"no outcome of positive probability of {problem.source_domain.source}" \
+            if ppddl else "no action"
+        reached = f"that the outcomes of {problem.source_domain.source} reach" if ppddl \
+            else "reachable"
+        both = contradiction(problem.problem)
+        why = (f"it asks for {both}, which can never both hold" if both else
+               f"{never} can never hold ({actions} makes it true, and the initial state "
                "does not have it)" if never else
-               f"none of the {graph.n_states} states reachable from the initial state "
+               f"none of the {graph.n_states} states {reached} from the initial state "
                "satisfies it")
         raise PlanningError(f"{source}: no plan: the goal cannot be reached from the "
                             f"initial state: {why}")
@@ -287,20 +299,84 @@ def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dyna
                          "reach the goal")
 
 
+def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics,
+                  model: ModelArrays) -> None:
+    """Refuse a true model in which no episode can reach the goal: the goal cannot be
+    reached from the initial state with positive probability (a :class:`PlanningError`
+    naming the dynamics file, the knowledge's plans and the ``success = 0`` keys), or
+    only in more actions than the step limit allows (a :class:`WorldError` naming
+    ``dynamics.step_limit``). The knowledge's plans say nothing of it: an action the
+    planner uses may never work. (A PPDDL domain's states are those reality reaches, so
+    :func:`check_goal` has refused the first case there.)"""
+    fewest = reality_distances(model)[graph.is_goal].min(initial=math.inf)
+    if fewest <= dynamics.step_limit:
+        return
+    source = problem.problem.source
+    plan = int(graph.distances[0])
+    if math.isinf(fewest):
+        raise PlanningError(f"{dynamics.source}: the goal of {source} cannot be reached in "
+                            f"reality: the knowledge has plans (the shortest: {plan} "
+                            "actions), but under this dynamics file no sequence of actions "
+                            "from the initial state reaches it with positive probability "
+                            f"(success = 0: {', '.join(never_working(dynamics))}); give "
+                            "those actions a success > 0")
+    raise WorldError(dynamics.source or source, "dynamics.step_limit",
+                     f"{dynamics.step_limit} is less than the fewest actions that can reach "
+                     f"the goal of {source} in reality ({int(fewest)} actions; "
+                     + (f"the knowledge's shortest plan has {plan}" if plan >= 0 else
+                        "the knowledge has no plan") + "): no episode can reach the goal")
+
+
+def reality_distances(model: ModelArrays) -> np.ndarray:
+    """``float64[n_states]``: the fewest actions from the initial state (0) to each state
+    in the true model, over outcomes of positive probability that do not end the trial
+    (inf: none reaches it). One breadth-first search over the model's arrays."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import shortest_path
+
+    n = model.obs_of.shape[0]
+    src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
+    keep = (model.prob > 0) & ~model.stuck & (model.next != src)
+    graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
+                       shape=(n, n))
+    return shortest_path(graph, directed=True, unweighted=True, indices=0)
+
+
+def never_working(dynamics: Dynamics) -> list[str]:
+    """The keys of the dynamics file whose actions never have their effect
+    (``success = 0``; an object override only where its schema's table differs)."""
+    out = [f"actions.{s}" for s, o in dynamics.actions.items() if o.success == 0]
+    out += [f"actions.{s}.objects.{obj}" for s, per in dynamics.objects.items()
+            for obj, o in per.items()
+            if o.success == 0 and dynamics.actions[s].success != 0]
+    return out
+
+
 def never_true(problem: PlanningProblem) -> str:
-    """The first goal literal of ``problem`` that can never hold ("" if none is)."""
-    task = problem.task
+    """The first goal literal of ``problem`` that can never hold in reality ("" if none
+    is)."""
+    task, domain = problem.learner_task, problem.source_domain
     for lit in problem.problem.goal:
         atom = str(lit.atom)
         text = atom if lit.positive else f"(not {atom})"
         if lit.atom.predicate == "=":
             if (lit.atom.args[0] == lit.atom.args[1]) != lit.positive:
                 return text
-        elif lit.atom.predicate not in problem.domain.fluent_predicates():
+        elif lit.atom.predicate not in domain.fluent_predicates():
             if (atom in task.statics) != lit.positive:
                 return text
         elif lit.positive and atom not in task.fact_index:
             return atom
+    return ""
+
+
+def contradiction(problem: Problem) -> str:
+    """``"(at a) and (not (at a))"``: the first atom the goal asks for with its negation
+    ("" if none)."""
+    goal = set(problem.goal)
+    for lit in problem.goal:
+        if lit.positive and replace(lit, positive=False) in goal:
+            return f"{lit.atom} and (not {lit.atom})"
     return ""
 
 
@@ -413,10 +489,11 @@ def _shipped(kind: str, value: str | Path):
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,
-                  dynamics: str | Path | None = None) -> PDDLInstance:
+                  dynamics: str | Path | None = None,
+                  determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
     """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
     ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
-    dynamics file."""
+    dynamics file; a PPDDL domain's planner knows its ``determinisation``."""
     from contextlib import ExitStack
     from importlib.resources import as_file
 
@@ -430,7 +507,7 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
         paths = [value if value is None or (found := _shipped(kind, value)) is None
                  else stack.enter_context(as_file(found))
                  for kind, value in zip(SHIPPED, (domain, problem, dynamics), strict=True)]
-        return PDDLInstance.from_files(*paths)
+        return PDDLInstance.from_files(*paths, determinisation=determinisation)
 
 
 class PDDLEnv(ModelEnv):
@@ -440,12 +517,13 @@ class PDDLEnv(ModelEnv):
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
                  dynamics: str | Path | None = None, instance: PDDLInstance | None = None,
-                 render_mode: str | None = None) -> None:
+                 render_mode: str | None = None,
+                 determinisation: str = DETERMINISATIONS[0]) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
                              f"or None, got {render_mode!r}")
         if instance is None:
-            instance = load_instance(domain, problem, dynamics)
+            instance = load_instance(domain, problem, dynamics, determinisation)
         self.instance = instance
         self.model = instance.model
         self.observation_space = Discrete(instance.n_states)

@@ -26,6 +26,7 @@ from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.inputs import read_text
+from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
 
 SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality",
@@ -34,9 +35,19 @@ STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
 COST_FLUENTS = ("total-cost", "reward")
 """The numeric fluents an effect may change: the action's cost, in either convention."""
+_COST_TERMS = tuple(f"({f})" for f in COST_FLUENTS)
 MAX_OUTCOMES = 4096
 """Most outcomes one action's effect may flatten into (independent probabilistic effects
 multiply)."""
+MAX_LITERAL = 100
+"""Most characters a number may be written in (its exact fraction is built of them)."""
+MAX_EXPONENT = 400
+"""The largest exponent, in size, of a number written like ``2.5e-3``: past what a float
+holds (``1e400`` is infinite as one, ``1e-400`` is 0), and small enough that its exact
+fraction is built at once (``1e-99999999``'s would take minutes)."""
+_NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
+"""What may be a number (:class:`~fractions.Fraction` reads it or says it is not);
+linear, so a long symbol is rejected at once."""
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s()]+|\s+")
 
 
@@ -395,7 +406,7 @@ class _Effects:
                          "action's cost (give costs with (decrease (reward) X))")
         value = items[2]
         if not value.is_list:
-            number = _number(value.symbol)
+            number = _number(r, value, ctx)
             if number is None or number < 0:
                 raise r.fail(value.line, f"{ctx}: expected a cost >= 0 (a number or a "
                              f"function term), found {value.symbol!r}")
@@ -452,16 +463,36 @@ def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tup
     return tuple(out)
 
 
-def _number(text: str) -> Fraction | None:
-    """``"0.25"``, ``".5"``, ``"1/4"`` or ``"3"`` as an exact fraction (None: not a number)."""
+def _number(r: _Reader, node: Node, ctx: str) -> Fraction | None:
+    """``0.25``, ``.5``, ``1/4``, ``3`` or ``2.5e-3`` as an exact fraction (None: ``node``
+    is not a number). Raises :class:`PDDLError` at its line for a number larger than
+    :data:`~gdq_pddl.limits.MAX_NUMBER` in size, and, before the fraction is built, for
+    one written in more than :data:`MAX_LITERAL` characters or with an exponent past
+    :data:`MAX_EXPONENT`."""
+    text = node.symbol
+    match = None if node.is_list else _NUMERIC.fullmatch(text)
+    if match is None or not any(ch.isdigit() for ch in text):
+        return None
+    if len(text) > MAX_LITERAL:
+        raise r.fail(node.line, f"{ctx}: the number {text[:24]}... is {len(text)} characters "
+                     f"long; a number is read in at most {MAX_LITERAL}")
+    if match.group(1) is not None and abs(int(match.group(1))) > MAX_EXPONENT:
+        raise r.fail(node.line, f"{ctx}: {text}: an exponent past {MAX_EXPONENT} in size is "
+                     f"not read (no float holds such a number; a number is at most "
+                     f"{MAX_NUMBER:g} in size)")
     try:
-        return Fraction(text)
+        value = Fraction(text)
     except (ValueError, ZeroDivisionError):
         return None
+    if abs(value) > MAX_NUMBER:
+        shown = f"{float(value):g}" if abs(value) < 10**308 else text  # a float holds it
+        raise r.fail(node.line, f"{ctx}: expected a number of at most {MAX_NUMBER:g} in size, "
+                     f"found {text}" + (f" (= {shown})" if shown != text else ""))
+    return value
 
 
 def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
-    value = _number(node.symbol) if not node.is_list else None
+    value = _number(r, node, ctx)
     if value is None:
         raise r.fail(node.line, f"{ctx}: expected a probability (a number such as 0.25 or "
                      f"1/4), found {node.text()}")
@@ -586,11 +617,17 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
     if ":init" not in sec:
         raise r.fail(None, "expected (:init ...), the initial state")
     init, values = [], {}
+    given: dict[str, tuple[float, Node]] = {}  # function term -> its value, where given
     for node in sec[":init"].items[1:]:
         head = node.items[0].symbol if node.is_list and node.items else ""
         if head == "=":
             term, value = _init_value(r, node, domain, objects)
-            values[term] = value
+            first, where = given.setdefault(term, (value, node))
+            if first != value:  # the same value twice is the same fact twice: allowed
+                raise r.fail(node.line, f"init: {term} is given two values, "
+                             f"{where.items[2].symbol} (line {where.line}) and "
+                             f"{node.items[2].symbol}; give it one")
+            values[term] = 0.0 if term in _COST_TERMS else value
             continue
         if head == "probabilistic":
             raise r.fail(node.line, "init: a probabilistic initial state is not supported "
@@ -625,7 +662,7 @@ def _init_value(r: _Reader, node: Node, domain: Domain,
                      f"{node.text()}")
     fname = head[0].symbol
     if fname in COST_FLUENTS:  # (= (total-cost) 0): where the sum starts; not needed
-        return f"({fname})", 0.0
+        return f"({fname})", _init_number(r, items[2], f"({fname})")
     if fname not in domain.functions:
         raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
                      f"{', '.join(sorted(domain.functions)) or 'none'})")
@@ -638,17 +675,21 @@ def _init_value(r: _Reader, node: Node, domain: Domain,
             raise r.fail(node.line, f"init: unknown object {a!r} in ({fname} ...)")
         if not is_subtype(domain.types, objects[a], t):
             raise r.fail(node.line, f"init: {a} is a {objects[a]}, but {fname} expects a {t}")
-    value = _number(items[2].symbol) if not items[2].is_list else None
+    term = str(Atom(fname, args))
+    return term, _init_number(r, items[2], term)
+
+
+def _init_number(r: _Reader, node: Node, term: str) -> float:
+    value = _number(r, node, f"init: {term}")
     if value is None:
-        raise r.fail(node.line, f"init: expected a number for ({fname} ...), found "
-                     f"{items[2].text()}")
-    return str(Atom(fname, args)), float(value)
+        raise r.fail(node.line, f"init: expected a number for {term}, found {node.text()}")
+    return float(value)
 
 
 def _goal_reward(r: _Reader, node: Node) -> float:
     items = node.items
     assert items is not None
-    value = _number(items[1].symbol) if len(items) == 2 and not items[1].is_list else None
+    value = _number(r, items[1], ":goal-reward") if len(items) == 2 else None
     if value is None or value <= 0:
         raise r.fail(node.line, f"expected (:goal-reward N) with N > 0, found {node.text()}")
     return float(value)
