@@ -271,6 +271,9 @@ def test_plan_still_answers_no_plan_and_warns_on_an_empty_plan(capsys, tmp_path)
     (["scale", "--episodes", "-1"], ["--episodes", "-1"]),
     (["building", "--positions", "-5"], ["--positions", "-5"]),
     (["building", "--positions", "100", "--seed", "-1"], ["--seed", "-1"]),
+    (["building", "--positions", "40", "--doors", "4"], ["doors", "got 4"]),  # 2 rooms, 3 tasks
+    (["building", "--positions", "40", "--doors", "1000000000000"], ["doors", "1000000000000"]),
+    (["building", "--positions", "150", "--doors", "33"], ["doors", "33", "fire doors"]),
     (["plan", "--task", "C", "--tolerance", "nan"], ["--tolerance", "nan"]),
     (["plan", "--task", "C", "--tolerance", "inf"], ["--tolerance", "inf"]),
     (["plan", "--task", "C", "--tolerance", "-0.5"], ["--tolerance", "-0.5"]),
