@@ -307,6 +307,32 @@ def test_scale_sizes_past_memory_are_refused(capsys, tmp_path):
     refused(code, out, "positions = 10,000,000,000", "would need")
 
 
+SCALE_FAST = ["scale", "--sizes", "40", "--runs", "1", "--episodes", "3", "--method",
+              "Q-learning"]
+
+
+@pytest.mark.parametrize("buildings", ["1000000000", "100000", "1001"])
+def test_absurd_buildings_are_refused_up_front(capsys, tmp_path, buildings):
+    # 10**9 was killed for memory before printing anything, 100000 ran for hours
+    t0 = time.perf_counter()
+    code, out = cli(capsys, *SCALE_FAST, "--buildings", buildings, "--out", tmp_path / "o")
+    refused(code, out, f"--buildings {buildings}", "1,000")
+    assert time.perf_counter() - t0 < 10
+    assert not (tmp_path / "o").exists()
+
+
+def test_scale_checks_the_memory_of_all_buildings_together(capsys, tmp_path, monkeypatch):
+    # a machine of 3 MB: a learner's tables (2.6 MB) and one building's runs fit, not the
+    # runs of 1000 buildings held until the report (4.1 MB)
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(3 * 10**6))
+    code, out = cli(capsys, *SCALE_FAST, "--runs", "2", "--buildings", "1000",
+                    "--out", tmp_path / "o")
+    refused(code, out, "1,000 buildings", "--buildings", "would need")
+    code, out = cli(capsys, *SCALE_FAST, "--buildings", "2", "--seed", "4611686018427387904",
+                    "--out", tmp_path / "o")
+    refused(code, out, "--seed + --buildings - 1", "4611686018427387905")
+
+
 def test_jobs_are_capped_at_the_runs_and_said(capsys, tmp_path):
     code, out = cli(capsys, "run", "--task", "C", "--episodes", "3", "--runs", "2",
                     "--method", "Q-learning", "--jobs", "40", "--out", tmp_path / "o",

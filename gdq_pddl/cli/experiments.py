@@ -230,7 +230,7 @@ def register_scale(sub) -> None:
                    help="building sizes in positions (default 100 300 1000)")
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
-                        "(default 2)")
+                        "(default 2, at most 1000)")
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
                         f"from: {', '.join(METHODS)})")
