@@ -277,6 +277,11 @@ def test_plan_still_answers_no_plan_and_warns_on_an_empty_plan(capsys, tmp_path)
     (["plan", "--task", "C", "--tolerance", "nan"], ["--tolerance", "nan"]),
     (["plan", "--task", "C", "--tolerance", "inf"], ["--tolerance", "inf"]),
     (["plan", "--task", "C", "--tolerance", "-0.5"], ["--tolerance", "-0.5"]),
+    (["plan", "--task", "C", "--tolerance", "1e308"], ["--tolerance", "1e308"]),  # overflowed
+    (["plan", "--task", "C", "--tolerance", "101"], ["--tolerance", "101"]),
+    (["plan", "--domain", data_file("domains", "keys-ppddl.pddl"), "--problem",
+      data_file("problems", "keys-ppddl-1.pddl"), "--tolerance", "1e308"],
+     ["--tolerance", "1e308"]),
 ])
 def test_bad_numbers_on_the_command_line(capsys, argv, names):
     code, out = cli(capsys, *argv)
@@ -619,14 +624,31 @@ def test_run_experiments_refuses_bad_jobs(tmp_path, jobs):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("tolerance", [float("nan"), float("inf"), -1.0])
-def test_planner_tolerance_must_be_finite(tolerance):
+@pytest.mark.parametrize("tolerance", [float("nan"), float("inf"), -1.0, 1e308, 101.0])
+@pytest.mark.parametrize("planner", ["graph", "pyperplan"])
+def test_planner_tolerance_must_be_finite(tolerance, planner):
     from gdq_pddl.errors import PlanningError
     from gdq_pddl.planning import PlanningProblem, get_planner
 
     problem = PlanningProblem.from_texts(KEYS_DOMAIN, KEYS_PROBLEM)
     with pytest.raises(PlanningError, match="tolerance"):
-        get_planner("graph").solve(problem, tolerance=tolerance)
+        get_planner(planner).solve(problem, tolerance=tolerance)
+
+
+@pytest.mark.parametrize("kind", ["all", "routes"])
+def test_plan_tables_refuse_absurd_tolerances(kind):
+    # 1e308 x the shortest length overflowed into an OverflowError in length_bound
+    from gdq_pddl.abstraction.pddl import graph_plan_table
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.world import load_world
+
+    with pytest.raises(GdqError, match=r"tolerance .*got 1e\+308"):
+        office_task_context(load_world(), "C", darling_tolerance=1e308, darling_kind=kind)
+    keys = PDDLInstance.from_files(data_file("domains", "keys-ppddl.pddl"),
+                                   data_file("problems", "keys-ppddl-1.pddl"))
+    with pytest.raises(GdqError, match=r"tolerance .*got 1e\+308"):
+        graph_plan_table(keys.graph, 1e308)
 
 
 def test_value_iteration_refuses_up_front_what_memory_cannot_hold(monkeypatch):

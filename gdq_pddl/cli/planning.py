@@ -12,8 +12,8 @@ from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
     determinisation_arg,
-    finite_nonnegative,
     task_args,
+    tolerance_arg,
     world_and_task,
 )
 
@@ -79,7 +79,7 @@ def register_plan(sub) -> None:
                                    "each plan with the learner state/action each step maps to.")
     task_args(p)
     p.add_argument("--planner", default="graph", help="planner backend (see `gdq-pddl planners`)")
-    p.add_argument("--tolerance", type=finite_nonnegative, default=0.0,
+    p.add_argument("--tolerance", type=tolerance_arg, default=0.0,
                    help="also every loop-free plan up to (1+T) x the shortest length")
     p.add_argument("--domain", type=Path, help="PDDL domain file (default: the office domain)")
     p.add_argument("--problem", type=Path,
