@@ -288,6 +288,17 @@ def test_bad_numbers_on_the_command_line(capsys, argv, names):
     refused(code, out, *names)
 
 
+@pytest.mark.parametrize("to", ["C", "c"])
+def test_a_switch_to_the_same_task_is_refused(capsys, tmp_path, to):
+    from gdq_pddl.experiments import switch_experiment
+
+    code, out = cli(capsys, "switch", "--from", "C", "--to", to, *FAST, "--out", tmp_path / "o")
+    refused(code, out, "--from and --to are the same task (C)")
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(GdqError, match="same task"):
+        switch_experiment("C", to, 3)
+
+
 @pytest.mark.parametrize(("argv", "names"), [
     (["--episodes", "1000000000000", "--runs", "1"], ["--episodes", "1,000,000,000,000"]),
     (["--runs", "1000000000"], ["--runs", "1,000,000,000"]),
