@@ -41,7 +41,7 @@ import numpy as np
 
 from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import check_memory
-from gdq_pddl.outputs import output_folder
+from gdq_pddl.outputs import output_folder, write_text
 from gdq_pddl.world import Task, World, parse_world
 
 DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
@@ -386,12 +386,11 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     out = output_folder(out)
     output_folder(out / "problems")
     world_path = out / f"{b.name}.toml"
-    world_path.write_text(text, encoding="utf-8")
-    (out / "domain.pddl").write_text(_domain_text(), encoding="utf-8")
+    write_text(world_path, text)
+    write_text((out / "domain.pddl"), _domain_text())
     problems = []
     for task in world.tasks.values():
         path = out / "problems" / f"{b.name}-{task.name.lower()}.pddl"
-        path.write_text(office_problem(world, Task(task.name, task.start, task.goal)),
-                        encoding="utf-8")
+        write_text(path, office_problem(world, Task(task.name, task.start, task.goal)))
         problems.append(path)
     return world_path, problems

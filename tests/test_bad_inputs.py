@@ -9,6 +9,9 @@ raise the package's own error with the same names.
 
 from __future__ import annotations
 
+import errno
+import io
+import os
 import signal
 import subprocess
 import sys
@@ -385,6 +388,45 @@ def test_unusable_problem_output_file(capsys, tmp_path, case):
            "proc": Path("/proc/gdq.pddl")}[case]
     code, text = cli(capsys, "problem", "--task", "C", "--out", out)
     refused(code, text, "--out", str(out))
+
+
+def _full_disk(*args, **kwargs):
+    """A write on a full disk: the OSError names no file."""
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here")
+def test_a_full_device_is_named(capsys):
+    code, text = cli(capsys, "problem", "--task", "C", "--out", "/dev/full")
+    refused(code, text, "/dev/full", "No space left on device")
+
+
+@pytest.mark.parametrize("command", [["planners"], ["problem", "--task", "C"]])
+def test_a_full_standard_output_is_named(capsys, monkeypatch, command):
+    class Full(io.StringIO):
+        write = _full_disk
+
+    monkeypatch.setattr(sys, "stdout", Full())
+    code, text = cli(capsys, *command)
+    refused(code, text, "standard output", "No space left on device")
+
+
+def test_a_disk_filling_up_names_the_file(capsys, tmp_path, monkeypatch):
+    import matplotlib.figure
+
+    with monkeypatch.context() as m:  # the building's world file
+        m.setattr(Path, "write_text", _full_disk)
+        code, text = cli(capsys, "building", "--positions", "40", "--out", tmp_path / "b")
+    refused(code, text, str(tmp_path / "b" / "building-40-s0.toml"), "No space left")
+    with monkeypatch.context() as m:  # a run's unit file (every atomic write)
+        m.setattr(np, "savez", _full_disk)
+        code, text = _run(capsys, tmp_path / "o")
+    refused(code, text, str(tmp_path / "o" / "units"), ".npz", "No space left")
+    assert _run(capsys, tmp_path / "r")[0] == 0
+    with monkeypatch.context() as m:  # a figure of the report
+        m.setattr(matplotlib.figure.Figure, "savefig", _full_disk)
+        code, text = cli(capsys, "report", tmp_path / "r")
+    refused(code, text, str(tmp_path / "r"), ".png", "No space left")
 
 
 def test_problem_out_in_a_new_folder_is_written(capsys, tmp_path):
