@@ -387,7 +387,7 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     output_folder(out / "problems")
     world_path = out / f"{b.name}.toml"
     write_text(world_path, text)
-    write_text((out / "domain.pddl"), _domain_text())
+    write_text(out / "domain.pddl", _domain_text())
     problems = []
     for task in world.tasks.values():
         path = out / "problems" / f"{b.name}-{task.name.lower()}.pddl"

@@ -32,7 +32,7 @@ from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
 from gdq_pddl.analysis.study import Study  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
 from gdq_pddl.errors import GdqError  # noqa: E402
-from gdq_pddl.outputs import save_figure
+from gdq_pddl.outputs import save_figure  # noqa: E402
 from gdq_pddl.world import Task, World  # noqa: E402
 
 METHOD_COLOURS = {

@@ -20,7 +20,7 @@ from matplotlib.patches import Rectangle  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from gdq_pddl.analysis.pairs import LOSS, WIN, Differences, PairRuns  # noqa: E402
-from gdq_pddl.outputs import save_figure
+from gdq_pddl.outputs import save_figure  # noqa: E402
 
 FIGURE_STEM = "pairs"
 OUTCOME_COLOURS = {WIN: "#2166ac", "tie": "#999999", LOSS: "#b2182b"}
