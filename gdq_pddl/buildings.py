@@ -7,9 +7,9 @@ positions: for a room door, a stub beside the corridor and the room's entrance.
 
 Layout, from a seed (``numpy.random.default_rng(seed)``, the only source of randomness):
 
-- ``--doors K`` doors (default ``positions // 8``): about 1/6 fire doors, about 1/6
-  second room doors, the rest one per room. Rooms have 3-8 positions, a chain with
-  sometimes a closing edge.
+- ``--doors K`` doors (default ``positions // 8``, 5 to ``positions``): about 1/6 fire
+  doors, about 1/6 second room doors, the rest one per room. Rooms have 3-8 positions, a
+  chain with sometimes a closing edge.
 - The positions left over form ``R = round(sqrt(n / 4))`` corridor rows of random
   lengths, split into segments of 4-8 positions; rows are joined by 2-3 vertical
   corridors (1-3 positions) at random places, so routes have alternatives but few ties.
@@ -41,7 +41,7 @@ import numpy as np
 
 from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import check_memory
-from gdq_pddl.outputs import output_folder
+from gdq_pddl.outputs import output_folder, write_text
 from gdq_pddl.world import Task, World, parse_world
 
 DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
@@ -96,16 +96,16 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
     check_memory(positions * POSITION_BYTES, f"positions = {positions:,}: generating the "
                  "building", "give fewer positions")
     k = positions // 8 if doors is None else doors
-    if k < 3:
-        raise WorldError("building", "doors", f"need at least 3 doors, got {k}")
+    if not 5 <= k <= positions:  # rooms for the tasks' 3 landmarks, a fire door, a second
+        # room door; and each door brings a position of its own (a stub, a side)
+        raise WorldError("building", "doors", f"need 5 to {positions} doors (at most one per "
+                                              f"position), got {k}")
     if seed < 0:
         raise WorldError("building", "seed", f"must be >= 0, got {seed}")
     rng = np.random.default_rng(seed)
     n_fire = max(1, round(k / 6))
     n_second = max(1, round(k / 6))
     n_rooms = k - n_fire - n_second
-    if n_rooms < 2:
-        raise WorldError("building", "doors", f"{k} doors leave too few rooms")
     sizes = rng.integers(3, 9, size=n_rooms)
     stubs = n_rooms + n_second + 2 * n_fire
     corridor = positions - stubs - int(sizes.sum())
@@ -117,7 +117,7 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
         raise WorldError("building", "doors", f"{k} doors are too many for {positions} "
                                               "positions")
     b = Building(name=f"building-{positions}-s{seed}")
-    rows = _corridors(b, rng, corridor, n_fire)
+    rows = _corridors(b, rng, corridor, n_fire, k)
     _rooms(b, rng, rows, sizes, n_second)
     _tasks(b, rng)
     b.description = (f"generated building: {positions} positions, {len(b.doors)} doors, "
@@ -126,8 +126,10 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
     return b
 
 
-def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int) -> list[list[str]]:
-    """Corridor rows and links of ``n`` positions in all (fire doors' stubs come on top)."""
+def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int,
+               doors: int) -> list[list[str]]:
+    """Corridor rows and links of ``n`` positions in all (fire doors' stubs come on top);
+    ``doors`` is the building's number of doors, for the message when they do not fit."""
     n_rows = max(2, round(math.sqrt(n / 4)))
     n_links = sum(int(rng.integers(2, 4)) for _ in range(n_rows - 1))
     link_len = rng.integers(1, 4, size=n_links)
@@ -135,15 +137,27 @@ def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int) -> li
     weights = rng.uniform(0.8, 1.2, size=n_rows)
     lengths = np.floor(weights / weights.sum() * row_total).astype(int)
     lengths[: row_total - lengths.sum()] += 1
-    # each fire door goes into a row or a link (a link holds at most one)
+    # each fire door goes into a row or a link (a link holds at most one); a row holds one
+    # per position at least 2 from its ends, and a fire door drawn for a full row goes
+    # where there is room instead (no draw: every building that fitted stays the same)
     row_fires = np.zeros(n_rows, dtype=int)
+    room_left = np.maximum(lengths - 4, 0)
     link_fire = np.zeros(n_links, dtype=bool)
     for _ in range(n_fire):
         slot = int(rng.integers(0, n_rows + n_links))
         if slot >= n_rows and not link_fire[slot - n_rows]:
             link_fire[slot - n_rows] = True
+            continue
+        row = slot % n_rows if room_left[slot % n_rows] else int(np.argmax(room_left))
+        if room_left[row]:
+            row_fires[row] += 1
+            room_left[row] -= 1
+        elif not link_fire.all():
+            link_fire[int(np.argmin(link_fire))] = True
         else:
-            row_fires[slot % n_rows] += 1
+            raise WorldError("building", "doors", f"{doors} doors are too many: their {n_fire} "
+                                                  f"fire doors do not fit in the corridors' {n} "
+                                                  "positions")
     area = 1
     rows: list[list[str]] = []
     for r, length in enumerate(lengths):
@@ -372,12 +386,11 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     out = output_folder(out)
     output_folder(out / "problems")
     world_path = out / f"{b.name}.toml"
-    world_path.write_text(text, encoding="utf-8")
-    (out / "domain.pddl").write_text(_domain_text(), encoding="utf-8")
+    write_text(world_path, text)
+    write_text(out / "domain.pddl", _domain_text())
     problems = []
     for task in world.tasks.values():
         path = out / "problems" / f"{b.name}-{task.name.lower()}.pddl"
-        path.write_text(office_problem(world, Task(task.name, task.start, task.goal)),
-                        encoding="utf-8")
+        write_text(path, office_problem(world, Task(task.name, task.start, task.goal)))
         problems.append(path)
     return world_path, problems

@@ -28,6 +28,12 @@ steps) and ``r_max / (1 - gamma)`` stay finite."""
 MAX_COUNT = 2**62
 """The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""
 
+MAX_TOLERANCE = 100.0
+"""The largest plan-length tolerance: plans of up to 101 x the shortest length (the paper
+uses 0.3). Past it a "tolerance" is a tour, not a near-shortest plan; and the bound
+``(1 + tolerance) x L`` still grows with it, past every loop-free plan (clingo grounds a
+horizon per step up to it) and, near 1e308, past any float."""
+
 FALLBACK_MEMORY = 16 * 1024**3
 """What :func:`physical_memory` assumes where the system does not say."""
 

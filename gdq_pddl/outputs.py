@@ -5,15 +5,23 @@ Every command that writes (``run``, ``switch``, ``robot``, ``reproduce``, ``know
 :func:`output_file` first, so an existing file given as ``--out``, a path under a file,
 ``/dev/null``, ``/proc`` or a read-only file system is one clear
 :class:`~gdq_pddl.errors.OutputError` naming the path, not a traceback after the work.
+Every write goes through :func:`writing` (or :func:`write_text`, :func:`save_figure`), so
+a disk that fills up during the work is named too.
 """
 
 from __future__ import annotations
 
 import os
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gdq_pddl.errors import OutputError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def output_folder(path: str | Path, option: str = "--out") -> Path:
@@ -56,6 +64,31 @@ def output_file(path: str | Path, option: str = "--out") -> Path:
     if not existed and path.is_file():
         path.unlink()
     return path
+
+
+@contextmanager
+def writing(path: str | Path) -> Iterator[None]:
+    """Name ``path`` in an OSError raised while writing it: a full disk (ENOSPC) or an I/O
+    error names no file, and the command line printed a bare "No space left on device".
+    An OSError that names its own file passes through, and so does a closed pipe."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is not None or isinstance(exc, BrokenPipeError):
+            raise
+        raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+
+
+def write_text(path: str | Path, text: str) -> None:
+    """``path.write_text(text)`` in UTF-8, through :func:`writing`."""
+    with writing(path):
+        Path(path).write_text(text, encoding="utf-8")
+
+
+def save_figure(fig: Figure, path: str | Path, **kwargs: object) -> None:
+    """``fig.savefig(path, **kwargs)``, through :func:`writing`."""
+    with writing(path):
+        fig.savefig(path, **kwargs)
 
 
 def _probe(folder: Path, option: str) -> None:

@@ -9,6 +9,9 @@ raise the package's own error with the same names.
 
 from __future__ import annotations
 
+import errno
+import io
+import os
 import signal
 import subprocess
 import sys
@@ -413,13 +416,32 @@ def test_reality_that_still_reaches_the_goal_runs(tmp_path, problem, dynamics, s
     (["scale", "--episodes", "-1"], ["--episodes", "-1"]),
     (["building", "--positions", "-5"], ["--positions", "-5"]),
     (["building", "--positions", "100", "--seed", "-1"], ["--seed", "-1"]),
+    (["building", "--positions", "40", "--doors", "4"], ["doors", "got 4"]),  # 2 rooms, 3 tasks
+    (["building", "--positions", "40", "--doors", "1000000000000"], ["doors", "1000000000000"]),
+    (["building", "--positions", "150", "--doors", "33"], ["doors", "33", "fire doors"]),
     (["plan", "--task", "C", "--tolerance", "nan"], ["--tolerance", "nan"]),
     (["plan", "--task", "C", "--tolerance", "inf"], ["--tolerance", "inf"]),
     (["plan", "--task", "C", "--tolerance", "-0.5"], ["--tolerance", "-0.5"]),
+    (["plan", "--task", "C", "--tolerance", "1e308"], ["--tolerance", "1e308"]),  # overflowed
+    (["plan", "--task", "C", "--tolerance", "101"], ["--tolerance", "101"]),
+    (["plan", "--domain", data_file("domains", "keys-ppddl.pddl"), "--problem",
+      data_file("problems", "keys-ppddl-1.pddl"), "--tolerance", "1e308"],
+     ["--tolerance", "1e308"]),
 ])
 def test_bad_numbers_on_the_command_line(capsys, argv, names):
     code, out = cli(capsys, *argv)
     refused(code, out, *names)
+
+
+@pytest.mark.parametrize("to", ["C", "c"])
+def test_a_switch_to_the_same_task_is_refused(capsys, tmp_path, to):
+    from gdq_pddl.experiments import switch_experiment
+
+    code, out = cli(capsys, "switch", "--from", "C", "--to", to, *FAST, "--out", tmp_path / "o")
+    refused(code, out, "--from and --to are the same task (C)")
+    assert not (tmp_path / "o").exists()
+    with pytest.raises(GdqError, match="same task"):
+        switch_experiment("C", to, 3)
 
 
 @pytest.mark.parametrize(("argv", "names"), [
@@ -444,6 +466,32 @@ def test_scale_sizes_past_memory_are_refused(capsys, tmp_path):
     refused(code, out, "--episodes 1,000,000,000,000", "would need")
     code, out = cli(capsys, "building", "--positions", "10000000000", "--out", tmp_path / "b")
     refused(code, out, "positions = 10,000,000,000", "would need")
+
+
+SCALE_FAST = ["scale", "--sizes", "40", "--runs", "1", "--episodes", "3", "--method",
+              "Q-learning"]
+
+
+@pytest.mark.parametrize("buildings", ["1000000000", "100000", "1001"])
+def test_absurd_buildings_are_refused_up_front(capsys, tmp_path, buildings):
+    # 10**9 was killed for memory before printing anything, 100000 ran for hours
+    t0 = time.perf_counter()
+    code, out = cli(capsys, *SCALE_FAST, "--buildings", buildings, "--out", tmp_path / "o")
+    refused(code, out, f"--buildings {buildings}", "1,000")
+    assert time.perf_counter() - t0 < 10
+    assert not (tmp_path / "o").exists()
+
+
+def test_scale_checks_the_memory_of_all_buildings_together(capsys, tmp_path, monkeypatch):
+    # a machine of 3 MB: a learner's tables (2.6 MB) and one building's runs fit, not the
+    # runs of 1000 buildings held until the report (4.1 MB)
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(3 * 10**6))
+    code, out = cli(capsys, *SCALE_FAST, "--runs", "2", "--buildings", "1000",
+                    "--out", tmp_path / "o")
+    refused(code, out, "1,000 buildings", "--buildings", "would need")
+    code, out = cli(capsys, *SCALE_FAST, "--buildings", "2", "--seed", "4611686018427387904",
+                    "--out", tmp_path / "o")
+    refused(code, out, "--seed + --buildings - 1", "4611686018427387905")
 
 
 def test_jobs_are_capped_at_the_runs_and_said(capsys, tmp_path):
@@ -482,6 +530,45 @@ def test_unusable_problem_output_file(capsys, tmp_path, case):
            "proc": Path("/proc/gdq.pddl")}[case]
     code, text = cli(capsys, "problem", "--task", "C", "--out", out)
     refused(code, text, "--out", str(out))
+
+
+def _full_disk(*args, **kwargs):
+    """A write on a full disk: the OSError names no file."""
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here")
+def test_a_full_device_is_named(capsys):
+    code, text = cli(capsys, "problem", "--task", "C", "--out", "/dev/full")
+    refused(code, text, "/dev/full", "No space left on device")
+
+
+@pytest.mark.parametrize("command", [["planners"], ["problem", "--task", "C"]])
+def test_a_full_standard_output_is_named(capsys, monkeypatch, command):
+    class Full(io.StringIO):
+        write = _full_disk
+
+    monkeypatch.setattr(sys, "stdout", Full())
+    code, text = cli(capsys, *command)
+    refused(code, text, "standard output", "No space left on device")
+
+
+def test_a_disk_filling_up_names_the_file(capsys, tmp_path, monkeypatch):
+    import matplotlib.figure
+
+    with monkeypatch.context() as m:  # the building's world file
+        m.setattr(Path, "write_text", _full_disk)
+        code, text = cli(capsys, "building", "--positions", "40", "--out", tmp_path / "b")
+    refused(code, text, str(tmp_path / "b" / "building-40-s0.toml"), "No space left")
+    with monkeypatch.context() as m:  # a run's unit file (every atomic write)
+        m.setattr(np, "savez", _full_disk)
+        code, text = _run(capsys, tmp_path / "o")
+    refused(code, text, str(tmp_path / "o" / "units"), ".npz", "No space left")
+    assert _run(capsys, tmp_path / "r")[0] == 0
+    with monkeypatch.context() as m:  # a figure of the report
+        m.setattr(matplotlib.figure.Figure, "savefig", _full_disk)
+        code, text = cli(capsys, "report", tmp_path / "r")
+    refused(code, text, str(tmp_path / "r"), ".png", "No space left")
 
 
 def test_problem_out_in_a_new_folder_is_written(capsys, tmp_path):
@@ -758,14 +845,31 @@ def test_run_experiments_refuses_bad_jobs(tmp_path, jobs):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("tolerance", [float("nan"), float("inf"), -1.0])
-def test_planner_tolerance_must_be_finite(tolerance):
+@pytest.mark.parametrize("tolerance", [float("nan"), float("inf"), -1.0, 1e308, 101.0])
+@pytest.mark.parametrize("planner", ["graph", "pyperplan"])
+def test_planner_tolerance_must_be_finite(tolerance, planner):
     from gdq_pddl.errors import PlanningError
     from gdq_pddl.planning import PlanningProblem, get_planner
 
     problem = PlanningProblem.from_texts(KEYS_DOMAIN, KEYS_PROBLEM)
     with pytest.raises(PlanningError, match="tolerance"):
-        get_planner("graph").solve(problem, tolerance=tolerance)
+        get_planner(planner).solve(problem, tolerance=tolerance)
+
+
+@pytest.mark.parametrize("kind", ["all", "routes"])
+def test_plan_tables_refuse_absurd_tolerances(kind):
+    # 1e308 x the shortest length overflowed into an OverflowError in length_bound
+    from gdq_pddl.abstraction.pddl import graph_plan_table
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.world import load_world
+
+    with pytest.raises(GdqError, match=r"tolerance .*got 1e\+308"):
+        office_task_context(load_world(), "C", darling_tolerance=1e308, darling_kind=kind)
+    keys = PDDLInstance.from_files(data_file("domains", "keys-ppddl.pddl"),
+                                   data_file("problems", "keys-ppddl-1.pddl"))
+    with pytest.raises(GdqError, match=r"tolerance .*got 1e\+308"):
+        graph_plan_table(keys.graph, 1e308)
 
 
 def test_value_iteration_refuses_up_front_what_memory_cannot_hold(monkeypatch):

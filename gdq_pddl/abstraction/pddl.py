@@ -20,6 +20,7 @@ import numpy as np
 
 from gdq_pddl.abstraction.table import PlanTable, pack_plans
 from gdq_pddl.errors import AbstractionError
+from gdq_pddl.limits import MAX_TOLERANCE, check_real
 from gdq_pddl.pddl.ppddl import ProbabilisticTask
 from gdq_pddl.pddl.reachable import StateGraph
 from gdq_pddl.planning.base import State, length_bound
@@ -72,8 +73,7 @@ class PDDLAbstraction:
 def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
                      max_plans: int = 10_000) -> PlanTable:
     """Plans from every reachable state (see the module docstring)."""
-    if tolerance < 0:
-        raise ValueError(f"tolerance must be >= 0, got {tolerance}")
+    check_real("tolerance", tolerance, 0.0, MAX_TOLERANCE)
     dist = graph.distances
     names = [op.name for op in graph.task.ops]
     edges = [graph.edges(s) for s in range(graph.n_states)]

@@ -48,6 +48,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
 
 from gdq_pddl.abstraction.table import Abstraction, PlanTable, pack_plans
+from gdq_pddl.limits import MAX_TOLERANCE, check_real
 from gdq_pddl.planning.base import PlanningProblem, length_bound
 
 Edge = tuple[int, int, int, str]
@@ -90,8 +91,7 @@ def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
     learner action ``a`` is one at which routes differ (the office: ``gothrough``). At
     most ``max_routes`` routes are kept per state, the table is then marked capped.
     """
-    if tolerance < 0:
-        raise ValueError(f"tolerance must be >= 0, got {tolerance}")
+    check_real("tolerance", tolerance, 0.0, MAX_TOLERANCE)
     n = abstraction.n_states
     read = _reader(abstraction, problem.task)
     edges = knowledge_edges(abstraction, problem, read)

@@ -32,6 +32,7 @@ from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
 from gdq_pddl.analysis.study import Study  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
 from gdq_pddl.errors import GdqError  # noqa: E402
+from gdq_pddl.outputs import save_figure  # noqa: E402
 from gdq_pddl.world import Task, World  # noqa: E402
 
 METHOD_COLOURS = {
@@ -73,7 +74,7 @@ def _save(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions) -> list[Pa
     paths = []
     for ext in opts.formats:
         path = out_dir / f"{stem}.{ext}"
-        fig.savefig(path, dpi=opts.dpi)
+        save_figure(fig, path, dpi=opts.dpi)
         paths.append(path)
         # the first save laid the figure out; keep that layout for the other formats
         # rather than solving it again (constrained layout is most of a save's time)

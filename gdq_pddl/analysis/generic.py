@@ -27,6 +27,7 @@ import numpy as np
 from gdq_pddl.analysis.data import load_config
 from gdq_pddl.analysis.episodes import Episodes
 from gdq_pddl.analysis.stats import run_means
+from gdq_pddl.outputs import write_text
 
 if TYPE_CHECKING:
     from gdq_pddl.analysis.sections.writer import ReportOptions
@@ -151,7 +152,7 @@ def write_generic_report(out: Path) -> Path:
     already in ``out/figures``)."""
     out = Path(out)
     path = out / "REPORT.md"
-    path.write_text(generic_report(out), encoding="utf-8")
+    write_text(path, generic_report(out))
     return path
 
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from gdq_pddl.analysis.knowledge_cases import CaseResult
 from gdq_pddl.analysis.knowledge_measures import ACCURATE, CURVE_WINDOW, WRONG, threshold
+from gdq_pddl.outputs import save_figure
 
 
 def _colour(method: str) -> str:
@@ -59,7 +60,7 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     handles, labels = axes.ravel()[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8)
     for ext in ("png", "pdf"):
-        fig.savefig(out / f"knowledge_curves.{ext}", dpi=120)
+        save_figure(fig, out / f"knowledge_curves.{ext}", dpi=120)
         paths.append(out / f"knowledge_curves.{ext}")
     plt.close(fig)
 
@@ -87,7 +88,7 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     fig.suptitle("left bar of each pair (hatched //): accurate knowledge; right: wrong "
                  "knowledge; crossed white bar: never converged", fontsize=8)
     for ext in ("png", "pdf"):
-        fig.savefig(out / f"knowledge_convergence.{ext}", dpi=120)
+        save_figure(fig, out / f"knowledge_convergence.{ext}", dpi=120)
         paths.append(out / f"knowledge_convergence.{ext}")
     plt.close(fig)
     return paths

@@ -17,6 +17,7 @@ from gdq_pddl.analysis.knowledge_measures import (
     RouteStep,
     threshold,
 )
+from gdq_pddl.outputs import write_text
 
 
 def _ep(value: float) -> str:
@@ -147,5 +148,5 @@ def write_report(cases: list[CaseResult], out: Path, command: str = "gdq-pddl kn
                          f"{_check_summary(steps, 'in_tolerant_plans')} |")
         lines += ["", "Findings:", ""] + [f"- {f}" for f in _findings(case)] + [""]
     path = out / "REPORT.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path

@@ -34,6 +34,7 @@ from scipy import stats as sps
 from gdq_pddl.analysis.data import load_config, load_world_spec
 from gdq_pddl.analysis.names import order_methods
 from gdq_pddl.errors import GdqError
+from gdq_pddl.outputs import write_text, writing
 
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
@@ -219,11 +220,11 @@ def write_tables(res: PairRuns, diffs: list[Differences], out: Path) -> list[Pat
     target = out / "tables"
     target.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = target / f"{TABLE_STEM}.csv", target / f"{TABLE_STEM}.md"
-    with open(csv_path, "w", encoding="utf-8", newline="") as fh:
+    with writing(csv_path), open(csv_path, "w", encoding="utf-8", newline="") as fh:
         writer = csv.writer(fh, lineterminator="\n")
         writer.writerow(table_columns(res))
         writer.writerows(table_rows(res, diffs))
-    md_path.write_text(table_markdown(res, diffs), encoding="utf-8")
+    write_text(md_path, table_markdown(res, diffs))
     return [csv_path, md_path]
 
 

@@ -20,6 +20,7 @@ from matplotlib.patches import Rectangle  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 from gdq_pddl.analysis.pairs import LOSS, WIN, Differences, PairRuns  # noqa: E402
+from gdq_pddl.outputs import save_figure  # noqa: E402
 
 FIGURE_STEM = "pairs"
 OUTCOME_COLOURS = {WIN: "#2166ac", "tie": "#999999", LOSS: "#b2182b"}
@@ -99,7 +100,7 @@ def write_figure(res: PairRuns, diffs: list[Differences], out: Path,
     paths = []
     for ext in formats:
         path = target / f"{FIGURE_STEM}.{ext}"
-        fig.savefig(path, dpi=dpi)
+        save_figure(fig, path, dpi=dpi)
         paths.append(path)
     plt.close(fig)
     return paths

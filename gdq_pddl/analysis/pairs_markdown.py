@@ -22,6 +22,7 @@ from gdq_pddl.analysis.pairs import (
     summarise,
 )
 from gdq_pddl.analysis.pairs_figures import FIGURE_STEM
+from gdq_pddl.outputs import write_text
 
 LISTED_PAIRS = 12
 """Up to this many pairs, the command line lists them (``--pairs``)."""
@@ -165,5 +166,5 @@ def write_report(res: PairRuns, diffs: list[Differences], out: Path) -> Path:
         lines += ["Only one method ran: there is nothing to compare.", ""]
     lines += _definitions(res)
     path = out / "REPORT.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path

@@ -31,6 +31,7 @@ from gdq_pddl.analysis.sections.why_gdq_fails import OptInitValues, optinit_valu
 from gdq_pddl.analysis.sections.writer import ReportOptions, Writer
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import make_tables
+from gdq_pddl.outputs import write_text
 
 __all__ = ["OptInitValues", "ReportOptions", "make_all", "optinit_values", "write_report"]
 
@@ -61,7 +62,7 @@ def write_report(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
     for section in SECTIONS:
         section.write(w)
     path = out / "REPORT.md"
-    path.write_text(render(w), encoding="utf-8")
+    write_text(path, render(w))
     return path
 
 

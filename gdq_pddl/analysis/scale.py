@@ -18,6 +18,7 @@ import numpy as np
 from gdq_pddl.analysis.names import order_methods
 from gdq_pddl.analysis.stats import mean_se
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
+from gdq_pddl.outputs import save_figure, write_text
 
 REFERENCE = "GDQ"
 """The method every other one is compared with, run by run."""
@@ -85,7 +86,7 @@ def figure(results: list[BuildingResult], episodes: int, out: Path) -> list[Path
     fig = draw(results, episodes)
     paths = [out / "scale.png", out / "scale.pdf"]
     for p in paths:
-        fig.savefig(p)
+        save_figure(fig, p)
     plt.close(fig)
     return paths
 
@@ -240,5 +241,5 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
               "process untimed).", ""]
     lines += _table(results, names, lambda g, m: f"{steps_per_s(g, m):,.0f}")
     path = out / "REPORT.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path

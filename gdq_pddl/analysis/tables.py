@@ -21,6 +21,7 @@ import numpy as np
 from gdq_pddl.analysis.data import TASKS_EXPERIMENT
 from gdq_pddl.analysis.stats import mean_se
 from gdq_pddl.analysis.study import Study
+from gdq_pddl.outputs import write_text, writing
 
 
 @dataclass(frozen=True)
@@ -149,7 +150,7 @@ def to_latex(table: AreaTable) -> str:
 
 
 def write_csv(table: AreaTable, path: Path) -> None:
-    with path.open("w", newline="", encoding="utf-8") as f:
+    with writing(path), path.open("w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(["task", "method", "runs", "irrelevant_paper", "irrelevant_computed",
                     *[f"area_{a}_mean" for a in table.areas],
@@ -173,7 +174,7 @@ def make_tables(out_dir: str | Path, study: Study | None = None,
         return []
     target.mkdir(parents=True, exist_ok=True)
     md, tex, csv_path = (target / f"area_visits.{e}" for e in ("md", "tex", "csv"))
-    md.write_text(to_markdown(table), encoding="utf-8")
-    tex.write_text(to_latex(table), encoding="utf-8")
+    write_text(md, to_markdown(table))
+    write_text(tex, to_latex(table))
     write_csv(table, csv_path)
     return [md, tex, csv_path]

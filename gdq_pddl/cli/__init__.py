@@ -11,11 +11,13 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable, Sequence
+from typing import TextIO
 
 from gdq_pddl.cli import experiments, planning
 from gdq_pddl.cli.common import EXIT_ERROR
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.runner import RunInterrupted
+from gdq_pddl.outputs import writing
 
 EXIT_INTERRUPTED = 130  # the shell's convention for a program ended by SIGINT
 
@@ -35,8 +37,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not hasattr(args, "func"):
         parser.print_help()
         return EXIT_ERROR
+    stdout, sys.stdout = sys.stdout, _NamedOutput(sys.stdout)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
+        return code
     except RunInterrupted as exc:  # Ctrl-C during a run: say how to go on
         print(f"gdq-pddl: {exc}", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -57,6 +62,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("gdq-pddl: error: out of memory; give smaller sizes (--runs, --episodes, "
               "the world's step_limit)", file=sys.stderr)
         return EXIT_ERROR
+    finally:
+        sys.stdout = stdout
+
+
+class _NamedOutput:
+    """``sys.stdout`` whose write errors name it (``> /dev/full`` or a full disk raise an
+    OSError naming no file); a closed pipe stays a BrokenPipeError."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        with writing("standard output"):
+            return self.stream.write(text)
+
+    def flush(self) -> None:
+        with writing("standard output"):
+            self.stream.flush()
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.stream, name)
 
 
 def build_parser() -> argparse.ArgumentParser:

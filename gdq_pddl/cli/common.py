@@ -29,16 +29,21 @@ def whole(low: int) -> Callable[[str], int]:
     return parse
 
 
-def finite_nonnegative(text: str) -> float:
-    """An argparse type: a finite number >= 0 (not nan, not inf)."""
+def tolerance_arg(text: str) -> float:
+    """An argparse type: a plan-length tolerance, a finite number in ``[0, MAX_TOLERANCE]``
+    (not nan, not inf, not one whose length bound is past every plan)."""
     import math
+
+    from gdq_pddl.limits import MAX_TOLERANCE
 
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    if not math.isfinite(value) or not 0 <= value <= MAX_TOLERANCE:
+        raise argparse.ArgumentTypeError(f"must be a finite number in [0, {MAX_TOLERANCE:g}] "
+                                         f"(plans up to {1 + MAX_TOLERANCE:g} x the shortest), "
+                                         f"got {text}")
     return value
 
 

@@ -100,6 +100,8 @@ def cmd_switch(args: argparse.Namespace) -> int:
 
     world = load_world(args.world)
     first, second = world.task(args.first).name, world.task(args.second).name
+    if first == second:  # task names are upper-cased: c and C are one task
+        raise GdqError(f"--from and --to are the same task ({first}): a switch needs two")
     kw = experiment_kw(args)
     check_planner(args.planner)
     exp = switch_experiment(first, second, args.episodes, world=str(args.world or "office"), **kw)
@@ -230,7 +232,7 @@ def register_scale(sub) -> None:
                    help="building sizes in positions (default 100 300 1000)")
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
-                        "(default 2)")
+                        "(default 2, at most 1000)")
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
                         f"from: {', '.join(METHODS)})")

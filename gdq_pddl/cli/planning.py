@@ -12,8 +12,8 @@ from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
     determinisation_arg,
-    finite_nonnegative,
     task_args,
+    tolerance_arg,
     world_and_task,
 )
 
@@ -30,7 +30,7 @@ def register_problem(sub) -> None:
 
 
 def cmd_problem(args: argparse.Namespace) -> int:
-    from gdq_pddl.outputs import output_file, output_folder
+    from gdq_pddl.outputs import output_file, output_folder, write_text
     from gdq_pddl.pddl.office import office_problem
     from gdq_pddl.world import load_world
 
@@ -39,13 +39,13 @@ def cmd_problem(args: argparse.Namespace) -> int:
         out = output_folder(args.out or Path("problems"))
         for name, task in world.tasks.items():
             path = out / f"task-{name.lower()}.pddl"
-            path.write_text(office_problem(world, task), encoding="utf-8")
+            write_text(path, office_problem(world, task))
             print(path)
         return 0
     world, task = world_and_task(args)
     text = office_problem(world, task)
     if args.out:
-        output_file(args.out).write_text(text, encoding="utf-8")
+        write_text(output_file(args.out), text)
     else:
         sys.stdout.write(text)
     return 0
@@ -79,7 +79,7 @@ def register_plan(sub) -> None:
                                    "each plan with the learner state/action each step maps to.")
     task_args(p)
     p.add_argument("--planner", default="graph", help="planner backend (see `gdq-pddl planners`)")
-    p.add_argument("--tolerance", type=finite_nonnegative, default=0.0,
+    p.add_argument("--tolerance", type=tolerance_arg, default=0.0,
                    help="also every loop-free plan up to (1+T) x the shortest length")
     p.add_argument("--domain", type=Path, help="PDDL domain file (default: the office domain)")
     p.add_argument("--problem", type=Path,

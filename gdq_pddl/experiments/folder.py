@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.errors import ResultsError
+from gdq_pddl.errors import OutputError, ResultsError
 from gdq_pddl.inputs import file_hash
+from gdq_pddl.outputs import writing
 
 try:
     import fcntl
@@ -66,8 +67,13 @@ class FolderLock:
             raise ResultsError(f"{self.path.parent} is in use by another gdq-pddl process "
                                f"(pid {holder}, lock {self.path}): wait for it to end, or "
                                "choose another --out") from None
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        try:
+            with writing(self.path):  # a full disk
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode())
+        except OutputError:
+            os.close(fd)  # releases the lock
+            raise
         self.fd = fd
         _HELD.add(fd)
         return self

@@ -131,6 +131,8 @@ def task_experiments(tasks: tuple[str, ...] = ("A", "B", "C", "D"), episodes: in
 
 def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Experiment:
     """The paper's task switch: ``episodes`` on ``first``, then as many on ``second``."""
+    if first.upper() == second.upper():  # task names are upper-cased
+        raise ConfigError(f"first and second are the same task ({first}): a switch needs two")
     return Experiment(f"switch-{first}-{second}", ((first, episodes), (second, episodes)), **kw)
 
 

@@ -50,7 +50,7 @@ from gdq_pddl.experiments.folder import (
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import run_unit
 from gdq_pddl.limits import check_count
-from gdq_pddl.outputs import output_folder
+from gdq_pddl.outputs import output_folder, writing
 
 __all__ = ["ResultsError", "RunInterrupted", "run_experiments"]
 
@@ -78,16 +78,18 @@ def versions() -> dict[str, str]:
 
 
 def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file."""
+    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file
+    (an OSError that names no file, a full disk, names ``path``)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with writing(path):
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        try:
+            write(Path(tmp))
+            os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
 
 
 def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:

@@ -35,6 +35,7 @@ Decisions, where the office protocol does not carry over:
   of seeds): ``K`` is the number the question is about ("at least two building seeds per
   size"), and building ``S`` is the one ``gdq-pddl building --seed S`` writes. The
   default ``--seed 0`` keeps the building of the one-building runs before this option.
+  At most :data:`MAX_BUILDINGS` (1000) per size.
 - **Paired runs**: a run's seeds come from its building, size and number, not from the
   method, so run ``r`` of every method starts from the same env and learner seeds and
   the report's GDQ-minus-method differences are taken run by run (the office protocol
@@ -81,6 +82,7 @@ Decisions, where the office protocol does not carry over:
 from __future__ import annotations
 
 import json
+import numbers
 import sys
 import time
 from collections.abc import Callable
@@ -107,6 +109,11 @@ TOLERANCE = 0.3
 FIRST = 300
 """Episodes of the early-learning measure: the mean return over the first ``FIRST``
 episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
+MAX_BUILDINGS = 1000
+"""The most ``--buildings`` per size: 500 times the published runs' 2. Each building has
+its own marker (and legend entry) in ``scale.png``, its own row in every table of
+``REPORT.md`` and its own folder of units, all generated and checked before the first
+run; past a thousand the report is unreadable and the runs take weeks."""
 
 
 @dataclass
@@ -304,6 +311,7 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
 
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
+    _check_buildings(seed, buildings)  # before the list of seeds is made
     seeds = building_seeds(seed, buildings)
     _check(sizes, runs, episodes, seeds, methods)
     out = output_folder(out)
@@ -334,6 +342,17 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
     return results
 
 
+def _check_buildings(seed: int, buildings: int) -> None:
+    """``--buildings`` in ``[1, MAX_BUILDINGS]`` and the last building seed in range."""
+    check_count("seed", seed)
+    whole = isinstance(buildings, numbers.Integral) and not isinstance(buildings, bool)
+    if not whole or not 1 <= buildings <= MAX_BUILDINGS:
+        raise GdqError(f"--buildings {buildings!r}: must be 1 to {MAX_BUILDINGS:,} per size "
+                       "(each building is a marker of scale.png and a row of every table "
+                       "of REPORT.md)")
+    check_count("the last building seed (--seed + --buildings - 1)", seed + buildings - 1)
+
+
 def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
            methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
@@ -342,16 +361,15 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
 
     check_count("runs", runs)
     check_count("episodes", episodes)
-    for s in seeds:
-        check_count("seed", s)
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
-    if not seeds:
-        raise GdqError("--buildings must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
-    # a building's returns and successes of every run of every method are held together
-    check_memory(len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES), f"--runs {runs:,} x "
-                 f"--episodes {episodes:,} x {len(methods)} methods", "give fewer --runs")
+    # every building's returns and successes of every run of every method are held until
+    # the report
+    n_buildings = len(sizes) * len(seeds)
+    check_memory(n_buildings * len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES),
+                 f"--runs {runs:,} x --episodes {episodes:,} x {len(methods)} methods x "
+                 f"{n_buildings:,} buildings", "give fewer --runs or --buildings")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
     unknown = [m for m in methods if m not in METHODS]

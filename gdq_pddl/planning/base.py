@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import NamedTuple, Protocol, runtime_checkable
 
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.limits import MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.pddl.parser import parse_domain, parse_problem
@@ -134,14 +135,16 @@ class PlanningProblem:
               *options: object) -> Query:
         """Resolve a query against the grounded task (every backend starts here).
 
-        Raises :class:`~gdq_pddl.errors.PlanningError` for a negative or non-finite
-        tolerance or a start
-        atom the problem does not have; a goal no action can ever make true gives a
-        query whose ``goal`` is None (a "no plan" answer, not an error).
+        Raises :class:`~gdq_pddl.errors.PlanningError` for a tolerance that is not a
+        finite number in ``[0, MAX_TOLERANCE]`` or a start atom the problem does not have;
+        a goal no action can ever make true gives a query whose ``goal`` is None (a "no
+        plan" answer, not an error).
         """
         if not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool) or \
-                not math.isfinite(tolerance) or tolerance < 0:
-            raise PlanningError(f"tolerance must be a finite number >= 0, got {tolerance!r}")
+                not math.isfinite(tolerance) or not 0 <= tolerance <= MAX_TOLERANCE:
+            raise PlanningError(f"tolerance must be a finite number in [0, {MAX_TOLERANCE:g}] "
+                                f"(plans up to {1 + MAX_TOLERANCE:g} x the shortest), got "
+                                f"{tolerance!r}")
         key = (planner, start, goal, tolerance, *options)
         hit = self._results.get(key)
         if hit is not None:  # answered before: skip resolving the masks
