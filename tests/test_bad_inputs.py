@@ -814,6 +814,9 @@ def test_env_step_refuses_what_is_not_an_action(action):
     ("QLearningConfig", {"epsilon": "0.1"}, "epsilon"),
     ("DarlingConfig", {"tolerance": float("nan")}, "tolerance"),
     ("DarlingConfig", {"tolerance": float("inf")}, "tolerance"),
+    ("DarlingConfig", {"tolerance": 1e308}, "tolerance"),
+    ("GDQConfig", {"plan_tolerance": 101.0}, "plan_tolerance"),
+    ("GDQConfig", {"explore_all_last_step": "no"}, "explore_all_last_step"),
 ])
 def test_learner_configs_refuse_non_numbers(config, kwargs, name):
     from gdq_pddl.learners import config as configs

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from gdq_pddl.limits import check_count, check_real
+from gdq_pddl.limits import MAX_TOLERANCE, check_count, check_real
 
 GDQVariant = Literal["model", "literal", "code"]
 GDQ_VARIANTS: tuple[str, ...] = ("model", "literal", "code")
@@ -160,7 +160,7 @@ class GDQConfig(LearnerConfig):
                 object.__setattr__(self, name, default)
         check_count("n_backups", self.n_backups, MAX_BACKUPS)
         check_count("m", self.m)
-        check_real("plan_tolerance", self.plan_tolerance, 0.0)
+        check_real("plan_tolerance", self.plan_tolerance, 0.0, MAX_TOLERANCE)
         if self.optimistic_successor not in ("start", "terminal"):
             raise ValueError("optimistic_successor must be 'start' or 'terminal', got "
                              f"{self.optimistic_successor!r}")
@@ -192,6 +192,6 @@ class DarlingConfig(LearnerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_real("tolerance", self.tolerance, 0.0)
+        check_real("tolerance", self.tolerance, 0.0, MAX_TOLERANCE)
         if self.variant not in ("paper", "code"):
             raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
