@@ -173,7 +173,10 @@ class World:
                 raise WorldError(self.source, "", "give a task or a start and goal, not both")
             return self.task(task)
         if start is None or goal is None:
-            raise WorldError(self.source, "", "give a task, or both a start and a goal")
+            given = "a start but no goal" if start is not None else \
+                "a goal but no start" if goal is not None else "no task"
+            raise WorldError(self.source, "", f"{given}: give a task, or both a start and a "
+                             "goal")
         s, g = self.position(start), self.position(goal)
         if s == g:
             raise WorldError(self.source, "", f"start and goal are the same position ({s}); "

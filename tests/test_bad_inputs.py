@@ -803,6 +803,15 @@ def test_env_step_refuses_what_is_not_an_action(action):
     env.step(np.int64(3))  # numpy integers are actions
 
 
+@pytest.mark.parametrize(("argv", "said"), [
+    (["--start", "p0"], "a start but no goal"), (["--goal", "p3"], "a goal but no start"),
+])
+def test_half_an_ad_hoc_task_says_which_half(capsys, tmp_path, argv, said):
+    code, text = cli(capsys, "run", *argv, "--episodes", "5", "--runs", "1", "--out",
+                     tmp_path / "o")
+    refused(code, text, said)
+
+
 @pytest.mark.parametrize(("config", "kwargs", "name"), [
     ("DynaQConfig", {"n_backups": 2.5}, "n_backups"),
     ("DynaQConfig", {"n_backups": 1e12}, "n_backups"),
