@@ -220,14 +220,8 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     predicates: dict[str, tuple[str, ...]] = {}
     if ":predicates" in sec:
         for node in sec[":predicates"].items[1:]:
-            items = r.lst(node, "a predicate (name ?x - type ...)")
-            if not items:
-                raise r.fail(node.line, "expected a predicate name")
-            pname = r.symbol(items[0], "a predicate name")
-            params = r.typed_list(items[1:], variables=True)
-            for _, t in params:
-                _check_type(r, types, t, node.line)
-            predicates[pname] = tuple(t for _, t in params)
+            pname, signature = _signature(r, node, types, "predicate")
+            predicates[pname] = signature
     functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
     actions = []
     for key, node in sec.items():
@@ -253,16 +247,23 @@ def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str
                              f"'- number' after one, found {item.text()}")
             i += 2
             continue
-        head = r.lst(item, "a function (name ?x - type ...)")
-        if not head:
-            raise r.fail(item.line, "expected a function name")
-        fname = r.symbol(head[0], "a function name")
-        params = r.typed_list(head[1:], variables=True)
-        for _, t in params:
-            _check_type(r, types, t, item.line)
-        out[fname] = tuple(t for _, t in params)
+        fname, signature = _signature(r, item, types, "function")
+        out[fname] = signature
         i += 1
     return out
+
+
+def _signature(r: _Reader, node: Node, types: dict[str, str | None],
+               what: str) -> tuple[str, tuple[str, ...]]:
+    """``(name ?x - t ?y - u)`` of a predicate or function -> ``(name, (t, u))``."""
+    items = r.lst(node, f"a {what} (name ?x - type ...)")
+    if not items:
+        raise r.fail(node.line, f"expected a {what} name")
+    name = r.symbol(items[0], f"a {what} name")
+    params = r.typed_list(items[1:], variables=True)
+    for _, t in params:
+        _check_type(r, types, t, node.line)
+    return name, tuple(t for _, t in params)
 
 
 def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> None:
