@@ -13,6 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from learning_helpers import Recording, run
 
 from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel
 from gdq_pddl.envs.office import OfficeEnv
@@ -29,33 +30,6 @@ TASKS = list(WORLD.tasks)
 @pytest.fixture(scope="module")
 def ctx_c():
     return office_task_context(WORLD, "C")
-
-
-class Recording:
-    """Wraps a learner and records the pairs it executes."""
-
-    def __init__(self, learner) -> None:
-        self.learner, self.pairs = learner, []
-        self.q = learner.q
-
-    def act(self, s, rng):
-        a = self.learner.act(s, rng)
-        self.pairs.append((s, a))
-        return a
-
-    def observe(self, *args):
-        self.learner.observe(*args)
-
-    def start_task(self, ctx):
-        self.learner.start_task(ctx)
-
-    def greedy_policy(self):
-        return self.learner.greedy_policy()
-
-
-def run(learner, env, n, seed, fast=None):
-    env.reset(seed=seed)
-    return run_episodes(learner, env, n, np.random.default_rng(seed + 1), fast=fast)
 
 
 def greedy_path(learner, ctx) -> list[tuple[int, int]]:

@@ -7,6 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from learning_helpers import Recording, run
 
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world
@@ -18,7 +19,6 @@ from gdq_pddl.learners import (
     DynaQConfig,
     GDQConfig,
     QLearning,
-    TabularLearner,
     core,
     empty_plan_table,
     make_learner,
@@ -39,34 +39,6 @@ ALL = [("qlearning", {}), ("dynaq", {}), ("darling", {}), ("darling", {"variant"
 @pytest.fixture(scope="module")
 def ctx_c():
     return office_task_context(WORLD, "C")
-
-
-class Recording:
-    """Wraps a learner and records every action it chooses."""
-
-    def __init__(self, learner: TabularLearner) -> None:
-        self.learner, self.actions, self.states = learner, [], []
-        self.q = learner.q
-
-    def act(self, s, rng):
-        a = self.learner.act(s, rng)
-        self.states.append(s)
-        self.actions.append(a)
-        return a
-
-    def observe(self, *args):
-        self.learner.observe(*args)
-
-    def start_task(self, ctx):
-        self.learner.start_task(ctx)
-
-    def greedy_policy(self):
-        return self.learner.greedy_policy()
-
-
-def run(learner, env, n, seed, fast=None):
-    env.reset(seed=seed)
-    return run_episodes(learner, env, n, np.random.default_rng(seed + 1), fast=fast)
 
 
 # --- OptInit ------------------------------------------------------------------------------
