@@ -18,7 +18,7 @@ from learning_helpers import Recording, run
 from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world
-from gdq_pddl.learners import GDQ, GDQConfig, core, office_task_context, run_episodes
+from gdq_pddl.learners import GDQ, GDQConfig, gdq, office_task_context, run_episodes
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import load_world
 
@@ -97,15 +97,15 @@ def test_a_pair_switches_from_prior_to_learned_after_more_than_m_visits(ctx_c, m
     rng = np.random.default_rng(0)
     for k in range(m + 1):
         prior_value = -p.prior_cost + p.gamma * learner.v[s_prior]
-        assert not core.prior_known(t, p, s, a)
-        assert core.hybrid_value(t, p, s, a) == pytest.approx(prior_value), k
+        assert not gdq.known(t, p, s, a)
+        assert gdq.hybrid_backup(t, p, s, a) == pytest.approx(prior_value), k
         learner.observe(s, a, -3.0, stuck_at, False, False, rng)
-    assert core.prior_known(t, p, s, a) and learner.visits[s, a] == m + 1
+    assert gdq.known(t, p, s, a) and learner.visits[s, a] == m + 1
     n, v = m + 1, learner.v
     learned = -3.0 + p.gamma * v[stuck_at]
     prior_value = -p.prior_cost + p.gamma * v[s_prior]
     expected = (n * learned + w * prior_value) / (n + w)  # the prior as w pseudo-trials
-    assert core.hybrid_value(t, p, s, a) == pytest.approx(expected)
+    assert gdq.hybrid_backup(t, p, s, a) == pytest.approx(expected)
     assert learner.q[s, a] == pytest.approx(expected)  # the real step's pair is revalued
 
 
@@ -114,11 +114,11 @@ def test_an_inapplicable_action_is_known_after_its_first_trial(ctx_c):
     t, p = learner.tables, learner.params
     s = ctx_c.s0
     a = int(np.flatnonzero(~ctx_c.prior.applicable[s])[0])
-    assert not learner.tables.allowed[s, a] and not core.prior_known(t, p, s, a)
+    assert not learner.tables.allowed[s, a] and not gdq.known(t, p, s, a)
     x = int(np.flatnonzero(ctx_c.prior.applicable[s])[0])
     s2 = int(ctx_c.prior.next_state[s, x])  # reality surprises: it does move
     learner.observe(s, a, -1.0, s2, False, False, np.random.default_rng(0))
-    assert core.prior_known(t, p, s, a) and learner.tables.allowed[s, a]
+    assert gdq.known(t, p, s, a) and learner.tables.allowed[s, a]
     v, w = learner.v, p.prior_weight  # the prior, "no change", as w pseudo-trials
     expected = ((-1.0 + p.gamma * v[s2]) + w * (-p.prior_cost + p.gamma * v[s])) / (1 + w)
     assert learner.q[s, a] == pytest.approx(expected)
@@ -165,7 +165,7 @@ def test_q_is_the_hybrid_backup_of_every_pair_after_optinit(ctx_c):
     t, p = learner.tables, learner.params
     for s in np.flatnonzero(~ctx_c.goal):
         for a in range(ctx_c.n_actions):
-            assert learner.q[s, a] == pytest.approx(core.hybrid_value(t, p, s, a), abs=1e-6)
+            assert learner.q[s, a] == pytest.approx(gdq.hybrid_backup(t, p, s, a), abs=1e-6)
 
 
 # --- determinism, both loops, growth --------------------------------------------------------
@@ -204,7 +204,7 @@ def test_the_reverse_index_grows_and_holds_every_state_a_known_backup_reads(ctx_
     index = [_indexed(t, x) for x in range(ctx_c.n_states)]
     known = 0
     for s, a in zip(*np.nonzero(learner.visits), strict=True):
-        assert core.prior_known(t, learner.params, s, a)  # m = 0: one trial
+        assert gdq.known(t, learner.params, s, a)  # m = 0: one trial
         known += 1
         prior = int(ctx_c.prior.next_state[s, a])
         reads = {*learner.successors(s, a), s if prior == NO_CHANGE else prior}
@@ -261,10 +261,10 @@ def test_exploration_of_every_action_can_spare_the_last_step(ctx_c):
 
 
 def test_a_context_without_prior_is_refused(ctx_c):
-    with pytest.raises(ValueError, match="prior model"):
+    with pytest.raises(ValueError, match="prior"):
         GDQ(replace(ctx_c, prior=None))
     wrong = PriorModel(np.zeros((3, 3), dtype=np.int64))
-    with pytest.raises(ValueError, match="prior model"):
+    with pytest.raises(ValueError, match="prior"):
         GDQ(replace(ctx_c, prior=wrong))
 
 
@@ -293,7 +293,7 @@ def test_gdq_learns_on_a_shipped_pddl_problem(problem):
 def test_gdq_runs_on_a_generated_building():
     from gdq_pddl.buildings import building_world
     from gdq_pddl.envs.compact import CompactEnv
-    from gdq_pddl.learners.compact_runner import run_compact
+    from gdq_pddl.learners.episodes import run_compact
 
     world = building_world(100, seed=1)
     ctx = office_task_context(world, "A")
@@ -332,9 +332,9 @@ def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_tas
     """The closed form from the goal distances is the prior's fixed point."""
     learner = GDQ(ctx_c)
     t, p = learner.tables, learner.params
-    init = core.prior_values(t, p)
+    init = gdq.prior_values(t, p)
     assert np.allclose(init, learner.v, atol=1e-9)
-    assert core.prior_optinit(t, p, 1e-9, 1000) == 1
+    assert gdq.value_iteration(t, p, 1e-9, 1000) == 1
     # a state that cannot reach the goal by the knowledge's actions: -c / (1 - gamma)
     dead = PriorModel(np.where(np.arange(ctx_c.n_states)[:, None] == ctx_c.s0, NO_CHANGE,
                                ctx_c.prior.next_state))

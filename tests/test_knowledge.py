@@ -106,7 +106,7 @@ def test_knowledge_none_is_bit_identical_to_before(office):
     """knowledge=None changes nothing: same keys, seeds and results as the loop the runner
     had before the field existed."""
     from gdq_pddl.envs.office import OfficeEnv
-    from gdq_pddl.learners.runner import run_episodes
+    from gdq_pddl.learners.episodes import run_episodes
 
     exp = Experiment("tasks", (("C", 40),), methods=("GDQ-code", "DARLING"), runs=1)
     for method in exp.methods:

@@ -19,11 +19,12 @@ from gdq_pddl.learners import (
     DynaQConfig,
     GDQConfig,
     QLearning,
-    core,
     empty_plan_table,
+    learned_model,
     make_learner,
     office_task_context,
     run_episodes,
+    tables,
 )
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, load_world
@@ -108,7 +109,7 @@ def test_code_variant_sets_r_max_on_plan_pairs_only(ctx_c):
     opt = learner.optimistic_pairs
     assert np.all(learner.q[opt] == ctx_c.r_max)
     assert np.all(learner.q[~opt] == 0.0)
-    assert learner.params.backup == core.BACKUP_SAMPLE
+    assert learner.params.backup == tables.BACKUP_SAMPLE
 
 
 def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
@@ -117,15 +118,15 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     rng = np.random.default_rng(0)
     s, a = (int(x[0]) for x in np.nonzero(learner.optimistic_pairs))
     t.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
-    core.recompute_all_v(t)
-    core.model_backup(t, p, s, a, rng)
+    tables.recompute_all_v(t)
+    learned_model.model_backup(t, p, s, a, rng)
     assert t.q[s, a] == 50.0  # never tried: left alone
     s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
-    core.record(t, p, s, a, -2.0, s2, False, False)  # one ordinary step to s2 at cost 2
+    learned_model.record(t, p, s, a, -2.0, s2, False, False)  # one ordinary step to s2 at cost 2
     assert learner.successors(s, a) == {s2: 1} and t.visits[s, a] == 1
     t.q[s2, :] = 10.0
-    core.recompute_v(t, s2)
-    core.model_backup(t, p, s, a, rng)
+    tables.recompute_v(t, s2)
+    learned_model.model_backup(t, p, s, a, rng)
     target = -2.0 + p.gamma * 10.0
     assert t.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
 
@@ -155,14 +156,15 @@ def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     optimistic = ctx_c.r_max + p.gamma * v[ctx_c.s0]
     rng = np.random.default_rng(0)
     for k in range(m + 1):
-        assert core.expected_value(t, p, s, a, v) == optimistic, f"changed after {k} visits"
+        value = learned_model.expected_value(t, p, s, a, v)
+        assert value == optimistic, f"changed after {k} visits"
         learner.observe(s, a, -1.0, s2, False, False, rng)
         # sample-based backups (the code variant) replay experience from the first trial
-        assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
+        assert learned_model.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
     # m + 1 visits: the learned model (always -1 to s2) takes over
     assert learner.visits[s, a] == m + 1
-    assert core.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
-    assert core.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
+    assert learned_model.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
+    assert learned_model.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
 
 
 def test_model_is_goal_independent_counts(ctx_c):
@@ -191,8 +193,8 @@ def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
     expected = {s2: order.count(s2) for s2 in sorted(set(order))}
     n = len(expected)
     slots = t.slots[1, 5]
-    assert list(slots[:n] >> core.SLOT_SHIFT) == sorted(expected)  # sorted, first slots
-    assert list(slots[:n] & core.COUNT_MASK) == [expected[s2] for s2 in sorted(expected)]
+    assert list(slots[:n] >> learned_model.SLOT_SHIFT) == sorted(expected)  # sorted, first slots
+    assert list(slots[:n] & learned_model.COUNT_MASK) == [expected[s2] for s2 in sorted(expected)]
     assert np.all(slots[n:] == 0)
     assert learner.successors(1, 5) == expected
     dense = np.zeros((ctx_c.n_states, ctx_c.n_actions, ctx_c.n_states), dtype=np.int64)
@@ -205,7 +207,7 @@ def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
         if dense[1, 5, s2]:
             total += dense[1, 5, s2] * (learner.params.gamma * v[s2] - 1.0)
     learner.params = learner.params._replace(m=0)
-    assert core.expected_value(t, learner.params, 1, 5, v) == total / len(order)
+    assert learned_model.expected_value(t, learner.params, 1, 5, v) == total / len(order)
 
 
 def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
@@ -224,7 +226,7 @@ def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
 
 
 def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
-    from gdq_pddl.learners.runner import _episodes
+    from gdq_pddl.learners.episodes import _episodes
 
     env = OfficeEnv(task="C")
     tight = replace(ctx_c, max_successors=1)
@@ -291,18 +293,18 @@ def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
     v = np.full(ctx_c.n_states, 1000.0)  # absurdly high values everywhere
     for _ in range(3):
         learner.observe(5, 9, 20.0, goal, True, False, rng)
-    assert core.expected_value(t, p, 5, 9, v) == ctx_c.r_max
+    assert learned_model.expected_value(t, p, 5, 9, v) == ctx_c.r_max
     for _ in range(2):
         learner.observe(6, 9, -20.0, 6, True, False, rng)
-    assert core.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
-    assert core.sample_outcome(t, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
-    assert core.sample_outcome(t, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
+    assert learned_model.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
+    assert learned_model.sample_outcome(t, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
+    assert learned_model.sample_outcome(t, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
     # the sample-based backup with inflated V must not exceed R_max either
     t.q[:, :] = 1000.0
-    core.recompute_all_v(t)
+    tables.recompute_all_v(t)
     t.q[5, 9] = 0.0
-    sample = core.Params(**{**p._asdict(), "backup": core.BACKUP_SAMPLE, "alpha": 1.0})
-    core.model_backup(t, sample, 5, 9, rng)
+    sample = tables.Params(**{**p._asdict(), "backup": tables.BACKUP_SAMPLE, "alpha": 1.0})
+    learned_model.model_backup(t, sample, 5, 9, rng)
     assert t.q[5, 9] == ctx_c.r_max
 
 
@@ -310,7 +312,7 @@ def test_real_terminal_and_truncated_steps_do_not_bootstrap(ctx_c):
     learner = QLearning(ctx_c)
     t = learner.tables
     t.q[:, :] = 500.0
-    core.recompute_all_v(t)
+    tables.recompute_all_v(t)
     rng = np.random.default_rng(0)
     t.q[1, 2] = 0.0
     learner.observe(1, 2, -20.0, 4, False, True, rng)  # timeout
@@ -356,7 +358,7 @@ def test_darling_maximises_over_allowed_actions_only(ctx_c):
     learner = Darling(ctx_c)
     s = ctx_c.s0
     banned = int(np.flatnonzero(~learner.tables.allowed[s])[0])
-    core.set_q(learner.tables, s, banned, 99.0)
+    tables.set_q(learner.tables, s, banned, 99.0)
     assert learner.v[s] == 0.0
     assert learner.greedy_policy()[s] != banned
 
@@ -368,14 +370,14 @@ def test_darling_code_executes_only_plan_actions_but_maximises_over_all(ctx_c):
     s = ctx_c.s0
     learner = Darling(ctx_c, DarlingConfig(variant="code", epsilon=0.0))
     banned = int(np.flatnonzero(~plan[s])[0])
-    core.set_q(learner.tables, s, banned, 99.0)
+    tables.set_q(learner.tables, s, banned, 99.0)
     assert learner.v[s] == 99.0  # the update's target sees the non-plan action
     rng = np.random.default_rng(0)
     picks = {learner.act(s, rng) for _ in range(500)}  # greedy is banned: replaced
     assert picks == set(np.flatnonzero(plan[s]).tolist())
     assert plan[s, learner.greedy_policy()[s]]
     paper = Darling(ctx_c)
-    core.set_q(paper.tables, s, banned, 99.0)
+    tables.set_q(paper.tables, s, banned, 99.0)
     assert paper.v[s] == 0.0
     rec = Recording(Darling(ctx_c, DarlingConfig(variant="code")))
     run(rec, OfficeEnv(task="C"), 100, 0, fast=False)
@@ -395,7 +397,7 @@ def test_darling_code_bootstraps_from_non_plan_actions(ctx_c):
     rng = np.random.default_rng(0)
     for variant, expected in (("code", 0.1 * (-1.0 + 0.95 * 10.0)), ("paper", 0.1 * -1.0)):
         learner = Darling(ctx_c, DarlingConfig(variant=variant))
-        core.set_q(learner.tables, s2, banned, 10.0)
+        tables.set_q(learner.tables, s2, banned, 10.0)
         learner.observe(s, a, -1.0, s2, False, False, rng)
         assert learner.q[s, a] == pytest.approx(expected)
 
@@ -497,7 +499,7 @@ def test_task_switch_keeps_the_model_and_reruns_optinit(ctx_c):
     known = np.argwhere(visits > learner.params.m)
     assert len(known)
     s, a = map(int, known[0])
-    assert core.expected_value(learner.tables, learner.params, s, a, learner.v) == \
+    assert learned_model.expected_value(learner.tables, learner.params, s, a, learner.v) == \
         pytest.approx(learner.q[s, a], abs=1e-6)
     run(learner, OfficeEnv(task="E"), 10, 5)  # keeps learning on the new task
     assert learner.visits.sum() > visits.sum()
@@ -528,7 +530,7 @@ def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
     t, p = learner.tables, learner.params
     s, a = (int(x[0]) for x in np.nonzero(opt))
     high = np.full(ctx_c.n_states, 100.0)
-    assert core.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation
+    assert learned_model.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation
 
 
 def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):

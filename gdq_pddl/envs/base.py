@@ -9,7 +9,7 @@ step, and observe it.
 (``model``), the hidden full state an episode starts in (``start_state``) and the
 ``goal_pos`` that :func:`env_step`'s goal test compares with, so the office and a PDDL
 domain step through the same code, and the fast episode runner
-(:mod:`gdq_pddl.learners.runner`) accepts any subclass.
+(:mod:`gdq_pddl.learners.episodes`) accepts any subclass.
 :class:`~gdq_pddl.envs.compact.CompactEnv` fills them in for the compact model; it is
 not a :class:`ModelEnv`.
 """

@@ -32,7 +32,7 @@ the other would make the office and PDDL path carry the door array and the extra
 lookups of every step, or make the compact one enumerate ``2**n_doors`` states. What the
 rule is, they share: the outcome draw (:func:`gdq_pddl.envs.model.draw_outcome`) and the
 cost, reward and episode end (:func:`gdq_pddl.envs.model.finish_step`), and one compiled
-episode loop (:mod:`gdq_pddl.learners.runner`) serves both.
+episode loop (:mod:`gdq_pddl.learners.episodes`) serves both.
 """
 
 from __future__ import annotations

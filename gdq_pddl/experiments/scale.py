@@ -71,7 +71,7 @@ Decisions, where the office protocol does not carry over:
   of GDQ-code reached the goal once in 1000 episodes at 100 positions).
 - **Memory**: a learner keeps, per (state, action) pair, its Q value and the model's
   visit and cost statistics (50 bytes), and GDQ and Dyna-Q ``max_successors`` slots of
-  8 bytes for the transitions (the sparse model of :mod:`gdq_pddl.learners.core`; at
+  8 bytes for the transitions (the sparse model of :mod:`gdq_pddl.learners.learned_model`; at
   1000 positions the compact model bounds a pair's distinct next states by 8). At 1000
   positions, 1250 states x 5000 actions, a learner allocates 0.3 GB (Q-learning,
   DARLING) or 0.7 GB (GDQ, Dyna-Q; ``table_mb``), of which only the pages of the pairs
@@ -99,7 +99,7 @@ from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, rea
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
 from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
 from gdq_pddl.learners import make_learner, office_task_context
-from gdq_pddl.learners.compact_runner import run_compact
+from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.limits import check_count, check_memory
 from gdq_pddl.outputs import output_folder
 
@@ -357,7 +357,7 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
            methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
     from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
-    from gdq_pddl.learners.core import table_bytes
+    from gdq_pddl.learners.tables import table_bytes
 
     check_count("runs", runs)
     check_count("episodes", episodes)

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Hyper, Unit
+from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
 
@@ -38,24 +38,16 @@ def resolve_task(world: World, spec: str) -> Task:
 
 
 def make_learner(method: str, context, hyper: Hyper):
-    """A fresh learner of ``method`` (a name of ``protocol.METHODS``) for ``context``."""
-    from gdq_pddl.experiments.protocol import METHODS
-    from gdq_pddl.learners import make_learner as learner_by_name
-
-    if method not in METHODS:
-        raise GdqError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
-    common = {"alpha": hyper.alpha, "gamma": hyper.gamma, "epsilon": hyper.epsilon}
-    for variant in ("code", "literal"):  # GDQ-code, DARLING-code, GDQ-literal
-        if method.endswith(f"-{variant}"):
-            return learner_by_name(method.removesuffix(f"-{variant}"), context,
-                                   variant=variant, **common)
-    return learner_by_name(method, context, **common)
+    """A fresh learner of ``method`` (a name of ``protocol.METHODS``) for ``context``, with
+    the experiment's shared settings (:func:`gdq_pddl.learners.make_learner`)."""
+    return learner_by_name(method, context, alpha=hyper.alpha, gamma=hyper.gamma,
+                           epsilon=hyper.epsilon)
 
 
 def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
     from gdq_pddl.envs.office import OfficeEnv
-    from gdq_pddl.learners.runner import run_episodes
+    from gdq_pddl.learners.episodes import run_episodes
 
     exp = unit.experiment
     if exp.pddl is not None:
@@ -106,7 +98,7 @@ def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:
     """:func:`run_unit` on a PDDL problem: every schedule entry runs on it (no areas)."""
     from gdq_pddl.envs.pddl_env import PDDLEnv
     from gdq_pddl.learners.context import pddl_task_context
-    from gdq_pddl.learners.runner import run_episodes
+    from gdq_pddl.learners.episodes import run_episodes
 
     exp = unit.experiment
     instance = load_pddl_instance(tuple(exp.pddl))

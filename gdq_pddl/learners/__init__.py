@@ -10,8 +10,20 @@
     env.reset(seed=0)
     records = run_episodes(learner, env, 300, np.random.default_rng(1))
 
-The rules live once, compiled, in :mod:`gdq_pddl.learners.core`; the learners' methods
-and the fast episode loop of :mod:`gdq_pddl.learners.runner` call them.
+Where things are:
+
+- :mod:`~gdq_pddl.learners.agents`: the learner classes and :func:`make_learner`;
+- :mod:`~gdq_pddl.learners.config`: their settings, one frozen dataclass each;
+- :mod:`~gdq_pddl.learners.context`: what a learner is told about a task;
+- :mod:`~gdq_pddl.learners.episodes`: :func:`run_episodes`, the Python and compiled loops;
+- the rules, each compiled once: :mod:`~gdq_pddl.learners.rules` (which rule runs after
+  a real step, per learner), :mod:`~gdq_pddl.learners.tables` (the arrays, the Q table,
+  the TD update, acting), :mod:`~gdq_pddl.learners.learned_model` (the learned model and
+  Dyna-Q's backups), :mod:`~gdq_pddl.learners.gdq` (the default GDQ: prior, hybrid
+  backup, sweep), :mod:`~gdq_pddl.learners.gdq_paper` (GDQ-literal and GDQ-code);
+- :mod:`~gdq_pddl.learners.guards`: the checks that keep compiled code within its arrays.
+
+``docs/learners.md`` compares the variants and records the decisions behind them.
 """
 
 from gdq_pddl.learners.agents import (
@@ -37,11 +49,11 @@ from gdq_pddl.learners.context import (
     office_task_context,
     pddl_task_context,
 )
-from gdq_pddl.learners.runner import EpisodeRecords, run_episodes
+from gdq_pddl.learners.episodes import EpisodeRecords, run_compact, run_episodes
 
 __all__ = [
     "GDQ", "METHODS", "Darling", "DarlingConfig", "DynaQ", "DynaQConfig", "EpisodeRecords",
     "GDQConfig", "Learner", "LearnerConfig", "QLearning", "QLearningConfig", "TabularLearner",
     "TaskContext", "empty_plan_table", "make_learner", "office_task_context", "pddl_task_context",
-    "run_episodes",
+    "run_compact", "run_episodes",
 ]

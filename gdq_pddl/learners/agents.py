@@ -1,111 +1,13 @@
-"""The four learners behind one small interface.
+"""The learners behind one small interface: :class:`QLearning`, :class:`DynaQ`,
+:class:`Darling` and :class:`GDQ`, and :func:`make_learner` by the names the command line
+takes.
 
 Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state, rng)``,
 ``observe(s, a, r, s2, terminated, truncated, rng)``, ``start_task(context)`` and
-``greedy_policy()``. The methods only call the compiled rules of
-:mod:`gdq_pddl.learners.core`, which the fast episode loop calls too.
-
-- :class:`QLearning`: epsilon-greedy Q-learning.
-- :class:`DynaQ`: Q-learning + the goal-independent model + N expected backups per real
-  step on uniformly random pairs tried more than m times.
-- :class:`Darling`: Q-learning restricted, at every state, to the actions that start a
-  plan within the length tolerance (1.3 x shortest) from that state, both when acting
-  (exploration included) and in the max of the update; all actions where no plan exists.
-  ``variant="code"`` is DARLING as the GDQ authors' released agent runs it (read, not
-  copied): the greedy choice and the update's max range over every action (untried ones
-  at 0), and any action that does not start a plan, greedy or exploratory, is replaced
-  by a uniformly random one that does. Untried actions keep Q = 0, so wherever the plan
-  actions' values are still negative the greedy choice is a non-plan action, replaced by
-  a random plan action: it walks at random among plan actions until the values along a
-  route turn positive (and the zeros floor every state's value in the update). It
-  learns much more slowly: on Task C, first 300 episodes, 100 runs, mean return 0.67
-  against 7.54 for the paper variant, the 50-episode average of the mean curve turning
-  positive at episode 170 against 58 (the issue's measurement of the released code:
-  ~231). It is a baseline for reading the paper's curves, not part of the paper
-  protocol (``gdq-pddl run --method DARLING-code``).
-- :class:`GDQ`: Guided Dyna-Q, below.
-
-GDQ's default: the action knowledge as an optimistic prior model (``variant="model"``)
------------------------------------------------------------------------------------
-SPEC section 4's decision; the rules are in :mod:`gdq_pddl.learners.core` ("Planning on
-the prior"), the prior in :mod:`gdq_pddl.abstraction.prior`, the measurements behind its
-settings in ``docs/decisions.md``. Every (state, action) pair is valued by a model: the
-knowledge's (the planner's successor, or no change where its preconditions fail; one
-step costs 1; reaching the goal pays R_max and ends the episode) until the pair has been
-tried more than m times, then the learned one with the prior as ``prior_weight``
-pseudo-trials. OptInit is value iteration on that hybrid model, so before the first step
-the greedy policy follows a shortest plan; after every real step prioritised sweeping
-recomputes pair values until at least ``n_backups`` are done (it finishes each state it
-takes from the queue). Exploring steps draw from the first actions of the
-plans within 1.3 x from the current state, a share ``explore_all`` of them from the
-actions never tried there. An action the knowledge says does nothing is outside the max
-until it has been tried.
-
-The two readings of the paper it is compared with
--------------------------------------------------
-``variant="literal"`` (GDQ-literal: Algorithms 1-3 read literally) and ``variant="code"``
-(GDQ-code: the authors' released code), side by side (literal | code):
-
-- H, the plans: every shortest plan (the paper: "a set of the shortest plans") | every
-  loop-free plan up to 1.3 x the shortest (the authors' planner's factor; their
-  planner's exact set differs, see ``docs/decisions.md``); ``plan_tolerance``.
-- Optimistic model: T(s,a,s0) = 1 for every pair, R = R_max on every pair of every plan
-  in H(s0), else 0 | none: the optimism is only in the initial Q.
-- Q after OptInit: policy iteration on that model (known pairs: learned model) until pi
-  is stable, and Q <- its Q for every (s, a) | Q <- 0, then Q(s,a) <- R_max on the plan
-  pairs; no policy iteration.
-- Real step: epsilon-greedy on Q, TD update with alpha, count in the model | the same.
-- N backups per step, each on a random transition of a random plan from the current
-  state: expected backup, assigned, ``Q(s,a) <- sum_s' T(s,a,s') (R or gamma V(s'))`` |
-  a TD update with alpha on one ``(r, s')`` replayed from the pair's recorded outcomes;
-  a pair never tried gets no backup.
-
-Where the code column comes from. The SPEC describes the released code's OptInit and
-its sample-based (alpha) backups, and that is what this variant implements; its backups
-replay recorded outcomes of plan pairs from the current state, stuck trials (-R_max)
-included. The authors' public GDQ agent (read, not copied) is more particular, and
-differs from this variant in ways the SPEC does not mention: a backup there draws a
-uniformly random experienced state and one of its tried actions, uses the pair's most
-frequent successor at its mean step reward, updates only if that transition is a step
-of a plan from some state it has planned from, and never holds a stuck step (its model
-counts only steps that did not end the episode). That rule was implemented and
-measured (commit b6c3c2a, reverted in the next commit): Task C, first 300 episodes,
-100 runs, mean return 5.41 against 7.26 for this variant (paired difference -1.84,
-s.e. 0.14), the gap coming almost entirely from not replaying stuck penalties. Which of
-the two the package should call "code" is an open question (``docs/decisions.md``).
-An earlier version of this package backed up untried plan pairs with the paper's
-optimistic model (``R_max`` and a jump to s0); with the code's seeding that inflates
-plan pairs towards ``R_max / (1 - gamma)`` as GDQ-literal's do, and it made
-GDQ-code reach a positive 50-episode average on Task C at episode ~120 instead of ~60.
-
-Policy iteration in GDQ-literal's OptInit (a decision). Algorithm 1, read literally, evaluates only
-``Q(s, pi(s))`` and then takes ``argmax_a Q(s, a)`` over a table whose other entries
-are still the initial zeros, so it can lock onto a non-plan action whose 0 beats a
-negative estimate, and it never gives the learner Q values for the other actions. We
-implement standard policy iteration instead: evaluate V^pi exactly (to 1e-10), compute
-``Q(s,a) = R(s,a) + gamma * sum_s' T(s,a,s') V^pi(s')`` for every action, improve
-keeping the current action on ties (else the lowest index) so it terminates, repeat
-until pi is stable, and hand that final Q to the learner. The initial policy is
-"action 0 everywhere" rather than random: the final Q is the optimistic model's Q*
-whatever the start, so this changes nothing the learner uses and keeps OptInit free of
-randomness.
-
-A consequence worth knowing (it follows from the paper's model, not from this code):
-optimistic pairs lead back to s0 without ending the episode, so under policy iteration
-the plan pairs are worth ``R_max / (1 - gamma)`` (400 for the office) and every other
-pair ``gamma`` times that (380), far above any achievable return (at most R_max = 20).
-Real experience then has to pull these values down.
-
-Other decisions where the paper is silent (GDQ-literal and GDQ-code):
-
-- H is re-planned from the state the action was taken in (Alg. 2 line 12 uses the
-  ``s`` of line 1), by a lookup in the task's :class:`PlanTable`.
-- When the current state has no plan (a planner that finds nothing), GDQ's N backups go
-  to uniformly random known pairs, as in Dyna-Q, so it still plans with what it learned.
-- ``start_task``: every GDQ keeps its model (counts) and reruns OptInit for the new goal
-  (known pairs with the learned model, unknown with the optimistic one; Q <- 0 first).
-  The baselines keep their Q table (they are not told the task changed other than
-  through the goal states their backups use); DARLING recomputes its allowed sets.
+``greedy_policy()``. The methods check their arguments (:mod:`gdq_pddl.learners.guards`)
+and call the compiled rules (:mod:`gdq_pddl.learners.rules` says which), which the fast
+episode loop calls too. How the variants compare, and why each decision where the paper
+is silent was taken: ``docs/learners.md``.
 """
 
 from __future__ import annotations
@@ -115,7 +17,8 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from gdq_pddl.abstraction import PlanTable
-from gdq_pddl.learners import core
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import gdq, gdq_paper, guards, learned_model, rules
 from gdq_pddl.learners.config import (
     DarlingConfig,
     DynaQConfig,
@@ -124,17 +27,33 @@ from gdq_pddl.learners.config import (
     QLearningConfig,
 )
 from gdq_pddl.learners.context import TaskContext
+from gdq_pddl.learners.tables import (
+    BACKUP_EXPECTED,
+    BACKUP_SAMPLE,
+    KIND_DARLING,
+    KIND_DYNAQ,
+    KIND_GDQ,
+    KIND_GDQ_PLANS,
+    KIND_QLEARNING,
+    Params,
+    Tables,
+    act,
+    greedy,
+    recompute_all_v,
+)
+from gdq_pddl.limits import check_count
 
-MODEL_BASED = (core.KIND_DYNAQ, core.KIND_GDQ, core.KIND_PRIOR)
-"""The learner kinds that record transitions (the others get no successor slots)."""
+MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
+"""The learner kinds that record transitions in a learned model (the others get no
+successor slots)."""
 
 _I0 = np.zeros(0, dtype=np.int64)
 _NO_PRIOR: dict[str, np.ndarray] = {
     "prior_next": np.zeros((0, 0), dtype=np.int64), "pp_ptr": _I0, "pp_pair": _I0,
     "rev_head": _I0, "rev_next": _I0, "rev_pair": _I0, "rev_n": np.zeros(1, dtype=np.int64),
     "heap": _I0, "heap_pos": _I0, "heap_prio": np.zeros(0), "heap_n": np.zeros(1, np.int64)}
-"""The :class:`core.Tables` fields of GDQ's default variant, for the other learners (never
-read by them; the two counters are never written either)."""
+"""The :class:`Tables` fields of the default GDQ, for the other learners (never read by
+them; the two counters are never written either)."""
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
@@ -143,12 +62,15 @@ MAX_DENSE_COUNTS = 50_000_000
 def _capacity(context: TaskContext) -> int:
     """Successor slots per pair for ``context``: its ``max_successors``, or every state."""
     k = context.max_successors
-    return context.n_states if k is None else max(1, int(k))
+    if k is None:
+        return context.n_states
+    check_count("TaskContext.max_successors", k)
+    return min(max(1, int(k)), context.n_states)  # more than every state is never needed
 
 
 @runtime_checkable
 class Learner(Protocol):
-    """What the episode runner needs from a learner."""
+    """What the episode loop needs from a learner."""
 
     q: np.ndarray
 
@@ -163,20 +85,26 @@ class Learner(Protocol):
 
 
 class TabularLearner:
-    """Shared implementation: arrays in :class:`core.Tables`, rules in :mod:`core`."""
+    """Shared implementation: arrays in :class:`~gdq_pddl.learners.tables.Tables`, rules in
+    the compiled modules (:mod:`gdq_pddl.learners.rules`)."""
 
-    kind: int = core.KIND_QLEARNING
+    kind: int = KIND_QLEARNING
     name: str = "tabular"
+    config_type: type[LearnerConfig] = LearnerConfig
 
     def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
+        if not isinstance(config, self.config_type):
+            raise ConfigError(f"{type(self).__name__} takes a {self.config_type.__name__}, "
+                              f"got {type(config).__name__}")
+        guards.check_context(context)
         self.config = config
         n_s, n_a = context.n_states, context.n_actions
-        self._model = core.new_model(n_s, n_a, _capacity(context),
-                                     transitions=self.kind in MODEL_BASED)
+        self._model = learned_model.new_model(n_s, n_a, _capacity(context),
+                                              transitions=self.kind in MODEL_BASED)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
         self.context = context
         self.tables, self.params = self._build(context)
-        core.recompute_all_v(self.tables)
+        recompute_all_v(self.tables)
         self._init_task()
 
     # -- per-learner hooks -------------------------------------------------------------
@@ -185,7 +113,7 @@ class TabularLearner:
         return np.ones((context.n_states, context.n_actions), dtype=np.bool_)
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
-        """What the learner may execute, per state (:mod:`~gdq_pddl.learners.core`)."""
+        """What the learner may execute, per state (:mod:`~gdq_pddl.learners.tables`)."""
         return allowed
 
     def _plans(self, context: TaskContext) -> PlanTable:
@@ -202,24 +130,22 @@ class TabularLearner:
         return 0
 
     def _backup_mode(self) -> int:
-        return core.BACKUP_EXPECTED
+        return BACKUP_EXPECTED
 
     def _opt_continue(self) -> float:
         return 1.0
 
     def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
-        """The :class:`core.Tables` fields only GDQ's default variant uses (empty here)."""
+        """The :class:`Tables` fields only the default GDQ uses (empty here)."""
         return _NO_PRIOR
 
     def _extra_params(self) -> dict[str, float]:
-        """:class:`core.Params` fields beyond the shared ones (their defaults here)."""
+        """:class:`Params` fields beyond the shared ones (their defaults here)."""
         return {}
 
     # -- interface ---------------------------------------------------------------------
-    def _build(self, context: TaskContext) -> tuple[core.Tables, core.Params]:
-        if (context.n_states, context.n_actions) != self.q.shape:
-            raise ValueError(f"task has {context.n_states} states x {context.n_actions} "
-                             f"actions, the learner {self.q.shape}")
+    def _build(self, context: TaskContext) -> tuple[Tables, Params]:
+        """The tables and params for ``context`` (checked by the caller)."""
         allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
         guide = np.ascontiguousarray(self._guide(context, allowed), dtype=np.bool_)
         plans = self._plans(context)
@@ -227,7 +153,7 @@ class TabularLearner:
         for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
             lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
             opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
-        tables = core.Tables(
+        tables = Tables(
             q=self.q, v=np.zeros(len(self.q)), allowed=allowed, guide=guide,
             n_guide=guide.sum(axis=1).astype(np.int64),
             goal=np.ascontiguousarray(context.goal, dtype=np.bool_), opt_r=opt_r,
@@ -238,34 +164,46 @@ class TabularLearner:
             pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64),
             **self._prior_arrays(context))
         c = self.config
-        params = core.Params(
+        params = Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
             n_backups=int(self._n_backups()), m=int(self._m()),
             backup=int(self._backup_mode()), s0=int(context.s0),
             opt_continue=float(self._opt_continue()), **self._extra_params())
+        guards.check_tables(tables, params)
         return tables, params
 
     def start_task(self, context: TaskContext) -> None:
-        """Switch to a new task, keeping what the learner has learned (see module doc)."""
+        """Switch to a new task, keeping what the learner has learned (``docs/learners.md``:
+        the baselines keep their Q table, every GDQ reruns OptInit on its learned model)."""
+        guards.check_context(context, *self.q.shape)
         self.context = context
         self._model = self._slots(_capacity(context))
         self.tables, self.params = self._build(context)
-        core.recompute_all_v(self.tables)
+        recompute_all_v(self.tables)
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        return int(core.act(self.tables, self.params, int(state), rng))
+        """The action to take in ``state`` (epsilon-greedy, :func:`~gdq_pddl.learners.
+        tables.act`)."""
+        s = guards.check_state("state", state, len(self.q))
+        guards.check_generator(rng)
+        return int(act(self.tables, self.params, s, rng))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        if not core.observe(self.tables, self.params, int(s), int(a), float(r), int(s2),
-                            bool(terminated), bool(truncated), rng):
-            raise ValueError(core.OVERFLOW)
+        """Learn from one real step (:func:`~gdq_pddl.learners.rules.observe`)."""
+        n_s, n_a = self.q.shape
+        s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
+        a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
+        guards.check_generator(rng)
+        if not rules.observe(self.tables, self.params, s, a, r, s2, bool(terminated),
+                             bool(truncated), rng):
+            raise ValueError(learned_model.OVERFLOW)
 
     def greedy_policy(self) -> np.ndarray:
         """Per state, the lowest-index allowed action of maximal Q."""
-        return core.greedy(self.tables, self.params)
+        return greedy(self.tables, self.params)
 
     @property
     def v(self) -> np.ndarray:
@@ -274,26 +212,28 @@ class TabularLearner:
 
     @property
     def visits(self) -> np.ndarray:
-        """Trials per (s, a) recorded in the model (model-based learners only)."""
+        """Trials per (s, a) recorded in the learned model (model-based learners only)."""
         return self.tables.visits
 
     @property
     def counts(self) -> np.ndarray:
-        """Model transition counts C[s, a, s'] as a new dense int64 array (all zero for the
-        model-free learners); refused past :data:`MAX_DENSE_COUNTS` entries (use
-        :meth:`successors`)."""
+        """The learned model's transition counts C[s, a, s'] as a new dense int64 array (all
+        zero for the model-free learners); refused past :data:`MAX_DENSE_COUNTS` entries
+        (use :meth:`successors`)."""
         n_s, n_a = self.q.shape
         if n_s * n_a * n_s > MAX_DENSE_COUNTS:
             raise ValueError(f"a dense C[s, a, s'] of {n_s} x {n_a} x {n_s} entries is too "
                              f"large; use successors(s, a)")
-        return core.dense_counts(self.tables.slots, n_s)
+        return learned_model.dense_counts(self.tables.slots, n_s)
 
     def successors(self, s: int, a: int) -> dict[int, int]:
         """``{s': count}`` of the recorded transitions of ``(s, a)``, in increasing ``s'``."""
+        n_s, n_a = self.q.shape
+        s, a = guards.check_state("s", s, n_s), guards.check_action("a", a, n_a)
         slots = self.tables.slots[s, a]
         slots = slots[slots != 0]
-        return dict(zip((slots >> core.SLOT_SHIFT).tolist(),
-                        (slots & core.COUNT_MASK).tolist(), strict=True))
+        return dict(zip((slots >> learned_model.SLOT_SHIFT).tolist(),
+                        (slots & learned_model.COUNT_MASK).tolist(), strict=True))
 
     @property
     def nbytes(self) -> int:
@@ -305,12 +245,15 @@ class TabularLearner:
 
     @property
     def max_successors(self) -> int:
-        """Successor slots per pair of the model (0 for the model-free learners)."""
+        """Successor slots per pair of the learned model (0 for the model-free learners)."""
         return int(self.tables.slots.shape[2])
 
     def reserve_successors(self, k: int) -> None:
         """Make room for ``k`` distinct successors per pair (model-based learners; the
-        recorded transitions are kept). The runners call it with what their env needs."""
+        recorded transitions are kept; never more than the learner's states). The episode
+        loops call it with what their env needs."""
+        check_count("k", k)
+        k = min(int(k), len(self.q))
         if self.kind in MODEL_BASED and k > self.max_successors:
             self._model = self._slots(k)
             self.tables = self.tables._replace(slots=self._model["slots"])
@@ -318,27 +261,34 @@ class TabularLearner:
     def _slots(self, k: int) -> dict[str, np.ndarray]:
         if self.kind not in MODEL_BASED:
             return self._model
-        return core.with_successor_slots(self._model, k)
+        return learned_model.with_successor_slots(self._model, k)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"
 
 
 class QLearning(TabularLearner):
-    kind = core.KIND_QLEARNING
+    """Epsilon-greedy Q-learning: the TD update on each real step, nothing else."""
+
+    kind = KIND_QLEARNING
     name = "Q-learning"
+    config_type = QLearningConfig
 
     def __init__(self, context: TaskContext, config: QLearningConfig | None = None) -> None:
-        super().__init__(context, config or QLearningConfig())
+        super().__init__(context, QLearningConfig() if config is None else config)
 
 
 class DynaQ(TabularLearner):
-    kind = core.KIND_DYNAQ
+    """Q-learning + the learned model + N expected backups per real step on uniformly
+    random pairs tried more than m times (:mod:`gdq_pddl.learners.learned_model`)."""
+
+    kind = KIND_DYNAQ
     name = "Dyna-Q"
     config: DynaQConfig
+    config_type = DynaQConfig
 
     def __init__(self, context: TaskContext, config: DynaQConfig | None = None) -> None:
-        super().__init__(context, config or DynaQConfig())
+        super().__init__(context, DynaQConfig() if config is None else config)
 
     def _n_backups(self) -> int:
         return self.config.n_backups
@@ -348,23 +298,31 @@ class DynaQ(TabularLearner):
 
 
 class Darling(TabularLearner):
-    kind = core.KIND_DARLING
+    """Q-learning restricted, at every state, to the actions that start a plan within the
+    length tolerance (1.3 x shortest) from that state, both when acting (exploration
+    included) and in the max of the update; all actions where no plan exists.
+    ``variant="code"`` is DARLING as the GDQ authors' released agent runs it
+    (``docs/learners.md``)."""
+
+    kind = KIND_DARLING
     name = "DARLING"
     config: DarlingConfig
+    config_type = DarlingConfig
 
     def __init__(self, context: TaskContext, config: DarlingConfig | None = None) -> None:
-        super().__init__(context, config or DarlingConfig())
+        super().__init__(context, DarlingConfig() if config is None else config)
 
     def _plan_actions(self, context: TaskContext) -> np.ndarray:
         """Per state, the actions that start a plan within the tolerance (all actions
         where there is no plan)."""
         table = context.darling_plans
         if table is None:
-            raise ValueError("DARLING needs a task context with darling_plans")
+            raise ConfigError("DARLING needs a task context with darling_plans")
         if context.darling_tolerance is not None and not np.isclose(
                 context.darling_tolerance, self.config.tolerance):
-            raise ValueError(f"the context's DARLING plans use tolerance "
-                             f"{context.darling_tolerance}, the config {self.config.tolerance}")
+            raise ConfigError(f"the context's DARLING plans use tolerance "
+                              f"{context.darling_tolerance}, the config "
+                              f"{self.config.tolerance}")
         return table.allowed_actions()
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
@@ -384,20 +342,40 @@ def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
         return context.plans
     if context.darling_plans is None or context.darling_tolerance is None or \
             not np.isclose(context.darling_tolerance, tolerance):
-        raise ValueError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
-                         f"tolerant plan table was built with that tolerance (it has "
-                         f"{context.darling_tolerance})")
+        raise ConfigError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
+                          f"tolerant plan table was built with that tolerance (it has "
+                          f"{context.darling_tolerance})")
     return context.darling_plans
 
 
 class GDQ(TabularLearner):
-    kind = core.KIND_PRIOR
+    """Guided Dyna-Q. The default (``variant="prior"``) takes the action knowledge as an
+    optimistic prior over every (state, action) pair and plans on it.
+
+    Its update rule is one module, :mod:`gdq_pddl.learners.gdq`. After each real step,
+    :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned model and
+    calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets each
+    pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
+    :func:`~gdq_pddl.learners.gdq.prior_backup` (``-prior_cost + gamma * v[where the
+    knowledge says it leads]``) until tried more than ``m`` times, then the learned model's
+    backup with the prior as ``prior_weight`` pseudo-trials. OptInit is
+    :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model. The prior
+    comes from :mod:`gdq_pddl.abstraction.prior`; the settings from
+    :class:`~gdq_pddl.learners.config.GDQConfig`.
+
+    ``variant="literal"`` (GDQ-literal) and ``"code"`` (GDQ-code) are the paper's two
+    readings, in :mod:`gdq_pddl.learners.gdq_paper`; ``docs/learners.md`` compares them.
+    """
+
+    kind = KIND_GDQ
     name = "GDQ"
     config: GDQConfig
+    config_type = GDQConfig
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        config = config or GDQConfig()
-        self.kind = core.KIND_PRIOR if config.variant == "model" else core.KIND_GDQ
+        config = GDQConfig() if config is None else config
+        if isinstance(config, GDQConfig):
+            self.kind = KIND_GDQ if config.variant == "prior" else KIND_GDQ_PLANS
         self._rev_capacity = 0
         super().__init__(context, config)
 
@@ -407,8 +385,8 @@ class GDQ(TabularLearner):
         action the knowledge says does nothing is worth its prior backup, one step that
         changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
         entries, so they are filled in here, when the table is read."""
-        if self.kind == core.KIND_PRIOR and hasattr(self, "tables"):
-            core.prior_fill_untried(self.tables, self.params)
+        if self.kind == KIND_GDQ and hasattr(self, "tables"):
+            gdq.fill_untried(self.tables, self.params)
         return self._q
 
     @q.setter
@@ -422,10 +400,10 @@ class GDQ(TabularLearner):
         return self.config.m
 
     def _backup_mode(self) -> int:
-        return core.BACKUP_SAMPLE if self.config.variant == "code" else core.BACKUP_EXPECTED
+        return BACKUP_SAMPLE if self.config.variant == "code" else BACKUP_EXPECTED
 
     def _plans(self, context: TaskContext) -> PlanTable:
-        if self.config.variant == "model":
+        if self.config.variant == "prior":
             return context.plans
         return _tolerant_plans(context, self.config.plan_tolerance)
 
@@ -433,7 +411,7 @@ class GDQ(TabularLearner):
         return 1.0 if self.config.optimistic_successor == "start" else 0.0
 
     def _extra_params(self) -> dict[str, float]:
-        if self.kind != core.KIND_PRIOR:
+        if self.kind != KIND_GDQ:
             return {}
         c = self.config
         return {"explore_all": float(c.explore_all),
@@ -443,12 +421,12 @@ class GDQ(TabularLearner):
                 "prior_weight": float(c.prior_weight)}
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
-        if self.kind != core.KIND_PRIOR:
+        if self.kind != KIND_GDQ:
             return super()._allowed(context)
         return self._prior(context).applicable  # OptInit adds the known pairs
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
-        if self.kind != core.KIND_PRIOR:
+        if self.kind != KIND_GDQ:
             return allowed
         if self.config.explore == "plans":
             return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions()
@@ -459,23 +437,23 @@ class GDQ(TabularLearner):
     @staticmethod
     def _prior(context: TaskContext):
         if context.prior is None:
-            raise ValueError("GDQ's default variant plans on the knowledge's prior model, and "
-                             "this task context has none (build it with office_task_context "
-                             "or pddl_task_context, or pass prior=...)")
+            raise ConfigError("the default GDQ plans on the knowledge's prior, and this task "
+                              "context has none (build it with office_task_context or "
+                              "pddl_task_context, or pass prior=...)")
         if context.prior.next_state.shape != (context.n_states, context.n_actions):
-            raise ValueError(f"the context's prior model is {context.prior.next_state.shape},"
-                             f" its task {context.n_states} states x {context.n_actions} "
-                             "actions")
+            raise ConfigError(f"the context's prior is {context.prior.next_state.shape}"
+                              f", its task {context.n_states} states x {context.n_actions} "
+                              "actions")
         return context.prior
 
     def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
-        if self.kind != core.KIND_PRIOR:
+        if self.kind != KIND_GDQ:
             return _NO_PRIOR
         prior = self._prior(context)
         n_s = context.n_states
         pp_ptr, pp_pair = prior.predecessors()
         capacity = max(self._rev_capacity,
-                       self._rev_needed() + core.rev_room(self._model["slots"].shape[2], 64))
+                       self._rev_needed() + gdq.reverse_room(self._model["slots"].shape[2], 64))
         self._rev_capacity = capacity
         return {"prior_next": np.ascontiguousarray(prior.next_state, dtype=np.int64),
                 "pp_ptr": pp_ptr, "pp_pair": pp_pair,
@@ -495,10 +473,11 @@ class GDQ(TabularLearner):
         return int(np.count_nonzero(slots[tried])) + int(np.count_nonzero(tried))
 
     def reserve_reverse(self, entries: int) -> None:
-        """Make room for ``entries`` more reverse-index entries (GDQ's default variant;
-        the runners call it with what the coming steps can add)."""
+        """Make room for ``entries`` more reverse-index entries (the default GDQ; the
+        episode loops call it with what the coming steps can add)."""
+        check_count("entries", entries)
         t = self.tables
-        if self.kind != core.KIND_PRIOR or len(t.rev_pair) - int(t.rev_n[0]) >= entries:
+        if self.kind != KIND_GDQ or len(t.rev_pair) - int(t.rev_n[0]) >= entries:
             return
         capacity = max(2 * len(t.rev_pair), int(t.rev_n[0]) + entries)
         rev_next = np.full(capacity, -1, dtype=np.int64)
@@ -510,24 +489,24 @@ class GDQ(TabularLearner):
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        if self.kind == core.KIND_PRIOR:
-            self.reserve_reverse(core.rev_room(self.max_successors))
+        if self.kind == KIND_GDQ:
+            self.reserve_reverse(gdq.reverse_room(self.max_successors))
         super().observe(s, a, r, s2, terminated, truncated, rng)
 
     def _init_task(self) -> None:
-        """OptInit: value iteration on the hybrid model (``model``), Algorithm 1 read
+        """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
         literally (``literal``) or the authors' code's shortcut (``code``)."""
         self.q[:, :] = 0.0
-        if self.kind == core.KIND_PRIOR:
+        if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
-            if core.prior_optinit(self.tables, self.params, tol, 1_000_000) < 0:
+            if gdq.value_iteration(self.tables, self.params, tol, 1_000_000) < 0:
                 raise AssertionError("reverse index sized too small")  # _prior_arrays
         elif self.config.variant == "literal":
-            self.policy = core.policy_iteration(self.tables, self.params)
+            self.policy = gdq_paper.policy_iteration(self.tables, self.params)
             return
         else:
-            core.seed_plan_pairs(self.tables, self.params.r_max)
-        self.policy = core.greedy(self.tables, self.params)
+            gdq_paper.seed_plan_pairs(self.tables, self.params.r_max)
+        self.policy = greedy(self.tables, self.params)
 
     @property
     def optimistic_pairs(self) -> np.ndarray:
@@ -537,25 +516,44 @@ class GDQ(TabularLearner):
 
     @property
     def applicable(self) -> np.ndarray:
-        """bool[S, A]: what the knowledge says can do something (``model``; the max ranges
+        """bool[S, A]: what the knowledge says can do something (``prior``; the max ranges
         over it and the known pairs, exploration draws from it with ``explore=
         "applicable"``), a view of the prior."""
         return self._prior(self.context).applicable
 
 
-METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig]]] = {
-    "qlearning": (QLearning, QLearningConfig),
-    "dynaq": (DynaQ, DynaQConfig),
-    "darling": (Darling, DarlingConfig),
-    "gdq": (GDQ, GDQConfig),
+METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig], str | None]] = {
+    "GDQ": (GDQ, GDQConfig, None),
+    "GDQ-literal": (GDQ, GDQConfig, "literal"),
+    "GDQ-code": (GDQ, GDQConfig, "code"),
+    "DARLING": (Darling, DarlingConfig, None),
+    "DARLING-code": (Darling, DarlingConfig, "code"),
+    "Dyna-Q": (DynaQ, DynaQConfig, None),
+    "Q-learning": (QLearning, QLearningConfig, None),
 }
+"""Every learner by the name the command line takes (``--method``): its class, its config
+class and the variant the name stands for (None: the config's default)."""
+
+_BY_KEY = {name.lower().replace("-", ""): name for name in METHODS}
 
 
 def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:
-    """A learner by name (``qlearning``, ``dynaq``, ``darling``, ``gdq``) with config
-    overrides, e.g. ``make_learner("gdq", ctx, variant="code")``."""
-    key = method.lower().replace("-", "").replace("_", "")
-    if key not in METHODS:
-        raise ValueError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
-    cls, cfg = METHODS[key]
-    return cls(context, cfg(**config))  # type: ignore[arg-type]
+    """A fresh learner by name for ``context``, with config overrides, e.g.
+    ``make_learner("GDQ-code", ctx, alpha=0.2)``.
+
+    ``method`` is a name of :data:`METHODS` (what ``--method`` takes), in any case and with
+    or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``); a name
+    without a variant takes ``variant=...`` among the overrides.
+    """
+    key = method.lower().replace("-", "").replace("_", "") if isinstance(method, str) else ""
+    if key not in _BY_KEY:
+        raise ConfigError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
+    cls, config_type, variant = METHODS[_BY_KEY[key]]
+    if variant is not None and config.setdefault("variant", variant) != variant:
+        raise ConfigError(f"method {method!r} is variant {variant!r}, and the overrides "
+                          f"say variant={config['variant']!r}")
+    try:
+        settings = config_type(**config)  # type: ignore[arg-type]
+    except TypeError as e:
+        raise ConfigError(f"{method}: {e}".replace("__init__() ", "")) from None
+    return cls(context, settings)

@@ -11,10 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from gdq_pddl.limits import MAX_TOLERANCE, check_count, check_real
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.limits import MAX_NUMBER, MAX_TOLERANCE, check_count, check_real
 
-GDQVariant = Literal["model", "literal", "code"]
-GDQ_VARIANTS: tuple[str, ...] = ("model", "literal", "code")
+GDQVariant = Literal["prior", "literal", "code"]
+GDQ_VARIANTS: tuple[str, ...] = ("prior", "literal", "code")
+"""``prior``, the default GDQ; ``literal`` and ``code``, the paper's two readings. The
+default was called ``model`` before "model" came to mean only the learned model; that
+name is still accepted."""
 DarlingVariant = Literal["paper", "code"]
 
 MAX_BACKUPS = 1_000_000
@@ -64,11 +68,12 @@ class DynaQConfig(LearnerConfig):
 
 @dataclass(frozen=True)
 class GDQConfig(LearnerConfig):
-    """Guided Dyna-Q. Three variants (:mod:`gdq_pddl.learners.agents` compares them):
+    """Guided Dyna-Q. Three variants (``docs/learners.md`` compares them):
 
-    - ``"model"`` (the default): the paper's idea done soundly. The action knowledge is
-      an optimistic *prior model* over every (state, action) pair; real experience
-      replaces it pair by pair; prioritised sweeping plans on the hybrid model.
+    - ``"prior"`` (the default): the paper's idea done soundly. The action knowledge is
+      an optimistic *prior* over every (state, action) pair; the learned model replaces it
+      pair by pair; prioritised sweeping plans on the mix of the two
+      (:mod:`gdq_pddl.learners.gdq`).
     - ``"literal"``: the paper's Algorithms 1-3 read literally (OptInit's policy
       iteration on a model where every optimistic pair leads back to s0; N expected
       backups along plans per step). It does not learn: its values inflate to
@@ -76,14 +81,14 @@ class GDQConfig(LearnerConfig):
     - ``"code"``: as the authors' released code (Q <- R_max on plan pairs, N sample
       backups along plans within 1.3 x the shortest per step).
 
-    The ``model`` defaults were chosen on tasks A-D (and, for ``explore_all``, the
+    The ``prior`` defaults were chosen on tasks A-D (and, for ``explore_all``, the
     corridor the knowledge lacks) only; ``docs/decisions.md`` has the measurements.
     """
 
-    variant: GDQVariant = "model"
+    variant: GDQVariant = "prior"
     """Which GDQ (above)."""
     n_backups: int | None = None
-    """N: simulated backups per real step. ``model``: prioritised sweeping recomputes pair
+    """N: simulated backups per real step. ``prior``: prioritised sweeping recomputes pair
     values until at least N are done, finishing every state it takes from the queue
     (so a step can recompute more than N; default 5: on tasks A-D 1, 5, 10 and 40 learn
     alike, and each costs time, ``benchmarks/learners.py speed``);
@@ -91,24 +96,24 @@ class GDQConfig(LearnerConfig):
     current state (default 5, the authors' code)."""
     m: int | None = None
     """A knowledge-applicable pair is *known* once tried more than ``m`` times: from then
-    on its model is learned, before that the optimistic one. Default 0 for ``model``
+    on its model is learned, before that the optimistic one. Default 0 for ``prior``
     (known after one trial, the prior kept as ``prior_weight`` pseudo-observations), 5
-    for the others (the authors' code). In ``model`` a pair the knowledge says does
+    for the others (the authors' code). In ``prior`` a pair the knowledge says does
     nothing is known after its first trial whatever ``m``."""
     prior_weight: float = 1.0
-    """``model`` only: a known pair's model is the posterior mean with the prior as this
+    """``prior`` only: a known pair's model is the posterior mean with the prior as this
     many pseudo-observations, ``(w * prior + n * learned) / (w + n)`` after ``n``
     trials. It keeps one unlucky early trial (a door that failed twice) from writing off
     a route for good; 0 is the plain empirical model (measured on tasks A-D: 1 is
     better than 0, and 0.5 or 2 no different from 1)."""
     explore: Literal["plans", "applicable"] = "plans"
-    """``model`` only: what exploring steps draw from (but for the ``explore_all`` share):
+    """``prior`` only: what exploring steps draw from (but for the ``explore_all`` share):
     ``"plans"``, the first actions of the plans within ``plan_tolerance`` from the
     current state (DARLING's set; every action in a state with no plan);
     ``"applicable"``, every action the knowledge says can do something here (measured
     worse on every task A-D: it wanders off the routes)."""
     explore_all: float = 0.1
-    """``model`` only: this share of exploring steps draws from every action instead,
+    """``prior`` only: this share of exploring steps draws from every action instead,
     one never tried in the current state first (any action once all were). Above 0 the
     knowledge never forbids an action: a capability it lacks is found, sooner the larger
     the share, and on accurate knowledge every such step is wasted. 0.1 (one step in a
@@ -117,7 +122,7 @@ class GDQConfig(LearnerConfig):
     0.04 and 0.07 return per episode against 0 (``benchmarks/gdq_settings.py``,
     ``docs/decisions.md``). Raise it when the knowledge may lack actions."""
     explore_all_last_step: bool = True
-    """``model`` only: whether the ``explore_all`` share applies also in a state from which
+    """``prior`` only: whether the ``explore_all`` share applies also in a state from which
     the knowledge reaches the goal in one action. There an action the knowledge lacks
     cannot shorten the route, only make the last step more reliable, so ``False`` spares
     most of the cost of ``explore_all`` on short tasks: on the 120 office start/goal pairs
@@ -128,10 +133,10 @@ class GDQConfig(LearnerConfig):
     been fixed on tasks A-D; the evaluation protocol (``docs/decisions.md``) forbids
     choosing on them."""
     prior_cost: float = 1.0
-    """``model`` only: the step cost the prior model charges. The knowledge counts
+    """``prior`` only: the step cost the prior charges. The knowledge counts
     actions (the planner ignores costs), so one step costs 1 in its units."""
     sweep_threshold: float = 1e-6
-    """``model`` only: a state-value change smaller than this is not propagated."""
+    """``prior`` only: a state-value change smaller than this is not propagated."""
     optimistic_successor: Literal["start", "terminal"] = "start"
     """``literal`` only: where an optimistic (unknown) pair leads. ``"start"``: to s0, as
     Algorithm 1's ``T(s, a, s0) = 1`` (so optimistic values reach R_max / (1 - gamma)).
@@ -141,20 +146,22 @@ class GDQConfig(LearnerConfig):
     """H holds every loop-free plan up to ``(1 + plan_tolerance)`` x the shortest length.
     None means the variant's own setting: 0 for ``"literal"`` (the paper plans "a set of
     the shortest plans"), 0.3 for ``"code"`` (the authors' released planner returned
-    plans up to 1.3 x the shortest) and for ``"model"``, which plans on its prior over
+    plans up to 1.3 x the shortest) and for ``"prior"``, which plans on its prior over
     every pair and uses these plans only to explore. The task context must hold a plan
     table built with that tolerance (its ``darling_plans``)."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.variant == "paper":
-            raise ValueError("GDQ variant 'paper' is now called 'literal' (the paper's "
-                             "Algorithms 1-3 read literally); the default is 'model'")
+            raise ConfigError("GDQ variant 'paper' is now called 'literal' (the paper's "
+                              "Algorithms 1-3 read literally); the default is 'prior'")
+        if self.variant == "model":  # the default's former name
+            object.__setattr__(self, "variant", "prior")
         if self.variant not in GDQ_VARIANTS:
-            raise ValueError(f"variant must be one of {', '.join(GDQ_VARIANTS)}, got "
-                             f"{self.variant!r}")
-        model = self.variant == "model"
-        for name, default in (("n_backups", 5), ("m", 0 if model else 5),
+            raise ConfigError(f"variant must be one of {', '.join(GDQ_VARIANTS)}, got "
+                              f"{self.variant!r}")
+        prior = self.variant == "prior"
+        for name, default in (("n_backups", 5), ("m", 0 if prior else 5),
                               ("plan_tolerance", 0.0 if self.variant == "literal" else 0.3)):
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
@@ -162,16 +169,16 @@ class GDQConfig(LearnerConfig):
         check_count("m", self.m)
         check_real("plan_tolerance", self.plan_tolerance, 0.0, MAX_TOLERANCE)
         if self.optimistic_successor not in ("start", "terminal"):
-            raise ValueError("optimistic_successor must be 'start' or 'terminal', got "
+            raise ConfigError("optimistic_successor must be 'start' or 'terminal', got "
                              f"{self.optimistic_successor!r}")
         if self.explore not in ("plans", "applicable"):
-            raise ValueError(f"explore must be 'plans' or 'applicable', got {self.explore!r}")
+            raise ConfigError(f"explore must be 'plans' or 'applicable', got {self.explore!r}")
         check_real("explore_all", self.explore_all, 0.0, 1.0)
         if not isinstance(self.explore_all_last_step, bool):
-            raise ValueError("explore_all_last_step must be True or False, got "
+            raise ConfigError("explore_all_last_step must be True or False, got "
                              f"{self.explore_all_last_step!r}")
         for name in ("prior_weight", "prior_cost", "sweep_threshold"):
-            check_real(name, getattr(self, name), 0.0)
+            check_real(name, getattr(self, name), 0.0, MAX_NUMBER)
 
 
 @dataclass(frozen=True)
@@ -188,10 +195,10 @@ class DarlingConfig(LearnerConfig):
     comparing with their published curves, not DARLING as defined: the greedy choice and
     the update's max range over *all* actions (untried ones at 0), and an action that is
     not a plan action (the greedy one, or an epsilon draw) is replaced by a uniformly
-    random plan action. See :mod:`gdq_pddl.learners.agents`."""
+    random plan action. See ``docs/learners.md``."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
         check_real("tolerance", self.tolerance, 0.0, MAX_TOLERANCE)
         if self.variant not in ("paper", "code"):
-            raise ValueError(f"variant must be 'paper' or 'code', got {self.variant!r}")
+            raise ConfigError(f"variant must be 'paper' or 'code', got {self.variant!r}")

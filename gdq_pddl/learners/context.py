@@ -221,7 +221,7 @@ _PDDL_TABLES: dict[tuple, tuple[object, PlanTable]] = {}
 
 MAX_TABLE_BYTES = 16_000_000_000
 """A learner keeps arrays per (state, action) pair, with ``max_successors`` successor
-slots each (:func:`gdq_pddl.learners.core.table_bytes`); a PDDL task whose tables would
+slots each (:func:`gdq_pddl.learners.tables.table_bytes`); a PDDL task whose tables would
 exceed this is refused with a clear message instead of exhausting memory."""
 
 
@@ -255,7 +255,7 @@ def pddl_task_context(instance, planner: str = "graph",
     """The :class:`TaskContext` of a PDDL problem: learner states are its reachable states
     (0 is the initial one), actions its ground actions, goal where the problem's goal holds."""
     from gdq_pddl.errors import PlanningError
-    from gdq_pddl.learners.core import table_bytes
+    from gdq_pddl.learners.tables import table_bytes
 
     n_s, n_a = instance.n_states, instance.n_actions
     k = successor_capacity(instance.model)

@@ -1,6 +1,6 @@
 """Compile the episode loop in a process of its own: ``python -m gdq_pddl.learners.precompile``.
 
-The compiled episode loop (:func:`gdq_pddl.learners.runner._episodes`) is the largest
+The compiled episode loop (:func:`gdq_pddl.learners.episodes._episodes`) is the largest
 kernel of the package, and numba compiles it on first use. The experiment runner starts
 this module in a second process before its own warm-up (:func:`start`) and compiles the
 learners' other kernels meanwhile; numba's on-disk cache hands the loop over. On two
@@ -13,21 +13,24 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import numpy as np
+
+from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.learners.agents import make_learner
+from gdq_pddl.learners.context import office_task_context
+from gdq_pddl.learners.episodes import run_episodes
+from gdq_pddl.world import builtin_world
+
 
 def compile_loop() -> None:
     """Run one episode of a Q-learner on the office through the fast path: the loop's
-    signature is the same for every learner kind (one :class:`~gdq_pddl.learners.core.Tables`
-    type) on any :class:`~gdq_pddl.envs.model.ModelArrays` env."""
-    import numpy as np
-
-    from gdq_pddl.envs.office import OfficeEnv
-    from gdq_pddl.learners import make_learner, office_task_context, run_episodes
-    from gdq_pddl.world import builtin_world
-
+    signature is the same for every learner kind (one
+    :class:`~gdq_pddl.learners.tables.Tables` type) on any
+    :class:`~gdq_pddl.envs.model.ModelArrays` env."""
     world = builtin_world("office")
     env = OfficeEnv(world=world, task="C")
     env.reset(seed=0)
-    run_episodes(make_learner("qlearning", office_task_context(world, "C")), env, 1,
+    run_episodes(make_learner("Q-learning", office_task_context(world, "C")), env, 1,
                  np.random.default_rng(0), fast=True)
 
 

@@ -2,21 +2,25 @@
 
 Two paths with identical results for the same seeds:
 
-- a generic Python loop over any gymnasium env of this package (``env.reset``,
-  ``env.step``, ``learner.act`` / ``learner.observe``);
-- a fast path, used when ``env.unwrapped`` is a :class:`~gdq_pddl.envs.base.ModelEnv`
-  (the office, or a PDDL domain) and the learner one of
-  :mod:`gdq_pddl.learners.agents`: one compiled loop calling
-  :func:`gdq_pddl.envs.model.env_step` and the same :mod:`~gdq_pddl.learners.core` rules.
-  The same loop, compiled for a :class:`~gdq_pddl.envs.compact.CompactModel`, calls
-  :func:`gdq_pddl.envs.compact.compact_step` instead
-  (:func:`gdq_pddl.learners.compact_runner.run_compact`).
+- a Python loop over any gymnasium env of this package (``env.reset``, ``env.step``,
+  ``learner.act`` / ``learner.observe``);
+- a compiled loop (:func:`_episodes`), used when ``env.unwrapped`` is a
+  :class:`~gdq_pddl.envs.base.ModelEnv` (the office, or a PDDL problem) and the learner a
+  :class:`~gdq_pddl.learners.agents.TabularLearner`: it calls
+  :func:`gdq_pddl.envs.model.env_step` and the same rules
+  (:func:`gdq_pddl.learners.tables.act`, :func:`gdq_pddl.learners.rules.observe`). The
+  same loop, compiled for a :class:`~gdq_pddl.envs.compact.CompactModel` (large worlds,
+  :func:`run_compact`), calls :func:`gdq_pddl.envs.compact.compact_step` instead.
 
 Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
-its model needs in this env (``learner.reserve_successors`` with
-:func:`~gdq_pddl.learners.context.successor_capacity` of the env's true model): the task
+its learned model needs in this env (``learner.reserve_successors`` with
+:func:`~gdq_pddl.learners.context.successor_capacity` of the env's true dynamics): the task
 context's capacity comes from the world the learner was told about, which may differ
 from the one it runs in (a knowledge experiment).
+
+Before the compiled loop runs, what it indexes with is checked
+(:mod:`gdq_pddl.learners.guards`): a learner built for another env, or a generator that
+is not one, is refused with :class:`~gdq_pddl.errors.ConfigError`.
 
 Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
 ``env.reset(seed=...)`` before calling), learner randomness from ``rng``. Neither path
@@ -34,11 +38,16 @@ from numba import types
 from numba.extending import overload
 
 from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
+from gdq_pddl.envs.compact import CompactEnv, CompactModel, compact_step, observe_state
 from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
-from gdq_pddl.learners import core
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import guards
 from gdq_pddl.learners.agents import Learner, TabularLearner
 from gdq_pddl.learners.context import successor_capacity
+from gdq_pddl.learners.gdq import reverse_room
+from gdq_pddl.learners.learned_model import OVERFLOW
+from gdq_pddl.learners.rules import observe
+from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.limits import check_count, check_memory
 
 
@@ -73,11 +82,16 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     """Run ``n_episodes`` episodes of ``learner`` in ``env`` (learning as it goes).
 
     ``fast=None`` picks the compiled loop when possible; ``True`` demands it and
-    ``False`` forces the Python loop (both give the same results).
+    ``False`` forces the Python loop (both give the same results). Raises
+    :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a ``numpy.random.Generator``
+    or the learner's states and actions are not the env's.
     """
     check_count("n_episodes", n_episodes)
+    guards.check_generator(rng)
     check_memory(n_episodes * (17 + 8 * _n_areas(env)), f"n_episodes = {n_episodes:,}: the "
                  "episode records", "run fewer episodes at a time")
+    if isinstance(learner, TabularLearner):
+        guards.check_env(*learner.q.shape, env)
     can_fast = isinstance(env.unwrapped, ModelEnv) and isinstance(learner, TabularLearner)
     if fast is None:
         fast = can_fast
@@ -87,6 +101,19 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     if fast:
         return _run_fast(learner, env, n_episodes, rng)  # type: ignore[arg-type]
     return _run_python(learner, env, n_episodes, rng)
+
+
+def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
+                rng: np.random.Generator) -> EpisodeRecords:
+    """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.compact.CompactEnv`
+    (seed ``env`` with ``reset`` first): the compiled loop over its compact dynamics, the
+    same draws and records as :func:`run_episodes` on the office (tested)."""
+    check_count("n_episodes", n_episodes)
+    guards.check_generator(rng)
+    guards.check_env(*learner.q.shape, env)
+    env = env.unwrapped
+    return run_compiled(env.model, env.start_pos, env.goal_pos, env.doors, learner,
+                        env.np_random, n_episodes, rng, max(1, int(env.model.area_of_pos.max())))
 
 
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
@@ -126,38 +153,51 @@ def _run_fast(learner: TabularLearner, env: gym.Env, n_episodes: int,
 _NO_DOORS = np.zeros(1, dtype=np.uint8)  # a ModelArrays state carries its doors itself
 
 
-def run_compiled(model: ModelArrays | CompactModel, start: int, goal_pos: int,
+def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int,
                  doors: np.ndarray, learner: TabularLearner, env_rng: np.random.Generator,
                  n_episodes: int, rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
-    """The compiled loop over either model kind: ``start`` is a full state of a
+    """The compiled loop over either kind of true dynamics: ``start`` is a full state of a
     :class:`ModelArrays` (``doors`` unused) or a position of a
     :class:`~gdq_pddl.envs.compact.CompactModel` (``doors``: its open-door array,
-    cleared at the start of every episode); ``n_areas`` columns of area visits."""
-    learner.reserve_successors(successor_capacity(model))
+    cleared at the start of every episode); ``n_areas`` columns of area visits (at least
+    the dynamics' areas)."""
+    check_count("n_episodes", n_episodes)
+    guards.check_generator(rng)
+    guards.check_generator(env_rng, "the env's generator")
+    n_s, n_a = learner.q.shape
+    if isinstance(dynamics, CompactModel):
+        most = guards.check_compact_dynamics(dynamics, start, doors, n_s, n_a)
+    else:
+        most = guards.check_dynamics(dynamics, start, n_s, n_a)
+    check_count("n_areas", n_areas)
+    if n_areas < most:
+        raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")
+    learner.reserve_successors(successor_capacity(dynamics))
     returns = np.zeros(n_episodes)
     steps = np.zeros(n_episodes, dtype=np.int64)
     success = np.zeros(n_episodes, dtype=np.bool_)
     areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
     # GDQ's reverse index grows between episodes: the loop stops before an episode that
     # might not fit (one episode adds at most `room` entries) and is called again.
-    room = core.rev_room(learner.max_successors, int(model.step_limit))
+    room = reverse_room(learner.max_successors, int(dynamics.step_limit))
     reserve = getattr(learner, "reserve_reverse", None)
     ep = 0
     while ep < n_episodes:
         if reserve is not None:
             reserve(room)
-        ep = _episodes(model, start, goal_pos, doors, learner.tables, learner.params,
+        guards.check_tables(learner.tables, learner.params)
+        ep = _episodes(dynamics, start, goal_pos, doors, learner.tables, learner.params,
                        env_rng, rng, returns, steps, success, areas, ep, room)
         if ep < 0:
-            raise ValueError(core.OVERFLOW)
+            raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
-# What the loop needs of a model kind, one implementation per kind, picked by numba from
-# the model's type when the loop is compiled: the hidden state an episode starts in, the
-# learner state it shows, one step (env_step / compact_step) and the area of a state.
-# inline="always" (here and on the step functions) keeps the loop as fast as one written
-# per kind; as plain calls it lost 10-20 % steps/s (benchmarks/learners.py speed).
+# What the loop needs of a kind of dynamics, one implementation per kind, picked by numba
+# from the dynamics' type when the loop is compiled: the hidden state an episode starts
+# in, the learner state it shows, one step (env_step / compact_step) and the area of a
+# state. inline="always" (here and on the step functions) keeps the loop as fast as one
+# written per kind; as plain calls it lost 10-20 % steps/s (benchmarks/learners.py speed).
 def _restart(m, start, doors):
     raise NotImplementedError  # compiled code only (see the overloads below)
 
@@ -220,27 +260,28 @@ def _area_impl(m, state):
 
 
 @numba.njit(cache=True)
-def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: core.Tables, p: core.Params,
+def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
               steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
               room: int) -> int:
     """The compiled episode loop (same calls, in the same order, as the Python loop) from
-    episode ``first``. Returns the number of episodes when all are done; -1 when the
-    learner's model ran out of successor slots (the loop stops there); an episode index
-    when GDQ's reverse index has less than ``room`` free entries before that episode (the
-    caller grows it and calls again from there)."""
+    episode ``first``, over the env's true dynamics ``m``. Returns the number of episodes
+    when all are done; -1 when the learner's model ran out of successor slots (the loop
+    stops there); an episode index when GDQ's reverse index has less than ``room`` free
+    entries before that episode (the caller grows it and calls again from there). Trusts
+    its arguments: :func:`run_compiled` checks them."""
     for ep in range(first, len(returns)):
-        if p.kind == core.KIND_PRIOR and len(t.rev_pair) - t.rev_n[0] < room:
+        if p.kind == KIND_GDQ and len(t.rev_pair) - t.rev_n[0] < room:
             return ep
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = core.act(t, p, s, rng)
+            a = act(t, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not core.observe(t, p, s, a, r, s2, terminated, truncated, rng):
+            if not observe(t, p, s, a, r, s2, terminated, truncated, rng):
                 return -1
             step += 1
             returns[ep] += r

@@ -1,0 +1,427 @@
+"""The default GDQ's update rule: the knowledge as a prior, a hybrid backup, a sweep.
+
+Read in this order: :func:`after_step` (what GDQ does after each real step),
+:func:`hybrid_backup` (what a pair is worth), :func:`sweep` (which pairs are recomputed),
+:func:`value_iteration` (OptInit, at the start of each task).
+
+**The prior.** The knowledge (the planner's actions, :mod:`gdq_pddl.abstraction.prior`)
+says where each pair leads: ``prior_next[s, a]``, or -1 where the action's preconditions
+fail ("no change"). Under the prior a pair succeeds deterministically at cost
+``prior_cost``; reaching a goal pays R_max and ends the episode. Its value is
+:func:`prior_backup`: ``R_max`` if the prior successor is a goal, else
+``-prior_cost + gamma * v[prior successor]``.
+
+**Known pairs.** A knowledge-applicable pair is *known* after more than m trials (the
+prior's optimism lasts that long), a knowledge-inapplicable one after its first trial (its
+prior, "no change", is no optimism worth keeping, and a single trial that does something
+is news the learner should plan with at once): :func:`is_known`.
+
+**The hybrid backup.** An unknown pair is worth its prior backup. A known pair's model is
+the posterior mean with the prior as ``prior_weight`` pseudo-observations: after n trials
+its backup is ``(n * learned + w * prior) / (n + w)``, ``learned`` being the expected
+backup under the learned model
+(:func:`gdq_pddl.learners.learned_model.learned_value`). There is no TD update: a pair's
+value is always its hybrid backup.
+
+**The sweep.** After a real step the learner records it, recomputes the stepped pair if it
+is known, and runs prioritised sweeping: states whose value changed wait in a max-heap by
+the size of the change; popping one recomputes every pair that can lead to it, i.e. the
+unknown applicable pairs whose prior successor it is (``pp_ptr``/``pp_pair``, static) and
+the known pairs that have reached it (the reverse index ``rev_*``, grown as pairs become
+known), until ``n_backups`` pairs have been recomputed. The heap carries what is left to
+the next step.
+
+**What it may choose.** ``allowed`` (what v and the greedy choice range over) holds the
+knowledge-applicable pairs and the known ones, so an action the knowledge says does
+nothing is never valued above an applicable one before it has been tried; a state where
+nothing is applicable allows every action. ``guide`` (what exploration draws from) holds
+the first actions of the plans from each state (or the applicable ones); a share
+``explore_all`` of the exploring steps draws an action never tried in the state instead
+(:func:`gdq_pddl.learners.tables.act`).
+
+**OptInit** is value iteration on the hybrid model (:func:`value_iteration`), started from
+the prior's own values (:func:`prior_values`).
+
+The measurements behind the settings are in ``docs/decisions.md``; the comparison with
+the paper's readings in ``docs/learners.md``.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from gdq_pddl.learners.learned_model import _learned, has_successor, record, slot_successor
+from gdq_pddl.learners.tables import Params, Tables, _set_q
+
+# --- the rule --------------------------------------------------------------------------------
+
+
+@numba.njit(cache=True)
+def after_step(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+               truncated: bool) -> bool:
+    """The default GDQ after one real step: record it in the learned model, index what
+    became known, then :func:`sweep`. False when the model had no slot for the step or
+    the reverse index is full (the callers keep room: :func:`reverse_room`)."""
+    # a successor not indexed yet (stuck and goal steps end the episode: never indexed;
+    # the prior successor is indexed from the start when the prior has weight)
+    new = not terminated and not has_successor(t.slots, s, a, s2) and not (
+        p.prior_weight > 0.0 and s2 == prior_successor(t.prior_next, s, a))
+    if not record(t, p, s, a, r, s2, terminated, truncated):
+        return False
+    if is_known(t.visits, t.prior_next, p.m, s, a):
+        if t.visits[s, a] == (p.m if t.prior_next[s, a] >= 0 else 0) + 1:  # just known
+            t.allowed[s, a] = True
+            if not _index_known_pair(t, p, s, a):
+                return False
+        elif new and not _index_add(t.rev_head, t.rev_next, t.rev_pair, t.rev_n, s2,
+                                    s * t.q.shape[1] + a):
+            return False
+    sweep(t, p, s, a)
+    return True
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _hybrid_backup(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
+                   cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
+                   goal: np.ndarray, v: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+                   a: int) -> float:
+    """:func:`hybrid_backup` on the arrays it reads (the sweep's inner loop calls this)."""
+    prior = _prior_backup(goal, v, prior_next, p, s, a)
+    if is_known(visits, prior_next, p.m, s, a):
+        n = visits[s, a]
+        learned = _learned(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, s, a,
+                           p.r_max, p.gamma)
+        w = p.prior_weight
+        return (n * learned + w * prior) / (n + w)
+    return prior
+
+
+@numba.njit(cache=True)
+def hybrid_backup(t: Tables, p: Params, s: int, a: int) -> float:
+    """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
+    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
+    return _hybrid_backup(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal,
+                          t.v, t.prior_next, p, s, a)
+
+
+@numba.njit(cache=True)
+def prior_backup(t: Tables, p: Params, s: int, a: int) -> float:
+    """The backup of ``(s, a)`` under the prior alone, with the current ``v``: R_max if
+    its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
+    return _prior_backup(t.goal, t.v, t.prior_next, p, s, a)
+
+
+@numba.njit(cache=True, inline="always")
+def _prior_backup(goal: np.ndarray, v: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+                  a: int) -> float:
+    s2 = prior_successor(prior_next, s, a)
+    return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def sweep(t: Tables, p: Params, s: int, a: int) -> None:
+    """Revalue the real step's pair ``(s, a)`` if it is known, then sweep: recompute the
+    pairs leading to the most changed states until ``n_backups`` pairs are done (a popped
+    state's pairs are all done) or none is queued."""
+    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
+    slots, stuck, visits = t.slots, t.stuck, t.visits
+    cost_sum, cost_n, cost_all = t.cost_sum, t.cost_n, t.cost_all
+    prior_next, pp_ptr, pp_pair = t.prior_next, t.pp_ptr, t.pp_pair
+    rev_head, rev_next, rev_pair = t.rev_head, t.rev_next, t.rev_pair
+    heap, heap_pos, heap_prio, heap_n = t.heap, t.heap_pos, t.heap_prio, t.heap_n
+    n_actions = q.shape[1]
+    if is_known(visits, prior_next, p.m, s, a):
+        _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                 prior_next, heap, heap_pos, heap_prio, heap_n, p, s, a)
+    budget = p.n_backups
+    while budget > 0 and heap_n[0] > 0:
+        x = _pop(heap, heap_pos, heap_prio, heap_n)
+        for k in range(pp_ptr[x], pp_ptr[x + 1]):  # unknown pairs the prior leads to x
+            pair = pp_pair[k]
+            ps, pa = pair // n_actions, pair % n_actions
+            if goal[ps] or is_known(visits, prior_next, p.m, ps, pa):
+                continue  # goal rows keep 0; known pairs are in the reverse index
+            _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                     prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            budget -= 1
+        e = rev_head[x]
+        while e >= 0:  # known pairs whose backup reads x
+            pair = rev_pair[e]
+            e = rev_next[e]
+            ps, pa = pair // n_actions, pair % n_actions
+            if goal[ps]:  # known before a task switch made its state a goal
+                continue
+            _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
+                     prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            budget -= 1
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _revalue(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, slots: np.ndarray,
+             stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray, cost_n: np.ndarray,
+             cost_all: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, heap: np.ndarray,
+             heap_pos: np.ndarray, heap_prio: np.ndarray, heap_n: np.ndarray, p: Params,
+             s: int, a: int) -> None:
+    """``q[s, a] <-`` its hybrid backup; queue ``s`` if that moved its value by more than
+    the sweep threshold. (The arrays one by one, not :class:`Tables`: this is the sweep's
+    inner loop, see :mod:`gdq_pddl.learners.tables`. The untried pairs the knowledge says
+    do nothing are not allowed: nothing here reads their Q, which :func:`fill_untried`
+    fills in when it is read.)"""
+    old = v[s]
+    _set_q(q, v, allowed, s, a, _hybrid_backup(slots, stuck, visits, cost_sum, cost_n,
+                                               cost_all, goal, v, prior_next, p, s, a))
+    change = abs(v[s] - old)
+    if change > p.sweep_threshold:
+        _push(heap, heap_pos, heap_prio, heap_n, s, change)
+
+
+@numba.njit(cache=True, inline="always")
+def is_known(visits: np.ndarray, prior_next: np.ndarray, m: int, s: int, a: int) -> bool:
+    """Whether ``(s, a)`` is valued by the learned model: tried more than m times if the
+    knowledge says it applies, at least once if it says it does nothing."""
+    return visits[s, a] > (m if prior_next[s, a] >= 0 else 0)
+
+
+@numba.njit(cache=True)
+def known(t: Tables, p: Params, s: int, a: int) -> bool:
+    """:func:`is_known` of ``(s, a)`` in a learner's tables."""
+    return is_known(t.visits, t.prior_next, p.m, s, a)
+
+
+@numba.njit(cache=True, inline="always")
+def prior_successor(prior_next: np.ndarray, s: int, a: int) -> int:
+    """Where the prior says ``(s, a)`` leads (``s`` itself where it says "no change")."""
+    x = prior_next[s, a]
+    return s if x < 0 else x
+
+
+# --- OptInit ---------------------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
+    """OptInit of the default GDQ: value iteration on the hybrid model (Gauss-Seidel sweeps
+    over the allowed pairs until no state value moves by more than ``tol``), then every
+    other pair's Q from the converged values, the reverse index rebuilt for the known
+    pairs and the queue emptied. Goal rows are 0. The sweeps start from the prior's own
+    values (:func:`prior_values`), exact when no pair is known yet, so a first task
+    takes one sweep however large the world. Returns the number of sweeps, or -1 when
+    the reverse index is too small (the caller sizes it for the known pairs)."""
+    n_states, n_actions = t.q.shape
+    q, v, allowed, goal, visits, prior_next = t.q, t.v, t.allowed, t.goal, t.visits, \
+        t.prior_next
+    ptr = np.zeros(n_states + 1, dtype=np.int64)
+    for s in range(n_states):
+        n = 0
+        for a in range(n_actions):
+            ok = prior_next[s, a] >= 0 or is_known(visits, prior_next, p.m, s, a)
+            allowed[s, a] = ok
+            n += ok
+        if n == 0:
+            allowed[s, :] = True
+            n = n_actions
+        ptr[s + 1] = ptr[s] + (0 if goal[s] else n)
+    pairs = np.empty(ptr[n_states], dtype=np.int64)
+    for s in range(n_states):
+        if goal[s]:
+            continue
+        k = ptr[s]
+        for a in range(n_actions):
+            if allowed[s, a]:
+                pairs[k] = a
+                k += 1
+    q[:, :] = 0.0
+    v[:] = prior_values(t, p)
+    sweeps = 0
+    while sweeps < max_sweeps:
+        sweeps += 1
+        delta = 0.0
+        for s in range(n_states):
+            if goal[s]:
+                continue
+            best = -np.inf
+            for k in range(ptr[s], ptr[s + 1]):
+                a = pairs[k]
+                x = hybrid_backup(t, p, s, a)
+                q[s, a] = x
+                if x > best:
+                    best = x
+            delta = max(delta, abs(best - v[s]))
+            v[s] = best
+        if delta <= tol:
+            break
+    for s in range(n_states):
+        if goal[s]:
+            continue
+        for a in range(n_actions):
+            if not allowed[s, a]:
+                q[s, a] = hybrid_backup(t, p, s, a)
+    t.rev_head[:] = -1
+    t.rev_n[0] = 0
+    for s in range(n_states):
+        for a in range(n_actions):
+            if is_known(visits, prior_next, p.m, s, a) and not _index_known_pair(t, p, s, a):
+                return -1
+    t.heap_pos[:] = -1
+    t.heap_n[0] = 0
+    return sweeps
+
+
+@numba.njit(cache=True)
+def prior_values(t: Tables, p: Params) -> np.ndarray:
+    """The state values of the prior alone: a state ``d`` prior steps from the goal
+    is worth R_max for d = 1 and ``-prior_cost + gamma * V_{d-1}`` beyond (backward
+    breadth-first search over the prior's edges); one that cannot reach it
+    ``-prior_cost / (1 - gamma)``; a goal 0."""
+    n_states, n_actions = t.q.shape
+    goal, pp_ptr, pp_pair = t.goal, t.pp_ptr, t.pp_pair
+    dist = np.full(n_states, -1, dtype=np.int64)
+    queue = np.empty(n_states, dtype=np.int64)
+    head, tail = 0, 0
+    for s in range(n_states):
+        if goal[s]:
+            dist[s] = 0
+            queue[tail] = s
+            tail += 1
+    while head < tail:
+        x = queue[head]
+        head += 1
+        for k in range(pp_ptr[x], pp_ptr[x + 1]):
+            ps = pp_pair[k] // n_actions
+            if dist[ps] < 0:
+                dist[ps] = dist[x] + 1
+                queue[tail] = ps
+                tail += 1
+    longest = 0
+    for s in range(n_states):
+        longest = max(longest, dist[s])
+    by_distance = np.zeros(longest + 1)
+    for d in range(1, longest + 1):
+        by_distance[d] = p.r_max if d == 1 else -p.prior_cost + p.gamma * by_distance[d - 1]
+    out = np.empty(n_states)
+    for s in range(n_states):
+        out[s] = by_distance[dist[s]] if dist[s] >= 0 else -p.prior_cost / (1.0 - p.gamma)
+    return out
+
+
+@numba.njit(cache=True)
+def fill_untried(t: Tables, p: Params) -> None:
+    """Q of every pair that is not allowed (untried, and the knowledge says it does
+    nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]``; goal rows
+    stay 0. The sweeps never read these entries, so they leave them to this."""
+    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
+    for s in range(q.shape[0]):
+        if goal[s]:
+            continue
+        stay = -p.prior_cost + p.gamma * v[s]
+        for a in range(q.shape[1]):
+            if not allowed[s, a]:
+                q[s, a] = stay
+
+
+# --- the reverse index: which known pairs read a state -----------------------------------------
+
+def reverse_room(max_successors: int, steps: int = 1) -> int:
+    """Reverse-index entries ``steps`` real steps can add at most (a pair becoming known
+    adds one per recorded successor and one for its prior successor, a known pair
+    reaching a new state one)."""
+    return steps * (max_successors + 1)
+
+
+@numba.njit(cache=True, inline="always")
+def _index_add(rev_head: np.ndarray, rev_next: np.ndarray, rev_pair: np.ndarray,
+               rev_n: np.ndarray, x: int, pair: int) -> bool:
+    """Record that known ``pair`` has reached state ``x``; False when the index is full."""
+    e = rev_n[0]
+    if e >= rev_pair.shape[0]:
+        return False
+    rev_pair[e] = pair
+    rev_next[e] = rev_head[x]
+    rev_head[x] = e
+    rev_n[0] = e + 1
+    return True
+
+
+@numba.njit(cache=True)
+def _index_known_pair(t: Tables, p: Params, s: int, a: int) -> bool:
+    """Index the states the newly known pair ``(s, a)``'s backup reads: its recorded
+    non-goal successors and, with ``prior_weight > 0``, its prior successor."""
+    slots, goal = t.slots, t.goal
+    rev_head, rev_next, rev_pair, rev_n = t.rev_head, t.rev_next, t.rev_pair, t.rev_n
+    pair = s * t.q.shape[1] + a
+    for j in range(slots.shape[2]):
+        here = slots[s, a, j]
+        if here == 0:
+            break
+        x = slot_successor(here)
+        if not goal[x] and not _index_add(rev_head, rev_next, rev_pair, rev_n, x, pair):
+            return False
+    x = prior_successor(t.prior_next, s, a)
+    if p.prior_weight > 0.0 and not goal[x] and not has_successor(slots, s, a, x):
+        return _index_add(rev_head, rev_next, rev_pair, rev_n, x, pair)
+    return True
+
+
+# --- the queue of changed states (a max-heap by the size of the change) -------------------------
+
+@numba.njit(cache=True, inline="always")
+def _sift_up(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, i: int) -> None:
+    x = heap[i]
+    while i > 0:
+        parent = (i - 1) // 2
+        y = heap[parent]
+        if prio[y] >= prio[x]:
+            break
+        heap[i] = y
+        pos[y] = i
+        i = parent
+    heap[i] = x
+    pos[x] = i
+
+
+@numba.njit(cache=True, inline="always")
+def _sift_down(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, n: int, i: int) -> None:
+    x = heap[i]
+    while True:
+        c = 2 * i + 1
+        if c >= n:
+            break
+        if c + 1 < n and prio[heap[c + 1]] > prio[heap[c]]:
+            c += 1
+        y = heap[c]
+        if prio[y] <= prio[x]:
+            break
+        heap[i] = y
+        pos[y] = i
+        i = c
+    heap[i] = x
+    pos[x] = i
+
+
+@numba.njit(cache=True, inline="always")
+def _push(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarray, x: int,
+          change: float) -> None:
+    """Queue state ``x`` with priority ``change`` (raised to it if already queued)."""
+    if pos[x] >= 0:
+        if change > prio[x]:
+            prio[x] = change
+            _sift_up(heap, pos, prio, pos[x])
+        return
+    n = heap_n[0]
+    heap[n] = x
+    prio[x] = change
+    heap_n[0] = n + 1
+    _sift_up(heap, pos, prio, n)
+
+
+@numba.njit(cache=True, inline="always")
+def _pop(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarray) -> int:
+    """The queued state of highest priority, removed from the queue."""
+    x = heap[0]
+    n = heap_n[0] - 1
+    heap_n[0] = n
+    pos[x] = -1
+    if n > 0:
+        heap[0] = heap[n]
+        _sift_down(heap, pos, prio, n, 0)
+    return x

@@ -1,0 +1,97 @@
+"""The paper's two readings of GDQ: GDQ-literal (Algorithms 1-3 read literally) and
+GDQ-code (the authors' released code). Both are Q-learning plus the learned model
+(:mod:`gdq_pddl.learners.learned_model`) plus N backups per real step along the plans H
+from the current state (:func:`backup_plans`); they differ in OptInit and in the kind of
+backup:
+
+- GDQ-literal: OptInit is :func:`policy_iteration` on an optimistic model (an unknown pair
+  leads to s0 with R_max on the plan pairs from s0); backups assign the expected value
+  (:func:`gdq_pddl.learners.learned_model.expected_value`).
+- GDQ-code: OptInit is :func:`seed_plan_pairs` (Q <- R_max on the plan pairs); backups are
+  TD updates on outcomes replayed from experience
+  (:func:`gdq_pddl.learners.learned_model.sample_outcome`).
+
+``docs/learners.md`` sets them side by side and says where each decision comes from.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from gdq_pddl.learners.learned_model import expected_value, model_backup
+from gdq_pddl.learners.tables import Params, Tables, recompute_all_v
+
+
+@numba.njit(cache=True)
+def backup_plans(t: Tables, p: Params, s: int, rng: np.random.Generator) -> bool:
+    """N backups of a random transition of a random plan from ``s``.
+
+    Returns False (and does nothing) when ``s`` has no plan.
+    """
+    lo, hi = t.plan_ptr[s], t.plan_ptr[s + 1]
+    if hi <= lo:
+        return False
+    for _ in range(p.n_backups):
+        k = lo + rng.integers(0, hi - lo)
+        j = t.pair_ptr[k] + rng.integers(0, t.pair_ptr[k + 1] - t.pair_ptr[k])
+        model_backup(t, p, t.pair_state[j], t.pair_action[j], rng)
+    return True
+
+
+@numba.njit(cache=True)
+def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
+                     improve_tol: float = 1e-6, max_iter: int = 10_000) -> np.ndarray:
+    """GDQ-literal's OptInit: policy iteration on the model (learned for known pairs,
+    optimistic otherwise).
+
+    Starts from the policy "action 0 everywhere", evaluates V^pi (in-place sweeps to
+    ``eval_tol``), computes Q(s, a) for every action and improves, keeping the current
+    action on ties (within ``improve_tol``) and else taking the lowest index, until the
+    policy is stable. Writes that final Q into ``t.q`` (goal rows 0) and returns pi.
+    """
+    n_states, n_actions = t.q.shape
+    pi = np.zeros(n_states, dtype=np.int64)
+    v = np.zeros(n_states)
+    qq = np.zeros((n_states, n_actions))
+    for _ in range(max_iter):
+        for _sweep in range(1_000_000):
+            delta = 0.0
+            for s in range(n_states):
+                if t.goal[s]:
+                    continue
+                x = expected_value(t, p, s, pi[s], v)
+                delta = max(delta, abs(x - v[s]))
+                v[s] = x
+            if delta < eval_tol:
+                break
+        stable = True
+        for s in range(n_states):
+            if t.goal[s]:
+                continue
+            best = -np.inf
+            for a in range(n_actions):
+                qq[s, a] = expected_value(t, p, s, a, v)
+                best = max(best, qq[s, a])
+            if qq[s, pi[s]] < best - improve_tol:
+                stable = False
+                for a in range(n_actions):
+                    if qq[s, a] >= best - improve_tol:
+                        pi[s] = a
+                        break
+        if stable:
+            break
+    t.q[:, :] = qq
+    recompute_all_v(t)
+    return pi
+
+
+@numba.njit(cache=True)
+def seed_plan_pairs(t: Tables, value: float) -> None:
+    """GDQ-code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's plan pairs."""
+    t.q[:, :] = 0.0
+    for s in range(t.q.shape[0]):
+        for a in range(t.q.shape[1]):
+            if t.opt_r[s, a]:
+                t.q[s, a] = value
+    recompute_all_v(t)

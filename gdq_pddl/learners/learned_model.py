@@ -1,0 +1,282 @@
+"""The learned model (what "model" means in the learners) and Dyna-Q's backups on it.
+
+The model is what a learner has counted of the real steps it took. It is
+goal-independent, so it survives a task switch. Per pair ``(s, a)``: ``visits[s, a]``
+all trials; ``stuck[s, a]`` trials that failed by getting stuck; ``cost_sum / cost_n`` the
+mean step cost over steps with no goal, stuck or timeout event (pairs never seen in such
+a step use the mean over all pairs, or 0 before any); and the transitions to learner
+states ``s'`` (goal, timeout and ordinary steps alike), sparse:
+
+- ``slots[s, a, j]``, ``j < K``: ``s' << 32 | count`` (int64, one load per slot;
+  :func:`slot_successor`, :func:`slot_count`); 0 is an empty slot. The occupied slots
+  come first, sorted by successor (:func:`record` inserts in order), so every loop over
+  them meets the successors in increasing ``s'`` exactly as a loop over a dense
+  ``counts[s, a, :]`` did: the same sums in the same order, the same sampled outcomes.
+- ``K`` is a capacity, the most distinct successors any pair can have
+  (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`, from the world's true
+  dynamics; the episode loops raise it to what the env they run in needs). Memory is
+  ``S x A x K`` slots instead of ``S x A x S`` counts, and ``np.zeros`` leaves the pages
+  of untried pairs unwritten. The model-free learners get ``K = 0``: they never record.
+- A transition that finds no free slot is not recorded at all: :func:`record` returns
+  False and its callers raise ValueError(:data:`OVERFLOW`). Not a raise in here: see
+  :func:`add_successor`.
+
+The expected backup of a pair under the model, for the current goal states G, is::
+
+    Q(s,a) = sum_s' T(s,a,s') * (R_max if s' in G else -cost(s,a) + gamma * V(s'))
+             + P_stuck(s,a) * (-R_max)
+
+with ``T(s,a,s') = count / visits`` over the slots of ``(s, a)`` and
+``P_stuck = stuck / visits`` (:func:`learned_value`). A step-limit timeout is not part of
+this Markov model (its transition is counted, its -R_max is not). No backup bootstraps
+through a terminal transition: reaching G or getting stuck ends the sum.
+
+A pair is *known* when ``visits > m``. Dyna-Q's planning (:func:`backup_known`) backs up
+known pairs only. GDQ-literal's expected backups give an unknown pair the optimistic
+backup of OptInit instead (:func:`expected_value`): ``T(s,a,s0) = 1`` and ``R = R_max``
+on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
+Sample-based backups (GDQ-code) only replay recorded outcomes of pairs tried at least
+once and leave untried pairs alone (:func:`sample_outcome`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from gdq_pddl.learners.tables import BACKUP_EXPECTED, Params, Tables, set_q, td_update
+
+SLOT_SHIFT = 32
+COUNT_MASK = (1 << SLOT_SHIFT) - 1
+"""A slot is ``successor << SLOT_SHIFT | count``: successors below 2**31, counts up to
+2**32 - 1 per (pair, successor)."""
+
+OVERFLOW = ("a (state, action) pair has more distinct successors than the learner's model "
+            "has slots (TaskContext.max_successors); give it more with reserve_successors")
+"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False (raised
+by their callers)."""
+
+
+def new_model(n_states: int, n_actions: int, max_successors: int,
+              transitions: bool = True) -> dict[str, np.ndarray]:
+    """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks.
+
+    ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
+    ``transitions`` is False (the model-free learners never record one).
+    """
+    k = int(max_successors) if transitions else 0
+    return {
+        "slots": np.zeros((n_states, n_actions, k), dtype=np.int64),
+        "stuck": np.zeros((n_states, n_actions), dtype=np.int64),
+        "visits": np.zeros((n_states, n_actions), dtype=np.int64),
+        "cost_sum": np.zeros((n_states, n_actions), dtype=np.float64),
+        "cost_n": np.zeros((n_states, n_actions), dtype=np.int64),
+        "cost_all": np.zeros(2, dtype=np.float64),
+        "known": np.zeros(n_states * n_actions, dtype=np.int64),
+        "n_known": np.zeros(1, dtype=np.int64),
+    }
+
+
+def with_successor_slots(model: dict[str, np.ndarray],
+                         max_successors: int) -> dict[str, np.ndarray]:
+    """``model`` with at least ``max_successors`` slots per pair (a copy of the slot
+    array when it had fewer, the recorded transitions kept; else ``model`` itself)."""
+    slots = model["slots"]
+    n_states, n_actions, k = slots.shape
+    if max_successors <= k:
+        return model
+    wider = np.zeros((n_states, n_actions, max_successors), dtype=np.int64)
+    wider[:, :, :k] = slots
+    return {**model, "slots": wider}
+
+
+def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
+    """The transition counts as a dense int64 ``[S, A, n_states]`` array."""
+    out = np.zeros((*slots.shape[:2], n_states), dtype=np.int64)
+    s, a, j = np.nonzero(slots)
+    out[s, a, slots[s, a, j] >> SLOT_SHIFT] = slots[s, a, j] & COUNT_MASK
+    return out
+
+
+@numba.njit(cache=True)
+def slot_successor(slot: int) -> int:
+    return slot >> SLOT_SHIFT
+
+
+@numba.njit(cache=True)
+def slot_count(slot: int) -> int:
+    return slot & COUNT_MASK
+
+
+# --- recording a real step -------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def add_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
+    """Count one transition ``(s, a) -> s2`` in the slots of ``(s, a)``, keeping them
+    sorted by successor. False (nothing changed) when ``s2`` is new and every slot is
+    taken.
+
+    Takes the slot array, not :class:`Tables`, and returns a status instead of raising
+    (both measured): reading tuple fields inside a loop cost a reference count update
+    per read (the loop 4 x slower), and a callee that can raise makes every caller that
+    holds the tuple update the counts of all its arrays on each call.
+    """
+    key = np.int64(s2) << SLOT_SHIFT
+    n_slots = slots.shape[2]
+    for j in range(n_slots):
+        here = slots[s, a, j]
+        if here == 0:  # the first empty slot: s2 is new and larger than all before
+            slots[s, a, j] = key + 1
+            return True
+        if slot_successor(here) == s2:
+            slots[s, a, j] = here + 1
+            return True
+        if here > key:  # a larger successor: insert s2 here, shifting the rest up
+            if slots[s, a, n_slots - 1] != 0:
+                return False
+            for jj in range(n_slots - 1, j, -1):
+                slots[s, a, jj] = slots[s, a, jj - 1]
+            slots[s, a, j] = key + 1
+            return True
+    return False
+
+
+@numba.njit(cache=True, inline="always")
+def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
+    """Whether ``(s, a) -> s2`` has been recorded."""
+    for j in range(slots.shape[2]):
+        here = slots[s, a, j]
+        if here == 0:
+            return False
+        if slot_successor(here) == s2:
+            return True
+    return False
+
+
+@numba.njit(cache=True, inline="always")
+def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+           truncated: bool) -> bool:
+    """Count one real transition in the model; False, and nothing recorded, when its
+    successor finds no free slot (:data:`OVERFLOW`)."""
+    if terminated and not t.goal[s2]:
+        t.stuck[s, a] += 1
+    elif not add_successor(t.slots, s, a, s2):
+        return False
+    if not terminated and not truncated:
+        t.cost_sum[s, a] -= r
+        t.cost_n[s, a] += 1
+        t.cost_all[0] -= r
+        t.cost_all[1] += 1.0
+    t.visits[s, a] += 1
+    if t.visits[s, a] == p.m + 1:
+        t.known[t.n_known[0]] = s * t.q.shape[1] + a
+        t.n_known[0] += 1
+    return True
+
+
+# --- what the model says a pair is worth -------------------------------------------------------
+
+@numba.njit(cache=True, inline="always")
+def mean_cost(t: Tables, s: int, a: int) -> float:
+    return _mean_cost(t.cost_sum, t.cost_n, t.cost_all, s, a)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s: int,
+               a: int) -> float:
+    """The mean step cost of ``(s, a)``; of every pair where it has none; else 0."""
+    if cost_n[s, a] > 0:
+        return cost_sum[s, a] / cost_n[s, a]
+    if cost_all[1] > 0:
+        return cost_all[0] / cost_all[1]
+    return 0.0
+
+
+@numba.njit(cache=True, inline="always")
+def learned_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
+    with state values ``v``."""
+    return _learned(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal, v,
+                    s, a, p.r_max, p.gamma)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _learned(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray,
+             cost_n: np.ndarray, cost_all: np.ndarray, goal: np.ndarray, v: np.ndarray,
+             s: int, a: int, r_max: float, gamma: float) -> float:
+    c = _mean_cost(cost_sum, cost_n, cost_all, s, a)
+    total = stuck[s, a] * -r_max
+    for j in range(slots.shape[2]):  # successors in increasing order
+        here = slots[s, a, j]
+        if here == 0:
+            break
+        k = slot_count(here)
+        s2 = slot_successor(here)
+        if goal[s2]:
+            total += k * r_max
+        else:
+            total += k * (gamma * v[s2] - c)
+    return total / visits[s, a]
+
+
+@numba.njit(cache=True, inline="always")
+def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+    """The expected Bellman backup of ``(s, a)``, with state values ``v``: the learned
+    model's for a known pair (``visits > m``), else the optimism of GDQ-literal."""
+    if t.visits[s, a] > p.m:
+        return learned_value(t, p, s, a, v)
+    r = p.r_max if t.opt_r[s, a] else 0.0
+    return r + p.opt_continue * p.gamma * v[p.s0]
+
+
+@numba.njit(cache=True, inline="always")
+def sample_outcome(t: Tables, p: Params, s: int, a: int,
+                   rng: np.random.Generator) -> tuple[float, int, bool]:
+    """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
+
+    The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
+    (stuck, goal, or an ordinary step at the pair's mean cost), never the optimism.
+    """
+    k = rng.integers(0, t.visits[s, a])
+    if k < t.stuck[s, a]:
+        return -p.r_max, s, True
+    k -= t.stuck[s, a]
+    slots = t.slots  # a local: a tuple field read in a loop costs more
+    for j in range(slots.shape[2]):  # successors in increasing order
+        k -= slot_count(slots[s, a, j])
+        if k < 0:
+            s2 = slot_successor(slots[s, a, j])
+            if t.goal[s2]:
+                return p.r_max, s2, True
+            return -mean_cost(t, s, a), s2, False
+    return -mean_cost(t, s, a), s, False  # unreachable: counts + stuck == visits
+
+
+# --- Dyna-Q's planning ---------------------------------------------------------------------------
+
+@numba.njit(cache=True)
+def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator) -> None:
+    """One simulated update of ``(s, a)``.
+
+    ``BACKUP_EXPECTED``: assign the expected backup (:func:`expected_value`).
+    ``BACKUP_SAMPLE`` (GDQ-code): a TD update on an outcome replayed from experience; a
+    pair never tried is left alone.
+    """
+    if p.backup == BACKUP_EXPECTED:
+        set_q(t, s, a, expected_value(t, p, s, a, t.v))
+    elif t.visits[s, a] > 0:
+        r, s2, terminal = sample_outcome(t, p, s, a, rng)
+        target = r if terminal else r + p.gamma * t.v[s2]
+        td_update(t, s, a, target, p.alpha)
+
+
+@numba.njit(cache=True)
+def backup_known(t: Tables, p: Params, rng: np.random.Generator) -> None:
+    """Dyna-Q planning: N backups of uniformly random known pairs."""
+    nk = t.n_known[0]
+    if nk == 0:
+        return
+    n_actions = t.q.shape[1]
+    for _ in range(p.n_backups):
+        i = t.known[rng.integers(0, nk)]
+        model_backup(t, p, i // n_actions, i % n_actions, rng)

@@ -1,0 +1,283 @@
+"""A learner's arrays, its Q table, and how it acts: the part every learner shares.
+
+Every learner (Q-learning, Dyna-Q, DARLING, the GDQs) is the same data, :class:`Tables`,
+plus scalar :class:`Params` whose ``kind`` says which rules run after a real step
+(:func:`gdq_pddl.learners.rules.observe`). This module holds:
+
+- the Q table and its maximum: :func:`set_q` (the only writer of single Q entries, so
+  ``v[s]`` stays the max of ``q[s, a]`` over the allowed actions) and :func:`td_update`,
+  the temporal-difference update, the one definition every learner's real step (and
+  GDQ-code's sample backups) uses;
+- acting: :func:`act`, epsilon-greedy with random tie-breaking, and :func:`greedy`.
+
+``allowed`` is what the max ranges over (the update's target and the greedy choice);
+``guide`` is what exploration draws uniformly from. They are the same array for every
+learner but two. DARLING-code (DARLING as the GDQ authors' code runs it): its max ranges
+over all actions while it may only execute plan actions, so a greedy action outside
+``guide`` is replaced by a draw from it. The default GDQ: ``allowed`` holds the
+knowledge-applicable and the known pairs, ``guide`` the first actions of the plans
+(:mod:`gdq_pddl.learners.gdq`); its greedy action is never replaced.
+
+Randomness comes only from the ``np.random.Generator`` passed in.
+
+The compiled functions here and in the other rule modules trust their arguments (no
+bounds checks in compiled code): the learners' methods and the episode loops check what
+they are given before calling them (:mod:`gdq_pddl.learners.guards`).
+
+Speed. A call of a compiled function that is not inlined and takes :class:`Tables` costs
+a reference-count update per array the tuple holds; the small rules called in inner loops
+(``set_q``, ``td_update``, ``record``, the backups' value functions) are therefore
+``inline="always"`` and take arrays, not the tuple (Task C, env steps/s: Q-learning 531k
+-> 1.05M, Dyna-Q 165k -> 260k, GDQ 182k -> 215k, ``benchmarks/learners.py speed``), while
+``act`` and ``observe`` stay calls: inlining ``observe`` into the episode loop made numba
+0.68 compile a loop whose results differ from the Python path's (caught by the fast ==
+Python tests), and inlining more tripled the compile time.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ_PLANS, KIND_GDQ = 0, 1, 2, 3, 4
+"""Which rules run after a real step. ``KIND_GDQ``: the default GDQ (the knowledge as a
+prior, :mod:`gdq_pddl.learners.gdq`); ``KIND_GDQ_PLANS``: the paper's readings,
+GDQ-literal and GDQ-code (backups along plans, :mod:`gdq_pddl.learners.gdq_paper`)."""
+KIND_NAMES = ("Q-learning", "Dyna-Q", "DARLING", "GDQ-literal/GDQ-code", "GDQ")
+BACKUP_EXPECTED, BACKUP_SAMPLE = 0, 1
+
+
+class Params(NamedTuple):
+    """Scalar settings of a learner for the current task."""
+
+    kind: int
+    alpha: float
+    gamma: float
+    epsilon: float
+    r_max: float
+    n_backups: int
+    m: int
+    backup: int
+    """BACKUP_EXPECTED (assign the expected value) or BACKUP_SAMPLE (TD on a sample)."""
+    s0: int
+    """The task's start learner state (target of the optimistic transitions)."""
+    opt_continue: float = 1.0
+    """1: an optimistic transition leads to s0 (the paper); 0: it ends the episode."""
+    explore_all: float = 0.0
+    """Share of exploring steps that draw from every action instead of ``guide``."""
+    explore_all_last: float = 1.0
+    """0: no such draw in a state from which the knowledge reaches the goal in one action
+    (``KIND_GDQ``)."""
+    prior_cost: float = 1.0
+    """Step cost of a pair still on the prior (``KIND_GDQ``)."""
+    sweep_threshold: float = 0.0
+    """Smallest change of a state value that prioritised sweeping propagates."""
+    prior_weight: float = 0.0
+    """Pseudo-observations of the prior in a known pair's model (``KIND_GDQ``)."""
+
+
+class Tables(NamedTuple):
+    """All arrays of a learner, S states x A actions, in four groups.
+
+    One flat tuple rather than nested groups: the compiled loop reads its fields in inner
+    loops, where every extra level costs reference-count updates (module docstring).
+    """
+
+    # -- the Q table and acting (this module) --
+    q: np.ndarray  # float64[S, A]
+    v: np.ndarray  # float64[S], max of q over allowed actions
+    allowed: np.ndarray  # bool[S, A], what the max (v, greedy) ranges over
+    guide: np.ndarray  # bool[S, A], what exploration draws from (module doc)
+    n_guide: np.ndarray  # int64[S], the count of guide[s], at least 1
+    goal: np.ndarray  # bool[S], goal learner states of the current task
+    # -- the learned model, kept across tasks (gdq_pddl.learners.learned_model) --
+    slots: np.ndarray  # int64[S, A, K]: s' << 32 | count, sorted, 0 = empty
+    stuck: np.ndarray  # int64[S, A]
+    visits: np.ndarray  # int64[S, A]
+    cost_sum: np.ndarray  # float64[S, A]
+    cost_n: np.ndarray  # int64[S, A]
+    cost_all: np.ndarray  # float64[2]: sum and number of all recorded step costs
+    known: np.ndarray  # int64[S * A]: pairs s * A + a in the order they became known
+    n_known: np.ndarray  # int64[1]
+    # -- the plans of GDQ-literal and GDQ-code (gdq_pddl.learners.gdq_paper) --
+    opt_r: np.ndarray  # bool[S, A], OptInit's plan pairs (R = R_max in the optimism)
+    plan_ptr: np.ndarray  # PlanTable (tolerance 0) arrays of the current task
+    pair_ptr: np.ndarray
+    pair_state: np.ndarray
+    pair_action: np.ndarray
+    # -- the default GDQ's prior and sweep (gdq_pddl.learners.gdq; empty for the others) --
+    prior_next: np.ndarray  # int64[S, A]: the knowledge's successor, -1 = no change
+    pp_ptr: np.ndarray  # int64[S + 1]: applicable pairs by prior successor (CSR) ...
+    pp_pair: np.ndarray  # int64[E]: ... as s * A + a
+    rev_head: np.ndarray  # int64[S]: first reverse entry of a successor state, -1 none
+    rev_next: np.ndarray  # int64[C]: next entry of the same successor, -1 none
+    rev_pair: np.ndarray  # int64[C]: the known pair s * A + a of an entry
+    rev_n: np.ndarray  # int64[1]: entries used
+    heap: np.ndarray  # int64[S]: states whose value change awaits propagation (max-heap)
+    heap_pos: np.ndarray  # int64[S]: a state's place in ``heap``, -1 when not queued
+    heap_prio: np.ndarray  # float64[S]: a queued state's priority (size of its value change)
+    heap_n: np.ndarray  # int64[1]
+
+
+def table_bytes(n_states: int, n_actions: int, max_successors: int,
+                transitions: bool = True, prior: bool = True) -> int:
+    """Bytes of a learner's per-pair arrays at most: Q, the allowed, guide and optimistic
+    masks, the model's visits, stuck, costs and known list, (``transitions``) the slots,
+    and (``prior``, the default GDQ) the prior's successors and reverse edges and, when
+    every pair is known, the reverse index (an entry of two int64 per successor)."""
+    per_pair = 8 * 6 + 3 + (8 * max_successors if transitions else 0)  # int64 slots
+    if prior:
+        per_pair += 8 + 8 + 16 * (max_successors if transitions else 1)
+    return n_states * n_actions * per_pair
+
+
+# --- the Q table and its maximum ---------------------------------------------------------
+
+@numba.njit(cache=True, inline="always")
+def recompute_v(t: Tables, s: int) -> None:
+    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions."""
+    _recompute_v(t.q, t.v, t.allowed, s)
+
+
+# The rules that run in inner loops take arrays, not Tables: a call that takes the tuple
+# costs a reference count update per array it holds (measured: the default GDQ's
+# backup took 650 ns through Tables, 60 ns on arrays).
+@numba.njit(cache=True, inline="always")
+def _recompute_v(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int) -> None:
+    best = -np.inf
+    for a in range(q.shape[1]):
+        if allowed[s, a] and q[s, a] > best:
+            best = q[s, a]
+    v[s] = best
+
+
+@numba.njit(cache=True)
+def recompute_all_v(t: Tables) -> None:
+    for s in range(t.q.shape[0]):
+        recompute_v(t, s)
+
+
+@numba.njit(cache=True, inline="always")
+def set_q(t: Tables, s: int, a: int, value: float) -> None:
+    """``q[s, a] <- value``, keeping ``v`` exact."""
+    _set_q(t.q, t.v, t.allowed, s, a, value)
+
+
+@numba.njit(cache=True, inline="always")
+def _set_q(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
+           value: float) -> None:
+    old = q[s, a]
+    q[s, a] = value
+    if not allowed[s, a]:
+        return
+    if value >= v[s]:
+        v[s] = value
+    elif old >= v[s]:
+        _recompute_v(q, v, allowed, s)
+
+
+@numba.njit(cache=True, inline="always")
+def td_update(t: Tables, s: int, a: int, target: float, alpha: float) -> None:
+    """``Q(s,a) += alpha (target - Q(s,a))``: real and sample-based simulated experience."""
+    set_q(t, s, a, t.q[s, a] + alpha * (target - t.q[s, a]))
+
+
+# --- acting --------------------------------------------------------------------------------
+
+@numba.njit(cache=True, inline="always")
+def _draw_guided(t: Tables, s: int, rng: np.random.Generator) -> int:
+    """A uniformly random action of ``guide[s]``."""
+    k = rng.integers(0, t.n_guide[s])
+    for a in range(t.q.shape[1]):
+        if t.guide[s, a]:
+            if k == 0:
+                return a
+            k -= 1
+    return 0  # unreachable: n_guide[s] counts guide[s]
+
+
+@numba.njit(cache=True)
+def _draw_untried(visits: np.ndarray, s: int, rng: np.random.Generator) -> int:
+    """A uniformly random action never tried in ``s``; any action once all were."""
+    n_actions = visits.shape[1]
+    n = 0
+    for a in range(n_actions):
+        n += visits[s, a] == 0
+    if n == 0:
+        return rng.integers(0, n_actions)
+    k = rng.integers(0, n)
+    for a in range(n_actions):
+        if visits[s, a] == 0:
+            if k == 0:
+                return a
+            k -= 1
+    return 0
+
+
+@numba.njit(cache=True, inline="always")
+def _one_step_from_goal(t: Tables, p: Params, s: int) -> bool:
+    """Whether the knowledge reaches the goal from ``s`` in one action (``KIND_GDQ``)."""
+    if p.kind != KIND_GDQ:
+        return False
+    for a in range(t.prior_next.shape[1]):
+        s2 = t.prior_next[s, a]
+        if s2 >= 0 and t.goal[s2]:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
+    """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
+
+    With probability epsilon a uniform action of ``guide[s]`` (or, for a share
+    ``explore_all`` of those steps, of every action, unless ``explore_all_last`` is 0 and
+    the knowledge reaches the goal from ``s`` in one action); else a uniformly chosen maximiser
+    of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
+    if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
+    when exploring with ``explore_all > 0``, then one integer when exploring or when
+    several actions tie, and one more for a replacement.
+    """
+    n_actions = t.q.shape[1]
+    if rng.random() < p.epsilon:
+        if p.explore_all > 0.0 and rng.random() < p.explore_all and (
+                p.explore_all_last > 0.0 or not _one_step_from_goal(t, p, s)):
+            return _draw_untried(t.visits, s, rng)
+        return _draw_guided(t, s, rng)
+    best = t.v[s]
+    ties = 0
+    last = 0
+    for a in range(n_actions):
+        if t.allowed[s, a] and t.q[s, a] == best:
+            ties += 1
+            last = a
+    if ties > 1:
+        k = rng.integers(0, ties)
+        for a in range(n_actions):
+            if t.allowed[s, a] and t.q[s, a] == best:
+                if k == 0:
+                    last = a
+                    break
+                k -= 1
+    if p.kind == KIND_DARLING and not t.guide[s, last]:
+        return _draw_guided(t, s, rng)
+    return last
+
+
+@numba.njit(cache=True)
+def greedy(t: Tables, p: Params) -> np.ndarray:
+    """The greedy policy: per state, the lowest-index action of maximal Q among those it
+    may execute: the allowed ones (DARLING: ``guide``, which is ``allowed`` but for
+    DARLING-code)."""
+    n_states, n_actions = t.q.shape
+    mask = t.guide if p.kind == KIND_DARLING else t.allowed
+    out = np.zeros(n_states, dtype=np.int64)
+    for s in range(n_states):
+        best = -np.inf
+        for a in range(n_actions):
+            if mask[s, a] and t.q[s, a] > best:
+                best = t.q[s, a]
+                out[s] = a
+    return out
