@@ -50,19 +50,19 @@ def check_generator(rng: object, name: str = "rng") -> None:
 def _check_index(name: str, value: object, n: int, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or \
             not 0 <= value < n:
-        raise ConfigError(f"{name} must be a {what} of the learner, an integer in "
+        raise ConfigError(f"{name} must be {what} of the learner, an integer in "
                           f"[0, {n - 1}], got {value!r}")
     return int(value)
 
 
 def check_state(name: str, value: object, n_states: int) -> int:
     """``value`` as a learner state index in ``[0, n_states)``."""
-    return _check_index(name, value, n_states, "state")
+    return _check_index(name, value, n_states, "a state")
 
 
 def check_action(name: str, value: object, n_actions: int) -> int:
     """``value`` as a learner action index in ``[0, n_actions)``."""
-    return _check_index(name, value, n_actions, "action")
+    return _check_index(name, value, n_actions, "an action")
 
 
 def check_reward(value: object) -> float:
