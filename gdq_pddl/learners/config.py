@@ -170,13 +170,13 @@ class GDQConfig(LearnerConfig):
         check_real("plan_tolerance", self.plan_tolerance, 0.0, MAX_TOLERANCE)
         if self.optimistic_successor not in ("start", "terminal"):
             raise ConfigError("optimistic_successor must be 'start' or 'terminal', got "
-                             f"{self.optimistic_successor!r}")
+                              f"{self.optimistic_successor!r}")
         if self.explore not in ("plans", "applicable"):
             raise ConfigError(f"explore must be 'plans' or 'applicable', got {self.explore!r}")
         check_real("explore_all", self.explore_all, 0.0, 1.0)
         if not isinstance(self.explore_all_last_step, bool):
             raise ConfigError("explore_all_last_step must be True or False, got "
-                             f"{self.explore_all_last_step!r}")
+                              f"{self.explore_all_last_step!r}")
         for name in ("prior_weight", "prior_cost", "sweep_threshold"):
             check_real(name, getattr(self, name), 0.0, MAX_NUMBER)
 
