@@ -38,9 +38,8 @@ from gdq_pddl.experiments.scale import METHODS, TOLERANCE
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.compact_runner import run_compact
 from gdq_pddl.learners.context import _domain_text
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
-from gdq_pddl.world import Task
+from gdq_pddl.world import Task, office_problem
 
 
 def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dict]:

@@ -378,7 +378,7 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     :func:`gdq_pddl.world.load_world` before anything is written.
     """
     from gdq_pddl.learners.context import _domain_text
-    from gdq_pddl.pddl.office import office_problem
+    from gdq_pddl.world import office_problem
 
     b = generate(positions, seed, doors)
     text = to_toml(b)

@@ -11,10 +11,9 @@ from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.abstraction.routes import knowledge_edges, route_plan_table
 from gdq_pddl.buildings import building_world
 from gdq_pddl.learners.context import _domain_text, office_plan_table, office_task_context
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, load_world
+from gdq_pddl.world import Task, load_world, office_problem
 
 TOL = 0.3
 

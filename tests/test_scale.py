@@ -17,9 +17,8 @@ from gdq_pddl.envs.solve_compact import next_states, solve_compact_task
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.compact_runner import run_compact
 from gdq_pddl.learners.context import _domain_text
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
-from gdq_pddl.world import Task, load_world
+from gdq_pddl.world import Task, load_world, office_problem
 
 
 def test_generator_is_deterministic_and_validates(tmp_path):

@@ -54,8 +54,8 @@ from gdq_pddl.envs.model import (
     merge_outcomes,
     outcome_csr,
 )
-from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import VERBS, World
+from gdq_pddl.spaces import VERBS, LearnerSpaces
+from gdq_pddl.world import World
 
 
 class CompactModel(NamedTuple):

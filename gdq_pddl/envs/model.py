@@ -19,9 +19,10 @@ from typing import NamedTuple, TypeVar
 import numba
 import numpy as np
 
+from gdq_pddl.dynamics import COST_KINDS, CostDist
 from gdq_pddl.limits import check_memory
-from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import COST_KINDS, VERBS, CostDist, World
+from gdq_pddl.spaces import VERBS, LearnerSpaces
+from gdq_pddl.world import World
 
 PAIR_BYTES = 150
 """Memory one (state, action) pair takes while a model is compiled: its outcomes are

@@ -119,9 +119,9 @@ def office_action_masks(world: World, task: Task) -> np.ndarray:
         return hit[1]
     from gdq_pddl.abstraction import OfficeAbstraction
     from gdq_pddl.abstraction.masks import knowledge_action_mask
-    from gdq_pddl.pddl.office import office_problem
     from gdq_pddl.planning.base import PlanningProblem
     from gdq_pddl.resources import domain_text
+    from gdq_pddl.world import office_problem
 
     problem = PlanningProblem.from_texts(domain_text(), office_problem(world, task))
     masks = knowledge_action_mask(OfficeAbstraction(world), problem.task)

@@ -72,7 +72,7 @@ from typing import Any
 import numpy as np
 from gymnasium.spaces import Discrete
 
-from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_action
+from gdq_pddl.dynamics import CostDist, Dynamics, load_dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
 from gdq_pddl.envs.model import PAIR_BYTES, ModelArrays, cost_arrays, merge_outcomes, outcome_csr
 from gdq_pddl.errors import PlanningError, WorldError
@@ -81,7 +81,6 @@ from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
-from gdq_pddl.world import CostDist
 
 GOAL_POS = 1
 """``pos_of`` of a goal state in a PDDL model (0 elsewhere); what ``env_step`` compares."""

@@ -131,7 +131,7 @@ _TABLES: dict[tuple, PlanTable] = {}
 
 def _knowledge_key(world: World) -> tuple:
     """What the planner's knowledge depends on (not the dynamics' probabilities, only
-    whether a door can open at all: see :func:`gdq_pddl.pddl.office.office_problem`)."""
+    whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
     return (world.positions, world.edges,
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 
@@ -176,8 +176,8 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
 def _office_planning_problem(world: World, goal: str):
     """The knowledge of ``world`` as a :class:`~gdq_pddl.planning.PlanningProblem` with
     goal ``goal`` (and any other position as its start)."""
-    from gdq_pddl.pddl.office import office_problem
     from gdq_pddl.planning import PlanningProblem
+    from gdq_pddl.world import office_problem
 
     start = next(p for p in world.positions if p != goal)
     return PlanningProblem.from_texts(
@@ -204,8 +204,8 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
                         darling_tolerance: float = 0.3, darling_kind: str = "all") -> TaskContext:
     """The :class:`TaskContext` of ``task`` (a Task or a task name) in an office world;
     ``darling_kind`` says how its tolerant table is built (:data:`TOLERANT_KINDS`)."""
-    if isinstance(task, str):
-        task = world.task(task)
+    if not isinstance(task, Task):
+        task = world.task(task)  # a name; anything else is refused there
     spaces = LearnerSpaces(world)
     goal = np.array([p == task.goal for p, _ in spaces.states], dtype=np.bool_)
     return TaskContext(
