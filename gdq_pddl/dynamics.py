@@ -22,7 +22,7 @@ often it works, what happens when it does not, and what it costs. See
 
 An object override applies to every ground action of the schema that has the object
 among its arguments; when several arguments have one, the leftmost wins. Keys it does
-not give come from the schema's table. :func:`load_dynamics` checks everything against
+not give come from the schema's table. :func:`parse_dynamics` checks everything against
 the domain and problem and names the file and key of every error, as world files do.
 
 A cost the file does not give is the one the domain states (``(increase (total-cost)
@@ -39,11 +39,9 @@ import math
 import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from gdq_pddl.errors import WorldError
-from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import Domain, Problem
 
@@ -180,7 +178,8 @@ class Outcomes:
 
 @dataclass(frozen=True)
 class Dynamics:
-    """A validated dynamics file. Build one with :func:`load_dynamics`."""
+    """A validated dynamics file. Build one with :func:`parse_dynamics` (or a world's
+    :meth:`~gdq_pddl.world.World.dynamics`)."""
 
     source: str
     r_max: float = 20.0
@@ -207,17 +206,6 @@ def split_action(name: str) -> tuple[str, tuple[str, ...]]:
     """``"(move a b)"`` -> ``("move", ("a", "b"))``."""
     parts = name.strip("()").split()
     return parts[0], tuple(parts[1:])
-
-
-def load_dynamics(path: str | Path, domain: Domain, problem: Problem,
-                  overlay: bool = False) -> Dynamics:
-    """Read and validate a dynamics file (an overlay for a PPDDL domain: ``overlay``)
-    against ``domain`` and ``problem``.
-
-    Raises :class:`WorldError` naming the file and key of the first problem found.
-    """
-    text = read_text(path, lambda src, msg: WorldError(src, "", msg))
-    return parse_dynamics(text, domain, problem, source=str(path), overlay=overlay)
 
 
 def parse_dynamics(text: str, domain: Domain, problem: Problem,

@@ -18,12 +18,12 @@ import re
 import tomllib
 from collections import deque
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from gdq_pddl.dynamics import Checks, CostDist
+from gdq_pddl.dynamics import Checks, CostDist, Dynamics, Outcomes
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.resources import world_text
@@ -128,6 +128,22 @@ class World:
             return door.costs[verb]
         return self.costs[verb]
 
+    def dynamics(self) -> Dynamics:
+        """The world's reality for ``domains/office.pddl`` (the one place the doors'
+        probabilities live): ``goto`` and ``approach`` reach their target with
+        ``navigation_success``, else a random walking neighbour (a slip over the
+        applicable ``goto`` and ``approach`` actions, the target included); ``opendoor``
+        and ``gothrough`` work with their door's ``success``, get stuck with its
+        ``stuck``, else do nothing; costs per verb, door overrides first."""
+        nav = Outcomes(self.navigation_success, 0.0, ("goto", "approach"))
+        actions = {v: replace(nav, cost=self.costs[v]) for v in ("goto", "approach")}
+        actions |= {v: Outcomes(cost=self.costs[v]) for v in DOOR_VERBS}
+        objects = {v: {d.name: Outcomes(d.success, d.stuck, "nothing",
+                                        d.costs.get(v, self.costs[v])) for d in self.doors}
+                   for v in DOOR_VERBS}
+        return Dynamics(self.source, self.r_max, self.step_limit, actions, objects,
+                        self.name, self.description, frozenset({"r_max", "step_limit"}))
+
     def position(self, name: str) -> str:
         """Resolve a position or landmark name; raise :class:`WorldError` if unknown."""
         if not isinstance(name, str):
@@ -193,7 +209,7 @@ class World:
                 f"{', '.join(locked)})" if locked else "no way leads there")
 
 
-def office_problem(world: World, task: Task) -> str:
+def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
     """The world's knowledge as a PDDL problem of ``domains/office.pddl``: reach
     ``task.goal`` from ``task.start`` with every door closed.
 
@@ -202,7 +218,8 @@ def office_problem(world: World, task: Task) -> str:
     with one exception: a door whose success probability is 0 (locked) gets no
     ``connects`` facts, since knowing that a door never opens is knowing that it is a
     wall (the knowledge-vs-reality experiments of :mod:`gdq_pddl.experiments.knowledge`
-    rely on this for their accurate reference)."""
+    rely on this for their accurate reference). ``locked_is_wall=False`` keeps them: the
+    building as reality has it, where such a door is one whose dynamics never open it."""
     door_sides = {p for d in world.doors for p in d.sides}
     walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
                   ((p, n) for n in ns))
@@ -225,7 +242,7 @@ def office_problem(world: World, task: Task) -> str:
     for d in world.doors:
         a, b = d.sides
         lines += [f"    (door-side {a} {d.name})", f"    (door-side {b} {d.name})"]
-        if d.success > 0:  # a door that never opens (locked) connects nothing
+        if d.success > 0 or not locked_is_wall:  # knowledge: a locked door is a wall
             lines += [f"    (connects {d.name} {a} {b})", f"    (connects {d.name} {b} {a})"]
         lines.append(f"    (closed {d.name})")
     lines[-1] += ")"

@@ -2,14 +2,22 @@
 
 from __future__ import annotations
 
+import hashlib
+
 import gymnasium as gym
+import numpy as np
 import pytest
 
 import gdq_pddl  # noqa: F401  (registers the envs)
+from gdq_pddl.buildings import building_world
+from gdq_pddl.envs.compact import compile_compact
+from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.pddl_env import GOAL_POS, load_instance
+from gdq_pddl.envs.solve import solve
 from gdq_pddl.errors import WorldError
 from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.resources import world_text
-from gdq_pddl.world import load_world, parse_world
+from gdq_pddl.world import builtin_world, load_world, parse_world
 
 
 @pytest.mark.parametrize("task", [3, 2.5, ("C",)])
@@ -30,3 +38,41 @@ def test_an_area_number_past_the_positions_names_its_key(number):
     text = world_text("office").replace('7 = ["p13", "p18"]', f'{number} = ["p13", "p18"]')
     with pytest.raises(WorldError, match=rf"areas\.{number}: area numbers run from 1 to 19"):
         parse_world(text, source="w.toml")
+
+
+def _digest(model) -> str:
+    h = hashlib.sha256()
+    for x in model:
+        h.update(np.ascontiguousarray(x).tobytes() if isinstance(x, np.ndarray)
+                 else repr(x).encode())
+    return h.hexdigest()[:16]
+
+
+# The digests of the models the office's own simulator compiled before the office went
+# through the PDDL path (commit 2b9d437): same states, actions, outcome order and
+# probabilities, so every random draw of an episode is the one it was.
+PINNED = {("office", "full"): "f06bf9fd4ede807c", ("office_robot", "full"): "a768f1b2f1d4610f",
+          ("office", "compact"): "1c0c5851b698ed66",
+          ("office_robot", "compact"): "9d0d98a2c8f593b0"}
+
+
+@pytest.mark.parametrize("name,kind", sorted(PINNED))
+def test_the_office_through_the_pddl_path_is_the_model_it_was(name, kind):
+    world = builtin_world(name)
+    model = compile_model(world) if kind == "full" else compile_compact(world)
+    assert _digest(model) == PINNED[name, kind]
+
+
+def test_a_building_compact_model_is_the_one_it_was():
+    assert _digest(compile_compact(building_world(100, seed=1))) == "cb1e854221fe5867"
+
+
+def test_the_world_is_the_one_place_of_the_doors_dynamics():
+    """The world's dynamics drive the generic PDDL env too: the office through
+    PDDL-v0 under the world file has the office's V* (the learner sees more states)."""
+    world = builtin_world("office")
+    instance = load_instance("office", "task-c")
+    assert instance.dynamics.objects["opendoor"]["d2"].stuck == 0.4
+    v = solve(instance.model, GOAL_POS).V[0, 0]
+    office = solve(compile_model(world), world.index["p17"])
+    assert v == pytest.approx(office.V[0, full_state(world, "p0")], abs=1e-9)

@@ -45,16 +45,20 @@ import numba
 import numpy as np
 from gymnasium.spaces import Discrete
 
+from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
-    _outcomes,
     cost_arrays,
     draw_outcome,
     finish_step,
+    ground_outcomes,
     merge_outcomes,
+    office_costs,
     outcome_csr,
+    reality_task,
+    slip_outcomes,
 )
-from gdq_pddl.spaces import VERBS, LearnerSpaces
+from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World
 
 
@@ -79,57 +83,59 @@ class CompactModel(NamedTuple):
     n_doors: int
 
 
-def _applicable(world: World, spaces: LearnerSpaces, p: str) -> list[tuple[int, str, str]]:
-    """``(action, verb, target)`` of the actions that can do something at ``p``."""
-    out = []
-    for q in world.walk_neighbours[p]:
-        verb = "approach" if q in world.door_at else "goto"
-        out.append((spaces.action(verb, q), verb, q))
-    door = world.door_at.get(p)
-    if door is not None:
-        out.append((spaces.action("opendoor", p), "opendoor", p))
-        other = door.sides[1] if door.sides[0] == p else door.sides[0]
-        out.append((spaces.action("gothrough", other), "gothrough", other))
-    return sorted(out)
-
-
 def compile_compact(world: World) -> CompactModel:
     """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
-    number of learner states x actions)."""
+    number of learner states x actions): the rule of
+    :func:`~gdq_pddl.envs.model.compile_true_model` on the same grounded building and
+    dynamics, from each learner state's planner state (every other door closed)."""
     spaces = LearnerSpaces(world)
+    o = OfficeAbstraction(world)
+    task = reality_task(world)
+    outcomes, schema_of = ground_outcomes(task, world.dynamics())
+    action_of_op = [o.learner_action(op.name) for op in task.ops]
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    at = {task.fact_index[f"(at {p})"]: i for i, p in enumerate(world.positions)}
+    at_mask = sum(1 << bit for bit in at)
     n_states, n_actions = spaces.n_states, spaces.n_actions
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
 
     def pairs():
-        for s, (p, is_open) in enumerate(spaces.states):
+        for s, (p, _) in enumerate(spaces.states):
+            state = task.mask(o.planner_state(s))
+            here = (world.index[p], False)
             door = world.door_at.get(p)
-            mask = 1 << door_ids[door.name] if door is not None and is_open else 0
-            for a, verb, q in _applicable(world, spaces, p):
+            bit = 1 << task.fact_index[f"(open {door.name})"] if door is not None else 0
+            # where each ground action leads: (position, did the door here open)
+            succ = sorted(((op_pos[id(op)], (at[(nxt & at_mask).bit_length() - 1],
+                                             bool(nxt & bit & ~state)))
+                           for op, nxt in task.successors(state)), key=lambda e: e[1][0])
+            applicable = dict(succ)
+            acting: dict[int, int] = {}
+            for k in applicable:
+                acting.setdefault(action_of_op[k], k)
+            for a in sorted(acting):
+                k = acting[a]
                 merged = merge_outcomes(
-                    ((world.index[np_], nm != mask, st), pr)
-                    for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q))
-                if list(merged) == [(world.index[p], False, False)]:
+                    ((*there, stuck), pr) for (there, stuck), pr in
+                    slip_outcomes(here, applicable[k], outcomes[k], applicable, schema_of))
+                if list(merged) == [(*here, False)]:
                     continue  # a no-op after all: leave the pair empty
                 yield s * n_actions + a, merged
 
     ptr, prob, (nxt, opens, stuck) = outcome_csr(n_states * n_actions, pairs(),
                                                  (np.int64, np.bool_, np.bool_))
-    costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
     door_of = np.array([door_ids[world.door_at[p].name] if p in world.door_at else -1
                         for p in world.positions], dtype=np.int64)
     state_of = np.array([[spaces.state(p, False), spaces.state(p, True)]
                          for p in world.positions], dtype=np.int64)
     return CompactModel(
         n_actions=n_actions, r_max=float(world.r_max), step_limit=int(world.step_limit),
-        ptr=ptr, prob=prob, next_pos=nxt, opens=opens, stuck=stuck, **cost_arrays(costs),
-        door_of_pos=door_of, state_of=state_of,
+        ptr=ptr, prob=prob, next_pos=nxt, opens=opens, stuck=stuck,
+        **cost_arrays(office_costs(world)), door_of_pos=door_of, state_of=state_of,
         pos_of_state=np.array([world.index[p] for p, _ in spaces.states], dtype=np.int64),
         area_of_pos=np.array([world.area_of.get(p, 0) for p in world.positions],
                              dtype=np.int64),
         n_doors=len(world.doors))
-
-
-assert VERBS[0] == "goto"
 
 
 @numba.njit(cache=True)
