@@ -278,6 +278,47 @@ def builtin_world(name: str) -> World:
     return parse_world(world_text(name), source=f"{name}.toml (built in)")
 
 
+DEFAULT_TASK = "C"
+
+
+def as_world(world: str | Path | World | None) -> World:
+    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
+
+    A bare name without a suffix that is not an existing file (``"office"``) is a
+    built-in world; anything else is read as a world file.
+    """
+    if world is None:
+        return load_world(None)
+    if isinstance(world, World):
+        return world
+    path = Path(world)
+    if isinstance(world, str) and not path.suffix and path.name == world and not path.exists():
+        try:
+            return builtin_world(world)
+        except OSError:
+            raise WorldError(world, "", "no such world file or built-in world") from None
+    return load_world(path)
+
+
+def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
+    """The task to run: by name, from start/goal, or the default.
+
+    The default is task ``C`` when the world has one, else the world's first task.
+    Raises :class:`WorldError` if start and goal are the same position.
+    """
+    if task is None and start is None and goal is None:
+        if DEFAULT_TASK not in world.tasks and world.tasks:
+            task = next(iter(world.tasks))
+        else:
+            task = DEFAULT_TASK
+    chosen = world.resolve(task=task, start=start, goal=goal)
+    if chosen.start == chosen.goal:
+        raise WorldError(world.source, f"tasks.{chosen.name}" if task else "start/goal",
+                         f"start and goal are the same position ({chosen.start}); "
+                         "the episode would be over before it begins")
+    return chosen
+
+
 def parse_world(text: str, source: str = "<string>") -> World:
     """Validate the TOML ``text`` of a world file; ``source`` names it in errors."""
     try:

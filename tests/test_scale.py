@@ -16,8 +16,8 @@ from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.solve_compact import next_states, solve_compact_task
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.compact_runner import run_compact
-from gdq_pddl.learners.context import _domain_text
 from gdq_pddl.planning import PlanningProblem, get_planner
+from gdq_pddl.resources import domain_text
 from gdq_pddl.world import Task, load_world, office_problem
 
 
@@ -148,7 +148,7 @@ def test_planning_on_300_positions_matches_plain_bfs():
     start = world.tasks["A"].start
     dist = _distances(_graph(b), start)
     goals = [p for p in b.positions if dist[p] in (9, 13)][:2]
-    problem = PlanningProblem.from_texts(_domain_text(),
+    problem = PlanningProblem.from_texts(domain_text(),
                                          office_problem(world, Task("t", start, goals[0])))
     planner = get_planner("graph")
     for goal in goals:

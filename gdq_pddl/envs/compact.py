@@ -14,13 +14,14 @@ lists outcomes per (learner state, action) pair, in CSR form (outcomes of pair
 and the episode keeps the set of open doors as a ``uint8`` array. A pair without
 outcomes is inapplicable: the robot stays (most of the ``5 * n_positions`` actions).
 
-The outcomes come from the same per-action rule as the full model
-(``gdq_pddl.envs.model._outcomes``), merged and ordered the same way, and
-:func:`compact_step` draws the same random numbers as
-:func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost draw),
-so on the office an episode is bit-identical to one of :class:`OfficeEnv` (tested).
-This is a second model kind, for worlds too large for the full one; value iteration
-(V*) still needs the full model and so small worlds.
+The outcomes come from the same rule as the full model
+(:func:`gdq_pddl.envs.model.slip_outcomes` on the same grounded building and dynamics),
+merged and ordered the same way, and :func:`compact_step` draws the same random numbers
+as :func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost
+draw), so on the office an episode is bit-identical to one of ``OfficeEnv`` (tested).
+It is a second representation of the same instance (an
+:class:`~gdq_pddl.envs.office.OfficeInstance`), for worlds too large for the full one;
+value iteration (V*) still needs the full model and so small worlds.
 
 Why :func:`compact_step` is not :func:`gdq_pddl.envs.model.env_step`: the two models
 index outcomes by different states. ``env_step`` looks up the pair of a *full* state (an
@@ -37,7 +38,6 @@ episode loop (:mod:`gdq_pddl.learners.runner`) serves both.
 
 from __future__ import annotations
 
-from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -58,6 +58,7 @@ from gdq_pddl.envs.model import (
     reality_task,
     slip_outcomes,
 )
+from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World
 
@@ -163,10 +164,10 @@ def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: i
 
 
 class CompactEnv(CompiledEnv):
-    """The office-like env of any world over a :class:`CompactModel`.
+    """The env of an office instance over its :class:`CompactModel` (large buildings).
 
-    Same spaces, rewards, episode ends and random draws as
-    :class:`gdq_pddl.envs.office.OfficeEnv`; ``info`` has ``action_mask`` (as the
+    Same arguments, spaces, rewards, episode ends and random draws as ``OfficeEnv``;
+    ``info`` has ``action_mask`` (as the
     office's), ``position``, ``area``, ``cause``, ``step`` and ``open_doors`` (door
     indices), not ``full_state``.
     """
@@ -175,11 +176,9 @@ class CompactEnv(CompiledEnv):
 
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
-        from gdq_pddl.envs.office import as_world, pick_task
-
-        self.world = as_world(world)
-        self.task = pick_task(self.world, task, start, goal)
-        self.spaces = LearnerSpaces(self.world)
+        self.instance = OfficeInstance.of(task, start, goal, world)
+        self.world, self.task = self.instance.world, self.instance.task
+        self.spaces = self.instance.spaces
         self.model = compile_compact(self.world)
         self.observation_space = Discrete(self.spaces.n_states)
         self.action_space = Discrete(self.spaces.n_actions)
@@ -201,12 +200,10 @@ class CompactEnv(CompiledEnv):
     def _observe(self) -> int:
         return int(observe_state(self.model, self._pos, self.doors))
 
-    @cached_property
+    @property
     def action_masks(self) -> np.ndarray:
-        """As :attr:`gdq_pddl.envs.office.OfficeEnv.action_masks`."""
-        from gdq_pddl.envs.office import office_action_masks
-
-        return office_action_masks(self.world, self.task)
+        """The instance's, as the full-state env's."""
+        return self.instance.action_masks
 
     def _info(self) -> dict[str, Any]:
         return {"action_mask": self.action_masks[self._observe()].copy(),

@@ -70,6 +70,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Discrete
 
@@ -231,6 +232,29 @@ class PDDLInstance:
     def atoms(self, s: int) -> frozenset[str]:
         """The fluent atoms of state ``s``."""
         return self.graph.task.atoms(self.graph.states[s])
+
+    def state_name(self, s: int) -> str:
+        """State ``s`` as its sorted fluent atoms."""
+        return " ".join(sorted(self.atoms(s)))
+
+    @property
+    def step_limit_key(self) -> tuple[str, str]:
+        """The file and key that give the step limit."""
+        return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
+
+    start_state = 0
+    """The initial state (the env's state numbers are the graph's)."""
+    goal_pos = GOAL_POS
+    render_modes = ("ansi",)
+
+    def info(self, fs: int) -> dict[str, Any]:
+        """What ``info`` says beyond every env's keys: nothing."""
+        return {}
+
+    def render(self, mode: str, fs: int, step: int, cause: str) -> str:
+        """The state's atoms after ``step`` actions (and why the episode ended)."""
+        why = f" ({cause})" if cause else ""
+        return f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
 
 
 def parse_reality(text: str, planning: PlanningProblem, source: str = "<string>") -> Dynamics:
@@ -493,43 +517,57 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
 
 
 class PDDLEnv(ModelEnv):
-    """A PDDL problem under a dynamics file (see the module docstring)."""
+    """The env of an instance of the one pipeline: a PDDL problem under its dynamics
+    (see the module docstring), or a world's task through the office's map
+    (:class:`~gdq_pddl.envs.office.OfficeInstance`, ``gdq_pddl/Office-v0``).
+
+    The instance's own attributes are the env's too (``env.unwrapped.world``,
+    ``.atoms(s)``, ``.action_name(a)``...)."""
 
     metadata = {"render_modes": ["ansi"], "render_fps": 4}
+    """A PDDL problem's; an env's own are its instance's."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
-                 dynamics: str | Path | None = None, instance: PDDLInstance | None = None,
+                 dynamics: str | Path | None = None, instance: Any = None,
                  render_mode: str | None = None,
                  determinisation: str = DETERMINISATIONS[0]) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
-                             f"or None, got {render_mode!r}")
+        self.check_render_mode(render_mode, PDDLInstance.render_modes if instance is None
+                               else instance.render_modes)
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
         self.instance = instance
+        self.metadata = {**self.metadata, "render_modes": list(instance.render_modes)}
         self.model = instance.model
         self.observation_space = Discrete(instance.n_states)
         self.action_space = Discrete(instance.n_actions)
         self.render_mode = render_mode
-        self.goal_pos = GOAL_POS
-        self.start_state = 0
+        self.goal_pos = instance.goal_pos
+        self.start_state = instance.start_state
         self._begin()
+
+    @staticmethod
+    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
+        """Refuse a render mode the instance cannot draw (a ``ValueError``)."""
+        if render_mode is not None and render_mode not in modes:
+            raise ValueError(f"render_mode must be one of {list(modes)} or None, "
+                             f"got {render_mode!r}")
+
+    def __getattr__(self, name: str) -> Any:
+        instance = self.__dict__.get("instance")
+        if instance is None or name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(instance, name)
 
     @property
     def action_masks(self) -> np.ndarray:
         return self.instance.action_masks
 
-    def action_name(self, a: int) -> str:
-        return self.instance.action_name(a)
-
-    def atoms(self, s: int) -> frozenset[str]:
-        return self.instance.atoms(s)
-
-    def render(self) -> str | None:
+    def render(self) -> str | np.ndarray | None:
         if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode="
+                            "'ansi' to gymnasium.make")
             return None
-        cause = f" ({self._cause})" if self._cause else ""
-        return f"step {self._t}{cause}: " + " ".join(sorted(self.atoms(self._fs)))
+        return self.instance.render(self.render_mode, self._fs, self._t, self._cause)
 
     def _info(self) -> dict[str, Any]:
-        return super()._info()
+        return {**self.instance.info(self._fs), **super()._info()}

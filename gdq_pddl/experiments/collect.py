@@ -19,13 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.experiments.protocol import Experiment
-from gdq_pddl.experiments.work import load_world_named, resolve_task
+from gdq_pddl.experiments.work import instance_of, load_world_named, resolve_task
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
 POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "state_name",
                   "action_name")
-N_AREAS = 7
 
 
 def collect(out: Path, experiments: list[Experiment]) -> None:
@@ -33,7 +32,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     from gdq_pddl.experiments.runner import atomic_write, read_unit
 
     units = [u for e in experiments for u in e.units()]
-    n_areas = N_AREAS if any(e.pddl is None for e in experiments) else 0
+    n_areas = max(int(instance_of(e, spec).model.area_of_pos.max())
+                  for e in experiments for spec, _ in e.schedule)
     header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, n_areas + 1))))
 
     def write_episodes(tmp: Path) -> None:
@@ -70,15 +70,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
 
 def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]]:
     """``(state name, action name)`` of learner indices in ``exp``'s world or problem."""
-    if exp.pddl is not None:
-        from gdq_pddl.experiments.work import load_pddl_instance
-
-        instance = load_pddl_instance(tuple(exp.pddl))
-        return (lambda s: " ".join(sorted(instance.atoms(s)))), instance.action_name
-    from gdq_pddl.spaces import LearnerSpaces
-
-    spaces = LearnerSpaces(load_world_named(exp.world))
-    return spaces.state_name, spaces.action_name
+    instance = instance_of(exp, exp.schedule[0][0])
+    return instance.state_name, instance.action_name
 
 
 CHUNK = 50_000
