@@ -25,6 +25,8 @@ would be wrong for a world file whose step limit differs from the office's 20.
 
 from __future__ import annotations
 
+import gymnasium
+
 OFFICE_ID = "gdq_pddl/Office-v0"
 PDDL_ID = "gdq_pddl/PDDL-v0"
 ENV_IDS = {OFFICE_ID: "gdq_pddl.envs.office:OfficeEnv",
@@ -34,8 +36,6 @@ ENV_IDS = {OFFICE_ID: "gdq_pddl.envs.office:OfficeEnv",
 
 def register_envs() -> None:
     """Register the package's envs with Gymnasium (a second call does nothing)."""
-    import gymnasium
-
     for env_id, entry_point in ENV_IDS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=None)

@@ -72,6 +72,7 @@ from gdq_pddl.abstraction.masks import knowledge_action_mask
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
+from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
@@ -151,6 +152,17 @@ class OfficeInstance:
     @cached_property
     def action_masks(self) -> np.ndarray:
         return office_action_masks(self.world, self.task)
+
+    def optimal(self) -> dict[str, Any]:
+        """The ground truth of the task: start, goal, V*, the relevant areas (visited
+        with probability >= 0.05 by the optimal policy), the paper's irrelevant ones
+        and the expected visits to each area."""
+        visits = expected_area_visits(self.world, self.task)
+        return {"start": self.task.start, "goal": self.task.goal,
+                "v_star": optimal_value(self.world, self.task),
+                "relevant_areas": list(relevant_areas(self.world, self.task, min_visits=0.05)),
+                "irrelevant_areas_paper": list(self.task.irrelevant_areas),
+                "expected_area_visits": {str(a): v for a, v in visits.items()}}
 
     def state_name(self, s: int) -> str:
         """Human name of learner state ``s``, e.g. ``"p2 (door open)"``."""

@@ -65,15 +65,20 @@ from __future__ import annotations
 
 import math
 import tomllib
+from contextlib import ExitStack
 from dataclasses import dataclass, replace
 from functools import cached_property
+from importlib.resources import as_file
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Discrete
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import shortest_path
 
+from gdq_pddl.abstraction.masks import graph_action_mask
 from gdq_pddl.dynamics import CostDist, Dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
 from gdq_pddl.envs.model import (
@@ -83,6 +88,7 @@ from gdq_pddl.envs.model import (
     compile_true_model,
     merge_outcomes,
 )
+from gdq_pddl.envs.solve import solve
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
@@ -90,6 +96,7 @@ from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
+from gdq_pddl.resources import data_file
 from gdq_pddl.world import parse_world
 
 GOAL_POS = 1
@@ -213,8 +220,6 @@ class PDDLInstance:
     def action_masks(self) -> np.ndarray:
         """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
         applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
-        from gdq_pddl.abstraction.masks import graph_action_mask
-
         return graph_action_mask(self.graph)
 
     @property
@@ -232,6 +237,16 @@ class PDDLInstance:
     def atoms(self, s: int) -> frozenset[str]:
         """The fluent atoms of state ``s``."""
         return self.graph.task.atoms(self.graph.states[s])
+
+    def optimal(self) -> dict[str, Any]:
+        """The ground truth: V* (value iteration on the true model), the shortest plan,
+        the sizes (a PDDL problem has no areas)."""
+        return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
+                "step_limit": self.dynamics.step_limit,
+                "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
+                "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
+                "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
+                "expected_area_visits": {}}
 
     def state_name(self, s: int) -> str:
         """State ``s`` as its sorted fluent atoms."""
@@ -380,9 +395,6 @@ def reality_distances(model: ModelArrays) -> np.ndarray:
     """``float64[n_states]``: the fewest actions from the initial state (0) to each state
     in the true model, over outcomes of positive probability that do not end the trial
     (inf: none reaches it). One breadth-first search over the model's arrays."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import shortest_path
-
     n = model.obs_of.shape[0]
     src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
     keep = (model.prob > 0) & ~model.stuck & (model.next != src)
@@ -468,8 +480,6 @@ SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
 
 def shipped_names(kind: str) -> list[str]:
     """The names of the shipped files of ``kind`` (``domain``, ``problem``, ``dynamics``)."""
-    from gdq_pddl.resources import data_file
-
     folder, suffix = SHIPPED[kind]
     found = [*data_file(folder).iterdir(), *(data_file().iterdir() if kind == "dynamics"
                                            else ())]  # the built-in worlds are dynamics
@@ -479,8 +489,6 @@ def shipped_names(kind: str) -> list[str]:
 def _shipped(kind: str, value: str | Path):
     """The shipped file (a Traversable) that ``value`` names, or None when ``value`` is
     a path: a bare name without a suffix that is not an existing file names one."""
-    from gdq_pddl.resources import data_file
-
     path = Path(value)
     if not isinstance(value, str) or path.suffix or path.name != value or path.exists():
         return None
@@ -500,9 +508,6 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
     """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
     ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
     dynamics file; a PPDDL domain's planner knows its ``determinisation``."""
-    from contextlib import ExitStack
-    from importlib.resources import as_file
-
     if domain is None or problem is None:
         raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
                             f"domains {', '.join(shipped_names('domain'))}; problems "

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.experiments.protocol import Experiment
-from gdq_pddl.experiments.work import instance_of, load_world_named, resolve_task
+from gdq_pddl.experiments.work import instance_of
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
@@ -103,48 +103,16 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
-    """V*, relevant areas and the paper's irrelevant areas of each task the experiments use."""
-    from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
-
+    """The ground truth of each task the experiments use (its instance's
+    :meth:`optimal`), keyed ``<task>`` (the office), ``<task>@<world>`` or
+    ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
-        if exp.pddl is not None:
-            out.update(pddl_optimal(exp))
-            continue
-        world = load_world_named(exp.world)
+        files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))
         for spec, _ in exp.schedule:
-            task = resolve_task(world, spec)
-            key = task.name if exp.world == "office" else f"{task.name}@{exp.world}"
-            if key in out:
-                continue
-            visits = expected_area_visits(world, task)
-            out[key] = {
-                "world": exp.world,
-                "start": task.start,
-                "goal": task.goal,
-                "v_star": optimal_value(world, task),
-                "relevant_areas": list(relevant_areas(world, task, min_visits=0.05)),
-                "irrelevant_areas_paper": list(task.irrelevant_areas),
-                "expected_area_visits": {str(a): v for a, v in visits.items()},
-            }
+            instance = instance_of(exp, spec)
+            place = files.get("problem", exp.world)
+            key = instance.name if place == "office" else f"{instance.name}@{place}"
+            if key not in out:
+                out[key] = {"world": exp.world, **files, **instance.optimal()}
     return out
-
-
-def pddl_optimal(exp: Experiment) -> dict:
-    """V* (value iteration on the true model) and the shortest plan length of a PDDL
-    experiment's problem, keyed ``<schedule entry>@<problem file>``."""
-    from gdq_pddl.envs.pddl_env import GOAL_POS
-    from gdq_pddl.envs.solve import solve
-    from gdq_pddl.experiments.work import load_pddl_instance
-
-    instance = load_pddl_instance(tuple(exp.pddl))
-    v_star = float(solve(instance.model, GOAL_POS).V[0, 0])
-    shortest = int(instance.graph.distances[0])
-    return {f"{spec}@{exp.pddl[1]}": {
-        "world": "pddl", "domain": exp.pddl[0], "problem": exp.pddl[1],
-        "dynamics": exp.pddl[2], "determinisation": instance.determinisation,
-        "r_max": instance.dynamics.r_max, "step_limit": instance.dynamics.step_limit,
-        "v_star": v_star, "shortest_plan": shortest,
-        "states": instance.n_states, "actions": instance.n_actions,
-        "relevant_areas": [], "irrelevant_areas_paper": [], "expected_area_visits": {},
-    } for spec, _ in exp.schedule}
