@@ -189,7 +189,7 @@ def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
     for env in (OfficeEnv(task="C"), CompactEnv(task="C")):
         learner = make_learner(method, office_task_context(env.world, "C"), **config)
         env.reset(seed=3)
-        run = run_episodes if isinstance(env, OfficeEnv) else run_compact
+        run = run_compact if isinstance(env, CompactEnv) else run_episodes
         out.append((run(learner, env, 60, np.random.default_rng(5)), learner.q.copy()))
     (a, qa), (b, qb) = out
     assert np.array_equal(a.returns, b.returns) and np.array_equal(qa, qb)
