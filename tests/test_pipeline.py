@@ -76,3 +76,16 @@ def test_the_world_is_the_one_place_of_the_doors_dynamics():
     v = solve(instance.model, GOAL_POS).V[0, 0]
     office = solve(compile_model(world), world.index["p17"])
     assert v == pytest.approx(office.V[0, full_state(world, "p0")], abs=1e-9)
+
+
+def test_a_world_file_is_the_reality_of_the_office_domain_only():
+    with pytest.raises(WorldError, match=r"office\.toml: world: a world file is the reality "
+                       r"of domains/office\.pddl.*have no approach"):
+        load_instance("keys", "keys-1", dynamics="office")
+
+
+def test_office_env_is_the_one_env_class_on_an_office_instance():
+    env = gym.make("gdq_pddl/Office-v0", task="C").unwrapped
+    pddl = gym.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-1").unwrapped
+    assert type(env) is type(pddl)
+    assert (env.world.name, env.task.name, env.spaces.n_states) == ("office", "C", 31)
