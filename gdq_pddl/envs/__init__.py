@@ -17,6 +17,11 @@ and ``gdq_pddl/PDDL-v0``, any PDDL problem under a dynamics file
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="ppddl.pddl", problem="p.pddl",
                          determinisation="most-likely")  # what the planner knows
 
+Both are one env class, :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on an instance of the
+one pipeline: a PDDL problem with its reality, or a world's task seen through the
+office's observation map (:class:`~gdq_pddl.envs.office.OfficeInstance`); both step
+the true model :func:`~gdq_pddl.envs.model.compile_true_model` builds.
+
 No ``max_episode_steps`` is registered: the env counts its own steps and ends an episode
 at the world's (or the dynamics file's) ``step_limit`` with the failure reward
 ``-r_max``; a ``TimeLimit`` wrapper would duplicate that, and with a fixed number it
