@@ -15,8 +15,10 @@ from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.pddl_env import GOAL_POS, load_instance
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.errors import WorldError
+from gdq_pddl.experiments.protocol import Experiment, Unit
+from gdq_pddl.experiments.work import run_unit
 from gdq_pddl.learners.context import office_task_context
-from gdq_pddl.resources import world_text
+from gdq_pddl.resources import data_file, world_text
 from gdq_pddl.world import builtin_world, load_world, parse_world
 
 
@@ -89,3 +91,27 @@ def test_office_env_is_the_one_env_class_on_an_office_instance():
     pddl = gym.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-1").unwrapped
     assert type(env) is type(pddl)
     assert (env.world.name, env.task.name, env.spaces.n_states) == ("office", "C", 31)
+
+
+def _run_digest(exp: Experiment, method: str) -> str:
+    out = run_unit(Unit(exp, method, 1))
+    h = hashlib.sha256()
+    for k in ("returns", "steps", "success", "areas", "policy"):
+        h.update(np.ascontiguousarray(out[k]).tobytes())
+    return h.hexdigest()[:16]
+
+
+# Short runs as the separate office and PDDL stacks ran them (commit e7cfd46): the office
+# with a task switch, and a PDDL problem, through the one path: same draws, same records.
+OFFICE_RUN = Experiment("pin", (("C", 40), ("D", 20)), methods=("GDQ", "DARLING"), runs=1)
+KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=1,
+                      world="pddl", pddl=(str(data_file("domains", "keys.pddl")),
+                                          str(data_file("problems", "keys-1.pddl")),
+                                          str(data_file("dynamics", "keys.toml"))))
+
+
+@pytest.mark.parametrize("exp,method,pinned", [
+    (OFFICE_RUN, "GDQ", "4156845d332efb79"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
+    (KEYS_RUN, "GDQ", "893026f8535fb43a"), (KEYS_RUN, "Dyna-Q", "347e3e5c19ae5129")])
+def test_a_short_run_is_the_one_it_was(exp, method, pinned):
+    assert _run_digest(exp, method) == pinned
