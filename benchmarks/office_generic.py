@@ -1,9 +1,9 @@
 """Task C on the specialised office env and on the generic PDDL env: do they agree?
 
-The generic env runs domains/office.pddl + problems/task-c.pddl under
-gdq_pddl/data/dynamics/office.toml. Its true model is the office's (same V*: a test
-checks it to 1e-9), but the learner sees more: 828 full planner states (which doors are
-open anywhere) instead of 31 observations, and the 58 ground actions instead of
+The generic env runs domains/office.pddl + problems/task-c.pddl under the world file
+gdq_pddl/data/office.toml. Its true model is the office's (same V*: a test checks it to
+1e-9), but the learner sees more: 828 full planner states (which doors are open anywhere)
+instead of 31 observations, and the 58 ground actions instead of
 95 verb x position actions. So learning curves differ; this script measures by how much.
 
     python benchmarks/office_generic.py --episodes 2500 --runs 10
@@ -43,7 +43,7 @@ def main(episodes: int, runs: int) -> None:
     office_ctx = office_task_context(world, "C")
     instance = PDDLInstance.from_files(str(data_file("domains", "office.pddl")),
                                        str(data_file("problems", "task-c.pddl")),
-                                       str(data_file("dynamics", "office.toml")))
+                                       str(data_file("office.toml")))
     generic = PDDLEnv(instance=instance)
     generic_ctx = pddl_task_context(instance)
     first = min(300, episodes)

@@ -36,16 +36,15 @@ from gdq_pddl.buildings import building_world
 from gdq_pddl.envs.compact import CompactEnv
 from gdq_pddl.experiments.scale import METHODS, TOLERANCE
 from gdq_pddl.learners import make_learner, office_task_context
-from gdq_pddl.learners.context import _domain_text
 from gdq_pddl.learners.episodes import run_compact
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
-from gdq_pddl.world import Task
+from gdq_pddl.resources import domain_text
+from gdq_pddl.world import Task, office_problem
 
 
 def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dict]:
     world = building_world(n, seed)
-    domain = _domain_text()
+    domain = domain_text()
     planner = get_planner("graph")
     out = []
     tasks = [world.tasks["A"], Task("C'", world.tasks["C"].goal, world.tasks["C"].start)]

@@ -2,8 +2,8 @@
 
 numba caches a compiled function (``@numba.njit(cache=True)``) in ``__pycache__`` and
 reuses it while the function's *own* file is unchanged, with the code of everything it
-calls from other files baked in. The fast episode loop (``learners/runner.py``) calls
-the learning rules (``learners/core.py``) and the env step (``envs/model.py``): edit
+calls from other files baked in. The fast episode loop (``learners/episodes.py``) calls
+the learning rules (``learners/gdq.py`` and the other rule modules) and the env step (``envs/model.py``): edit
 ``core.py`` and the loop would go on running the old rules, silently, while the Python
 path runs the new ones. So on import we hash the sources of the modules with compiled
 functions and, when the hash differs from the one the cache was built with, delete the

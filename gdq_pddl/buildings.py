@@ -42,7 +42,8 @@ import numpy as np
 from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import check_memory
 from gdq_pddl.outputs import output_folder, write_text
-from gdq_pddl.world import Task, World, parse_world
+from gdq_pddl.resources import domain_text
+from gdq_pddl.world import Task, World, office_problem, parse_world
 
 DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
     # label, success, stuck, how often
@@ -377,9 +378,6 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     Returns the world file and the problem files. The world file is validated by
     :func:`gdq_pddl.world.load_world` before anything is written.
     """
-    from gdq_pddl.learners.context import _domain_text
-    from gdq_pddl.pddl.office import office_problem
-
     b = generate(positions, seed, doors)
     text = to_toml(b)
     world = parse_world(text, source=f"{b.name}.toml (generated)")
@@ -387,7 +385,7 @@ def write_building(out: str | Path, positions: int, seed: int = 0,
     output_folder(out / "problems")
     world_path = out / f"{b.name}.toml"
     write_text(world_path, text)
-    write_text(out / "domain.pddl", _domain_text())
+    write_text(out / "domain.pddl", domain_text())
     problems = []
     for task in world.tasks.values():
         path = out / "problems" / f"{b.name}-{task.name.lower()}.pddl"

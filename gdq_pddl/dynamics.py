@@ -22,7 +22,7 @@ often it works, what happens when it does not, and what it costs. See
 
 An object override applies to every ground action of the schema that has the object
 among its arguments; when several arguments have one, the leftmost wins. Keys it does
-not give come from the schema's table. :func:`load_dynamics` checks everything against
+not give come from the schema's table. :func:`parse_dynamics` checks everything against
 the domain and problem and names the file and key of every error, as world files do.
 
 A cost the file does not give is the one the domain states (``(increase (total-cost)
@@ -34,16 +34,129 @@ the domain's), costs (they replace the domain's; a distribution, say).
 
 from __future__ import annotations
 
+import difflib
+import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 from gdq_pddl.errors import WorldError
-from gdq_pddl.inputs import read_text
+from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.world import CostDist, _Validator
+
+COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
+"""Numeric codes of cost distributions, as the compiled simulator reads them."""
+
+COST_KEYS: dict[str, tuple[str, ...]] = {
+    "uniform": ("dist", "low", "high"),
+    "normal": ("dist", "mean", "sd"),
+}
+"""The keys of a cost table, by distribution."""
+
+
+@dataclass(frozen=True)
+class CostDist:
+    """The cost of one action: a constant, ``uniform(a, b)`` or ``normal(a, b)`` clipped at 0."""
+
+    kind: str = "const"
+    a: float = 1.0
+    b: float = 0.0
+
+    @property
+    def mean(self) -> float:
+        """Expected cost (for the normal, of the unclipped distribution)."""
+        return (self.a + self.b) / 2 if self.kind == "uniform" else self.a
+
+
+class Checks:
+    """The checks every data file of reality shares (world and dynamics files): strict
+    keys, typed values, finite numbers of at most :data:`MAX_NUMBER` in size,
+    probabilities and costs; each error names the file and the key at fault."""
+
+    def __init__(self, source: str, raw: dict[str, Any]) -> None:
+        self.source, self.raw = source, raw
+
+    def fail(self, key: str, message: str) -> WorldError:
+        return WorldError(self.source, key, message)
+
+    def known_keys(self, table: Mapping[str, Any], path: str, allowed: Iterable[str],
+                   what: str = "key") -> None:
+        """Refuse a key of ``table`` not in ``allowed`` (a misspelling would be ignored)."""
+        allowed = tuple(allowed)
+        for key in table:
+            if key not in allowed:
+                close = difflib.get_close_matches(key, allowed, n=1)
+                hint = f"did you mean {close[0]!r}? " if close else ""
+                where = f"{path}.{key}" if path else key
+                raise self.fail(where, f"unknown {what} ({hint}expected one of: "
+                                f"{', '.join(allowed)})")
+
+    def get(self, table: Mapping[str, Any], key: str, path: str, kind: type | tuple,
+            default: Any = ...) -> Any:
+        if key not in table:
+            if default is ...:
+                raise self.fail(path, "missing")
+            return default
+        value = table[key]
+        if kind is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+            names = (kind,) if isinstance(kind, type) else kind
+            name = " or ".join(k.__name__ for k in names)
+            raise self.fail(path, f"expected {name}, got {value!r}")
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.finite(value, path)
+        return value
+
+    def finite(self, value: float, path: str) -> None:
+        """Refuse NaN, infinities and numbers past :data:`MAX_NUMBER`."""
+        if not math.isfinite(value) or abs(value) > MAX_NUMBER:
+            raise self.fail(path, f"expected a finite number of at most {MAX_NUMBER:g} in "
+                            f"size, got {value!r}")
+
+    def positive(self, table: Mapping[str, Any], key: str, path: str, default: float) -> float:
+        value = self.get(table, key, path, float, default)
+        if value <= 0:
+            raise self.fail(path, f"must be > 0, got {value}")
+        return value
+
+    def count(self, table: Mapping[str, Any], key: str, path: str, default: int) -> int:
+        value = self.get(table, key, path, int, default)
+        if value < 1:
+            raise self.fail(path, f"must be >= 1, got {value}")
+        return value
+
+    def probability(self, table: Mapping[str, Any], key: str, path: str) -> float:
+        value = self.get(table, key, path, float)
+        if not 0.0 <= value <= 1.0:
+            raise self.fail(path, f"a probability must be in [0, 1], got {value}")
+        return value
+
+    def cost(self, value: Any, path: str) -> CostDist:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.finite(value, path)
+            if value < 0:
+                raise self.fail(path, f"a cost must be >= 0, got {value}")
+            return CostDist("const", float(value))
+        if not isinstance(value, dict):
+            raise self.fail(path, f"expected a number or a table with 'dist', got {value!r}")
+        dist = value.get("dist")
+        if dist not in ("uniform", "normal"):
+            raise self.fail(f"{path}.dist", f"expected 'uniform' or 'normal', got {dist!r}")
+        self.known_keys(value, path, COST_KEYS[dist])
+        if dist == "uniform":
+            low = self.get(value, "low", f"{path}.low", float)
+            high = self.get(value, "high", f"{path}.high", float)
+            if not 0 <= low <= high:
+                raise self.fail(path, f"need 0 <= low <= high, got low={low} high={high}")
+            return CostDist("uniform", low, high)
+        mean = self.get(value, "mean", f"{path}.mean", float)
+        sd = self.get(value, "sd", f"{path}.sd", float)
+        if sd < 0 or mean < 0:
+            raise self.fail(path, f"need mean >= 0 and sd >= 0, got {mean}, {sd}")
+        return CostDist("normal", mean, sd)
+
 
 FAILURES = ("nothing", "stuck")
 """Named failure modes; a list of schema names is the third one (a slip)."""
@@ -65,7 +178,8 @@ class Outcomes:
 
 @dataclass(frozen=True)
 class Dynamics:
-    """A validated dynamics file. Build one with :func:`load_dynamics`."""
+    """A validated dynamics file. Build one with :func:`parse_dynamics` (or a world's
+    :meth:`~gdq_pddl.world.World.dynamics`)."""
 
     source: str
     r_max: float = 20.0
@@ -94,17 +208,6 @@ def split_action(name: str) -> tuple[str, tuple[str, ...]]:
     return parts[0], tuple(parts[1:])
 
 
-def load_dynamics(path: str | Path, domain: Domain, problem: Problem,
-                  overlay: bool = False) -> Dynamics:
-    """Read and validate a dynamics file (an overlay for a PPDDL domain: ``overlay``)
-    against ``domain`` and ``problem``.
-
-    Raises :class:`WorldError` naming the file and key of the first problem found.
-    """
-    text = read_text(path, lambda src, msg: WorldError(src, "", msg))
-    return parse_dynamics(text, domain, problem, source=str(path), overlay=overlay)
-
-
 def parse_dynamics(text: str, domain: Domain, problem: Problem,
                    source: str = "<string>", overlay: bool = False) -> Dynamics:
     """Validate the TOML ``text`` of a dynamics file; ``source`` names it in errors."""
@@ -119,7 +222,7 @@ OUTCOME_KEYS = ("success", "stuck", "failure")
 """What a dynamics file says about outcomes, and an overlay may not (the domain does)."""
 
 
-class _DynamicsValidator(_Validator):
+class _DynamicsValidator(Checks):
     """The world file's checks (types, probabilities, costs) plus the domain's names."""
 
     def __init__(self, source: str, raw: dict[str, Any], domain: Domain,

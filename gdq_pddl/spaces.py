@@ -12,17 +12,35 @@ Which position a verb names:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Protocol
 
-from gdq_pddl.world import VERBS, World
+VERBS: tuple[str, ...] = ("goto", "approach", "opendoor", "gothrough", "stay")
+"""The action verbs, in the order of the learner's action index (verb-major)."""
+
+
+class Building(Protocol):
+    """What the learner's vocabulary reads of a building (a
+    :class:`~gdq_pddl.world.World` has it): its positions in order, their indices, and
+    the door at each door-side position (``name`` and ``sides``)."""
+
+    @property
+    def positions(self) -> tuple[str, ...]: ...
+
+    @property
+    def index(self) -> Mapping[str, int]: ...
+
+    @property
+    def door_at(self) -> Mapping[str, object]: ...
 
 
 @dataclass(frozen=True)
 class LearnerSpaces:
-    """State and action indices of the learner for one world."""
+    """State and action indices of the learner for one building."""
 
-    world: World
+    world: Building
 
     @cached_property
     def states(self) -> tuple[tuple[str, bool], ...]:

@@ -5,33 +5,31 @@ lists positions, their undirected adjacency, doors (two sides each, a success an
 stuck probability, optional per-door costs), per-verb action costs, areas, landmarks and
 tasks. :func:`load_world` validates all of it and names the file and the key on every
 error, so a user editing a door never meets a traceback.
+
+A world is a way to produce an instance of the one pipeline: its knowledge is
+``domains/office.pddl`` with the problem :func:`office_problem` writes, its reality the
+door dynamics of the file (:meth:`World.dynamics`), and the learner sees it through the
+office's observation map (:mod:`gdq_pddl.abstraction.office`).
 """
 
 from __future__ import annotations
 
-import difflib
-import math
 import re
 import tomllib
 from collections import deque
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+from gdq_pddl.dynamics import Checks, CostDist, Dynamics, Outcomes
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
-from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.resources import world_text
-
-VERBS: tuple[str, ...] = ("goto", "approach", "opendoor", "gothrough", "stay")
-"""The action verbs, in the order of the learner's action index (verb-major)."""
+from gdq_pddl.spaces import VERBS
 
 DOOR_VERBS = ("opendoor", "gothrough")
-
-COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
-"""Numeric codes of cost distributions, as the compiled simulator reads them."""
 
 KEYS: dict[str, tuple[str, ...]] = {
     "": ("world", "costs", "doors", "areas", "landmarks", "tasks"),
@@ -39,10 +37,8 @@ KEYS: dict[str, tuple[str, ...]] = {
               "positions", "adjacency", "forbidden_areas"),
     "door": ("sides", "success", "stuck", "label", "cost"),
     "task": ("start", "goal", "irrelevant_areas"),
-    "uniform": ("dist", "low", "high"),
-    "normal": ("dist", "mean", "sd"),
 }
-"""The keys each table of a world file may have (cost tables: by distribution)."""
+"""The keys each table of a world file may have."""
 
 PDDL_NAME = re.compile(r"[a-z][a-z0-9_-]*")
 """What a position or door name must look like: it becomes a PDDL object, and PDDL
@@ -51,20 +47,6 @@ reads names case-insensitively (``P1`` and ``p1`` would be one object)."""
 LABEL = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
 """What a world or task name must look like: it goes into PDDL problem names, file names
 and CSV columns."""
-
-
-@dataclass(frozen=True)
-class CostDist:
-    """The cost of one action: a constant, ``uniform(a, b)`` or ``normal(a, b)`` clipped at 0."""
-
-    kind: str = "const"
-    a: float = 1.0
-    b: float = 0.0
-
-    @property
-    def mean(self) -> float:
-        """Expected cost (for the normal, of the unclipped distribution)."""
-        return (self.a + self.b) / 2 if self.kind == "uniform" else self.a
 
 
 @dataclass(frozen=True)
@@ -146,8 +128,26 @@ class World:
             return door.costs[verb]
         return self.costs[verb]
 
+    def dynamics(self) -> Dynamics:
+        """The world's reality for ``domains/office.pddl`` (the one place the doors'
+        probabilities live): ``goto`` and ``approach`` reach their target with
+        ``navigation_success``, else a random walking neighbour (a slip over the
+        applicable ``goto`` and ``approach`` actions, the target included); ``opendoor``
+        and ``gothrough`` work with their door's ``success``, get stuck with its
+        ``stuck``, else do nothing; costs per verb, door overrides first."""
+        nav = Outcomes(self.navigation_success, 0.0, ("goto", "approach"))
+        actions = {v: replace(nav, cost=self.costs[v]) for v in ("goto", "approach")}
+        actions |= {v: Outcomes(cost=self.costs[v]) for v in DOOR_VERBS}
+        objects = {v: {d.name: Outcomes(d.success, d.stuck, "nothing",
+                                        d.costs.get(v, self.costs[v])) for d in self.doors}
+                   for v in DOOR_VERBS}
+        return Dynamics(self.source, self.r_max, self.step_limit, actions, objects,
+                        self.name, self.description, frozenset({"r_max", "step_limit"}))
+
     def position(self, name: str) -> str:
         """Resolve a position or landmark name; raise :class:`WorldError` if unknown."""
+        if not isinstance(name, str):
+            raise WorldError(self.source, "", f"a position is named by a string, got {name!r}")
         if name in self.index:
             return name
         if self.landmarks.get(name) in self.index:
@@ -158,6 +158,9 @@ class World:
 
     def task(self, name: str) -> Task:
         """Return the named task; raise :class:`WorldError` listing the known ones."""
+        if not isinstance(name, str):
+            raise WorldError(self.source, "", f"a task is named by a string (known: "
+                             f"{', '.join(self.tasks)}), got {name!r}")
         try:
             return self.tasks[name.upper()]
         except KeyError:
@@ -206,6 +209,47 @@ class World:
                 f"{', '.join(locked)})" if locked else "no way leads there")
 
 
+def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
+    """The world's knowledge as a PDDL problem of ``domains/office.pddl``: reach
+    ``task.goal`` from ``task.start`` with every door closed.
+
+    The files in ``problems/`` are its output for the office's tasks (a test fails if
+    they drift). The PDDL has no probabilities, so a door's difficulty is not knowledge,
+    with one exception: a door whose success probability is 0 (locked) gets no
+    ``connects`` facts, since knowing that a door never opens is knowing that it is a
+    wall (the knowledge-vs-reality experiments of :mod:`gdq_pddl.experiments.knowledge`
+    rely on this for their accurate reference). ``locked_is_wall=False`` keeps them: the
+    building as reality has it, where such a door is one whose dynamics never open it."""
+    door_sides = {p for d in world.doors for p in d.sides}
+    walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
+                  ((p, n) for n in ns))
+    order = world.index.__getitem__
+    lines = [
+        f"; Generated by `gdq-pddl problem` from {world.name} ({world.description or 'world'}).",
+        f"; Task {task.name}: {task.start} -> {task.goal}. Do not edit: regenerate instead.",
+        f"(define (problem {world.name}-{task.name.lower()})",
+        "  (:domain office)",
+        "  (:objects",
+        "    " + " ".join(world.positions) + " - position",
+        "    " + " ".join(d.name for d in world.doors) + " - door)" if world.doors
+        else "    )",
+        "  (:init",
+        f"    (at {task.start})",
+    ]
+    lines += [f"    (floor {p})" for p in world.positions if p not in door_sides]
+    for a, b in sorted(walk, key=lambda e: (order(e[0]), order(e[1]))):
+        lines.append(f"    (walkway {a} {b})")
+    for d in world.doors:
+        a, b = d.sides
+        lines += [f"    (door-side {a} {d.name})", f"    (door-side {b} {d.name})"]
+        if d.success > 0 or not locked_is_wall:  # knowledge: a locked door is a wall
+            lines += [f"    (connects {d.name} {a} {b})", f"    (connects {d.name} {b} {a})"]
+        lines.append(f"    (closed {d.name})")
+    lines[-1] += ")"
+    lines += [f"  (:goal (at {task.goal})))", ""]
+    return "\n".join(lines)
+
+
 def _component(start: str, links: Mapping[str, Iterable[str]]) -> set[str]:
     """The nodes reachable from ``start`` over ``links`` (breadth first)."""
     seen, queue = {start}, deque([start])
@@ -234,80 +278,59 @@ def builtin_world(name: str) -> World:
     return parse_world(world_text(name), source=f"{name}.toml (built in)")
 
 
+DEFAULT_TASK = "C"
+
+
+def as_world(world: str | Path | World | None) -> World:
+    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
+
+    A bare name without a suffix that is not an existing file (``"office"``) is a
+    built-in world; anything else is read as a world file.
+    """
+    if world is None:
+        return load_world(None)
+    if isinstance(world, World):
+        return world
+    path = Path(world)
+    if isinstance(world, str) and not path.suffix and path.name == world and not path.exists():
+        try:
+            return builtin_world(world)
+        except OSError:
+            raise WorldError(world, "", "no such world file or built-in world") from None
+    return load_world(path)
+
+
+def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
+    """The task to run: by name, from start/goal, or the default.
+
+    The default is task ``C`` when the world has one, else the world's first task.
+    Raises :class:`WorldError` if start and goal are the same position.
+    """
+    if task is None and start is None and goal is None:
+        if DEFAULT_TASK not in world.tasks and world.tasks:
+            task = next(iter(world.tasks))
+        else:
+            task = DEFAULT_TASK
+    chosen = world.resolve(task=task, start=start, goal=goal)
+    if chosen.start == chosen.goal:
+        raise WorldError(world.source, f"tasks.{chosen.name}" if task else "start/goal",
+                         f"start and goal are the same position ({chosen.start}); "
+                         "the episode would be over before it begins")
+    return chosen
+
+
 def parse_world(text: str, source: str = "<string>") -> World:
     """Validate the TOML ``text`` of a world file; ``source`` names it in errors."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise WorldError(source, "", f"not valid TOML: {exc}") from None
-    return _Validator(source, raw).world()
+    return _WorldChecks(source, raw).world()
 
 
-class _Validator:
-    """Checks one parsed TOML document and builds the :class:`World`.
-
-    Strict: every table and key must be one the format has (:data:`KEYS`), every number
-    finite and at most :data:`MAX_NUMBER` in size; each error names the key at fault.
-    """
-
-    def __init__(self, source: str, raw: dict[str, Any]) -> None:
-        self.source, self.raw = source, raw
-
-    def fail(self, key: str, message: str) -> WorldError:
-        return WorldError(self.source, key, message)
-
-    def known_keys(self, table: Mapping[str, Any], path: str, allowed: Iterable[str],
-                   what: str = "key") -> None:
-        """Refuse a key of ``table`` not in ``allowed`` (a misspelling would be ignored)."""
-        allowed = tuple(allowed)
-        for key in table:
-            if key not in allowed:
-                close = difflib.get_close_matches(key, allowed, n=1)
-                hint = f"did you mean {close[0]!r}? " if close else ""
-                where = f"{path}.{key}" if path else key
-                raise self.fail(where, f"unknown {what} ({hint}expected one of: "
-                                f"{', '.join(allowed)})")
-
-    def get(self, table: Mapping[str, Any], key: str, path: str, kind: type | tuple,
-            default: Any = ...) -> Any:
-        if key not in table:
-            if default is ...:
-                raise self.fail(path, "missing")
-            return default
-        value = table[key]
-        if kind is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
-            names = (kind,) if isinstance(kind, type) else kind
-            name = " or ".join(k.__name__ for k in names)
-            raise self.fail(path, f"expected {name}, got {value!r}")
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            self.finite(value, path)
-        return value
-
-    def finite(self, value: float, path: str) -> None:
-        """Refuse NaN, infinities and numbers past :data:`MAX_NUMBER`."""
-        if not math.isfinite(value) or abs(value) > MAX_NUMBER:
-            raise self.fail(path, f"expected a finite number of at most {MAX_NUMBER:g} in "
-                            f"size, got {value!r}")
-
-    def positive(self, table: Mapping[str, Any], key: str, path: str, default: float) -> float:
-        value = self.get(table, key, path, float, default)
-        if value <= 0:
-            raise self.fail(path, f"must be > 0, got {value}")
-        return value
-
-    def count(self, table: Mapping[str, Any], key: str, path: str, default: int) -> int:
-        value = self.get(table, key, path, int, default)
-        if value < 1:
-            raise self.fail(path, f"must be >= 1, got {value}")
-        return value
-
-    def probability(self, table: Mapping[str, Any], key: str, path: str) -> float:
-        value = self.get(table, key, path, float)
-        if not 0.0 <= value <= 1.0:
-            raise self.fail(path, f"a probability must be in [0, 1], got {value}")
-        return value
+class _WorldChecks(Checks):
+    """The world file's own checks on top of the TOML checks of
+    :class:`~gdq_pddl.dynamics.Checks`."""
 
     def pos(self, name: Any, path: str) -> str:
         if not isinstance(name, str) or name not in self.position_set:
@@ -318,30 +341,6 @@ class _Validator:
         if not isinstance(value, str) or not pattern.fullmatch(value):
             raise self.fail(path, f"expected {what}, got {value!r}")
         return value
-
-    def cost(self, value: Any, path: str) -> CostDist:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            self.finite(value, path)
-            if value < 0:
-                raise self.fail(path, f"a cost must be >= 0, got {value}")
-            return CostDist("const", float(value))
-        if not isinstance(value, dict):
-            raise self.fail(path, f"expected a number or a table with 'dist', got {value!r}")
-        dist = value.get("dist")
-        if dist not in ("uniform", "normal"):
-            raise self.fail(f"{path}.dist", f"expected 'uniform' or 'normal', got {dist!r}")
-        self.known_keys(value, path, KEYS[dist])
-        if dist == "uniform":
-            low = self.get(value, "low", f"{path}.low", float)
-            high = self.get(value, "high", f"{path}.high", float)
-            if not 0 <= low <= high:
-                raise self.fail(path, f"need 0 <= low <= high, got low={low} high={high}")
-            return CostDist("uniform", low, high)
-        mean = self.get(value, "mean", f"{path}.mean", float)
-        sd = self.get(value, "sd", f"{path}.sd", float)
-        if sd < 0 or mean < 0:
-            raise self.fail(path, f"need mean >= 0 and sd >= 0, got {mean}, {sd}")
-        return CostDist("normal", mean, sd)
 
     def world(self) -> World:
         self.known_keys(self.raw, "", KEYS[""], "table")
@@ -480,6 +479,10 @@ class _Validator:
             if not re.fullmatch(r"[1-9][0-9]*", name):
                 raise self.fail(key, "area names must be whole numbers from 1 (no leading 0)")
             number = int(name)
+            if number > len(self.positions):
+                raise self.fail(key, f"area numbers run from 1 to {len(self.positions)} (the "
+                                "number of positions; each area is a column of the "
+                                "per-episode area counts)")
             if not isinstance(members, list):
                 raise self.fail(key, f"expected a list of positions, got {members!r}")
             for p in members:

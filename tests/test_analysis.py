@@ -21,11 +21,10 @@ from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import area_table, make_tables
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import solve
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World, builtin_world, load_world
+from gdq_pddl.world import World, builtin_world, load_world, office_problem
 
 METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
 ROBOT_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q")  # robot_experiment's default

@@ -69,7 +69,8 @@ def lamps() -> PDDLInstance:
 @pytest.fixture(scope="module")
 def office_c() -> PDDLInstance:
     return PDDLInstance.from_files(ROOT / "domains" / "office.pddl",
-                                   ROOT / "problems" / "task-c.pddl", DYN / "office.toml")
+                                   ROOT / "problems" / "task-c.pddl",
+                                   ROOT / "gdq_pddl" / "data" / "office.toml")
 
 
 def shipped(domain: str, problem: str) -> PDDLInstance:

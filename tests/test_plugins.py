@@ -74,7 +74,7 @@ def test_python_api_finds_and_runs_the_plugin(site):
         from gdq_pddl.planning import get_planner, planners
         from gdq_pddl.planning.graph import GraphPlanner
         from gdq_pddl.planning.validate import validate_plan
-        from gdq_pddl.pddl.office import office_problem
+        from gdq_pddl.world import office_problem
         from gdq_pddl.planning import PlanningProblem
         from gdq_pddl.resources import domain_text
         from gdq_pddl.world import load_world

@@ -10,18 +10,18 @@ from hypothesis import strategies as st
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.abstraction.routes import knowledge_edges, route_plan_table
 from gdq_pddl.buildings import building_world
-from gdq_pddl.learners.context import _domain_text, office_plan_table, office_task_context
-from gdq_pddl.pddl.office import office_problem
+from gdq_pddl.learners.context import office_plan_table, office_task_context
 from gdq_pddl.planning import PlanningProblem
+from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, load_world
+from gdq_pddl.world import Task, load_world, office_problem
 
 TOL = 0.3
 
 
 def _problem(world, goal):
     start = next(p for p in world.positions if p != goal)
-    return PlanningProblem.from_texts(_domain_text(),
+    return PlanningProblem.from_texts(domain_text(),
                                       office_problem(world, Task("t", start, goal)))
 
 

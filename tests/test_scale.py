@@ -15,11 +15,10 @@ from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.solve_compact import next_states, solve_compact_task
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
-from gdq_pddl.learners.context import _domain_text
 from gdq_pddl.learners.episodes import run_compact
-from gdq_pddl.pddl.office import office_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
-from gdq_pddl.world import Task, load_world
+from gdq_pddl.resources import domain_text
+from gdq_pddl.world import Task, load_world, office_problem
 
 
 def test_generator_is_deterministic_and_validates(tmp_path):
@@ -149,7 +148,7 @@ def test_planning_on_300_positions_matches_plain_bfs():
     start = world.tasks["A"].start
     dist = _distances(_graph(b), start)
     goals = [p for p in b.positions if dist[p] in (9, 13)][:2]
-    problem = PlanningProblem.from_texts(_domain_text(),
+    problem = PlanningProblem.from_texts(domain_text(),
                                          office_problem(world, Task("t", start, goals[0])))
     planner = get_planner("graph")
     for goal in goals:
@@ -190,7 +189,7 @@ def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
     for env in (OfficeEnv(task="C"), CompactEnv(task="C")):
         learner = make_learner(method, office_task_context(env.world, "C"), **config)
         env.reset(seed=3)
-        run = run_episodes if isinstance(env, OfficeEnv) else run_compact
+        run = run_compact if isinstance(env, CompactEnv) else run_episodes
         out.append((run(learner, env, 60, np.random.default_rng(5)), learner.q.copy()))
     (a, qa), (b, qb) = out
     assert np.array_equal(a.returns, b.returns) and np.array_equal(qa, qb)

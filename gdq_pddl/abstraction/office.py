@@ -6,8 +6,7 @@ from collections.abc import Callable
 
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.planning.base import State
-from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World
+from gdq_pddl.spaces import Building, LearnerSpaces
 
 # PDDL action -> (learner verb, index of the argument naming the learner position)
 _ACTIONS = {"goto": ("goto", 1), "approach": ("approach", 1), "opendoor": ("opendoor", 0),
@@ -17,7 +16,7 @@ _ACTIONS = {"goto": ("goto", 1), "approach": ("approach", 1), "opendoor": ("open
 class OfficeAbstraction:
     """O between ``domains/office.pddl`` and :class:`~gdq_pddl.spaces.LearnerSpaces`."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: Building) -> None:
         self.world = world
         self.spaces = LearnerSpaces(world)
         self.n_states = self.spaces.n_states
@@ -74,12 +73,15 @@ class OfficeAbstraction:
         plans then include every opendoor they might need (optimistic, never wrong).
         """
         p, is_open = self.spaces.states[state]
-        here = self.world.door_at.get(p)
+        door = self.world.door_at.get(p)
+        opened = door.name if door is not None and is_open else None
         atoms = {f"(at {p})"}
-        for d in self.world.doors:
-            atoms.add(f"({'open' if d is here and is_open else 'closed'} {d.name})")
+        for d in {d.name for d in self.world.door_at.values()}:
+            atoms.add(f"({'open' if d == opened else 'closed'} {d})")
         return frozenset(atoms)
 
-    def goal(self, position_or_goal: str) -> State:
-        """The goal ``(at p)`` for a position or landmark name."""
-        return frozenset({f"(at {self.world.position(position_or_goal)})"})
+    def goal(self, position: str) -> State:
+        """The goal ``(at p)`` for a position name."""
+        if position not in self.world.index:
+            raise AbstractionError(f"unknown goal position {position!r}")
+        return frozenset({f"(at {position})"})

@@ -31,8 +31,7 @@ def register_problem(sub) -> None:
 
 def cmd_problem(args: argparse.Namespace) -> int:
     from gdq_pddl.outputs import output_file, output_folder, write_text
-    from gdq_pddl.pddl.office import office_problem
-    from gdq_pddl.world import load_world
+    from gdq_pddl.world import load_world, office_problem
 
     if args.all:
         world = load_world(args.world)
@@ -100,8 +99,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         start = goal = None
     else:
         from gdq_pddl.abstraction import OfficeAbstraction
-        from gdq_pddl.pddl.office import office_problem
         from gdq_pddl.resources import domain_text
+        from gdq_pddl.world import office_problem
 
         world, task = world_and_task(args)
         dtext, dsrc = (domain_text(), "office.pddl (built in)") if args.domain is None else \

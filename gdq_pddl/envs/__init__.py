@@ -17,6 +17,11 @@ and ``gdq_pddl/PDDL-v0``, any PDDL problem under a dynamics file
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="ppddl.pddl", problem="p.pddl",
                          determinisation="most-likely")  # what the planner knows
 
+Both are one env class, :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on an instance of the
+one pipeline: a PDDL problem with its reality, or a world's task seen through the
+office's observation map (:class:`~gdq_pddl.envs.office.OfficeInstance`); both step
+the true model :func:`~gdq_pddl.envs.model.compile_true_model` builds.
+
 No ``max_episode_steps`` is registered: the env counts its own steps and ends an episode
 at the world's (or the dynamics file's) ``step_limit`` with the failure reward
 ``-r_max``; a ``TimeLimit`` wrapper would duplicate that, and with a fixed number it
@@ -24,6 +29,8 @@ would be wrong for a world file whose step limit differs from the office's 20.
 """
 
 from __future__ import annotations
+
+import gymnasium
 
 OFFICE_ID = "gdq_pddl/Office-v0"
 PDDL_ID = "gdq_pddl/PDDL-v0"
@@ -34,8 +41,6 @@ ENV_IDS = {OFFICE_ID: "gdq_pddl.envs.office:OfficeEnv",
 
 def register_envs() -> None:
     """Register the package's envs with Gymnasium (a second call does nothing)."""
-    import gymnasium
-
     for env_id, entry_point in ENV_IDS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=None)

@@ -9,15 +9,16 @@ step, and observe it.
 (``model``), the hidden full state an episode starts in (``start_state``) and the
 ``goal_pos`` that :func:`env_step`'s goal test compares with, so the office and a PDDL
 domain step through the same code, and the fast episode runner
-(:mod:`gdq_pddl.learners.episodes`) accepts any subclass.
-:class:`~gdq_pddl.envs.compact.CompactEnv` fills them in for the compact model; it is
-not a :class:`ModelEnv`.
+(:mod:`gdq_pddl.learners.episodes`) accepts any subclass; the package's one subclass is
+:class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on any instance.
+:class:`~gdq_pddl.envs.compact.CompactEnv` fills them in for the compact model of an
+office instance (large buildings); it is not a :class:`ModelEnv`.
 """
 
 from __future__ import annotations
 
 import operator
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -25,16 +26,15 @@ from gymnasium.error import ResetNeeded
 
 from gdq_pddl.envs.model import CAUSES, ModelArrays, env_step
 
-if TYPE_CHECKING:
-    from gdq_pddl.envs.compact import CompactModel
-
 
 class CompiledEnv(gym.Env[int, int]):
     """Base class: subclasses set ``model`` and the spaces, call :meth:`_begin` at the
     end of ``__init__`` and implement :meth:`_restart`, :meth:`_advance`,
     :meth:`_observe` and :meth:`_info`."""
 
-    model: ModelArrays | CompactModel
+    model: tuple
+    """The compiled model: :class:`ModelArrays`, or the compact model of
+    :mod:`gdq_pddl.envs.compact` (both are named tuples of arrays)."""
 
     def _begin(self) -> None:
         """Mark the env as not started (call at the end of ``__init__``)."""

@@ -14,13 +14,14 @@ lists outcomes per (learner state, action) pair, in CSR form (outcomes of pair
 and the episode keeps the set of open doors as a ``uint8`` array. A pair without
 outcomes is inapplicable: the robot stays (most of the ``5 * n_positions`` actions).
 
-The outcomes come from the same per-action rule as the full model
-(``gdq_pddl.envs.model._outcomes``), merged and ordered the same way, and
-:func:`compact_step` draws the same random numbers as
-:func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost draw),
-so on the office an episode is bit-identical to one of :class:`OfficeEnv` (tested).
-This is a second model kind, for worlds too large for the full one; value iteration
-(V*) still needs the full model and so small worlds.
+The outcomes come from the same rule as the full model
+(:func:`gdq_pddl.envs.model.slip_outcomes` on the same grounded building and dynamics),
+merged and ordered the same way, and :func:`compact_step` draws the same random numbers
+as :func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost
+draw), so on the office an episode is bit-identical to one of ``OfficeEnv`` (tested).
+It is a second representation of the same instance (an
+:class:`~gdq_pddl.envs.office.OfficeInstance`), for worlds too large for the full one;
+value iteration (V*) still needs the full model and so small worlds.
 
 Why :func:`compact_step` is not :func:`gdq_pddl.envs.model.env_step`: the two models
 index outcomes by different states. ``env_step`` looks up the pair of a *full* state (an
@@ -37,7 +38,6 @@ episode loop (:mod:`gdq_pddl.learners.episodes`) serves both.
 
 from __future__ import annotations
 
-from functools import cached_property
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -45,17 +45,22 @@ import numba
 import numpy as np
 from gymnasium.spaces import Discrete
 
+from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
-    _outcomes,
     cost_arrays,
     draw_outcome,
     finish_step,
+    ground_outcomes,
     merge_outcomes,
+    office_costs,
     outcome_csr,
+    reality_task,
+    slip_outcomes,
 )
+from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import VERBS, World
+from gdq_pddl.world import World
 
 
 class CompactModel(NamedTuple):
@@ -79,57 +84,59 @@ class CompactModel(NamedTuple):
     n_doors: int
 
 
-def _applicable(world: World, spaces: LearnerSpaces, p: str) -> list[tuple[int, str, str]]:
-    """``(action, verb, target)`` of the actions that can do something at ``p``."""
-    out = []
-    for q in world.walk_neighbours[p]:
-        verb = "approach" if q in world.door_at else "goto"
-        out.append((spaces.action(verb, q), verb, q))
-    door = world.door_at.get(p)
-    if door is not None:
-        out.append((spaces.action("opendoor", p), "opendoor", p))
-        other = door.sides[1] if door.sides[0] == p else door.sides[0]
-        out.append((spaces.action("gothrough", other), "gothrough", other))
-    return sorted(out)
-
-
 def compile_compact(world: World) -> CompactModel:
     """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
-    number of learner states x actions)."""
+    number of learner states x actions): the rule of
+    :func:`~gdq_pddl.envs.model.compile_true_model` on the same grounded building and
+    dynamics, from each learner state's planner state (every other door closed)."""
     spaces = LearnerSpaces(world)
+    o = OfficeAbstraction(world)
+    task = reality_task(world)
+    outcomes, schema_of = ground_outcomes(task, world.dynamics())
+    action_of_op = [o.learner_action(op.name) for op in task.ops]
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    at = {task.fact_index[f"(at {p})"]: i for i, p in enumerate(world.positions)}
+    at_mask = sum(1 << bit for bit in at)
     n_states, n_actions = spaces.n_states, spaces.n_actions
     door_ids = {d.name: i for i, d in enumerate(world.doors)}
 
     def pairs():
-        for s, (p, is_open) in enumerate(spaces.states):
+        for s, (p, _) in enumerate(spaces.states):
+            state = task.mask(o.planner_state(s))
+            here = (world.index[p], False)
             door = world.door_at.get(p)
-            mask = 1 << door_ids[door.name] if door is not None and is_open else 0
-            for a, verb, q in _applicable(world, spaces, p):
+            bit = 1 << task.fact_index[f"(open {door.name})"] if door is not None else 0
+            # where each ground action leads: (position, did the door here open)
+            succ = sorted(((op_pos[id(op)], (at[(nxt & at_mask).bit_length() - 1],
+                                             bool(nxt & bit & ~state)))
+                           for op, nxt in task.successors(state)), key=lambda e: e[1][0])
+            applicable = dict(succ)
+            acting: dict[int, int] = {}
+            for k in applicable:
+                acting.setdefault(action_of_op[k], k)
+            for a in sorted(acting):
+                k = acting[a]
                 merged = merge_outcomes(
-                    ((world.index[np_], nm != mask, st), pr)
-                    for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q))
-                if list(merged) == [(world.index[p], False, False)]:
+                    ((*there, stuck), pr) for (there, stuck), pr in
+                    slip_outcomes(here, applicable[k], outcomes[k], applicable, schema_of))
+                if list(merged) == [(*here, False)]:
                     continue  # a no-op after all: leave the pair empty
                 yield s * n_actions + a, merged
 
     ptr, prob, (nxt, opens, stuck) = outcome_csr(n_states * n_actions, pairs(),
                                                  (np.int64, np.bool_, np.bool_))
-    costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
     door_of = np.array([door_ids[world.door_at[p].name] if p in world.door_at else -1
                         for p in world.positions], dtype=np.int64)
     state_of = np.array([[spaces.state(p, False), spaces.state(p, True)]
                          for p in world.positions], dtype=np.int64)
     return CompactModel(
         n_actions=n_actions, r_max=float(world.r_max), step_limit=int(world.step_limit),
-        ptr=ptr, prob=prob, next_pos=nxt, opens=opens, stuck=stuck, **cost_arrays(costs),
-        door_of_pos=door_of, state_of=state_of,
+        ptr=ptr, prob=prob, next_pos=nxt, opens=opens, stuck=stuck,
+        **cost_arrays(office_costs(world)), door_of_pos=door_of, state_of=state_of,
         pos_of_state=np.array([world.index[p] for p, _ in spaces.states], dtype=np.int64),
         area_of_pos=np.array([world.area_of.get(p, 0) for p in world.positions],
                              dtype=np.int64),
         n_doors=len(world.doors))
-
-
-assert VERBS[0] == "goto"
 
 
 @numba.njit(cache=True)
@@ -157,10 +164,10 @@ def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: i
 
 
 class CompactEnv(CompiledEnv):
-    """The office-like env of any world over a :class:`CompactModel`.
+    """The env of an office instance over its :class:`CompactModel` (large buildings).
 
-    Same spaces, rewards, episode ends and random draws as
-    :class:`gdq_pddl.envs.office.OfficeEnv`; ``info`` has ``action_mask`` (as the
+    Same arguments, spaces, rewards, episode ends and random draws as ``OfficeEnv``;
+    ``info`` has ``action_mask`` (as the
     office's), ``position``, ``area``, ``cause``, ``step`` and ``open_doors`` (door
     indices), not ``full_state``.
     """
@@ -169,11 +176,9 @@ class CompactEnv(CompiledEnv):
 
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
-        from gdq_pddl.envs.office import as_world, pick_task
-
-        self.world = as_world(world)
-        self.task = pick_task(self.world, task, start, goal)
-        self.spaces = LearnerSpaces(self.world)
+        self.instance = OfficeInstance.of(task, start, goal, world)
+        self.world, self.task = self.instance.world, self.instance.task
+        self.spaces = self.instance.spaces
         self.model = compile_compact(self.world)
         self.observation_space = Discrete(self.spaces.n_states)
         self.action_space = Discrete(self.spaces.n_actions)
@@ -195,12 +200,10 @@ class CompactEnv(CompiledEnv):
     def _observe(self) -> int:
         return int(observe_state(self.model, self._pos, self.doors))
 
-    @cached_property
+    @property
     def action_masks(self) -> np.ndarray:
-        """As :attr:`gdq_pddl.envs.office.OfficeEnv.action_masks`."""
-        from gdq_pddl.envs.office import office_action_masks
-
-        return office_action_masks(self.world, self.task)
+        """The instance's, as the full-state env's."""
+        return self.instance.action_masks
 
     def _info(self) -> dict[str, Any]:
         return {"action_mask": self.action_masks[self._observe()].copy(),

@@ -13,15 +13,21 @@ and one of a step (:func:`env_step`).
 from __future__ import annotations
 
 import weakref
-from collections.abc import Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Mapping
+from dataclasses import dataclass
 from typing import NamedTuple, TypeVar
 
 import numba
 import numpy as np
 
+from gdq_pddl.abstraction import OfficeAbstraction
+from gdq_pddl.dynamics import COST_KINDS, CostDist, Dynamics, Outcomes, split_action
 from gdq_pddl.limits import check_memory
+from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.planning.base import PlanningProblem
+from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import COST_KINDS, VERBS, CostDist, World
+from gdq_pddl.world import Task, World, office_problem
 
 PAIR_BYTES = 150
 """Memory one (state, action) pair takes while a model is compiled: its outcomes are
@@ -55,35 +61,6 @@ def full_state(world: World, position: str, open_doors: frozenset[str] = frozens
     """Full-state index of ``position`` with the named doors open."""
     mask = sum(1 << i for i, d in enumerate(world.doors) if d.name in open_doors)
     return world.index[position] * (1 << len(world.doors)) + mask
-
-
-def _outcomes(world: World, door_ids: dict[str, int], p: str, mask: int, verb: str,
-              q: str) -> list[tuple[float, str, int, bool]]:
-    """Outcomes ``(prob, position, mask, stuck)`` of ``verb q`` taken at ``p``."""
-    noop = [(1.0, p, mask, False)]
-    door = world.door_at.get(p)
-    if verb in ("goto", "approach"):
-        ns = world.walk_neighbours[p]
-        wants_door = verb == "approach"
-        if q not in ns or (q in world.door_at) != wants_door:
-            return noop
-        ok = world.navigation_success
-        out = [(ok, q, mask, False)]
-        out += [((1 - ok) / len(ns), n, mask, False) for n in ns]
-        return out
-    if verb in ("opendoor", "gothrough") and door is not None:
-        bit = 1 << door_ids[door.name]
-        is_open = bool(mask & bit)
-        if verb == "opendoor" and q == p and not is_open:
-            result = (door.success, p, mask | bit, False)
-        elif verb == "gothrough" and is_open and q != p and q in door.sides:
-            result = (door.success, q, mask, False)
-        else:
-            return noop
-        out = [result, (door.stuck, p, mask, True)]
-        out.append((1.0 - door.success - door.stuck, p, mask, False))
-        return out
-    return noop
 
 
 K = TypeVar("K", bound=Hashable)
@@ -123,17 +100,162 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
 
 def cost_arrays(costs: list[CostDist]) -> dict[str, np.ndarray]:
     """``cost_kind``, ``cost_a`` and ``cost_b`` of every model kind, from one
-    :class:`~gdq_pddl.world.CostDist` per action."""
+    :class:`~gdq_pddl.dynamics.CostDist` per action."""
     return {"cost_kind": np.array([COST_KINDS[c.kind] for c in costs], dtype=np.int64),
             "cost_a": np.array([c.a for c in costs], dtype=np.float64),
             "cost_b": np.array([c.b for c in costs], dtype=np.float64)}
+
+
+@dataclass(frozen=True, eq=False)
+class StateSpace:
+    """The states an env steps through, as planner states of one grounded task, and what
+    the learner sees of them: an observation map applied to the task.
+
+    A PDDL problem's (:func:`graph_space`) is its reachable state graph, seen as it is;
+    the office's (:func:`office_space`) is every (position, open doors) state of the
+    building, seen through O (the learner's 31 states and 95 verb-major actions).
+    """
+
+    task: GroundTask
+    n_states: int
+    edges: Callable[[int], list[tuple[int, int]]]
+    """``(ground action, next state)`` of every ground action that works in state ``i``
+    (none: every action is a no-op there, as at a goal the graph does not expand), in
+    the order a slip lists its outcomes: a PDDL problem's in ground-action order, the
+    office's in state order (by position: "a random walking neighbour")."""
+    n_actions: int
+    action_of_op: tuple[int, ...]
+    """The learner action of each ground action (the first applicable one acts)."""
+    obs_of: np.ndarray
+    """int64[n_states]: the learner state of each state."""
+    pos_of: np.ndarray
+    """int64[n_states]: what :func:`env_step`'s goal test compares with ``goal_pos``."""
+    area_of_pos: np.ndarray
+    n_doors: int = 0
+
+
+def slip_outcomes(here: Hashable, there: Hashable, o: Outcomes,
+                  applicable: Mapping[int, Hashable], schema_of: list[str]) -> list:
+    """``((next, stuck), probability)`` of an applicable ground action whose effect leads
+    from ``here`` to ``there``, in the order the model lists them: its effect, the
+    stuck trial, then what the rest ``1 - success - stuck`` does (nothing, or the effect
+    of a uniformly random applicable ground action of the slip's schemas, in the order of
+    ``applicable``: ground action -> where it leads)."""
+    rest = max(0.0, 1.0 - o.success - o.stuck)
+    out = [((there, False), o.success), ((here, True), o.stuck)]
+    if isinstance(o.failure, tuple):
+        slips = [u for k, u in applicable.items() if schema_of[k] in o.failure]
+        if slips:
+            return out + [((u, False), rest / len(slips)) for u in slips]
+    return out + [((here, False), rest)]
+
+
+def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes], list[str]]:
+    """The :class:`~gdq_pddl.dynamics.Outcomes` and the schema of every ground action."""
+    parts = [split_action(op.name) for op in task.ops]
+    return [dynamics.outcomes(*part) for part in parts], [schema for schema, _ in parts]
+
+
+def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDist],
+                       pairs: Iterable[tuple[int, dict[tuple, float]]] | None = None,
+                       ) -> ModelArrays:
+    """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
+    one per learner action): for each (state, learner action) pair, the outcomes of the
+    ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
+    ``pairs`` replaces them (a PPDDL domain's outcomes are its own)."""
+    outcomes, schema_of = ground_outcomes(space.task, dynamics)
+    n_a = space.n_actions
+
+    def rule():
+        for s in range(space.n_states):
+            applicable = dict(space.edges(s))
+            acting: dict[int, int] = {}
+            for k in applicable:
+                acting.setdefault(space.action_of_op[k], k)
+            for a in range(n_a):
+                k = acting.get(a)
+                yield s * n_a + a, {(s, False): 1.0} if k is None else merge_outcomes(
+                    slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
+
+    ptr, prob, (nxt, stuck) = outcome_csr(space.n_states * n_a,
+                                          rule() if pairs is None else pairs,
+                                          (np.int64, np.bool_))
+    model = ModelArrays(
+        n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
+        step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
+        **cost_arrays(costs), obs_of=space.obs_of, pos_of=space.pos_of,
+        area_of_pos=space.area_of_pos)
+    for array in model:
+        if isinstance(array, np.ndarray):
+            array.setflags(write=False)
+    return model
+
+
+def reality_task(world: World) -> GroundTask:
+    """The building of ``world`` as reality has it, grounded: ``domains/office.pddl`` on
+    the world's problem with every door (a locked one too: its dynamics never open it).
+    Cached per world."""
+    hit = _REALITY.get(id(world))
+    if hit is not None and hit[0]() is world:
+        return hit[1]
+    p = world.positions[0]
+    problem = office_problem(world, Task("reality", p, p), locked_is_wall=False)
+    task = PlanningProblem.from_texts(domain_text(), problem, "office.pddl (built in)",
+                                      f"{world.source} (as PDDL)").task
+    _REALITY[id(world)] = (weakref.ref(world), task)
+    return task
+
+
+_REALITY: dict[int, tuple[weakref.ref, GroundTask]] = {}
+
+
+def office_space(world: World, task: GroundTask | None = None) -> StateSpace:
+    """The office's :class:`StateSpace`: every full state ``position * 2**n_doors + door
+    mask`` of ``world`` (goal-independent: a task's goal is the env's ``goal_pos``),
+    seen through O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`)."""
+    task = reality_task(world) if task is None else task
+    o = OfficeAbstraction(world)
+    n_doors = len(world.doors)
+    n_masks = 1 << n_doors
+    n_full = len(world.positions) * n_masks
+    at = [1 << task.fact_index[f"(at {p})"] for p in world.positions]
+    opened = [1 << task.fact_index[f"(open {d.name})"] for d in world.doors]
+    closed = [1 << task.fact_index[f"(closed {d.name})"] for d in world.doors]
+    doors = [sum(opened[i] if mask >> i & 1 else closed[i] for i in range(n_doors))
+             for mask in range(n_masks)]
+    states = [at[pi] | doors[mask] for pi in range(len(at)) for mask in range(n_masks)]
+    index = {state: fs for fs, state in enumerate(states)}
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+
+    def edges(fs: int) -> list[tuple[int, int]]:
+        out = [(op_pos[id(op)], index[nxt]) for op, nxt in task.successors(states[fs])]
+        return sorted(out, key=lambda e: e[1])
+
+    read = o.mask_reader(task)
+    return StateSpace(
+        task=task, n_states=n_full, edges=edges, n_actions=o.n_actions,
+        action_of_op=tuple(o.learner_action(op.name) for op in task.ops),
+        obs_of=np.array([read(state) for state in states], dtype=np.int64),
+        pos_of=np.repeat(np.arange(len(at), dtype=np.int64), n_masks),
+        area_of_pos=np.array([world.area_of.get(p, 0) for p in world.positions],
+                             dtype=np.int64),
+        n_doors=n_doors)
+
+
+def office_costs(world: World) -> list[CostDist]:
+    """The cost of each of the learner's actions (``stay`` too, which no ground action
+    is), door overrides first."""
+    spaces = LearnerSpaces(world)
+    return [world.cost(*spaces.action_parts(a)) for a in range(spaces.n_actions)]
 
 
 _COMPILED: dict[int, tuple[weakref.ref, ModelArrays]] = {}
 
 
 def compile_model(world: World) -> ModelArrays:
-    """The world's true dynamics as :class:`ModelArrays` (read-only, compiled once per world).
+    """The world's true model: :func:`compile_true_model` of its :func:`office_space`
+    under :meth:`World.dynamics <gdq_pddl.world.World.dynamics>` (read-only, compiled
+    once per world).
 
     Every env, solver and analysis of the same :class:`World` object shares one copy:
     building it is the slowest part of making an env, and experiments make thousands.
@@ -141,64 +263,16 @@ def compile_model(world: World) -> ModelArrays:
     hit = _COMPILED.get(id(world))
     if hit is not None and hit[0]() is world:
         return hit[1]
-    model = _compile(world)
-    for array in model:
-        if isinstance(array, np.ndarray):
-            array.setflags(write=False)
-    _COMPILED[id(world)] = (weakref.ref(world), model)
-    return model
-
-
-def _compile(world: World) -> ModelArrays:
-    spaces = LearnerSpaces(world)
     n_pos, n_doors = len(world.positions), len(world.doors)
-    n_masks = 1 << n_doors
-    n_full, n_actions = n_pos * n_masks, spaces.n_actions
-    check_memory(n_full * n_actions * PAIR_BYTES,
+    n_actions = LearnerSpaces(world).n_actions
+    check_memory(n_pos * (1 << n_doors) * n_actions * PAIR_BYTES,
                  f"{world.source}: {n_doors} doors: the simulator's true model ({n_pos} "
                  f"positions x 2**{n_doors} door states x {n_actions} actions)",
                  "give the world fewer doors (generated buildings run on a compact model: "
                  "gdq-pddl scale)")
-    door_ids = {d.name: i for i, d in enumerate(world.doors)}
-    obs_of = np.zeros(n_full, dtype=np.int64)
-    pos_of = np.zeros(n_full, dtype=np.int64)
-    for fs in range(n_full):
-        pi, mask = divmod(fs, n_masks)
-        p = world.positions[pi]
-        door = world.door_at.get(p)
-        pos_of[fs] = pi
-        obs_of[fs] = spaces.state(p, door is not None and bool(mask >> door_ids[door.name] & 1))
-    parts = [spaces.action_parts(a) for a in range(n_actions)]
-
-    def pairs():
-        for fs in range(n_full):
-            pi, mask = divmod(fs, n_masks)
-            p = world.positions[pi]
-            for a, (verb, q) in enumerate(parts):
-                yield fs * n_actions + a, merge_outcomes(
-                    [((world.index[np_] * n_masks + nm, st), pr)
-                     for pr, np_, nm, st in _outcomes(world, door_ids, p, mask, verb, q)])
-
-    ptr, prob, (nxt, stuck) = outcome_csr(n_full * n_actions, pairs(), (np.int64, np.bool_))
-    costs = [world.cost(*spaces.action_parts(a)) for a in range(n_actions)]
-    area = np.array([world.area_of.get(p, 0) for p in world.positions], dtype=np.int64)
-    return ModelArrays(
-        n_actions=n_actions,
-        n_doors=n_doors,
-        r_max=float(world.r_max),
-        step_limit=int(world.step_limit),
-        ptr=ptr,
-        prob=prob,
-        next=nxt,
-        stuck=stuck,
-        **cost_arrays(costs),
-        obs_of=obs_of,
-        pos_of=pos_of,
-        area_of_pos=area,
-    )
-
-
-assert VERBS[0] == "goto"  # the action layout above is verb-major from goto
+    model = compile_true_model(office_space(world), world.dynamics(), office_costs(world))
+    _COMPILED[id(world)] = (weakref.ref(world), model)
+    return model
 
 
 @numba.njit(cache=True)

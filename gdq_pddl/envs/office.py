@@ -1,9 +1,17 @@
-"""The office world of the GDQ paper as a Gymnasium environment.
+"""The office world of the GDQ paper: one PDDL instance seen through the office's map.
 
 A robot moves between named positions of an office; some pairs of positions are the two
 sides of a door, which a person opens on request and which the robot then crosses. The
 building, its doors and their dynamics come from a world file (by default the shipped
 ``office.toml``); nothing here is specific to the office.
+
+An :class:`OfficeInstance` is the instance a world file produces: the knowledge
+``domains/office.pddl`` with the world's problem, the world's reality
+(:meth:`~gdq_pddl.world.World.dynamics`, compiled through the same
+:func:`~gdq_pddl.envs.model.compile_true_model` as any PDDL problem) and the office's
+observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``OfficeEnv(...)``
+(``gdq_pddl/Office-v0``) is the one env class of the package,
+:class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on such an instance.
 
 ## Action space
 ``Discrete(5 * n_positions)`` (95 for the office), verb-major: action
@@ -44,67 +52,31 @@ in the observed state: a ground action applicable there maps to it. ``stay`` is 
 built-in world name; default the office); ``render_mode`` (``"ansi"`` or
 ``"rgb_array"``).
 
-Every step goes through :func:`gdq_pddl.envs.model.env_step`, the one definition of the
-dynamics, with randomness from ``self.np_random`` only.
+Every step goes through :func:`gdq_pddl.envs.model.env_step`, the one definition of a
+step, with randomness from ``self.np_random`` only. ``env.unwrapped.world``, ``.task``,
+``.spaces`` and ``.decode(full_state)`` are the instance's.
 """
 
 from __future__ import annotations
 
 import weakref
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.base import ModelEnv
+from gdq_pddl.abstraction import OfficeAbstraction
+from gdq_pddl.abstraction.masks import knowledge_action_mask
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
-from gdq_pddl.errors import WorldError
+from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
+from gdq_pddl.planning.base import PlanningProblem
+from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, builtin_world, load_world
-
-DEFAULT_TASK = "C"
-
-
-def as_world(world: str | Path | World | None) -> World:
-    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
-
-    A bare name without a suffix that is not an existing file (``"office"``) is a
-    built-in world; anything else is read as a world file.
-    """
-    if world is None:
-        return load_world(None)
-    if isinstance(world, World):
-        return world
-    path = Path(world)
-    if isinstance(world, str) and not path.suffix and path.name == world and not path.exists():
-        try:
-            return builtin_world(world)
-        except OSError:
-            raise WorldError(world, "", "no such world file or built-in world") from None
-    return load_world(path)
-
-
-def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
-    """The task to run: by name, from start/goal, or the default.
-
-    The default is task ``C`` when the world has one, else the world's first task.
-    Raises :class:`WorldError` if start and goal are the same position.
-    """
-    if task is None and start is None and goal is None:
-        if DEFAULT_TASK not in world.tasks and world.tasks:
-            task = next(iter(world.tasks))
-        else:
-            task = DEFAULT_TASK
-    chosen = world.resolve(task=task, start=start, goal=goal)
-    if chosen.start == chosen.goal:
-        raise WorldError(world.source, f"tasks.{chosen.name}" if task else "start/goal",
-                         f"start and goal are the same position ({chosen.start}); "
-                         "the episode would be over before it begins")
-    return chosen
+from gdq_pddl.world import Task, World, as_world, office_problem, pick_task
 
 
 def office_action_masks(world: World, task: Task) -> np.ndarray:
@@ -117,12 +89,6 @@ def office_action_masks(world: World, task: Task) -> np.ndarray:
     hit = _MASKS.get(key)
     if hit is not None and hit[0]() is world:
         return hit[1]
-    from gdq_pddl.abstraction import OfficeAbstraction
-    from gdq_pddl.abstraction.masks import knowledge_action_mask
-    from gdq_pddl.pddl.office import office_problem
-    from gdq_pddl.planning.base import PlanningProblem
-    from gdq_pddl.resources import domain_text
-
     problem = PlanningProblem.from_texts(domain_text(), office_problem(world, task))
     masks = knowledge_action_mask(OfficeAbstraction(world), problem.task)
     _MASKS[key] = (weakref.ref(world), masks)
@@ -132,55 +98,109 @@ def office_action_masks(world: World, task: Task) -> np.ndarray:
 _MASKS: dict[tuple[int, str], tuple[weakref.ref, np.ndarray]] = {}
 
 
-class OfficeEnv(ModelEnv):
-    """A robot in an office reaching a goal position (see the module docstring)."""
+@dataclass(frozen=True, eq=False)
+class OfficeInstance:
+    """A task of a world as an instance of the one pipeline (see the module docstring)."""
 
-    metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
+    world: World
+    task: Task
+    render_modes = ("ansi", "rgb_array")
 
-    def __init__(self, task: str | None = None, start: str | None = None,
-                 goal: str | None = None, world: str | Path | World | None = None,
-                 render_mode: str | None = None) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
-                             f"or None, got {render_mode!r}")
-        self.world: World = as_world(world)
-        self.task: Task = pick_task(self.world, task, start, goal)
-        self.spaces = LearnerSpaces(self.world)
-        self.model: ModelArrays = compile_model(self.world)
-        self.observation_space = Discrete(self.spaces.n_states)
-        self.action_space = Discrete(self.spaces.n_actions)
-        self.render_mode = render_mode
-        self.goal_pos = self.world.index[self.task.goal]
-        self.start_state = full_state(self.world, self.task.start)
-        self._begin()
-        self._painter: MapPainter | None = None
+    @classmethod
+    def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
+           world: str | Path | World | None = None) -> OfficeInstance:
+        """The instance of a task by name, or of a start and goal, in a world (a
+        :class:`World`, a world file, a built-in name; default the office)."""
+        chosen = as_world(world)
+        return cls(chosen, pick_task(chosen, task, start, goal))
+
+    @property
+    def name(self) -> str:
+        return self.task.name
+
+    @property
+    def step_limit_key(self) -> tuple[str, str]:
+        """The file and key that give the step limit."""
+        return self.world.source, "world.step_limit"
+
+    @cached_property
+    def spaces(self) -> LearnerSpaces:
+        """The learner's states and actions (the map's image)."""
+        return LearnerSpaces(self.world)
+
+    @property
+    def model(self) -> ModelArrays:
+        """The true model over full states (shared by every task of the world)."""
+        return compile_model(self.world)
+
+    @property
+    def n_states(self) -> int:
+        return self.spaces.n_states
+
+    @property
+    def n_actions(self) -> int:
+        return self.spaces.n_actions
+
+    @cached_property
+    def start_state(self) -> int:
+        return full_state(self.world, self.task.start)
+
+    @cached_property
+    def goal_pos(self) -> int:
+        return self.world.index[self.task.goal]
 
     @cached_property
     def action_masks(self) -> np.ndarray:
         return office_action_masks(self.world, self.task)
 
+    def optimal(self) -> dict[str, Any]:
+        """The ground truth of the task: start, goal, V*, the relevant areas (visited
+        with probability >= 0.05 by the optimal policy), the paper's irrelevant ones
+        and the expected visits to each area."""
+        visits = expected_area_visits(self.world, self.task)
+        return {"start": self.task.start, "goal": self.task.goal,
+                "v_star": optimal_value(self.world, self.task),
+                "relevant_areas": list(relevant_areas(self.world, self.task, min_visits=0.05)),
+                "irrelevant_areas_paper": list(self.task.irrelevant_areas),
+                "expected_area_visits": {str(a): v for a, v in visits.items()}}
+
+    def state_name(self, s: int) -> str:
+        """Human name of learner state ``s``, e.g. ``"p2 (door open)"``."""
+        return self.spaces.state_name(s)
+
+    def action_name(self, a: int) -> str:
+        """Human name of learner action ``a``, e.g. ``"approach p2"``."""
+        return self.spaces.action_name(a)
+
     def decode(self, fs: int) -> tuple[str, frozenset[str]]:
         """``(position name, names of the open doors)`` of a full state."""
-        pos, mask = divmod(int(fs), 1 << self.model.n_doors)
+        pos, mask = divmod(int(fs), 1 << len(self.world.doors))
         opened = frozenset(d.name for i, d in enumerate(self.world.doors) if mask >> i & 1)
         return self.world.positions[pos], opened
 
-    def _info(self) -> dict[str, Any]:
-        pos = int(self.model.pos_of[self._fs])
-        return {"position": self.world.positions[pos], **super()._info()}
+    def info(self, fs: int) -> dict[str, Any]:
+        """What ``info`` says beyond every env's keys: the ``position``'s name."""
+        return {"position": self.world.positions[int(self.model.pos_of[fs])]}
 
-    def _frame(self) -> Frame:
-        robot, opened = self.decode(self._fs)
-        return Frame(self.world, self.task.name, robot, self.task.goal, opened, self._t,
-                     self._cause)
+    def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
+        robot, opened = self.decode(fs)
+        frame = Frame(self.world, self.task.name, robot, self.task.goal, opened, step, cause)
+        return ansi(frame) if mode == "ansi" else self._painter(frame)
 
-    def render(self) -> str | np.ndarray | None:
-        if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; pass render_mode="
-                            "'ansi' or 'rgb_array' to gymnasium.make")
-            return None
-        if self.render_mode == "ansi":
-            return ansi(self._frame())
-        if self._painter is None:
-            self._painter = MapPainter(self.world)
-        return self._painter(self._frame())
+    @cached_property
+    def _painter(self) -> MapPainter:
+        return MapPainter(self.world)
+
+
+def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (an env id's
+              goal: str | None = None, world: str | Path | World | None = None,  # class name)
+              render_mode: str | None = None) -> PDDLEnv:
+    """``gdq_pddl/Office-v0``: the env on the :class:`OfficeInstance` of a task (see the
+    module docstring for the arguments)."""
+    PDDLEnv.check_render_mode(render_mode, OfficeInstance.render_modes)
+    return PDDLEnv(instance=OfficeInstance.of(task, start, goal, world),
+                   render_mode=render_mode)
+
+
+OfficeEnv.metadata = {"render_modes": list(OfficeInstance.render_modes),  # what
+                      "render_fps": 4}  # gymnasium.make reads of an entry point

@@ -64,24 +64,40 @@ Taxi) is 1 for the ground actions whose precondition holds in the state.
 from __future__ import annotations
 
 import math
+import tomllib
+from contextlib import ExitStack
 from dataclasses import dataclass, replace
 from functools import cached_property
+from importlib.resources import as_file
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Discrete
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import shortest_path
 
-from gdq_pddl.dynamics import Dynamics, load_dynamics, parse_dynamics, split_action
+from gdq_pddl.abstraction.masks import graph_action_mask
+from gdq_pddl.dynamics import CostDist, Dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.model import PAIR_BYTES, ModelArrays, cost_arrays, merge_outcomes, outcome_csr
+from gdq_pddl.envs.model import (
+    PAIR_BYTES,
+    ModelArrays,
+    StateSpace,
+    compile_true_model,
+    merge_outcomes,
+)
+from gdq_pddl.envs.solve import solve
 from gdq_pddl.errors import PlanningError, WorldError
+from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
-from gdq_pddl.world import CostDist
+from gdq_pddl.resources import data_file
+from gdq_pddl.world import parse_world
 
 GOAL_POS = 1
 """``pos_of`` of a goal state in a PDDL model (0 elsewhere); what ``env_step`` compares."""
@@ -110,9 +126,9 @@ class PDDLInstance:
         """Read and check the files (errors name the file and line or key). A PPDDL
         domain needs no dynamics file; its planner knows its ``determinisation``."""
         planning = PlanningProblem.from_files(domain, problem, _checked(determinisation))
-        overlay = None if dynamics is None else load_dynamics(
-            dynamics, planning.source_domain, planning.problem,
-            overlay=planning.source_domain.probabilistic)
+        overlay = None if dynamics is None else parse_reality(
+            read_text(dynamics, lambda src, msg: WorldError(src, "", msg)), planning,
+            str(dynamics))
         return cls._built(planning, overlay, max_states)
 
     @classmethod
@@ -121,9 +137,7 @@ class PDDLInstance:
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
         planning = PlanningProblem.from_texts(domain, problem,
                                               determinisation=_checked(determinisation))
-        overlay = None if dynamics is None else parse_dynamics(
-            dynamics, planning.source_domain, planning.problem,
-            overlay=planning.source_domain.probabilistic)
+        overlay = None if dynamics is None else parse_reality(dynamics, planning)
         return cls._built(planning, overlay, max_states)
 
     @classmethod
@@ -197,22 +211,15 @@ class PDDLInstance:
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
                      f"of {self.n_states} states x {self.n_actions} ground actions",
                      "make the problem smaller (fewer objects)")
-        if self.ppddl:
-            model = compile_ppddl_model(self.graph, self.costs, self.dynamics)
-        else:
-            model = compile_pddl_model(self.graph, self.dynamics, self.costs)
+        model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
+                                   ppddl_outcomes(self.graph) if self.ppddl else None)
         check_reality(self.problem, self.graph, self.dynamics, model)
-        for array in model:
-            if isinstance(array, np.ndarray):
-                array.setflags(write=False)
         return model
 
     @cached_property
     def action_masks(self) -> np.ndarray:
         """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
         applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
-        from gdq_pddl.abstraction.masks import graph_action_mask
-
         return graph_action_mask(self.graph)
 
     @property
@@ -230,6 +237,63 @@ class PDDLInstance:
     def atoms(self, s: int) -> frozenset[str]:
         """The fluent atoms of state ``s``."""
         return self.graph.task.atoms(self.graph.states[s])
+
+    def optimal(self) -> dict[str, Any]:
+        """The ground truth: V* (value iteration on the true model), the shortest plan,
+        the sizes (a PDDL problem has no areas)."""
+        return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
+                "step_limit": self.dynamics.step_limit,
+                "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
+                "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
+                "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
+                "expected_area_visits": {}}
+
+    def state_name(self, s: int) -> str:
+        """State ``s`` as its sorted fluent atoms."""
+        return " ".join(sorted(self.atoms(s)))
+
+    @property
+    def step_limit_key(self) -> tuple[str, str]:
+        """The file and key that give the step limit."""
+        return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
+
+    start_state = 0
+    """The initial state (the env's state numbers are the graph's)."""
+    goal_pos = GOAL_POS
+    render_modes = ("ansi",)
+
+    def info(self, fs: int) -> dict[str, Any]:
+        """What ``info`` says beyond every env's keys: nothing."""
+        return {}
+
+    def render(self, mode: str, fs: int, step: int, cause: str) -> str:
+        """The state's atoms after ``step`` actions (and why the episode ended)."""
+        why = f" ({cause})" if cause else ""
+        return f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
+
+
+def parse_reality(text: str, planning: PlanningProblem, source: str = "<string>") -> Dynamics:
+    """The dynamics of ``planning`` from the TOML ``text`` of a dynamics file (an overlay
+    for a PPDDL domain), or of a world file (a ``[world]`` table): reality for
+    ``domains/office.pddl`` (:meth:`~gdq_pddl.world.World.dynamics`)."""
+    domain, problem = planning.source_domain, planning.problem
+    try:
+        is_world = "world" in tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        is_world = False  # parse_dynamics says what is wrong
+    if not is_world:
+        return parse_dynamics(text, domain, problem, source, overlay=domain.probabilistic)
+    world = parse_world(text, source)
+    dynamics = world.dynamics()
+    missing = sorted(set(dynamics.actions) - {a.name for a in domain.actions})
+    missing += sorted(d.name for d in world.doors if d.name not in problem.objects)
+    if domain.probabilistic or missing:
+        raise WorldError(source, "world", f"a world file is the reality of "
+                         f"domains/office.pddl and its problems; {domain.source} and "
+                         f"{problem.source} have no {', '.join(missing) or 'place for it'}"
+                         if missing else f"a world file gives outcomes, and the PPDDL "
+                         f"domain {domain.source} gives its own: give an overlay")
+    return dynamics
 
 
 def _checked(determinisation: str) -> str:
@@ -331,9 +395,6 @@ def reality_distances(model: ModelArrays) -> np.ndarray:
     """``float64[n_states]``: the fewest actions from the initial state (0) to each state
     in the true model, over outcomes of positive probability that do not end the trial
     (inf: none reaches it). One breadth-first search over the model's arrays."""
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import shortest_path
-
     n = model.obs_of.shape[0]
     src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
     keep = (model.prob > 0) & ~model.stuck & (model.next != src)
@@ -380,82 +441,36 @@ def contradiction(problem: Problem) -> str:
     return ""
 
 
-def compile_pddl_model(graph: StateGraph, dynamics: Dynamics,
-                       costs: list[CostDist] | None = None) -> ModelArrays:
-    """The dynamics of every (reachable state, ground action) pair as :class:`ModelArrays`
-    (``costs``: one per ground action; default: the dynamics file's, else 1)."""
-    ops = graph.task.ops
-    n_ops = len(ops)
-    parts = [split_action(op.name) for op in ops]
-    outcomes = [dynamics.outcomes(schema, args) for schema, args in parts]
-    schema_of = [schema for schema, _ in parts]
-    if costs is None:
-        costs = [o.cost or CostDist() for o in outcomes]
-
-    def pairs():
-        for s in range(graph.n_states):
-            applicable = dict(graph.edges(s))  # op -> next state (goal states: none)
-            for k in range(n_ops):
-                t = applicable.get(k)
-                if t is None:
-                    yield s * n_ops + k, {(s, False): 1.0}
-                else:
-                    o = outcomes[k]
-                    rest = max(0.0, 1.0 - o.success - o.stuck)
-                    yield s * n_ops + k, merge_outcomes(
-                        _split(s, t, o, rest, applicable, schema_of))
-
-    return _model(graph, pairs(), costs, dynamics)
+def graph_space(graph: StateGraph) -> StateSpace:
+    """A PDDL problem's :class:`~gdq_pddl.envs.model.StateSpace`: its reachable states
+    (goal states not expanded) and ground actions, seen as they are."""
+    n = graph.n_states
+    return StateSpace(
+        task=graph.task, n_states=n, edges=graph.edges, n_actions=len(graph.task.ops),
+        action_of_op=tuple(range(len(graph.task.ops))),
+        obs_of=np.arange(n, dtype=np.int64),
+        pos_of=np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64),
+        area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
 
 
-def compile_ppddl_model(graph: StateGraph, costs: list[CostDist],
-                        dynamics: Dynamics) -> ModelArrays:
-    """The true model of a PPDDL problem: every outcome of every applicable ground action
-    (``graph.task`` is a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`)."""
+def ppddl_outcomes(graph: StateGraph):
+    """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
+    every applicable ground action (``graph.task`` is a
+    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`), a no-op elsewhere."""
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
     index = graph.index
-
-    def pairs():
-        for s, state in enumerate(graph.states):
-            here = {} if graph.is_goal[s] else {op_pos[id(op)]: op
-                                                for op in task.applicable(state)}
-            for k in range(n_ops):
-                op = here.get(k)
-                if op is None:
-                    yield s * n_ops + k, {(s, False): 1.0}
-                else:
-                    yield s * n_ops + k, merge_outcomes(
-                        ((s, True) if o.stuck else (index[o.apply(state)], False),
-                         o.probability) for o in op.outcomes)
-
-    return _model(graph, pairs(), costs, dynamics)
-
-
-def _model(graph: StateGraph, pairs, costs: list[CostDist], dynamics: Dynamics) -> ModelArrays:
-    n_ops = len(graph.task.ops)
-    ptr, prob, (nxt, stuck) = outcome_csr(graph.n_states * n_ops, pairs, (np.int64, np.bool_))
-    pos_of = np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64)
-    return ModelArrays(
-        n_actions=n_ops, n_doors=0, r_max=float(dynamics.r_max),
-        step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
-        **cost_arrays(costs),
-        obs_of=np.arange(graph.n_states, dtype=np.int64), pos_of=pos_of,
-        area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
-
-
-def _split(s: int, t: int, o, rest: float, applicable: dict[int, int],
-           schema_of: list[str]) -> list[tuple[tuple[int, bool], float]]:
-    """Outcomes ``((next, stuck), prob)`` of an applicable action: success, stuck, the rest."""
-    out = [((t, False), o.success), ((s, True), o.stuck)]
-    if isinstance(o.failure, tuple):
-        slips = [u for k, u in applicable.items() if schema_of[k] in o.failure]
-        if slips:
-            out += [((u, False), rest / len(slips)) for u in slips]
-            return out
-    out.append(((s, False), rest))
-    return out
+    for s, state in enumerate(graph.states):
+        here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
+        for k in range(n_ops):
+            op = here.get(k)
+            if op is None:
+                yield s * n_ops + k, {(s, False): 1.0}
+            else:
+                yield s * n_ops + k, merge_outcomes(
+                    ((s, True) if o.stuck else (index[o.apply(state)], False), o.probability)
+                    for o in op.outcomes)
 
 
 SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
@@ -465,23 +480,22 @@ SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
 
 def shipped_names(kind: str) -> list[str]:
     """The names of the shipped files of ``kind`` (``domain``, ``problem``, ``dynamics``)."""
-    from gdq_pddl.resources import data_file
-
     folder, suffix = SHIPPED[kind]
-    return sorted(f.name.removesuffix(suffix) for f in data_file(folder).iterdir()
-                  if f.name.endswith(suffix))
+    found = [*data_file(folder).iterdir(), *(data_file().iterdir() if kind == "dynamics"
+                                           else ())]  # the built-in worlds are dynamics
+    return sorted(f.name.removesuffix(suffix) for f in found if f.name.endswith(suffix))
 
 
 def _shipped(kind: str, value: str | Path):
     """The shipped file (a Traversable) that ``value`` names, or None when ``value`` is
     a path: a bare name without a suffix that is not an existing file names one."""
-    from gdq_pddl.resources import data_file
-
     path = Path(value)
     if not isinstance(value, str) or path.suffix or path.name != value or path.exists():
         return None
     folder, suffix = SHIPPED[kind]
     found = data_file(folder, value + suffix)
+    if not found.is_file() and kind == "dynamics":
+        found = data_file(value + suffix)  # a built-in world file: the office's reality
     if not found.is_file():
         raise PlanningError(f"{kind} {value!r}: no such file, and no shipped {kind} of that "
                             f"name (shipped: {', '.join(shipped_names(kind))})")
@@ -494,9 +508,6 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
     """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
     ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
     dynamics file; a PPDDL domain's planner knows its ``determinisation``."""
-    from contextlib import ExitStack
-    from importlib.resources import as_file
-
     if domain is None or problem is None:
         raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
                             f"domains {', '.join(shipped_names('domain'))}; problems "
@@ -511,43 +522,57 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
 
 
 class PDDLEnv(ModelEnv):
-    """A PDDL problem under a dynamics file (see the module docstring)."""
+    """The env of an instance of the one pipeline: a PDDL problem under its dynamics
+    (see the module docstring), or a world's task through the office's map
+    (:class:`~gdq_pddl.envs.office.OfficeInstance`, ``gdq_pddl/Office-v0``).
+
+    The instance's own attributes are the env's too (``env.unwrapped.world``,
+    ``.atoms(s)``, ``.action_name(a)``...)."""
 
     metadata = {"render_modes": ["ansi"], "render_fps": 4}
+    """A PDDL problem's; an env's own are its instance's."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
-                 dynamics: str | Path | None = None, instance: PDDLInstance | None = None,
+                 dynamics: str | Path | None = None, instance: Any = None,
                  render_mode: str | None = None,
                  determinisation: str = DETERMINISATIONS[0]) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} "
-                             f"or None, got {render_mode!r}")
+        self.check_render_mode(render_mode, PDDLInstance.render_modes if instance is None
+                               else instance.render_modes)
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
         self.instance = instance
+        self.metadata = {**self.metadata, "render_modes": list(instance.render_modes)}
         self.model = instance.model
         self.observation_space = Discrete(instance.n_states)
         self.action_space = Discrete(instance.n_actions)
         self.render_mode = render_mode
-        self.goal_pos = GOAL_POS
-        self.start_state = 0
+        self.goal_pos = instance.goal_pos
+        self.start_state = instance.start_state
         self._begin()
+
+    @staticmethod
+    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
+        """Refuse a render mode the instance cannot draw (a ``ValueError``)."""
+        if render_mode is not None and render_mode not in modes:
+            raise ValueError(f"render_mode must be one of {list(modes)} or None, "
+                             f"got {render_mode!r}")
+
+    def __getattr__(self, name: str) -> Any:
+        instance = self.__dict__.get("instance")
+        if instance is None or name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(instance, name)
 
     @property
     def action_masks(self) -> np.ndarray:
         return self.instance.action_masks
 
-    def action_name(self, a: int) -> str:
-        return self.instance.action_name(a)
-
-    def atoms(self, s: int) -> frozenset[str]:
-        return self.instance.atoms(s)
-
-    def render(self) -> str | None:
+    def render(self) -> str | np.ndarray | None:
         if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode="
+                            "'ansi' to gymnasium.make")
             return None
-        cause = f" ({self._cause})" if self._cause else ""
-        return f"step {self._t}{cause}: " + " ".join(sorted(self.atoms(self._fs)))
+        return self.instance.render(self.render_mode, self._fs, self._t, self._cause)
 
     def _info(self) -> dict[str, Any]:
-        return super()._info()
+        return {**self.instance.info(self._fs), **super()._info()}

@@ -82,7 +82,7 @@ class MapPainter:
 
     def __init__(self, world: World, size: tuple[float, float] = (6.0, 6.0),
                  dpi: int = 80) -> None:
-        import networkx as nx
+        import networkx as nx  # start-up time: loaded only when a map is drawn
 
         self.world, self.size, self.dpi = world, size, dpi
         graph = nx.Graph()
@@ -94,6 +94,7 @@ class MapPainter:
 
     def __call__(self, frame: Frame) -> np.ndarray:
         """Render ``frame``; returns a fresh ``uint8[H, W, 3]`` array."""
+        # start-up time: matplotlib loads only when a frame is drawn
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
@@ -140,7 +141,7 @@ class MapPainter:
         nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
         range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
         """
-        from matplotlib.cm import ScalarMappable
+        from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 
         w, xy = self.world, self.xy

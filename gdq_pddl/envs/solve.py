@@ -24,9 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import norm
 
+from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.limits import check_memory
-from gdq_pddl.world import COST_KINDS, Task, World
+from gdq_pddl.world import Task, World
 
 TIE_TOLERANCE = 1e-9
 """Actions whose value is within this of the best count as tied (lowest index wins)."""

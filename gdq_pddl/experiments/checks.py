@@ -10,8 +10,13 @@ workers then share.
 
 from __future__ import annotations
 
+from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.pddl_env import PDDLInstance
+from gdq_pddl.envs.solve import check_solvable
 from gdq_pddl.errors import WorldError
 from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.work import instance_of
+from gdq_pddl.learners.context import shortest_plans
 from gdq_pddl.limits import check_memory
 
 EPISODE_BYTES = 400
@@ -28,10 +33,26 @@ def preflight(experiments: list[Experiment], jobs: int = 1) -> None:
     experiments fail or give meaningless results (see the module docstring)."""
     check_sizes(experiments, jobs)
     for exp in experiments:
-        if exp.pddl is not None:
-            _check_pddl(exp)
-        else:
-            _check_office(exp)
+        for spec, _ in exp.schedule:
+            check_instance(instance_of(exp, spec))
+
+
+def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
+    """Refuse an instance whose V* would not fit in memory, or on which no episode can
+    reach the goal: no plan from the start, or a shortest plan longer than the step
+    limit (a :class:`~gdq_pddl.errors.WorldError` naming the file and key). Building a
+    PDDL problem's model checks the same (:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`)."""
+    model = instance.model
+    source, key = instance.step_limit_key
+    check_solvable(model, f"{source}: {key}")
+    shortest = int(shortest_plans(instance).length[model.obs_of[instance.start_state]])
+    if shortest < 0:  # World.resolve checks reachability: the knowledge disagrees
+        raise WorldError(source, f"tasks.{instance.name}", "the planner finds no plan for "
+                         f"task {instance.name}")
+    if shortest > model.step_limit:
+        raise WorldError(source, key, f"{model.step_limit} is less than the shortest plan of "
+                         f"task {instance.name} ({shortest} actions): no episode can reach "
+                         "the goal")
 
 
 def check_sizes(experiments: list[Experiment], jobs: int = 1) -> None:
@@ -51,37 +72,3 @@ def check_report_size(experiments: list[Experiment]) -> None:
     rows = sum(e.runs * len(e.methods) * e.episodes for e in experiments)
     check_memory(rows * ROW_BYTES, f"the report: {rows:,} episodes read back from "
                  "episodes.csv", "give fewer --runs or --episodes, or --no-report")
-
-
-def _check_office(exp: Experiment) -> None:
-    from gdq_pddl.envs.model import compile_model
-    from gdq_pddl.envs.solve import check_solvable
-    from gdq_pddl.experiments.work import load_world_named, resolve_task
-    from gdq_pddl.learners.context import office_plan_table
-    from gdq_pddl.spaces import LearnerSpaces
-
-    world = load_world_named(exp.world)
-    check_solvable(compile_model(world), f"{world.source}: world.step_limit")
-    for spec, _ in exp.schedule:
-        task = resolve_task(world, spec)
-        if task.start == task.goal:
-            raise WorldError(world.source, f"tasks.{task.name}", f"start and goal are the "
-                             f"same position ({task.start})")
-        table = office_plan_table(world, task.goal, "graph", 0.0)
-        shortest = int(table.length[LearnerSpaces(world).state(task.start)])
-        if shortest < 0:  # World.resolve checks reachability: the knowledge disagrees
-            raise WorldError(world.source, f"tasks.{task.name}", f"the planner finds no "
-                             f"plan from {task.start} to {task.goal}")
-        if shortest > world.step_limit:
-            raise WorldError(world.source, "world.step_limit", f"{world.step_limit} is less "
-                             f"than the shortest plan of task {task.name} ({shortest} "
-                             "actions): no episode can reach the goal")
-
-
-def _check_pddl(exp: Experiment) -> None:
-    from gdq_pddl.envs.solve import check_solvable
-    from gdq_pddl.experiments.work import load_pddl_instance
-
-    instance = load_pddl_instance(tuple(exp.pddl))
-    model = instance.model  # grounds, explores and checks the task (PDDLInstance.graph)
-    check_solvable(model, f"{instance.dynamics.source}: dynamics.step_limit")

@@ -19,13 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.experiments.protocol import Experiment
-from gdq_pddl.experiments.work import load_world_named, resolve_task
+from gdq_pddl.experiments.work import instance_of
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
 POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "state_name",
                   "action_name")
-N_AREAS = 7
 
 
 def collect(out: Path, experiments: list[Experiment]) -> None:
@@ -33,7 +32,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     from gdq_pddl.experiments.runner import atomic_write, read_unit
 
     units = [u for e in experiments for u in e.units()]
-    n_areas = N_AREAS if any(e.pddl is None for e in experiments) else 0
+    n_areas = max(int(instance_of(e, spec).model.area_of_pos.max())
+                  for e in experiments for spec, _ in e.schedule)
     header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, n_areas + 1))))
 
     def write_episodes(tmp: Path) -> None:
@@ -70,15 +70,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
 
 def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]]:
     """``(state name, action name)`` of learner indices in ``exp``'s world or problem."""
-    if exp.pddl is not None:
-        from gdq_pddl.experiments.work import load_pddl_instance
-
-        instance = load_pddl_instance(tuple(exp.pddl))
-        return (lambda s: " ".join(sorted(instance.atoms(s)))), instance.action_name
-    from gdq_pddl.spaces import LearnerSpaces
-
-    spaces = LearnerSpaces(load_world_named(exp.world))
-    return spaces.state_name, spaces.action_name
+    instance = instance_of(exp, exp.schedule[0][0])
+    return instance.state_name, instance.action_name
 
 
 CHUNK = 50_000
@@ -110,48 +103,16 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
-    """V*, relevant areas and the paper's irrelevant areas of each task the experiments use."""
-    from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
-
+    """The ground truth of each task the experiments use (its instance's
+    :meth:`optimal`), keyed ``<task>`` (the office), ``<task>@<world>`` or
+    ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
-        if exp.pddl is not None:
-            out.update(pddl_optimal(exp))
-            continue
-        world = load_world_named(exp.world)
+        files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))
         for spec, _ in exp.schedule:
-            task = resolve_task(world, spec)
-            key = task.name if exp.world == "office" else f"{task.name}@{exp.world}"
-            if key in out:
-                continue
-            visits = expected_area_visits(world, task)
-            out[key] = {
-                "world": exp.world,
-                "start": task.start,
-                "goal": task.goal,
-                "v_star": optimal_value(world, task),
-                "relevant_areas": list(relevant_areas(world, task, min_visits=0.05)),
-                "irrelevant_areas_paper": list(task.irrelevant_areas),
-                "expected_area_visits": {str(a): v for a, v in visits.items()},
-            }
+            instance = instance_of(exp, spec)
+            place = files.get("problem", exp.world)
+            key = instance.name if place == "office" else f"{instance.name}@{place}"
+            if key not in out:
+                out[key] = {"world": exp.world, **files, **instance.optimal()}
     return out
-
-
-def pddl_optimal(exp: Experiment) -> dict:
-    """V* (value iteration on the true model) and the shortest plan length of a PDDL
-    experiment's problem, keyed ``<schedule entry>@<problem file>``."""
-    from gdq_pddl.envs.pddl_env import GOAL_POS
-    from gdq_pddl.envs.solve import solve
-    from gdq_pddl.experiments.work import load_pddl_instance
-
-    instance = load_pddl_instance(tuple(exp.pddl))
-    v_star = float(solve(instance.model, GOAL_POS).V[0, 0])
-    shortest = int(instance.graph.distances[0])
-    return {f"{spec}@{exp.pddl[1]}": {
-        "world": "pddl", "domain": exp.pddl[0], "problem": exp.pddl[1],
-        "dynamics": exp.pddl[2], "determinisation": instance.determinisation,
-        "r_max": instance.dynamics.r_max, "step_limit": instance.dynamics.step_limit,
-        "v_star": v_star, "shortest_plan": shortest,
-        "states": instance.n_states, "actions": instance.n_actions,
-        "relevant_areas": [], "irrelevant_areas_paper": [], "expected_area_visits": {},
-    } for spec, _ in exp.schedule}

@@ -7,13 +7,20 @@ it returns.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.experiments.protocol import Hyper, Unit
+from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+from gdq_pddl.experiments.knowledge import derived_world, knowledge_world
+from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
+from gdq_pddl.learners import precompile
 from gdq_pddl.learners.agents import make_learner as learner_by_name
+from gdq_pddl.learners.context import TaskContext, task_context
+from gdq_pddl.learners.episodes import run_episodes
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
 
@@ -23,8 +30,6 @@ def load_world_named(name: str) -> World:
     if name in ("office", "office_robot"):
         return builtin_world(name)
     if name.startswith("office:"):  # in-memory variants, see experiments/knowledge.py
-        from gdq_pddl.experiments.knowledge import derived_world
-
         return derived_world(name)
     return load_world(Path(name))
 
@@ -44,29 +49,41 @@ def make_learner(method: str, context, hyper: Hyper):
                            epsilon=hyper.epsilon)
 
 
+def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
+    """The instance schedule entry ``spec`` of ``exp`` runs on: the experiment's PDDL
+    problem (``exp.pddl``: the files; each entry names it), or the task ``spec`` of its
+    world (a task name or ``start->goal``)."""
+    if exp.pddl is not None:
+        return load_pddl_instance(tuple(exp.pddl))
+    world = load_world_named(exp.world)
+    return OfficeInstance(world, resolve_task(world, spec))
+
+
+def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
+    """The learners' :class:`~gdq_pddl.learners.context.TaskContext` of ``instance``,
+    planned with ``exp.planner`` on ``exp.knowledge`` (None: the instance's own)."""
+    knowledge = None if exp.knowledge is None else \
+        knowledge_world(instance.world, exp.knowledge)
+    return task_context(instance, exp.planner, knowledge=knowledge)
+
+
 def run_unit(unit: Unit) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
-    from gdq_pddl.envs.office import OfficeEnv
-    from gdq_pddl.learners.episodes import run_episodes
-
     exp = unit.experiment
-    if exp.pddl is not None:
-        return _run_pddl_unit(unit)
-    world = load_world_named(exp.world)
     rng, env_seed = unit.seeds()
-    learner, parts = None, []
+    learner, parts, names = None, [], []
     for i, (spec, episodes) in enumerate(exp.schedule):
-        task = resolve_task(world, spec)
-        context = _office_context(exp, world, spec)
+        instance = instance_of(exp, spec)
+        context = context_of(exp, instance)
         if learner is None:
             learner = make_learner(unit.method, context, exp.hyper)
         else:
             learner.start_task(context)
-        env = OfficeEnv(world=world, start=task.start, goal=task.goal)
+        env = PDDLEnv(instance=instance)
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
-    return _unit_result(parts, [resolve_task(world, t).name for t, _ in exp.schedule], exp,
-                        learner)
+        names.append(instance.name)
+    return _unit_result(parts, names, exp, learner)
 
 
 def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.ndarray]:
@@ -86,33 +103,10 @@ def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.nd
 def load_pddl_instance(files: tuple[str, ...]):
     """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``
     or ``(domain, problem, dynamics, determinisation)`` (dynamics ``""``: none)."""
-    from gdq_pddl.envs.pddl_env import PDDLInstance
-
     domain, problem, dynamics, *determinisation = files
     return PDDLInstance.from_files(domain, problem, dynamics or None,
                                    determinisation=determinisation[0] if determinisation
                                    else "all-outcomes")
-
-
-def _run_pddl_unit(unit: Unit) -> dict[str, np.ndarray]:
-    """:func:`run_unit` on a PDDL problem: every schedule entry runs on it (no areas)."""
-    from gdq_pddl.envs.pddl_env import PDDLEnv
-    from gdq_pddl.learners.context import pddl_task_context
-    from gdq_pddl.learners.episodes import run_episodes
-
-    exp = unit.experiment
-    instance = load_pddl_instance(tuple(exp.pddl))
-    rng, env_seed = unit.seeds()
-    context = pddl_task_context(instance, exp.planner)
-    learner = make_learner(unit.method, context, exp.hyper)
-    env = PDDLEnv(instance=instance)
-    parts = []
-    for i, (_, episodes) in enumerate(exp.schedule):
-        if i:
-            learner.start_task(context)
-        env.reset(seed=env_seed + i)
-        parts.append(run_episodes(learner, env, episodes, rng))
-    return _unit_result(parts, [t for t, _ in exp.schedule], exp, learner)
 
 
 def warm_up(units: list[Unit]) -> None:
@@ -123,10 +117,6 @@ def warm_up(units: list[Unit]) -> None:
     kernels), then, once the other process is done, one tiny run each loads the loop
     from numba's cache.
     """
-    from dataclasses import replace
-
-    from gdq_pddl.learners import precompile
-
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
         if (u.experiment.world, u.method) not in tiny:
@@ -146,19 +136,5 @@ def warm_up(units: list[Unit]) -> None:
 def first_learner(unit: Unit):
     """A learner of ``unit`` for its first task, OptInit done (what it learns from)."""
     exp = unit.experiment
-    if exp.pddl is not None:
-        from gdq_pddl.learners.context import pddl_task_context
-
-        context = pddl_task_context(load_pddl_instance(tuple(exp.pddl)), exp.planner)
-    else:
-        context = _office_context(exp, load_world_named(exp.world), exp.schedule[0][0])
+    context = context_of(exp, instance_of(exp, exp.schedule[0][0]))
     return make_learner(unit.method, context, exp.hyper)
-
-
-def _office_context(exp, world: World, spec: str):
-    """The task context of schedule entry ``spec`` of an office experiment."""
-    from gdq_pddl.experiments.knowledge import knowledge_world
-    from gdq_pddl.learners.context import office_task_context
-
-    task = resolve_task(world, spec)
-    return office_task_context(knowledge_world(world, exp.knowledge), task, exp.planner)

@@ -1,17 +1,32 @@
-"""What a learner is told about a task: start, goal states and the planner's plans."""
+"""What a learner is told about a task: start, goal states and the planner's plans.
+
+:func:`task_context` is the last step of the one pipeline: the :class:`TaskContext` of an
+instance, a PDDL problem (:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`: the learner's
+states are its reachable states) or a world's task seen through the office's map
+(:class:`~gdq_pddl.envs.office.OfficeInstance`: the learner's 31 states).
+"""
 
 from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from gdq_pddl.abstraction import OfficeAbstraction, PlanTable, build_plan_table
+from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
 from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph, prior_from_task
+from gdq_pddl.abstraction.routes import route_plan_table
+from gdq_pddl.envs.compact import CompactModel, compile_compact
+from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.pddl_env import PDDLInstance
+from gdq_pddl.envs.solve_compact import next_states
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.learners.tables import table_bytes
+from gdq_pddl.planning import PlanningProblem, get_planner
+from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World
+from gdq_pddl.world import Task, World, office_problem
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,20 +79,6 @@ def empty_plan_table(n_states: int, n_actions: int) -> PlanTable:
                      np.full(n_states, -1, dtype=np.int64))
 
 
-def _domain_text() -> str:
-    from gdq_pddl import resources
-
-    try:
-        return resources.domain_text()
-    except FileNotFoundError:
-        # A source checkout: the domain lives at the repository root and is only
-        # copied into gdq_pddl/data/ when the wheel is built.
-        import gdq_pddl
-
-        return (Path(gdq_pddl.__file__).resolve().parents[1] / "domains" /
-                "office.pddl").read_text(encoding="utf-8")
-
-
 def successor_capacity(model) -> int:
     """The most distinct next learner states of one (learner state, action) pair in a
     true model, at least 1: a :class:`~gdq_pddl.envs.model.ModelArrays` (exact: the
@@ -85,9 +86,6 @@ def successor_capacity(model) -> int:
     :class:`~gdq_pddl.envs.compact.CompactModel` (an upper bound: an outcome whose next
     position has a door other than the one acted at may show it open or closed; a pair
     with no outcome stays put). Cached per model."""
-    from gdq_pddl.envs.compact import CompactModel
-    from gdq_pddl.envs.solve_compact import next_states
-
     hit = _CAPACITY.get(id(model.ptr))
     if hit is not None and hit[0]() is model.ptr:
         return hit[1]
@@ -117,8 +115,6 @@ def office_successor_capacity(world: World) -> int:
     hit = _WORLD_CAPACITY.get(id(world))
     if hit is not None and hit[0]() is world:
         return hit[1]
-    from gdq_pddl.envs.compact import compile_compact
-
     capacity = successor_capacity(compile_compact(world))
     _WORLD_CAPACITY[id(world)] = (weakref.ref(world), capacity)
     return capacity
@@ -131,7 +127,7 @@ _TABLES: dict[tuple, PlanTable] = {}
 
 def _knowledge_key(world: World) -> tuple:
     """What the planner's knowledge depends on (not the dynamics' probabilities, only
-    whether a door can open at all: see :func:`gdq_pddl.pddl.office.office_problem`)."""
+    whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
     return (world.positions, world.edges,
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 
@@ -154,13 +150,9 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
     key = (_knowledge_key(world), goal, planner, float(tolerance), kind)
     table = _TABLES.get(key)
     if table is None:
-        from gdq_pddl.planning import get_planner
-
         problem = _office_planning_problem(world, goal)
         abstraction = OfficeAbstraction(world)
         if kind == "routes":
-            from gdq_pddl.abstraction.routes import route_plan_table
-
             spaces = abstraction.spaces
             crossings = {spaces.action("gothrough", p) for p in world.door_at}
             table = route_plan_table(abstraction, problem,
@@ -176,12 +168,9 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
 def _office_planning_problem(world: World, goal: str):
     """The knowledge of ``world`` as a :class:`~gdq_pddl.planning.PlanningProblem` with
     goal ``goal`` (and any other position as its start)."""
-    from gdq_pddl.pddl.office import office_problem
-    from gdq_pddl.planning import PlanningProblem
-
     start = next(p for p in world.positions if p != goal)
     return PlanningProblem.from_texts(
-        _domain_text(), office_problem(world, Task("plan-table", start, goal)))
+        domain_text(), office_problem(world, Task("plan-table", start, goal)))
 
 
 _PRIORS: dict[tuple, PriorModel] = {}
@@ -204,8 +193,8 @@ def office_task_context(world: World, task: Task | str, planner: str = "graph",
                         darling_tolerance: float = 0.3, darling_kind: str = "all") -> TaskContext:
     """The :class:`TaskContext` of ``task`` (a Task or a task name) in an office world;
     ``darling_kind`` says how its tolerant table is built (:data:`TOLERANT_KINDS`)."""
-    if isinstance(task, str):
-        task = world.task(task)
+    if not isinstance(task, Task):
+        task = world.task(task)  # a name; anything else is refused there
     spaces = LearnerSpaces(world)
     goal = np.array([p == task.goal for p, _ in spaces.states], dtype=np.bool_)
     return TaskContext(
@@ -232,8 +221,6 @@ def pddl_plan_table(instance, planner: str = "graph", tolerance: float = 0.0) ->
     (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other backend is asked
     once per state. Cached per (instance, planner, tolerance).
     """
-    from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
-
     key = (id(instance), planner, float(tolerance))
     hit = _PDDL_TABLES.get(key)
     if hit is not None and hit[0] is instance:
@@ -241,8 +228,6 @@ def pddl_plan_table(instance, planner: str = "graph", tolerance: float = 0.0) ->
     if planner == "graph":
         table = graph_plan_table(instance.graph, tolerance)
     else:
-        from gdq_pddl.planning import get_planner
-
         abstraction = PDDLAbstraction(instance.graph)
         table = build_plan_table(abstraction, instance.problem, get_planner(planner),
                                  abstraction.goal(), tolerance)
@@ -254,9 +239,6 @@ def pddl_task_context(instance, planner: str = "graph",
                       darling_tolerance: float = 0.3) -> TaskContext:
     """The :class:`TaskContext` of a PDDL problem: learner states are its reachable states
     (0 is the initial one), actions its ground actions, goal where the problem's goal holds."""
-    from gdq_pddl.errors import PlanningError
-    from gdq_pddl.learners.tables import table_bytes
-
     n_s, n_a = instance.n_states, instance.n_actions
     k = successor_capacity(instance.model)
     if table_bytes(n_s, n_a, k) > MAX_TABLE_BYTES:
@@ -271,3 +253,24 @@ def pddl_task_context(instance, planner: str = "graph",
         darling_plans=pddl_plan_table(instance, planner, darling_tolerance),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
         prior=prior_from_graph(instance.graph))
+
+
+def shortest_plans(instance: PDDLInstance | OfficeInstance,
+                   planner: str = "graph") -> PlanTable:
+    """The shortest plans of every learner state of an instance (cached)."""
+    if isinstance(instance, OfficeInstance):
+        return office_plan_table(instance.world, instance.task.goal, planner, 0.0)
+    return pddl_plan_table(instance, planner, 0.0)
+
+
+def task_context(instance: PDDLInstance | OfficeInstance, planner: str = "graph",
+                 darling_tolerance: float = 0.3, knowledge: World | None = None,
+                 darling_kind: str = "all") -> TaskContext:
+    """The :class:`TaskContext` of an instance of the one pipeline. A world's task is
+    planned on ``knowledge`` (another world's building: knowledge that differs from
+    reality on purpose; None: the instance's own); ``darling_kind`` as in
+    :func:`office_task_context`."""
+    if isinstance(instance, OfficeInstance):
+        return office_task_context(knowledge or instance.world, instance.task, planner,
+                                   darling_tolerance, darling_kind)
+    return pddl_task_context(instance, planner, darling_tolerance)
