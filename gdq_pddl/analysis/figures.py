@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import multiprocessing as mp
 import os
-import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,12 +25,10 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
-from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
-from gdq_pddl.analysis.sections.methods import curves_stem, uncovered  # noqa: E402
+from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
 from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
-from gdq_pddl.analysis.study import Study  # noqa: E402
+from gdq_pddl.analysis.study import Study, curves_stem, slug  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
-from gdq_pddl.errors import GdqError  # noqa: E402
 from gdq_pddl.outputs import save_figure  # noqa: E402
 from gdq_pddl.world import Task, World  # noqa: E402
 
@@ -54,11 +51,6 @@ def method_colour(method: str) -> str:
     return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
 
 
-def slug(label: str) -> str:
-    """A task label as a file-name part (``p0->p17`` -> ``p0_p17``)."""
-    return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "task"
-
-
 @dataclass(frozen=True)
 class FigureOptions:
     """How figures are drawn."""
@@ -69,7 +61,9 @@ class FigureOptions:
     dpi: int = 120
 
 
-def _save(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions) -> list[Path]:
+def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = FigureOptions()
+             ) -> list[Path]:
+    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``; close it."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for ext in opts.formats:
@@ -134,18 +128,9 @@ def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
     ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
 
 
-def _task(study: Study, experiment: str, task: str) -> Task | None:
-    try:
-        return study.task(experiment, task)
-    except GdqError:
-        return None
-
-
 def _task_title(study: Study, experiment: str, task: str) -> str:
-    if study.is_pddl(experiment):
-        return f"problem {task}"
-    t = _task(study, experiment, task)
-    return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"Task {task}"
+    t = study.task(experiment, task)
+    return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"problem {task}"
 
 
 def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
@@ -156,7 +141,7 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     exp = experiment
     if not study.has(exp):
         return []
-    ep = study.episodes
+    ep = study
     tasks = ep.tasks(exp)
     fig, axes = _grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
@@ -182,7 +167,7 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     stem = "fraction_of_vstar" if fraction_of_vstar else "learning_curves"
     if exp != TASKS_EXPERIMENT:
         stem = curves_stem(exp) if not fraction_of_vstar else f"{stem}_{slug(exp)}"
-    return _save(fig, out_dir, stem, opts)
+    return save_all(fig, out_dir, stem, opts)
 
 
 def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
@@ -191,7 +176,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     exps = study.switch_experiments
     if not exps:
         return []
-    ep = study.episodes
+    ep = study
     fig, axes = _grid(len(exps))
     for ax, exp in zip(axes, exps, strict=True):
         for method in ep.methods(exp):
@@ -209,7 +194,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     axes[0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"goal change: mean over runs +- SE, {opts.window}-episode moving average",
                  fontsize=11)
-    return _save(fig, out_dir, "switch_curves", opts)
+    return save_all(fig, out_dir, "switch_curves", opts)
 
 
 _LAYOUTS: dict[int, tuple[World, dict[str, np.ndarray]]] = {}
@@ -257,11 +242,9 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
     and sized by its area's visits summed over a run, mean over runs (the CSV counts areas,
     not positions, so all positions of an area share a value)."""
     paths: list[Path] = []
-    ep = study.episodes
-    if not ep.areas:
-        return paths
+    ep = study
     for exp in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT):
-        if not study.has(exp):
+        if not study.has(exp) or not study.has_areas(exp):
             continue
         world = study.world(exp)
         xy = _map_xy(world)
@@ -291,7 +274,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 for p, value in zip(world.positions, values, strict=True):
                     ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                             color="white" if value > 0.3 * top else "black", in_layout=False)
-                _mark_task(ax, xy, _task(study, exp, task))
+                _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
             fig.colorbar(sm, cax=cax, label="area visits per run (mean)")
@@ -299,7 +282,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
             fig.suptitle(f"{label}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
             stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{slug(task)}"
-            paths += _save(fig, out_dir, stem, opts)
+            paths += save_all(fig, out_dir, stem, opts)
     return paths
 
 
@@ -316,11 +299,10 @@ def _draw_route(ax: Axes, xy: dict[str, np.ndarray], positions: Sequence[str],
 def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
                 experiment: str = TASKS_EXPERIMENT, task: str = "C") -> list[Path]:
     """The route each method's final greedy policy takes (most common over runs)."""
-    if study.policies is None or not study.has(experiment):
+    if study.policies is None or not study.has(experiment) or \
+            study.task(experiment, task) is None:
         return []
     world = study.world(experiment)
-    if _task(study, experiment, task) is None:
-        return []
     xy = _map_xy(world)
     best = study.truth(experiment, task).optimal_route_areas
     panels = []
@@ -340,7 +322,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
             ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                     in_layout=False)
         _draw_route(ax, xy, summary.example.positions, method_colour(method))
-        _mark_task(ax, xy, _task(study, experiment, task))
+        _mark_task(ax, xy, study.task(experiment, task))
         on_best = summary.on_route(world, best)
         areas = "->".join(map(str, summary.areas)) or "(none)"
         ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
@@ -351,7 +333,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
     fig.suptitle(f"{_task_title(study, experiment, task)}: most common final greedy route "
                  f"per method (optimal: areas {'->'.join(map(str, best))})", fontsize=10)
     stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{slug(task)}"
-    return _save(fig, out_dir, stem, opts)
+    return save_all(fig, out_dir, stem, opts)
 
 
 def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
@@ -360,7 +342,7 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     exp = ROBOT_EXPERIMENT
     if not study.has(exp):
         return []
-    ep = study.episodes
+    ep = study
     fig, ax = plt.subplots(figsize=(6.0, 3.8), layout="constrained")
     tasks = ep.tasks(exp)
     for method in ep.methods(exp):
@@ -370,7 +352,7 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
             _band(ax, x, m, method, window=1)
             ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
     if len(tasks) == 1:
-        ax.axhline(study.truth(exp, tasks[0]).v_star, color="black", ls="--", lw=0.8,
+        ax.axhline(study.v_star(exp, tasks[0]), color="black", ls="--", lw=0.8,
                    label="V*")
     ax.set_xlabel("trial")
     ax.set_ylabel("return (cumulative reward) per trial")
@@ -378,7 +360,7 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
                  "(unsmoothed)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(fig, out_dir, "robot_returns", opts)
+    return save_all(fig, out_dir, "robot_returns", opts)
 
 
 def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
@@ -389,10 +371,10 @@ def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
     target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
     jobs: list[tuple[Callable[..., list[Path]], dict]] = [
         (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
-    jobs += [(learning_curves, {"experiment": exp}) for exp in uncovered(study)]
+    jobs += [(learning_curves, {"experiment": exp}) for exp in study.uncovered]
     jobs += [(switch_curves, {}), (visit_heatmaps, {}), (task_routes, {})]
     if study.has(ROBOT_EXPERIMENT):
-        tasks = study.episodes.tasks(ROBOT_EXPERIMENT)
+        tasks = study.tasks(ROBOT_EXPERIMENT)
         if tasks:
             jobs.append((task_routes, {"experiment": ROBOT_EXPERIMENT, "task": tasks[-1]}))
     jobs.append((robot_returns, {}))
@@ -412,7 +394,6 @@ def _draw(jobs: list, study: Study, target: Path, opts: FigureOptions) -> list[l
     if len(jobs) < 2 or (os.cpu_count() or 1) < 2 or mp.get_start_method(True) not in (
             None, "fork"):
         return [job(study, target, opts, **kw) for job, kw in jobs]
-    study.episodes  # noqa: B018  (load episodes.csv here, not once per process)
     _JOBS = (jobs, study, target, opts)
     try:
         with mp.get_context("fork").Pool(2) as pool:

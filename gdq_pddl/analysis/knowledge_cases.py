@@ -25,8 +25,11 @@ from gdq_pddl.analysis.knowledge_measures import (
     threshold,
 )
 from gdq_pddl.analysis.routes import optimal_route, walk_policy
+from gdq_pddl.analysis.study import Study
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.solve import solve_task
+from gdq_pddl.experiments.knowledge import CASES, knowledge_world
+from gdq_pddl.experiments.work import load_world_named, resolve_task
 from gdq_pddl.world import Task
 
 
@@ -87,15 +90,9 @@ def _experiments(out: Path) -> dict[str, dict]:
 
 def analyse(out: str | Path) -> list[CaseResult]:
     """Measure every case of an output folder of ``gdq-pddl knowledge``."""
-    from gdq_pddl.analysis.data import load_episodes, load_policies
-    from gdq_pddl.experiments.knowledge import CASES, knowledge_world
-    from gdq_pddl.experiments.work import load_world_named, resolve_task
-
     out = Path(out)
     exps = _experiments(out)
-    episodes = load_episodes(out / "episodes.csv")
-    policies = load_policies(out)
-    grouped = policies.grouped() if policies is not None else {}
+    study = Study.open(out)
     described = {c.name: c.description for c in CASES}
     names = sorted({n.rsplit("--", 1)[0] for n in exps if n.endswith(("--accurate", "--wrong"))},
                    key=lambda n: (list(described).index(n) if n in described else 99, n))
@@ -117,10 +114,10 @@ def analyse(out: str | Path) -> list[CaseResult]:
         for kind, exp in ((ACCURATE, acc), (WRONG, wrong)):
             results[kind] = {}
             for m in methods:
-                returns = episodes.matrix("return", exp["name"], m)
+                returns = study.returns(exp["name"], m)
                 if returns.size == 0:
                     continue
-                pols = [grouped.get((exp["name"], m, task.name, r)) for r in range(len(returns))]
+                pols = [study.policy(exp["name"], m, task.name, r) for r in range(len(returns))]
                 walks = [walk_policy(real, p, task.start, task.goal) for p in pols if p]
                 results[kind][m] = MethodResult(
                     runs=len(returns), episodes=returns.shape[1],

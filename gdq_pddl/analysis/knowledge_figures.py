@@ -5,30 +5,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
 
+from gdq_pddl.analysis.figures import method_colour as _colour
 from gdq_pddl.analysis.knowledge_cases import CaseResult
 from gdq_pddl.analysis.knowledge_measures import ACCURATE, CURVE_WINDOW, WRONG, threshold
 from gdq_pddl.outputs import save_figure
 
 
-def _colour(method: str) -> str:
-    try:
-        from gdq_pddl.analysis.figures import method_colour
-
-        return method_colour(method)
-    except Exception:  # pragma: no cover - a figure colour is never worth failing over
-        return "#333333"
-
-
 def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     """Learning curves per case (wrong solid, accurate dashed, V* and the convergence
     threshold) and a bar chart of convergence episodes per method and case."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     paths: list[Path] = []
     if not cases:
         return paths

@@ -12,6 +12,8 @@ import numpy as np
 from gdq_pddl.analysis.routes import likeliest_next
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.envs.solve import expected_costs, solve_task
+from gdq_pddl.learners.context import office_task_context
+from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World
 
 WINDOW = 100
@@ -109,9 +111,6 @@ def route_check(real: World, knowledge: World, task: Task,
     """Along the likeliest route of the true optimal policy in ``real``: are the optimal
     actions in DARLING's allowed set / in the plans / applicable in GDQ's prior model,
     with knowledge from ``knowledge``?"""
-    from gdq_pddl.learners.context import office_task_context
-    from gdq_pddl.spaces import LearnerSpaces
-
     ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
     allowed = ctx.darling_plans.allowed_actions()
     shortest = ctx.plans.first_actions
