@@ -14,13 +14,19 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT, optimal_entry
+from gdq_pddl.analysis.results import (
+    ROBOT_EXPERIMENT,
+    TASKS_EXPERIMENT,
+    optimal_entry,
+    order_methods,
+)
 from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
     convergence_episode,
     first_positive,
+    iqm_ci,
     mean_se,
     route_indicator,
     run_means,
@@ -118,6 +124,7 @@ def write_methods(w: Writer, full: bool = True) -> None:
         w.figure(curves_stem(exp), f"learning curves, {exp}")
         for task in w.study.tasks(exp):
             write_task(w, exp, task)
+    write_iqm(w, [(e, t) for e in exps for t in w.study.tasks(e)])
 
 
 def method_summary(study: Study, exp: str, task: str) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -243,7 +250,30 @@ fraction of V*."""
             cells.append(f"{overall:.2f} ({last:.2f})")
         w.add(f"| {task} | " + " | ".join(cells) + " |")
     w.add("")
+    write_iqm(w, [(TASKS_EXPERIMENT, t) for t in ep.tasks(TASKS_EXPERIMENT)])
     w.figure("fraction_of_vstar", "return as a fraction of V*")
+
+
+def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
+    """Over several (experiment, task) slices: per method, the interquartile mean of
+    every run's mean return / V* with its stratified bootstrap 95% CI (nothing with
+    fewer than 2 tasks of known positive V*)."""
+    study = w.study
+    slices = [(e, t) for e, t in slices if study.v_star(e, t) > 0]
+    if len(slices) < 2:
+        return
+    w.add(f"**Over the {len(slices)} tasks** ({', '.join(t for _, t in slices)}): per method, "
+          "the interquartile mean (IQM, the mean of the middle 50%) of every run's mean "
+          "return / V* on every task, with a 95% stratified bootstrap interval (runs "
+          "resampled within each task, 2,000 resamples, `scipy.stats.bootstrap`; n/a with "
+          "fewer than 2 runs per task).", "",
+          "| Method | tasks | IQM of return / V* | 95% interval |", "|---|--:|--:|---|")
+    for m in order_methods({m for e, _ in slices for m in study.methods(e)}):
+        scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
+        scores = [x for x in scores if x.size]
+        point, low, high = iqm_ci(scores, seed=w.opts.seed)
+        w.add(f"| {m} | {len(scores)} | {fmt2(point)} | [{fmt2(low)}, {fmt2(high)}] |")
+    w.add("")
 
 
 # hypothesis 1
