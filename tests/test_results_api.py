@@ -26,7 +26,7 @@ RUNS, EPISODES = 3, 40
 
 
 def write_folder(out: Path, tasks: tuple[str, ...] = ("C",), areas: int = 7,
-                 v_star: float = 10.0) -> Path:
+                 v_star: float = 10.0, planner: str = "graph") -> Path:
     """A ``gdq-pddl run``-like folder: experiment ``run``, ``tasks`` one after another
     (one config entry per task), ``areas`` area columns (0: none, as a PDDL problem)."""
     rng = np.random.default_rng(3)
@@ -48,7 +48,7 @@ def write_folder(out: Path, tasks: tuple[str, ...] = ("C",), areas: int = 7,
         writer.writerows(rows)
     (out / "config.json").write_text(json.dumps({"experiments": [
         {"name": "run", "schedule": [[t, EPISODES]], "methods": list(METHODS), "runs": RUNS,
-         "world": "office", "seed": 0, "planner": "graph"} for t in tasks]}))
+         "world": "office", "seed": 0, "planner": planner} for t in tasks]}))
     (out / "optimal.json").write_text(json.dumps({t: {"v_star": v_star} for t in tasks}))
     return out
 
@@ -152,3 +152,15 @@ def test_a_run_over_several_tasks_reports_the_iqm(tmp_path):
     scores = [study.returns("run", "GDQ", t).mean(axis=1) / 10.0 for t in "CDE"]
     point, low, high = iqm_ci(scores)
     assert f"| GDQ | 3 | {point:.2f} | [{low:.2f}, {high:.2f}] |" in text
+
+
+@pytest.mark.parametrize("planner", ["graph", "pyperplan"])
+def test_the_report_names_the_planner_and_warns_of_one_plan_backends(tmp_path, planner):
+    out = write_folder(tmp_path / "o", areas=0, planner=planner)
+    make_all(out)
+    text = (out / "REPORT.md").read_text()
+    kind = "every shortest plan" if planner == "graph" else "one plan"
+    assert f"Planner `{planner}` ({kind} per query); DARLING and GDQ-code use the plans " \
+           "within (1 + 0.3) x the shortest" in text
+    assert ("**Warning:** `pyperplan` returns one plan per query" in text) == (
+        planner == "pyperplan")

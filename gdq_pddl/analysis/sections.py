@@ -37,9 +37,11 @@ from gdq_pddl.analysis.stats import (
 from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
 from gdq_pddl.analysis.writer import Writer, fmt, fmt2, milestone_str, pct, route_str
+from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.work import make_learner
-from gdq_pddl.learners import office_task_context
+from gdq_pddl.learners import DarlingConfig, office_task_context
+from gdq_pddl.planning import get_planner
 
 
 def method_paragraph(w: Writer) -> str:
@@ -80,18 +82,43 @@ def write_header(w: Writer) -> None:
         w.add("Configuration: not recorded (no readable `config.json`).", "")
     if cfg.versions:
         w.add("Versions: " + ", ".join(f"{k} {v}" for k, v in cfg.versions.items()), "")
-    w.add(method_paragraph(w), "")
+    w.add(*planner_lines(study), method_paragraph(w), "")
 
 
 TITLE = "Methods compared"
 
 
 def setup_lines(study: Study) -> list[str]:
-    """What produced the folder, per experiment (from ``config.json``)."""
-    return [f"- `{e.get('name')}`: methods {', '.join(e.get('methods') or []) or '?'}; "
-            f"{e.get('runs', '?')} runs; seed {e.get('seed', '?')}; planner "
-            f"`{e.get('planner', '?')}`; world `{e.get('world', '?')}`"
-            for e in study.config.experiments] or ["Configuration: not recorded."]
+    """What produced the folder, per experiment (from ``config.json``), then the
+    planners (:func:`planner_lines`)."""
+    lines = [f"- `{e.get('name')}`: methods {', '.join(e.get('methods') or []) or '?'}; "
+             f"{e.get('runs', '?')} runs; seed {e.get('seed', '?')}; planner "
+             f"`{e.get('planner', '?')}`; world `{e.get('world', '?')}`"
+             for e in study.config.experiments] or ["Configuration: not recorded."]
+    return [*lines, "", *planner_lines(study)]
+
+
+def planner_lines(study: Study) -> list[str]:
+    """The planner backends that made the knowledge's plans, the plan tolerance, and a
+    warning for a backend that returns one plan per query (GDQ-code's and DARLING's
+    plans within the tolerance then shrink to that plan)."""
+    lines = []
+    tolerance = DarlingConfig().tolerance
+    for name in sorted({str(e.get("planner", "graph")) for e in study.config.experiments}):
+        try:
+            every = get_planner(name).all_plans
+        except PlanningError as exc:
+            lines.append(f"Planner `{name}`: {exc}; whether it gives every plan is unknown.")
+            continue
+        lines.append(f"Planner `{name}` ({'every shortest plan' if every else 'one plan'} per "
+                     f"query); DARLING and GDQ-code use the plans within (1 + {tolerance:g}) x "
+                     "the shortest (the learners' default tolerance).")
+        if not every:
+            lines.append(f"**Warning:** `{name}` returns one plan per query, so GDQ-code's and "
+                         "DARLING's plans within the tolerance are that one plan: their "
+                         "results, and GDQ's differences from them, are not what a planner "
+                         "giving every plan (`graph`) would give.")
+    return [*lines, ""] if lines else []
 
 
 def definitions(window: int) -> str:
