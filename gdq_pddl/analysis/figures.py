@@ -24,6 +24,7 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from scipy import stats as sps  # noqa: E402
 
 from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
 from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
@@ -32,16 +33,19 @@ from gdq_pddl.envs.render import MapPainter  # noqa: E402
 from gdq_pddl.outputs import save_figure  # noqa: E402
 from gdq_pddl.world import Task, World  # noqa: E402
 
-METHOD_COLOURS = {
-    "GDQ": "#d62728",
-    "GDQ-literal": "#ff7f0e",
-    "GDQ-code": "#ff9896",
-    "DARLING": "#2ca02c",
-    "DARLING-code": "#98df8a",
-    "Dyna-Q": "#1f77b4",
-    "Q-learning": "#7f7f7f",
+METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
+    "GDQ": "#D55E00",  # vermillion
+    "GDQ-literal": "#E69F00",  # orange
+    "GDQ-code": "#CC79A7",  # reddish purple
+    "DARLING": "#009E73",  # bluish green
+    "DARLING-code": "#56B4E9",  # sky blue
+    "Dyna-Q": "#0072B2",  # blue
+    "Q-learning": "#000000",  # black
 }
-_EXTRA = ("#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
+_EXTRA = ("#F0E442", "#999999", "#8c564b", "#9467bd", "#17becf")
+INTERVAL = "95% t-interval over runs"
+"""What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
+x standard error."""
 
 
 def method_colour(method: str) -> str:
@@ -117,13 +121,14 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
 
 def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
           scale: float = 1.0) -> None:
-    """Mean over runs with a standard-error band, both smoothed by a trailing average."""
-    mean, se = mean_se(matrix / scale, axis=0)
-    if window > 1:
-        mean = moving_average(mean, window, full_only=False)
-        se = moving_average(se, window, full_only=False)
-    colour = method_colour(method)
+    """Each run's curve smoothed by a trailing average, then their mean over runs with
+    its 95% t-interval (:data:`INTERVAL`)."""
     n = matrix.shape[0]
+    smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
+        matrix / scale
+    mean, se = mean_se(smooth, axis=0)
+    se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
+    colour = method_colour(method)
     ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
     ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
 
@@ -137,7 +142,8 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
                     fraction_of_vstar: bool = False,
                     experiment: str = TASKS_EXPERIMENT) -> list[Path]:
     """Return per episode (or return / V*) of each task of ``experiment`` (the paper's
-    tasks A-D by default), mean over runs +- SE, smoothed."""
+    tasks A-D by default), mean over runs with its 95% interval, smoothed. Return / V*
+    is drawn from -0.1 to 1.1, where the methods that learn can be told apart."""
     exp = experiment
     if not study.has(exp):
         return []
@@ -159,10 +165,13 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
         ax.set_xlabel("episode")
         ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ax.grid(alpha=0.3)
+        if fraction_of_vstar:
+            ax.set_ylim(-0.1, 1.1)
     axes[0].legend(fontsize=7, loc="lower right")
-    what = "return / V*" if fraction_of_vstar else "return per episode"
+    what = "return / V* (below -0.1 off the axis)" if fraction_of_vstar else \
+        "return per episode"
     sep = "\n" if len(tasks) == 1 else ": "  # one panel is too narrow for one line
-    fig.suptitle(f"{what}{sep}mean over runs +- SE, {opts.window}-episode moving average",
+    fig.suptitle(f"{what}{sep}mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
     stem = "fraction_of_vstar" if fraction_of_vstar else "learning_curves"
     if exp != TASKS_EXPERIMENT:
@@ -192,7 +201,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
         ax.set_ylabel("return (cumulative reward)")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
-    fig.suptitle(f"goal change: mean over runs +- SE, {opts.window}-episode moving average",
+    fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
     return save_all(fig, out_dir, "switch_curves", opts)
 
@@ -277,7 +286,8 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-            fig.colorbar(sm, cax=cax, label="area visits per run (mean)")
+            fig.colorbar(sm, cax=cax,
+                         label="area visits per run (mean; square-root colour scale)")
             label = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{label}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
@@ -338,7 +348,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
 
 def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                   ) -> list[Path]:
-    """Robot protocol: return (cumulative reward) per trial, mean over runs +- SE."""
+    """Robot protocol: return (cumulative reward) per trial, mean over runs, 95% interval."""
     exp = ROBOT_EXPERIMENT
     if not study.has(exp):
         return []
@@ -356,7 +366,7 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
                    label="V*")
     ax.set_xlabel("trial")
     ax.set_ylabel("return (cumulative reward) per trial")
-    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean over runs +- SE "
+    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
                  "(unsmoothed)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
