@@ -141,7 +141,6 @@ def write_methods(w: Writer, full: bool = True) -> None:
     exps = w.study.uncovered
     if not exps:
         return
-    w.verdicts.elsewhere.append(TITLE)
     how = "Welch's t-test and bootstrap CI as in the Method paragraph." if full else \
         method_paragraph(w).removeprefix("**Method.** ")
     w.add(f"## {TITLE}", "",

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
+
+import pandas as pd
 
 from gdq_pddl.analysis.results import is_gdq, order_methods
 from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, verdict, verdict_reason
@@ -67,78 +69,68 @@ VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper
 """How the verdict summary names the GDQ variants."""
 
 
-@dataclass
-class Case:
-    """One hypothesis case: each GDQ variant's verdict and reason."""
-
-    hypothesis: str
-    case: str
-    basis: str
-    verdicts: dict[str, str] = field(default_factory=dict)
-    reasons: dict[str, str] = field(default_factory=dict)
+def markdown_rows(frame: pd.DataFrame) -> list[str]:
+    """A DataFrame of text as compact Markdown table lines (unpadded, so that a line per
+    row stays greppable: ``| I | Task A | **holds** |``)."""
+    return ["| " + " | ".join(map(str, frame.columns)) + " |",
+            "|" + "---|" * len(frame.columns),
+            *("| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))]
 
 
 class Verdicts:
-    """The cases in the order the sections met them, ``(hypothesis, case) -> Case``.
+    """Each GDQ variant's verdict per hypothesis case, in the order the sections met
+    them (a DataFrame with one row per case and variant)."""
 
-    ``gdq_runs`` says whether the data hold any GDQ run at all, so that a folder without
-    cases (no tasks or switch experiment) is not summarised as having no GDQ runs;
-    :attr:`elsewhere` names the sections that compare GDQ outside the hypotheses.
-    """
+    COLUMNS = ("hypothesis", "case", "basis", "variant", "verdict", "reason")
 
     def __init__(self, gdq_runs: bool = True) -> None:
-        self.cases: dict[tuple[str, str], Case] = {}
+        self.rows: list[tuple[str, ...]] = []
         self.gdq_runs = gdq_runs
-        self.elsewhere: list[str] = []
+        """Whether the data hold a GDQ run at all (else: no verdicts, and why)."""
 
     def record(self, hypothesis: str, case: str, basis: str, variant: str,
                comps: Sequence[Comparison]) -> tuple[str, str]:
         """Record ``variant``'s verdict on a case; returns the verdict and its reason."""
-        v = verdict(comps)
-        reason = verdict_reason(comps)
-        entry = self.cases.setdefault((hypothesis, case), Case(hypothesis, case, basis))
-        entry.verdicts[variant] = v
-        entry.reasons[variant] = reason
+        v, reason = verdict(comps), verdict_reason(comps)
+        self.rows.append((hypothesis, case, basis, variant, v, reason))
         return v, reason
 
-    def variants(self) -> list[str]:
-        """The GDQ variants with a verdict, in method order."""
-        found = {v for c in self.cases.values() for v in c.verdicts}
-        return order_methods(found)
+    @property
+    def frame(self) -> pd.DataFrame:
+        return pd.DataFrame(self.rows, columns=list(self.COLUMNS))
 
     def counts(self) -> str:
         """``GDQ, ... (`GDQ`): k of n cases hold; ...`` per variant, or why there is no
         verdict."""
-        variants = self.variants()
-        if not variants:
-            if not self.gdq_runs:
-                return "No verdicts (no GDQ runs in the data)."
-            see = "".join(f"; see '{s}'" for s in self.elsewhere)
-            return ("No paper-hypothesis verdicts: this folder has no tasks or switch "
-                    f"experiment with GDQ runs{see}.")
-        parts = []
-        for v in variants:
-            cases = [c for c in self.cases.values() if v in c.verdicts]
-            held = sum(c.verdicts[v] == HOLDS for c in cases)
-            parts.append(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {held} of {len(cases)} cases hold")
-        return "; ".join(parts) + "."
+        if not self.rows:
+            return "No verdicts (no GDQ runs in the data)." if not self.gdq_runs else \
+                "No paper-hypothesis verdicts: no tasks or switch experiment with GDQ runs."
+        held = self.frame.assign(held=lambda f: f["verdict"] == HOLDS).groupby(
+            "variant", sort=False)["held"].agg(["sum", "size"])
+        return "; ".join(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {int(h['sum'])} of "
+                         f"{int(h['size'])} cases hold" for v, h in held.loc[
+                             order_methods(held.index)].iterrows()) + "."
 
     def section(self, notes: Sequence[str]) -> list[str]:
         """The ``## Verdicts`` section: the table (when there are cases), the counts and
         the skipped parts."""
         summary = ["## Verdicts", ""]
-        if self.cases:
-            variants = self.variants()
-            summary += ["| Hypothesis | Case | " + " | ".join(
-                            f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
-                            for v in variants) + " | Basis |",
-                        "|---|---|" + "---|" * len(variants) + "---|"]
-            for c in self.cases.values():
-                cells = [f"**{c.verdicts[v]}**" if v in c.verdicts else "–" for v in variants]
-                reasons = "; ".join(f"{v} {c.reasons[v]}" for v in variants if v in c.reasons)
-                summary.append(f"| {c.hypothesis} | {c.case} | " + " | ".join(cells)
-                               + f" | {c.basis}: {reasons} |")
-            summary.append("")
+        if self.rows:
+            f = self.frame
+            variants = order_methods(f["variant"].unique())
+            table = f.pivot_table(index=["hypothesis", "case"], columns="variant",
+                                  values="verdict", aggfunc="first", sort=False)
+            table = table.reindex(columns=variants).map(
+                lambda v: "–" if pd.isna(v) else f"**{v}**")
+            table.columns = [f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
+                             for v in variants]
+            why = f.assign(why=f["variant"] + " " + f["reason"]).groupby(
+                ["hypothesis", "case"], sort=False).agg(basis=("basis", "first"),
+                                                        why=("why", "; ".join))
+            table["Basis"] = why["basis"] + ": " + why["why"]
+            table = table.reset_index().rename(columns={"hypothesis": "Hypothesis",
+                                                        "case": "Case"})
+            summary += [*markdown_rows(table), ""]
         summary += [self.counts(), ""]
         if notes:
             summary += ["Skipped parts:", "", *[f"- {n}" for n in notes], ""]
