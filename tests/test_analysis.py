@@ -217,11 +217,11 @@ def test_bold_cells_are_the_minima_of_irrelevant_areas(full):
         rows = table.frame.loc[task]
         irrelevant = set(table.irrelevant_paper[task]) | set(table.irrelevant_computed[task])
         for area in table.areas:
-            lowest = rows[f"mean_{area}"].round(1).min()
+            lowest = rows[f"area_{area}_mean"].round(1).min()
             for method, r in rows.iterrows():
-                expect = area in irrelevant and round(r[f"mean_{area}"], 1) == lowest
-                assert r[f"bold_{area}"] == expect, (task, area, method)
-        assert rows[[f"bold_{a}" for a in table.areas]].to_numpy().any()
+                expect = area in irrelevant and round(r[f"area_{area}_mean"], 1) == lowest
+                assert r[f"area_{area}_bold"] == expect, (task, area, method)
+        assert rows[[f"area_{a}_bold" for a in table.areas]].to_numpy().any()
     md = (out / "tables" / "area_visits.md").read_text()
     tex = (out / "tables" / "area_visits.tex").read_text()
     assert "**" in md and r"\mathbf" in tex and r"\toprule" in tex

@@ -403,7 +403,7 @@ def write_hypothesis_2(w: Writer) -> None:
                 w.verdict_line("II", case, comps,
                                "Welch + bootstrap on per-run visits to those areas",
                                variant)
-                fewest = sum(bool(table.frame.loc[(task, variant), f"bold_{a}"])
+                fewest = sum(bool(table.frame.loc[(task, variant), f"area_{a}_bold"])
                              for a in irr if a in areas)
                 w.add(f"  {variant} has the fewest visits in {fewest} of {len(cols)} "
                       "of these areas.")

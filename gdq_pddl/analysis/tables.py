@@ -25,8 +25,8 @@ TABLE_DIR = "tables"
 
 @dataclass(frozen=True)
 class AreaTable:
-    """``frame``: index (task, method); columns ``runs``, ``mean_<a>``, ``se_<a>`` and
-    ``bold_<a>`` per area ``a``."""
+    """``frame``: index (task, method); columns ``runs``, ``area_<a>_mean``,
+    ``area_<a>_se`` and ``area_<a>_bold`` per area ``a`` (the CSV's columns)."""
 
     frame: pd.DataFrame
     areas: tuple[int, ...]
@@ -48,10 +48,10 @@ def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int =
         cols].sum()
     by = per_run.groupby(level=["task", "method"], observed=True)
     mean, se = by.mean(), by.sem().fillna(0.0)
-    mean.columns = se.columns = [str(a) for a in areas]
+    mean.columns = se.columns = [f"area_{a}" for a in areas]
     order = [(t, m) for t in tasks for m in methods if (t, m) in mean.index]
-    frame = pd.concat([by.size().rename("runs"), mean.add_prefix("mean_"),
-                       se.add_prefix("se_")], axis=1).loc[order]
+    frame = pd.concat([by.size().rename("runs"), mean.add_suffix("_mean"),
+                       se.add_suffix("_se")], axis=1).loc[order]
     lowest = mean.round(decimals).groupby(level="task", observed=True).transform("min")
     for task in tasks:
         truth = study.truth(experiment, task)
@@ -59,8 +59,8 @@ def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int =
     for a in areas:
         irrelevant = pd.Series([a in set(paper[t]) | set(computed[t]) for t, _ in order],
                                index=frame.index)
-        frame[f"bold_{a}"] = irrelevant & (mean[str(a)].round(decimals) <= lowest[str(a)]
-                                           ).loc[order]
+        col = f"area_{a}"
+        frame[f"{col}_bold"] = irrelevant & (mean[col].round(decimals) <= lowest[col]).loc[order]
     return AreaTable(frame, areas, paper, computed, decimals)
 
 
@@ -69,9 +69,9 @@ def _cells(table: AreaTable, bold: str, sep: str = " ") -> pd.DataFrame:
     d, f = table.decimals, table.frame
     out = pd.DataFrame({"runs": f["runs"]})
     for a in table.areas:
-        text = [f"{m:.{d}f}{sep}({s:.{d}f})" for m, s in zip(f[f"mean_{a}"], f[f"se_{a}"],
+        text = [f"{m:.{d}f}{sep}({s:.{d}f})" for m, s in zip(f[f"area_{a}_mean"], f[f"area_{a}_se"],
                                                               strict=True)]
-        out[f"Area {a}"] = [bold.format(t) if b else t for t, b in zip(text, f[f"bold_{a}"],
+        out[f"Area {a}"] = [bold.format(t) if b else t for t, b in zip(text, f[f"area_{a}_bold"],
                                                                        strict=True)]
     return out
 
@@ -96,12 +96,12 @@ def area_markdown(table: AreaTable) -> str:
 
 def area_latex(table: AreaTable) -> str:
     """The table as LaTeX (booktabs; bold cells in ``\\mathbf``)."""
-    cells = _cells(table, r"$\mathbf{{{}}}$", "~").drop(columns="runs")
-    for c in cells.columns:
+    cells = _cells(table, r"$\mathbf{{{}}}$", "~").drop(columns="runs").reset_index()
+    for c in cells.columns[2:]:
         cells[c] = [t if t.startswith("$") else f"${t}$" for t in cells[c]]
-    cells.index = cells.index.set_names(["Task", "Method"])
-    return cells.to_latex(escape=False, multirow=False, column_format="ll" + "r" * len(
-        table.areas))
+    cells["task"] = cells["task"].astype(str).where(~cells["task"].duplicated(), "")
+    return cells.rename(columns={"task": "Task", "method": "Method"}).to_latex(
+        index=False, escape=False, column_format="ll" + "r" * len(table.areas))
 
 
 def make_tables(out_dir: str | Path, study: Study | None = None,
@@ -122,6 +122,6 @@ def make_tables(out_dir: str | Path, study: Study | None = None,
                                          for t in tasks])
     frame.insert(2, "irrelevant_computed", [" ".join(map(str, table.irrelevant_computed[t]))
                                             for t in tasks])
-    write_text(csv_path, frame.astype({c: int for c in frame if c.startswith("bold_")})
+    write_text(csv_path, frame.astype({c: int for c in frame if c.endswith("_bold")})
                .to_csv(float_format="%.6g", lineterminator="\n"))
     return [md, tex, csv_path]
