@@ -95,7 +95,7 @@ def setup_lines(study: Study) -> list[str]:
              f"{e.get('runs', '?')} runs; seed {e.get('seed', '?')}; planner "
              f"`{e.get('planner', '?')}`; world `{e.get('world', '?')}`"
              for e in study.config.experiments] or ["Configuration: not recorded."]
-    return [*lines, "", *planner_lines(study)]
+    return [*lines, "", *planner_lines(study)][:-1]
 
 
 def planner_lines(study: Study) -> list[str]:
@@ -141,8 +141,10 @@ def write_methods(w: Writer, full: bool = True) -> None:
     exps = w.study.uncovered
     if not exps:
         return
-    how = "Welch's t-test and bootstrap CI as in the Method paragraph." if full else \
-        method_paragraph(w).removeprefix("**Method.** ")
+    how = "Welch's t-test and bootstrap CI as in the Method paragraph." if full else (
+        "Welch's t-test (two-sided) and a percentile bootstrap 95% CI of the difference in "
+        f"means over runs (`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}); "
+        f"a difference counts when the CI excludes 0 and p < {ALPHA}.")
     w.add(f"## {TITLE}", "",
           f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
           f"each task of the experiment. {definitions(w.opts.window)} {how}", "")
