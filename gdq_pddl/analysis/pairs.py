@@ -1,23 +1,9 @@
-"""The table, summary and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``).
-
-Everything is computed from ``runs.csv`` (one mean return per pair, method and run) and
-``optimal.json`` (:mod:`gdq_pddl.experiments.pairs`):
-
-- per pair and method, the **mean return** over the episodes of a run, then the mean
-  over runs and its standard error (ddof 1);
-- per pair and baseline, the **paired difference** of the reference (GDQ when it ran,
-  else the first method) minus the baseline: run ``r`` of both starts from the same
-  seeds, so ``d_r`` = reference's run-``r`` mean minus the baseline's; its mean over
-  runs, standard error ``sd(d) / sqrt(n)`` and the 95% interval ``mean +- t(0.975,
-  n - 1) se`` (Student's t). **win** when the interval lies above 0, **loss** when it
-  lies below, **tie** otherwise (and always with a single run: no interval);
-- the **summary** over a set of pairs: the mean of the per-pair differences, its
-  standard error ``sqrt(sum se_p^2) / P`` (the pairs' runs are independent), the counts
-  of wins, ties and losses, and the worst pairs (lowest mean difference). Over all pairs
-  and over the pairs that are not tasks A-D, the ones every setting was tuned on.
-
-342 intervals at 95% are 342 tests: two methods that were equal everywhere would still
-show about 17 wins or losses by chance, which the report says beside the counts.
+"""The data and statistics of a pairs folder (``gdq-pddl pairs``), from ``runs.csv``
+(one mean return per pair, method and run) and ``optimal.json``: per pair and method
+the mean over runs and its standard error; per pair and baseline the paired difference
+of the reference (GDQ when it ran) minus the baseline, its Student's t 95% interval and
+win / tie / loss; summaries over sets of pairs; the IQM over pairs. docs/decisions.md
+("Every start/goal pair") defines each; :mod:`.pairs_report` writes the figure and text.
 """
 
 from __future__ import annotations
