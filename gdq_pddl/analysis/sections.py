@@ -9,6 +9,7 @@ experiments. Every number is computed from the data; nothing is typed in.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +24,7 @@ from gdq_pddl.analysis.results import (
 from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
+    Comparison,
     compare,
     convergence_episode,
     first_positive,
@@ -259,13 +261,12 @@ fraction of V*."""
               f"{', '.join(map(str, tr.irrelevant_areas_paper)) or 'none'} | "
               f"{route_str(tr.optimal_route_areas)} |")
     w.add("")
-    ep = study
-    methods = ep.methods(TASKS_EXPERIMENT)
+    methods = study.methods(TASKS_EXPERIMENT)
     fw = w.opts.final_window
     w.add(f"Learning as a fraction of V*: mean return over all episodes / V* "
           f"(over the last {fw} episodes in brackets), mean over runs.", "",
           "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
-    for task in ep.tasks(TASKS_EXPERIMENT):
+    for task in study.tasks(TASKS_EXPERIMENT):
         v = study.truth(TASKS_EXPERIMENT, task).v_star
         cells = []
         for m in methods:
@@ -278,8 +279,17 @@ fraction of V*."""
             cells.append(f"{overall:.2f} ({last:.2f})")
         w.add(f"| {task} | " + " | ".join(cells) + " |")
     w.add("")
-    write_iqm(w, [(TASKS_EXPERIMENT, t) for t in ep.tasks(TASKS_EXPERIMENT)])
+    write_iqm(w, [(TASKS_EXPERIMENT, t) for t in study.tasks(TASKS_EXPERIMENT)])
     w.figure("fraction_of_vstar", "return as a fraction of V*")
+
+
+def against_baselines(w: Writer, exp: str, variant: str,
+                      stat: Callable[[str], np.ndarray], **kw: bool) -> list[Comparison]:
+    """``variant`` against each baseline of ``exp`` with data, on per-run ``stat(method)``
+    (an empty array: no runs)."""
+    a = stat(variant)
+    return [compare(a, b, variant, m, seed=w.opts.seed, **kw)
+            for m in w.study.baselines(exp) if (b := stat(m)).size]
 
 
 def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
@@ -315,26 +325,19 @@ return first turns positive."""
                      "the tasks experiment (A-D) is missing"):
         return
     w.figure("learning_curves", "learning curves, tasks A-D")
-    ep = study
     w.add("Statistic: per-run mean return over all episodes of the task (the "
           "cumulative reward of a run divided by its episodes).", "")
-    for task in ep.tasks(TASKS_EXPERIMENT):
+    for task in study.tasks(TASKS_EXPERIMENT):
         variants = [v for v in w.variants(TASKS_EXPERIMENT)
                     if study.returns(TASKS_EXPERIMENT, v, task).size]
         if "GDQ" not in variants:
             w.add(f"- {task}: no GDQ runs; skipped.")
         for variant in variants:
             gdq = study.returns(TASKS_EXPERIMENT, variant, task)
-            comps, early = [], []
-            for b in study.baselines(TASKS_EXPERIMENT):
-                base = study.returns(TASKS_EXPERIMENT, b, task)
-                if base.size == 0:
-                    continue
-                comps.append(compare(run_means(gdq), run_means(base), variant, b,
-                                     seed=opts.seed))
-                early.append(compare(run_means(gdq, 0, opts.early_window),
-                                     run_means(base, 0, opts.early_window), variant, b,
-                                     seed=opts.seed))
+            comps = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
+                study.returns(TASKS_EXPERIMENT, m, t)))
+            early = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
+                study.returns(TASKS_EXPERIMENT, m, t), 0, opts.early_window))
             w.verdict_line("I", f"Task {task}", comps,
                            "Welch + bootstrap on per-run mean return", variant)
             w.comparisons(comps)
@@ -347,13 +350,12 @@ return first turns positive."""
 
 def milestones(w: Writer) -> None:
     study, window = w.study, w.opts.window
-    ep = study
-    methods = ep.methods(TASKS_EXPERIMENT)
+    methods = study.methods(TASKS_EXPERIMENT)
     w.add(f"Episode at which the {window}-episode moving average of return first turns "
           "positive: on the mean curve over runs; in brackets the mean over the "
           "runs that reach it and how many do.", "",
           "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
-    for task in ep.tasks(TASKS_EXPERIMENT):
+    for task in study.tasks(TASKS_EXPERIMENT):
         cells = []
         for m in methods:
             r = study.returns(TASKS_EXPERIMENT, m, task)
@@ -394,14 +396,10 @@ def write_hypothesis_2(w: Writer) -> None:
                 if totals:
                     w.add(f"- {case}: no irrelevant areas; nothing to test.", "")
                 continue
-            for variant, gdq in totals.items():
-                comps = []
-                for b in study.baselines(TASKS_EXPERIMENT):
-                    base = study.area_totals(TASKS_EXPERIMENT, b, task)
-                    if base.shape[0]:
-                        comps.append(compare(gdq[:, cols].sum(axis=1),
-                                             base[:, cols].sum(axis=1), variant, b,
-                                             higher_is_better=False, seed=w.opts.seed))
+            for variant in totals:
+                comps = against_baselines(
+                    w, TASKS_EXPERIMENT, variant, lambda m, t=task, c=cols: study.area_totals(
+                        TASKS_EXPERIMENT, m, t)[:, c].sum(axis=1), higher_is_better=False)
                 w.verdict_line("II", case, comps,
                                "Welch + bootstrap on per-run visits to those areas",
                                variant)
@@ -431,9 +429,8 @@ def write_hypothesis_3(w: Writer) -> None:
           f"new task) at which the {opts.window}-episode moving average of the new "
           "task's returns first turns positive, on the mean curve (in brackets: mean "
           "over runs that reach it, and how many).", "")
-    ep = study
     for exp in exps:
-        tasks = ep.tasks(exp)
+        tasks = study.tasks(exp)
         if len(tasks) < 2:
             w.add(f"- {exp}: only task {', '.join(tasks)} in the data; skipped.", "")
             continue
@@ -442,13 +439,8 @@ def write_hypothesis_3(w: Writer) -> None:
         if "GDQ" not in variants:
             w.add(f"- {exp}: no GDQ runs; skipped.", "")
         for variant in variants:
-            gdq = study.returns(exp, variant, new)
-            comps = []
-            for b in study.baselines(exp):
-                base = study.returns(exp, b, new)
-                if base.size:
-                    comps.append(compare(run_means(gdq, 0, n), run_means(base, 0, n),
-                                         variant, b, seed=opts.seed))
+            comps = against_baselines(w, exp, variant, lambda m, e=exp, t=new: run_means(
+                study.returns(e, m, t), 0, n))
             w.verdict_line("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
                            f"{study.switch_episode(exp)})", comps,
                            f"Welch + bootstrap on per-run mean return, first {n} "
@@ -457,7 +449,7 @@ def write_hypothesis_3(w: Writer) -> None:
         if not variants:
             continue
         parts = []
-        for m in ep.methods(exp):
+        for m in study.methods(exp):
             ms = first_positive(study.returns(exp, m, new), opts.window)
             parts.append(f"{m} {milestone_str(ms)}")
         w.add("  Recovery episode: " + "; ".join(parts) + ".", "")
@@ -489,8 +481,7 @@ paper's best route."""
         w.add("_No `policies.csv`: final greedy routes are not available._", "")
     w.add(f"| Method | final route {route_str(BEST_ROUTE_C)} | most common final route "
           "| converged runs | convergence episode (mean) |", "|---|--:|---|--:|--:|")
-    ep = study
-    for m in ep.methods(exp):
+    for m in study.methods(exp):
         summary = study.route_summary(exp, m, "C") if have_policies else None
         share, common = "–", "–"
         if summary is not None:
@@ -499,17 +490,17 @@ paper's best route."""
             k = summary.count
             common = (f"{route_str(summary.areas)} ({summary.end}, {k} "
                       f"run{'s' if k != 1 else ''})")
-        conv = convergence_episode(ep.area_visits(exp, m, "C"),
-                                   ep.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-                                   ep.areas, opts.route_window, opts.route_share)
+        conv = convergence_episode(study.area_visits(exp, m, "C"),
+                                   study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
+                                   study.areas, opts.route_window, opts.route_share)
         reached = [c for c in conv if not math.isnan(c)]
         mean_conv = fmt(float(np.mean(reached)), 5) if reached else "never"
         w.add(f"| {m} | {share} | {common} | {len(reached)}/{len(conv)} | "
               f"{mean_conv} |")
     w.add("")
-    gdq = convergence_episode(ep.area_visits(exp, "GDQ", "C"),
-                              ep.matrix("success", exp, "GDQ", "C"), BEST_ROUTE_C,
-                              ep.areas, opts.route_window, opts.route_share)
+    gdq = convergence_episode(study.area_visits(exp, "GDQ", "C"),
+                              study.matrix("success", exp, "GDQ", "C"), BEST_ROUTE_C,
+                              study.areas, opts.route_window, opts.route_share)
     if gdq:
         w.add("GDQ's convergence episode per run: "
               + ", ".join(fmt(c, 5) if not math.isnan(c) else "never" for c in gdq)
@@ -660,8 +651,7 @@ def write_robot(w: Writer) -> None:
     if not w.section("Robot protocol (simulated)", study.has(exp), "Robot protocol",
                      "the robot experiment is missing"):
         return
-    ep = study
-    tasks = ep.tasks(exp)
+    tasks = study.tasks(exp)
     task = tasks[-1]
     world = study.world(exp)
     truth = study.truth(exp, task)
@@ -676,17 +666,17 @@ def write_robot(w: Writer) -> None:
           "| Method | runs | mean return per trial | runs with a success | first "
           "success (mean trial) | trial route becomes optimal (per run) | final "
           "greedy route optimal |", "|---|--:|--:|--:|--:|---|--:|")
-    for m in ep.methods(exp):
+    for m in study.methods(exp):
         ret = study.returns(exp, m, task)
-        success = ep.matrix("success", exp, m, task)
+        success = study.matrix("success", exp, m, task)
         if ret.size == 0:
             continue
         n = ret.shape[0]
         succ_runs = int(np.sum(np.nansum(success, axis=1) > 0))
         firsts = [float(np.flatnonzero(row > 0)[0] + 1) for row in success
                   if np.any(row > 0)]
-        ind = route_indicator(ep.area_visits(exp, m, task), success,
-                              truth.optimal_route_areas, ep.areas)
+        ind = route_indicator(study.area_visits(exp, m, task), success,
+                              truth.optimal_route_areas, study.areas)
         conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
         conv_txt = ", ".join("never" if math.isnan(c) else str(int(c)) for c in conv)
         summary = study.route_summary(exp, m, task)
@@ -697,8 +687,8 @@ def write_robot(w: Writer) -> None:
               f"{fmt(float(np.mean(firsts)), 3) if firsts else 'none'} | {conv_txt} | "
               f"{final} |")
     w.add("")
-    if "Dyna-Q" in ep.methods(exp):
-        success = ep.matrix("success", exp, "Dyna-Q", task)
+    if "Dyna-Q" in study.methods(exp):
+        success = study.matrix("success", exp, "Dyna-Q", task)
         k = int(np.sum(np.nansum(success, axis=1) > 0))
         w.add(f"Dyna-Q reached the goal at least once within {success.shape[1]} trials "
               f"in {k} of {success.shape[0]} runs"
