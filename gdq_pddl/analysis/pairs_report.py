@@ -15,6 +15,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.colors import TwoSlopeNorm
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 
@@ -51,15 +52,18 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     grid = np.full((len(names), len(names)), np.nan)
     for i, p in enumerate(res.pairs):
         grid[at[res.facts[p]["start"]], at[res.facts[p]["goal"]]] = diff.mean[i]
-    limit = float(np.nanmax(np.abs(grid))) if np.isfinite(grid).any() else 0.0
-    limit = limit or 1.0  # symmetric about 0: white is no difference
+    # white is no difference; each side of 0 spans its own extreme, so small losses
+    # against large wins still show in full red
+    low, high = (float(np.nanmin(grid)), float(np.nanmax(grid))) if np.isfinite(
+        grid).any() else (-1.0, 1.0)
+    norm = TwoSlopeNorm(0.0, min(low, -1e-9), max(high, 1e-9))
     cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
-    image = ax.imshow(grid, cmap=cmap, vmin=-limit, vmax=limit)
+    image = ax.imshow(grid, cmap=cmap, norm=norm)
     for i, p in enumerate(res.pairs):
         r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
         mark = {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), "")
         if mark:
-            dark = abs(diff.mean[i]) > 0.6 * limit
+            dark = abs(norm(diff.mean[i]) - 0.5) > 0.3
             ax.text(c, r, mark, ha="center", va="center", fontsize=7,
                     color="white" if dark else "black")
         if res.facts[p].get("tuning"):
@@ -70,7 +74,8 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.set(xlabel="goal", ylabel="start",
            title=f"{res.reference} - {diff.baseline}: mean return difference")
     ax.title.set_fontsize(9)
-    ax.figure.colorbar(image, ax=ax, shrink=0.8)
+    ax.figure.colorbar(image, ax=ax, shrink=0.8,
+                       label="each side of 0 scaled to its own extreme")
 
 
 def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
