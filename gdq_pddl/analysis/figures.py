@@ -61,6 +61,8 @@ class FigureOptions:
 
     window: int = 50
     """Moving-average window of learning curves, in episodes."""
+    after_switch: int = 250
+    """Episodes after a goal change the switch figure's lower row shows."""
     formats: tuple[str, ...] = ("png", "pdf")
     dpi: int = 120
 
@@ -120,9 +122,9 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
 
 
 def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
-          scale: float = 1.0) -> None:
+          scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Each run's curve smoothed by a trailing average, then their mean over runs with
-    its 95% t-interval (:data:`INTERVAL`)."""
+    its 95% t-interval (:data:`INTERVAL`); returns the interval's bounds."""
     n = matrix.shape[0]
     smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
         matrix / scale
@@ -131,6 +133,7 @@ def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
     colour = method_colour(method)
     ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
     ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
+    return mean - se, mean + se
 
 
 def _task_title(study: Study, experiment: str, task: str) -> str:
@@ -181,25 +184,37 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
 
 def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                   ) -> list[Path]:
-    """Each switch experiment (C->D, C->E): return over the whole run, line at the switch."""
+    """Each switch experiment (C->D, C->E): return over the whole run with a line at the
+    switch (top), and the episodes around the switch at a readable scale (bottom: from
+    50 before to ``opts.after_switch`` after, the tested statistic's span)."""
     exps = study.switch_experiments
     if not exps:
         return []
-    ep = study
-    fig, axes = _grid(len(exps))
-    for ax, exp in zip(axes, exps, strict=True):
-        for method in ep.methods(exp):
-            m = ep.matrix("return", exp, method)
-            if m.size:
-                _band(ax, ep.episode_numbers(exp, method), m, method, opts.window)
+    fig, axes = _grid(2 * len(exps), max_cols=len(exps))
+    for k, exp in enumerate(exps):
         switch = study.switch_episode(exp)
-        if switch is not None:
-            ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
-        tasks = ep.tasks(exp)
-        ax.set_title(f"{exp}: task {' -> '.join(tasks)}", fontsize=10)
-        ax.set_xlabel("episode")
-        ax.set_ylabel("return (cumulative reward)")
-        ax.grid(alpha=0.3)
+        for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):
+            seen = []
+            for method in study.methods(exp):
+                m = study.matrix("return", exp, method)
+                if m.size:
+                    x = study.episode_numbers(exp, method)
+                    low, high = _band(ax, x, m, method, opts.window)
+                    if zoom and switch is not None:
+                        near = (x >= switch - 50) & (x <= switch + opts.after_switch)
+                        seen += [np.nanmin(low[near]), np.nanmax(high[near])]
+            if switch is not None:
+                ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
+                if zoom:
+                    ax.set_xlim(switch - 50, switch + opts.after_switch)
+                    pad = 0.05 * (max(seen) - min(seen)) if seen else 0.0
+                    ax.set_ylim(min(seen) - pad, max(seen) + pad) if seen else None
+            what = f"first {opts.after_switch} episodes after the switch" if zoom else \
+                f"task {' -> '.join(study.tasks(exp))}"
+            ax.set_title(f"{exp}: {what}", fontsize=10)
+            ax.set_xlabel("episode")
+            ax.set_ylabel("return (cumulative reward)")
+            ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
