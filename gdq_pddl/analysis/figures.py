@@ -24,6 +24,7 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
 from scipy import stats as sps  # noqa: E402
 
 from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
@@ -253,6 +254,21 @@ def _draw_map(ax: Axes, world: World, xy: dict[str, np.ndarray], alpha: float = 
     ax.margins(0.1)
 
 
+def _outline_areas(ax: Axes, world: World, xy: dict[str, np.ndarray]) -> None:
+    """Each area as a dashed circle around its positions, labelled with its number."""
+    span = np.ptp(np.array(list(xy.values())), axis=0).max() or 1.0
+    for area, positions in sorted(world.areas.items()):
+        pts = np.array([xy[p] for p in positions if p in xy])
+        if not len(pts):
+            continue
+        centre = pts.mean(axis=0)
+        radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
+        ax.add_patch(Circle(centre, radius, fill=False, ls="--", lw=0.8, ec="#555555",
+                            zorder=2, in_layout=False))
+        ax.text(centre[0], centre[1] + radius, f"area {area}", fontsize=6, ha="center",
+                va="bottom", color="#333333", zorder=6, in_layout=False)
+
+
 def _mark_task(ax: Axes, xy: dict[str, np.ndarray], t: Task | None) -> None:
     if t is None or t.start not in xy or t.goal not in xy:
         return
@@ -298,6 +314,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 for p, value in zip(world.positions, values, strict=True):
                     ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                             color="white" if value > 0.3 * top else "black", in_layout=False)
+                _outline_areas(ax, world, xy)
                 _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
