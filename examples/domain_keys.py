@@ -2,7 +2,7 @@
 
 What it shows: an `Experiment` with `pddl=(domain, problem, dynamics)` runs on any PDDL
 problem through the same runner as the office (parallel, resumable, one seed per run),
-and `write_generic_report` summarises it. The red door is nearer, but its lock jams
+and `report_text` summarises it. The red door is nearer, but its lock jams
 and can end the trial; the best route fetches the blue key (on keys-2 that is not a
 shortest plan).
 
@@ -15,7 +15,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from gdq_pddl.analysis.generic import generic_report
+from gdq_pddl.analysis import report_text
 from gdq_pddl.experiments import Experiment, run_experiments
 from gdq_pddl.resources import data_file
 
@@ -31,7 +31,7 @@ def main(episodes: int, runs: int, problem: str) -> str:
                      methods=("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning"))
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)
-        report = generic_report(out)
+        report = report_text(out)
     print(report)
     return report
 

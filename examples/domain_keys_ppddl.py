@@ -16,7 +16,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from gdq_pddl.analysis.generic import generic_report
+from gdq_pddl.analysis import report_text
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.experiments import DEFAULT_METHODS, Experiment, run_experiments
@@ -45,7 +45,7 @@ def main(episodes: int, runs: int, determinisation: str) -> str:
                      pddl=(domain, problem, "", determinisation), methods=DEFAULT_METHODS)
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)
-        report = generic_report(out)
+        report = report_text(out)
     print(report)
     return report
 

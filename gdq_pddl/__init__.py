@@ -9,3 +9,16 @@ from gdq_pddl.envs import register_envs  # noqa: E402
 __version__ = "0.1.0"
 
 register_envs()  # gymnasium.make("gdq_pddl/Office-v0" or "gdq_pddl/PDDL-v0", ...) after import
+
+__all__ = ["__version__", "load_results"]
+
+
+def __getattr__(name: str):
+    """``load_results`` (:func:`gdq_pddl.analysis.results.load_results`: an output
+    folder's episodes as a pandas DataFrame), imported on first use: start-up time, the
+    analysis layer loads pandas and matplotlib, which an env user does not need."""
+    if name == "load_results":
+        from gdq_pddl.analysis.results import load_results
+
+        return load_results
+    raise AttributeError(f"module 'gdq_pddl' has no attribute {name!r}")

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from gdq_pddl.analysis.episodes import load_episodes
-from gdq_pddl.analysis.sections.writer import milestone_str
 from gdq_pddl.analysis.stats import first_positive
+from gdq_pddl.analysis.study import Study
+from gdq_pddl.analysis.writer import milestone_str
 from gdq_pddl.cli import build_parser, main
 from gdq_pddl.experiments import DEFAULT_METHODS
 from gdq_pddl.spaces import LearnerSpaces
@@ -87,7 +87,7 @@ def test_pddl_run_has_the_learning_curves_and_the_milestones_table(pddl_run):
     assert "![learning curves, run](figures/learning_curves_run.png)" in report
     assert "| Method | runs | mean return (SE) | last 10% (SE) | success rate | " \
            "MA50 > 0 at episode |" in report
-    ep = load_episodes(pddl_run)
+    ep = Study.open(pddl_run)
     for method in ("GDQ-code", "Q-learning"):
         line = next(x for x in report.splitlines() if x.startswith(f"| {method} |")
                     or x.startswith(f"| **{method}** |"))

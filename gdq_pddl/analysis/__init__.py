@@ -1,14 +1,14 @@
 """From an experiment output folder to figures, tables and ``REPORT.md``.
 
-``make_all(out_dir)`` writes everything; the parts are :mod:`.figures`, :mod:`.tables`,
-:mod:`.stats` and :mod:`.report`, reading the folder through :mod:`.data` and
-:class:`~gdq_pddl.analysis.study.Study`.
+:func:`load_results` reads ``episodes.csv`` into a pandas DataFrame (one row per
+episode); :class:`Study` is the folder read lazily; :func:`make_report` writes whatever
+report the folder's data calls for (:func:`make_all` for an episodes folder).
 """
 
 from __future__ import annotations
 
-from gdq_pddl.analysis.data import Episodes, load_episodes
-from gdq_pddl.analysis.report import make_all, write_report
+from gdq_pddl.analysis.report import make_all, make_report, report_text, write_report
+from gdq_pddl.analysis.results import load_results
 from gdq_pddl.analysis.study import Study
 
-__all__ = ["Episodes", "Study", "load_episodes", "make_all", "write_report"]
+__all__ = ["Study", "load_results", "make_all", "make_report", "report_text", "write_report"]

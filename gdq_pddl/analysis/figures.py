@@ -10,7 +10,6 @@ from __future__ import annotations
 import math
 import multiprocessing as mp
 import os
-import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,26 +24,29 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.colors import PowerNorm  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
+from scipy import stats as sps  # noqa: E402
 
-from gdq_pddl.analysis.data import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
-from gdq_pddl.analysis.sections.methods import curves_stem, uncovered  # noqa: E402
+from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
 from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
-from gdq_pddl.analysis.study import Study  # noqa: E402
+from gdq_pddl.analysis.study import Study, curves_stem, slug  # noqa: E402
 from gdq_pddl.envs.render import MapPainter  # noqa: E402
-from gdq_pddl.errors import GdqError  # noqa: E402
 from gdq_pddl.outputs import save_figure  # noqa: E402
 from gdq_pddl.world import Task, World  # noqa: E402
 
-METHOD_COLOURS = {
-    "GDQ": "#d62728",
-    "GDQ-literal": "#ff7f0e",
-    "GDQ-code": "#ff9896",
-    "DARLING": "#2ca02c",
-    "DARLING-code": "#98df8a",
-    "Dyna-Q": "#1f77b4",
-    "Q-learning": "#7f7f7f",
+METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
+    "GDQ": "#D55E00",  # vermillion
+    "GDQ-literal": "#E69F00",  # orange
+    "GDQ-code": "#CC79A7",  # reddish purple
+    "DARLING": "#009E73",  # bluish green
+    "DARLING-code": "#56B4E9",  # sky blue
+    "Dyna-Q": "#0072B2",  # blue
+    "Q-learning": "#000000",  # black
 }
-_EXTRA = ("#9467bd", "#8c564b", "#e377c2", "#bcbd22", "#17becf")
+_EXTRA = ("#F0E442", "#999999", "#8c564b", "#9467bd", "#17becf")
+INTERVAL = "95% t-interval over runs"
+"""What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
+x standard error."""
 
 
 def method_colour(method: str) -> str:
@@ -54,22 +56,21 @@ def method_colour(method: str) -> str:
     return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
 
 
-def slug(label: str) -> str:
-    """A task label as a file-name part (``p0->p17`` -> ``p0_p17``)."""
-    return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "task"
-
-
 @dataclass(frozen=True)
 class FigureOptions:
     """How figures are drawn."""
 
     window: int = 50
     """Moving-average window of learning curves, in episodes."""
+    after_switch: int = 250
+    """Episodes after a goal change the switch figure's lower row shows."""
     formats: tuple[str, ...] = ("png", "pdf")
     dpi: int = 120
 
 
-def _save(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions) -> list[Path]:
+def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = FigureOptions()
+             ) -> list[Path]:
+    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``; close it."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for ext in opts.formats:
@@ -122,41 +123,35 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
 
 
 def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
-          scale: float = 1.0) -> None:
-    """Mean over runs with a standard-error band, both smoothed by a trailing average."""
-    mean, se = mean_se(matrix / scale, axis=0)
-    if window > 1:
-        mean = moving_average(mean, window, full_only=False)
-        se = moving_average(se, window, full_only=False)
-    colour = method_colour(method)
+          scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's curve smoothed by a trailing average, then their mean over runs with
+    its 95% t-interval (:data:`INTERVAL`); returns the interval's bounds."""
     n = matrix.shape[0]
+    smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
+        matrix / scale
+    mean, se = mean_se(smooth, axis=0)
+    se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
+    colour = method_colour(method)
     ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
     ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
-
-
-def _task(study: Study, experiment: str, task: str) -> Task | None:
-    try:
-        return study.task(experiment, task)
-    except GdqError:
-        return None
+    return mean - se, mean + se
 
 
 def _task_title(study: Study, experiment: str, task: str) -> str:
-    if study.is_pddl(experiment):
-        return f"problem {task}"
-    t = _task(study, experiment, task)
-    return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"Task {task}"
+    t = study.task(experiment, task)
+    return f"Task {task}: {t.start} -> {t.goal}" if t is not None else f"problem {task}"
 
 
 def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
                     fraction_of_vstar: bool = False,
                     experiment: str = TASKS_EXPERIMENT) -> list[Path]:
     """Return per episode (or return / V*) of each task of ``experiment`` (the paper's
-    tasks A-D by default), mean over runs +- SE, smoothed."""
+    tasks A-D by default), mean over runs with its 95% interval, smoothed. Return / V*
+    is drawn from -0.1 to 1.1, where the methods that learn can be told apart."""
     exp = experiment
     if not study.has(exp):
         return []
-    ep = study.episodes
+    ep = study
     tasks = ep.tasks(exp)
     fig, axes = _grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
@@ -174,42 +169,57 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
         ax.set_xlabel("episode")
         ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ax.grid(alpha=0.3)
+        if fraction_of_vstar:
+            ax.set_ylim(-0.1, 1.1)
     axes[0].legend(fontsize=7, loc="lower right")
-    what = "return / V*" if fraction_of_vstar else "return per episode"
+    what = "return / V* (below -0.1 off the axis)" if fraction_of_vstar else \
+        "return per episode"
     sep = "\n" if len(tasks) == 1 else ": "  # one panel is too narrow for one line
-    fig.suptitle(f"{what}{sep}mean over runs +- SE, {opts.window}-episode moving average",
+    fig.suptitle(f"{what}{sep}mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
     stem = "fraction_of_vstar" if fraction_of_vstar else "learning_curves"
     if exp != TASKS_EXPERIMENT:
         stem = curves_stem(exp) if not fraction_of_vstar else f"{stem}_{slug(exp)}"
-    return _save(fig, out_dir, stem, opts)
+    return save_all(fig, out_dir, stem, opts)
 
 
 def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                   ) -> list[Path]:
-    """Each switch experiment (C->D, C->E): return over the whole run, line at the switch."""
+    """Each switch experiment (C->D, C->E): return over the whole run with a line at the
+    switch (top), and the episodes around the switch at a readable scale (bottom: from
+    50 before to ``opts.after_switch`` after, the tested statistic's span)."""
     exps = study.switch_experiments
     if not exps:
         return []
-    ep = study.episodes
-    fig, axes = _grid(len(exps))
-    for ax, exp in zip(axes, exps, strict=True):
-        for method in ep.methods(exp):
-            m = ep.matrix("return", exp, method)
-            if m.size:
-                _band(ax, ep.episode_numbers(exp, method), m, method, opts.window)
+    fig, axes = _grid(2 * len(exps), max_cols=len(exps))
+    for k, exp in enumerate(exps):
         switch = study.switch_episode(exp)
-        if switch is not None:
-            ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
-        tasks = ep.tasks(exp)
-        ax.set_title(f"{exp}: task {' -> '.join(tasks)}", fontsize=10)
-        ax.set_xlabel("episode")
-        ax.set_ylabel("return (cumulative reward)")
-        ax.grid(alpha=0.3)
+        for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):
+            seen = []
+            for method in study.methods(exp):
+                m = study.matrix("return", exp, method)
+                if m.size:
+                    x = study.episode_numbers(exp, method)
+                    low, high = _band(ax, x, m, method, opts.window)
+                    if zoom and switch is not None:
+                        near = (x >= switch - 50) & (x <= switch + opts.after_switch)
+                        seen += [np.nanmin(low[near]), np.nanmax(high[near])]
+            if switch is not None:
+                ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
+                if zoom:
+                    ax.set_xlim(switch - 50, switch + opts.after_switch)
+                    pad = 0.05 * (max(seen) - min(seen)) if seen else 0.0
+                    ax.set_ylim(min(seen) - pad, max(seen) + pad) if seen else None
+            what = f"first {opts.after_switch} episodes after the switch" if zoom else \
+                f"task {' -> '.join(study.tasks(exp))}"
+            ax.set_title(f"{exp}: {what}", fontsize=10)
+            ax.set_xlabel("episode")
+            ax.set_ylabel("return (cumulative reward)")
+            ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
-    fig.suptitle(f"goal change: mean over runs +- SE, {opts.window}-episode moving average",
+    fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
-    return _save(fig, out_dir, "switch_curves", opts)
+    return save_all(fig, out_dir, "switch_curves", opts)
 
 
 _LAYOUTS: dict[int, tuple[World, dict[str, np.ndarray]]] = {}
@@ -244,6 +254,21 @@ def _draw_map(ax: Axes, world: World, xy: dict[str, np.ndarray], alpha: float = 
     ax.margins(0.1)
 
 
+def _outline_areas(ax: Axes, world: World, xy: dict[str, np.ndarray]) -> None:
+    """Each area as a dashed circle around its positions, labelled with its number."""
+    span = np.ptp(np.array(list(xy.values())), axis=0).max() or 1.0
+    for area, positions in sorted(world.areas.items()):
+        pts = np.array([xy[p] for p in positions if p in xy])
+        if not len(pts):
+            continue
+        centre = pts.mean(axis=0)
+        radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
+        ax.add_patch(Circle(centre, radius, fill=False, ls="--", lw=0.8, ec="#555555",
+                            zorder=2, in_layout=False))
+        ax.text(centre[0], centre[1] + radius, f"area {area}", fontsize=6, ha="center",
+                va="bottom", color="#333333", zorder=6, in_layout=False)
+
+
 def _mark_task(ax: Axes, xy: dict[str, np.ndarray], t: Task | None) -> None:
     if t is None or t.start not in xy or t.goal not in xy:
         return
@@ -257,11 +282,9 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
     and sized by its area's visits summed over a run, mean over runs (the CSV counts areas,
     not positions, so all positions of an area share a value)."""
     paths: list[Path] = []
-    ep = study.episodes
-    if not ep.areas:
-        return paths
+    ep = study
     for exp in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT):
-        if not study.has(exp):
+        if not study.has(exp) or not study.has_areas(exp):
             continue
         world = study.world(exp)
         xy = _map_xy(world)
@@ -291,15 +314,17 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 for p, value in zip(world.positions, values, strict=True):
                     ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                             color="white" if value > 0.3 * top else "black", in_layout=False)
-                _mark_task(ax, xy, _task(study, exp, task))
+                _outline_areas(ax, world, xy)
+                _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-            fig.colorbar(sm, cax=cax, label="area visits per run (mean)")
+            fig.colorbar(sm, cax=cax,
+                         label="area visits per run (mean; square-root colour scale)")
             label = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{label}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
             stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{slug(task)}"
-            paths += _save(fig, out_dir, stem, opts)
+            paths += save_all(fig, out_dir, stem, opts)
     return paths
 
 
@@ -316,11 +341,10 @@ def _draw_route(ax: Axes, xy: dict[str, np.ndarray], positions: Sequence[str],
 def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
                 experiment: str = TASKS_EXPERIMENT, task: str = "C") -> list[Path]:
     """The route each method's final greedy policy takes (most common over runs)."""
-    if study.policies is None or not study.has(experiment):
+    if study.policies is None or not study.has(experiment) or \
+            study.task(experiment, task) is None:
         return []
     world = study.world(experiment)
-    if _task(study, experiment, task) is None:
-        return []
     xy = _map_xy(world)
     best = study.truth(experiment, task).optimal_route_areas
     panels = []
@@ -340,7 +364,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
             ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
                     in_layout=False)
         _draw_route(ax, xy, summary.example.positions, method_colour(method))
-        _mark_task(ax, xy, _task(study, experiment, task))
+        _mark_task(ax, xy, study.task(experiment, task))
         on_best = summary.on_route(world, best)
         areas = "->".join(map(str, summary.areas)) or "(none)"
         ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
@@ -351,16 +375,16 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
     fig.suptitle(f"{_task_title(study, experiment, task)}: most common final greedy route "
                  f"per method (optimal: areas {'->'.join(map(str, best))})", fontsize=10)
     stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{slug(task)}"
-    return _save(fig, out_dir, stem, opts)
+    return save_all(fig, out_dir, stem, opts)
 
 
 def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                   ) -> list[Path]:
-    """Robot protocol: return (cumulative reward) per trial, mean over runs +- SE."""
+    """Robot protocol: return (cumulative reward) per trial, mean over runs, 95% interval."""
     exp = ROBOT_EXPERIMENT
     if not study.has(exp):
         return []
-    ep = study.episodes
+    ep = study
     fig, ax = plt.subplots(figsize=(6.0, 3.8), layout="constrained")
     tasks = ep.tasks(exp)
     for method in ep.methods(exp):
@@ -370,15 +394,15 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
             _band(ax, x, m, method, window=1)
             ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
     if len(tasks) == 1:
-        ax.axhline(study.truth(exp, tasks[0]).v_star, color="black", ls="--", lw=0.8,
+        ax.axhline(study.v_star(exp, tasks[0]), color="black", ls="--", lw=0.8,
                    label="V*")
     ax.set_xlabel("trial")
     ax.set_ylabel("return (cumulative reward) per trial")
-    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean over runs +- SE "
+    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
                  "(unsmoothed)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(fig, out_dir, "robot_returns", opts)
+    return save_all(fig, out_dir, "robot_returns", opts)
 
 
 def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
@@ -389,10 +413,10 @@ def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
     target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
     jobs: list[tuple[Callable[..., list[Path]], dict]] = [
         (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
-    jobs += [(learning_curves, {"experiment": exp}) for exp in uncovered(study)]
+    jobs += [(learning_curves, {"experiment": exp}) for exp in study.uncovered]
     jobs += [(switch_curves, {}), (visit_heatmaps, {}), (task_routes, {})]
     if study.has(ROBOT_EXPERIMENT):
-        tasks = study.episodes.tasks(ROBOT_EXPERIMENT)
+        tasks = study.tasks(ROBOT_EXPERIMENT)
         if tasks:
             jobs.append((task_routes, {"experiment": ROBOT_EXPERIMENT, "task": tasks[-1]}))
     jobs.append((robot_returns, {}))
@@ -412,7 +436,6 @@ def _draw(jobs: list, study: Study, target: Path, opts: FigureOptions) -> list[l
     if len(jobs) < 2 or (os.cpu_count() or 1) < 2 or mp.get_start_method(True) not in (
             None, "fork"):
         return [job(study, target, opts, **kw) for job, kw in jobs]
-    study.episodes  # noqa: B018  (load episodes.csv here, not once per process)
     _JOBS = (jobs, study, target, opts)
     try:
         with mp.get_context("fork").Pool(2) as pool:

@@ -1,40 +1,27 @@
-"""The table, summary and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``).
-
-Everything is computed from ``runs.csv`` (one mean return per pair, method and run) and
-``optimal.json`` (:mod:`gdq_pddl.experiments.pairs`):
-
-- per pair and method, the **mean return** over the episodes of a run, then the mean
-  over runs and its standard error (ddof 1);
-- per pair and baseline, the **paired difference** of the reference (GDQ when it ran,
-  else the first method) minus the baseline: run ``r`` of both starts from the same
-  seeds, so ``d_r`` = reference's run-``r`` mean minus the baseline's; its mean over
-  runs, standard error ``sd(d) / sqrt(n)`` and the 95% interval ``mean +- t(0.975,
-  n - 1) se`` (Student's t). **win** when the interval lies above 0, **loss** when it
-  lies below, **tie** otherwise (and always with a single run: no interval);
-- the **summary** over a set of pairs: the mean of the per-pair differences, its
-  standard error ``sqrt(sum se_p^2) / P`` (the pairs' runs are independent), the counts
-  of wins, ties and losses, and the worst pairs (lowest mean difference). Over all pairs
-  and over the pairs that are not tasks A-D, the ones every setting was tuned on.
-
-342 intervals at 95% are 342 tests: two methods that were equal everywhere would still
-show about 17 wins or losses by chance, which the report says beside the counts.
+"""The data and statistics of a pairs folder (``gdq-pddl pairs``), from ``runs.csv``
+(one mean return per pair, method and run) and ``optimal.json``: per pair and method
+the mean over runs and its standard error; per pair and baseline the paired difference
+of the reference (GDQ when it ran) minus the baseline, its Student's t 95% interval and
+win / tie / loss; summaries over sets of pairs; the IQM over pairs. docs/decisions.md
+("Every start/goal pair") defines each; :mod:`.pairs_report` writes the figure and text.
 """
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from scipy import stats as sps
 
-from gdq_pddl.analysis.data import load_config, load_world_spec
-from gdq_pddl.analysis.names import order_methods
+from gdq_pddl.analysis.results import load_config, order_methods
+from gdq_pddl.analysis.stats import iqm_ci
 from gdq_pddl.errors import GdqError
-from gdq_pddl.outputs import write_text, writing
+from gdq_pddl.outputs import write_text
+from gdq_pddl.world import builtin_world, load_world
 
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
@@ -46,7 +33,7 @@ TABLE_STEM = "pairs"
 @dataclass(frozen=True)
 class PairRuns:
     """A pairs folder's results: ``means[pair, method, run]`` (NaN: no such run), methods
-    in the report's order (:func:`~gdq_pddl.analysis.names.order_methods`)."""
+    in the report's order (:func:`~gdq_pddl.analysis.results.order_methods`)."""
 
     pairs: tuple[str, ...]
     methods: tuple[str, ...]
@@ -71,14 +58,6 @@ class PairRuns:
         return np.array([bool(self.facts[p].get("tuning")) for p in self.pairs])
 
 
-def is_pairs_folder(out: Path) -> bool:
-    """Whether ``out`` is an output folder of ``gdq-pddl pairs`` (by its config)."""
-    from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
-
-    exps = load_config(out).experiments
-    return bool(exps) and all(e.get("name") == PAIRS_EXPERIMENT for e in exps)
-
-
 def load_pair_runs(out: Path) -> PairRuns:
     """Read ``runs.csv``, ``optimal.json`` and ``config.json`` of a pairs folder."""
     path = out / "runs.csv"
@@ -86,19 +65,16 @@ def load_pair_runs(out: Path) -> PairRuns:
         raise GdqError(f"{out} has no runs.csv: the pairs run has not finished "
                        "(continue it with --resume)")
     facts = json.loads((out / "optimal.json").read_text(encoding="utf-8"))
-    with open(path, newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
-    pairs = tuple(facts)
+    runs = pd.read_csv(path, dtype={"pair": str, "method": str}, keep_default_na=False)
     config = load_config(out).raw
-    methods = tuple(order_methods(config["experiments"][0]["methods"]))
-    runs = max((int(r["run"]) for r in rows), default=-1) + 1
-    means = np.full((len(pairs), len(methods), runs), np.nan)
-    p_index = {p: i for i, p in enumerate(pairs)}
-    m_index = {m: i for i, m in enumerate(methods)}
-    for r in rows:
-        means[p_index[r["pair"]], m_index[r["method"]], int(r["run"])] = float(r["mean_return"])
-    world = load_world_spec(config["experiments"][0]["world"])
-    return PairRuns(pairs, methods, means, facts, config, world.positions)
+    exp = config["experiments"][0]
+    pairs, methods = tuple(facts), tuple(order_methods(exp["methods"]))
+    grid = pd.MultiIndex.from_product([pairs, methods, range(int(exp["runs"]))])
+    means = runs.set_index(["pair", "method", "run"])["mean_return"].reindex(grid)
+    world = exp["world"]
+    world = builtin_world(world) if world in ("office", "office_robot") else load_world(world)
+    return PairRuns(pairs, methods, means.to_numpy().reshape(len(pairs), len(methods), -1),
+                    facts, config, world.positions)
 
 
 def over_runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -168,51 +144,51 @@ def number(x: float, digits: int = 2, sign: bool = False) -> str:
     return f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
 
 
-def table_columns(res: PairRuns) -> list[str]:
-    """The CSV table's header (see :func:`table_rows`)."""
-    cols = ["pair", "start", "goal", "tuning", "shortest_plan", "v_star"]
-    for m in res.methods:
-        cols += [f"mean_{m}", f"se_{m}"]
-    for b in res.baselines:
-        cols += [f"diff_{b}", f"diff_se_{b}", f"ci_low_{b}", f"ci_high_{b}", f"outcome_{b}"]
-    return cols
-
-
-def table_rows(res: PairRuns, diffs: list[Differences]) -> list[list]:
-    """One row per pair: facts, each method's mean (se) and each difference."""
+def table(res: PairRuns, diffs: list[Differences]) -> pd.DataFrame:
+    """One row per pair: facts, each method's mean and se, each difference (every digit)."""
     means, ses = over_runs(res.means)
-    rows = []
-    for i, p in enumerate(res.pairs):
-        f = res.facts[p]
-        row = [p, f["start"], f["goal"], f.get("tuning") or "", f["shortest_plan"],
-               repr(f["v_star"])]
-        for j in range(len(res.methods)):
-            row += [repr(float(means[i, j])), repr(float(ses[i, j]))]
-        for d in diffs:
-            row += [repr(float(d.mean[i])), repr(float(d.se[i])), repr(float(d.low[i])),
-                    repr(float(d.high[i])), str(d.outcome[i])]
-        rows.append(row)
-    return rows
+    facts = pd.DataFrame([res.facts[p] for p in res.pairs])
+    out = pd.DataFrame({"pair": res.pairs, "start": facts["start"], "goal": facts["goal"],
+                        "tuning": facts["tuning"].fillna(""),
+                        "shortest_plan": facts["shortest_plan"], "v_star": facts["v_star"]})
+    for j, m in enumerate(res.methods):
+        out[f"mean_{m}"], out[f"se_{m}"] = means[:, j], ses[:, j]
+    for d in diffs:
+        b = d.baseline
+        out[f"diff_{b}"], out[f"diff_se_{b}"] = d.mean, d.se
+        out[f"ci_low_{b}"], out[f"ci_high_{b}"], out[f"outcome_{b}"] = d.low, d.high, d.outcome
+    return out
 
 
 def table_markdown(res: PairRuns, diffs: list[Differences]) -> str:
     """The table as Markdown (rounded; the CSV has every digit)."""
+    full = table(res, diffs)
     ref = res.reference
-    head = ["pair", "tuning", "shortest plan", "V*", *res.methods,
-            *(f"{ref} - {d.baseline}" for d in diffs)]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    means, ses = over_runs(res.means)
-    for i, p in enumerate(res.pairs):
-        f = res.facts[p]
-        tuning = f.get("tuning")
-        cells = [f"**{p}**" if tuning else p, f"task {tuning}" if tuning else "",
-                 str(f["shortest_plan"]) if f["shortest_plan"] >= 0 else "none",
-                 number(f["v_star"])]
-        cells += [f"{number(m)} ({number(e)})" for m, e in zip(means[i], ses[i], strict=True)]
-        cells += [f"{number(d.mean[i], sign=True)} ({number(d.se[i])}) {d.outcome[i]}"
-                  for d in diffs]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    md = pd.DataFrame({
+        "pair": [f"**{p}**" if t else p for p, t in zip(full["pair"], full["tuning"],
+                                                         strict=True)],
+        "tuning": [f"task {t}" if t else "" for t in full["tuning"]],
+        "shortest plan": [str(n) if n >= 0 else "none" for n in full["shortest_plan"]],
+        "V*": [number(v) for v in full["v_star"]]})
+    for m in res.methods:
+        md[m] = [f"{number(a)} ({number(b)})" for a, b in zip(full[f"mean_{m}"],
+                                                             full[f"se_{m}"], strict=True)]
+    for d in diffs:
+        md[f"{ref} - {d.baseline}"] = [f"{number(a, sign=True)} ({number(b)}) {o}" for a, b, o
+                                       in zip(d.mean, d.se, d.outcome, strict=True)]
+    return md.to_markdown(index=False, disable_numparse=True) + "\n"
+
+
+def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
+    """Per method over the pairs with V* > 0: the interquartile mean of every run's mean
+    return / V* (one score per pair and run) and its stratified bootstrap 95% CI (runs
+    resampled within each pair, :func:`~gdq_pddl.analysis.stats.iqm_ci`)."""
+    v_star = np.array([float(res.facts[p].get("v_star") or math.nan) for p in res.pairs])
+    keep = np.flatnonzero(v_star > 0)
+    rows = {m: iqm_ci([res.means[i, j] / v_star[i] for i in keep], seed)
+            for j, m in enumerate(res.methods)}
+    return pd.DataFrame.from_dict(rows, orient="index", columns=["iqm", "low", "high"]).assign(
+        pairs=len(keep))
 
 
 def write_tables(res: PairRuns, diffs: list[Differences], out: Path) -> list[Path]:
@@ -220,23 +196,9 @@ def write_tables(res: PairRuns, diffs: list[Differences], out: Path) -> list[Pat
     target = out / "tables"
     target.mkdir(parents=True, exist_ok=True)
     csv_path, md_path = target / f"{TABLE_STEM}.csv", target / f"{TABLE_STEM}.md"
-    with writing(csv_path), open(csv_path, "w", encoding="utf-8", newline="") as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(table_columns(res))
-        writer.writerows(table_rows(res, diffs))
+    frame = table(res, diffs)
+    floats = [c for c in frame if frame[c].dtype == float]
+    frame[floats] = frame[floats].map(lambda x: repr(float(x)))  # every digit
+    write_text(csv_path, frame.to_csv(index=False, lineterminator="\n"))
     write_text(md_path, table_markdown(res, diffs))
     return [csv_path, md_path]
-
-
-def make_pairs_report(out: str | Path) -> list[Path]:
-    """The table, figure and ``REPORT.md`` of a pairs folder; returns the paths."""
-    from gdq_pddl.analysis.pairs_figures import write_figure
-    from gdq_pddl.analysis.pairs_markdown import write_report
-
-    out = Path(out)
-    res = load_pair_runs(out)
-    diffs = [differences(res, b) for b in res.baselines]
-    paths = write_tables(res, diffs, out)
-    paths += write_figure(res, diffs, out)
-    paths.append(write_report(res, diffs, out))
-    return paths

@@ -1,78 +1,88 @@
-"""``REPORT.md``: the paper's hypotheses tested on an experiment output folder.
+"""``REPORT.md`` of an output folder, with its figures and tables.
 
-Every verdict is computed from the data by :func:`gdq_pddl.analysis.stats.verdict` (GDQ
-against each baseline, one number per run, Welch's t-test and a bootstrap CI); nothing
-is hard-coded. Experiments missing from the folder (a ``--quick`` run without switches
-or robot) are skipped with a note; experiments no paper section covers (``gdq-pddl run``)
-get the *Methods compared* section (:mod:`.sections.methods`) instead of verdicts.
-
-The sections are in :mod:`gdq_pddl.analysis.sections`; this module runs them in order
-and puts the verdict summary after the method paragraph.
+What the folder holds decides the report: ``runs.csv`` without ``episodes.csv`` is a
+pairs folder (:mod:`.pairs_report`); experiments with ``knowledge`` in ``config.json``
+are the wrong-knowledge cases (:mod:`.knowledge`); a folder with one of the paper's
+experiments (``tasks``, ``switch-*``, ``robot``) gets the paper's hypotheses tested, with
+verdicts (:data:`SECTIONS`); any other (``gdq-pddl run`` on the office or a PDDL problem)
+gets the *Methods compared* report. Every verdict is computed from the data by
+:func:`gdq_pddl.analysis.stats.verdict`; nothing is hard-coded.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from gdq_pddl.analysis import sections
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
-from gdq_pddl.analysis.sections import (
-    ground_truth,
-    header,
-    hypothesis_1,
-    hypothesis_2,
-    hypothesis_3,
-    methods,
-    robot,
-    route_c,
-    variants,
-    why_gdq_fails,
-)
-from gdq_pddl.analysis.sections.why_gdq_fails import OptInitValues, optinit_values
-from gdq_pddl.analysis.sections.writer import ReportOptions, Writer
+from gdq_pddl.analysis.knowledge_report import make_knowledge_report
+from gdq_pddl.analysis.pairs_report import make_pairs_report
+from gdq_pddl.analysis.results import load_config
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import make_tables
+from gdq_pddl.analysis.writer import ReportOptions, Writer
+from gdq_pddl.errors import ResultsError
+from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
 from gdq_pddl.outputs import write_text
 
-__all__ = ["OptInitValues", "ReportOptions", "make_all", "optinit_values", "write_report"]
-
-SECTIONS = (header, methods, ground_truth, hypothesis_1, hypothesis_2, hypothesis_3, route_c,
-            variants, why_gdq_fails, robot)
-"""The report's sections in order (modules with ``write(w)``)."""
+SECTIONS = (sections.write_header, sections.write_methods, sections.write_ground_truth,
+            sections.write_hypothesis_1, sections.write_hypothesis_2,
+            sections.write_hypothesis_3, sections.write_route_c, sections.write_variants,
+            sections.write_why_gdq_fails, sections.write_robot)
+"""The paper report's sections in order."""
 DEFAULT_OPTIONS = ReportOptions()
 
 
-def render(w: Writer) -> str:
-    """The written lines with the verdict summary: a one-line count under the title and
-    the ``## Verdicts`` section after the method paragraph."""
-    summary = w.verdicts.section(w.notes)
-    # header is the first block up to the method paragraph; put the summary after it
-    head_end = next(i for i, line in enumerate(w.lines)
-                    if line.startswith("**Method.**")) + 2
+def report_text(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
+                study: Study | None = None) -> str:
+    """The Markdown of ``REPORT.md`` (embedding figures already in ``out_dir/figures``)."""
+    out = Path(out_dir)
+    study = study or Study.open(out)
+    w = Writer(study, opts, out)
+    if len(study.uncovered) == len(study.experiments):  # no paper experiment
+        w.add("# Run report", "", *sections.setup_lines(study), "")
+        sections.write_methods(w, full=False)
+        return "\n".join(w.lines)
+    for section in SECTIONS:
+        section(w)
+    # a one-line count under the title, the verdicts after the method paragraph
+    head_end = next(i for i, line in enumerate(w.lines) if line.startswith("**Method.**")) + 2
     top = [f"**Summary.** {w.verdicts.counts()}", ""]
-    return "\n".join(w.lines[:2] + top + w.lines[2:head_end] + summary
+    return "\n".join(w.lines[:2] + top + w.lines[2:head_end] + w.verdicts.section(w.notes)
                      + w.lines[head_end:]) + "\n"
 
 
 def write_report(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
                  study: Study | None = None) -> Path:
-    """Write ``REPORT.md`` in ``out_dir`` (embedding figures already in ``out_dir/figures``)."""
-    out = Path(out_dir)
-    study = study or Study.open(out)
-    w = Writer(study, opts, out)
-    for section in SECTIONS:
-        section.write(w)
-    path = out / "REPORT.md"
-    write_text(path, render(w))
+    """Write ``REPORT.md`` in ``out_dir``; returns its path."""
+    path = Path(out_dir) / "REPORT.md"
+    write_text(path, report_text(out_dir, opts, study))
     return path
 
 
 def make_all(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
              figure_opts: FigureOptions | None = None) -> list[Path]:
-    """Figures, tables and ``REPORT.md`` for one output folder; returns every written path."""
+    """Figures, tables and ``REPORT.md`` of an episodes folder; returns every written path."""
     out = Path(out_dir)
     study = Study.open(out)
-    fopts = figure_opts or FigureOptions(window=opts.window)
-    paths = make_figures(out, fopts, study)
+    paths = make_figures(out, figure_opts or FigureOptions(window=opts.window), study)
     paths += make_tables(out, study)
     paths.append(write_report(out, opts, study))
     return paths
+
+
+def make_report(out_dir: str | Path, command: str | None = None) -> list[Path]:
+    """Whatever report the folder's data calls for (see the module docstring); returns
+    every written path, ``REPORT.md`` last. ``command`` names what made a knowledge
+    folder."""
+    out = Path(out_dir)
+    config = load_config(out)
+    if config.experiments and all(e.get("name") == PAIRS_EXPERIMENT
+                                  for e in config.experiments):
+        return make_pairs_report(out)
+    if not (out / "episodes.csv").is_file():
+        raise ResultsError(f"{out} has no episodes.csv: is it an output folder of gdq-pddl "
+                           "run, switch, robot, reproduce, knowledge or pairs?")
+    if any(e.get("knowledge") for e in config.experiments):
+        return make_knowledge_report(out, command or "gdq-pddl knowledge (see config.json)")
+    return make_all(out)

@@ -13,12 +13,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
-from gdq_pddl.analysis.names import order_methods
+from gdq_pddl.analysis.figures import method_colour, save_all
+from gdq_pddl.analysis.results import order_methods
 from gdq_pddl.analysis.stats import mean_se
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
-from gdq_pddl.outputs import save_figure, write_text
+from gdq_pddl.outputs import write_text
 
 REFERENCE = "GDQ"
 """The method every other one is compared with, run by run."""
@@ -79,30 +83,21 @@ def _first_label(episodes: int) -> str:
     return f"first {FIRST} episodes" if episodes > FIRST else f"{episodes} episodes (all)"
 
 
+def make_scale_report(results: list[BuildingResult], runs: int, episodes: int, out: Path
+                      ) -> list[Path]:
+    """``scale.png``, ``scale.pdf`` and ``REPORT.md`` in ``out``; returns the paths."""
+    return [*figure(results, episodes, out), report(results, runs, episodes, out)]
+
+
 def figure(results: list[BuildingResult], episodes: int, out: Path) -> list[Path]:
     """:func:`draw` saved as ``out/scale.png`` and ``out/scale.pdf``; returns the paths."""
-    import matplotlib.pyplot as plt
-
-    fig = draw(results, episodes)
-    paths = [out / "scale.png", out / "scale.pdf"]
-    for p in paths:
-        save_figure(fig, p)
-    plt.close(fig)
-    return paths
+    return save_all(draw(results, episodes), out, "scale")
 
 
-def draw(results: list[BuildingResult], episodes: int):
+def draw(results: list[BuildingResult], episodes: int) -> Figure:
     """The figure: episodes to convergence, GDQ minus each other method in mean return over
     the first episodes (when GDQ ran) and env steps/s against size; each building its own
     marker, a line through each size's value over all its buildings."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
-
-    from gdq_pddl.analysis.figures import method_colour
-
     names = _names(results)
     others = [n for n in names if n != REFERENCE] if REFERENCE in names else []
     sizes = by_size(results)

@@ -1,33 +1,34 @@
-"""Statistics for the hypotheses: per-run summaries, GDQ-vs-baseline tests, milestones.
+"""Statistics for the reports: GDQ-vs-baseline tests, verdicts, milestones, the IQM.
 
 Every comparison is between *runs* (the independent unit): one number per run for each
-method, then Welch's t-test (unequal variances) and a percentile bootstrap 95% CI of the
-difference in means (runs resampled with replacement within each method, a numpy
-Generator with a fixed seed). A difference is *significant* when the CI excludes 0 and
-the two-sided p-value is below ``alpha`` (when the t-test is undefined, e.g. two
-constant samples, the CI alone decides).
+method, then Welch's t-test (unequal variances, :func:`scipy.stats.ttest_ind`) and a
+percentile bootstrap 95% CI of the difference in means (:func:`scipy.stats.bootstrap`,
+runs resampled within each method, a numpy Generator with a fixed seed). A difference is
+*significant* when the CI excludes 0 and the two-sided p-value is below ``alpha`` (when
+the t-test is undefined, e.g. two constant samples, the CI alone decides).
 
-Verdicts (:func:`verdict`) over the comparisons of GDQ with each baseline:
+Verdicts (:func:`verdict`) over the comparisons of GDQ with each baseline: ``holds`` when
+GDQ is significantly better than every baseline; ``does not hold`` when it is
+significantly worse than at least one, or better than none; ``mixed`` otherwise.
 
-- ``holds``: GDQ is significantly better than every baseline;
-- ``does not hold``: GDQ is significantly worse than at least one baseline, or
-  significantly better than none;
-- ``mixed``: better than some, indistinguishable from the others, worse than none.
+Milestones use a trailing moving average (pandas ``rolling``) over *full* windows only:
+the value at episode ``e`` is the mean of episodes ``e - w + 1 .. e``, defined from
+episode ``w`` on, so one lucky early episode cannot count as a milestone.
 
-Milestones on a return curve use a trailing moving average over *full* windows only:
-the value at episode ``e`` (1-based) is the mean of episodes ``e - w + 1 .. e``, defined
-from episode ``w`` on, so one lucky early episode cannot count as a milestone.
+Over many tasks (:func:`iqm_ci`): the interquartile mean of every run's score on every
+task, with a stratified bootstrap CI (runs resampled within each task), as Agarwal et al.
+(2021) recommend for results over many tasks and few runs.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 from scipy import stats as sps
 
 ALPHA = 0.05
@@ -38,39 +39,26 @@ HOLDS, DOES_NOT_HOLD, MIXED = "holds", "does not hold", "mixed"
 
 
 def run_means(matrix: np.ndarray, start: int = 0, stop: int | None = None) -> np.ndarray:
-    """Per-run mean of ``matrix[runs, episodes]`` over episode columns ``start:stop``."""
+    """Per-run mean of ``matrix[runs, episodes]`` over episode columns ``start:stop``
+    (NaN for a run without episodes there)."""
     if matrix.size == 0:
         return np.empty(0)
-    with _quiet():
-        return np.nanmean(matrix[:, start:stop], axis=1)
-
-
-@contextmanager
-def _quiet() -> Iterator[None]:
-    """Silence numpy's 'mean of empty slice' warnings (an empty slice gives NaN)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", category=RuntimeWarning)
-        yield
+    return pd.DataFrame(matrix[:, start:stop]).mean(axis=1).to_numpy()
 
 
 def mean_se(x: np.ndarray, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Mean and standard error (ddof=1; 0 with a single sample) along ``axis``, NaN-aware."""
-    x = np.asarray(x, dtype=float)
-    with _quiet():
-        mean = np.nanmean(x, axis=axis)
-        n = np.sum(~np.isnan(x), axis=axis)
-        sd = np.nanstd(x, axis=axis, ddof=1) if x.shape[axis] > 1 else np.zeros_like(mean)
-    se = np.where(n > 1, sd / np.sqrt(np.maximum(n, 1)), 0.0)
-    return mean, se
+    frame = pd.DataFrame(np.moveaxis(np.asarray(x, dtype=float), axis, 0).reshape(
+        np.shape(x)[axis], -1))
+    shape = np.delete(np.shape(x), axis)
+    mean, se = frame.mean().to_numpy(), frame.sem().fillna(0.0).to_numpy()
+    return mean.reshape(shape), se.reshape(shape)
 
 
 @dataclass(frozen=True)
 class Comparison:
-    """``a`` (GDQ) against ``b`` (a baseline): difference ``mean(a) - mean(b)``.
-
-    ``higher_is_better`` says which sign favours ``a``; :attr:`outcome` is ``better``,
-    ``worse`` or ``inconclusive`` for ``a``.
-    """
+    """``a`` (GDQ) against ``b`` (a baseline): difference ``mean(a) - mean(b)``;
+    ``higher_is_better`` says which sign favours ``a``."""
 
     a: str
     b: str
@@ -95,6 +83,7 @@ class Comparison:
 
     @property
     def outcome(self) -> str:
+        """``better``, ``worse`` or ``inconclusive`` for ``a``."""
         if not self.significant:
             return "inconclusive"
         good = self.diff > 0 if self.higher_is_better else self.diff < 0
@@ -108,24 +97,32 @@ class Comparison:
                 f"n = {self.n_a} vs {self.n_b} runs): {self.outcome}")
 
 
-def bootstrap_ci(a: np.ndarray, b: np.ndarray, n_boot: int = N_BOOT, seed: int = SEED,
+def _mean_diff(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
+    return a.mean(axis=axis) - b.mean(axis=axis)
+
+
+def bootstrap_ci(a: np.ndarray, b: np.ndarray, seed: int = SEED,
                  level: float = 0.95) -> tuple[float, float]:
-    """Percentile bootstrap CI of ``mean(a) - mean(b)`` (each resampled with replacement)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    a, b = a[~np.isnan(a)], b[~np.isnan(b)]
-    if a.size == 0 or b.size == 0:
+    """Percentile bootstrap CI of ``mean(a) - mean(b)`` (each resampled with replacement;
+    NaN when a sample has fewer than 2 values, or all are equal)."""
+    a, b = _finite(a), _finite(b)
+    if a.size < 2 or b.size < 2:
         return math.nan, math.nan
-    rng = np.random.default_rng(seed)
-    ma = a[rng.integers(0, a.size, size=(n_boot, a.size))].mean(axis=1)
-    mb = b[rng.integers(0, b.size, size=(n_boot, b.size))].mean(axis=1)
-    lo, hi = np.quantile(ma - mb, [(1 - level) / 2, (1 + level) / 2])
-    return float(lo), float(hi)
+    if np.ptp(a) == 0 and np.ptp(b) == 0:  # nothing to resample: the CI is the point
+        return float(a[0] - b[0]), float(a[0] - b[0])
+    res = sps.bootstrap((a, b), _mean_diff, n_resamples=N_BOOT, confidence_level=level,
+                        method="percentile", rng=np.random.default_rng(seed))
+    return float(res.confidence_interval.low), float(res.confidence_interval.high)
+
+
+def _finite(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    return x[~np.isnan(x)]
 
 
 def welch(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     """Welch's t statistic and two-sided p-value (NaN when undefined)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    a, b = a[~np.isnan(a)], b[~np.isnan(b)]
+    a, b = _finite(a), _finite(b)
     if a.size < 2 or b.size < 2 or (np.ptp(a) == 0 and np.ptp(b) == 0):
         return math.nan, math.nan
     # nearly constant samples (a method that fails identically in every run) make scipy
@@ -139,14 +136,11 @@ def welch(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
 def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "baseline",
             higher_is_better: bool = True, seed: int = SEED, alpha: float = ALPHA) -> Comparison:
     """Welch's t-test and bootstrap CI of ``mean(a) - mean(b)`` over runs."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    t, p = welch(a, b)
-    lo, hi = bootstrap_ci(a, b, seed=seed)
-    with _quiet():
-        ma, mb = float(np.nanmean(a)), float(np.nanmean(b))
-    return Comparison(name_a, name_b, ma, mb, ma - mb, lo, hi, t, p,
-                      int(np.sum(~np.isnan(a))), int(np.sum(~np.isnan(b))),
-                      higher_is_better, alpha)
+    fa, fb = _finite(a), _finite(b)
+    ma = float(fa.mean()) if fa.size else math.nan
+    mb = float(fb.mean()) if fb.size else math.nan
+    return Comparison(name_a, name_b, ma, mb, ma - mb, *bootstrap_ci(fa, fb, seed),
+                      *welch(fa, fb), fa.size, fb.size, higher_is_better, alpha)
 
 
 def verdict(comparisons: Sequence[Comparison]) -> str:
@@ -164,40 +158,26 @@ def verdict_reason(comparisons: Sequence[Comparison]) -> str:
     no significant difference from Dyna-Q``."""
     groups = {"better": "better than", "inconclusive": "no significant difference from",
               "worse": "worse than"}
-    parts = []
-    for outcome, words in groups.items():
-        names = [c.b for c in comparisons if c.outcome == outcome]
-        if names:
-            parts.append(f"{words} {', '.join(names)}")
+    parts = [f"{words} {', '.join(names)}" for outcome, words in groups.items()
+             if (names := [c.b for c in comparisons if c.outcome == outcome])]
     return "; ".join(parts) or "no baselines"
 
 
 def moving_average(x: np.ndarray, window: int, full_only: bool = True) -> np.ndarray:
-    """Trailing moving average along the last axis.
-
-    With ``full_only`` the first ``window - 1`` values are NaN; otherwise they average the
-    episodes seen so far (the figures' smoothing, so curves start at episode 1).
-    NaNs in ``x`` propagate.
-    """
+    """Trailing moving average along the last axis of a 1-D or 2-D array (pandas
+    ``rolling``). With ``full_only`` the first ``window - 1`` values are NaN; otherwise
+    they average the episodes seen so far (the figures' smoothing)."""
     x = np.asarray(x, dtype=float)
     window = max(1, int(window))
-    n = x.shape[-1]
-    pad = np.zeros((*x.shape[:-1], 1))
-    c = np.concatenate([pad, np.cumsum(x, axis=-1)], axis=-1)
-    idx = np.arange(1, n + 1)
-    lo = np.maximum(idx - window, 0)
-    out = (c[..., idx] - c[..., lo]) / (idx - lo)
-    if full_only:
-        out[..., : min(window - 1, n)] = np.nan
-    return out
+    frame = pd.DataFrame(np.atleast_2d(x).T)
+    out = frame.rolling(window, min_periods=window if full_only else 1).mean().to_numpy().T
+    return out.reshape(x.shape)
 
 
-def first_crossing(curve: np.ndarray, window: int = 50, threshold: float = 0.0) -> float:
-    """1-based episode at which the full-window moving average of ``curve`` first exceeds
-    ``threshold`` (NaN if never)."""
-    ma = moving_average(curve, window)
-    hits = np.flatnonzero(ma > threshold)
-    return float(hits[0] + 1) if hits.size else math.nan
+def _first(hits: np.ndarray) -> float:
+    """1-based index of the first True (NaN if none)."""
+    idx = np.flatnonzero(hits)
+    return float(idx[0] + 1) if idx.size else math.nan
 
 
 @dataclass(frozen=True)
@@ -207,7 +187,7 @@ class Milestone:
     per_run: tuple[float, ...]
     """Per run (NaN: never within the data)."""
     on_mean_curve: float
-    """On the mean curve over runs (the headline figure: what the learning curve shows)."""
+    """On the mean curve over runs (what the learning curve shows)."""
 
     @property
     def reached(self) -> int:
@@ -224,10 +204,9 @@ def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0)
     per run and on the mean curve over runs."""
     if matrix.size == 0:
         return Milestone((), math.nan)
-    per_run = tuple(first_crossing(row, window, threshold) for row in matrix)
-    with _quiet():
-        mean_curve = np.nanmean(matrix, axis=0)
-    return Milestone(per_run, first_crossing(mean_curve, window, threshold))
+    per_run = tuple(_first(row) for row in moving_average(matrix, window) > threshold)
+    mean_curve = pd.DataFrame(matrix).mean().to_numpy()
+    return Milestone(per_run, _first(moving_average(mean_curve, window) > threshold))
 
 
 def settles(indicator: np.ndarray, window: int, share: float) -> float:
@@ -236,9 +215,7 @@ def settles(indicator: np.ndarray, window: int, share: float) -> float:
     ind = np.asarray(indicator, dtype=float)
     if ind.size < window:
         return math.nan
-    ma = moving_average(ind, window)
-    ok = ma >= share - 1e-12
-    ok[: window - 1] = False
+    ok = moving_average(ind, window) >= share - 1e-12
     if not ok[-1]:
         return math.nan
     bad = np.flatnonzero(~ok)
@@ -247,12 +224,8 @@ def settles(indicator: np.ndarray, window: int, share: float) -> float:
 
 def route_indicator(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
                     areas: Sequence[int]) -> np.ndarray:
-    """Per episode: succeeded and visited exactly the areas of ``route_areas``.
-
-    ``visits`` is ``[..., n_areas]`` (areas in the order of ``areas``). For Task C the
-    area sets tell the three candidate routes apart: {1,2,6} (d0), {1,3,6} (d2) and
-    {1,2,3,6} (d1 and d3). Slips that wander into an extra area count as off-route.
-    """
+    """Per episode: succeeded and visited exactly the areas of ``route_areas``
+    (``visits[..., n_areas]``, areas in the order of ``areas``)."""
     on = np.array([a in set(route_areas) for a in areas])
     visited = visits > 0
     exact = np.all(visited[..., on], axis=-1) & ~np.any(visited[..., ~on], axis=-1)
@@ -263,10 +236,32 @@ def convergence_episode(visits: np.ndarray, success: np.ndarray, route_areas: Se
                         areas: Sequence[int], window: int = 50,
                         share: float = 0.5) -> tuple[float, ...]:
     """Per run: the episode from which at least ``share`` of the last ``window`` episodes
-    follow ``route_areas`` successfully, to the end of the run (NaN: not converged).
-
-    The CSV has no per-episode policies, so convergence is read off behaviour: the
-    episode's area visits (see :func:`route_indicator`).
-    """
+    follow ``route_areas`` successfully, to the end of the run (NaN: not converged)."""
     ind = route_indicator(visits, success, route_areas, areas)
     return tuple(settles(row, window, share) for row in ind)
+
+
+def iqm(x: np.ndarray, axis: int | None = None) -> np.ndarray:
+    """Interquartile mean: the mean of the middle 50% of the values."""
+    return sps.trim_mean(x, 0.25, axis=axis)
+
+
+def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED, level: float = 0.95,
+           n_resamples: int = 2000) -> tuple[float, float, float]:
+    """IQM of every run's score on every task (``scores``: one array of run scores per
+    task) and its stratified percentile bootstrap CI: :func:`scipy.stats.bootstrap` with
+    one sample per task resamples runs within each task. The CI is NaN when a task has
+    fewer than 2 runs."""
+    samples = [s for s in (_finite(s) for s in scores) if s.size]
+    if not samples:
+        return math.nan, math.nan, math.nan
+    point = float(iqm(np.concatenate(samples)))
+    if min(s.size for s in samples) < 2:
+        return point, math.nan, math.nan
+
+    def statistic(*xs: np.ndarray, axis: int = -1) -> np.ndarray:
+        return iqm(np.concatenate(xs, axis=axis), axis=axis)
+
+    res = sps.bootstrap(samples, statistic, n_resamples=n_resamples, confidence_level=level,
+                        method="percentile", rng=np.random.default_rng(seed))
+    return point, float(res.confidence_interval.low), float(res.confidence_interval.high)

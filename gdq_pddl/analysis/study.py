@@ -1,50 +1,49 @@
-"""One experiment output folder, loaded lazily: the object figures, tables and report share."""
+"""One experiment output folder, read lazily: what figures, tables and reports share.
+
+What a problem is comes from its data: it has areas when its rows carry area visits,
+a map (positions, routes, a world task) when it has areas, and its V* from
+``optimal.json`` (computed from the world when the file lacks it and there is a map).
+"""
 
 from __future__ import annotations
 
+import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
-from gdq_pddl.analysis.data import (
+from gdq_pddl.analysis.results import (
+    ROBOT_EXPERIMENT,
     SWITCH_PREFIX,
     TASKS_EXPERIMENT,
-    Episodes,
-    Policies,
     RunConfig,
+    area_columns,
     is_gdq,
     load_config,
-    load_episodes,
     load_optimal,
     load_policies,
-    load_world_spec,
+    load_results,
+    optimal_entry,
+    order_methods,
 )
-from gdq_pddl.analysis.routes import (
-    Route,
-    TaskTruth,
-    resolve_task_label,
-    task_truth,
-    walk_policy,
-)
+from gdq_pddl.analysis.routes import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
 from gdq_pddl.errors import GdqError
-from gdq_pddl.world import Task, World
+from gdq_pddl.world import Task, World, builtin_world, load_world
 
-PDDL_WORLD = "pddl"
-"""The ``world`` the runner records for an experiment on a PDDL problem."""
+PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)
+"""With every ``switch-*``, the experiments a paper section covers."""
 
 
 @dataclass(frozen=True)
 class RouteSummary:
-    """The final greedy routes of one method's runs, and the most common one.
-
-    Runs are grouped by route in *area* terms and how the walk ended (``goal``, ``loop``
-    ...); the most common group is the method's route (ties: the group of the lowest
-    run). :attr:`example` is that group's most common position sequence, for drawing.
-    The report's table and the route figure both use this, so they always agree.
-    """
+    """The final greedy routes of one method's runs, and the most common one (grouped by
+    route in *area* terms and how the walk ended; ties: the group of the lowest run).
+    :attr:`example` is that group's most common position sequence, for drawing."""
 
     routes: dict[int, Route]
     areas: tuple[int, ...]
@@ -66,12 +65,22 @@ def summarise_routes(world: World, routes: dict[int, Route]) -> RouteSummary | N
     """The :class:`RouteSummary` of ``routes`` (None when there are none)."""
     if not routes:
         return None
-    groups = Counter((r.areas(world), r.end) for _, r in sorted(routes.items()))
-    (areas, end), count = groups.most_common(1)[0]
-    members = [r for _, r in sorted(routes.items()) if (r.areas(world), r.end) == (areas, end)]
+    runs = sorted(routes.items())
+    (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
+    members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
     top = Counter(r.positions for r in members).most_common(1)[0][0]
     example = next(r for r in members if r.positions == top)
     return RouteSummary(dict(routes), areas, end, count, example)
+
+
+def slug(label: str) -> str:
+    """A label as a file-name part (``p0->p17`` -> ``p0_p17``)."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", label).strip("_") or "task"
+
+
+def curves_stem(experiment: str) -> str:
+    """The file stem of an uncovered experiment's learning-curve figure."""
+    return "learning_curves_" + (slug(experiment) if slug(experiment) != "task" else "x")
 
 
 @dataclass(frozen=True)
@@ -79,132 +88,209 @@ class Study:
     """The contents of an output folder (each file read on first use)."""
 
     out_dir: Path
-    _truths: dict[tuple[str, str], TaskTruth] = field(default_factory=dict, repr=False,
-                                                     compare=False)
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     @classmethod
     def open(cls, out_dir: str | Path) -> Study:
         out = Path(out_dir)
-        if not (out / "episodes.csv").exists():
-            raise FileNotFoundError(f"{out}: no episodes.csv (is this an experiment output "
-                                    "folder?)")
-        return cls(out)
+        study = cls(out)
+        study.results  # noqa: B018  (read and check episodes.csv now: errors name the file)
+        return study
 
     @cached_property
-    def episodes(self) -> Episodes:
-        return load_episodes(self.out_dir / "episodes.csv")
+    def results(self) -> pd.DataFrame:
+        return load_results(self.out_dir)
 
     @cached_property
     def config(self) -> RunConfig:
         return load_config(self.out_dir)
 
     @cached_property
-    def policies(self) -> Policies | None:
+    def policies(self) -> pd.DataFrame | None:
         return load_policies(self.out_dir)
-
-    @cached_property
-    def _policy_map(self) -> dict[tuple[str, str, str, int], dict[int, int]]:
-        return self.policies.grouped() if self.policies is not None else {}
 
     @cached_property
     def optimal(self) -> dict[str, dict]:
         return load_optimal(self.out_dir)
 
     @cached_property
-    def _worlds(self) -> dict[str, World]:
-        return {}
+    def _groups(self) -> dict[tuple, np.ndarray]:
+        """Row indices per (experiment, method, task) and per (experiment, method)."""
+        df = self.results
+        out = dict(df.groupby(["experiment", "method", "task"], observed=True).indices)
+        for key, rows in df.groupby(["experiment", "method"], observed=True).indices.items():
+            out[(*key, None)] = rows
+        return out
 
-    def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
-        """The world ``experiment`` ran in (one object per world, so models compile once)."""
-        spec = self.config.world_spec(experiment)
-        if spec not in self._worlds:
-            self._worlds[spec] = load_world_spec(spec)
-        return self._worlds[spec]
+    def rows(self, experiment: str, method: str | None = None,
+             task: str | None = None) -> pd.DataFrame:
+        """The rows of one experiment (and method, and task)."""
+        if method is not None:
+            return self.results.iloc[self._groups.get((experiment, method, task), [])]
+        if ("rows", experiment) not in self._cache:
+            df = self.results
+            self._cache[("rows", experiment)] = df[df["experiment"] == experiment]
+        return self._cache[("rows", experiment)]
 
-    def is_pddl(self, experiment: str) -> bool:
-        """Whether ``experiment`` ran on a PDDL problem (``gdq-pddl run --domain``), which
-        has no world file, areas or positions."""
-        return self.config.world_spec(experiment) == PDDL_WORLD
+    def __len__(self) -> int:
+        return len(self.results)
 
-    def task(self, experiment: str, label: str) -> Task:
-        """The task a ``task`` column label names in ``experiment``'s world (a
-        :class:`GdqError` for a PDDL experiment: it has no world)."""
-        if self.is_pddl(experiment):
-            raise GdqError(f"experiment {experiment!r} ran on a PDDL problem: no world task")
-        return resolve_task_label(self.world(experiment), label)
+    @cached_property
+    def experiments(self) -> list[str]:
+        return sorted(self.results["experiment"].unique())
 
-    def v_star(self, experiment: str, task: str) -> float:
-        """V* of ``task``: :meth:`truth`'s, or for a PDDL experiment ``optimal.json``'s
-        (NaN when absent)."""
-        if not self.is_pddl(experiment):
-            return self.truth(experiment, task).v_star
-        from gdq_pddl.analysis.generic import optimal_entry
+    def methods(self, experiment: str | None = None) -> list[str]:
+        df = self.results if experiment is None else self.rows(experiment)
+        return order_methods(df["method"].unique())
 
-        value = optimal_entry(self.optimal, task, PDDL_WORLD).get("v_star")
-        return float(value) if isinstance(value, (int, float)) else float("nan")
-
-    def truth(self, experiment: str, task: str) -> TaskTruth:
-        """V*, relevant areas and optimal route of ``task`` in ``experiment``'s world.
-
-        ``optimal.json`` keys a task by name in the office and ``name@world`` elsewhere
-        (the runner's convention); what it lacks is computed from the true model.
-        """
-        spec = self.config.world_spec(experiment)
-        key = (spec, task)
-        if key not in self._truths:
-            t = self.task(experiment, task)
-            given = self.optimal.get(f"{t.name}@{spec}") or self.optimal.get(f"{task}@{spec}")
-            if given is None and spec == "office":
-                given = self.optimal.get(t.name) or self.optimal.get(task)
-            self._truths[key] = task_truth(self.world(experiment), t, given)
-        return self._truths[key]
+    def tasks(self, experiment: str, method: str | None = None) -> list[str]:
+        """Task labels in order of first appearance (a switch's old task first)."""
+        key = ("tasks", experiment, method)
+        if key not in self._cache:
+            df = self.rows(experiment) if method is None else self.rows(experiment, method)
+            first = df.groupby("task", observed=True)["episode"].min()
+            self._cache[key] = sorted(first.index, key=lambda t: (first[t], t))
+        return list(self._cache[key])
 
     def has(self, experiment: str) -> bool:
-        return self.episodes.has(experiment)
+        return experiment in self.experiments
 
     @property
     def switch_experiments(self) -> list[str]:
-        return [e for e in self.episodes.experiments if e.startswith(SWITCH_PREFIX)]
+        return [e for e in self.experiments if e.startswith(SWITCH_PREFIX)]
 
-    def methods(self, experiment: str) -> list[str]:
-        return self.episodes.methods(experiment)
+    @property
+    def uncovered(self) -> list[str]:
+        """The experiments no paper section covers (``gdq-pddl run`` and the like)."""
+        return [e for e in self.experiments
+                if e not in PAPER_EXPERIMENTS and not e.startswith(SWITCH_PREFIX)]
 
     def baselines(self, experiment: str) -> list[str]:
         """Methods GDQ is tested against: every method but GDQ and its variants."""
         return [m for m in self.methods(experiment) if not is_gdq(m)]
 
-    def switch_episode(self, experiment: str) -> int | None:
-        """First episode of the new task in a switch experiment (from the data; the
-        config's ``switch_episode`` only when the data show a single task)."""
-        ep = self.episodes
-        tasks = ep.tasks(experiment)
-        if len(tasks) >= 2:
-            rows = ep.mask(experiment, task=tasks[1])
-            return int(ep.values["episode"][rows].min())
-        return self.config.switch_episode
+    def matrix(self, column: str, experiment: str, method: str,
+               task: str | None = None) -> np.ndarray:
+        """``float64[runs, episodes]`` of ``column`` for one slice (runs and episodes
+        ascending; NaN where a run lacks one); with a ``task``, only its episodes."""
+        key = ("matrix", column, experiment, method, task)
+        if key not in self._cache:
+            rows = self.rows(experiment, method, task)
+            self._cache[key] = np.empty((0, 0)) if rows.empty else rows.pivot(
+                index="run", columns="episode", values=column).to_numpy(dtype=float)
+        return self._cache[key]
 
-    def route(self, experiment: str, method: str, task: str, run: int) -> Route | None:
-        """The intended route of a run's final greedy policy (None: no policy stored)."""
-        policy = self._policy_map.get((experiment, method, task, run))
-        if not policy:
+    def returns(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
+        return self.matrix("return", experiment, method, task)
+
+    def episode_numbers(self, experiment: str, method: str, task: str | None = None
+                        ) -> np.ndarray:
+        """The episode numbers (columns) of :meth:`matrix` for the same slice."""
+        return np.unique(self.rows(experiment, method, task)["episode"].to_numpy())
+
+    @cached_property
+    def area_columns(self) -> list[str]:
+        return area_columns(self.results.columns)
+
+    @property
+    def areas(self) -> tuple[int, ...]:
+        """Area numbers that have a column."""
+        return tuple(int(c[5:]) for c in self.area_columns)
+
+    def has_areas(self, experiment: str) -> bool:
+        """Whether ``experiment``'s rows record area visits (a PDDL problem's do not; an
+        old folder's hold zeros), hence a map with areas and positions."""
+        key = ("areas", experiment)
+        if key not in self._cache:
+            cols = self.area_columns
+            self._cache[key] = bool(cols) and bool(self.rows(experiment)[cols].gt(0).any(
+                axis=None))
+        return self._cache[key]
+
+    def area_visits(self, experiment: str, method: str, task: str | None = None
+                    ) -> np.ndarray:
+        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`)."""
+        mats = [self.matrix(c, experiment, method, task) for c in self.area_columns]
+        if not mats or mats[0].size == 0:
+            return np.empty((0, 0, len(mats)))
+        return np.stack(mats, axis=-1)
+
+    def area_totals(self, experiment: str, method: str, task: str) -> np.ndarray:
+        """``[runs, n_areas]``: visits per area summed over each run's episodes of ``task``."""
+        rows = self.rows(experiment, method, task)
+        return rows.groupby("run")[self.area_columns].sum().to_numpy(dtype=float)
+
+    def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
+        """The world ``experiment`` ran in (one object per world, so models compile once)."""
+        spec = self.config.world_spec(experiment)
+        if ("world", spec) not in self._cache:
+            self._cache[("world", spec)] = builtin_world(spec) if spec in (
+                "office", "office_robot") else load_world(spec)
+        return self._cache[("world", spec)]
+
+    def task(self, experiment: str, label: str) -> Task | None:
+        """The world task a ``task`` label names (None: the problem has no map)."""
+        if not self.has_areas(experiment):
             return None
-        t = self.task(experiment, task)
-        return walk_policy(self.world(experiment), policy, t.start, t.goal)
+        try:
+            return resolve_task_label(self.world(experiment), label)
+        except GdqError:
+            return None
+
+    def v_star(self, experiment: str, task: str) -> float:
+        """V* of ``task``: ``optimal.json``'s, else computed from the map (NaN: neither)."""
+        value = optimal_entry(self.optimal, task, self.config.world_spec(experiment)).get(
+            "v_star", optimal_entry(self.optimal, task).get("v_star"))
+        if isinstance(value, int | float):
+            return float(value)
+        return self.truth(experiment, task).v_star if self.has_areas(experiment) else math.nan
+
+    def truth(self, experiment: str, task: str) -> TaskTruth:
+        """V*, relevant areas and optimal route of ``task`` on ``experiment``'s map
+        (``optimal.json`` keys a task ``name`` in the office, ``name@world`` elsewhere)."""
+        spec = self.config.world_spec(experiment)
+        key = ("truth", spec, task)
+        if key not in self._cache:
+            t = self.task(experiment, task)
+            if t is None:
+                raise GdqError(f"experiment {experiment!r} has no map: no ground truth of "
+                               f"task {task!r}")
+            given = self.optimal.get(f"{t.name}@{spec}") or self.optimal.get(f"{task}@{spec}")
+            if given is None and spec == "office":
+                given = self.optimal.get(t.name) or self.optimal.get(task)
+            self._cache[key] = task_truth(self.world(experiment), t, given)
+        return self._cache[key]
+
+    def switch_episode(self, experiment: str) -> int | None:
+        """First episode of the new task in a switch experiment (None: a single task)."""
+        tasks = self.tasks(experiment)
+        if len(tasks) < 2:
+            return None
+        rows = self.rows(experiment)
+        return int(rows.loc[rows["task"] == tasks[1], "episode"].min())
+
+    @cached_property
+    def _policy_map(self) -> dict[tuple[str, str, str, int], dict[int, int]]:
+        if self.policies is None:
+            return {}
+        return {key: dict(zip(g["state"], g["action"], strict=True)) for key, g in
+                self.policies.groupby(["experiment", "method", "task", "run"])}
+
+    def policy(self, experiment: str, method: str, task: str, run: int) -> dict[int, int]:
+        """Learner state -> greedy action of one run's final policy (empty: none stored)."""
+        return self._policy_map.get((experiment, method, task, run), {})
 
     def routes(self, experiment: str, method: str, task: str) -> dict[int, Route]:
-        """Run -> route, for every run of ``method`` with a stored policy for ``task``."""
-        runs = sorted({r for (e, m, t, r) in self._policy_map
-                       if e == experiment and m == method and t == task})
-        out = {}
-        for r in runs:
-            route = self.route(experiment, method, task, r)
-            if route is not None:
-                out[r] = route
-        return out
+        """Run -> the intended route of its final greedy policy (runs with a policy)."""
+        t = self.task(experiment, task)
+        if t is None:
+            return {}
+        world = self.world(experiment)
+        return {r: walk_policy(world, policy, t.start, t.goal)
+                for (e, m, k, r), policy in sorted(self._policy_map.items())
+                if (e, m, k) == (experiment, method, task) and policy}
 
     def route_summary(self, experiment: str, method: str, task: str) -> RouteSummary | None:
         """The most common final greedy route of ``method`` (None: no policies)."""
-        return summarise_routes(self.world(experiment), self.routes(experiment, method, task))
-
-    def returns(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
-        return self.episodes.matrix("return", experiment, method, task)
+        routes = self.routes(experiment, method, task)
+        return summarise_routes(self.world(experiment), routes) if routes else None

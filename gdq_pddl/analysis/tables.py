@@ -1,180 +1,127 @@
-"""The area-visit table in the paper's layout (its Table "explore").
+"""The area-visit table in the paper's layout (its Table "explore"), by pandas.
 
 Rows are task x method, columns Area 1..k; a cell is ``mean (SE)`` over runs of the
-visits to that area summed over a run's episodes. The task cell lists the paper's
-irrelevant areas and the computed ones (areas the true optimal policy does not visit,
-see :class:`~gdq_pddl.analysis.routes.TaskTruth`). In every column that is irrelevant
-to the task by either definition, the fewest visits among all methods in the table are
-bold (every method within rounding of the minimum, so ties are all bold).
-
-Written as Markdown, LaTeX (booktabs) and CSV (plain numbers, one row per task x method).
+visits to that area summed over a run's episodes (``groupby`` sums per run, then mean
+and ``sem`` per method). The task cell lists the paper's irrelevant areas and the
+computed ones (areas the true optimal policy does not visit). In every column that is
+irrelevant to the task by either definition, the fewest visits among all methods (after
+rounding, so ties are all bold) are bold. Written by the DataFrame's own writers:
+Markdown (``to_markdown``), LaTeX (``to_latex``, booktabs) and CSV (every digit).
 """
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
+import pandas as pd
 
-from gdq_pddl.analysis.data import TASKS_EXPERIMENT
-from gdq_pddl.analysis.stats import mean_se
+from gdq_pddl.analysis.results import TASKS_EXPERIMENT
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.outputs import write_text, writing
+from gdq_pddl.outputs import write_text
 
-
-@dataclass(frozen=True)
-class AreaRow:
-    """One task x method row."""
-
-    task: str
-    method: str
-    runs: int
-    mean: tuple[float, ...]
-    se: tuple[float, ...]
-    bold: tuple[bool, ...]
+TABLE_DIR = "tables"
 
 
 @dataclass(frozen=True)
 class AreaTable:
+    """``frame``: index (task, method); columns ``runs``, ``area_<a>_mean``,
+    ``area_<a>_se`` and ``area_<a>_bold`` per area ``a`` (the CSV's columns)."""
+
+    frame: pd.DataFrame
     areas: tuple[int, ...]
-    rows: tuple[AreaRow, ...]
     irrelevant_paper: dict[str, tuple[int, ...]]
     irrelevant_computed: dict[str, tuple[int, ...]]
     decimals: int = 1
 
-    def tasks(self) -> list[str]:
-        return list(dict.fromkeys(r.task for r in self.rows))
 
-
-def run_area_totals(study: Study, method: str, task: str,
-                    experiment: str = TASKS_EXPERIMENT) -> np.ndarray:
-    """``[runs, n_areas]``: visits per area summed over each run's episodes of ``task``."""
-    v = study.episodes.area_visits(experiment, method, task)
-    if v.size == 0:
-        return np.empty((0, len(study.episodes.areas)))
-    return np.nansum(v, axis=1)
-
-
-def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int = 1) -> AreaTable:
-    """Compute the table (empty rows when ``experiment`` is missing)."""
-    ep = study.episodes
-    areas = ep.areas
-    rows: list[AreaRow] = []
+def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int = 1
+               ) -> AreaTable:
+    """Compute the table (no rows when ``experiment`` is missing or has no areas)."""
+    areas, cols = study.areas, study.area_columns
     paper: dict[str, tuple[int, ...]] = {}
     computed: dict[str, tuple[int, ...]] = {}
-    if not study.has(experiment):
-        return AreaTable(areas, (), paper, computed, decimals)
-    for task in ep.tasks(experiment):
+    if not study.has(experiment) or not study.has_areas(experiment):
+        return AreaTable(pd.DataFrame(), areas, paper, computed, decimals)
+    tasks, methods = study.tasks(experiment), study.methods(experiment)
+    per_run = study.rows(experiment).groupby(["task", "method", "run"], observed=True)[
+        cols].sum()
+    by = per_run.groupby(level=["task", "method"], observed=True)
+    mean, se = by.mean(), by.sem().fillna(0.0)
+    mean.columns = se.columns = [f"area_{a}" for a in areas]
+    order = [(t, m) for t in tasks for m in methods if (t, m) in mean.index]
+    frame = pd.concat([by.size().rename("runs"), mean.add_suffix("_mean"),
+                       se.add_suffix("_se")], axis=1).loc[order]
+    lowest = mean.round(decimals).groupby(level="task", observed=True).transform("min")
+    for task in tasks:
         truth = study.truth(experiment, task)
         paper[task], computed[task] = truth.irrelevant_areas_paper, truth.irrelevant_areas
-        irrelevant = set(paper[task]) | set(computed[task])
-        stats = {}
-        for method in ep.methods(experiment):
-            totals = run_area_totals(study, method, task, experiment)
-            if totals.shape[0]:
-                stats[method] = (totals.shape[0], *mean_se(totals, axis=0))
-        if not stats:
-            continue
-        rounded = {m: np.round(s[1], decimals) for m, s in stats.items()}
-        lowest = np.min(np.stack(list(rounded.values())), axis=0)
-        for method, (n, mean, se) in stats.items():
-            bold = tuple(a in irrelevant and rounded[method][i] <= lowest[i]
-                         for i, a in enumerate(areas))
-            rows.append(AreaRow(task, method, n, tuple(map(float, mean)),
-                                tuple(map(float, se)), bold))
-    return AreaTable(areas, tuple(rows), paper, computed, decimals)
+    for a in areas:
+        irrelevant = pd.Series([a in set(paper[t]) | set(computed[t]) for t, _ in order],
+                               index=frame.index)
+        col = f"area_{a}"
+        frame[f"{col}_bold"] = irrelevant & (mean[col].round(decimals) <= lowest[col]).loc[order]
+    return AreaTable(frame, areas, paper, computed, decimals)
 
 
-def _sets(a: tuple[int, ...]) -> str:
-    return ", ".join(map(str, a)) if a else "none"
+def _cells(table: AreaTable, bold: str, sep: str = " ") -> pd.DataFrame:
+    """The table as text: ``mean (se)`` cells, ``bold`` a format with one ``{}``."""
+    d, f = table.decimals, table.frame
+    out = pd.DataFrame({"runs": f["runs"]})
+    for a in table.areas:
+        text = [f"{m:.{d}f}{sep}({s:.{d}f})" for m, s in zip(f[f"area_{a}_mean"], f[f"area_{a}_se"],
+                                                              strict=True)]
+        out[f"Area {a}"] = [bold.format(t) if b else t for t, b in zip(text, f[f"area_{a}_bold"],
+                                                                       strict=True)]
+    return out
 
 
-def _cell(row: AreaRow, i: int, d: int) -> str:
-    return f"{row.mean[i]:.{d}f} ({row.se[i]:.{d}f})"
+def _sets(areas: tuple[int, ...]) -> str:
+    return ", ".join(map(str, areas)) if areas else "none"
 
 
-def to_markdown(table: AreaTable) -> str:
-    d = table.decimals
-    head = ["Task", "Method", "runs", *[f"Area {a}" for a in table.areas]]
-    lines = ["| " + " | ".join(head) + " |", "|" + "|".join(
-        [":--", ":--", "--:"] + ["--:"] * len(table.areas)) + "|"]
-    last = None
-    for row in table.rows:
-        if row.task != last:
-            paper = _sets(table.irrelevant_paper[row.task])
-            ours = _sets(table.irrelevant_computed[row.task])
-            task_cell = f"**{row.task}** (irrelevant: paper {paper}; computed {ours})"
-        else:
-            task_cell = ""
-        last = row.task
-        cells = [f"**{_cell(row, i, d)}**" if b else _cell(row, i, d)
-                 for i, b in enumerate(row.bold)]
-        lines.append("| " + " | ".join([task_cell, row.method, str(row.runs), *cells]) + " |")
-    return "\n".join(lines) + "\n"
+def area_markdown(table: AreaTable) -> str:
+    """The table as Markdown (the task cell names both sets of irrelevant areas)."""
+    if table.frame.empty:
+        return "_No area visits in the data._\n"
+    cells = _cells(table, "**{}**").reset_index()
+    first = ~cells["task"].duplicated()
+    cells["task"] = [f"**{t}** (irrelevant: paper {_sets(table.irrelevant_paper[t])}; "
+                     f"computed {_sets(table.irrelevant_computed[t])})" if f else ""
+                     for t, f in zip(cells["task"], first, strict=True)]
+    cells = cells.rename(columns={"task": "Task", "method": "Method"})
+    return cells.to_markdown(index=False, colalign=("left", "left", *["right"] * (
+        len(cells.columns) - 2))) + "\n"
 
 
-def _tex(text: str) -> str:
-    return text.replace("_", r"\_").replace("&", r"\&").replace("%", r"\%")
-
-
-def to_latex(table: AreaTable) -> str:
-    d = table.decimals
-    k = len(table.areas)
-    out = [r"\begin{tabular}{ll" + "r" * k + "}", r"\toprule",
-           "Task & Method & " + " & ".join(f"Area {a}" for a in table.areas) + r" \\",
-           r"\midrule"]
-    tasks = table.tasks()
-    for j, task in enumerate(tasks):
-        rows = [r for r in table.rows if r.task == task]
-        for i, row in enumerate(rows):
-            if i == 0:
-                label = f"Task {_tex(task)}"
-            elif i == 1:
-                label = f"paper: {_sets(table.irrelevant_paper[task])}"
-            elif i == 2:
-                label = f"ours: {_sets(table.irrelevant_computed[task])}"
-            else:
-                label = ""
-            cells = []
-            for a in range(k):
-                text = f"{row.mean[a]:.{d}f}~({row.se[a]:.{d}f})"
-                cells.append(rf"$\mathbf{{{text}}}$" if row.bold[a] else f"${text}$")
-            out.append(f"{label} & \\textit{{{_tex(row.method)}}} & " + " & ".join(cells)
-                       + r" \\")
-        if j < len(tasks) - 1:
-            out.append(r"\midrule")
-    out += [r"\bottomrule", r"\end{tabular}"]
-    return "\n".join(out) + "\n"
-
-
-def write_csv(table: AreaTable, path: Path) -> None:
-    with writing(path), path.open("w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(["task", "method", "runs", "irrelevant_paper", "irrelevant_computed",
-                    *[f"area_{a}_mean" for a in table.areas],
-                    *[f"area_{a}_se" for a in table.areas],
-                    *[f"area_{a}_bold" for a in table.areas]])
-        for row in table.rows:
-            w.writerow([row.task, row.method, row.runs,
-                        " ".join(map(str, table.irrelevant_paper[row.task])),
-                        " ".join(map(str, table.irrelevant_computed[row.task])),
-                        *[f"{v:.6g}" for v in row.mean], *[f"{v:.6g}" for v in row.se],
-                        *[int(b) for b in row.bold]])
+def area_latex(table: AreaTable) -> str:
+    """The table as LaTeX (booktabs; bold cells in ``\\mathbf``)."""
+    cells = _cells(table, r"$\mathbf{{{}}}$", "~").drop(columns="runs").reset_index()
+    for c in cells.columns[2:]:
+        cells[c] = [t if t.startswith("$") else f"${t}$" for t in cells[c]]
+    cells["task"] = cells["task"].astype(str).where(~cells["task"].duplicated(), "")
+    return cells.rename(columns={"task": "Task", "method": "Method"}).to_latex(
+        index=False, escape=False, column_format="ll" + "r" * len(table.areas))
 
 
 def make_tables(out_dir: str | Path, study: Study | None = None,
                 table_dir: str | Path | None = None) -> list[Path]:
     """Write ``area_visits.{md,tex,csv}`` into ``table_dir`` (default ``out_dir/tables``)."""
     study = study or Study.open(out_dir)
-    target = Path(table_dir) if table_dir is not None else Path(out_dir) / "tables"
+    target = Path(table_dir) if table_dir is not None else Path(out_dir) / TABLE_DIR
     table = area_table(study)
-    if not table.rows:
+    if table.frame.empty:
         return []
     target.mkdir(parents=True, exist_ok=True)
     md, tex, csv_path = (target / f"area_visits.{e}" for e in ("md", "tex", "csv"))
-    write_text(md, to_markdown(table))
-    write_text(tex, to_latex(table))
-    write_csv(table, csv_path)
+    write_text(md, area_markdown(table))
+    write_text(tex, area_latex(table))
+    frame = table.frame.copy()
+    tasks = frame.index.get_level_values("task")
+    frame.insert(1, "irrelevant_paper", [" ".join(map(str, table.irrelevant_paper[t]))
+                                         for t in tasks])
+    frame.insert(2, "irrelevant_computed", [" ".join(map(str, table.irrelevant_computed[t]))
+                                            for t in tasks])
+    write_text(csv_path, frame.astype({c: int for c in frame if c.endswith("_bold")})
+               .to_csv(float_format="%.6g", lineterminator="\n"))
     return [md, tex, csv_path]

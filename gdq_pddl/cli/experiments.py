@@ -15,7 +15,6 @@ from gdq_pddl.cli.common import (
     exec_args,
     execute,
     experiment_kw,
-    office_report,
     run_args,
     task_args,
     world_and_task,
@@ -72,15 +71,7 @@ def _run_pddl(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
     check_planner(args.planner)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
-    return execute([exp], args, f"run-{instance.name}", report=pddl_report)
-
-
-def pddl_report(out: Path) -> str:
-    """Figures and REPORT.md of a PDDL run's output folder; returns what was written."""
-    from gdq_pddl.analysis.generic import make_generic_report
-
-    paths = make_generic_report(out)
-    return f"wrote {len(paths) - 1} figures and {paths[-1]}"
+    return execute([exp], args, f"run-{instance.name}")
 
 
 def register_switch(sub) -> None:
@@ -174,7 +165,7 @@ def cmd_knowledge(args: argparse.Namespace) -> int:
     command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
 
     def report(out: Path) -> str:
-        from gdq_pddl.analysis.knowledge import make_knowledge_report
+        from gdq_pddl.analysis.knowledge_report import make_knowledge_report
 
         paths = make_knowledge_report(out, command)
         return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
@@ -191,28 +182,13 @@ def register_report(sub) -> None:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from gdq_pddl.analysis.data import load_config
-    from gdq_pddl.analysis.generic import is_pddl_folder
-    from gdq_pddl.analysis.pairs import is_pairs_folder
+    from gdq_pddl.analysis import make_report
     from gdq_pddl.outputs import output_folder
 
-    if is_pairs_folder(args.out):
+    if args.out.is_dir():
         output_folder(args.out, "report")  # figures and REPORT.md go there
-        print(pairs_report(args.out))
-        return 0
-    if not (args.out / "episodes.csv").is_file():
-        raise GdqError(f"{args.out} has no episodes.csv: is it an output folder of gdq-pddl "
-                       "run, switch, robot, reproduce, knowledge or pairs?")
-    output_folder(args.out, "report")  # figures and REPORT.md go there
-    if is_pddl_folder(args.out):  # gdq-pddl run --domain ...
-        print(pddl_report(args.out))
-    elif any(e.get("knowledge") for e in load_config(args.out).experiments):
-        from gdq_pddl.analysis.knowledge import make_knowledge_report
-
-        paths = make_knowledge_report(args.out, "gdq-pddl knowledge (see config.json)")
-        print(f"wrote {len(paths)} figures and reports; read {args.out / 'REPORT.md'}")
-    else:
-        print(office_report(args.out))
+    paths = make_report(args.out)  # a missing folder: an error naming what it should hold
+    print(f"wrote {len(paths) - 1} figures and tables; read {paths[-1]}")
     return 0
 
 
@@ -253,6 +229,7 @@ def register_scale(sub) -> None:
 def cmd_scale(args: argparse.Namespace) -> int:
     import shlex
 
+    from gdq_pddl.analysis.scale import make_scale_report
     from gdq_pddl.experiments.scale import run_scale
 
     out = args.out or Path("results/scale")
@@ -261,8 +238,10 @@ def cmd_scale(args: argparse.Namespace) -> int:
                           "--buildings", str(args.buildings), "--method", *methods,
                           "--runs", str(args.runs), "--episodes", str(args.episodes),
                           "--seed", str(args.seed), "--out", str(out), "--resume"])
-    run_scale(out, args.sizes, args.runs, args.episodes, args.seed, buildings=args.buildings,
-              methods=methods, resume=args.resume, command=command)
+    results = run_scale(out, args.sizes, args.runs, args.episodes, args.seed,
+                        buildings=args.buildings, methods=methods, resume=args.resume,
+                        command=command)
+    make_scale_report(results, args.runs, args.episodes, out)
     print(out / "REPORT.md")
     return 0
 
@@ -306,7 +285,7 @@ def cmd_pairs(args: argparse.Namespace) -> int:
 
 def pairs_report(out: Path) -> str:
     """Table, figure and REPORT.md of a pairs folder; returns what was written."""
-    from gdq_pddl.analysis.pairs import make_pairs_report
+    from gdq_pddl.analysis.pairs_report import make_pairs_report
 
     paths = make_pairs_report(out)
     return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"

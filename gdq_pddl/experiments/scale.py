@@ -21,7 +21,9 @@ runner (:mod:`gdq_pddl.experiments.runner`) does::
                           returns, success (per episode), steps, wall_s, table_mb
     building-N-sS.npz     every run on that building (:func:`save_building`), once its
                           units are done
-    scale.png/pdf, REPORT.md  at the end, from the units
+    scale.png/pdf, REPORT.md  drawn from the results by the analysis layer
+                          (:func:`gdq_pddl.analysis.scale.make_scale_report`, which
+                          ``gdq-pddl scale`` calls once this module has run)
 
 An interrupted run (Ctrl-C, or killed) loses at most the run in flight; ``--resume``
 checks that the configuration is the same and runs only the missing units (it cannot add
@@ -300,8 +302,9 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
               progress: bool = True, log: Callable[[str], None] | None = None,
               command: str | None = None) -> list[BuildingResult]:
     """Run every building of every size into ``out``, each (size, building, method, run)
-    saved as it finishes; then ``building-N-sS.npz``, ``scale.png/pdf`` and ``REPORT.md``
-    from the saved runs. Returns the buildings' results, by size then seed.
+    saved as it finishes; then ``building-N-sS.npz`` from the saved runs. Returns the
+    buildings' results, by size then seed (the report is drawn from them by the analysis
+    layer).
 
     ``resume=True`` checks that ``out/config.json`` holds the same configuration and
     runs only the missing units. On Ctrl-C raises :class:`RunInterrupted`, whose message
@@ -326,10 +329,6 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
                     results.append(_building_into(out, n, s, runs, episodes, methods,
                                                   progress, log, rerun))
                     save_building(results[-1], out / f"{results[-1].name}.npz")
-            from gdq_pddl.analysis.scale import figure, report
-
-            figure(results, episodes, out)
-            report(results, runs, episodes, out)
         except KeyboardInterrupt:
             done = len(list((out / "units").glob("building-*/*.npz")))
             total = len(sizes) * buildings * len(methods) * runs

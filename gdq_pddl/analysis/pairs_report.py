@@ -1,6 +1,10 @@
-"""``REPORT.md`` of a pairs folder: setup, summary, figure, losses, worst pairs, definitions.
+"""The figure and ``REPORT.md`` of a pairs folder: setup, summary (with the IQM over
+pairs), figure, losses, worst pairs, definitions.
 
-Every number is computed by :mod:`gdq_pddl.analysis.pairs` from the folder's data.
+Every number is computed by :mod:`gdq_pddl.analysis.pairs` from the folder's data. The
+figure has one row per baseline: a start-by-goal heatmap of the mean paired difference
+(diverging colours centred at 0, the diagonal blank, ``+`` on wins and ``-`` on losses,
+the tuning tasks boxed), and every pair's difference sorted, with its 95% interval.
 """
 
 from __future__ import annotations
@@ -8,21 +12,110 @@ from __future__ import annotations
 import shlex
 from pathlib import Path
 
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.colors import TwoSlopeNorm
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import MaxNLocator
 
+from gdq_pddl.analysis.figures import save_all
 from gdq_pddl.analysis.pairs import (
     LEVEL,
     LOSS,
     TABLE_STEM,
+    WIN,
     WORST,
     Differences,
     PairRuns,
     Summary,
+    differences,
+    iqm_table,
+    load_pair_runs,
     number,
     summarise,
+    write_tables,
 )
-from gdq_pddl.analysis.pairs_figures import FIGURE_STEM
 from gdq_pddl.outputs import write_text
+
+FIGURE_STEM = "pairs"
+OUTCOME_COLOURS = {WIN: "#2166ac", "tie": "#999999", LOSS: "#b2182b"}
+LABELLED = 30
+"""Up to this many pairs, the sorted plot names each one."""
+
+
+def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
+    """Start (rows) by goal (columns), colour = mean difference; grey: the diagonal and
+    pairs not run."""
+    names = res.positions
+    at = {n: i for i, n in enumerate(names)}
+    grid = np.full((len(names), len(names)), np.nan)
+    for i, p in enumerate(res.pairs):
+        grid[at[res.facts[p]["start"]], at[res.facts[p]["goal"]]] = diff.mean[i]
+    # white is no difference; each side of 0 spans its own extreme, so small losses
+    # against large wins still show in full red
+    low, high = (float(np.nanmin(grid)), float(np.nanmax(grid))) if np.isfinite(
+        grid).any() else (-1.0, 1.0)
+    norm = TwoSlopeNorm(0.0, min(low, -1e-9), max(high, 1e-9))
+    cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
+    image = ax.imshow(grid, cmap=cmap, norm=norm)
+    for i, p in enumerate(res.pairs):
+        r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
+        mark = {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), "")
+        if mark:
+            dark = abs(norm(diff.mean[i]) - 0.5) > 0.3
+            ax.text(c, r, mark, ha="center", va="center", fontsize=7,
+                    color="white" if dark else "black")
+        if res.facts[p].get("tuning"):
+            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, lw=1.5,
+                                   edgecolor="black"))
+    ax.set_xticks(range(len(names)), names, rotation=90, fontsize=6)
+    ax.set_yticks(range(len(names)), names, fontsize=6)
+    ax.set(xlabel="goal", ylabel="start",
+           title=f"{res.reference} - {diff.baseline}: mean return difference")
+    ax.title.set_fontsize(9)
+    ax.figure.colorbar(image, ax=ax, shrink=0.8,
+                       label="each side of 0 scaled to its own extreme")
+
+
+def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
+    """Every pair's mean difference, lowest first, with its 95% interval."""
+    order = np.argsort(diff.mean, kind="stable")
+    x = np.arange(len(order))
+    mean = diff.mean[order]
+    err = np.vstack([mean - diff.low[order], diff.high[order] - mean])
+    colours = [OUTCOME_COLOURS[str(o)] for o in diff.outcome[order]]
+    ax.errorbar(x, mean, yerr=np.nan_to_num(err), fmt="none", ecolor=colours, lw=0.6)
+    ax.scatter(x, mean, c=colours, s=6, zorder=3)
+    tuning = res.tuning()[order]
+    ax.scatter(x[tuning], mean[tuning], s=40, facecolors="none", edgecolors="black", lw=1,
+               zorder=4, label="tuning task (A-D)")
+    ax.axhline(0, color="black", lw=0.6)
+    if len(order) <= LABELLED:
+        ax.set_xticks(x, [res.pairs[i] for i in order], rotation=90, fontsize=7)
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    counts = {o: int(np.sum(diff.outcome == o)) for o in (WIN, "tie", LOSS)}
+    ax.set(xlabel="pair, sorted by difference",
+           ylabel=f"{res.reference} - {diff.baseline} (95% interval)",
+           title=f"{counts[WIN]} wins, {counts['tie']} ties, {counts[LOSS]} losses "
+                 f"of {len(order)} pairs")
+    ax.title.set_fontsize(9)
+    if tuning.any():
+        ax.legend(fontsize=7, loc="upper left")
+
+
+def write_figure(res: PairRuns, diffs: list[Differences], out: Path) -> list[Path]:
+    """``figures/pairs.{png,pdf}``: one row per baseline (none: no figure)."""
+    if not diffs:
+        return []
+    fig, axes = plt.subplots(len(diffs), 2, figsize=(12.5, 5.2 * len(diffs)), squeeze=False,
+                             layout="constrained", width_ratios=(1, 1.25))
+    for (hx, sx), diff in zip(axes, diffs, strict=True):
+        heatmap(hx, res, diff)
+        sorted_differences(sx, res, diff)
+    return save_all(fig, out / "figures", FIGURE_STEM)
+
 
 LISTED_PAIRS = 12
 """Up to this many pairs, the command line lists them (``--pairs``)."""
@@ -144,6 +237,34 @@ def _definitions(res: PairRuns) -> list[str]:
         "method and run) and `units/` (every episode's return and success).", ""]
 
 
+def _iqm(res: PairRuns) -> list[str]:
+    """Each method over all pairs: the IQM of return / V* with its stratified CI."""
+    iqms = iqm_table(res)
+    if not len(iqms) or not iqms["pairs"].iloc[0]:
+        return []
+    rows = [f"| {m} | {number(r.iqm)} | [{number(r.low)}, {number(r.high)}] |"
+            for m, r in iqms.iterrows()]
+    return ["## Over all pairs: interquartile mean", "",
+            f"Per method, every run on every pair with V* > 0 ({iqms['pairs'].iloc[0]} "
+            "pairs) gives one score, its mean return per episode / V*; the interquartile "
+            "mean (IQM) of all scores is the mean of their middle 50% (robust to a few "
+            "outlying pairs, less noisy than the median), with a 95% stratified bootstrap "
+            "interval (runs resampled within each pair, 2,000 resamples, "
+            "`scipy.stats.bootstrap`; n/a with a single run).", "",
+            "| method | IQM of return / V* | 95% interval |", "|---|---|---|", *rows, ""]
+
+
+def make_pairs_report(out: str | Path) -> list[Path]:
+    """The table, figure and ``REPORT.md`` of a pairs folder; returns the paths."""
+    out = Path(out)
+    res = load_pair_runs(out)
+    diffs = [differences(res, b) for b in res.baselines]
+    paths = write_tables(res, diffs, out)
+    paths += write_figure(res, diffs, out)
+    paths.append(write_report(res, diffs, out))
+    return paths
+
+
 def write_report(res: PairRuns, diffs: list[Differences], out: Path) -> Path:
     """Write ``out/REPORT.md``; returns its path."""
     keep_all = np.ones(len(res.pairs), dtype=bool)
@@ -164,7 +285,7 @@ def write_report(res: PairRuns, diffs: list[Differences], out: Path) -> Path:
                   *_losses(res, diffs), *_worst(res, diffs, all_pairs)]
     else:
         lines += ["Only one method ran: there is nothing to compare.", ""]
-    lines += _definitions(res)
+    lines += [*_iqm(res), *_definitions(res)]
     path = out / "REPORT.md"
     write_text(path, "\n".join(lines))
     return path

@@ -1,0 +1,696 @@
+"""The sections of ``REPORT.md``, each a ``write_<name>(w)`` on a :class:`Writer`.
+
+:func:`write_methods` and :func:`write_task` make the *Methods compared* report of any
+experiment no paper section covers (``gdq-pddl run`` on the office or a PDDL problem);
+the others test the paper's hypotheses on its ``tasks``, ``switch-*`` and ``robot``
+experiments. Every number is computed from the data; nothing is typed in.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from gdq_pddl.analysis.results import (
+    ROBOT_EXPERIMENT,
+    TASKS_EXPERIMENT,
+    optimal_entry,
+    order_methods,
+)
+from gdq_pddl.analysis.routes import BEST_ROUTE_C
+from gdq_pddl.analysis.stats import (
+    ALPHA,
+    Comparison,
+    compare,
+    convergence_episode,
+    first_positive,
+    iqm_ci,
+    mean_se,
+    route_indicator,
+    run_means,
+    settles,
+    verdict,
+    verdict_reason,
+)
+from gdq_pddl.analysis.study import Study, curves_stem, slug
+from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
+from gdq_pddl.analysis.writer import Writer, fmt, fmt2, milestone_str, pct, route_str
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
+from gdq_pddl.experiments.work import make_learner
+from gdq_pddl.learners import DarlingConfig, office_task_context
+from gdq_pddl.planning import get_planner
+
+
+def method_paragraph(w: Writer) -> str:
+    """How comparisons are made and verdicts given (the report's *Method*)."""
+    return (
+        "**Method.** The unit of analysis is the run. For each comparison every run "
+        "contributes one number; each GDQ variant (`GDQ`, the library's: the action "
+        "knowledge as an optimistic prior model; `GDQ-literal`, the paper's Algorithms "
+        "1-3 read literally; `GDQ-code`, the authors' released code) is compared on its "
+        "own with each baseline (every method but GDQ and its variants) by Welch's t-test "
+        "(two-sided) and a percentile bootstrap 95% CI of the difference in means "
+        f"(`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}). "
+        f"A difference counts when the CI excludes 0 and p < {ALPHA} (with fewer than 2 "
+        "runs per method nothing counts). Verdict per case and variant: **holds** = "
+        "the variant significantly better than every baseline; **does not hold** = "
+        "significantly worse than at least one, or better than none; **mixed** = "
+        "otherwise. Milestones use a trailing moving average over full windows of "
+        f"{w.opts.window} episodes (defined from episode {w.opts.window} on).")
+
+
+def write_header(w: Writer) -> None:
+    """Output folder, configuration, versions and the method paragraph."""
+    cfg, study = w.study.config, w.study
+    w.add("# Experiment report", "",
+          f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
+          f"experiments: {', '.join(study.experiments) or 'none'}.", "")
+    if cfg.experiments:
+        w.add("| experiment | world | schedule (task x episodes) | methods | runs | seed |",
+              "|---|---|---|---|--:|--:|")
+        for e in cfg.experiments:
+            sched = e.get("schedule") if isinstance(e.get("schedule"), list) else []
+            w.add(f"| {e.get('name', '?')} | {e.get('world', '?')} | "
+                  f"{', '.join(f'{t} x {n}' for t, n in sched) or '?'} | "
+                  f"{', '.join(e.get('methods') or []) or '?'} | {e.get('runs', '?')} | "
+                  f"{e.get('seed', '?')} |")
+        w.add("")
+    else:
+        w.add("Configuration: not recorded (no readable `config.json`).", "")
+    if cfg.versions:
+        w.add("Versions: " + ", ".join(f"{k} {v}" for k, v in cfg.versions.items()), "")
+    w.add(*planner_lines(study), method_paragraph(w), "")
+
+
+TITLE = "Methods compared"
+
+
+def setup_lines(study: Study) -> list[str]:
+    """What produced the folder, per experiment (from ``config.json``), then the
+    planners (:func:`planner_lines`)."""
+    lines = [f"- `{e.get('name')}`: methods {', '.join(e.get('methods') or []) or '?'}; "
+             f"{e.get('runs', '?')} runs; seed {e.get('seed', '?')}; planner "
+             f"`{e.get('planner', '?')}`; world `{e.get('world', '?')}`"
+             for e in study.config.experiments] or ["Configuration: not recorded."]
+    return [*lines, "", *planner_lines(study)][:-1]
+
+
+def planner_lines(study: Study) -> list[str]:
+    """The planner backends that made the knowledge's plans, the plan tolerance, and a
+    warning for a backend that returns one plan per query (GDQ-code's and DARLING's
+    plans within the tolerance then shrink to that plan)."""
+    lines = []
+    tolerance = DarlingConfig().tolerance
+    for name in sorted({str(e.get("planner", "graph")) for e in study.config.experiments}):
+        try:
+            every = get_planner(name).all_plans
+        except PlanningError as exc:
+            lines.append(f"Planner `{name}`: {exc}; whether it gives every plan is unknown.")
+            continue
+        lines.append(f"Planner `{name}` ({'every shortest plan' if every else 'one plan'} per "
+                     f"query); DARLING and GDQ-code use the plans within (1 + {tolerance:g}) x "
+                     "the shortest (the learners' default tolerance).")
+        if not every:
+            lines.append(f"**Warning:** `{name}` returns one plan per query, so GDQ-code's and "
+                         "DARLING's plans within the tolerance are that one plan: their "
+                         "results, and GDQ's differences from them, are not what a planner "
+                         "giving every plan (`graph`) would give.")
+    return [*lines, ""] if lines else []
+
+
+def definitions(window: int) -> str:
+    """What :func:`write_task`'s table and comparisons report (for the text above them)."""
+    return ("Per method: the runs; the mean return per episode over all the task's "
+            "episodes, mean over runs (standard error over runs); the same over each "
+            "run's last 10% of episodes; the success rate (share of all episodes of all "
+            "runs that reach the goal); and the episode of the task (1 = its first) at "
+            f"which the {window}-episode moving average of the mean curve over runs "
+            "first turns positive (in brackets: the mean over the runs that reach it, and "
+            "how many do; n/a: never within the data). Bold: the highest mean return. "
+            "Then each GDQ variant against each baseline (every method but GDQ and its "
+            "variants) on the per-run mean return, over all episodes and over the last "
+            "10%:")
+
+
+def write_methods(w: Writer, full: bool = True) -> None:
+    """The section (nothing when every experiment has its paper section); ``full``: in
+    the full report, which has the method paragraph above."""
+    exps = w.study.uncovered
+    if not exps:
+        return
+    how = "Welch's t-test and bootstrap CI as in the Method paragraph." if full else (
+        "Welch's t-test (two-sided) and a percentile bootstrap 95% CI of the difference in "
+        f"means over runs (`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}); "
+        f"a difference counts when the CI excludes 0 and p < {ALPHA}.")
+    w.add(f"## {TITLE}", "",
+          f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
+          f"each task of the experiment. {definitions(w.opts.window)} {how}", "")
+    for exp in exps:
+        w.figure(curves_stem(exp), f"learning curves, {exp}")
+        for task in w.study.tasks(exp):
+            write_task(w, exp, task)
+    write_iqm(w, [(e, t) for e in exps for t in w.study.tasks(e)])
+
+
+def method_summary(study: Study, exp: str, task: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Per (method, run): the mean return over the task's episodes (``return``) and over
+    its last 10% (``last``); and per method (rows in method order): ``runs``,
+    ``episodes``, ``tail`` (= max(1, episodes // 10)), ``mean`` and ``se`` over runs of
+    ``return``, ``last`` and ``last_se`` of ``last``, ``success`` (share of episodes)."""
+    df = study.rows(exp)
+    df = df[df["task"] == task].sort_values(["method", "run", "episode"])
+    episodes = df.groupby("method", observed=True)["episode"].nunique()
+    tail = (episodes // 10).clip(lower=1)
+    place = df.groupby(["method", "run"], observed=True).cumcount()
+    is_last = place >= df["method"].map(episodes - tail).astype(int)
+    per_run = df.assign(last=df["return"].where(is_last)).groupby(
+        ["method", "run"], observed=True)[["return", "last"]].mean()
+    by = per_run.groupby(level="method", observed=True)
+    table = pd.DataFrame({"runs": by.size(), "episodes": episodes, "tail": tail,
+                          "mean": by["return"].mean(), "se": by["return"].sem(),
+                          "last": by["last"].mean(), "last_se": by["last"].sem(),
+                          "success": df.groupby("method", observed=True)["success"].mean()})
+    return per_run, table.reindex([m for m in study.methods(exp) if m in table.index])
+
+
+def _facts(info: dict) -> list[str]:
+    """A PDDL problem's facts from its ``optimal.json`` entry (none for the office)."""
+    if "domain" not in info:
+        return []
+    if not info.get("determinisation"):
+        reality = f"dynamics `{info.get('dynamics')}`"
+    else:
+        overlay = f"overlay `{info['dynamics']}`" if info.get("dynamics") else "no overlay"
+        reality = (f"PPDDL: reality is the domain's probabilistic model ({overlay}; r_max "
+                   f"{info.get('r_max'):g}, step limit {info.get('step_limit')}), the planner "
+                   f"knows its {info['determinisation']} determinisation")
+    return [f"- PDDL domain `{info.get('domain')}`, problem `{info.get('problem')}`, {reality}",
+            f"- learner: {info.get('states')} states (every reachable planner state), "
+            f"{info.get('actions')} actions (ground actions)",
+            f"- shortest plan: {info.get('shortest_plan')} actions", ""]
+
+
+def write_task(w: Writer, exp: str, task: str) -> None:
+    """One task of an uncovered experiment: its facts, the per-method table, the tests."""
+    study, window = w.study, w.opts.window
+    per_run, table = method_summary(study, exp, task)
+    if table.empty:
+        return
+    w.add(f"### {exp}: task {task}", "", *_facts(optimal_entry(study.optimal, task)))
+    v_star = study.v_star(exp, task)
+    facts = [f"V* = {v_star:.2f} (optimal expected return per episode, value iteration "
+             "on the true model)" if not math.isnan(v_star) else "V*: not known"]
+    facts += [f"{n} episodes per run, last 10% = the final {t}"
+              for n, t in sorted(set(zip(table["episodes"], table["tail"], strict=True)))]
+    w.add("; ".join(facts) + ".", "",
+          f"| Method | runs | mean return (SE) | last 10% (SE) | success rate | "
+          f"MA{window} > 0 at episode |", "|---|--:|--:|--:|--:|--:|")
+    best = table["mean"].idxmax() if table["mean"].notna().any() else None
+    for method, s in table.iterrows():
+        name = f"**{method}**" if method == best else method
+        ms = first_positive(study.returns(exp, method, task), window)
+        w.add(f"| {name} | {int(s.runs)} | {fmt2(s['mean'])} ({fmt2(s.se)}) | "
+              f"{fmt2(s['last'])} ({fmt2(s.last_se)}) | {pct(s.success)} | "
+              f"{milestone_str(ms)} |")
+    w.add("")
+    variants = [v for v in w.variants(exp) if v in table.index]
+    baselines = [b for b in study.baselines(exp) if b in table.index]
+    if not variants or not baselines:
+        w.add(f"No {'GDQ variant' if not variants else 'baseline'} ran on this task: "
+              "nothing to compare.", "")
+        return
+    for variant in variants:
+        for label, column in (("all episodes", "return"), ("last 10% of episodes", "last")):
+            comps = [compare(per_run.loc[variant, column].to_numpy(),
+                             per_run.loc[b, column].to_numpy(), variant, b, seed=w.opts.seed)
+                     for b in baselines]
+            w.add(f"- **{variant}**, {label}: {variant} {verdict_reason(comps)}")
+            w.comparisons(comps)
+
+
+# ground truth
+
+def write_ground_truth(w: Writer) -> None:
+    """Ground truth: V*, relevant areas and optimal routes per task, and learning as a
+fraction of V*."""
+    study = w.study
+    w.add("## Ground truth: V* and relevant areas", "")
+    if not study.has(TASKS_EXPERIMENT):
+        w.add("_The tasks experiment is missing: skipped._", "")
+        return
+    w.add("V* is the optimal expected return per episode from value iteration on the "
+          "true model; relevant areas are those the optimal policy visits "
+          "(`optimal.json` where given, else > 0.05 expected visits per episode).", "",
+          "| Task | start -> goal | V* | relevant areas | irrelevant (computed) | "
+          "irrelevant (paper) | optimal route (areas) |", "|---|---|--:|---|---|---|---|")
+    pairs = [(TASKS_EXPERIMENT, t) for t in study.tasks(TASKS_EXPERIMENT)]
+    for exp in study.switch_experiments:
+        pairs += [(exp, t) for t in study.tasks(exp)
+                  if t not in [task for _, task in pairs]]
+    for exp, task in pairs:
+        tr = study.truth(exp, task)
+        t = study.task(exp, task)
+        w.add(f"| {task} | {t.start} -> {t.goal} | {tr.v_star:.2f} | "
+              f"{', '.join(map(str, tr.relevant_areas))} | "
+              f"{', '.join(map(str, tr.irrelevant_areas)) or 'none'} | "
+              f"{', '.join(map(str, tr.irrelevant_areas_paper)) or 'none'} | "
+              f"{route_str(tr.optimal_route_areas)} |")
+    w.add("")
+    methods = study.methods(TASKS_EXPERIMENT)
+    fw = w.opts.final_window
+    w.add(f"Learning as a fraction of V*: mean return over all episodes / V* "
+          f"(over the last {fw} episodes in brackets), mean over runs.", "",
+          "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
+    for task in study.tasks(TASKS_EXPERIMENT):
+        v = study.truth(TASKS_EXPERIMENT, task).v_star
+        cells = []
+        for m in methods:
+            r = study.returns(TASKS_EXPERIMENT, m, task)
+            if r.size == 0:
+                cells.append("–")
+                continue
+            overall = float(np.nanmean(run_means(r))) / v
+            last = float(np.nanmean(run_means(r, max(0, r.shape[1] - fw)))) / v
+            cells.append(f"{overall:.2f} ({last:.2f})")
+        w.add(f"| {task} | " + " | ".join(cells) + " |")
+    w.add("")
+    write_iqm(w, [(TASKS_EXPERIMENT, t) for t in study.tasks(TASKS_EXPERIMENT)])
+    w.figure("fraction_of_vstar", "return as a fraction of V*")
+
+
+def against_baselines(w: Writer, exp: str, variant: str,
+                      stat: Callable[[str], np.ndarray], **kw: bool) -> list[Comparison]:
+    """``variant`` against each baseline of ``exp`` with data, on per-run ``stat(method)``
+    (an empty array: no runs)."""
+    a = stat(variant)
+    return [compare(a, b, variant, m, seed=w.opts.seed, **kw)
+            for m in w.study.baselines(exp) if (b := stat(m)).size]
+
+
+def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
+    """Over several (experiment, task) slices: per method, the interquartile mean of
+    every run's mean return / V* with its stratified bootstrap 95% CI (nothing with
+    fewer than 2 tasks of known positive V*)."""
+    study = w.study
+    slices = [(e, t) for e, t in slices if study.v_star(e, t) > 0]
+    if len(slices) < 2:
+        return
+    w.add(f"**Over the {len(slices)} tasks** ({', '.join(t for _, t in slices)}): per method, "
+          "the interquartile mean (IQM, the mean of the middle 50%) of every run's mean "
+          "return / V* on every task, with a 95% stratified bootstrap interval (runs "
+          "resampled within each task, 2,000 resamples, `scipy.stats.bootstrap`; n/a with "
+          "fewer than 2 runs per task).", "",
+          "| Method | tasks | IQM of return / V* | 95% interval |", "|---|--:|--:|---|")
+    for m in order_methods({m for e, _ in slices for m in study.methods(e)}):
+        scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
+        scores = [x for x in scores if x.size]
+        point, low, high = iqm_ci(scores, seed=w.opts.seed)
+        w.add(f"| {m} | {len(scores)} | {fmt2(point)} | [{fmt2(low)}, {fmt2(high)}] |")
+    w.add("")
+
+
+# hypothesis 1
+
+def write_hypothesis_1(w: Writer) -> None:
+    """Hypothesis I: GDQ collects more reward (tasks A-D), and when the moving average of
+return first turns positive."""
+    study, opts = w.study, w.opts
+    if not w.section("Hypothesis I: GDQ collects more reward (tasks A-D)",
+                     study.has(TASKS_EXPERIMENT), "Hypothesis I",
+                     "the tasks experiment (A-D) is missing"):
+        return
+    w.figure("learning_curves", "learning curves, tasks A-D")
+    w.add("Statistic: per-run mean return over all episodes of the task (the "
+          "cumulative reward of a run divided by its episodes).", "")
+    for task in study.tasks(TASKS_EXPERIMENT):
+        variants = [v for v in w.variants(TASKS_EXPERIMENT)
+                    if study.returns(TASKS_EXPERIMENT, v, task).size]
+        if "GDQ" not in variants:
+            w.add(f"- {task}: no GDQ runs; skipped.")
+        for variant in variants:
+            gdq = study.returns(TASKS_EXPERIMENT, variant, task)
+            comps = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
+                study.returns(TASKS_EXPERIMENT, m, t)))
+            early = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
+                study.returns(TASKS_EXPERIMENT, m, t), 0, opts.early_window))
+            w.verdict_line("I", f"Task {task}", comps,
+                           "Welch + bootstrap on per-run mean return", variant)
+            w.comparisons(comps)
+            if opts.early_window < gdq.shape[1]:
+                w.add(f"  First {opts.early_window} episodes only (verdict "
+                      f"{verdict(early)}: {variant} {verdict_reason(early)}):")
+                w.comparisons(early)
+    milestones(w)
+
+
+def milestones(w: Writer) -> None:
+    study, window = w.study, w.opts.window
+    methods = study.methods(TASKS_EXPERIMENT)
+    w.add(f"Episode at which the {window}-episode moving average of return first turns "
+          "positive: on the mean curve over runs; in brackets the mean over the "
+          "runs that reach it and how many do.", "",
+          "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
+    for task in study.tasks(TASKS_EXPERIMENT):
+        cells = []
+        for m in methods:
+            r = study.returns(TASKS_EXPERIMENT, m, task)
+            ms = first_positive(r, window)
+            cells.append(milestone_str(ms))
+        w.add(f"| {task} | " + " | ".join(cells) + " |")
+    w.add("")
+
+
+# hypothesis 2
+
+def write_hypothesis_2(w: Writer) -> None:
+    """Hypothesis II: GDQ avoids irrelevant areas."""
+    study = w.study
+    if not w.section("Hypothesis II: GDQ avoids irrelevant areas",
+                     study.has(TASKS_EXPERIMENT), "Hypothesis II",
+                     "the tasks experiment (A-D) is missing"):
+        return
+    table = area_table(study)
+    w.add("Area visits summed over a run, mean (SE) over runs; bold: fewest visits "
+          "among the methods in an area irrelevant by either definition. "
+          f"(Also in `{TABLE_DIR}/area_visits.md`, `.tex`, `.csv`.)", "",
+          area_markdown(table))
+    w.add("Statistic: per run, the visits to the task's irrelevant areas summed over "
+          "the run (fewer is better), for the paper's and for the computed set.", "")
+    areas = study.areas
+    for task in study.tasks(TASKS_EXPERIMENT):
+        totals = {v: study.area_totals(TASKS_EXPERIMENT, v, task)
+                  for v in w.variants(TASKS_EXPERIMENT)}
+        totals = {v: t for v, t in totals.items() if t.shape[0]}
+        if "GDQ" not in totals:
+            w.add(f"- {task}: no GDQ runs; skipped.")
+        for label, irr in (("paper", table.irrelevant_paper[task]),
+                           ("computed", table.irrelevant_computed[task])):
+            cols = [areas.index(a) for a in irr if a in areas]
+            case = f"Task {task}, {label} irrelevant areas {{{', '.join(map(str, irr))}}}"
+            if not cols:
+                if totals:
+                    w.add(f"- {case}: no irrelevant areas; nothing to test.", "")
+                continue
+            for variant in totals:
+                comps = against_baselines(
+                    w, TASKS_EXPERIMENT, variant, lambda m, t=task, c=cols: study.area_totals(
+                        TASKS_EXPERIMENT, m, t)[:, c].sum(axis=1), higher_is_better=False)
+                w.verdict_line("II", case, comps,
+                               "Welch + bootstrap on per-run visits to those areas",
+                               variant)
+                fewest = sum(bool(table.frame.loc[(task, variant), f"area_{a}_bold"])
+                             for a in irr if a in areas)
+                w.add(f"  {variant} has the fewest visits in {fewest} of {len(cols)} "
+                      "of these areas.")
+                w.comparisons(comps, " visits")
+    for task in study.tasks(TASKS_EXPERIMENT):
+        w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
+
+
+# hypothesis 3
+
+def write_hypothesis_3(w: Writer) -> None:
+    """Hypothesis III: GDQ adapts faster to a goal change (the switch experiments)."""
+    study, opts = w.study, w.opts
+    exps = study.switch_experiments
+    if not w.section("Hypothesis III: GDQ adapts faster to a goal change", bool(exps),
+                     "Hypothesis III", "no switch experiment (switch-C-D, switch-C-E)"):
+        return
+    w.figure("switch_curves", "goal change")
+    n = opts.switch_window
+    w.add(f"Statistic: per-run mean return over the first {n} episodes after the "
+          "switch (all of them if fewer). "
+          "Recovery: the episode after the switch (1 = first episode of the "
+          f"new task) at which the {opts.window}-episode moving average of the new "
+          "task's returns first turns positive, on the mean curve (in brackets: mean "
+          "over runs that reach it, and how many).", "")
+    for exp in exps:
+        tasks = study.tasks(exp)
+        if len(tasks) < 2:
+            w.add(f"- {exp}: only task {', '.join(tasks)} in the data; skipped.", "")
+            continue
+        new = tasks[-1]
+        variants = [v for v in w.variants(exp) if study.returns(exp, v, new).size]
+        if "GDQ" not in variants:
+            w.add(f"- {exp}: no GDQ runs; skipped.", "")
+        for variant in variants:
+            comps = against_baselines(w, exp, variant, lambda m, e=exp, t=new: run_means(
+                study.returns(e, m, t), 0, n))
+            w.verdict_line("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
+                           f"{study.switch_episode(exp)})", comps,
+                           f"Welch + bootstrap on per-run mean return, first {n} "
+                           "episodes after the switch", variant)
+            w.comparisons(comps)
+        if not variants:
+            continue
+        parts = []
+        for m in study.methods(exp):
+            ms = first_positive(study.returns(exp, m, new), opts.window)
+            parts.append(f"{m} {milestone_str(ms)}")
+        w.add("  Recovery episode: " + "; ".join(parts) + ".", "")
+
+
+# route c
+
+def write_route_c(w: Writer) -> None:
+    """Task C route finding: final greedy routes and behavioural convergence to the
+paper's best route."""
+    study, opts = w.study, w.opts
+    exp = TASKS_EXPERIMENT
+    if not w.section("Task C: route finding",
+                     study.has(exp) and "C" in study.tasks(exp),
+                     "Task C routes", "Task C is not in the tasks experiment"):
+        return
+    world = study.world(exp)
+    best = study.truth(exp, "C").optimal_route_areas
+    w.add(f"The paper's best route is areas {route_str(BEST_ROUTE_C)}; the true "
+          f"optimal policy's likeliest route is {route_str(best)}. A run's final "
+          "greedy policy is walked from the start along each action's likeliest "
+          "outcome (at most 30 steps). Convergence (behavioural, from `episodes.csv`): "
+          f"the episode from which at least {opts.route_share:.0%} of the last "
+          f"{opts.route_window} episodes succeed while visiting exactly the areas of "
+          f"{route_str(BEST_ROUTE_C)}, to the end of the run.", "")
+    w.figure("routes_C", "Task C greedy routes")
+    have_policies = study.policies is not None
+    if not have_policies:
+        w.add("_No `policies.csv`: final greedy routes are not available._", "")
+    w.add(f"| Method | final route {route_str(BEST_ROUTE_C)} | most common final route "
+          "| converged runs | convergence episode (mean) |", "|---|--:|---|--:|--:|")
+    for m in study.methods(exp):
+        summary = study.route_summary(exp, m, "C") if have_policies else None
+        share, common = "–", "–"
+        if summary is not None:
+            on = summary.on_route(world, BEST_ROUTE_C)
+            share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
+            k = summary.count
+            common = (f"{route_str(summary.areas)} ({summary.end}, {k} "
+                      f"run{'s' if k != 1 else ''})")
+        conv = convergence_episode(study.area_visits(exp, m, "C"),
+                                   study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
+                                   study.areas, opts.route_window, opts.route_share)
+        reached = [c for c in conv if not math.isnan(c)]
+        mean_conv = fmt(float(np.mean(reached)), 5) if reached else "never"
+        w.add(f"| {m} | {share} | {common} | {len(reached)}/{len(conv)} | "
+              f"{mean_conv} |")
+    w.add("")
+    gdq = convergence_episode(study.area_visits(exp, "GDQ", "C"),
+                              study.matrix("success", exp, "GDQ", "C"), BEST_ROUTE_C,
+                              study.areas, opts.route_window, opts.route_share)
+    if gdq:
+        w.add("GDQ's convergence episode per run: "
+              + ", ".join(fmt(c, 5) if not math.isnan(c) else "never" for c in gdq)
+              + ".", "")
+
+
+# variants
+
+OTHERS = ("GDQ-literal", "GDQ-code")
+
+
+def write_variants(w: Writer) -> None:
+    """GDQ against the two readings of the paper's GDQ (GDQ-literal, GDQ-code), task by
+task."""
+    study = w.study
+    exp = TASKS_EXPERIMENT
+    methods = study.methods(exp) if study.has(exp) else []
+    others = [m for m in OTHERS if m in methods]
+    if not w.section("GDQ vs the paper read literally (GDQ-literal) and the authors' code "
+                     "(GDQ-code)", "GDQ" in methods and bool(others), "GDQ vs its variants",
+                     "the tasks experiment lacks GDQ or both of its variants"):
+        return
+    w.add("Mean return per episode over all episodes, mean (SE) over runs; each "
+          "difference is GDQ minus the variant, with its bootstrap 95% CI and Welch p.", "",
+          "| Task | GDQ | " + " | ".join(f"{m} | GDQ - {m} (95% CI) | p" for m in others)
+          + " |", "|---|--:|" + "--:|--:|--:|" * len(others))
+    for task in study.tasks(exp):
+        a = run_means(study.returns(exp, "GDQ", task))
+        if a.size == 0:
+            continue
+        ma, sa = mean_se(a)
+        cells = [f"{ma:.2f} ({sa:.2f})"]
+        for m in others:
+            b = run_means(study.returns(exp, m, task))
+            if b.size == 0:
+                cells += ["–", "–", "–"]
+                continue
+            c = compare(a, b, "GDQ", m, seed=w.opts.seed)
+            mb, sb = mean_se(b)
+            cells += [f"{mb:.2f} ({sb:.2f})", f"{c.diff:+.2f} [{c.ci_low:+.2f}, "
+                      f"{c.ci_high:+.2f}]", fmt(c.p)]
+        w.add(f"| {task} | " + " | ".join(cells) + " |")
+    w.add("")
+
+
+# why gdq fails
+
+def write_why_gdq_fails(w: Writer) -> None:
+    """Measured evidence for the literal reading's failure: Q right after OptInit and
+    how episodes end."""
+    study = w.study
+    exp = TASKS_EXPERIMENT
+    if not w.section("Why the paper's GDQ read literally fails here",
+                     study.has(exp) and bool(set(GDQ_VARIANTS) & set(study.methods(exp))),
+                     "Why GDQ-literal fails", "the tasks experiment has no GDQ runs"):
+        return
+    tasks = study.tasks(exp)
+    task = "C" if "C" in tasks else tasks[0]
+    init = optinit_values(study, exp, task)
+    r_max, gamma = init.r_max, init.gamma
+    bound = r_max / (1 - gamma)
+    w.add(f"Q values at the start state of Task {task} right after OptInit, measured "
+          "by building each learner as the experiment did (before any episode); "
+          f"R_max = {r_max:g}, gamma = {gamma:g}, so R_max / (1 - gamma) = "
+          f"{bound:.4g} and gamma R_max / (1 - gamma) = {gamma * bound:.4g}.", "",
+          "| Variant | Q(s0, greedy action) | median Q(s0, ·) | actions at s0 |",
+          "|---|--:|--:|--:|")
+    for method, (greedy, median, n) in init.values.items():
+        w.add(f"| {method} | {greedy:.4g} | {median:.4g} | {n} |")
+    w.add("")
+    limit = study.world(exp).step_limit
+    w.add(f"How episodes end (tasks {', '.join(tasks)}, all episodes of all runs): the "
+          f"share that run out of the {limit}-step limit without reaching the goal "
+          f"(steps = {limit} and success = 0), and the share that reach the goal.", "",
+          "| Method | step limit, no goal | goal reached | mean return |",
+          "|---|--:|--:|--:|")
+    df = study.rows(exp)
+    ends = df.assign(timeout=(df["steps"] == limit) & (df["success"] == 0),
+                     goal=df["success"] > 0).groupby("method", observed=True)[
+                         ["timeout", "goal", "return"]].mean()
+    shares = {}
+    for m in study.methods(exp):
+        shares[m] = float(ends.loc[m, "timeout"])
+        w.add(f"| {m} | {shares[m]:.1%} | {ends.loc[m, 'goal']:.1%} | "
+              f"{ends.loc[m, 'return']:.2f} |")
+    w.add("")
+    paper = init.values.get("GDQ-literal")
+    if paper is not None:
+        timeout = shares.get("GDQ-literal", math.nan)
+        w.add(
+            "**Mechanism.** Algorithm 1's optimistic model sends every pair back to s0 "
+            "without ending the episode, so policy iteration values the plan pairs at "
+            f"R_max / (1 - gamma) = {bound:.4g} and every other pair at about gamma times "
+            f"that (measured: greedy {paper[0]:.4g}, median {paper[1]:.4g}), far above any "
+            f"real return (at most R_max = {r_max:g}). Reaching the goal ends the episode "
+            f"with a target of at most {r_max:g}, which *lowers* the value of the pair "
+            "that got there relative to the inflated bootstrap of pairs that keep the "
+            "episode going, so the greedy policy learns to avoid the goal; with "
+            f"alpha = {init.alpha:g} the excess decays by only about "
+            f"{init.alpha * (1 - gamma):.2%} per visit (alpha (1 - gamma)). Measured: "
+            f"{pct(timeout)} of GDQ-literal's episodes end at the step limit without "
+            f"the goal, against {pct(shares.get('GDQ-code', math.nan))} for GDQ-code, "
+            "whose OptInit gives R_max only to the plan pairs (no policy iteration), and "
+            f"{pct(shares.get('GDQ', math.nan))} for GDQ, whose optimistic model is "
+            "the knowledge itself: a plan pair leads where the planner says, reaching "
+            "the goal pays R_max and ends the episode, so its values are what a run "
+            "of the shortest plan would return if every action worked.", "")
+
+
+@dataclass(frozen=True)
+class OptInitValues:
+    """Q at the start state right after OptInit, per GDQ variant (see
+    :func:`optinit_values`)."""
+
+    task: str
+    r_max: float
+    gamma: float
+    alpha: float
+    values: dict[str, tuple[float, float, int]]
+    """Method -> (Q(s0, greedy action), median Q(s0, ·), number of actions)."""
+
+
+def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
+    """Build each GDQ variant for ``task`` with the experiment's hyperparameters and
+    planner (as the runner does) and read Q(s0, ·) before any episode."""
+    entry = next((e for e in study.config.experiments if e.get("name") == experiment
+                  and any(t == task for t, _ in e.get("schedule") or [])),
+                 study.config.experiment(experiment))
+    raw = entry.get("hyper") if isinstance(entry.get("hyper"), dict) else {}
+    hyper = Hyper(**{k: float(v) for k, v in raw.items() if k in ("alpha", "gamma", "epsilon")})
+    planner = entry.get("planner") if isinstance(entry.get("planner"), str) else "graph"
+    ctx = office_task_context(study.world(experiment), study.task(experiment, task), planner)
+    values = {}
+    for method in GDQ_VARIANTS:
+        learner = make_learner(method, ctx, hyper)
+        q = learner.q[ctx.s0]
+        greedy = int(learner.greedy_policy()[ctx.s0])
+        values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
+    return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
+
+
+# robot
+
+def write_robot(w: Writer) -> None:
+    """The robot protocol (simulated): returns, first successes and routes per trial."""
+    study, opts = w.study, w.opts
+    exp = ROBOT_EXPERIMENT
+    if not w.section("Robot protocol (simulated)", study.has(exp), "Robot protocol",
+                     "the robot experiment is missing"):
+        return
+    tasks = study.tasks(exp)
+    task = tasks[-1]
+    world = study.world(exp)
+    truth = study.truth(exp, task)
+    w.figure("robot_returns", "robot protocol, return per trial")
+    w.figure(f"routes_robot_{slug(task)}", "robot greedy routes")
+    w.figure(f"heatmap_robot_{slug(task)}", "robot area visits")
+    w.add(f"Task {task} in `{world.name}`; V* = {truth.v_star:.1f}; optimal route "
+          f"(areas) {route_str(truth.optimal_route_areas)}. A trial *follows the "
+          "optimal route* when it succeeds visiting exactly those areas; the route "
+          f"*becomes optimal* at the trial from which at least {opts.robot_share:.0%} "
+          f"of the last {opts.robot_window} trials follow it, to the end.", "",
+          "| Method | runs | mean return per trial | runs with a success | first "
+          "success (mean trial) | trial route becomes optimal (per run) | final "
+          "greedy route optimal |", "|---|--:|--:|--:|--:|---|--:|")
+    for m in study.methods(exp):
+        ret = study.returns(exp, m, task)
+        success = study.matrix("success", exp, m, task)
+        if ret.size == 0:
+            continue
+        n = ret.shape[0]
+        succ_runs = int(np.sum(np.nansum(success, axis=1) > 0))
+        firsts = [float(np.flatnonzero(row > 0)[0] + 1) for row in success
+                  if np.any(row > 0)]
+        ind = route_indicator(study.area_visits(exp, m, task), success,
+                              truth.optimal_route_areas, study.areas)
+        conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
+        conv_txt = ", ".join("never" if math.isnan(c) else str(int(c)) for c in conv)
+        summary = study.route_summary(exp, m, task)
+        final = "–"
+        if summary is not None:
+            final = f"{summary.on_route(world, truth.optimal_route_areas)}/{summary.runs}"
+        w.add(f"| {m} | {n} | {np.nanmean(ret):.1f} | {succ_runs}/{n} | "
+              f"{fmt(float(np.mean(firsts)), 3) if firsts else 'none'} | {conv_txt} | "
+              f"{final} |")
+    w.add("")
+    if "Dyna-Q" in study.methods(exp):
+        success = study.matrix("success", exp, "Dyna-Q", task)
+        k = int(np.sum(np.nansum(success, axis=1) > 0))
+        w.add(f"Dyna-Q reached the goal at least once within {success.shape[1]} trials "
+              f"in {k} of {success.shape[0]} runs"
+              + (" (the paper: no meaningful solution in 30 trials)." if k == 0
+                 else " (the paper reports no meaningful solution in 30 trials)."), "")

@@ -1,0 +1,185 @@
+"""What every section of ``REPORT.md`` writes with: the options, the number formats, the
+verdict bookkeeping (:class:`Verdicts`) and the line buffer (:class:`Writer`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from gdq_pddl.analysis.results import is_gdq, order_methods
+from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, verdict, verdict_reason
+from gdq_pddl.analysis.study import Study
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    """Windows and thresholds of the report's statistics."""
+
+    window: int = 50
+    """Moving-average window (episodes) for milestones and curves."""
+    early_window: int = 500
+    """Hypothesis I also compares the mean return over the first this many episodes."""
+    final_window: int = 250
+    """Learning as a fraction of V*: mean return over the last this many episodes."""
+    switch_window: int = 250
+    """Hypothesis III: mean return over the first this many episodes after the switch."""
+    route_window: int = 50
+    route_share: float = 0.5
+    """Task C convergence: from which episode at least this share of the last
+    ``route_window`` episodes follow the best route successfully, to the end."""
+    robot_window: int = 5
+    robot_share: float = 0.6
+    """Robot convergence: the same with a short window (30 trials)."""
+    seed: int = 20240501
+
+
+FIGURE_DIR, TABLE_DIR = "figures", "tables"
+
+
+def fmt2(x: float) -> str:
+    """Two decimals, ``n/a`` for NaN."""
+    return "n/a" if math.isnan(x) else f"{x:.2f}"
+
+
+def fmt(x: float, digits: int = 3) -> str:
+    return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{digits}g}"
+
+
+def milestone_str(ms: Milestone) -> str:
+    """A milestone on the mean curve, then in brackets the mean over the runs that reach
+    it and how many do: ``55 (61.5; 4/5)``."""
+    return (f"{fmt(ms.on_mean_curve, 5)} ({fmt(ms.mean_of_reached, 4)}; "
+            f"{ms.reached}/{len(ms.per_run)})")
+
+
+def route_str(areas: Sequence[int]) -> str:
+    return "->".join(map(str, areas)) if areas else "(none)"
+
+
+def pct(x: float) -> str:
+    return "n/a" if math.isnan(x) else f"{x:.1%}"
+
+
+VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper's GDQ read "
+                 "literally", "GDQ-code": "authors'-code GDQ"}
+"""How the verdict summary names the GDQ variants."""
+
+
+def markdown_rows(frame: pd.DataFrame) -> list[str]:
+    """A DataFrame of text as compact Markdown table lines (unpadded, so that a line per
+    row stays greppable: ``| I | Task A | **holds** |``)."""
+    return ["| " + " | ".join(map(str, frame.columns)) + " |",
+            "|" + "---|" * len(frame.columns),
+            *("| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))]
+
+
+class Verdicts:
+    """Each GDQ variant's verdict per hypothesis case, in the order the sections met
+    them (a DataFrame with one row per case and variant)."""
+
+    COLUMNS = ("hypothesis", "case", "basis", "variant", "verdict", "reason")
+
+    def __init__(self, gdq_runs: bool = True) -> None:
+        self.rows: list[tuple[str, ...]] = []
+        self.gdq_runs = gdq_runs
+        """Whether the data hold a GDQ run at all (else: no verdicts, and why)."""
+
+    def record(self, hypothesis: str, case: str, basis: str, variant: str,
+               comps: Sequence[Comparison]) -> tuple[str, str]:
+        """Record ``variant``'s verdict on a case; returns the verdict and its reason."""
+        v, reason = verdict(comps), verdict_reason(comps)
+        self.rows.append((hypothesis, case, basis, variant, v, reason))
+        return v, reason
+
+    @property
+    def frame(self) -> pd.DataFrame:
+        return pd.DataFrame(self.rows, columns=list(self.COLUMNS))
+
+    def counts(self) -> str:
+        """``GDQ, ... (`GDQ`): k of n cases hold; ...`` per variant, or why there is no
+        verdict."""
+        if not self.rows:
+            return "No verdicts (no GDQ runs in the data)." if not self.gdq_runs else \
+                "No paper-hypothesis verdicts: no tasks or switch experiment with GDQ runs."
+        held = self.frame.assign(held=lambda f: f["verdict"] == HOLDS).groupby(
+            "variant", sort=False)["held"].agg(["sum", "size"])
+        return "; ".join(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {int(h['sum'])} of "
+                         f"{int(h['size'])} cases hold" for v, h in held.loc[
+                             order_methods(held.index)].iterrows()) + "."
+
+    def section(self, notes: Sequence[str]) -> list[str]:
+        """The ``## Verdicts`` section: the table (when there are cases), the counts and
+        the skipped parts."""
+        summary = ["## Verdicts", ""]
+        if self.rows:
+            f = self.frame
+            variants = order_methods(f["variant"].unique())
+            table = f.pivot_table(index=["hypothesis", "case"], columns="variant",
+                                  values="verdict", aggfunc="first", sort=False)
+            table = table.reindex(columns=variants).map(
+                lambda v: "–" if pd.isna(v) else f"**{v}**")
+            table.columns = [f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
+                             for v in variants]
+            why = f.assign(why=f["variant"] + " " + f["reason"]).groupby(
+                ["hypothesis", "case"], sort=False).agg(basis=("basis", "first"),
+                                                        why=("why", "; ".join))
+            table["Basis"] = why["basis"] + ": " + why["why"]
+            table = table.reset_index().rename(columns={"hypothesis": "Hypothesis",
+                                                        "case": "Case"})
+            summary += [*markdown_rows(table), ""]
+        summary += [self.counts(), ""]
+        if notes:
+            summary += ["Skipped parts:", "", *[f"- {n}" for n in notes], ""]
+        return summary
+
+
+class Writer:
+    """Accumulates Markdown lines, the hypothesis verdicts and the skipped parts."""
+
+    def __init__(self, study: Study, opts: ReportOptions, out_dir: Path) -> None:
+        self.study, self.opts, self.out_dir = study, opts, out_dir
+        self.lines: list[str] = []
+        self.verdicts = Verdicts(any(is_gdq(m) for m in study.methods()))
+        self.notes: list[str] = []
+
+    def add(self, *lines: str) -> None:
+        self.lines.extend(lines)
+
+    def figure(self, stem: str, caption: str) -> None:
+        path = self.out_dir / FIGURE_DIR / f"{stem}.png"
+        if path.exists():
+            self.add(f"![{caption}]({FIGURE_DIR}/{stem}.png)", "")
+
+    def comparisons(self, comps: Sequence[Comparison], unit: str = "") -> None:
+        for c in comps:
+            self.add(f"  - {c.describe(unit)}")
+        self.add("")
+
+    def verdict_line(self, hypothesis: str, case: str, comps: Sequence[Comparison],
+                     basis: str, variant: str = "GDQ") -> str:
+        """Record ``variant``'s verdict on a case and write its bullet (GDQ under the case
+        name, a variant as ``case, variant``)."""
+        v, reason = self.verdicts.record(hypothesis, case, basis, variant, comps)
+        label = case if variant == "GDQ" else f"{case}, {variant}"
+        self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})")
+        return v
+
+    def variants(self, experiment: str) -> list[str]:
+        """GDQ and its variants present in ``experiment`` (GDQ first)."""
+        return [m for m in self.study.methods(experiment) if is_gdq(m)]
+
+    def section(self, title: str, available: bool, what: str, why: str) -> bool:
+        """Write the heading ``## title``; when the section's data is not ``available``,
+        note ``what`` as skipped because ``why`` and return False (the section ends)."""
+        self.add(f"## {title}", "")
+        if not available:
+            self.note(what, why)
+        return available
+
+    def note(self, what: str, why: str) -> None:
+        self.notes.append(f"{what}: skipped, {why}.")
+        self.add(f"_Skipped: {why}._", "")
