@@ -1,10 +1,21 @@
-"""Helpers the learner tests share: a recording wrapper and a seeded episode run."""
+"""Plain helpers the tests share (fixtures live in ``tests/conftest.py``).
+
+Import them as ``from tests.helpers import ...``: ``tests`` and its layer folders are
+packages, so pytest puts the repository root on ``sys.path`` wherever a test file lives.
+"""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 
 from gdq_pddl.learners import run_episodes
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+"""The repository checkout (``domains/``, ``problems/``, ``docs/``, ``examples/`` ...)."""
+DYNAMICS = REPO_ROOT / "gdq_pddl" / "data" / "dynamics"
+"""The shipped dynamics files (``keys.toml``, ``office.toml`` ...)."""
 
 
 class Recording:

@@ -15,7 +15,6 @@ from gdq_pddl.envs import register_envs
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import WorldError
-from gdq_pddl.world import load_world
 
 ENV_ID = "gdq_pddl/Office-v0"
 
@@ -40,11 +39,6 @@ stuck = 0.25
 start = "a"
 goal = "d"
 """
-
-
-@pytest.fixture(scope="module")
-def office():
-    return load_world(None)
 
 
 @pytest.fixture(scope="module")

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+from tests.helpers import REPO_ROOT
+
+EXAMPLES = REPO_ROOT / "examples"
 BUDGET = {"task_x.py": ["--trials", "5"]}
 
 

@@ -7,7 +7,6 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from learning_helpers import Recording, run
 
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world
@@ -27,6 +26,7 @@ from gdq_pddl.learners import (
 )
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, load_world
+from tests.helpers import Recording, run
 
 WORLD = load_world()
 DET = deterministic_world(WORLD)
@@ -34,11 +34,6 @@ LITERAL = GDQConfig(variant="literal")
 
 ALL = [("qlearning", {}), ("dynaq", {}), ("darling", {}), ("darling", {"variant": "code"}),
        ("gdq", {}), ("gdq", {"variant": "literal"}), ("gdq", {"variant": "code"})]
-
-
-@pytest.fixture(scope="module")
-def ctx_c():
-    return office_task_context(WORLD, "C")
 
 
 # --- OptInit ------------------------------------------------------------------------------

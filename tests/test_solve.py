@@ -21,14 +21,9 @@ from gdq_pddl.envs.solve import (
     solve_task,
 )
 from gdq_pddl.envs.variants import deterministic_world
-from gdq_pddl.world import CostDist, load_world, parse_world
+from gdq_pddl.world import CostDist, parse_world
 
 ENV_ID = "gdq_pddl/Office-v0"
-
-
-@pytest.fixture(scope="module")
-def office():
-    return load_world(None)
 
 
 @pytest.fixture(scope="module")

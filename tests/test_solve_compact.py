@@ -17,12 +17,7 @@ from gdq_pddl.envs.solve_compact import (
     solve_compact_task,
 )
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, load_world, parse_world
-
-
-@pytest.fixture(scope="module")
-def office() -> World:
-    return load_world(None)
+from gdq_pddl.world import Task, World, parse_world
 
 
 def dense_values(world: World, goal: str, always_closed: bool = False):
