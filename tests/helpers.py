@@ -48,6 +48,26 @@ class Recording:
         return self.learner.greedy_policy()
 
 
+def corridor_text(nav: float, doors: list[tuple[float, float]], ring: bool = False,
+                  world: str = "", sections: str = "") -> str:
+    """A world file: a corridor x0 - y0 | z0 - x1 - y1 | z1 - x2 ... with a door of
+    ``(success, stuck)`` between each y and z (and x0 - last when ``ring``); ``world``
+    adds keys to its ``[world]`` table, ``sections`` tables before the doors."""
+    names, edges, tables = ["x0"], [], []
+    for i, (success, stuck) in enumerate(doors):
+        y, z, x = f"y{i}", f"z{i}", f"x{i + 1}"
+        edges += [(names[-1], y), (y, z), (z, x)]
+        names += [y, z, x]
+        tables.append(f'[doors.d{i}]\nsides = ["{y}", "{z}"]\nsuccess = {success!r}\n'
+                      f"stuck = {stuck!r}\n")
+    if ring and len(names) > 2:
+        edges.append((names[0], names[-1]))
+    adjacency = ", ".join(f'["{a}", "{b}"]' for a, b in edges)
+    return (f"[world]\n{world}navigation_success = {nav!r}\n"
+            f"positions = [{', '.join(repr(n) for n in names)}]\n"
+            f"adjacency = [{adjacency}]\n\n{sections}" + "\n".join(tables))
+
+
 def run(learner, env, n, seed, fast=None):
     """``n`` episodes of ``learner`` on ``env`` reset with ``seed``, its draws from
     ``seed + 1``."""
