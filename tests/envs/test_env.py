@@ -180,7 +180,7 @@ def test_inapplicable_action_costs_a_step_and_changes_nothing() -> None:
 def test_info_fields() -> None:
     env = gymnasium.make(ENV_ID, task="A")
     obs, info = env.reset(seed=1)
-    mask = info.pop("action_mask")  # tests/test_gym_conventions.py checks its values
+    mask = info.pop("action_mask")  # tests/envs/test_gym_conventions.py checks its values
     assert mask.dtype == np.int8 and mask.shape == (95,)
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
                     env.unwrapped.start_state, "step": 0}

@@ -458,7 +458,7 @@ def test_runner_works_through_gymnasium_make(ctx_c):
 @pytest.mark.parametrize("variant", ["literal", "code"])
 def test_gdq_without_any_plan_runs_and_learns(variant):
     """The plan-based variants with an empty H: Dyna-Q with extra steps, still learning.
-    (The default variant plans on its prior model, not on H: tests/test_gdq_model.py.)"""
+    (The default variant plans on its prior model, not on H: tests/learners/test_gdq_model.py.)"""
     task = Task("near", "p0", "p2")
     ctx = office_task_context(DET, task)
     empty = empty_plan_table(ctx.n_states, ctx.n_actions)
