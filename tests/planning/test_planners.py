@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from gdq_pddl.errors import PlanningError
@@ -12,7 +14,6 @@ from gdq_pddl.planning.graph import GraphPlanner
 from gdq_pddl.planning.pyperplan_backend import PyperplanPlanner
 from gdq_pddl.planning.validate import validate_plan
 from gdq_pddl.world import load_world
-from tests.helpers import REPO_ROOT
 
 LENGTHS = {"A": 5, "B": 4, "C": 8, "D": 9}
 COUNTS = {"C": 2, "D": 3}
@@ -39,7 +40,7 @@ def _domain_text() -> str:
     try:
         return domain_text()
     except OSError:
-        return (REPO_ROOT / "domains" / "office.pddl").read_text()
+        return (Path(__file__).resolve().parents[2] / "domains" / "office.pddl").read_text()
 
 
 @pytest.fixture(scope="module")
