@@ -168,7 +168,7 @@ def test_unit_seeds_depend_only_on_identity_and_pair_the_methods():
 # kernels again); that results do not depend on the order units finish in is proven by
 # the two local processes the Ray results are compared with.
 RAY_SCRIPT = """
-import os, signal, socket, subprocess, sys, tempfile, time
+import os, shutil, signal, socket, subprocess, sys, tempfile, time
 from pathlib import Path
 from gdq_pddl.experiments import run_experiments, task_experiments
 exps = task_experiments(tasks=("C",), episodes=20, runs=2, methods=("GDQ", "Q-learning"))
@@ -201,6 +201,7 @@ finally:
         os.killpg(head.pid, signal.SIGKILL)
     except ProcessLookupError:
         pass
+    shutil.rmtree(temp, ignore_errors=True)
 """
 
 
