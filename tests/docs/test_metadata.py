@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import re
 import tomllib
-from pathlib import Path
 
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.helpers import REPO_ROOT as ROOT
+
 PAPER_TITLE = "Guiding Robot Exploration in Reinforcement Learning via Automated Planning"
 PAPER_AUTHORS = [("Yohei", "Hayamizu"), ("Saeid", "Amiri"), ("Kishan", "Chandan"),
                  ("Keiki", "Takadama"), ("Shiqi", "Zhang")]

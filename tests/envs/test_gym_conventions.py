@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import gymnasium
 import numpy as np
 import pytest
@@ -19,8 +17,8 @@ from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, shipped_names
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners import office_task_context
+from tests.helpers import REPO_ROOT as ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 KEYS_FILES = {"domain": ROOT / "domains" / "keys.pddl",
               "problem": ROOT / "problems" / "keys-2.pddl",
               "dynamics": ROOT / "gdq_pddl" / "data" / "dynamics" / "keys.toml"}

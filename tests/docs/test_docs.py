@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+from tests.helpers import REPO_ROOT
+
+DOCS = REPO_ROOT / "docs"
 
 
 def python_blocks(path: Path) -> list[str]:

@@ -15,7 +15,6 @@ from gdq_pddl.envs import register_envs
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import WorldError
-from gdq_pddl.world import load_world
 
 ENV_ID = "gdq_pddl/Office-v0"
 
@@ -40,11 +39,6 @@ stuck = 0.25
 start = "a"
 goal = "d"
 """
-
-
-@pytest.fixture(scope="module")
-def office():
-    return load_world(None)
 
 
 @pytest.fixture(scope="module")
@@ -186,7 +180,7 @@ def test_inapplicable_action_costs_a_step_and_changes_nothing() -> None:
 def test_info_fields() -> None:
     env = gymnasium.make(ENV_ID, task="A")
     obs, info = env.reset(seed=1)
-    mask = info.pop("action_mask")  # tests/test_gym_conventions.py checks its values
+    mask = info.pop("action_mask")  # tests/envs/test_gym_conventions.py checks its values
     assert mask.dtype == np.int8 and mask.shape == (95,)
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
                     env.unwrapped.start_state, "step": 0}

@@ -17,12 +17,8 @@ from gdq_pddl.envs.solve_compact import (
     solve_compact_task,
 )
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, load_world, parse_world
-
-
-@pytest.fixture(scope="module")
-def office() -> World:
-    return load_world(None)
+from gdq_pddl.world import Task, World, parse_world
+from tests.helpers import corridor_text
 
 
 def dense_values(world: World, goal: str, always_closed: bool = False):
@@ -103,19 +99,10 @@ def test_compiled_solver_matches_the_dense_one(office: World, task: str) -> None
 def corridor(nav: float, doors: list[tuple[float, float]], costs: dict[str, float],
              step_limit: int) -> World:
     """x0 - y0 | z0 - x1 - y1 | z1 - x2 ... (a door between each y and z)."""
-    names, edges, tables = ["x0"], [], []
-    for i, (success, stuck) in enumerate(doors):
-        y, z, x = f"y{i}", f"z{i}", f"x{i + 1}"
-        edges += [(names[-1], y), (y, z), (z, x)]
-        names += [y, z, x]
-        tables.append(f'[doors.d{i}]\nsides = ["{y}", "{z}"]\nsuccess = {success!r}\n'
-                      f"stuck = {stuck!r}\n")
-    adjacency = ", ".join(f'["{a}", "{b}"]' for a, b in edges)
     cost_lines = "\n".join(f"{verb} = {c!r}" for verb, c in costs.items())
-    text = (f"[world]\nstep_limit = {step_limit}\nr_max = 10.0\nnavigation_success = {nav!r}\n"
-            f"positions = [{', '.join(repr(n) for n in names)}]\nadjacency = [{adjacency}]\n\n"
-            f"[costs]\n{cost_lines}\n\n" + "\n".join(tables))
-    return parse_world(text, source="corridor")
+    return parse_world(corridor_text(nav, doors, world=f"step_limit = {step_limit}\n"
+                                     "r_max = 10.0\n", sections=f"[costs]\n{cost_lines}\n\n"),
+                       source="corridor")
 
 
 def test_always_closed_would_over_estimate() -> None:

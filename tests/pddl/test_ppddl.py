@@ -25,9 +25,8 @@ from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.planning.validate import validate_plan
-
-ROOT = Path(__file__).resolve().parent.parent
-DYN = ROOT / "gdq_pddl" / "data" / "dynamics"
+from tests.helpers import DYNAMICS as DYN
+from tests.helpers import REPO_ROOT as ROOT
 
 # A domain no shipped file knows: a hiker on two banks of a river. Fording is quick,
 # but the current may carry the hiker downstream, or away (a failed trial); the bridge

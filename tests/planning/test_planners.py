@@ -39,7 +39,7 @@ def _domain_text() -> str:
     try:
         return domain_text()
     except OSError:
-        return (Path(__file__).resolve().parents[1] / "domains" / "office.pddl").read_text()
+        return (Path(__file__).resolve().parents[2] / "domains" / "office.pddl").read_text()
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,6 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from learning_helpers import Recording, run
 
 from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel
 from gdq_pddl.envs.office import OfficeEnv
@@ -21,15 +20,11 @@ from gdq_pddl.envs.variants import deterministic_world
 from gdq_pddl.learners import GDQ, GDQConfig, gdq, office_task_context, run_episodes
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import load_world
+from tests.helpers import Recording, run
 
 WORLD = load_world()
 DET = deterministic_world(WORLD)
 TASKS = list(WORLD.tasks)
-
-
-@pytest.fixture(scope="module")
-def ctx_c():
-    return office_task_context(WORLD, "C")
 
 
 def greedy_path(learner, ctx) -> list[tuple[int, int]]:
@@ -308,9 +303,8 @@ def test_gdq_runs_on_a_generated_building():
 def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_goal():
     """A PPDDL domain's all-outcomes determinisation gives one ground action several
     planner edges; the optimistic prior takes the best of them."""
-    from test_ppddl import hike
-
     from gdq_pddl.abstraction.prior import prior_from_graph
+    from tests.pddl.test_ppddl import hike
 
     graph = hike("all-outcomes").graph
     prior = prior_from_graph(graph).next_state

@@ -7,7 +7,6 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from learning_helpers import Recording, run
 
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world
@@ -28,6 +27,7 @@ from gdq_pddl.learners import (
 )
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, load_world
+from tests.helpers import Recording, run
 
 WORLD = load_world()
 DET = deterministic_world(WORLD)
@@ -35,11 +35,6 @@ LITERAL = GDQConfig(variant="literal")
 
 ALL = [("qlearning", {}), ("dynaq", {}), ("darling", {}), ("darling", {"variant": "code"}),
        ("gdq", {}), ("gdq", {"variant": "literal"}), ("gdq", {"variant": "code"})]
-
-
-@pytest.fixture(scope="module")
-def ctx_c():
-    return office_task_context(WORLD, "C")
 
 
 # --- OptInit ------------------------------------------------------------------------------
@@ -465,7 +460,7 @@ def test_runner_works_through_gymnasium_make(ctx_c):
 @pytest.mark.parametrize("variant", ["literal", "code"])
 def test_gdq_without_any_plan_runs_and_learns(variant):
     """The plan-based variants with an empty H: Dyna-Q with extra steps, still learning.
-    (The default variant plans on its prior model, not on H: tests/test_gdq_model.py.)"""
+    (The default variant plans on its prior model, not on H: tests/learners/test_gdq_model.py.)"""
     task = Task("near", "p0", "p2")
     ctx = office_task_context(DET, task)
     empty = empty_plan_table(ctx.n_states, ctx.n_actions)

@@ -4,8 +4,6 @@ domains, and the command line end to end on a domain written here."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
@@ -21,9 +19,8 @@ from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.pddl.reachable import reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.world import load_world
-
-ROOT = Path(__file__).resolve().parent.parent
-DYN = ROOT / "gdq_pddl" / "data" / "dynamics"
+from tests.helpers import DYNAMICS as DYN
+from tests.helpers import REPO_ROOT as ROOT
 
 # A domain no shipped file knows: switch lamps on along a line of rooms.
 LAMPS_DOMAIN = """

@@ -23,12 +23,6 @@ from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import load_world_named, make_learner, run_unit
 from gdq_pddl.learners import office_task_context
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import builtin_world
-
-
-@pytest.fixture(scope="module")
-def office():
-    return builtin_world("office")
 
 
 def _plan_pairs(table, spaces):

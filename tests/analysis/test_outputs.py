@@ -17,8 +17,8 @@ from gdq_pddl.cli import build_parser, main
 from gdq_pddl.experiments import DEFAULT_METHODS
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import load_world
+from tests.helpers import REPO_ROOT as ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
 KEYS = ["--domain", str(ROOT / "domains" / "keys.pddl"),
         "--problem", str(ROOT / "problems" / "keys-1.pddl"),
         "--dynamics", str(ROOT / "gdq_pddl" / "data" / "dynamics" / "keys.toml")]

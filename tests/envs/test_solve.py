@@ -21,14 +21,10 @@ from gdq_pddl.envs.solve import (
     solve_task,
 )
 from gdq_pddl.envs.variants import deterministic_world
-from gdq_pddl.world import CostDist, load_world, parse_world
+from gdq_pddl.world import CostDist, parse_world
+from tests.helpers import corridor_text
 
 ENV_ID = "gdq_pddl/Office-v0"
-
-
-@pytest.fixture(scope="module")
-def office():
-    return load_world(None)
 
 
 @pytest.fixture(scope="module")
@@ -46,23 +42,6 @@ def test_office_probabilities_sum_to_one(office_model: ModelArrays) -> None:
     np.testing.assert_allclose(pair_sums(office_model), 1.0, atol=1e-12)
 
 
-def small_world(nav: float, doors: list[tuple[float, float]], ring: bool) -> str:
-    """A corridor x0 - y0 | z0 - x1 - y1 | z1 ... (door between each y and z)."""
-    names, edges, tables = ["x0"], [], []
-    for i, (success, stuck) in enumerate(doors):
-        y, z, x = f"y{i}", f"z{i}", f"x{i + 1}"
-        edges += [(names[-1], y), (y, z), (z, x)]
-        names += [y, z, x]
-        tables.append(f'[doors.d{i}]\nsides = ["{y}", "{z}"]\nsuccess = {success!r}\n'
-                      f"stuck = {stuck!r}\n")
-    if ring and len(names) > 2:
-        edges.append((names[0], names[-1]))
-    adjacency = ", ".join(f'["{a}", "{b}"]' for a, b in edges)
-    return (f"[world]\nnavigation_success = {nav!r}\n"
-            f"positions = [{', '.join(repr(n) for n in names)}]\n"
-            f"adjacency = [{adjacency}]\n\n" + "\n".join(tables))
-
-
 door_probs = st.tuples(st.floats(0, 1), st.floats(0, 1)).map(
     lambda p: (p[0], min(p[1], 1.0 - p[0])))
 
@@ -71,14 +50,14 @@ door_probs = st.tuples(st.floats(0, 1), st.floats(0, 1)).map(
 @given(nav=st.floats(0, 1), doors=st.lists(door_probs, min_size=0, max_size=3),
        ring=st.booleans())
 def test_probabilities_sum_to_one_property(nav: float, doors: list, ring: bool) -> None:
-    model = compile_model(parse_world(small_world(nav, doors, ring), source="hypothesis"))
+    model = compile_model(parse_world(corridor_text(nav, doors, ring), source="hypothesis"))
     assert np.all(np.diff(model.ptr) > 0)
     assert np.all(model.prob >= 0)
     np.testing.assert_allclose(pair_sums(model), 1.0, atol=1e-9)
 
 
 def test_expected_costs_of_each_distribution() -> None:
-    text = small_world(1.0, [(1.0, 0.0)], False) + """
+    text = corridor_text(1.0, [(1.0, 0.0)], False) + """
 [costs]
 goto = 2.5
 approach = { dist = "uniform", low = 1.0, high = 4.0 }

@@ -18,8 +18,9 @@ from pathlib import Path
 import pytest
 
 import gdq_pddl
+from tests.helpers import REPO_ROOT
 
-TEMPLATE = Path(__file__).resolve().parents[1] / "examples" / "planner_plugin"
+TEMPLATE = REPO_ROOT / "examples" / "planner_plugin"
 # A distribution whose planner cannot be imported: the listing must survive it.
 BROKEN_DIST = "gdq_broken_planner-0.1.dist-info"
 

@@ -1,0 +1,25 @@
+"""Fixtures shared by the test folders (plain helpers are in ``tests/helpers.py``).
+
+The tests are laid out by the package's layers (``tests/pddl``, ``tests/planning`` ...,
+``tests/cli``); each folder is a package, so modules import helpers as ``tests.helpers``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from gdq_pddl.learners import office_task_context
+from gdq_pddl.world import World, load_world
+
+
+@pytest.fixture(scope="session")
+def office() -> World:
+    """The shipped office world (a frozen value: one for the whole session)."""
+    return load_world(None)
+
+
+@pytest.fixture(scope="module")
+def ctx_c(office: World):
+    """The learners' task context of the office's task C (one per test module, as a
+    learner's start_task may keep a reference to it)."""
+    return office_task_context(office, "C")

@@ -1,0 +1,48 @@
+"""Every example runs with a tiny budget (CI runs them all)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+
+import pytest
+
+from tests.helpers import REPO_ROOT
+
+EXAMPLES = REPO_ROOT / "examples"
+BUDGET = {"task_x.py": ["--trials", "5"]}
+SCRIPTS = sorted(p.name for p in [*EXAMPLES.glob("task_*.py"), *EXAMPLES.glob("domain_*.py")])
+
+
+def _run(script: str) -> subprocess.CompletedProcess:
+    """The example as a user runs it: a fresh interpreter (nothing imported before it)."""
+    argv = BUDGET.get(script, ["--episodes", "20"])
+    if script == "task_b.py" or script.startswith("domain_"):
+        argv += ["--runs", "1"]
+    return subprocess.run([sys.executable, str(EXAMPLES / script), *argv],
+                          capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def results(request) -> dict[str, subprocess.CompletedProcess]:
+    """The selected examples, run side by side, one per core: each spends most of its
+    time starting an interpreter and loading the compiled kernels."""
+    chosen = [item.callspec.params["script"] for item in request.session.items
+              if getattr(item, "originalname", None) == "test_example_runs"
+              and item.module is request.module]
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        return dict(zip(chosen, pool.map(_run, chosen), strict=True))
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_example_runs(script, results):
+    result = results[script]
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip()
+
+
+def test_there_is_an_example_per_task():
+    assert {p.stem for p in EXAMPLES.glob("task_*.py")} == {f"task_{t}" for t in "abcdex"}
+    assert (EXAMPLES / "planner_plugin" / "pyproject.toml").exists()

@@ -1,0 +1,75 @@
+"""Plain helpers the tests share (fixtures live in ``tests/conftest.py``).
+
+Import them as ``from tests.helpers import ...``: ``tests`` and its layer folders are
+packages, so pytest puts the repository root on ``sys.path`` wherever a test file lives.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gdq_pddl.learners import run_episodes
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+"""The repository checkout (``domains/``, ``problems/``, ``docs/``, ``examples/`` ...)."""
+DYNAMICS = REPO_ROOT / "gdq_pddl" / "data" / "dynamics"
+"""The shipped dynamics files (``keys.toml``, ``office.toml`` ...)."""
+
+
+class Recording:
+    """Wraps a learner and records the (state, action) pairs it executes."""
+
+    def __init__(self, learner) -> None:
+        self.learner, self.pairs = learner, []
+        self.q = learner.q
+
+    @property
+    def states(self) -> list[int]:
+        return [s for s, _ in self.pairs]
+
+    @property
+    def actions(self) -> list[int]:
+        return [a for _, a in self.pairs]
+
+    def act(self, s, rng):
+        a = self.learner.act(s, rng)
+        self.pairs.append((s, a))
+        return a
+
+    def observe(self, *args):
+        self.learner.observe(*args)
+
+    def start_task(self, ctx):
+        self.learner.start_task(ctx)
+
+    def greedy_policy(self):
+        return self.learner.greedy_policy()
+
+
+def corridor_text(nav: float, doors: list[tuple[float, float]], ring: bool = False,
+                  world: str = "", sections: str = "") -> str:
+    """A world file: a corridor x0 - y0 | z0 - x1 - y1 | z1 - x2 ... with a door of
+    ``(success, stuck)`` between each y and z (and x0 - last when ``ring``); ``world``
+    adds keys to its ``[world]`` table, ``sections`` tables before the doors."""
+    names, edges, tables = ["x0"], [], []
+    for i, (success, stuck) in enumerate(doors):
+        y, z, x = f"y{i}", f"z{i}", f"x{i + 1}"
+        edges += [(names[-1], y), (y, z), (z, x)]
+        names += [y, z, x]
+        tables.append(f'[doors.d{i}]\nsides = ["{y}", "{z}"]\nsuccess = {success!r}\n'
+                      f"stuck = {stuck!r}\n")
+    if ring and len(names) > 2:
+        edges.append((names[0], names[-1]))
+    adjacency = ", ".join(f'["{a}", "{b}"]' for a, b in edges)
+    return (f"[world]\n{world}navigation_success = {nav!r}\n"
+            f"positions = [{', '.join(repr(n) for n in names)}]\n"
+            f"adjacency = [{adjacency}]\n\n{sections}" + "\n".join(tables))
+
+
+def run(learner, env, n, seed, fast=None):
+    """``n`` episodes of ``learner`` on ``env`` reset with ``seed``, its draws from
+    ``seed + 1``."""
+    env.reset(seed=seed)
+    return run_episodes(learner, env, n, np.random.default_rng(seed + 1), fast=fast)
