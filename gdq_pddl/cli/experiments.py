@@ -1,9 +1,15 @@
 """Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, pairs,
-report."""
+report.
+
+The reports (:mod:`gdq_pddl.analysis`) and ``scale`` (which loads the learners) are
+imported inside the functions that use them, for start-up time (matplotlib and numba).
+"""
 
 from __future__ import annotations
 
 import argparse
+import shlex
+from dataclasses import replace
 from pathlib import Path
 
 from gdq_pddl.cli.common import (
@@ -11,16 +17,32 @@ from gdq_pddl.cli.common import (
     POSITIVE,
     check_planner,
     checked_methods,
+    determinisation,
     determinisation_arg,
     exec_args,
     execute,
     experiment_kw,
+    load_world_checked,
     office_report,
+    refuse_given,
     run_args,
     task_args,
     world_and_task,
 )
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments import (
+    Experiment,
+    pairs,
+    paper_protocol,
+    robot_experiment,
+    switch_experiment,
+)
+from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments
+from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS as SCALE_DEFAULT_METHODS
+from gdq_pddl.experiments.scale_methods import METHODS as SCALE_METHODS
+from gdq_pddl.experiments.work import load_pddl_instance
+from gdq_pddl.experiments.worlds import world_name
+from gdq_pddl.outputs import output_folder
 
 
 def register_run(sub) -> None:
@@ -43,22 +65,19 @@ def register_run(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import Experiment
-
     if args.domain or args.problem or args.dynamics:
         return _run_pddl(args)
+    refuse_given(args, ["--determinisation"], "is for a PPDDL domain (with --domain and "
+                 "--problem); an office task has no determinisation to choose")
     world, task = world_and_task(args)
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
-    exp = Experiment("run", ((spec, args.episodes),), world=str(args.world or "office"), **kw)
+    exp = Experiment("run", ((spec, args.episodes),), world=world_name(args.world), **kw)
     return execute([exp], args, f"run-{task.name}")
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import Experiment
-    from gdq_pddl.experiments.work import load_pddl_instance
-
     if not (args.domain and args.problem):
         raise GdqError("a PDDL run needs --domain and --problem (and --dynamics for a STRIPS "
                        "domain)")
@@ -66,18 +85,18 @@ def _run_pddl(args: argparse.Namespace) -> int:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
     files = (str(args.domain), str(args.problem),
-             "" if args.dynamics is None else str(args.dynamics), args.determinisation)
+             "" if args.dynamics is None else str(args.dynamics), determinisation(args))
     instance = load_pddl_instance(files)  # check the files (and size) before any worker
     instance.model  # noqa: B018
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", report=pddl_report)
 
 
 def pddl_report(out: Path) -> str:
     """Figures and REPORT.md of a PDDL run's output folder; returns what was written."""
-    from gdq_pddl.analysis.generic import make_generic_report
+    from gdq_pddl.analysis.generic import make_generic_report  # start-up time
 
     paths = make_generic_report(out)
     return f"wrote {len(paths) - 1} figures and {paths[-1]}"
@@ -95,16 +114,13 @@ def register_switch(sub) -> None:
 
 
 def cmd_switch(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import switch_experiment
-    from gdq_pddl.world import load_world
-
-    world = load_world(args.world)
+    world = load_world_checked(args.world)
     first, second = world.task(args.first).name, world.task(args.second).name
     if first == second:  # task names are upper-cased: c and C are one task
         raise GdqError(f"--from and --to are the same task ({first}): a switch needs two")
     kw = experiment_kw(args)
-    check_planner(args.planner)
-    exp = switch_experiment(first, second, args.episodes, world=str(args.world or "office"), **kw)
+    check_planner(args.planner, kw["methods"])
+    exp = switch_experiment(first, second, args.episodes, world=world_name(args.world), **kw)
     return execute([exp], args, exp.name)
 
 
@@ -118,12 +134,8 @@ def register_robot(sub) -> None:
 
 
 def cmd_robot(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
-    from gdq_pddl.experiments import robot_experiment
-
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     exp = robot_experiment(runs=kw.pop("runs"), **kw)
     exp = replace(exp, schedule=(("X", args.episodes),))
     return execute([exp], args, "robot")
@@ -141,15 +153,11 @@ def register_reproduce(sub) -> None:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import paper_protocol
-
     name = "reproduce-quick" if args.quick else "reproduce"
     return execute(paper_protocol(quick=args.quick, seed=args.seed), args, name)
 
 
 def register_knowledge(sub) -> None:
-    from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS
-
     p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
                        description="Task C with a door locked in reality but usable in the "
                                    "knowledge (d3, d1), a corridor only reality has, and a "
@@ -168,13 +176,11 @@ def register_knowledge(sub) -> None:
 
 
 def cmd_knowledge(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments.knowledge import knowledge_experiments
-
     exps = knowledge_experiments(args.episodes, args.runs, args.seed, checked_methods(args))
     command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
 
     def report(out: Path) -> str:
-        from gdq_pddl.analysis.knowledge import make_knowledge_report
+        from gdq_pddl.analysis.knowledge import make_knowledge_report  # start-up time
 
         paths = make_knowledge_report(out, command)
         return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
@@ -191,10 +197,11 @@ def register_report(sub) -> None:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    # start-up time: the analysis modules import matplotlib and numba
     from gdq_pddl.analysis.data import load_config
     from gdq_pddl.analysis.generic import is_pddl_folder
+    from gdq_pddl.analysis.knowledge import make_knowledge_report
     from gdq_pddl.analysis.pairs import is_pairs_folder
-    from gdq_pddl.outputs import output_folder
 
     if is_pairs_folder(args.out):
         output_folder(args.out, "report")  # figures and REPORT.md go there
@@ -207,8 +214,6 @@ def cmd_report(args: argparse.Namespace) -> int:
     if is_pddl_folder(args.out):  # gdq-pddl run --domain ...
         print(pddl_report(args.out))
     elif any(e.get("knowledge") for e in load_config(args.out).experiments):
-        from gdq_pddl.analysis.knowledge import make_knowledge_report
-
         paths = make_knowledge_report(args.out, "gdq-pddl knowledge (see config.json)")
         print(f"wrote {len(paths)} figures and reports; read {args.out / 'REPORT.md'}")
     else:
@@ -217,9 +222,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def register_scale(sub) -> None:
-    from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
-
-    default = list(DEFAULT_METHODS)
+    default = list(SCALE_DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
                        description="Run each --method on --buildings generated buildings of "
                                    "each size (building seeds --seed, --seed + 1, ...) and "
@@ -235,7 +238,7 @@ def register_scale(sub) -> None:
                         "(default 2, at most 1000)")
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(METHODS)})")
+                        f"from: {', '.join(SCALE_METHODS)})")
     p.add_argument("--runs", type=POSITIVE, default=5,
                    help="runs per method and building, paired across methods (default 5)")
     p.add_argument("--episodes", type=POSITIVE, default=5000,
@@ -251,9 +254,7 @@ def register_scale(sub) -> None:
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    import shlex
-
-    from gdq_pddl.experiments.scale import run_scale
+    from gdq_pddl.experiments.scale import run_scale  # start-up time: it loads the learners
 
     out = args.out or Path("results/scale")
     methods = list(dict.fromkeys(args.method))
@@ -284,10 +285,7 @@ def register_pairs(sub) -> None:
 
 
 def cmd_pairs(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import pairs
-    from gdq_pddl.world import load_world
-
-    world = load_world(args.world)
+    world = load_world_checked(args.world)
     if args.pairs and args.sample is not None:
         raise GdqError("give --pairs or --sample, not both")
     if args.pairs:
@@ -297,8 +295,8 @@ def cmd_pairs(args: argparse.Namespace) -> int:
     else:
         chosen = pairs.all_pairs(world)
     kw = experiment_kw(args)
-    check_planner(args.planner)
-    exps = pairs.pair_experiments(chosen, args.episodes, world=str(args.world or "office"), **kw)
+    check_planner(args.planner, kw["methods"])
+    exps = pairs.pair_experiments(chosen, args.episodes, world=world_name(args.world), **kw)
     return execute(exps, args, "pairs", pairs_report, results="runs.csv",
                    work=pairs.run_pair_unit, collect=pairs.collect_pairs,
                    unit_arrays=pairs.PAIR_ARRAYS)
@@ -306,7 +304,7 @@ def cmd_pairs(args: argparse.Namespace) -> int:
 
 def pairs_report(out: Path) -> str:
     """Table, figure and REPORT.md of a pairs folder; returns what was written."""
-    from gdq_pddl.analysis.pairs import make_pairs_report
+    from gdq_pddl.analysis.pairs import make_pairs_report  # start-up time
 
     paths = make_pairs_report(out)
     return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"

@@ -1,9 +1,12 @@
 """Turn the per-unit files of an output folder into its CSV and JSON results.
 
 ``episodes.csv`` has the columns :data:`EPISODE_COLUMNS`, then, when an office
-experiment is among them, ``area_1 .. area_7``: the steps of the episode that end in
-each area of the world file (a PDDL domain has no areas, so a folder of PDDL runs has
-no such columns). ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
+experiment is among them, ``area_1 .. area_K``: the steps of the episode that end in
+each area of the world file, ``K`` the largest area number of the experiments' worlds
+(7 in the office; a PDDL domain has no areas, so a folder of PDDL runs has no such
+columns). Text fields (experiment, method and task names, which may come from input
+files) are quoted as the ``csv`` module quotes them: a name with a comma or a quote
+stays one field. ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
 action per learner state, by index and by name (``state_name``: ``p1 (door open)`` in
 the office, the state's fluent atoms for a PDDL domain; ``action_name``: ``gothrough
 p3``, or the ground action ``(move c11 c12)``).
@@ -12,28 +15,44 @@ p3``, or the ground action ``(move c11 c12)``).
 from __future__ import annotations
 
 import csv
+import io
 import json
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment
-from gdq_pddl.experiments.work import load_world_named, resolve_task
+from gdq_pddl.experiments.work import load_pddl_instance, load_world_named, resolve_task
+from gdq_pddl.outputs import atomic_write
+from gdq_pddl.spaces import LearnerSpaces
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
 POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "state_name",
                   "action_name")
-N_AREAS = 7
+
+
+def area_count(experiments: list[Experiment]) -> int:
+    """The number of area columns: the largest area number of the office experiments'
+    worlds (0 when every experiment is a PDDL problem)."""
+    return max((max(load_world_named(e.world).areas, default=0) for e in experiments
+                if e.pddl is None), default=0)
+
+
+def csv_field(text: str) -> str:
+    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only when it holds a
+    comma, a quote or a line break: a plain name is written as it is)."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow([text])
+    return buffer.getvalue()
 
 
 def collect(out: Path, experiments: list[Experiment]) -> None:
     """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write, read_unit
-
     units = [u for e in experiments for u in e.units()]
-    n_areas = N_AREAS if any(e.pddl is None for e in experiments) else 0
+    n_areas = area_count(experiments)
     header = ",".join((*EPISODE_COLUMNS, *(f"area_{k}" for k in range(1, n_areas + 1))))
 
     def write_episodes(tmp: Path) -> None:
@@ -42,7 +61,7 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
             for unit in units:
                 data = read_unit(out, unit)
                 for chunk in _episode_rows(unit.experiment.name, unit.method, unit.run, data,
-                                           n_areas):
+                                           n_areas):  # names quoted in _episode_rows
                     fh.write(chunk)
 
     def write_policies(tmp: Path) -> None:
@@ -71,12 +90,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
 def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]]:
     """``(state name, action name)`` of learner indices in ``exp``'s world or problem."""
     if exp.pddl is not None:
-        from gdq_pddl.experiments.work import load_pddl_instance
-
         instance = load_pddl_instance(tuple(exp.pddl))
         return (lambda s: " ".join(sorted(instance.atoms(s)))), instance.action_name
-    from gdq_pddl.spaces import LearnerSpaces
-
     spaces = LearnerSpaces(load_world_named(exp.world))
     return spaces.state_name, spaces.action_name
 
@@ -91,9 +106,9 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
     :data:`CHUNK` rows (a full protocol has ~1M rows: plain string formatting of Python
     numbers, which measured 7 times faster than numpy's character functions)."""
     n = len(data["returns"])
-    tasks = np.repeat(data["tasks"], data["counts"])
+    tasks = np.repeat([csv_field(str(t)) for t in data["tasks"].tolist()], data["counts"])
     k = min(n_areas, data["areas"].shape[1])
-    head = f"{experiment},{method},"
+    head = f"{csv_field(experiment)},{csv_field(method)},"
     for lo in range(0, n, CHUNK):
         hi = min(n, lo + CHUNK)
         areas = np.zeros((hi - lo, n_areas), dtype=np.int64)
@@ -111,6 +126,7 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
     """V*, relevant areas and the paper's irrelevant areas of each task the experiments use."""
+    # start-up time: the solvers import numba, which `gdq-pddl --help` need not wait for
     from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
 
     out: dict = {}
@@ -140,9 +156,9 @@ def optimal_summary(experiments: list[Experiment]) -> dict:
 def pddl_optimal(exp: Experiment) -> dict:
     """V* (value iteration on the true model) and the shortest plan length of a PDDL
     experiment's problem, keyed ``<schedule entry>@<problem file>``."""
+    # start-up time: the env and solver import numba (see optimal_summary)
     from gdq_pddl.envs.pddl_env import GOAL_POS
     from gdq_pddl.envs.solve import solve
-    from gdq_pddl.experiments.work import load_pddl_instance
 
     instance = load_pddl_instance(tuple(exp.pddl))
     v_star = float(solve(instance.model, GOAL_POS).V[0, 0])

@@ -8,25 +8,13 @@ it returns.
 from __future__ import annotations
 
 from functools import cache
-from pathlib import Path
 
 import numpy as np
 
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Hyper, Unit
-from gdq_pddl.world import Task, World, builtin_world, load_world
-
-
-@cache
-def load_world_named(name: str) -> World:
-    """``office`` / ``office_robot`` (built in), or a world file path."""
-    if name in ("office", "office_robot"):
-        return builtin_world(name)
-    if name.startswith("office:"):  # in-memory variants, see experiments/knowledge.py
-        from gdq_pddl.experiments.knowledge import derived_world
-
-        return derived_world(name)
-    return load_world(Path(name))
+from gdq_pddl.experiments.worlds import load_world_named
+from gdq_pddl.world import Task, World
 
 
 def resolve_task(world: World, spec: str) -> Task:
