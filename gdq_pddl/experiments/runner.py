@@ -287,6 +287,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                 _run_pending(out, experiments, pending,
                              processes if executor == "local" else jobs, executor, address,
                              progress, work)
+                _check_unchanged(out, experiments)
                 collect(out, experiments)
             except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP (_Stopped)
                 raise _interrupted(out, experiments, resume, exc) from None
@@ -295,6 +296,20 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                 (out / "config.json").unlink(missing_ok=True)
             raise
     return out
+
+
+def _check_unchanged(out: Path, experiments: list[Experiment]) -> None:
+    """Refuse to collect runs whose input files changed while they ran (each worker reads
+    the files by the name the driver resolved; their content must be what the driver
+    checked and config.json records)."""
+    recorded = read_config(out / "config.json").get("inputs")
+    changed = changed_input(recorded if isinstance(recorded, dict) else {},
+                            input_hashes(input_files(experiments)))
+    if changed:
+        raise ResultsError(f"{changed} changed while the runs in {out} went on (its content "
+                           "differs from what config.json records): some runs may have read "
+                           "one version and some the other; restore it and delete the runs "
+                           "saved since, or start again in another --out")
 
 
 def _interrupted(out: Path, experiments: list[Experiment], resume: bool,
