@@ -29,7 +29,7 @@ from gdq_pddl.cli.common import (
     task_args,
     world_and_task,
 )
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import GdqError, SizeError
 from gdq_pddl.experiments import (
     Experiment,
     pairs,
@@ -86,8 +86,14 @@ def _run_pddl(args: argparse.Namespace) -> int:
                        "its start and goal from --problem")
     files = (str(args.domain), str(args.problem),
              "" if args.dynamics is None else str(args.dynamics), determinisation(args))
-    instance = load_pddl_instance(files)  # check the files (and size) before any worker
-    instance.model  # noqa: B018
+    try:  # check the files (and size) before any worker
+        load_pddl_instance(files).model  # noqa: B018
+    except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
+        if isinstance(exc, SizeError):
+            raise
+        raise SizeError(f"{args.problem}: grounding the problem ran out of memory; give a "
+                        "smaller problem") from None
+    instance = load_pddl_instance(files)
     kw = experiment_kw(args)
     check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
