@@ -1,19 +1,34 @@
-"""Keep numba's on-disk cache of this package's compiled functions in step with the source.
+"""Keep numba's on-disk cache of this package's compiled functions in step with the source,
+and never let a damaged cache file stop a run.
 
 numba caches a compiled function (``@numba.njit(cache=True)``) in ``__pycache__`` and
 reuses it while the function's *own* file is unchanged, with the code of everything it
 calls from other files baked in. The fast episode loop (``learners/episodes.py``) calls
-the learning rules (``learners/gdq.py`` and the other rule modules) and the env step (``envs/model.py``): edit
-``core.py`` and the loop would go on running the old rules, silently, while the Python
-path runs the new ones. So on import we hash the sources of the modules with compiled
+the learning rules (``learners/gdq.py`` and the other rule modules) and the env step
+(``envs/model.py``): edit a rule and the loop would go on running the old one, silently,
+while the Python path runs
+the new one. So on import we hash the sources of the modules with compiled
 functions and, when the hash differs from the one the cache was built with, delete the
 package's cache files. An installed package never changes, so this is a check of a few
-files per process; a cache folder we cannot write (a read-only install) is left alone.
+files per process.
+
+A cache file cut short (a full disk, a copy interrupted, a hand edit) made numba raise
+``UnpicklingError`` on every later run until it was deleted by hand. So each cache file
+is also read once as a pickle stream (its opcodes walked, no object built, numba not
+imported) when it first appears or changes; a damaged one is deleted, and numba compiles
+that function again. Where the cache folder cannot be written (a read-only install) and
+a damaged file cannot be deleted, numba is pointed at a cache folder of its own
+(``NUMBA_CACHE_DIR``, unless the user set one) before it is imported.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
+import json
+import os
+import pickletools
+import tempfile
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
@@ -21,6 +36,12 @@ JIT_FOLDERS = ("envs", "learners", "planning")
 """Subpackages whose modules have (or call) compiled functions."""
 STAMP = Path("learners", "__pycache__", "jit-sources.sha256")
 """Where, under the package, the digest the cache was built with is kept."""
+CHECKED = Path("learners", "__pycache__", "jit-checked.json")
+"""Where, under the package, the cache files already read whole are listed (name, size,
+modification time), so each is read once."""
+PICKLES = {".nbi": 2, ".nbc": 1}
+"""How many pickles numba writes one after the other in each kind of cache file (an
+index: numba's version, then the index itself; a data file: one)."""
 
 
 def sources_digest(root: Path = PACKAGE) -> str:
@@ -33,22 +54,93 @@ def sources_digest(root: Path = PACKAGE) -> str:
     return h.hexdigest()
 
 
+def cache_files(root: Path = PACKAGE) -> list[Path]:
+    """numba's cache files (index and data) under ``root``."""
+    return [path for folder in JIT_FOLDERS for pattern in ("*.nbi", "*.nbc")
+            for path in sorted((root / folder / "__pycache__").glob(pattern))]
+
+
 def refresh(root: Path = PACKAGE) -> bool:
-    """Delete stale numba cache files under ``root`` (see the module docstring); True
-    when it did."""
+    """Delete stale numba cache files under ``root`` (see the module docstring), and
+    damaged ones; True when the sources changed and the cache was cleared."""
     digest, stamp = sources_digest(root), root / STAMP
     try:
-        if stamp.read_text() == digest:
-            return False
+        fresh = stamp.read_text() == digest
     except OSError:
-        pass
+        fresh = False
+    if fresh:
+        remove_damaged(root)
+        return False
     try:
-        for folder in JIT_FOLDERS:
-            for pattern in ("*.nbi", "*.nbc"):
-                for path in (root / folder / "__pycache__").glob(pattern):
-                    path.unlink(missing_ok=True)
+        for path in cache_files(root):
+            path.unlink(missing_ok=True)
         stamp.parent.mkdir(exist_ok=True)
         stamp.write_text(digest)
     except OSError:
+        remove_damaged(root)
         return False
     return True
+
+
+def is_whole(data: bytes, pickles: int) -> bool:
+    """Whether ``data`` is exactly ``pickles`` complete pickles, one after the other."""
+    stream = io.BytesIO(data)
+    try:
+        for _ in range(pickles):
+            for _op in pickletools.genops(stream):
+                pass
+    except (ValueError, EOFError, KeyError):  # cut short, or not a pickle at all
+        return False
+    return stream.tell() == len(data)
+
+
+def remove_damaged(root: Path = PACKAGE) -> list[Path]:
+    """Delete the cache files under ``root`` that are not whole pickles (each file read
+    once, see :data:`CHECKED`); returns the damaged ones found."""
+    record_path = root / CHECKED
+    try:
+        record = json.loads(record_path.read_text())
+        if not isinstance(record, dict):
+            record = {}
+    except (OSError, ValueError):
+        record = {}
+    checked: dict[str, list[int]] = {}
+    damaged: list[Path] = []
+    for path in cache_files(root):
+        try:
+            info = path.stat()
+            key, mark = str(path.relative_to(root)), [info.st_size, info.st_mtime_ns]
+            if record.get(key) == mark:
+                checked[key] = mark
+                continue
+            if is_whole(path.read_bytes(), PICKLES[path.suffix]):
+                checked[key] = mark
+            else:
+                damaged.append(path)
+        except OSError:  # removed meanwhile by another process: numba sees it missing
+            continue
+    stuck = False
+    for path in damaged:
+        try:
+            path.unlink(missing_ok=True)
+        except OSError:
+            stuck = True
+    if stuck and "NUMBA_CACHE_DIR" not in os.environ:
+        os.environ["NUMBA_CACHE_DIR"] = str(Path(tempfile.gettempdir()) /
+                                            f"gdq_pddl-numba-{getattr(os, 'getuid', os.getpid)()}")
+    if checked != record:
+        _write_record(record_path, checked)
+    return damaged
+
+
+def _write_record(path: Path, checked: dict[str, list[int]]) -> None:
+    """Save the list of files read whole (atomically; nothing if the folder is
+    read-only: the files are then read again by the next process)."""
+    try:
+        path.parent.mkdir(exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        with os.fdopen(fd, "w") as fh:
+            json.dump(checked, fh)
+        os.replace(tmp, path)
+    except OSError:
+        return

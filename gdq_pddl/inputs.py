@@ -1,33 +1,75 @@
 """Reading the files a user gives (world, domain, problem, dynamics), and fingerprinting them.
 
-:func:`read_text` turns every way a file can fail to be text (missing, a folder, no
-permission, not UTF-8) into the caller's own error, naming the file; :func:`file_hash`
-is what ``--resume`` compares to tell that an input changed between two runs.
+:func:`read_text` turns every way a file can fail to be text (missing, a folder, a device
+or a FIFO, larger than :data:`~gdq_pddl.limits.MAX_INPUT_BYTES`, no permission, not
+UTF-8) into the caller's own error, naming the file, before more than that many bytes
+are read; a UTF-8 byte-order mark at the start is dropped. :func:`file_hash` is what
+``--resume`` compares to tell that an input changed between two runs.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 
 from gdq_pddl.errors import GdqError
+from gdq_pddl.limits import MAX_INPUT_BYTES, human_bytes
+
+BOM = "\ufeff"
+"""The byte-order mark some editors put at the start of a UTF-8 file."""
+
+
+def read_bytes(path: str | Path, fail: Callable[[str, str], GdqError],
+               limit: int = MAX_INPUT_BYTES) -> bytes:
+    """The bytes of the regular file ``path``, at most ``limit`` of them; on any failure
+    raise ``fail(file name, message)``.
+
+    A device (``/dev/zero``), a FIFO (whose ``open`` waits for a writer) or a folder is
+    refused from its ``stat``, before it is opened; a file that grows past ``limit`` while
+    it is read is refused after reading ``limit + 1`` bytes.
+    """
+    name = str(path)
+    try:
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):
+            kind = "a folder" if stat.S_ISDIR(info.st_mode) else \
+                "a FIFO" if stat.S_ISFIFO(info.st_mode) else "a device or other special file"
+            raise fail(name, f"is {kind}, not a regular file")
+        if info.st_size > limit:
+            raise fail(name, _too_large(info.st_size, limit))
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        with os.fdopen(fd, "rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise fail(name, f"cannot read: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise fail(name, _too_large(len(data), limit))
+    return data
+
+
+def _too_large(size: int, limit: int) -> str:
+    return (f"is {human_bytes(size)}, larger than the {human_bytes(limit)} an input file may "
+            "have (every shipped or generated file is far smaller)")
 
 
 def read_text(path: str | Path, fail: Callable[[str, str], GdqError]) -> str:
-    """The UTF-8 text of ``path``; on any failure raise ``fail(file name, message)``."""
+    """The UTF-8 text of ``path`` (see :func:`read_bytes`), without a leading byte-order
+    mark; on any failure raise ``fail(file name, message)``."""
+    data = read_bytes(path, fail)
     try:
-        return Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise fail(str(path), f"cannot read: {exc.strerror or exc}") from None
+        return data.decode("utf-8").removeprefix(BOM)
     except UnicodeDecodeError as exc:
         raise fail(str(path), f"not a UTF-8 text file (byte {exc.object[exc.start]:#04x} at "
                    f"offset {exc.start}); save it as UTF-8") from None
 
 
 def file_hash(path: str | Path) -> str:
-    """``sha256:<hex>`` of the file's bytes (``missing`` when it cannot be read)."""
+    """``sha256:<hex>`` of the file's bytes (``missing`` when it cannot be read: not a
+    regular file, too large, or unreadable; :func:`read_text` then says why)."""
     try:
-        return "sha256:" + hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    except OSError:
+        return "sha256:" + hashlib.sha256(read_bytes(path, GdqError)).hexdigest()
+    except GdqError:
         return "missing"

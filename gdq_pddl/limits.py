@@ -18,6 +18,11 @@ import math
 import numbers
 import os
 
+try:
+    import resource
+except ImportError:  # pragma: no cover (not POSIX: no limit to read)
+    resource = None
+
 from gdq_pddl.errors import ConfigError, SizeError
 
 MAX_NUMBER = 1e15
@@ -34,12 +39,26 @@ uses 0.3). Past it a "tolerance" is a tour, not a near-shortest plan; and the bo
 ``(1 + tolerance) x L`` still grows with it, past every loop-free plan (clingo grounds a
 horizon per step up to it) and, near 1e308, past any float."""
 
+MAX_INPUT_BYTES = 16 * 1000**2
+"""The largest input file (world, domain, problem, dynamics) read: 16 MB, a few times a
+generated building of 100,000 positions (5 MB), far past any published PDDL problem."""
+
+MAX_INIT_ATOMS = 100_000
+"""The most atoms a PDDL problem's initial state may hold to be planned over (a generated
+building of 10,000 positions has 32,500, planned in seconds): the grounded task keeps a
+bitmask over every fact per action, so its memory grows with the square of this."""
+
+MAX_WORLD_POSITIONS = 30_000
+"""The most positions a world may have to be planned over: its PDDL problem's initial
+state has about 3.25 atoms per position, so past this it passes :data:`MAX_INIT_ATOMS`."""
+
 FALLBACK_MEMORY = 16 * 1024**3
 """What :func:`physical_memory` assumes where the system does not say."""
 
 
 def physical_memory() -> int:
-    """Bytes of physical memory of this machine (``FALLBACK_MEMORY`` if unknown).
+    """Bytes of physical memory of this machine (``FALLBACK_MEMORY`` if unknown), or the
+    process's address-space limit if lower.
 
     ``GDQ_PDDL_MEMORY`` (bytes) overrides it, for tests and for sharing a machine.
     """
@@ -47,9 +66,18 @@ def physical_memory() -> int:
     if override and override.isdigit():
         return int(override)
     try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (AttributeError, ValueError, OSError):
-        return FALLBACK_MEMORY
+        have = FALLBACK_MEMORY
+    return min(have, _address_space_cap())
+
+
+def _address_space_cap() -> float:
+    """The process's address-space limit (``ulimit -v``), or inf when there is none."""
+    if resource is None:  # pragma: no cover (not POSIX)
+        return math.inf
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return math.inf if soft == resource.RLIM_INFINITY else soft
 
 
 def human_bytes(n: float) -> str:

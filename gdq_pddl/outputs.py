@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -77,6 +77,50 @@ def writing(path: str | Path) -> Iterator[None]:
         if exc.filename is not None or isinstance(exc, BrokenPipeError):
             raise
         raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
+
+
+def file_mode() -> int:
+    """The permissions a new file gets under the process's umask (``0o644`` under the usual
+    ``022``): what :func:`atomic_write` gives its file, since a temporary file is made
+    ``0o600`` whatever the umask says."""
+    mask = os.umask(0o22)  # reading the umask means setting it: put it straight back
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
+    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file
+    (an OSError that names no file, a full disk, names ``path``). The file gets the
+    permissions the umask gives a new file (:func:`file_mode`), as a plain ``open`` would.
+
+    A process killed in the middle leaves ``.<name>.*.tmp`` next to ``path``
+    (:data:`TEMPORARY`), which the next writer of that folder may remove.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with writing(path):
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        os.close(fd)
+        try:
+            write(Path(tmp))
+            os.chmod(tmp, file_mode())
+            os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+TEMPORARY = ".*.tmp"
+"""The glob of what :func:`atomic_write` leaves behind when killed mid-write."""
+
+
+def remove_temporary(folder: Path) -> None:
+    """Remove what a killed :func:`atomic_write` left in ``folder`` (nothing if it is not a
+    folder); a file only appears under its own name by an atomic rename, so these are
+    never results."""
+    if folder.is_dir():
+        for stale in folder.glob(TEMPORARY):
+            stale.unlink(missing_ok=True)
 
 
 def write_text(path: str | Path, text: str) -> None:

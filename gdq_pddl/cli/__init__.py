@@ -21,6 +21,11 @@ from gdq_pddl.outputs import writing
 
 EXIT_INTERRUPTED = 130  # the shell's convention for a program ended by SIGINT
 
+
+def _exit_signal(exc: BaseException) -> int:
+    """128 + the signal that stopped the command (SIGINT unless SIGTERM or SIGHUP)."""
+    return 128 + int(getattr(exc, "signal", EXIT_INTERRUPTED - 128))
+
 COMMANDS: list[Callable] = [
     planning.register_problem, planning.register_building, planning.register_plan,
     planning.register_planners, experiments.register_run, experiments.register_switch,
@@ -42,15 +47,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = args.func(args)
         sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
         return code
-    except RunInterrupted as exc:  # Ctrl-C during a run: say how to go on
+    except RunInterrupted as exc:  # Ctrl-C, SIGTERM or SIGHUP during a run: how to go on
         print(f"gdq-pddl: {exc}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _exit_signal(exc)
     except GdqError as exc:
         print(f"gdq-pddl: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("gdq-pddl: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _exit_signal(exc)
     except BrokenPipeError:  # output piped into `head` and closed early: not an error
         sys.stderr.close()
         return 0

@@ -1,20 +1,34 @@
-"""What the subcommands share: task and run options, validation, running and reporting."""
+"""What the subcommands share: task and run options, validation, running and reporting.
+
+Imports of what draws figures (:mod:`gdq_pddl.analysis`: matplotlib and numba) stay
+inside the functions that use them, for start-up time: ``gdq-pddl --help`` and a bad
+option answer at once.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import sys
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import ConfigError, GdqError, SizeError
+from gdq_pddl.experiments import DEFAULT_METHODS, METHODS, Experiment, run_experiments
+from gdq_pddl.experiments.checks import check_report_size, check_sizes
+from gdq_pddl.experiments.protocol import safe_name
+from gdq_pddl.experiments.runner import saved_units
+from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS
+from gdq_pddl.planning import get_planner
+from gdq_pddl.world import Task, World, load_world
 
 EXIT_ERROR, EXIT_NO_PLAN = 2, 1
 
 
 def whole(low: int) -> Callable[[str], int]:
     """An argparse type: a whole number >= ``low`` (and small enough for int64)."""
-    from gdq_pddl.limits import MAX_COUNT
-
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -32,10 +46,6 @@ def whole(low: int) -> Callable[[str], int]:
 def tolerance_arg(text: str) -> float:
     """An argparse type: a plan-length tolerance, a finite number in ``[0, MAX_TOLERANCE]``
     (not nan, not inf, not one whose length bound is past every plan)."""
-    import math
-
-    from gdq_pddl.limits import MAX_TOLERANCE
-
     try:
         value = float(text)
     except ValueError:
@@ -52,8 +62,6 @@ POSITIVE, NONNEGATIVE = whole(1), whole(0)
 
 def note(message: str) -> None:
     """A line for the user on stderr (stdout stays the results)."""
-    import sys
-
     print(f"gdq-pddl: {message}", file=sys.stderr)
 
 
@@ -66,18 +74,41 @@ def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
 
 
 def determinisation_arg(p: argparse.ArgumentParser) -> None:
-    from gdq_pddl.pddl.ppddl import DETERMINISATIONS
-
-    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=DETERMINISATIONS[0],
+    """--determinisation, default None (``determinisation`` gives its value), so that a
+    command can tell it was given where it means nothing (an office task)."""
+    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=None,
                    help="what the planner knows of a PPDDL domain: every outcome of an "
                         "action is a planner action (all-outcomes, the default), or only its "
                         "most likely one (most-likely)")
 
 
-def world_and_task(args: argparse.Namespace):
-    from gdq_pddl.world import load_world
+def determinisation(args: argparse.Namespace) -> str:
+    """The --determinisation given, or the default one."""
+    return args.determinisation or DETERMINISATIONS[0]
 
-    world = load_world(args.world)
+
+def refuse_given(args: argparse.Namespace, options: Sequence[str], why: str) -> None:
+    """Refuse the first of ``options`` (``--task``...) given on the command line: an
+    option that would be ignored is an error, not a silent no-op."""
+    for option in options:
+        if getattr(args, option.removeprefix("--").replace("-", "_"), None) is not None:
+            raise ConfigError(f"{option} {why}")
+
+
+def load_world_checked(path: Path | None) -> World:
+    """The world of ``--world`` (None: the built-in office), refused up front, naming its
+    file, when it has more positions than can be planned over."""
+    world = load_world(path)
+    if len(world.positions) > MAX_WORLD_POSITIONS:
+        raise SizeError(f"{world.source}: {len(world.positions):,} positions, more than the "
+                        f"{MAX_WORLD_POSITIONS:,} a world may have to be planned over (its "
+                        "grounded problem grows with the square of the positions); give a "
+                        "smaller world")
+    return world
+
+
+def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
+    world = load_world_checked(args.world)
     if args.task is None and args.start is None and args.goal is None:
         raise GdqError("give --task, or --start and --goal")
     task = world.resolve(args.task, args.start, args.goal)
@@ -87,10 +118,8 @@ def world_and_task(args: argparse.Namespace):
 
 
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
-              episodes: int = 2500, runs: int = 10) -> None:
+             episodes: int = 2500, runs: int = 10) -> None:
     """The options of a command that runs methods; ``out`` names its default --out."""
-    from gdq_pddl.experiments import DEFAULT_METHODS, METHODS
-
     default = list(methods or DEFAULT_METHODS)  # GDQ, GDQ-code and the baselines
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
@@ -114,14 +143,13 @@ def exec_args(p: argparse.ArgumentParser, out: str) -> None:
                    help="continue an interrupted run in --out (same command line)")
     p.add_argument("--executor", choices=("local", "ray"), default="local",
                    help="local processes, or a Ray cluster")
-    p.add_argument("--address", help="Ray cluster address (default: start a local instance)")
+    p.add_argument("--address", help="Ray cluster address, with --executor ray (default: "
+                                     "start a local instance)")
     p.add_argument("--no-report", action="store_true", help="skip figures, tables and report")
 
 
 def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
     """The --method names, validated and without repeats."""
-    from gdq_pddl.experiments import METHODS
-
     unknown = [m for m in args.method if m not in METHODS]
     if unknown:
         raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
@@ -134,15 +162,25 @@ def experiment_kw(args: argparse.Namespace) -> dict:
             "planner": args.planner}
 
 
-def check_planner(name: str) -> None:
-    from gdq_pddl.planning import get_planner
+PLAN_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code")
+"""The methods that learn from plans (what --planner changes)."""
 
-    get_planner(name)  # fail now, with the list of known planners, not inside a worker
+
+def check_planner(name: str, methods: Sequence[str] = ()) -> None:
+    """Fail now, with the list of known planners, not inside a worker; say so when a
+    backend that returns one plan per query is given to methods that learn from every
+    shortest plan (and DARLING from every plan within a tolerance)."""
+    planner = get_planner(name)
+    users = [m for m in methods if m in PLAN_METHODS]
+    if users and not getattr(planner, "all_plans", True):
+        note(f"warning: planner {name} returns one plan per query: {', '.join(users)} "
+             "learn from that plan alone where the graph planner gives every shortest plan "
+             "(and every plan within a tolerance)")
 
 
 def office_report(out: Path) -> str:
     """Figures, tables and REPORT.md of an office output folder; returns what was written."""
-    from gdq_pddl.analysis import make_all
+    from gdq_pddl.analysis import make_all  # start-up time: matplotlib and numba
 
     paths = make_all(out)
     report = next((p for p in paths if p.name == "REPORT.md"), None)
@@ -150,27 +188,31 @@ def office_report(out: Path) -> str:
         (f"; read {report}" if report else "")
 
 
-def execute(experiments, args: argparse.Namespace, name: str,
+def check_executor(args: argparse.Namespace) -> None:
+    """Refuse Ray's options where Ray does not run."""
+    if args.address is not None and args.executor != "ray":
+        raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
+                          f"(the executor is {args.executor})")
+
+
+def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
             report: Callable[[Path], str] = office_report, results: str = "episodes.csv",
             **run_kw) -> int:
-    """Run ``experiments`` into --out (default results/<name>), then ``report`` on it;
-    ``results`` names the collected file, ``run_kw`` goes to ``run_experiments`` (its
-    ``work`` and ``collect``)."""
-    import time
-
-    from gdq_pddl.experiments import run_experiments
-    from gdq_pddl.experiments.checks import check_report_size, check_sizes
-
-    out = args.out or Path("results") / name
+    """Run ``experiments`` into --out (default results/<name>, ``name`` made a safe file
+    name: it may come from an input file), then ``report`` on it; ``results`` names the
+    collected file, ``run_kw`` goes to ``run_experiments`` (its ``work`` and
+    ``collect``)."""
+    check_executor(args)
+    out = args.out or Path("results") / safe_name(name)
     check_sizes(experiments, args.jobs or 1)  # the runs first: their message names options
     if not args.no_report:
         check_report_size(experiments)
+    before = saved_units(out, experiments) if args.resume else 0
     t0 = time.perf_counter()
     run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
                     address=args.address, resume=args.resume, log=note, **run_kw)
-    print(f"ran {sum(e.runs * len(e.methods) for e in experiments)} runs in "
-          f"{time.perf_counter() - t0:.1f} s; results in {out}/{results}")
+    ran = sum(e.runs * len(e.methods) for e in experiments) - before
+    print(f"ran {ran} runs in {time.perf_counter() - t0:.1f} s; results in {out}/{results}")
     if not args.no_report:
         print(report(out))
     return 0
-

@@ -1,9 +1,15 @@
 """Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, pairs,
-report."""
+report.
+
+The reports (:mod:`gdq_pddl.analysis`) and ``scale`` (which loads the learners) are
+imported inside the functions that use them, for start-up time (matplotlib and numba).
+"""
 
 from __future__ import annotations
 
 import argparse
+import shlex
+from dataclasses import replace
 from pathlib import Path
 
 from gdq_pddl.cli.common import (
@@ -11,15 +17,31 @@ from gdq_pddl.cli.common import (
     POSITIVE,
     check_planner,
     checked_methods,
+    determinisation,
     determinisation_arg,
     exec_args,
     execute,
     experiment_kw,
+    load_world_checked,
+    refuse_given,
     run_args,
     task_args,
     world_and_task,
 )
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import GdqError, SizeError
+from gdq_pddl.experiments import (
+    Experiment,
+    pairs,
+    paper_protocol,
+    robot_experiment,
+    switch_experiment,
+)
+from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments
+from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS as SCALE_DEFAULT_METHODS
+from gdq_pddl.experiments.scale_methods import METHODS as SCALE_METHODS
+from gdq_pddl.experiments.work import load_pddl_instance
+from gdq_pddl.experiments.worlds import world_name
+from gdq_pddl.outputs import output_folder
 
 
 def register_run(sub) -> None:
@@ -42,22 +64,19 @@ def register_run(sub) -> None:
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import Experiment
-
     if args.domain or args.problem or args.dynamics:
         return _run_pddl(args)
+    refuse_given(args, ["--determinisation"], "is for a PPDDL domain (with --domain and "
+                 "--problem); an office task has no determinisation to choose")
     world, task = world_and_task(args)
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
-    exp = Experiment("run", ((spec, args.episodes),), world=str(args.world or "office"), **kw)
+    exp = Experiment("run", ((spec, args.episodes),), world=world_name(args.world), **kw)
     return execute([exp], args, f"run-{task.name}")
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import Experiment
-    from gdq_pddl.experiments.work import load_pddl_instance
-
     if not (args.domain and args.problem):
         raise GdqError("a PDDL run needs --domain and --problem (and --dynamics for a STRIPS "
                        "domain)")
@@ -65,11 +84,17 @@ def _run_pddl(args: argparse.Namespace) -> int:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
     files = (str(args.domain), str(args.problem),
-             "" if args.dynamics is None else str(args.dynamics), args.determinisation)
-    instance = load_pddl_instance(files)  # check the files (and size) before any worker
-    instance.model  # noqa: B018
+             "" if args.dynamics is None else str(args.dynamics), determinisation(args))
+    try:  # check the files (and size) before any worker
+        load_pddl_instance(files).model  # noqa: B018
+    except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
+        if isinstance(exc, SizeError):
+            raise
+        raise SizeError(f"{args.problem}: grounding the problem ran out of memory; give a "
+                        "smaller problem") from None
+    instance = load_pddl_instance(files)
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}")
 
@@ -86,16 +111,13 @@ def register_switch(sub) -> None:
 
 
 def cmd_switch(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import switch_experiment
-    from gdq_pddl.world import load_world
-
-    world = load_world(args.world)
+    world = load_world_checked(args.world)
     first, second = world.task(args.first).name, world.task(args.second).name
     if first == second:  # task names are upper-cased: c and C are one task
         raise GdqError(f"--from and --to are the same task ({first}): a switch needs two")
     kw = experiment_kw(args)
-    check_planner(args.planner)
-    exp = switch_experiment(first, second, args.episodes, world=str(args.world or "office"), **kw)
+    check_planner(args.planner, kw["methods"])
+    exp = switch_experiment(first, second, args.episodes, world=world_name(args.world), **kw)
     return execute([exp], args, exp.name)
 
 
@@ -109,12 +131,8 @@ def register_robot(sub) -> None:
 
 
 def cmd_robot(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
-    from gdq_pddl.experiments import robot_experiment
-
     kw = experiment_kw(args)
-    check_planner(args.planner)
+    check_planner(args.planner, kw["methods"])
     exp = robot_experiment(runs=kw.pop("runs"), **kw)
     exp = replace(exp, schedule=(("X", args.episodes),))
     return execute([exp], args, "robot")
@@ -132,15 +150,11 @@ def register_reproduce(sub) -> None:
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import paper_protocol
-
     name = "reproduce-quick" if args.quick else "reproduce"
     return execute(paper_protocol(quick=args.quick, seed=args.seed), args, name)
 
 
 def register_knowledge(sub) -> None:
-    from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS
-
     p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
                        description="Task C with a door locked in reality but usable in the "
                                    "knowledge (d3, d1), a corridor only reality has, and a "
@@ -159,13 +173,11 @@ def register_knowledge(sub) -> None:
 
 
 def cmd_knowledge(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments.knowledge import knowledge_experiments
-
     exps = knowledge_experiments(args.episodes, args.runs, args.seed, checked_methods(args))
     command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
 
     def report(out: Path) -> str:
-        from gdq_pddl.analysis.knowledge_report import make_knowledge_report
+        from gdq_pddl.analysis.knowledge_report import make_knowledge_report  # start-up time
 
         paths = make_knowledge_report(out, command)
         return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
@@ -182,8 +194,7 @@ def register_report(sub) -> None:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from gdq_pddl.analysis import make_report
-    from gdq_pddl.outputs import output_folder
+    from gdq_pddl.analysis import make_report  # start-up time: matplotlib and numba
 
     if args.out.is_dir():
         output_folder(args.out, "report")  # figures and REPORT.md go there
@@ -193,9 +204,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def register_scale(sub) -> None:
-    from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
-
-    default = list(DEFAULT_METHODS)
+    default = list(SCALE_DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
                        description="Run each --method on --buildings generated buildings of "
                                    "each size (building seeds --seed, --seed + 1, ...) and "
@@ -211,7 +220,7 @@ def register_scale(sub) -> None:
                         "(default 2, at most 1000)")
     p.add_argument("--method", nargs="+", metavar="M", default=default,
                    help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(METHODS)})")
+                        f"from: {', '.join(SCALE_METHODS)})")
     p.add_argument("--runs", type=POSITIVE, default=5,
                    help="runs per method and building, paired across methods (default 5)")
     p.add_argument("--episodes", type=POSITIVE, default=5000,
@@ -227,10 +236,8 @@ def register_scale(sub) -> None:
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    import shlex
-
-    from gdq_pddl.analysis.scale import make_scale_report
-    from gdq_pddl.experiments.scale import run_scale
+    from gdq_pddl.analysis.scale import make_scale_report  # start-up time: matplotlib
+    from gdq_pddl.experiments.scale import run_scale  # start-up time: it loads the learners
 
     out = args.out or Path("results/scale")
     methods = list(dict.fromkeys(args.method))
@@ -263,10 +270,7 @@ def register_pairs(sub) -> None:
 
 
 def cmd_pairs(args: argparse.Namespace) -> int:
-    from gdq_pddl.experiments import pairs
-    from gdq_pddl.world import load_world
-
-    world = load_world(args.world)
+    world = load_world_checked(args.world)
     if args.pairs and args.sample is not None:
         raise GdqError("give --pairs or --sample, not both")
     if args.pairs:
@@ -276,8 +280,8 @@ def cmd_pairs(args: argparse.Namespace) -> int:
     else:
         chosen = pairs.all_pairs(world)
     kw = experiment_kw(args)
-    check_planner(args.planner)
-    exps = pairs.pair_experiments(chosen, args.episodes, world=str(args.world or "office"), **kw)
+    check_planner(args.planner, kw["methods"])
+    exps = pairs.pair_experiments(chosen, args.episodes, world=world_name(args.world), **kw)
     return execute(exps, args, "pairs", pairs_report, results="runs.csv",
                    work=pairs.run_pair_unit, collect=pairs.collect_pairs,
                    unit_arrays=pairs.PAIR_ARRAYS)
@@ -285,7 +289,7 @@ def cmd_pairs(args: argparse.Namespace) -> int:
 
 def pairs_report(out: Path) -> str:
     """Table, figure and REPORT.md of a pairs folder; returns what was written."""
-    from gdq_pddl.analysis.pairs_report import make_pairs_report
+    from gdq_pddl.analysis.pairs_report import make_pairs_report  # start-up time
 
     paths = make_pairs_report(out)
     return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"

@@ -7,15 +7,26 @@ import json
 import sys
 from pathlib import Path
 
+from gdq_pddl.abstraction import OfficeAbstraction
+from gdq_pddl.buildings import write_building
 from gdq_pddl.cli.common import (
     EXIT_NO_PLAN,
     NONNEGATIVE,
     POSITIVE,
+    determinisation,
     determinisation_arg,
+    load_world_checked,
+    refuse_given,
     task_args,
     tolerance_arg,
     world_and_task,
 )
+from gdq_pddl.errors import ConfigError, SizeError
+from gdq_pddl.outputs import output_file, output_folder, write_text
+from gdq_pddl.pddl.parser import _read
+from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
+from gdq_pddl.resources import data_file, domain_text
+from gdq_pddl.world import office_problem
 
 
 def register_problem(sub) -> None:
@@ -30,11 +41,8 @@ def register_problem(sub) -> None:
 
 
 def cmd_problem(args: argparse.Namespace) -> int:
-    from gdq_pddl.outputs import output_file, output_folder, write_text
-    from gdq_pddl.world import load_world, office_problem
-
     if args.all:
-        world = load_world(args.world)
+        world = load_world_checked(args.world)
         out = output_folder(args.out or Path("problems"))
         for name, task in world.tasks.items():
             path = out / f"task-{name.lower()}.pddl"
@@ -63,8 +71,6 @@ def register_building(sub) -> None:
 
 
 def cmd_building(args: argparse.Namespace) -> int:
-    from gdq_pddl.buildings import write_building
-
     world, problems = write_building(args.out or Path("results/building"), args.positions,
                                      args.seed, args.doors)
     for path in (world, *problems):
@@ -89,27 +95,35 @@ def register_plan(sub) -> None:
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from gdq_pddl.planning import PlanningProblem, Status, get_planner
-
     planner = get_planner(args.planner)
+    if args.tolerance and not getattr(planner, "all_plans", True):
+        raise ConfigError(f"--tolerance {args.tolerance:g}: planner {args.planner} returns one "
+                          "plan, not every plan within a tolerance; use --planner graph or "
+                          "clingo, or no --tolerance")
     abstraction = None
     if args.problem is not None:
+        refuse_given(args, ["--task", "--start", "--goal", "--world"],
+                     "is for an office task; with --problem the start and goal are the "
+                     "problem's own")
         domain = args.domain or _shipped_domain()
-        problem = PlanningProblem.from_files(domain, args.problem, args.determinisation)
+        problem = PlanningProblem.from_files(domain, args.problem, determinisation(args))
         start = goal = None
+        source = str(args.problem)
     else:
-        from gdq_pddl.abstraction import OfficeAbstraction
-        from gdq_pddl.resources import domain_text
-        from gdq_pddl.world import office_problem
-
+        refuse_given(args, ["--determinisation"], "is for a PPDDL domain (with --problem); "
+                     "an office task has no determinisation to choose")
         world, task = world_and_task(args)
         dtext, dsrc = (domain_text(), "office.pddl (built in)") if args.domain is None else \
-            (_read_text(args.domain), str(args.domain))
-        problem = PlanningProblem.from_texts(dtext, office_problem(world, task), dsrc,
-                                             f"task {task.name} (generated)")
+            (_read(args.domain), str(args.domain))
+        source = f"task {task.name} (generated from {world.source})"
+        problem = PlanningProblem.from_texts(dtext, office_problem(world, task), dsrc, source)
         abstraction = OfficeAbstraction(world)
         start, goal = None, abstraction.goal(task.goal)
-    result = planner.solve(problem, start, goal, args.tolerance)
+    try:
+        result = planner.solve(problem, start, goal, args.tolerance)
+    except MemoryError:
+        raise SizeError(f"{source}: planning ran out of memory; give a smaller problem"
+                        + (" or a smaller --tolerance" if args.tolerance else "")) from None
     plans = [_plan_json(plan, abstraction) for plan in result.plans]
     if args.json:
         print(json.dumps({"status": str(result.status), "planner": result.planner,
@@ -145,15 +159,7 @@ def _plan_json(plan, abstraction) -> dict:
 
 
 def _shipped_domain() -> Path:
-    from gdq_pddl.resources import data_file
-
     return Path(str(data_file("domains", "office.pddl")))
-
-
-def _read_text(path: Path) -> str:
-    from gdq_pddl.pddl.parser import _read
-
-    return _read(path)
 
 
 def register_planners(sub) -> None:
@@ -165,8 +171,6 @@ def register_planners(sub) -> None:
 
 
 def cmd_planners(args: argparse.Namespace) -> int:
-    from gdq_pddl.planning import planners
-
     infos = planners()
     if args.json:
         print(json.dumps([{"name": i.name, "usable": i.usable, "reason": i.reason}

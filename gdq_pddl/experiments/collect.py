@@ -1,9 +1,12 @@
 """Turn the per-unit files of an output folder into its CSV and JSON results.
 
 ``episodes.csv`` has the columns :data:`EPISODE_COLUMNS`, then, when an office
-experiment is among them, ``area_1 .. area_7``: the steps of the episode that end in
-each area of the world file (a PDDL domain has no areas, so a folder of PDDL runs has
-no such columns). ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
+experiment is among them, ``area_1 .. area_K``: the steps of the episode that end in
+each area of the world file, ``K`` the largest area number of the experiments' worlds
+(7 in the office; a PDDL domain has no areas, so a folder of PDDL runs has no such
+columns). Text fields (experiment, method and task names, which may come from input
+files) are quoted as the ``csv`` module quotes them: a name with a comma or a quote
+stays one field. ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
 action per learner state, by index and by name (``state_name``: ``p1 (door open)`` in
 the office, the state's fluent atoms for a PDDL domain; ``action_name``: ``gothrough
 p3``, or the ground action ``(move c11 c12)``).
@@ -12,14 +15,17 @@ p3``, or the ground action ``(move c11 c12)``).
 from __future__ import annotations
 
 import csv
+import io
 import json
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment
 from gdq_pddl.experiments.work import instance_of
+from gdq_pddl.outputs import atomic_write
 
 EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "steps",
                    "success")
@@ -27,10 +33,16 @@ POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "sta
                   "action_name")
 
 
+def csv_field(text: str) -> str:
+    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only when it holds a
+    comma, a quote or a line break: a plain name is written as it is)."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow([text])
+    return buffer.getvalue()
+
+
 def collect(out: Path, experiments: list[Experiment]) -> None:
     """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write, read_unit
-
     units = [u for e in experiments for u in e.units()]
     n_areas = max(int(instance_of(e, spec).model.area_of_pos.max())
                   for e in experiments for spec, _ in e.schedule)
@@ -42,7 +54,7 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
             for unit in units:
                 data = read_unit(out, unit)
                 for chunk in _episode_rows(unit.experiment.name, unit.method, unit.run, data,
-                                           n_areas):
+                                           n_areas):  # names quoted in _episode_rows
                     fh.write(chunk)
 
     def write_policies(tmp: Path) -> None:
@@ -84,9 +96,9 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
     :data:`CHUNK` rows (a full protocol has ~1M rows: plain string formatting of Python
     numbers, which measured 7 times faster than numpy's character functions)."""
     n = len(data["returns"])
-    tasks = np.repeat(data["tasks"], data["counts"])
+    tasks = np.repeat([csv_field(str(t)) for t in data["tasks"].tolist()], data["counts"])
     k = min(n_areas, data["areas"].shape[1])
-    head = f"{experiment},{method},"
+    head = f"{csv_field(experiment)},{csv_field(method)},"
     for lo in range(0, n, CHUNK):
         hi = min(n, lo + CHUNK)
         areas = np.zeros((hi - lo, n_areas), dtype=np.int64)

@@ -9,8 +9,8 @@ What both runners (:mod:`gdq_pddl.experiments.runner` and
 - :func:`input_hashes` / :func:`changed_input`: the content of every input file, so a
   resume refuses inputs edited since the run began (one world for some runs and another
   for the rest);
-- :func:`load_unit`: a unit file read back, or an error naming it and saying how to
-  rerun that one unit.
+- :func:`load_unit` / :func:`read_unit`: a unit file read back, or an error naming it
+  and saying how to rerun that one unit.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.errors import OutputError, ResultsError
+from gdq_pddl.experiments.protocol import Unit
 from gdq_pddl.inputs import file_hash
 from gdq_pddl.outputs import writing
 
@@ -35,7 +36,7 @@ except ImportError:  # pragma: no cover (not POSIX: no lock, as before)
 LOCK_NAME = ".lock"
 
 __all__ = ["FolderLock", "ResultsError", "changed_input", "close_inherited_locks",
-           "input_hashes", "load_unit", "read_config"]
+           "input_hashes", "load_unit", "read_config", "read_unit", "unit_path"]
 
 
 _HELD: set[int] = set()
@@ -47,8 +48,10 @@ class FolderLock:
 
     The lock is the operating system's (``flock``): it ends with the process, however the
     process ends, so a killed run never leaves a folder locked. Entering raises
-    :class:`ResultsError` naming the process that holds it. The lock file stays (removing
-    it would let a third process lock a file nobody else sees).
+    :class:`ResultsError` naming the process that holds it. Leaving the block removes the
+    lock file while still holding the lock, so a finished folder holds no ``.lock``; a
+    process that was waiting on the removed file sees that it is gone and locks a new one
+    (so two processes never hold "the" lock at once). Only a killed run leaves the file.
     """
 
     def __init__(self, folder: Path) -> None:
@@ -58,15 +61,19 @@ class FolderLock:
     def __enter__(self) -> FolderLock:
         if fcntl is None:
             return self
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
-            os.close(fd)
-            raise ResultsError(f"{self.path.parent} is in use by another gdq-pddl process "
-                               f"(pid {holder}, lock {self.path}): wait for it to end, or "
-                               "choose another --out") from None
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                holder = os.read(fd, 32).decode(errors="replace").strip() or "unknown"
+                os.close(fd)
+                raise ResultsError(f"{self.path.parent} is in use by another gdq-pddl "
+                                   f"process (pid {holder}, lock {self.path}): wait for it "
+                                   "to end, or choose another --out") from None
+            if self._current(fd):
+                break
+            os.close(fd)  # its holder removed that file as it ended: lock the new one
         try:
             with writing(self.path):  # a full disk
                 os.ftruncate(fd, 0)
@@ -78,9 +85,18 @@ class FolderLock:
         _HELD.add(fd)
         return self
 
+    def _current(self, fd: int) -> bool:
+        """Whether ``fd`` is still the file at :attr:`path` (not removed or replaced)."""
+        try:
+            return os.path.samestat(os.fstat(fd), os.stat(self.path))
+        except FileNotFoundError:
+            return False
+
     def __exit__(self, *exc: object) -> None:
         if self.fd is not None:
             _HELD.discard(self.fd)
+            with contextlib.suppress(OSError):  # a folder removed under the run
+                os.unlink(self.path)  # still locked: nobody can hold it in between
             os.close(self.fd)  # releases the lock
             self.fd = None
 
@@ -148,3 +164,24 @@ def load_unit(path: Path, what: str, expect: Mapping[str, int],
 def _damaged(path: Path, what: str, why: str, rerun: str) -> ResultsError:
     return ResultsError(f"{path} ({what}) is damaged ({why}): delete it and run {rerun} to "
                         "rerun that run alone")
+
+
+UNIT_ARRAYS = ("returns", "steps", "success", "areas", "tasks", "counts", "policy")
+"""What :func:`~gdq_pddl.experiments.work.run_unit` saves of a unit."""
+PER_EPISODE = ("returns", "steps", "success", "areas")
+"""The arrays with one entry per episode."""
+
+
+def unit_path(out: Path, unit: Unit) -> Path:
+    """Where ``unit``'s results are saved in the output folder ``out``."""
+    return out / "units" / f"{unit.key}.npz"
+
+
+def read_unit(out: Path, unit: Unit, arrays: tuple[str, ...] = UNIT_ARRAYS
+              ) -> dict[str, np.ndarray]:
+    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming its file if damaged
+    (an array missing, or one per episode of the wrong length)."""
+    n = unit.experiment.episodes
+    return load_unit(unit_path(out, unit), f"{unit.method}, run {unit.run} of "
+                     f"{unit.experiment.name}",
+                     {k: n if k in PER_EPISODE else -1 for k in arrays})

@@ -8,8 +8,8 @@ and action spaces are identical and only what the knowledge says differs. An
 the knowledge world in ``knowledge`` (None: the real world itself, accurate knowledge).
 
 The derived worlds are built in memory and named ``office:<variant>``;
-:func:`gdq_pddl.experiments.work.load_world_named` resolves those names through
-:data:`WORLDS`.
+:func:`gdq_pddl.experiments.worlds.load_world_named` resolves those names through
+:data:`~gdq_pddl.experiments.worlds.WORLDS`.
 
 The cases (all on Task C, p0 -> p17; every case also runs with accurate knowledge, the
 same real world with knowledge built from it, as the reference):
@@ -27,65 +27,22 @@ same real world with knowledge built from it, as the reference):
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, replace
-from functools import cache
+from dataclasses import dataclass
 
 from gdq_pddl.errors import GdqError
-from gdq_pddl.world import World, builtin_world
+from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.worlds import (
+    PASSAGE,
+    WORLDS,
+    derived_world,
+    load_world_named,
+    with_edge,
+)
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import World
 
-PASSAGE = ("p8", "p17")
-"""The corridor that exists in reality but not in the knowledge (case ``passage``)."""
-
-
-def with_edge(world: World, a: str, b: str) -> World:
-    """``world`` with an extra walkway ``a``-``b`` (both must be existing positions)."""
-    for p in (a, b):
-        world.position(p)  # raises WorldError for an unknown position
-    if frozenset((a, b)) in {frozenset(e) for e in world.edges}:
-        raise GdqError(f"{world.name} already has the edge {a}-{b}")
-    return replace(world, edges=(*world.edges, (a, b)))
-
-
-def _office() -> World:
-    return builtin_world("office")
-
-
-def _locked(door: str) -> Callable[[], World]:
-    def build() -> World:
-        from gdq_pddl.envs.variants import with_door
-
-        return replace(with_door(_office(), door, success=0.0, stuck=0.0),
-                       name=f"office-locked-{door}")
-    return build
-
-
-def _passage() -> World:
-    return replace(with_edge(_office(), *PASSAGE), name="office-passage")
-
-
-def _deterministic() -> World:
-    from gdq_pddl.envs.variants import deterministic_world
-
-    return deterministic_world(_office())
-
-
-WORLDS: dict[str, Callable[[], World]] = {
-    "office:locked-d1": _locked("d1"),
-    "office:locked-d3": _locked("d3"),
-    "office:passage": _passage,
-    "office:deterministic": _deterministic,
-}
-"""In-memory derived worlds by name (resolved by ``load_world_named``)."""
-
-
-@cache
-def derived_world(name: str) -> World:
-    """The derived world ``name`` (a key of :data:`WORLDS`), built once per process."""
-    try:
-        return WORLDS[name]()
-    except KeyError:
-        raise GdqError(f"unknown derived world {name!r} (known: {', '.join(WORLDS)})") from None
+__all__ = ["CASES", "KNOWLEDGE_METHODS", "PASSAGE", "WORLDS", "Case", "derived_world",
+           "knowledge_experiments", "knowledge_world", "with_edge"]
 
 
 @dataclass(frozen=True)
@@ -131,11 +88,10 @@ def wrong_name(case: Case) -> str:
 
 def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
                           methods: tuple[str, ...] = KNOWLEDGE_METHODS,
-                          cases: tuple[Case, ...] = CASES, planner: str = "graph") -> list:
+                          cases: tuple[Case, ...] = CASES, planner: str = "graph"
+                          ) -> list[Experiment]:
     """Per case two experiments on the case's real world: knowledge built from the real
     world (``<case>--accurate``) and from the case's knowledge world (``<case>--wrong``)."""
-    from gdq_pddl.experiments.protocol import Experiment
-
     out = []
     for c in cases:
         common = {"methods": methods, "runs": runs, "seed": seed, "planner": planner,
@@ -151,9 +107,6 @@ def knowledge_world(real: World, knowledge: str | None) -> World:
     named world, which must give the learner the same states and actions as ``real``."""
     if knowledge is None:
         return real
-    from gdq_pddl.experiments.work import load_world_named
-    from gdq_pddl.spaces import LearnerSpaces
-
     world = load_world_named(knowledge)
     a, b = LearnerSpaces(real), LearnerSpaces(world)
     if a.states != b.states or a.n_actions != b.n_actions:

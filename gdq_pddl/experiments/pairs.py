@@ -38,8 +38,11 @@ from pathlib import Path
 import numpy as np
 
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
+from gdq_pddl.outputs import atomic_write
+from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World, WorldError
 
 PAIRS_EXPERIMENT = "pairs"
@@ -108,8 +111,6 @@ def run_pair_unit(unit: Unit) -> dict[str, np.ndarray]:
 
 def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
     """Write ``runs.csv`` and ``optimal.json`` of a pairs folder from ``out/units``."""
-    from gdq_pddl.experiments.runner import atomic_write, read_unit
-
     def write_runs(tmp: Path) -> None:
         with open(tmp, "w", encoding="utf-8", newline="") as fh:
             writer = csv.writer(fh, lineterminator="\n")
@@ -132,10 +133,10 @@ def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
 def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
     """Per pair of ``experiments`` (all in one world): start, goal, the shortest plan's
     length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
+    # start-up time: the model, solver and plan tables import numba and networkx
     from gdq_pddl.envs.model import compile_model, full_state
     from gdq_pddl.envs.solve import solve
     from gdq_pddl.learners.context import office_plan_table
-    from gdq_pddl.spaces import LearnerSpaces
 
     if not experiments:
         return {}

@@ -8,6 +8,7 @@ only, so results are identical whatever the number of jobs or the order they fin
 
 from __future__ import annotations
 
+import re
 import zlib
 from dataclasses import dataclass, field, replace
 
@@ -109,9 +110,10 @@ class Unit:
 
     @property
     def key(self) -> str:
-        """A file-name-safe identity, unique within an output folder."""
+        """A file-name-safe identity, unique within an output folder (see
+        :func:`safe_name`: names from input files never become paths)."""
         tasks = "-".join(t.replace("->", "_to_") for t, _ in self.experiment.schedule)
-        return f"{self.experiment.name}__{tasks}__{self.method}__run{self.run}"
+        return safe_name(f"{self.experiment.name}__{tasks}__{self.method}__run{self.run}")
 
     def seeds(self) -> tuple[np.random.Generator, int]:
         """The learner's Generator and the env's integer seed, from the experiment and the
@@ -121,6 +123,29 @@ class Unit:
         seq = np.random.SeedSequence([self.experiment.seed, ident, self.run])
         learner, env = seq.spawn(2)
         return np.random.default_rng(learner), int(env.generate_state(1)[0])
+
+
+SAFE = re.compile(r"[A-Za-z0-9_.+=-]+")
+"""The characters a name may keep in a file name: no separator, no space, no quote."""
+MAX_NAME = 150
+"""The longest file name :func:`safe_name` makes (file systems allow 255 bytes)."""
+
+
+def safe_name(name: str) -> str:
+    """``name`` as one file name inside a folder: itself when it is made of
+    :data:`SAFE` characters only, does not start with a dot and is at most
+    :data:`MAX_NAME` long; otherwise every other character replaced by ``_``, cut to
+    length and followed by a hash of the whole name, so two names never meet.
+
+    A problem named ``../../x`` (a name from an input file) gives ``_._.._x-<hash>``:
+    never a path out of the folder, never a hidden file.
+    """
+    if SAFE.fullmatch(name) and not name.startswith(".") and len(name) <= MAX_NAME:
+        return name
+    digest = f"{zlib.crc32(name.encode('utf-8', 'surrogatepass')):08x}"
+    cleaned = re.sub(r"[^A-Za-z0-9_.+=-]", "_", name)
+    cleaned = "_" + cleaned[1:] if cleaned.startswith(".") else cleaned
+    return f"{cleaned[:MAX_NAME - 9]}-{digest}"
 
 
 def task_experiments(tasks: tuple[str, ...] = ("A", "B", "C", "D"), episodes: int = 2500,

@@ -24,39 +24,88 @@ successes per unit and collects one row per run instead of one per episode
 
 from __future__ import annotations
 
+import ctypes
 import json
 import os
 import signal
+import socket
 import sys
-import tempfile
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict
+from importlib.metadata import PackageNotFoundError, version
 from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from gdq_pddl.errors import ConfigError
+from gdq_pddl.experiments.checks import preflight
+from gdq_pddl.experiments.collect import collect as collect_episodes
 from gdq_pddl.experiments.folder import (
+    UNIT_ARRAYS,
     FolderLock,
     ResultsError,
     changed_input,
     close_inherited_locks,
     input_hashes,
-    load_unit,
     read_config,
+    read_unit,
+    unit_path,
 )
 from gdq_pddl.experiments.protocol import Experiment, Unit
-from gdq_pddl.experiments.work import run_unit
+from gdq_pddl.experiments.work import run_unit, warm_up
+from gdq_pddl.experiments.worlds import is_file_name
 from gdq_pddl.limits import check_count
-from gdq_pddl.outputs import output_folder, writing
+from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
 
-__all__ = ["ResultsError", "RunInterrupted", "run_experiments"]
+__all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_experiments"]
 
 
 class RunInterrupted(ResultsError):
-    """The run was interrupted (Ctrl-C); what finished is saved and ``--resume`` goes on."""
+    """The run was interrupted (Ctrl-C, or SIGTERM / SIGHUP); what finished is saved and
+    ``--resume`` goes on. ``signal`` is the number of the signal that stopped it."""
+
+    def __init__(self, message: str, signum: int = signal.SIGINT) -> None:
+        super().__init__(message)
+        self.signal = signum
+
+    def __reduce__(self):
+        return type(self), (str(self), self.signal)
+
+
+class _Stopped(KeyboardInterrupt):
+    """SIGTERM or SIGHUP in the driver, raised where Ctrl-C's KeyboardInterrupt would be,
+    so that both end the workers and save what finished the same way."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signal = signum
+
+
+STOP_SIGNALS = (signal.SIGTERM, getattr(signal, "SIGHUP", signal.SIGTERM))
+"""The signals besides SIGINT (Ctrl-C) that stop a run cleanly: its workers end with it."""
+
+
+@contextmanager
+def _stop_on_signals() -> Iterator[None]:
+    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (outside the main
+    thread, where Python cannot handle signals, nothing changes)."""
+    def stop(signum: int, _frame: object) -> None:
+        raise _Stopped(signum)
+
+    try:
+        previous = {s: signal.signal(s, stop) for s in STOP_SIGNALS}
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 def config_of(experiments: list[Experiment]) -> dict:
@@ -66,8 +115,6 @@ def config_of(experiments: list[Experiment]) -> dict:
 
 def versions() -> dict[str, str]:
     """Versions of the packages that shape the results."""
-    from importlib.metadata import PackageNotFoundError, version
-
     out = {"python": sys.version.split()[0]}
     for pkg in ("gdq_pddl", "numpy", "numba", "gymnasium", "networkx", "unified-planning"):
         try:
@@ -75,21 +122,6 @@ def versions() -> dict[str, str]:
         except PackageNotFoundError:
             out[pkg] = "not installed"
     return out
-
-
-def atomic_write(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file
-    (an OSError that names no file, a full disk, names ``path``)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with writing(path):
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        os.close(fd)
-        try:
-            write(Path(tmp))
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
 
 
 def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
@@ -107,29 +139,8 @@ def input_files(experiments: list[Experiment]) -> list[str]:
         if e.pddl is not None:
             files += e.pddl
             continue
-        files += [w for w in (e.world, e.knowledge) if w and w not in ("office", "office_robot")
-                  and not w.startswith("office:")]
+        files += [w for w in (e.world, e.knowledge) if w and is_file_name(w)]
     return files
-
-
-def unit_path(out: Path, unit: Unit) -> Path:
-    return out / "units" / f"{unit.key}.npz"
-
-
-UNIT_ARRAYS = ("returns", "steps", "success", "areas", "tasks", "counts", "policy")
-"""What :func:`~gdq_pddl.experiments.work.run_unit` saves of a unit."""
-PER_EPISODE = ("returns", "steps", "success", "areas")
-"""The arrays with one entry per episode."""
-
-
-def read_unit(out: Path, unit: Unit, arrays: tuple[str, ...] = UNIT_ARRAYS
-              ) -> dict[str, np.ndarray]:
-    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming its file if damaged
-    (an array missing, or one per episode of the wrong length)."""
-    n = unit.experiment.episodes
-    return load_unit(unit_path(out, unit), f"{unit.method}, run {unit.run} of "
-                     f"{unit.experiment.name}",
-                     {k: n if k in PER_EPISODE else -1 for k in arrays})
 
 
 def _held(out: Path) -> bool:
@@ -154,18 +165,30 @@ def _difference(old: object, new: list) -> str:
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
             arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
     """Check or create ``out``; return the units still to run (on ``resume``, every saved
-    unit is read first: one without ``arrays`` is named as damaged)."""
+    unit is read first: one without ``arrays`` is named as damaged).
+
+    Saved results are reused only on ``resume``, and only when ``config.json`` says they
+    are of the same experiments and inputs: without ``resume`` a folder holding any (a
+    unit file, ``episodes.csv``) is refused, whether or not its ``config.json`` is there.
+    """
+    units = [u for e in experiments for u in e.units()]
+    check_unit_keys(units)
     config = config_of(experiments) | {"inputs": input_hashes(input_files(experiments))}
     cfg_path = out / "config.json"
-    if resume and not cfg_path.exists():
-        if _held(out):
-            raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
-        raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
-                           "there); to start one, give the same command without --resume")
-    if cfg_path.exists() and (resume or _held(out)):
-        if not resume:
+    if not resume and _held(out):
+        if cfg_path.exists():
             raise ResultsError(f"{out} already holds results: continue them with --resume, "
                                "or choose another --out")
+        raise ResultsError(f"{out} holds results (units/*.npz or episodes.csv) but no "
+                           "config.json saying of what: they cannot be checked, so they are "
+                           "not reused; choose another --out, or delete them")
+    if resume:
+        if not cfg_path.exists():
+            if _held(out):
+                raise ResultsError(f"{out}: config.json is missing, cannot check what to "
+                                   "resume")
+            raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
+                               "there); to start one, give the same command without --resume")
         old = read_config(cfg_path)
         new = json.loads(json.dumps(config["experiments"]))
         if old.get("experiments") != new:
@@ -179,21 +202,39 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
                                "differs from what config.json records): resuming would mix "
                                "results of both versions; restore it, or start again in "
                                "another --out")
-    # a run killed in the middle of a write leaves its temporary file (never a unit file:
-    # those appear only by an atomic rename); remove them before going on
-    for stale in (out / "units").glob(".*.tmp") if (out / "units").exists() else ():
-        stale.unlink(missing_ok=True)
+    # a run killed in the middle of a write leaves its temporary file (never a result: those
+    # appear only by an atomic rename); remove them before going on
+    remove_temporary(out)
+    remove_temporary(out / "units")
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
-    units = [u for e in experiments for u in e.units()]
-    keys = [u.key for u in units]
-    if len(set(keys)) != len(keys):
-        raise ResultsError("two experiments share a name and schedule; give them distinct names")
     done = [u for u in units if unit_path(out, u).exists()]
     if resume:
         for u in done:  # a damaged unit file: say which, before running the others
             read_unit(out, u, arrays)
     return [u for u in units if not unit_path(out, u).exists()]
+
+
+def check_unit_keys(units: list[Unit]) -> None:
+    """Refuse units that would be saved under one file name, naming both and the file."""
+    seen: dict[str, Unit] = {}
+    for u in units:
+        other = seen.setdefault(u.key, u)
+        if other is not u:
+            raise ResultsError(
+                f"{other.method} run {other.run} of experiment {other.experiment.name!r} "
+                f"(schedule {_schedule(other)}) and {u.method} run {u.run} of experiment "
+                f"{u.experiment.name!r} (schedule {_schedule(u)}) would both be saved as "
+                f"units/{u.key}.npz; give the experiments distinct names")
+
+
+def _schedule(unit: Unit) -> str:
+    return " then ".join(f"{t} x {n}" for t, n in unit.experiment.schedule)
+
+
+def saved_units(out: Path, experiments: list[Experiment]) -> int:
+    """How many units of ``experiments`` are saved in ``out``."""
+    return sum(unit_path(Path(out), u).exists() for e in experiments for u in e.units())
 
 
 def check_jobs(jobs: int | None) -> int:
@@ -222,34 +263,69 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
 
     ``log`` (if given) is told how many runs are left and on how many processes;
     ``unit_arrays`` are the arrays ``work`` saves (what ``--resume`` checks saved units
-    for).
+    for). Ctrl-C, SIGTERM and SIGHUP end the workers and raise :class:`RunInterrupted`,
+    saying what is saved and how to go on.
     """
-    from gdq_pddl.experiments.checks import preflight
-
     work = work or run_unit  # read at call time: tests replace run_unit
-    if collect is None:
-        from gdq_pddl.experiments.collect import collect
-
+    collect = collect or collect_episodes
     out = Path(out)
     wanted = check_jobs(jobs)
     preflight(experiments, wanted)
     output_folder(out)
-    with FolderLock(out):
+    with FolderLock(out), _stop_on_signals():
         pending = prepare(out, experiments, resume, unit_arrays)
         processes = min(wanted, max(1, len(pending)))
-        if log is not None and executor == "local":
+        if log is not None and not pending:
+            log(f"nothing to run: all {sum(len(e.units()) for e in experiments)} runs are "
+                f"saved in {out}; writing its results again")
+        elif log is not None and executor == "local":
             capped = f" (--jobs {jobs} capped at the runs to do)" if jobs and jobs > processes \
                 else ""
             log(f"{len(pending)} run(s) to do on {processes} process(es){capped}")
         try:
-            _run_pending(out, experiments, pending, processes if executor == "local" else jobs,
-                         executor, address, progress, work)
-            collect(out, experiments)
+            try:
+                _run_pending(out, experiments, pending,
+                             processes if executor == "local" else jobs, executor, address,
+                             progress, work)
+                _check_unchanged(out, experiments)
+                collect(out, experiments)
+            except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP (_Stopped)
+                raise _interrupted(out, experiments, resume, exc) from None
         except Exception:
             if not resume and not _held(out):  # nothing saved: leave no config.json behind
                 (out / "config.json").unlink(missing_ok=True)
             raise
     return out
+
+
+def _check_unchanged(out: Path, experiments: list[Experiment]) -> None:
+    """Refuse to collect runs whose input files changed while they ran (each worker reads
+    the files by the name the driver resolved; their content must be what the driver
+    checked and config.json records)."""
+    recorded = read_config(out / "config.json").get("inputs")
+    changed = changed_input(recorded if isinstance(recorded, dict) else {},
+                            input_hashes(input_files(experiments)))
+    if changed:
+        raise ResultsError(f"{changed} changed while the runs in {out} went on (its content "
+                           "differs from what config.json records): some runs may have read "
+                           "one version and some the other; restore it and delete the runs "
+                           "saved since, or start again in another --out")
+
+
+def _interrupted(out: Path, experiments: list[Experiment], resume: bool,
+                 exc: KeyboardInterrupt) -> RunInterrupted:
+    """What to tell after a stop: what is saved, and the command that goes on from it."""
+    signum = getattr(exc, "signal", signal.SIGINT)
+    what = "interrupted" if signum == signal.SIGINT else \
+        f"stopped by {signal.Signals(signum).name}"
+    total = sum(len(e.units()) for e in experiments)
+    done = saved_units(out, experiments)
+    if done == 0 and not resume:
+        return RunInterrupted(f"{what} before any run was saved; nothing is kept in {out}: "
+                              "to start again, give the same command (without --resume)",
+                              signum)
+    return RunInterrupted(f"{what}: {done} of {total} runs are saved in {out}; continue "
+                          "with the same command and --resume", signum)
 
 
 def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
@@ -264,17 +340,11 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
         for unit, result in _execute(pending, jobs, executor, address, work):
             save_unit(units_dir / f"{unit.key}.npz", result)
             bar.update(1)
-    except KeyboardInterrupt:
+    finally:
         bar.close()
-        done = len(list(units_dir.glob("*.npz"))) if units_dir.exists() else 0
-        raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
-                             "continue with the same command and --resume") from None
-    bar.close()
 
 
 def _progress(total: int, initial: int, enabled: bool):
-    from tqdm import tqdm
-
     return tqdm(total=total, initial=initial, unit="run", desc="runs", dynamic_ncols=True,
                 disable=not enabled or not sys.stderr.isatty())
 
@@ -295,7 +365,29 @@ def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | 
 
 def _init_worker() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the driver handles Ctrl-C for everyone
+    for s in STOP_SIGNALS:  # the driver's handlers, inherited by the fork: end quietly
+        signal.signal(s, signal.SIG_DFL)
+    _die_with_parent()
     close_inherited_locks()
+
+
+PR_SET_PDEATHSIG = 1
+"""Linux's ``prctl`` option: the signal a process gets when its parent dies."""
+
+
+def _die_with_parent() -> None:
+    """Have the kernel send this worker SIGTERM when the driver dies, however it dies
+    (SIGKILL included), so no worker runs on as an orphan (Linux only; elsewhere the
+    driver's signal handlers and the pool's ``terminate`` do it)."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):  # pragma: no cover (no libc prctl)
+        return
+    if os.getppid() == 1:  # the driver died before the prctl took effect
+        os._exit(1)
 
 
 def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray]]:
@@ -304,8 +396,6 @@ def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray
 
 def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
     # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
-    from gdq_pddl.experiments.work import warm_up
-
     warm_up(units)
     # multiprocessing.Pool, not ProcessPoolExecutor: on Ctrl-C the workers in flight are
     # terminated, and an executor whose workers were terminated can hang the interpreter
@@ -323,7 +413,7 @@ def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
 
 def _ray(units: list[Unit], jobs: int | None, address: str | None, work: Work = run_unit):
     try:
-        import ray
+        import ray  # optional dependency: imported only when --executor ray asks for it
     except ImportError:
         raise ResultsError("--executor ray needs the optional package ray "
                            "(pip install 'gdq_pddl[ray]')") from None
@@ -352,8 +442,6 @@ def _ray(units: list[Unit], jobs: int | None, address: str | None, work: Work = 
 
 def _check_reachable(address: str, timeout: float = 5.0) -> None:
     """Fail fast on a ``host:port`` nobody answers (ray.init retries for minutes)."""
-    import socket
-
     host, sep, port = address.removeprefix("ray://").rpartition(":")
     if not sep or not port.isdigit():
         return  # "auto" and other forms: let Ray resolve them

@@ -11,11 +11,13 @@ from functools import cached_property
 from pathlib import Path
 from typing import NamedTuple, Protocol, runtime_checkable
 
-from gdq_pddl.errors import PlanningError
-from gdq_pddl.limits import MAX_TOLERANCE
+from gdq_pddl.errors import PlanningError, SizeError
+from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.pddl.parser import parse_domain, parse_problem
+from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem
+from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
+from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
 
 State = frozenset[str]
 """A planner state: the fluent atoms that hold, e.g. ``{"(at p0)", "(closed d0)", ...}``."""
@@ -93,11 +95,9 @@ class PlanningProblem:
         and planned on through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source)
+        check_size(problem, problem_source)
         if not domain.probabilistic:
             return cls(domain, problem, domain_text, problem_text)
-        from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
-        from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
-
         det = determinise(domain, determinisation)
         return cls(det, problem, write_domain(det), write_parsed_problem(problem, domain),
                    domain, ground_ppddl(domain, problem, determinisation))
@@ -105,8 +105,7 @@ class PlanningProblem:
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,
                    determinisation: str = "all-outcomes") -> PlanningProblem:
-        from gdq_pddl.pddl.parser import _read
-
+        """Read and parse a domain and problem file (see :meth:`from_texts`)."""
         return cls.from_texts(_read(domain_path), _read(problem_path), str(domain_path),
                               str(problem_path), determinisation)
 
@@ -172,11 +171,32 @@ class PlanningProblem:
         return result
 
     def problem_pddl(self, start: State | None = None, goal: State | None = None) -> str:
-        """PDDL text of this problem with another start state and/or goal."""
-        from gdq_pddl.pddl.writer import write_problem
+        """PDDL text of this problem with another start state and/or goal (what backends
+        that run an external planner, and the plan validator, read for each query): its
+        objects, its static facts and the query's fluent atoms."""
+        start = start if start is not None else self.init
+        goal = goal if goal is not None else self.goal
+        by_type: dict[str, list[str]] = {}
+        for obj, typ in self.problem.objects.items():
+            if obj not in self.domain.constants:
+                by_type.setdefault(typ, []).append(obj)
+        objects = "\n".join(f"    {' '.join(objs)} - {typ}" for typ, objs in by_type.items())
+        init = sorted(self.task.statics | set(start))
+        return (f"(define (problem {self.problem.name})\n"
+                f"  (:domain {self.domain.name})\n"
+                f"  (:objects\n{objects})\n"
+                "  (:init\n" + "\n".join(f"    {a}" for a in init) + ")\n"
+                f"  (:goal (and {' '.join(sorted(goal))})))\n")
 
-        return write_problem(self, start if start is not None else self.init,
-                             goal if goal is not None else self.goal)
+
+def check_size(problem: Problem, source: str) -> None:
+    """Refuse, naming ``source``, a problem too large to plan over: one whose initial state
+    has more than :data:`~gdq_pddl.limits.MAX_INIT_ATOMS` atoms (grounding keeps a
+    bitmask over every fact per action, so it would take minutes and gigabytes)."""
+    if len(problem.init) > MAX_INIT_ATOMS:
+        raise SizeError(f"{source}: the initial state has {len(problem.init):,} atoms, more "
+                        f"than the {MAX_INIT_ATOMS:,} a problem may have to be planned over "
+                        "(a building of about 30,000 positions); give a smaller problem")
 
 
 class Query(NamedTuple):

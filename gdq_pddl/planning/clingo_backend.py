@@ -82,7 +82,7 @@ class ClingoPlanner:
     def unusable_reason(cls) -> str | None:
         """Why clingo cannot run here (it is not installed), or None when it can."""
         try:
-            import clingo  # noqa: F401
+            import clingo  # noqa: F401  (optional dependency)
         except ImportError:
             return NOT_INSTALLED
         return None
@@ -159,7 +159,7 @@ class ClingoPlanner:
 
 def _clingo() -> Any:
     try:
-        import clingo
+        import clingo  # optional dependency: only this backend needs it
     except ImportError:
         raise PlanningError(f"planner 'clingo' is not usable here: {NOT_INSTALLED}") from None
     return clingo

@@ -15,9 +15,11 @@ for every plan within a tolerance.
 from __future__ import annotations
 
 import time
+from importlib.util import find_spec
 
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+from gdq_pddl.planning.validate import up_action_name, up_problem
 
 SEARCH = {"search": "astar", "heuristic": "hmax"}
 """unified-planning parameters of the pyperplan engine: an optimal (admissible) search."""
@@ -32,8 +34,6 @@ class PyperplanPlanner:
     @classmethod
     def unusable_reason(cls) -> str | None:
         """Why pyperplan cannot run here (unified-planning or up-pyperplan missing), or None."""
-        from importlib.util import find_spec
-
         for module, dist in (("unified_planning", "unified-planning"),
                              ("up_pyperplan", "up-pyperplan")):
             if find_spec(module) is None:
@@ -49,10 +49,9 @@ class PyperplanPlanner:
         key, t0 = q.key, q.started
         if q.goal is None:  # a goal no action can make true: no need to ask pyperplan
             return problem.remember(key, self._none(t0))
-        from gdq_pddl.planning.validate import up_action_name, up_problem
-
         up = up_problem(problem, start, goal)
         result = self._run(up)
+        # unified-planning: imported once it is known to be there (and for start-up time)
         from unified_planning.engines import PlanGenerationResultStatus as S
 
         if result.status in (S.UNSOLVABLE_PROVEN, S.UNSOLVABLE_INCOMPLETELY):
@@ -73,7 +72,7 @@ class PyperplanPlanner:
 
     @staticmethod
     def _run(up):
-        from unified_planning.shortcuts import OneshotPlanner
+        from unified_planning.shortcuts import OneshotPlanner  # optional: see unusable_reason
 
         try:
             with OneshotPlanner(name="pyperplan", params=SEARCH) as engine:

@@ -27,7 +27,7 @@ _PARSED: weakref.WeakKeyDictionary[PlanningProblem, UPProblem] = weakref.WeakKey
 
 def _up() -> Any:
     """Import unified-planning with its credits banner switched off."""
-    try:
+    try:  # imported on first use: start-up time, and a clear error if it is missing
         import unified_planning.shortcuts as shortcuts
     except ImportError as exc:  # a declared dependency, but say so clearly if it is missing
         raise PlanningError(f"unified-planning cannot be imported: {exc} "
@@ -45,7 +45,7 @@ def base_up_problem(problem: PlanningProblem) -> UPProblem:
         raise PlanningError("unified-planning needs the domain as PDDL text: build the "
                             "problem with PlanningProblem.from_texts or from_files")
     _up()
-    from unified_planning.io import PDDLReader
+    from unified_planning.io import PDDLReader  # after _up(): see there
 
     # the original text keeps goal literals the writer drops (negative or static ones)
     text = problem.problem_text or problem.problem_pddl()
@@ -100,7 +100,7 @@ def up_action_name(instance: Any) -> str:
 
 
 def _up_plan(up: UPProblem, actions: tuple[str, ...]) -> Any:
-    from unified_planning.plans import ActionInstance, SequentialPlan
+    from unified_planning.plans import ActionInstance, SequentialPlan  # see _up()
 
     steps = []
     for i, action in enumerate(actions):
@@ -129,7 +129,7 @@ def validate_plan(problem: PlanningProblem, plan: Plan, start: State | None = No
     elif frozenset(start) != plan.states[0]:
         raise PlanningError("the plan does not start in the given start state")
     up = up_problem(problem, start, goal)
-    _up()
+    _up()  # unified-planning on first use (start-up time), then its validator
     from unified_planning.engines.plan_validator import SequentialPlanValidator
     from unified_planning.engines.results import ValidationResultStatus
 
