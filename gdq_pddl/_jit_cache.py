@@ -6,11 +6,10 @@ reuses it while the function's *own* file is unchanged, with the code of everyth
 calls from other files baked in. The fast episode loop (``learners/episodes.py``) calls
 the learning rules (``learners/gdq.py`` and the other rule modules) and the env step
 (``envs/model.py``): edit a rule and the loop would go on running the old one, silently,
-while the Python path runs
-the new one. So on import we hash the sources of the modules with compiled
-functions and, when the hash differs from the one the cache was built with, delete the
-package's cache files. An installed package never changes, so this is a check of a few
-files per process.
+while the Python path runs the new one. So on import we hash the sources of the modules
+with compiled functions and, when the hash differs from the one the cache was built
+with, delete the package's cache files. An installed package never changes, so this is a
+check of a few files per process.
 
 A cache file cut short (a full disk, a copy interrupted, a hand edit) made numba raise
 ``UnpicklingError`` on every later run until it was deleted by hand. So each cache file
