@@ -20,6 +20,7 @@ reports pyparsing character offsets; plans are still validated with unified-plan
 from __future__ import annotations
 
 import re
+import string
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -48,7 +49,23 @@ fraction is built at once (``1e-99999999``'s would take minutes)."""
 _NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
 """What may be a number (:class:`~fractions.Fraction` reads it or says it is not);
 linear, so a long symbol is rejected at once."""
-_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s()]+|\s+")
+_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+|\s+")
+_SYMBOL = re.compile(r"[?:]?[A-Za-z0-9_.+/-]+|=")
+"""What a symbol may be written with: a name, a ``?variable``, a ``:keyword``, a number
+(``0.25``, ``1/4``, ``2.5e-3``), ``-`` or ``=``. Any other character is refused where it
+stands, never dropped (``#`` does not start a comment: ``;`` does)."""
+_SYMBOL_CHARS = frozenset(string.ascii_letters + string.digits + "_.+/-")
+_NAME = re.compile(r"[a-z][a-z0-9_-]*")
+"""A name (of a domain, type, object, predicate, action...): a letter, then letters,
+digits, ``-`` and ``_`` (PDDL's grammar); a variable is ``?`` and a name."""
+_PROBLEM_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")
+"""A problem's name may also start with a digit (a world file's name, which a generated
+office problem's starts with, may); it is never a term of a formula."""
+MAX_DEPTH = 200
+"""Deepest nesting of parentheses read. Real domains nest a few dozen levels at most;
+the later stages walk formulas recursively, so a file nested deeper is refused at the
+line where it passes this depth, instead of exhausting Python's stack."""
+BOM = "\ufeff"
 
 
 @dataclass(frozen=True)
@@ -71,7 +88,7 @@ class Node:
 
 class _Reader:
     def __init__(self, text: str, source: str) -> None:
-        self.text, self.source = text, source
+        self.text, self.source = text.removeprefix(BOM), source
 
     def fail(self, line: int | None, message: str) -> PDDLError:
         return PDDLError(self.source, line, message)
@@ -82,6 +99,10 @@ class _Reader:
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
+                if len(stack) >= MAX_DEPTH:
+                    raise self.fail(line, f"parentheses nested more than {MAX_DEPTH} levels "
+                                    "deep; no domain or problem needs that many (is a ')' "
+                                    "missing?)")
                 stack.append((line, []))
             elif tok == ")":
                 if not stack:
@@ -99,7 +120,7 @@ class _Reader:
             elif not stack:
                 raise self.fail(line, f"expected '(' but found {tok!r}")
             else:
-                stack[-1][1].append(Node(line, symbol=tok.lower()))
+                stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
             line += tok.count("\n")
         if stack:
             line = _suspect_unclosed(self.text) or stack[-1][0]
@@ -107,6 +128,32 @@ class _Reader:
         if top is None:
             raise self.fail(None, "empty file: expected (define ...)")
         return top
+
+    def checked(self, tok: str, line: int) -> str:
+        """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that
+        no symbol may have."""
+        if _SYMBOL.fullmatch(tok):
+            return tok.lower()
+        bad = next((ch for i, ch in enumerate(tok)
+                    if ch not in _SYMBOL_CHARS and not (i == 0 and ch in "?:")), None)
+        if bad is None:  # a lone '?' or ':'
+            raise self.fail(line, f"expected a name, a ?variable, a :keyword or a number, "
+                            f"found {tok!r}")
+        hint = " (a comment starts with ';', not '#')" if bad == "#" else ""
+        raise self.fail(line, f"the character {bad!r} cannot be part of a name, found in "
+                        f"{tok!r}{hint}; names are ASCII letters, digits, '-' and '_'")
+
+    def name(self, node: Node, what: str, variable: bool = False,
+             grammar: re.Pattern = _NAME) -> str:
+        """The symbol ``node``, which must be a name (``variable``: a ``?name``)."""
+        text = self.symbol(node, what)
+        bare = text[1:] if variable and text.startswith("?") else text
+        if (variable and not text.startswith("?")) or not grammar.fullmatch(bare):
+            first = "letter or digit" if grammar is _PROBLEM_NAME else "letter"
+            raise self.fail(node.line, f"expected {what}, found {text!r} (a name is a "
+                            f"{first}, then letters, digits, '-' and '_'"
+                            + ("; a variable is '?' and a name)" if variable else ")"))
+        return text
 
     # --- helpers ---------------------------------------------------------------------
     def symbol(self, node: Node, what: str) -> str:
@@ -126,42 +173,64 @@ class _Reader:
         head = self.lst(items[1], f"({kind} NAME)")
         if len(head) != 2 or head[0].symbol != kind:
             raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
-        return self.symbol(head[1], f"a {kind} name"), items[2:]
+        grammar = _PROBLEM_NAME if kind == "problem" else _NAME
+        return self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
 
-    def typed_list(self, nodes: tuple[Node, ...], variables: bool) -> list[tuple[str, str]]:
-        """``a b - t c`` -> [(a, t), (b, t), (c, object)]."""
-        out: list[tuple[str, str]] = []
-        pending: list[str] = []
+    def typed_list(self, nodes: tuple[Node, ...], variables: bool, what: str,
+                   ) -> list[tuple[str, str, int]]:
+        """``a b - t c`` -> [(a, t, line), (b, t, line), (c, object, line)]; a name
+        given twice is refused (``what``: what the names are, for the message)."""
+        out: list[tuple[str, str, int]] = []
+        pending: list[tuple[str, int]] = []
+        first: dict[str, int] = {}
         i = 0
         while i < len(nodes):
-            name = self.symbol(nodes[i], "a name")
-            if name == "-":
+            if nodes[i].symbol == "-":
                 if i + 1 >= len(nodes) or not pending:
                     raise self.fail(nodes[i].line, "expected names before '- TYPE'")
-                typ = self.symbol(nodes[i + 1], "a type name")
-                out += [(p, typ) for p in pending]
+                typ = self.name(nodes[i + 1], "a type name")
+                out += [(p, typ, line) for p, line in pending]
                 pending = []
                 i += 2
                 continue
-            if variables != name.startswith("?"):
-                want = "a variable (?x)" if variables else "a name (not a variable)"
-                raise self.fail(nodes[i].line, f"expected {want}, found {name!r}")
-            pending.append(name)
+            kind = "a variable (?x)" if variables else "a name (not a variable)"
+            name = self.name(nodes[i], kind, variable=variables)
+            if name in first:
+                raise self.fail(nodes[i].line, f"{what} {name} is declared twice (first at "
+                                f"line {first[name]})")
+            first[name] = nodes[i].line
+            pending.append((name, nodes[i].line))
             i += 1
-        return out + [(p, "object") for p in pending]
+        return out + [(p, "object", line) for p, line in pending]
 
-    def sections(self, body: tuple[Node, ...]) -> dict[str, Node]:
+    def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
+                 kind: str) -> tuple[dict[str, Node], list[Node]]:
+        """The sections of a domain or problem by keyword, and its ``(:action ...)``
+        forms in order; a keyword not in ``known`` (nor ``:action`` in a domain) is
+        refused, as is a section given twice."""
         out: dict[str, Node] = {}
+        actions: list[Node] = []
         for node in body:
             items = self.lst(node, "a section such as (:predicates ...)")
             if not items or items[0].is_list or not items[0].symbol.startswith(":"):
                 raise self.fail(node.line,
                                 f"expected a section (:keyword ...), found {node.text()}")
             key = items[0].symbol
-            if key != ":action" and key in out:
-                raise self.fail(node.line, f"duplicate section {key}")
-            out[key if key != ":action" else f":action{len(out)}"] = node
-        return out
+            if key == ":action" and kind == "domain":
+                actions.append(node)
+                continue
+            if key in _UNSUPPORTED_SECTIONS:
+                raise self.fail(node.line, f"{key} is not supported (gdq_pddl reads "
+                                f"{_LANGUAGE})")
+            if key not in known:
+                expected = (*known, ":action") if kind == "domain" else known
+                raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
+                                f"one of {', '.join(expected)})")
+            if key in out:
+                raise self.fail(node.line, f"duplicate section {key} (first at line "
+                                f"{out[key].line})")
+            out[key] = node
+        return out, actions
 
 
 def _suspect_unclosed(text: str) -> int | None:
@@ -187,56 +256,109 @@ def _suspect_unclosed(text: str) -> int | None:
     return None
 
 
+_DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions")
+_PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
+                     ":metric")
+_UNSUPPORTED_SECTIONS = (":durative-action", ":derived", ":process", ":event", ":axiom",
+                         ":constraints", ":timed-initial-literals")
+_LANGUAGE = "STRIPS with typing and PPDDL's probabilistic effects"
+KNOWN_REQUIREMENTS = frozenset({
+    ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
+    ":equality", ":existential-preconditions", ":universal-preconditions",
+    ":quantified-preconditions", ":conditional-effects", ":fluents", ":numeric-fluents",
+    ":object-fluents", ":adl", ":durative-actions", ":duration-inequalities",
+    ":continuous-effects", ":derived-predicates", ":timed-initial-literals",
+    ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
+    ":rewards", ":mdp", ":non-deterministic"})
+"""Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
+_RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either",
+                       "probabilistic", "oneof", "increase", "decrease", "assign"})
+"""Words a formula reads as connectives: no predicate may be named so."""
+
+
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
     """Parse a domain; raise :class:`PDDLError` with file and line on any problem."""
     r = _Reader(text, source)
     name, body = r.header(r.tree(), "domain")
-    sec = r.sections(body)
-    known = {":requirements", ":types", ":constants", ":predicates", ":functions"}
-    for key, node in sec.items():
-        if key not in known and not key.startswith(":action"):
-            raise r.fail(node.line, f"{key.split('0')[0]} is not supported "
-                         "(gdq_pddl reads STRIPS with typing)")
-    reqs = set()
-    if ":requirements" in sec:
-        for n in sec[":requirements"].items[1:]:
-            req = r.symbol(n, "a requirement")
-            if req not in SUPPORTED:
-                raise r.fail(n.line, f"requirement {req} is not supported "
-                             f"(supported: {' '.join(sorted(SUPPORTED))})")
-            reqs.add(req)
-    types = {"object": None}
-    if ":types" in sec:
-        for t, parent in r.typed_list(sec[":types"].items[1:], variables=False):
-            types[t] = parent
-        for t, parent in list(types.items()):
-            if parent is not None and parent not in types:
-                raise r.fail(sec[":types"].line, f"type {t} has unknown parent type {parent}")
+    sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
+    reqs = _requirements(r, sec[":requirements"]) if ":requirements" in sec else set()
+    types = _types(r, sec[":types"]) if ":types" in sec else {"object": None}
     constants = {}
     if ":constants" in sec:
-        for c, t in r.typed_list(sec[":constants"].items[1:], variables=False):
-            _check_type(r, types, t, sec[":constants"].line)
+        for c, t, line in r.typed_list(sec[":constants"].items[1:], False, "constant"):
+            _check_type(r, types, t, line)
             constants[c] = t
     predicates: dict[str, tuple[str, ...]] = {}
     if ":predicates" in sec:
+        first: dict[str, int] = {}
         for node in sec[":predicates"].items[1:]:
             pname, signature = _signature(r, node, types, "predicate")
+            if pname in first:
+                raise r.fail(node.line, f"predicate {pname} is declared twice (first at "
+                             f"line {first[pname]})")
+            if pname in _RESERVED:
+                raise r.fail(node.line, f"a predicate cannot be named {pname}: formulas "
+                             "read it as a connective")
+            first[pname] = node.line
             predicates[pname] = signature
     functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
-    actions = []
-    for key, node in sec.items():
-        if key.startswith(":action"):
-            actions.append(_action(r, node, predicates, types, constants, reqs, functions))
-    names = [a.name for a in actions]
-    if len(set(names)) != len(names):
-        raise r.fail(None, f"duplicate action names in {sorted(names)}")
+    actions: list[Action] = []
+    for node in action_nodes:
+        action = _action(r, node, predicates, types, constants, reqs, functions)
+        twin = next((a for a in actions if a.name == action.name), None)
+        if twin is not None:
+            raise r.fail(node.line, f"action {action.name} is declared twice (first at line "
+                         f"{twin.line})")
+        actions.append(action)
     return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source,
                   functions)
+
+
+def _requirements(r: _Reader, node: Node) -> set[str]:
+    """The keys of ``(:requirements ...)``: each a requirement of PDDL or PPDDL (a typo
+    is refused), and one gdq_pddl reads (:data:`SUPPORTED`)."""
+    out = set()
+    for n in node.items[1:]:
+        req = r.symbol(n, "a requirement")
+        if req not in KNOWN_REQUIREMENTS:
+            raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
+                         "PPDDL are :strips, :typing, :adl, :probabilistic-effects, ...)")
+        if req not in SUPPORTED:
+            raise r.fail(n.line, f"requirement {req} is not supported "
+                         f"(supported: {' '.join(sorted(SUPPORTED))})")
+        out.add(req)
+    return out
+
+
+def _types(r: _Reader, node: Node) -> dict[str, str | None]:
+    """``(:types a b - c)`` -> ``{object: None, a: c, b: c, c: object}``; a type declared
+    twice, an undeclared parent and a cycle of parents are refused."""
+    types: dict[str, str | None] = {"object": None}
+    lines: dict[str, int] = {}
+    for t, parent, line in r.typed_list(node.items[1:], False, "type"):
+        if t == "object":
+            if parent != "object":
+                raise r.fail(line, f"object is the root type: it cannot be a {parent}")
+            continue
+        types[t], lines[t] = parent, line
+    for t, parent in types.items():
+        if parent is not None and parent not in types:
+            raise r.fail(lines[t], f"type {t} has unknown parent type {parent}")
+    for t in lines:
+        chain = [t]
+        while (parent := types[chain[-1]]) is not None:
+            if parent in chain:
+                cycle = " - ".join(chain[chain.index(parent):] + [parent])
+                raise r.fail(lines[t], f"the types form a cycle ({cycle}): every type must "
+                             "lead up to object")
+            chain.append(parent)
+    return types
 
 
 def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str, tuple[str, ...]]:
     """``(:functions (f ?x - t) - number (total-cost))`` -> ``{f: (t,), total-cost: ()}``."""
     out: dict[str, tuple[str, ...]] = {}
+    first: dict[str, int] = {}
     items = node.items[1:]
     i = 0
     while i < len(items):
@@ -248,6 +370,10 @@ def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str
             i += 2
             continue
         fname, signature = _signature(r, item, types, "function")
+        if fname in first:
+            raise r.fail(item.line, f"function {fname} is declared twice (first at line "
+                         f"{first[fname]})")
+        first[fname] = item.line
         out[fname] = signature
         i += 1
     return out
@@ -259,11 +385,11 @@ def _signature(r: _Reader, node: Node, types: dict[str, str | None],
     items = r.lst(node, f"a {what} (name ?x - type ...)")
     if not items:
         raise r.fail(node.line, f"expected a {what} name")
-    name = r.symbol(items[0], f"a {what} name")
-    params = r.typed_list(items[1:], variables=True)
-    for _, t in params:
-        _check_type(r, types, t, node.line)
-    return name, tuple(t for _, t in params)
+    name = r.name(items[0], f"a {what} name")
+    params = r.typed_list(items[1:], True, f"{what} {name}: parameter")
+    for _, t, line in params:
+        _check_type(r, types, t, line)
+    return name, tuple(t for _, t, _ in params)
 
 
 def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> None:
@@ -278,7 +404,7 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     assert items is not None
     if len(items) < 2:
         raise r.fail(node.line, "expected (:action NAME :parameters (...) ...)")
-    name = r.symbol(items[1], "an action name")
+    name = r.name(items[1], "an action name")
     fields: dict[str, Node] = {}
     rest = items[2:]
     if len(rest) % 2:
@@ -288,11 +414,15 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
         if k not in (":parameters", ":precondition", ":effect"):
             raise r.fail(key.line, f"action {name}: unexpected {k} (expected :parameters, "
                          ":precondition or :effect)")
+        if k in fields:
+            raise r.fail(key.line, f"action {name}: {k} is given twice (first at line "
+                         f"{fields[k].line})")
         fields[k] = value
-    params = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), variables=True) \
-        if ":parameters" in fields else []
-    for _, t in params:
-        _check_type(r, types, t, node.line)
+    typed = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), True,
+                         f"action {name}: parameter") if ":parameters" in fields else []
+    for _, t, line in typed:
+        _check_type(r, types, t, line)
+    params = [(p, t) for p, t, _ in typed]
     scope = dict(params) | constants
     ctx = f"action {name}"
     pre = _literals(r, fields.get(":precondition"), predicates, types, scope, ctx, reqs, True)
@@ -595,14 +725,13 @@ def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
 def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Problem:
     """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit."""
     r = _Reader(text, source)
-    name, body = r.header(r.tree(), "problem")
-    sec = r.sections(body)
-    for key, node in sec.items():
-        if key not in (":domain", ":objects", ":init", ":goal", ":requirements",
-                       ":goal-reward", ":metric"):
-            raise r.fail(node.line, f"{key} is not supported in a problem")
+    top = r.tree()
+    name, body = r.header(top, "problem")
+    sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
+    if ":requirements" in sec:
+        _requirements(r, sec[":requirements"])
     if ":domain" not in sec:
-        raise r.fail(None, "expected (:domain NAME)")
+        raise r.fail(top.line, "expected (:domain NAME)")
     dnode = sec[":domain"]
     dname = r.symbol(dnode.items[1], "a domain name") if len(dnode.items) == 2 else None
     if dname != domain.name:
@@ -610,13 +739,14 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
                      f"{domain.name!r} ({domain.source})")
     objects = dict(domain.constants)
     if ":objects" in sec:
-        for o, t in r.typed_list(sec[":objects"].items[1:], variables=False):
-            _check_type(r, domain.types, t, sec[":objects"].line)
+        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object"):
+            _check_type(r, domain.types, t, line)
             if o in objects:
-                raise r.fail(sec[":objects"].line, f"object {o} is declared twice")
+                raise r.fail(line, f"object {o} is declared twice (as a constant of the "
+                             f"domain, {domain.source})")
             objects[o] = t
     if ":init" not in sec:
-        raise r.fail(None, "expected (:init ...), the initial state")
+        raise r.fail(top.line, "expected (:init ...), the initial state")
     init, values = [], {}
     given: dict[str, tuple[float, Node]] = {}  # function term -> its value, where given
     for node in sec[":init"].items[1:]:
@@ -640,7 +770,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
     if ":metric" in sec:
         _metric(r, sec[":metric"])
     if ":goal" not in sec:
-        raise r.fail(None, "expected (:goal ...)")
+        raise r.fail(top.line, "expected (:goal ...)")
     gnode = sec[":goal"]
     if len(gnode.items) != 2:
         raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "

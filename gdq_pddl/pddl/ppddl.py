@@ -33,8 +33,9 @@ DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
 
 _SEP = "#"
-"""Joins a schema and an outcome index in the grounding of every outcome ('#' is not a
-PDDL name character, so it cannot clash with a name of the domain)."""
+"""Joins a schema and an outcome index in the grounding of every outcome. The reader
+refuses '#' in a name, and :func:`ground_ppddl` refuses a domain built otherwise with
+one, so it cannot clash with a name of the domain."""
 
 
 @dataclass(frozen=True)
@@ -147,6 +148,10 @@ def ground_ppddl(domain: Domain, problem: Problem,
                                                                       GroundTask]:
     """Ground every outcome of every action once; return reality's task (the learner's
     ground actions) and the planner's (the determinisation), over the same facts."""
+    for action in domain.actions:
+        if _SEP in action.name:
+            raise PDDLError(domain.source, action.line or None, f"action {action.name}: "
+                            f"{_SEP!r} cannot be part of an action name")
     names = planner_names(domain, determinisation)
     every = []  # one deterministic schema per outcome: the grounder's relaxed reachability
     for action in domain.actions:  # then gives every fact some outcome can make true
