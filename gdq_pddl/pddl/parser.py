@@ -30,8 +30,6 @@ from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
 
-SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality",
-             ":probabilistic-effects", ":action-costs", ":rewards"}
 STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
 COST_FLUENTS = ("total-cost", "reward")
@@ -93,9 +91,11 @@ class _Reader:
     def fail(self, line: int | None, message: str) -> PDDLError:
         return PDDLError(self.source, line, message)
 
-    def tree(self) -> Node:
+    def forms(self) -> list[Node]:
+        """The file's top-level forms (one ``(define ...)`` each; IPPC files hold a
+        domain and its problems in one file)."""
         stack: list[tuple[int, list[Node]]] = []
-        line, top = 1, None
+        line, top = 1, []
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
@@ -111,10 +111,8 @@ class _Reader:
                 node = Node(start, tuple(items))
                 if stack:
                     stack[-1][1].append(node)
-                elif top is None:
-                    top = node
                 else:
-                    raise self.fail(start, "expected end of file after the (define ...) form")
+                    top.append(node)
             elif tok[0].isspace() or tok[0] == ";":
                 pass
             elif not stack:
@@ -125,9 +123,59 @@ class _Reader:
         if stack:
             line = _suspect_unclosed(self.text) or stack[-1][0]
             raise self.fail(line, "expected ')': this '(' is never closed")
-        if top is None:
+        if not top:
             raise self.fail(None, "empty file: expected (define ...)")
         return top
+
+    def pick(self, kind: str, name: str | None = None) -> Node:
+        """The ``(define (KIND NAME) ...)`` form of the file: the only one of its kind,
+        or the one named ``name``; the others may be of the other kind."""
+        found: list[tuple[str, Node]] = []
+        for node in self.forms():
+            items = self.lst(node, "(define ...)")
+            head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
+            if head is None or not head.is_list or not head.items or \
+                    head.items[0].symbol not in ("domain", "problem"):
+                raise self.fail(node.line, "expected (define (domain NAME) ...) or (define "
+                                f"(problem NAME) ...), found {_short(node)}")
+            if head.items[0].symbol == kind:
+                label = head.items[1].symbol if len(head.items) == 2 else ""
+                found.append((label, node))
+        other = "problem" if kind == "domain" else "domain"
+        if not found:
+            raise self.fail(None, f"expected a (define ({kind} NAME) ...) form; this file "
+                            f"has only {other}s")
+        if name is not None:
+            chosen = [node for label, node in found if label == name.lower()]
+            if not chosen:
+                raise self.fail(None, f"no {kind} named {name!r} in this file (it has "
+                                f"{', '.join(label for label, _ in found)})")
+            return chosen[0]
+        if len(found) > 1:
+            labels = ", ".join(label for label, _ in found)
+            raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
+                            f"({labels}): pick one by name")
+        return found[0][1]
+
+    def refuse_outside(self) -> None:
+        """Refuse a file that uses constructs outside the language, naming every one."""
+        seen: dict[str, list[int]] = {}
+        todo = list(self.forms())
+        while todo:
+            node = todo.pop()
+            if not node.items:
+                continue
+            head = node.items[0].symbol
+            if head in _OUTSIDE or (head in _UNSUPPORTED_SECTIONS):
+                seen.setdefault(head, []).append(node.line)
+            todo.extend(i for i in node.items if i.is_list)
+        if seen:
+            order = sorted(seen, key=lambda h: min(seen[h]))
+            listed = "; ".join(f"({h} ...){_OUTSIDE.get(h, '')} at line"
+                               f"{'s' if len(seen[h]) > 1 else ''} "
+                               f"{', '.join(map(str, sorted(seen[h])))}" for h in order)
+            raise self.fail(min(seen[order[0]]), f"not supported (gdq_pddl reads "
+                            f"{_LANGUAGE}): {listed}")
 
     def checked(self, tok: str, line: int) -> str:
         """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that
@@ -233,6 +281,12 @@ class _Reader:
         return out, actions
 
 
+def _short(node: Node) -> str:
+    """The start of ``node``'s text, for a message."""
+    text = node.text()
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def _suspect_unclosed(text: str) -> int | None:
     """The line of the '(' most likely missing its ')', judged by indentation.
 
@@ -271,6 +325,12 @@ KNOWN_REQUIREMENTS = frozenset({
     ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
     ":rewards", ":mdp", ":non-deterministic"})
 """Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
+_OUTSIDE = {"when": "", "forall": "", "exists": "", "or": "", "imply": "",
+            "oneof": " (FOND: give probabilities with (probabilistic ...))",
+            "assign": " (numeric fluents)", "scale-up": " (numeric fluents)",
+            "scale-down": " (numeric fluents)", "either": " (either-types)"}
+"""Connectives outside the language read, each with a hint: a file using any is refused
+with every use listed (:meth:`_Reader.refuse_outside`)."""
 _RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either",
                        "probabilistic", "oneof", "increase", "decrease", "assign"})
 """Words a formula reads as connectives: no predicate may be named so."""
@@ -279,7 +339,8 @@ _RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", 
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
     """Parse a domain; raise :class:`PDDLError` with file and line on any problem."""
     r = _Reader(text, source)
-    name, body = r.header(r.tree(), "domain")
+    r.refuse_outside()
+    name, body = r.header(r.pick("domain"), "domain")
     sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
     reqs = _requirements(r, sec[":requirements"]) if ":requirements" in sec else set()
     types = _types(r, sec[":types"]) if ":types" in sec else {"object": None}
@@ -315,17 +376,15 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
 
 
 def _requirements(r: _Reader, node: Node) -> set[str]:
-    """The keys of ``(:requirements ...)``: each a requirement of PDDL or PPDDL (a typo
-    is refused), and one gdq_pddl reads (:data:`SUPPORTED`)."""
+    """The keys of ``(:requirements ...)``, each a requirement of PDDL or PPDDL (a typo
+    is refused). They declare, and never decide: what the file uses is read, or refused
+    for what it is (:data:`_OUTSIDE`), whatever it declares."""
     out = set()
     for n in node.items[1:]:
         req = r.symbol(n, "a requirement")
         if req not in KNOWN_REQUIREMENTS:
             raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
                          "PPDDL are :strips, :typing, :adl, :probabilistic-effects, ...)")
-        if req not in SUPPORTED:
-            raise r.fail(n.line, f"requirement {req} is not supported "
-                         f"(supported: {' '.join(sorted(SUPPORTED))})")
         out.add(req)
     return out
 
@@ -653,11 +712,6 @@ def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ..
         inner = _literals(r, items[1], predicates, types, scope, ctx, reqs, precondition)
         if len(inner) != 1 or not inner[0].positive:
             raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
-        # PPDDL domains (pddlgym's, for one) use them without declaring the requirement
-        if precondition and inner[0].atom.predicate != "=" and \
-                not reqs & {":negative-preconditions", ":probabilistic-effects"}:
-            raise r.fail(node.line, f"{ctx}: a negative precondition needs the "
-                         ":negative-preconditions requirement")
         return [Literal(inner[0].atom, False)]
     if head == "probabilistic":
         raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
@@ -722,10 +776,15 @@ def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
     return want == "object"
 
 
-def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Problem:
-    """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit."""
+def parse_problem(text: str, domain: Domain, source: str = "<problem>",
+                  name: str | None = None) -> Problem:
+    """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit.
+
+    ``text`` may hold the domain too, and several problems: ``name`` picks one (needed
+    when there are several)."""
     r = _Reader(text, source)
-    top = r.tree()
+    r.refuse_outside()
+    top = r.pick("problem", name)
     name, body = r.header(top, "problem")
     sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
     if ":requirements" in sec:
@@ -840,9 +899,10 @@ def read_domain(path: str | Path) -> Domain:
     return parse_domain(_read(path), str(path))
 
 
-def read_problem(path: str | Path, domain: Domain) -> Problem:
-    """Read and parse a problem file for ``domain``."""
-    return parse_problem(_read(path), domain, str(path))
+def read_problem(path: str | Path, domain: Domain, name: str | None = None) -> Problem:
+    """Read and parse a problem file for ``domain`` (``name``: which problem of a file
+    that holds several)."""
+    return parse_problem(_read(path), domain, str(path), name)
 
 
 def _read(path: str | Path) -> str:
