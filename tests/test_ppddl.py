@@ -197,7 +197,7 @@ def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, s
      "(probabilistic ...) can only be an effect, not a precondition"),
     (WALK_EFFECT, "(probabilistic 0.9 (and (at ?b) (increase (reward) 1)))", 10,
      "a cost inside (probabilistic ...) is not supported"),
-    (WALK_EFFECT, "(when (at ?a) (at ?b))", 10, "not supported (gdq_pddl reads"),
+    (WALK_EFFECT, "(when (at ?a) (stuck))", 10, "(stuck) inside (when ...)"),
     (WALK_EFFECT, "(oneof (at ?b) (at ?a))", 10, "(oneof ...) (FOND"),
     (WALK_EFFECT, "(not (stuck))", 10, "(not (stuck)) is not an effect"),
     ("(at ?a) (trail ?a ?b))", "(at ?a) (trail ?a ?b) (stuck))", 8,

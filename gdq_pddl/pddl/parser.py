@@ -28,7 +28,20 @@ from pathlib import Path
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import MAX_NUMBER
-from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
+from gdq_pddl.pddl.model import (
+    Action,
+    Atom,
+    CondEffect,
+    Condition,
+    CostTerm,
+    Domain,
+    Junction,
+    Literal,
+    Outcome,
+    Problem,
+    Quantified,
+)
+from gdq_pddl.pddl.normalise import conjunction, ground_dnf, nnf
 
 STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
@@ -325,8 +338,7 @@ KNOWN_REQUIREMENTS = frozenset({
     ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
     ":rewards", ":mdp", ":non-deterministic"})
 """Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
-_OUTSIDE = {"when": "", "forall": "", "exists": "", "or": "", "imply": "",
-            "oneof": " (FOND: give probabilities with (probabilistic ...))",
+_OUTSIDE = {"oneof": " (FOND: give probabilities with (probabilistic ...))",
             "assign": " (numeric fluents)", "scale-up": " (numeric fluents)",
             "scale-down": " (numeric fluents)", "either": " (either-types)"}
 """Connectives outside the language read, each with a hint: a file using any is refused
@@ -484,18 +496,38 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     params = [(p, t) for p, t, _ in typed]
     scope = dict(params) | constants
     ctx = f"action {name}"
-    pre = _literals(r, fields.get(":precondition"), predicates, types, scope, ctx, reqs, True)
+    pre, rest = _precondition(r, fields.get(":precondition"), predicates, types, scope, ctx)
     reader = _Effects(r, predicates, types, scope, ctx, functions)
     branches = reader.effect(fields.get(":effect"), inside=False)
-    if not reader.probabilistic:
-        return Action(name, tuple(params), tuple(pre), branches[0][1], node.line,
+    if not reader.probabilistic and not reader.conditional and rest is None:
+        return Action(name, tuple(params), pre, branches[0][1], node.line,  # type: ignore
                       cost=tuple(reader.costs))
-    return Action(name, tuple(params), tuple(pre), (), node.line,
-                  _outcomes(branches, predicates), tuple(reader.costs))
+    return Action(name, tuple(params), pre, (), node.line,
+                  _outcomes(branches, predicates), tuple(reader.costs), rest)
 
 
-Branches = list[tuple[Fraction, tuple[Literal, ...]]]
-"""An effect as a distribution: ``(probability, literals)`` pairs summing to 1."""
+def _precondition(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
+                  types: dict[str, str | None], scope: dict[str, str],
+                  ctx: str) -> tuple[tuple[Literal, ...], Condition | None]:
+    """A precondition as its literals (a conjunction, in order) and the rest (None: it is
+    all literals). The rest holds what only grounding can decide: quantifiers and
+    disjunctions, in negation normal form."""
+    if node is None:
+        return (), None
+    cond = nnf(_condition(r, node, predicates, types, scope, ctx))
+    lits = conjunction(cond)
+    if lits is not None:
+        return lits, None
+    assert isinstance(cond, (Junction, Quantified))
+    parts = cond.parts if isinstance(cond, Junction) and cond.kind == "and" else (cond,)
+    literals = tuple(p for p in parts if isinstance(p, Literal))
+    others = tuple(p for p in parts if not isinstance(p, Literal))
+    return literals, (others[0] if len(others) == 1 else Junction("and", others))
+
+
+Branches = list[tuple[Fraction, tuple[Literal | CondEffect, ...]]]
+"""An effect as a distribution: ``(probability, effects)`` pairs summing to 1; each
+effect a literal, or a conditional or quantified one."""
 
 
 class _Effects:
@@ -508,6 +540,11 @@ class _Effects:
         self.ctx, self.functions = ctx, functions
         self.costs: list[CostTerm] = []
         self.probabilistic = False
+        self.conditional = False
+        self.variables: tuple[tuple[str, str], ...] = ()
+        """The variables of the ``forall`` effects around the effect being read."""
+        self.when: Condition | None = None
+        """The conditions of the ``when`` effects around it, joined (None: none)."""
 
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
@@ -518,6 +555,8 @@ class _Effects:
         if not items:
             return [(Fraction(1), ())]
         head = items[0].symbol
+        if head in ("when", "forall"):
+            return self.scoped(node, items, inside)
         if head == "and":
             out: Branches = [(Fraction(1), ())]
             for sub in items[1:]:
@@ -533,6 +572,9 @@ class _Effects:
                 raise r.fail(node.line, f"{ctx}: a cost inside (probabilistic ...) is not "
                              "supported: an action's cost cannot depend on its outcome; "
                              "state it outside the probabilistic effect")
+            if self.when is not None or self.variables:
+                raise r.fail(node.line, f"{ctx}: a cost inside (when ...) or (forall ...) "
+                             "is not supported: an action's cost cannot depend on the state")
             self.costs.append(self.cost(node, items))
             return [(Fraction(1), ())]
         if head == "not":
@@ -543,7 +585,7 @@ class _Effects:
             if atom.predicate == STUCK and self.predicates[STUCK] == ():
                 raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) "
                              "marks a failed trial, which ends the episode")
-            return [(Fraction(1), (Literal(atom, False),))]
+            return [(Fraction(1), (self.literal(Literal(atom, False), node),))]
         if head == "=":
             raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
         if head in _CONNECTIVES:
@@ -552,8 +594,50 @@ class _Effects:
             raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported in an effect"
                          f"{hint} (gdq_pddl reads STRIPS effects and PPDDL's probabilistic "
                          "ones)")
-        return [(Fraction(1), (Literal(_atom(r, node, self.predicates, self.types,
-                                             self.scope, ctx), True),))]
+        atom = _atom(r, node, self.predicates, self.types, self.scope, ctx)
+        return [(Fraction(1), (self.literal(Literal(atom, True), node),))]
+
+    def literal(self, lit: Literal, node: Node) -> Literal | CondEffect:
+        """``lit`` as an effect of the ``when``/``forall`` effects around it."""
+        if self.when is None and not self.variables:
+            return lit
+        if lit.atom.predicate == STUCK and self.predicates.get(STUCK) == ():
+            raise self.r.fail(node.line, f"{self.ctx}: (stuck) inside (when ...) or (forall "
+                              "...) is not supported: a failed trial is an outcome of its "
+                              "own; write it in (probabilistic ...)")
+        self.conditional = True
+        return CondEffect(self.variables, self.when, lit)
+
+    def scoped(self, node: Node, items: tuple[Node, ...], inside: bool) -> Branches:
+        """``(when CONDITION EFFECT)`` or ``(forall (?x - t ...) EFFECT)``: the effect's
+        literals hold under the condition, for every binding of the variables. A
+        probabilistic effect inside a ``when`` keeps its probabilities (the condition is
+        read in the state the action is taken in, whatever the outcome); inside a
+        ``forall`` it would be a choice per object, which is not read."""
+        r, ctx, head = self.r, self.ctx, items[0].symbol
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected ({head} "
+                         f"{'CONDITION' if head == 'when' else '(?x - TYPE ...)'} EFFECT)")
+        saved = self.scope, self.variables, self.when
+        try:
+            if head == "when":
+                cond = nnf(_condition(r, items[1], self.predicates, self.types, self.scope,
+                                      ctx))
+                self.when = cond if self.when is None else Junction("and", (self.when, cond))
+            else:
+                typed = r.typed_list(r.lst(items[1], "a variable list"), True,
+                                     f"{ctx}: variable")
+                for _, t, line in typed:
+                    _check_type(r, self.types, t, line)
+                self.variables += tuple((v, t) for v, t, _ in typed)
+                self.scope = {**self.scope, **{v: t for v, t, _ in typed}}
+            branches = self.effect(items[2], inside)
+        finally:
+            self.scope, self.variables, self.when = saved
+        if head == "forall" and len(branches) > 1:
+            raise r.fail(node.line, f"{ctx}: (probabilistic ...) inside (forall ...) is not "
+                         "supported (a choice per object)")
+        return branches
 
     def probabilistic_effect(self, node: Node, items: tuple[Node, ...]) -> Branches:
         """``(probabilistic p1 e1 ...)``: each ``e_i`` with ``p_i``; the rest, no effect."""
@@ -635,21 +719,23 @@ def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tup
     stuck = Atom(STUCK, ())
     is_stuck_domain = predicates.get(STUCK) == ()
     merged: dict[tuple, Fraction] = {}
-    for p, lits in branches:
+    for p, effects in branches:
         if p == 0:
             continue
+        lits = tuple(e for e in effects if isinstance(e, Literal))
+        conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         if is_stuck_domain and Literal(stuck, True) in lits:
             key: tuple = ("stuck",)
         else:
             unique = tuple(dict.fromkeys(lits))
-            key = ("effect", frozenset(unique), unique)
+            key = ("effect", frozenset(unique), unique, frozenset(conds), conds)
         merged[key] = merged.get(key, Fraction(0)) + p
     out = []
     for key, p in merged.items():
         if key[0] == "stuck":
             out.append(Outcome(float(p), (), True))
         else:
-            out.append(Outcome(float(p), key[2]))
+            out.append(Outcome(float(p), key[2], conditional=key[4]))
     return tuple(out)
 
 
@@ -691,46 +777,56 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
     return value
 
 
-def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
-              types: dict[str, str | None], scope: dict[str, str], ctx: str,
-              reqs: set[str], precondition: bool) -> list[Literal]:
-    """Flatten a conjunction of (possibly negated) atoms."""
-    if node is None:
-        return []
+def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
+               types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Condition:
+    """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
+    :class:`Junction` kinds; :func:`~gdq_pddl.pddl.normalise.nnf` compiles them away)."""
     items = r.lst(node, "a formula")
     if not items:
-        return []
+        return Junction("and", ())
     head = items[0].symbol
-    if head == "and":
-        out: list[Literal] = []
-        for sub in items[1:]:
-            out += _literals(r, sub, predicates, types, scope, ctx, reqs, precondition)
-        return out
+
+    def sub(n: Node, extra: dict[str, str] | None = None) -> Condition:
+        return _condition(r, n, predicates, types, {**scope, **extra} if extra else scope,
+                          ctx)
+
+    if head in ("and", "or"):
+        return Junction(head, tuple(sub(i) for i in items[1:]))
     if head == "not":
         if len(items) != 2:
-            raise r.fail(node.line, f"{ctx}: expected (not (ATOM))")
-        inner = _literals(r, items[1], predicates, types, scope, ctx, reqs, precondition)
-        if len(inner) != 1 or not inner[0].positive:
-            raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
-        return [Literal(inner[0].atom, False)]
+            raise r.fail(node.line, f"{ctx}: expected (not FORMULA)")
+        inner = sub(items[1])
+        return Literal(inner.atom, not inner.positive) if isinstance(inner, Literal) else \
+            Junction("not", (inner,))
+    if head == "imply":
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected (imply FORMULA FORMULA)")
+        return Junction("imply", (sub(items[1]), sub(items[2])))
+    if head in ("forall", "exists"):
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
+        typed = r.typed_list(r.lst(items[1], "a variable list"), True, f"{ctx}: variable")
+        for _, t, line in typed:
+            _check_type(r, types, t, line)
+        return Quantified(head, tuple((v, t) for v, t, _ in typed),
+                          sub(items[2], {v: t for v, t, _ in typed}))
     if head == "probabilistic":
         raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
                      f"{'precondition' if ctx.startswith('action') else 'goal'}")
-    if head in ("or", "imply", "forall", "exists", "when", "increase", "decrease", "oneof"):
-        raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported (STRIPS with typing only)")
+    if head in ("when", "increase", "decrease", "oneof"):
+        raise r.fail(node.line, f"{ctx}: ({head} ...) can only be an effect, not part of a "
+                     "condition")
     if head == "=":
-        if not precondition:
-            raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
         args = tuple(r.symbol(a, "a term") for a in items[1:])
         if len(args) != 2:
             raise r.fail(node.line, f"{ctx}: (= a b) takes two terms")
         for a in args:
             if a not in scope:
                 raise r.fail(node.line, f"{ctx}: unknown term {a!r}")
-        return [Literal(Atom("=", args), True)]
+        return Literal(Atom("=", args), True)
     atom = _atom(r, node, predicates, types, scope, ctx)
     _not_stuck(r, atom, predicates, node.line, ctx)
-    return [Literal(atom, True)]
+    return Literal(atom, True)
 
 
 def _not_stuck(r: _Reader, atom: Atom, predicates: dict[str, tuple[str, ...]], line: int,
@@ -834,10 +930,49 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
     if len(gnode.items) != 2:
         raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
                      f"{len(gnode.items) - 1}")
-    goal = _literals(r, gnode.items[1], domain.predicates, domain.types, objects, "goal",
-                     set(domain.requirements), True)
+    goal = _goal(r, gnode.items[1], domain, objects, init)
     return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source, values,
                    goal_reward)
+
+
+def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
+          init: list[Atom]) -> tuple[Literal, ...]:
+    """The goal as literals. A goal with quantifiers is expanded over the problem's
+    objects (it has no free variable); one that still has alternatives once the atoms no
+    action changes are decided is refused: the goal is a set of literals."""
+    cond = nnf(_condition(r, node, domain.predicates, domain.types, objects, "goal"))
+    lits = conjunction(cond)
+    if lits is not None:
+        return lits
+
+    def of_type(t: str) -> list[str]:
+        return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
+
+    def too_many() -> PDDLError:
+        return r.fail(node.line, "goal: more than 4096 alternatives once its quantifiers "
+                      "are expanded")
+
+    fluent = domain.fluent_predicates()
+    static = frozenset(a for a in init if a.predicate not in fluent)
+    dnf = ground_dnf(cond, {}, of_type, lambda a: None, too_many)
+    if len(dnf) > 1:  # decide what no action changes, and look again
+        dnf = ground_dnf(cond, {}, of_type, lambda a: None if a.predicate in fluent else
+                         a in static, too_many)
+    if not dnf:
+        raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
+    if len(dnf) > 1:
+        raise r.fail(node.line, f"goal: it has {len(dnf)} alternatives ((or ...), (exists "
+                     "...), (imply ...)) even once the atoms no action changes are decided; "
+                     "a goal with alternatives is not supported (give one of them)")
+    pos, neg = dnf[0]
+    return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
+        tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+
+
+def _fact_atom(fact: str) -> Atom:
+    """``"(at r1)"`` -> ``Atom("at", ("r1",))`` (names have no spaces or parentheses)."""
+    name, *args = fact[1:-1].split()
+    return Atom(name, tuple(args))
 
 
 def _init_value(r: _Reader, node: Node, domain: Domain,
