@@ -265,3 +265,30 @@ def test_run_refuses_a_hash_in_an_action_name_with_one_line(capsys, tmp_path):
     assert code == 2, text
     assert "Traceback" not in text
     assert f"{d}:9: " in text and "'#'" in text
+
+
+@pytest.mark.parametrize("kind", ["imply", "not", "forall", "or", "when", "forall-effect"])
+def test_every_connective_nested_up_to_the_limit_is_normalised_and_grounded(kind):
+    """Normalisation and grounding walk conditions and effects recursively: at the deepest
+    nesting the reader accepts, each connective still goes through."""
+    n = MAX_DEPTH - 8
+    pre, eff = "(b)", "(a)"
+    if kind == "imply":
+        pre = "(imply (a) " * n + "(b)" + ")" * n
+    elif kind == "not":
+        pre = "(not " * (n - n % 2) + "(b)" + ")" * (n - n % 2)
+    elif kind == "forall":
+        pre = "(forall (?x - t) " * n + "(b)" + ")" * n
+    elif kind == "or":
+        pre = "(or (a) " * n + "(b)" + ")" * n
+    elif kind == "when":
+        eff = "(when (b) " * n + "(a)" + ")" * n
+    else:
+        eff = "(forall (?x - t) " * n + "(a)" + ")" * n
+    domain = parse_domain(f"(define (domain d) (:types t) (:predicates (a) (b)) (:action go "
+                          f":parameters () :precondition {pre} :effect {eff}))")
+    problem = parse_problem("(define (problem p) (:domain d) (:objects o - t) (:init (b)) "
+                            "(:goal (a)))", domain)
+    learner, planner = ground_ppddl(domain, problem)
+    assert [op.name for op in learner.ops] == ["(go)"]
+    assert learner.atoms(learner.ops[0].outcomes[0].apply(learner.init)) == {"(a)"}

@@ -5,6 +5,9 @@ grounded result is derived by hand in the comments."""
 
 from __future__ import annotations
 
+from fractions import Fraction
+
+import numpy as np
 import pytest
 
 from gdq_pddl.cli import main
@@ -326,3 +329,200 @@ def test_the_new_constructs_run_end_to_end_with_the_hand_derived_value(capsys, t
     out = capsys.readouterr()
     assert code == 0, out.out + out.err
     assert (tmp_path / "o" / "episodes.csv").read_text().count("\n") == 1 + 5 * 20
+
+
+# --- property: the grounded model against an independent interpreter ----------------------
+#
+# Random small domains over one type, two objects, fluents p/1, q/1, r/0 and a static s/1,
+# with conditions and effects drawn from the whole language. The interpreter below reads
+# the PDDL text itself (its own s-expression reader) and applies PDDL's semantics
+# directly: no normal form, no grounding. From the initial state it explores every state
+# reality reaches; in each, every ground action must be applicable exactly when the
+# library says, and lead to the same distribution of next states.
+
+OBJECTS = ("o1", "o2")
+
+
+def sexp(text: str):
+    tokens = text.replace("(", " ( ").replace(")", " ) ").split()
+    stack: list[list] = [[]]
+    for tok in tokens:
+        if tok == "(":
+            stack.append([])
+        elif tok == ")":
+            done = stack.pop()
+            stack[-1].append(done)
+        else:
+            stack[-1].append(tok.lower())
+    return stack[0]
+
+
+def holds(c, b: dict[str, str], state: frozenset[str]) -> bool:
+    head = c[0] if c else "and"
+    if head == "and":
+        return all(holds(x, b, state) for x in c[1:])
+    if head == "or":
+        return any(holds(x, b, state) for x in c[1:])
+    if head == "not":
+        return not holds(c[1], b, state)
+    if head == "imply":
+        return not holds(c[1], b, state) or holds(c[2], b, state)
+    if head in ("forall", "exists"):
+        var = c[1][0]
+        test = all if head == "forall" else any
+        return test(holds(c[2], {**b, var: o}, state) for o in OBJECTS)
+    args = [b.get(a, a) for a in c[1:]]
+    if head == "=":
+        return args[0] == args[1]
+    return "(" + " ".join([head, *args]) + ")" in state
+
+
+def effect(e, b: dict[str, str], state: frozenset[str]) -> list[tuple]:
+    """``[(probability, adds, deletes)]`` of effect ``e`` in ``state``."""
+    head = e[0] if e else "and"
+    if head == "and":
+        out = [(1.0, frozenset(), frozenset())]
+        for x in e[1:]:
+            out = [(p * q, a | a2, d | d2) for p, a, d in out for q, a2, d2 in effect(x, b, state)]
+        return out
+    if head == "forall":
+        var, out = e[1][0], [(1.0, frozenset(), frozenset())]
+        for o in OBJECTS:
+            out = [(p * q, a | a2, d | d2) for p, a, d in out
+                   for q, a2, d2 in effect(e[2], {**b, var: o}, state)]
+        return out
+    if head == "when":
+        return effect(e[2], b, state) if holds(e[1], b, state) else \
+            [(1.0, frozenset(), frozenset())]
+    if head == "probabilistic":
+        out, total = [], 0.0
+        for p_text, sub in zip(e[1::2], e[2::2], strict=True):
+            p = float(Fraction(p_text))
+            total += p
+            out += [(p * q, a, d) for q, a, d in effect(sub, b, state)]
+        return out + [(1.0 - total, frozenset(), frozenset())]
+    if head == "not":
+        atom = "(" + " ".join([e[1][0], *(b.get(a, a) for a in e[1][1:])]) + ")"
+        return [(1.0, frozenset(), frozenset((atom,)))]
+    atom = "(" + " ".join([head, *(b.get(a, a) for a in e[1:])]) + ")"
+    return [(1.0, frozenset((atom,)), frozenset())]
+
+
+def random_condition(rng, depth: int, variables: list[str]) -> str:
+    atoms = [f"(p {v})" for v in variables] + [f"(q {v})" for v in variables] + \
+        [f"(s {v})" for v in variables] + ["(r)"]
+    kind = rng.integers(0, 8) if depth > 0 else 0
+    if kind <= 1:
+        return atoms[rng.integers(len(atoms))]
+    if kind == 2:
+        return f"(not {random_condition(rng, depth - 1, variables)})"
+    if kind in (3, 4):
+        word = ("and", "or")[kind - 3]
+        return f"({word} {random_condition(rng, depth - 1, variables)} " \
+               f"{random_condition(rng, depth - 1, variables)})"
+    if kind == 5:
+        return f"(imply {random_condition(rng, depth - 1, variables)} " \
+               f"{random_condition(rng, depth - 1, variables)})"
+    if kind == 6:
+        v = f"?v{depth}"
+        word = ("forall", "exists")[int(rng.integers(2))]
+        return f"({word} ({v} - t) {random_condition(rng, depth - 1, [*variables, v])})"
+    a, b = rng.choice(variables, size=2)
+    return f"(= {a} {b})"
+
+
+def random_effect(rng, depth: int, variables: list[str]) -> str:
+    lits = [f"(p {v})" for v in variables] + [f"(q {v})" for v in variables] + ["(r)"]
+    lit = lits[rng.integers(len(lits))]
+    kind = rng.integers(0, 6) if depth > 0 else 0
+    if kind == 0:
+        return lit
+    if kind == 1:
+        return f"(not {lit})"
+    if kind == 2:
+        return f"(and {random_effect(rng, depth - 1, variables)} " \
+               f"{random_effect(rng, depth - 1, variables)})"
+    if kind == 3:
+        return f"(when {random_condition(rng, 2, variables)} " \
+               f"{random_effect(rng, depth - 1, variables)})"
+    if kind == 4:
+        v = f"?w{depth}"
+        body = f"(when {random_condition(rng, 1, [*variables, v])} " \
+               f"{random_effect(rng, 0, [*variables, v])})"
+        return f"(forall ({v} - t) {body})"
+    return f"(probabilistic 1/3 {random_effect(rng, depth - 1, variables)} " \
+           f"1/2 {random_effect(rng, depth - 1, variables)})"
+
+
+def random_domain(rng) -> tuple[str, str]:
+    actions = []
+    for i in range(3):
+        actions.append(f"""  (:action a{i} :parameters (?x - t)
+    :precondition {random_condition(rng, 3, ['?x'])}
+    :effect {random_effect(rng, 3, ['?x'])})""")
+    init = [f"({p} {o})" for p in "pqs" for o in OBJECTS if rng.random() < 0.5]
+    init += ["(r)"] * int(rng.random() < 0.5)
+    domain = ("(define (domain rnd) (:requirements :adl :probabilistic-effects)\n"
+              "  (:types t)\n  (:predicates (p ?x - t) (q ?x - t) (r) (s ?x - t) (g))\n"
+              + "\n".join(actions) + ")\n")
+    problem = (f"(define (problem rnd-1) (:domain rnd) (:objects {' '.join(OBJECTS)} - t)\n"
+               f"  (:init {' '.join(init)})\n  (:goal (g)))\n")
+    return domain, problem
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_grounded_model_agrees_with_an_independent_interpreter(seed):
+    from gdq_pddl.pddl.reachable import reachable_graph
+
+    rng = np.random.default_rng(seed)
+    domain_text, problem_text = random_domain(rng)
+    learner, planner = grounded(domain_text, problem_text)
+    planner_agrees(learner, planner)
+    graph = reachable_graph(learner)  # (g) never holds: every state is expanded
+    tree = sexp(domain_text)[0]
+    schemas = {a[1]: (a[5], a[7]) for a in tree if isinstance(a, list) and a[0] == ":action"}
+    init_atoms = sexp(problem_text)[0][4][1:]
+    init = frozenset("(" + " ".join(a) + ")" for a in init_atoms)
+    statics = learner.statics  # init atoms no effect changes (full states are compared)
+    ops = {op.name: op for op in learner.ops}
+
+    def interpret(state: frozenset[str]) -> dict[str, dict[frozenset[str], float]]:
+        out = {}
+        for name, (pre, eff) in schemas.items():
+            for o in OBJECTS:
+                b = {"?x": o}
+                if holds(pre, b, state):
+                    dist: dict[frozenset[str], float] = {}
+                    for p, adds, dels in effect(eff, b, state):
+                        t = (state - dels) | adds
+                        dist[t] = dist.get(t, 0.0) + p
+                    out[f"({name} {o})"] = {t: p for t, p in dist.items() if p > 1e-12}
+        return out
+
+    seen = {init}
+    frontier = [init]
+    while frontier:  # the interpreter's own exploration of what reality reaches
+        nxt = []
+        for state in frontier:
+            for dist in interpret(state).values():
+                for t in dist:
+                    if t not in seen:
+                        seen.add(t)
+                        nxt.append(t)
+        frontier = nxt
+    library = {learner.atoms(s) | statics for s in graph.states}
+    assert library == seen, domain_text
+    for s in graph.states:
+        state = learner.atoms(s) | statics
+        expected = interpret(state)
+        applicable = {op.name for op in learner.applicable(s)}
+        assert applicable == set(expected), (domain_text, sorted(state))
+        for name, want in expected.items():
+            got: dict[frozenset[str], float] = {}
+            for o in ops[name].outcomes:
+                t = learner.atoms(o.apply(s)) | statics
+                got[t] = got.get(t, 0.0) + o.probability
+            got = {t: p for t, p in got.items() if p > 1e-12}
+            assert got.keys() == want.keys(), (domain_text, name, sorted(state))
+            for t, p in want.items():
+                assert got[t] == pytest.approx(p), (domain_text, name)
