@@ -1,14 +1,20 @@
-"""A PDDL reader for STRIPS with typing (plus negative preconditions and equality), and
-for the part of PPDDL that gdq_pddl reads (``docs/domains.md``, "PPDDL").
+"""A PDDL reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``,
+"PPDDL"): STRIPS with typing, conditions with ``and``/``or``/``not``/``imply``/``forall``/
+``exists``/``=`` and constants, effects with ``when`` and ``forall``, and probabilistic
+effects.
 
 PPDDL (Younes and Littman, 2004): ``(probabilistic p1 e1 p2 e2 ...)`` effects, nested
-or side by side under ``and``, with rational probabilities (``0.25``, ``1/4``) that sum
-to at most 1 (the rest: no effect); action costs as ``(increase (total-cost) X)`` or
-``(decrease (reward) X)``, X a number or a function term valued in the problem's
-``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in the problem. A 0-ary
-predicate ``stuck`` marks a failed trial: an outcome that makes ``(stuck)`` true ends
-the episode. Each probabilistic action's effect is flattened here into its
-distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`).
+or side by side under ``and`` or ``when``, with rational probabilities (``0.25``,
+``1/4``) that sum to at most 1 (the rest: no effect); action costs as
+``(increase (total-cost) X)`` or ``(decrease (reward) X)``, X a number or a function
+term valued in the problem's ``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in
+the problem. A 0-ary predicate ``stuck`` marks a failed trial: an outcome that makes
+``(stuck)`` true ends the episode. Each probabilistic action's effect is flattened here
+into its distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`); conditions
+are put in negation normal form (:mod:`gdq_pddl.pddl.normalise`), and a precondition
+that is not a plain conjunction of literals keeps the rest for grounding. One file may
+hold a domain and its problems. Requirement keys are checked for typos only: they never
+decide what is read.
 
 It reads a domain and a problem into the small frozen types of :mod:`gdq_pddl.pddl.model`
 and checks that they fit together. Every error is a :class:`~gdq_pddl.errors.PDDLError`
@@ -41,7 +47,7 @@ from gdq_pddl.pddl.model import (
     Problem,
     Quantified,
 )
-from gdq_pddl.pddl.normalise import conjunction, ground_dnf, nnf
+from gdq_pddl.pddl.normalise import MAX_DISJUNCTS, conjunction, ground_dnf, nnf
 
 STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
@@ -328,7 +334,7 @@ _PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", "
                      ":metric")
 _UNSUPPORTED_SECTIONS = (":durative-action", ":derived", ":process", ":event", ":axiom",
                          ":constraints", ":timed-initial-literals")
-_LANGUAGE = "STRIPS with typing and PPDDL's probabilistic effects"
+_LANGUAGE = "the PPDDL of the IPPC probabilistic tracks, docs/domains.md"
 KNOWN_REQUIREMENTS = frozenset({
     ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
     ":equality", ":existential-preconditions", ":universal-preconditions",
@@ -377,7 +383,7 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
     actions: list[Action] = []
     for node in action_nodes:
-        action = _action(r, node, predicates, types, constants, reqs, functions)
+        action = _action(r, node, predicates, types, constants, functions)
         twin = next((a for a in actions if a.name == action.name), None)
         if twin is not None:
             raise r.fail(node.line, f"action {action.name} is declared twice (first at line "
@@ -469,7 +475,7 @@ def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> 
 
 
 def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-            types: dict[str, str | None], constants: dict[str, str], reqs: set[str],
+            types: dict[str, str | None], constants: dict[str, str],
             functions: dict[str, tuple[str, ...]]) -> Action:
     items = node.items
     assert items is not None
@@ -949,8 +955,8 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
         return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
 
     def too_many() -> PDDLError:
-        return r.fail(node.line, "goal: more than 4096 alternatives once its quantifiers "
-                      "are expanded")
+        return r.fail(node.line, f"goal: more than {MAX_DISJUNCTS} alternatives once its "
+                      "quantifiers are expanded")
 
     fluent = domain.fluent_predicates()
     static = frozenset(a for a in init if a.predicate not in fluent)
