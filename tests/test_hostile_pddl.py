@@ -94,7 +94,7 @@ def test_a_hash_in_an_object_name_is_refused_in_the_problem():
 
 @pytest.mark.parametrize(("old", "new", "line", "what"), [
     ("(:action press", "(:action 2press", 9, "an action name"),
-    ("(:types lamp switch)", "(:types lamp -switch)", 3, "a name"),
+    ("(:types lamp switch)", "(:types lamp _switch)", 3, "a name"),
     ("(domain lamp)", "(domain 1/2)", 1, "a domain name"),
     ("(on ?l - lamp)", "(?on ?l - lamp)", 4, "a predicate name"),
     (":parameters (?s - switch ?l - lamp)\n    :precondition (and",

@@ -95,6 +95,12 @@ def test_one_file_given_as_both_domain_and_problem_runs(capsys, tmp_path):
     assert (tmp_path / "out" / "episodes.csv").exists()
 
 
+def test_a_type_glued_to_its_dash_is_read_as_lexers_read_it():
+    """``(?loc -zone)``, as a published IPPC domain writes it: '-zone' is '- zone'."""
+    domain = parse_domain(ONE_FILE.replace("(?a ?b - room)", "(?a ?b -room)"))
+    assert domain.actions[1].parameters == (("?a", "room"), ("?b", "room"))
+
+
 # --- requirements declare, never decide -------------------------------------------------
 
 def test_an_undeclared_requirement_does_not_block_its_construct():

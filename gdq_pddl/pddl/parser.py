@@ -252,13 +252,14 @@ class _Reader:
         first: dict[str, int] = {}
         i = 0
         while i < len(nodes):
-            if nodes[i].symbol == "-":
-                if i + 1 >= len(nodes) or not pending:
+            glued = nodes[i].symbol[:1] == "-" and _NAME.fullmatch(nodes[i].symbol[1:])
+            if nodes[i].symbol == "-" or glued:  # '-TYPE' is '- TYPE', as PDDL lexers read it
+                if (not glued and i + 1 >= len(nodes)) or not pending:
                     raise self.fail(nodes[i].line, "expected names before '- TYPE'")
-                typ = self.name(nodes[i + 1], "a type name")
+                typ = nodes[i].symbol[1:] if glued else self.name(nodes[i + 1], "a type name")
                 out += [(p, typ, line) for p, line in pending]
                 pending = []
-                i += 2
+                i += 1 if glued else 2
                 continue
             kind = "a variable (?x)" if variables else "a name (not a variable)"
             name = self.name(nodes[i], kind, variable=variables)
