@@ -292,3 +292,29 @@ def test_every_connective_nested_up_to_the_limit_is_normalised_and_grounded(kind
     learner, planner = ground_ppddl(domain, problem)
     assert [op.name for op in learner.ops] == ["(go)"]
     assert learner.atoms(learner.ops[0].outcomes[0].apply(learner.init)) == {"(a)"}
+
+
+EIGHT = " ".join(f"?v{i}" for i in range(8))
+
+
+@pytest.mark.parametrize(("pre", "eff", "goal"), [
+    (f"(forall ({EIGHT} - t) (not (p ?v0)))", "(not (a))", "(not (a))"),
+    ("(a)", f"(forall ({EIGHT} - t) (p ?v7))", "(not (a))"),
+    ("(a)", "(not (a))", f"(exists ({EIGHT} - t) (p ?v3))"),
+])
+def test_quantifiers_that_would_expand_past_any_machine_are_refused_up_front(pre, eff, goal):
+    """Eight variables over 50 objects are 4e13 atoms: refused at once, naming the action
+    (in a precondition, a forall effect) or the goal, not a hang."""
+    objects = " ".join(f"o{i}" for i in range(50))
+    domain = parse_domain("(define (domain d) (:types t) (:predicates (a) (p ?x - t)) "
+                          f"(:action go :parameters () :precondition {pre} :effect {eff}))",
+                          "d.pddl")
+    problem = f"(define (problem q) (:domain d) (:objects {objects} - t) (:init (a)) " \
+              f"(:goal {goal}))"
+    if goal != "(not (a))":
+        refused_at(lambda: parse_problem(problem, domain, "p.pddl"), "p.pddl", 1,
+                   "atoms once its quantifiers are expanded")
+        return
+    parsed = parse_problem(problem, domain, "p.pddl")
+    refused_at(lambda: ground_ppddl(domain, parsed), "d.pddl", 1, "action go",
+               "atoms once grounded")

@@ -12,6 +12,7 @@ conjunctions of fluent atoms (must hold, must not hold).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Mapping
 
 from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
@@ -19,6 +20,9 @@ from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
 MAX_DISJUNCTS = 4096
 """Most alternatives one ground condition may expand into (a disjunction of
 disjunctions multiplies); past it the condition is refused, naming its action."""
+MAX_ATOMS = 1_000_000
+"""Most atoms one ground condition may expand into (nested quantifiers multiply: eight
+variables over 50 objects are 4e13); past it the condition is refused up front."""
 
 Disjunct = tuple[frozenset[str], frozenset[str]]
 """A conjunction of ground fluent literals: the atoms that must hold, those that must not."""
@@ -66,15 +70,22 @@ def uses_quantifier_or_disjunction(cond: Condition) -> bool:
 
 def ground_dnf(cond: Condition, binding: Mapping[str, str],
                objects: Callable[[str], list[str]], static: Callable[[Atom], bool | None],
-               too_many: Callable[[], Exception]) -> list[Disjunct]:
+               too_many: Callable[[], Exception],
+               budget: list[int] | None = None) -> list[Disjunct]:
     """``cond`` (NNF) under ``binding`` as alternatives of fluent literals.
 
     ``objects(type)`` lists the problem's objects of a type (for quantifiers);
     ``static(atom)`` is the truth of a ground atom no action changes (None: a fluent);
-    ``too_many()`` is the error raised past :data:`MAX_DISJUNCTS`. An empty list is a
-    condition that never holds; ``[(∅, ∅)]`` one that always does.
+    ``too_many()`` is the error raised past :data:`MAX_DISJUNCTS` alternatives or
+    :data:`MAX_ATOMS` atoms (``budget``: the atoms left). An empty list is a condition
+    that never holds; ``[(∅, ∅)]`` one that always does.
     """
+    if budget is None:
+        budget = [MAX_ATOMS]
     if isinstance(cond, Literal):
+        budget[0] -= 1
+        if budget[0] < 0:
+            raise too_many()
         atom = Atom(cond.atom.predicate, tuple(binding.get(a, a) for a in cond.atom.args))
         if atom.predicate == "=":
             truth: bool | None = atom.args[0] == atom.args[1]
@@ -86,11 +97,14 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
         return [(fact, frozenset())] if cond.positive else [(frozenset(), fact)]
     if isinstance(cond, Quantified):
         names = [v for v, _ in cond.variables]
+        domains = [objects(t) for _, t in cond.variables]
+        if math.prod(len(d) for d in domains) > budget[0]:
+            raise too_many()
         parts = [ground_dnf(cond.body, {**binding, **dict(zip(names, values, strict=True))},
-                            objects, static, too_many)
-                 for values in itertools.product(*(objects(t) for _, t in cond.variables))]
+                            objects, static, too_many, budget)
+                 for values in itertools.product(*domains)]
         return _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
-    parts = [ground_dnf(p, binding, objects, static, too_many) for p in cond.parts]
+    parts = [ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts]
     return _all(parts, too_many) if cond.kind == "and" else _any(parts, too_many)
 
 

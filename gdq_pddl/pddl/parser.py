@@ -47,7 +47,7 @@ from gdq_pddl.pddl.model import (
     Problem,
     Quantified,
 )
-from gdq_pddl.pddl.normalise import MAX_DISJUNCTS, conjunction, ground_dnf, nnf
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, conjunction, ground_dnf, nnf
 
 STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
@@ -598,9 +598,9 @@ class _Effects:
         if head in _CONNECTIVES:
             hint = " (FOND); give probabilities with (probabilistic ...)" \
                 if head == "oneof" else ""
-            raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported in an effect"
-                         f"{hint} (gdq_pddl reads STRIPS effects and PPDDL's probabilistic "
-                         "ones)")
+            raise r.fail(node.line, f"{ctx}: ({head} ...) cannot be an effect{hint} (an "
+                         "effect is made of literals, and, when, forall, probabilistic and "
+                         "costs)")
         atom = _atom(r, node, self.predicates, self.types, self.scope, ctx)
         return [(Fraction(1), (self.literal(Literal(atom, True), node),))]
 
@@ -956,8 +956,8 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
         return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
 
     def too_many() -> PDDLError:
-        return r.fail(node.line, f"goal: more than {MAX_DISJUNCTS} alternatives once its "
-                      "quantifiers are expanded")
+        return r.fail(node.line, f"goal: more than {MAX_DISJUNCTS} alternatives or "
+                      f"{MAX_ATOMS} atoms once its quantifiers are expanded")
 
     fluent = domain.fluent_predicates()
     static = frozenset(a for a in init if a.predicate not in fluent)

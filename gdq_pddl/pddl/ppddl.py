@@ -23,6 +23,7 @@ which is what the abstraction O does with the plans.
 from __future__ import annotations
 
 import itertools
+import math
 from collections import defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -30,7 +31,7 @@ from dataclasses import dataclass, field, replace
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl.grounding import GroundOp, GroundTask, _bindings, _bits, ground
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
-from gdq_pddl.pddl.normalise import TRUE, ground_dnf
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, ground_dnf
 from gdq_pddl.pddl.parser import is_subtype
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
@@ -287,8 +288,10 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     raw = []
     for action in domain.actions:
         def too_many(action: Action = action) -> PDDLError:
-            return PDDLError(domain.source, action.line or None, f"action {action.name}: its "
-                             "condition has too many alternatives once grounded")
+            return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
+                             f"condition or forall effect grows past {MAX_DISJUNCTS} "
+                             f"alternatives or {MAX_ATOMS} atoms once grounded over the "
+                             "problem's objects")
         whole = Junction("and", action.precondition + ((action.condition,)
                                                        if action.condition else ()))
         for b in _bindings(action, static_tuples, by_type, typed, fluent):
@@ -377,7 +380,10 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
     conds: list[tuple] = []
     for ce in o.conditional:
         names = [v for v, _ in ce.variables]
-        for values in itertools.product(*(objects(t) for _, t in ce.variables)):
+        domains = [objects(t) for _, t in ce.variables]
+        if math.prod(len(d) for d in domains) > MAX_ATOMS:
+            raise too_many()
+        for values in itertools.product(*domains):
             bb = {**b, **dict(zip(names, values, strict=True))}
             when = TRUE if ce.condition is None else \
                 ground_dnf(ce.condition, bb, objects, static, too_many)
