@@ -27,13 +27,48 @@ class Literal:
 
 
 @dataclass(frozen=True)
+class Junction:
+    """``(and ...)`` or ``(or ...)`` of conditions (``kind``: ``"and"`` or ``"or"``)."""
+
+    kind: str
+    parts: tuple[Condition, ...]
+
+
+@dataclass(frozen=True)
+class Quantified:
+    """``(forall (?x - t ...) body)`` or ``(exists ...)`` (``kind``)."""
+
+    kind: str
+    variables: tuple[tuple[str, str], ...]
+    body: Condition
+
+
+Condition = Literal | Junction | Quantified
+"""A condition in negation normal form (:mod:`gdq_pddl.pddl.normalise` makes it so):
+negation only on atoms, no ``imply``. Equality is the atom ``(= a b)``."""
+
+
+@dataclass(frozen=True)
+class CondEffect:
+    """One literal an outcome makes true or false for every binding of ``variables``
+    (a ``forall`` effect) under which ``condition`` (a ``when``; None: always) holds in
+    the state the action is taken in."""
+
+    variables: tuple[tuple[str, str], ...]
+    condition: Condition | None
+    literal: Literal
+
+
+@dataclass(frozen=True)
 class Outcome:
     """One outcome of a probabilistic action: its probability and the literals it makes
-    true or false. ``stuck``: the outcome makes ``(stuck)`` true, a failed trial."""
+    true or false. ``stuck``: the outcome makes ``(stuck)`` true, a failed trial.
+    ``conditional``: the effects that depend on the state or are quantified."""
 
     probability: float
     effect: tuple[Literal, ...]
     stuck: bool = False
+    conditional: tuple[CondEffect, ...] = ()
 
 
 CostTerm = float | Atom
@@ -58,6 +93,10 @@ class Action:
     line: int = 0
     outcomes: tuple[Outcome, ...] = ()
     cost: tuple[CostTerm, ...] = ()
+    condition: Condition | None = None
+    """The rest of the precondition, where it is more than a conjunction of literals
+    (quantifiers, disjunction): it must hold too. Such an action, or one with
+    conditional effects, has ``outcomes`` even if it is deterministic."""
 
 
 @dataclass(frozen=True)
@@ -83,7 +122,9 @@ class Domain:
     def fluent_predicates(self) -> frozenset[str]:
         """Predicates some action (some outcome of it) changes; the others are static."""
         return frozenset(lit.atom.predicate for a in self.actions
-                         for lits in (a.effect, *(o.effect for o in a.outcomes))
+                         for lits in (a.effect, *(o.effect for o in a.outcomes),
+                                      *((c.literal for c in o.conditional)
+                                        for o in a.outcomes))
                          for lit in lits)
 
 

@@ -1,14 +1,20 @@
-"""A PDDL reader for STRIPS with typing (plus negative preconditions and equality), and
-for the part of PPDDL that gdq_pddl reads (``docs/domains.md``, "PPDDL").
+"""A PDDL reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``,
+"PPDDL"): STRIPS with typing, conditions with ``and``/``or``/``not``/``imply``/``forall``/
+``exists``/``=`` and constants, effects with ``when`` and ``forall``, and probabilistic
+effects.
 
 PPDDL (Younes and Littman, 2004): ``(probabilistic p1 e1 p2 e2 ...)`` effects, nested
-or side by side under ``and``, with rational probabilities (``0.25``, ``1/4``) that sum
-to at most 1 (the rest: no effect); action costs as ``(increase (total-cost) X)`` or
-``(decrease (reward) X)``, X a number or a function term valued in the problem's
-``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in the problem. A 0-ary
-predicate ``stuck`` marks a failed trial: an outcome that makes ``(stuck)`` true ends
-the episode. Each probabilistic action's effect is flattened here into its
-distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`).
+or side by side under ``and`` or ``when``, with rational probabilities (``0.25``,
+``1/4``) that sum to at most 1 (the rest: no effect); action costs as
+``(increase (total-cost) X)`` or ``(decrease (reward) X)``, X a number or a function
+term valued in the problem's ``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in
+the problem. A 0-ary predicate ``stuck`` marks a failed trial: an outcome that makes
+``(stuck)`` true ends the episode. Each probabilistic action's effect is flattened here
+into its distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`); conditions
+are put in negation normal form (:mod:`gdq_pddl.pddl.normalise`), and a precondition
+that is not a plain conjunction of literals keeps the rest for grounding. One file may
+hold a domain and its problems. Requirement keys are checked for typos only: they never
+decide what is read.
 
 It reads a domain and a problem into the small frozen types of :mod:`gdq_pddl.pddl.model`
 and checks that they fit together. Every error is a :class:`~gdq_pddl.errors.PDDLError`
@@ -20,6 +26,7 @@ reports pyparsing character offsets; plans are still validated with unified-plan
 from __future__ import annotations
 
 import re
+import string
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -27,10 +34,21 @@ from pathlib import Path
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import MAX_NUMBER
-from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Outcome, Problem
+from gdq_pddl.pddl.model import (
+    Action,
+    Atom,
+    CondEffect,
+    Condition,
+    CostTerm,
+    Domain,
+    Junction,
+    Literal,
+    Outcome,
+    Problem,
+    Quantified,
+)
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, conjunction, ground_dnf, nnf
 
-SUPPORTED = {":strips", ":typing", ":negative-preconditions", ":equality",
-             ":probabilistic-effects", ":action-costs", ":rewards"}
 STUCK = "stuck"
 """The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
 COST_FLUENTS = ("total-cost", "reward")
@@ -48,7 +66,23 @@ fraction is built at once (``1e-99999999``'s would take minutes)."""
 _NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
 """What may be a number (:class:`~fractions.Fraction` reads it or says it is not);
 linear, so a long symbol is rejected at once."""
-_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s()]+|\s+")
+_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+|\s+")
+_SYMBOL = re.compile(r"[?:]?[A-Za-z0-9_.+/-]+|=")
+"""What a symbol may be written with: a name, a ``?variable``, a ``:keyword``, a number
+(``0.25``, ``1/4``, ``2.5e-3``), ``-`` or ``=``. Any other character is refused where it
+stands, never dropped (``#`` does not start a comment: ``;`` does)."""
+_SYMBOL_CHARS = frozenset(string.ascii_letters + string.digits + "_.+/-")
+_NAME = re.compile(r"[a-z][a-z0-9_-]*")
+"""A name (of a domain, type, object, predicate, action...): a letter, then letters,
+digits, ``-`` and ``_`` (PDDL's grammar); a variable is ``?`` and a name."""
+_PROBLEM_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")
+"""A problem's name may also start with a digit (a world file's name, which a generated
+office problem's starts with, may); it is never a term of a formula."""
+MAX_DEPTH = 200
+"""Deepest nesting of parentheses read. Real domains nest a few dozen levels at most;
+the later stages walk formulas recursively, so a file nested deeper is refused at the
+line where it passes this depth, instead of exhausting Python's stack."""
+BOM = "\ufeff"
 
 
 @dataclass(frozen=True)
@@ -71,17 +105,23 @@ class Node:
 
 class _Reader:
     def __init__(self, text: str, source: str) -> None:
-        self.text, self.source = text, source
+        self.text, self.source = text.removeprefix(BOM), source
 
     def fail(self, line: int | None, message: str) -> PDDLError:
         return PDDLError(self.source, line, message)
 
-    def tree(self) -> Node:
+    def forms(self) -> list[Node]:
+        """The file's top-level forms (one ``(define ...)`` each; IPPC files hold a
+        domain and its problems in one file)."""
         stack: list[tuple[int, list[Node]]] = []
-        line, top = 1, None
+        line, top = 1, []
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
+                if len(stack) >= MAX_DEPTH:
+                    raise self.fail(line, f"parentheses nested more than {MAX_DEPTH} levels "
+                                    "deep; no domain or problem needs that many (is a ')' "
+                                    "missing?)")
                 stack.append((line, []))
             elif tok == ")":
                 if not stack:
@@ -90,23 +130,97 @@ class _Reader:
                 node = Node(start, tuple(items))
                 if stack:
                     stack[-1][1].append(node)
-                elif top is None:
-                    top = node
                 else:
-                    raise self.fail(start, "expected end of file after the (define ...) form")
+                    top.append(node)
             elif tok[0].isspace() or tok[0] == ";":
                 pass
             elif not stack:
                 raise self.fail(line, f"expected '(' but found {tok!r}")
             else:
-                stack[-1][1].append(Node(line, symbol=tok.lower()))
+                stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
             line += tok.count("\n")
         if stack:
             line = _suspect_unclosed(self.text) or stack[-1][0]
             raise self.fail(line, "expected ')': this '(' is never closed")
-        if top is None:
+        if not top:
             raise self.fail(None, "empty file: expected (define ...)")
         return top
+
+    def pick(self, kind: str, name: str | None = None) -> Node:
+        """The ``(define (KIND NAME) ...)`` form of the file: the only one of its kind,
+        or the one named ``name``; the others may be of the other kind."""
+        found: list[tuple[str, Node]] = []
+        for node in self.forms():
+            items = self.lst(node, "(define ...)")
+            head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
+            if head is None or not head.is_list or not head.items or \
+                    head.items[0].symbol not in ("domain", "problem"):
+                raise self.fail(node.line, "expected (define (domain NAME) ...) or (define "
+                                f"(problem NAME) ...), found {_short(node)}")
+            if head.items[0].symbol == kind:
+                label = head.items[1].symbol if len(head.items) == 2 else ""
+                found.append((label, node))
+        other = "problem" if kind == "domain" else "domain"
+        if not found:
+            raise self.fail(None, f"expected a (define ({kind} NAME) ...) form; this file "
+                            f"has only {other}s")
+        if name is not None:
+            chosen = [node for label, node in found if label == name.lower()]
+            if not chosen:
+                raise self.fail(None, f"no {kind} named {name!r} in this file (it has "
+                                f"{', '.join(label for label, _ in found)})")
+            return chosen[0]
+        if len(found) > 1:
+            labels = ", ".join(label for label, _ in found)
+            raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
+                            f"({labels}): pick one by name")
+        return found[0][1]
+
+    def refuse_outside(self) -> None:
+        """Refuse a file that uses constructs outside the language, naming every one."""
+        seen: dict[str, list[int]] = {}
+        todo = list(self.forms())
+        while todo:
+            node = todo.pop()
+            if not node.items:
+                continue
+            head = node.items[0].symbol
+            if head in _OUTSIDE or (head in _UNSUPPORTED_SECTIONS):
+                seen.setdefault(head, []).append(node.line)
+            todo.extend(i for i in node.items if i.is_list)
+        if seen:
+            order = sorted(seen, key=lambda h: min(seen[h]))
+            listed = "; ".join(f"({h} ...){_OUTSIDE.get(h, '')} at line"
+                               f"{'s' if len(seen[h]) > 1 else ''} "
+                               f"{', '.join(map(str, sorted(seen[h])))}" for h in order)
+            raise self.fail(min(seen[order[0]]), f"not supported (gdq_pddl reads "
+                            f"{_LANGUAGE}): {listed}")
+
+    def checked(self, tok: str, line: int) -> str:
+        """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that
+        no symbol may have."""
+        if _SYMBOL.fullmatch(tok):
+            return tok.lower()
+        bad = next((ch for i, ch in enumerate(tok)
+                    if ch not in _SYMBOL_CHARS and not (i == 0 and ch in "?:")), None)
+        if bad is None:  # a lone '?' or ':'
+            raise self.fail(line, f"expected a name, a ?variable, a :keyword or a number, "
+                            f"found {tok!r}")
+        hint = " (a comment starts with ';', not '#')" if bad == "#" else ""
+        raise self.fail(line, f"the character {bad!r} cannot be part of a name, found in "
+                        f"{tok!r}{hint}; names are ASCII letters, digits, '-' and '_'")
+
+    def name(self, node: Node, what: str, variable: bool = False,
+             grammar: re.Pattern = _NAME) -> str:
+        """The symbol ``node``, which must be a name (``variable``: a ``?name``)."""
+        text = self.symbol(node, what)
+        bare = text[1:] if variable and text.startswith("?") else text
+        if (variable and not text.startswith("?")) or not grammar.fullmatch(bare):
+            first = "letter or digit" if grammar is _PROBLEM_NAME else "letter"
+            raise self.fail(node.line, f"expected {what}, found {text!r} (a name is a "
+                            f"{first}, then letters, digits, '-' and '_'"
+                            + ("; a variable is '?' and a name)" if variable else ")"))
+        return text
 
     # --- helpers ---------------------------------------------------------------------
     def symbol(self, node: Node, what: str) -> str:
@@ -126,42 +240,71 @@ class _Reader:
         head = self.lst(items[1], f"({kind} NAME)")
         if len(head) != 2 or head[0].symbol != kind:
             raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
-        return self.symbol(head[1], f"a {kind} name"), items[2:]
+        grammar = _PROBLEM_NAME if kind == "problem" else _NAME
+        return self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
 
-    def typed_list(self, nodes: tuple[Node, ...], variables: bool) -> list[tuple[str, str]]:
-        """``a b - t c`` -> [(a, t), (b, t), (c, object)]."""
-        out: list[tuple[str, str]] = []
-        pending: list[str] = []
+    def typed_list(self, nodes: tuple[Node, ...], variables: bool, what: str,
+                   ) -> list[tuple[str, str, int]]:
+        """``a b - t c`` -> [(a, t, line), (b, t, line), (c, object, line)]; a name
+        given twice is refused (``what``: what the names are, for the message)."""
+        out: list[tuple[str, str, int]] = []
+        pending: list[tuple[str, int]] = []
+        first: dict[str, int] = {}
         i = 0
         while i < len(nodes):
-            name = self.symbol(nodes[i], "a name")
-            if name == "-":
-                if i + 1 >= len(nodes) or not pending:
+            glued = nodes[i].symbol[:1] == "-" and _NAME.fullmatch(nodes[i].symbol[1:])
+            if nodes[i].symbol == "-" or glued:  # '-TYPE' is '- TYPE', as PDDL lexers read it
+                if (not glued and i + 1 >= len(nodes)) or not pending:
                     raise self.fail(nodes[i].line, "expected names before '- TYPE'")
-                typ = self.symbol(nodes[i + 1], "a type name")
-                out += [(p, typ) for p in pending]
+                typ = nodes[i].symbol[1:] if glued else self.name(nodes[i + 1], "a type name")
+                out += [(p, typ, line) for p, line in pending]
                 pending = []
-                i += 2
+                i += 1 if glued else 2
                 continue
-            if variables != name.startswith("?"):
-                want = "a variable (?x)" if variables else "a name (not a variable)"
-                raise self.fail(nodes[i].line, f"expected {want}, found {name!r}")
-            pending.append(name)
+            kind = "a variable (?x)" if variables else "a name (not a variable)"
+            name = self.name(nodes[i], kind, variable=variables)
+            if name in first:
+                raise self.fail(nodes[i].line, f"{what} {name} is declared twice (first at "
+                                f"line {first[name]})")
+            first[name] = nodes[i].line
+            pending.append((name, nodes[i].line))
             i += 1
-        return out + [(p, "object") for p in pending]
+        return out + [(p, "object", line) for p, line in pending]
 
-    def sections(self, body: tuple[Node, ...]) -> dict[str, Node]:
+    def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
+                 kind: str) -> tuple[dict[str, Node], list[Node]]:
+        """The sections of a domain or problem by keyword, and its ``(:action ...)``
+        forms in order; a keyword not in ``known`` (nor ``:action`` in a domain) is
+        refused, as is a section given twice."""
         out: dict[str, Node] = {}
+        actions: list[Node] = []
         for node in body:
             items = self.lst(node, "a section such as (:predicates ...)")
             if not items or items[0].is_list or not items[0].symbol.startswith(":"):
                 raise self.fail(node.line,
                                 f"expected a section (:keyword ...), found {node.text()}")
             key = items[0].symbol
-            if key != ":action" and key in out:
-                raise self.fail(node.line, f"duplicate section {key}")
-            out[key if key != ":action" else f":action{len(out)}"] = node
-        return out
+            if key == ":action" and kind == "domain":
+                actions.append(node)
+                continue
+            if key in _UNSUPPORTED_SECTIONS:
+                raise self.fail(node.line, f"{key} is not supported (gdq_pddl reads "
+                                f"{_LANGUAGE})")
+            if key not in known:
+                expected = (*known, ":action") if kind == "domain" else known
+                raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
+                                f"one of {', '.join(expected)})")
+            if key in out:
+                raise self.fail(node.line, f"duplicate section {key} (first at line "
+                                f"{out[key].line})")
+            out[key] = node
+        return out, actions
+
+
+def _short(node: Node) -> str:
+    """The start of ``node``'s text, for a message."""
+    text = node.text()
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _suspect_unclosed(text: str) -> int | None:
@@ -187,56 +330,113 @@ def _suspect_unclosed(text: str) -> int | None:
     return None
 
 
+_DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions")
+_PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
+                     ":metric")
+_UNSUPPORTED_SECTIONS = (":durative-action", ":derived", ":process", ":event", ":axiom",
+                         ":constraints", ":timed-initial-literals")
+_LANGUAGE = "the PPDDL of the IPPC probabilistic tracks, docs/domains.md"
+KNOWN_REQUIREMENTS = frozenset({
+    ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
+    ":equality", ":existential-preconditions", ":universal-preconditions",
+    ":quantified-preconditions", ":conditional-effects", ":fluents", ":numeric-fluents",
+    ":object-fluents", ":adl", ":durative-actions", ":duration-inequalities",
+    ":continuous-effects", ":derived-predicates", ":timed-initial-literals",
+    ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
+    ":rewards", ":mdp", ":non-deterministic"})
+"""Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
+_OUTSIDE = {"oneof": " (FOND: give probabilities with (probabilistic ...))",
+            "assign": " (numeric fluents)", "scale-up": " (numeric fluents)",
+            "scale-down": " (numeric fluents)", "either": " (either-types)"}
+"""Connectives outside the language read, each with a hint: a file using any is refused
+with every use listed (:meth:`_Reader.refuse_outside`)."""
+_RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either",
+                       "probabilistic", "oneof", "increase", "decrease", "assign"})
+"""Words a formula reads as connectives: no predicate may be named so."""
+
+
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
     """Parse a domain; raise :class:`PDDLError` with file and line on any problem."""
     r = _Reader(text, source)
-    name, body = r.header(r.tree(), "domain")
-    sec = r.sections(body)
-    known = {":requirements", ":types", ":constants", ":predicates", ":functions"}
-    for key, node in sec.items():
-        if key not in known and not key.startswith(":action"):
-            raise r.fail(node.line, f"{key.split('0')[0]} is not supported "
-                         "(gdq_pddl reads STRIPS with typing)")
-    reqs = set()
-    if ":requirements" in sec:
-        for n in sec[":requirements"].items[1:]:
-            req = r.symbol(n, "a requirement")
-            if req not in SUPPORTED:
-                raise r.fail(n.line, f"requirement {req} is not supported "
-                             f"(supported: {' '.join(sorted(SUPPORTED))})")
-            reqs.add(req)
-    types = {"object": None}
-    if ":types" in sec:
-        for t, parent in r.typed_list(sec[":types"].items[1:], variables=False):
-            types[t] = parent
-        for t, parent in list(types.items()):
-            if parent is not None and parent not in types:
-                raise r.fail(sec[":types"].line, f"type {t} has unknown parent type {parent}")
+    r.refuse_outside()
+    name, body = r.header(r.pick("domain"), "domain")
+    sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
+    reqs = _requirements(r, sec[":requirements"]) if ":requirements" in sec else set()
+    types = _types(r, sec[":types"]) if ":types" in sec else {"object": None}
     constants = {}
     if ":constants" in sec:
-        for c, t in r.typed_list(sec[":constants"].items[1:], variables=False):
-            _check_type(r, types, t, sec[":constants"].line)
+        for c, t, line in r.typed_list(sec[":constants"].items[1:], False, "constant"):
+            _check_type(r, types, t, line)
             constants[c] = t
     predicates: dict[str, tuple[str, ...]] = {}
     if ":predicates" in sec:
+        first: dict[str, int] = {}
         for node in sec[":predicates"].items[1:]:
             pname, signature = _signature(r, node, types, "predicate")
+            if pname in first:
+                raise r.fail(node.line, f"predicate {pname} is declared twice (first at "
+                             f"line {first[pname]})")
+            if pname in _RESERVED:
+                raise r.fail(node.line, f"a predicate cannot be named {pname}: formulas "
+                             "read it as a connective")
+            first[pname] = node.line
             predicates[pname] = signature
     functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
-    actions = []
-    for key, node in sec.items():
-        if key.startswith(":action"):
-            actions.append(_action(r, node, predicates, types, constants, reqs, functions))
-    names = [a.name for a in actions]
-    if len(set(names)) != len(names):
-        raise r.fail(None, f"duplicate action names in {sorted(names)}")
+    actions: list[Action] = []
+    for node in action_nodes:
+        action = _action(r, node, predicates, types, constants, functions)
+        twin = next((a for a in actions if a.name == action.name), None)
+        if twin is not None:
+            raise r.fail(node.line, f"action {action.name} is declared twice (first at line "
+                         f"{twin.line})")
+        actions.append(action)
     return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source,
                   functions)
+
+
+def _requirements(r: _Reader, node: Node) -> set[str]:
+    """The keys of ``(:requirements ...)``, each a requirement of PDDL or PPDDL (a typo
+    is refused). They declare, and never decide: what the file uses is read, or refused
+    for what it is (:data:`_OUTSIDE`), whatever it declares."""
+    out = set()
+    for n in node.items[1:]:
+        req = r.symbol(n, "a requirement")
+        if req not in KNOWN_REQUIREMENTS:
+            raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
+                         "PPDDL are :strips, :typing, :adl, :probabilistic-effects, ...)")
+        out.add(req)
+    return out
+
+
+def _types(r: _Reader, node: Node) -> dict[str, str | None]:
+    """``(:types a b - c)`` -> ``{object: None, a: c, b: c, c: object}``; a type declared
+    twice, an undeclared parent and a cycle of parents are refused."""
+    types: dict[str, str | None] = {"object": None}
+    lines: dict[str, int] = {}
+    for t, parent, line in r.typed_list(node.items[1:], False, "type"):
+        if t == "object":
+            if parent != "object":
+                raise r.fail(line, f"object is the root type: it cannot be a {parent}")
+            continue
+        types[t], lines[t] = parent, line
+    for t, parent in types.items():
+        if parent is not None and parent not in types:
+            raise r.fail(lines[t], f"type {t} has unknown parent type {parent}")
+    for t in lines:
+        chain = [t]
+        while (parent := types[chain[-1]]) is not None:
+            if parent in chain:
+                cycle = " - ".join(chain[chain.index(parent):] + [parent])
+                raise r.fail(lines[t], f"the types form a cycle ({cycle}): every type must "
+                             "lead up to object")
+            chain.append(parent)
+    return types
 
 
 def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str, tuple[str, ...]]:
     """``(:functions (f ?x - t) - number (total-cost))`` -> ``{f: (t,), total-cost: ()}``."""
     out: dict[str, tuple[str, ...]] = {}
+    first: dict[str, int] = {}
     items = node.items[1:]
     i = 0
     while i < len(items):
@@ -248,6 +448,10 @@ def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str
             i += 2
             continue
         fname, signature = _signature(r, item, types, "function")
+        if fname in first:
+            raise r.fail(item.line, f"function {fname} is declared twice (first at line "
+                         f"{first[fname]})")
+        first[fname] = item.line
         out[fname] = signature
         i += 1
     return out
@@ -259,11 +463,11 @@ def _signature(r: _Reader, node: Node, types: dict[str, str | None],
     items = r.lst(node, f"a {what} (name ?x - type ...)")
     if not items:
         raise r.fail(node.line, f"expected a {what} name")
-    name = r.symbol(items[0], f"a {what} name")
-    params = r.typed_list(items[1:], variables=True)
-    for _, t in params:
-        _check_type(r, types, t, node.line)
-    return name, tuple(t for _, t in params)
+    name = r.name(items[0], f"a {what} name")
+    params = r.typed_list(items[1:], True, f"{what} {name}: parameter")
+    for _, t, line in params:
+        _check_type(r, types, t, line)
+    return name, tuple(t for _, t, _ in params)
 
 
 def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> None:
@@ -272,13 +476,13 @@ def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> 
 
 
 def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-            types: dict[str, str | None], constants: dict[str, str], reqs: set[str],
+            types: dict[str, str | None], constants: dict[str, str],
             functions: dict[str, tuple[str, ...]]) -> Action:
     items = node.items
     assert items is not None
     if len(items) < 2:
         raise r.fail(node.line, "expected (:action NAME :parameters (...) ...)")
-    name = r.symbol(items[1], "an action name")
+    name = r.name(items[1], "an action name")
     fields: dict[str, Node] = {}
     rest = items[2:]
     if len(rest) % 2:
@@ -288,25 +492,49 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
         if k not in (":parameters", ":precondition", ":effect"):
             raise r.fail(key.line, f"action {name}: unexpected {k} (expected :parameters, "
                          ":precondition or :effect)")
+        if k in fields:
+            raise r.fail(key.line, f"action {name}: {k} is given twice (first at line "
+                         f"{fields[k].line})")
         fields[k] = value
-    params = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), variables=True) \
-        if ":parameters" in fields else []
-    for _, t in params:
-        _check_type(r, types, t, node.line)
+    typed = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), True,
+                         f"action {name}: parameter") if ":parameters" in fields else []
+    for _, t, line in typed:
+        _check_type(r, types, t, line)
+    params = [(p, t) for p, t, _ in typed]
     scope = dict(params) | constants
     ctx = f"action {name}"
-    pre = _literals(r, fields.get(":precondition"), predicates, types, scope, ctx, reqs, True)
+    pre, rest = _precondition(r, fields.get(":precondition"), predicates, types, scope, ctx)
     reader = _Effects(r, predicates, types, scope, ctx, functions)
     branches = reader.effect(fields.get(":effect"), inside=False)
-    if not reader.probabilistic:
-        return Action(name, tuple(params), tuple(pre), branches[0][1], node.line,
+    if not reader.probabilistic and not reader.conditional and rest is None:
+        return Action(name, tuple(params), pre, branches[0][1], node.line,  # type: ignore
                       cost=tuple(reader.costs))
-    return Action(name, tuple(params), tuple(pre), (), node.line,
-                  _outcomes(branches, predicates), tuple(reader.costs))
+    return Action(name, tuple(params), pre, (), node.line,
+                  _outcomes(branches, predicates), tuple(reader.costs), rest)
 
 
-Branches = list[tuple[Fraction, tuple[Literal, ...]]]
-"""An effect as a distribution: ``(probability, literals)`` pairs summing to 1."""
+def _precondition(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
+                  types: dict[str, str | None], scope: dict[str, str],
+                  ctx: str) -> tuple[tuple[Literal, ...], Condition | None]:
+    """A precondition as its literals (a conjunction, in order) and the rest (None: it is
+    all literals). The rest holds what only grounding can decide: quantifiers and
+    disjunctions, in negation normal form."""
+    if node is None:
+        return (), None
+    cond = nnf(_condition(r, node, predicates, types, scope, ctx))
+    lits = conjunction(cond)
+    if lits is not None:
+        return lits, None
+    assert isinstance(cond, (Junction, Quantified))
+    parts = cond.parts if isinstance(cond, Junction) and cond.kind == "and" else (cond,)
+    literals = tuple(p for p in parts if isinstance(p, Literal))
+    others = tuple(p for p in parts if not isinstance(p, Literal))
+    return literals, (others[0] if len(others) == 1 else Junction("and", others))
+
+
+Branches = list[tuple[Fraction, tuple[Literal | CondEffect, ...]]]
+"""An effect as a distribution: ``(probability, effects)`` pairs summing to 1; each
+effect a literal, or a conditional or quantified one."""
 
 
 class _Effects:
@@ -319,6 +547,11 @@ class _Effects:
         self.ctx, self.functions = ctx, functions
         self.costs: list[CostTerm] = []
         self.probabilistic = False
+        self.conditional = False
+        self.variables: tuple[tuple[str, str], ...] = ()
+        """The variables of the ``forall`` effects around the effect being read."""
+        self.when: Condition | None = None
+        """The conditions of the ``when`` effects around it, joined (None: none)."""
 
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
@@ -329,6 +562,8 @@ class _Effects:
         if not items:
             return [(Fraction(1), ())]
         head = items[0].symbol
+        if head in ("when", "forall"):
+            return self.scoped(node, items, inside)
         if head == "and":
             out: Branches = [(Fraction(1), ())]
             for sub in items[1:]:
@@ -344,6 +579,9 @@ class _Effects:
                 raise r.fail(node.line, f"{ctx}: a cost inside (probabilistic ...) is not "
                              "supported: an action's cost cannot depend on its outcome; "
                              "state it outside the probabilistic effect")
+            if self.when is not None or self.variables:
+                raise r.fail(node.line, f"{ctx}: a cost inside (when ...) or (forall ...) "
+                             "is not supported: an action's cost cannot depend on the state")
             self.costs.append(self.cost(node, items))
             return [(Fraction(1), ())]
         if head == "not":
@@ -354,17 +592,59 @@ class _Effects:
             if atom.predicate == STUCK and self.predicates[STUCK] == ():
                 raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) "
                              "marks a failed trial, which ends the episode")
-            return [(Fraction(1), (Literal(atom, False),))]
+            return [(Fraction(1), (self.literal(Literal(atom, False), node),))]
         if head == "=":
             raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
         if head in _CONNECTIVES:
             hint = " (FOND); give probabilities with (probabilistic ...)" \
                 if head == "oneof" else ""
-            raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported in an effect"
-                         f"{hint} (gdq_pddl reads STRIPS effects and PPDDL's probabilistic "
-                         "ones)")
-        return [(Fraction(1), (Literal(_atom(r, node, self.predicates, self.types,
-                                             self.scope, ctx), True),))]
+            raise r.fail(node.line, f"{ctx}: ({head} ...) cannot be an effect{hint} (an "
+                         "effect is made of literals, and, when, forall, probabilistic and "
+                         "costs)")
+        atom = _atom(r, node, self.predicates, self.types, self.scope, ctx)
+        return [(Fraction(1), (self.literal(Literal(atom, True), node),))]
+
+    def literal(self, lit: Literal, node: Node) -> Literal | CondEffect:
+        """``lit`` as an effect of the ``when``/``forall`` effects around it."""
+        if self.when is None and not self.variables:
+            return lit
+        if lit.atom.predicate == STUCK and self.predicates.get(STUCK) == ():
+            raise self.r.fail(node.line, f"{self.ctx}: (stuck) inside (when ...) or (forall "
+                              "...) is not supported: a failed trial is an outcome of its "
+                              "own; write it in (probabilistic ...)")
+        self.conditional = True
+        return CondEffect(self.variables, self.when, lit)
+
+    def scoped(self, node: Node, items: tuple[Node, ...], inside: bool) -> Branches:
+        """``(when CONDITION EFFECT)`` or ``(forall (?x - t ...) EFFECT)``: the effect's
+        literals hold under the condition, for every binding of the variables. A
+        probabilistic effect inside a ``when`` keeps its probabilities (the condition is
+        read in the state the action is taken in, whatever the outcome); inside a
+        ``forall`` it would be a choice per object, which is not read."""
+        r, ctx, head = self.r, self.ctx, items[0].symbol
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected ({head} "
+                         f"{'CONDITION' if head == 'when' else '(?x - TYPE ...)'} EFFECT)")
+        saved = self.scope, self.variables, self.when
+        try:
+            if head == "when":
+                cond = nnf(_condition(r, items[1], self.predicates, self.types, self.scope,
+                                      ctx))
+                self.when = cond if self.when is None else Junction("and", (self.when, cond))
+            else:
+                typed = r.typed_list(r.lst(items[1], "a variable list"), True,
+                                     f"{ctx}: variable")
+                for _, t, line in typed:
+                    _check_type(r, self.types, t, line)
+                self.variables += tuple((v, t) for v, t, _ in typed)
+                self.scope = {**self.scope, **{v: t for v, t, _ in typed}}
+            branches = self.effect(items[2], inside)
+        finally:
+            self.scope, self.variables, self.when = saved
+        if head == "forall" and len(branches) > 1:
+            raise r.fail(node.line, f"{ctx}: (probabilistic ...) inside (forall ...) is not "
+                         "supported (a choice per object)")
+        return branches
 
     def probabilistic_effect(self, node: Node, items: tuple[Node, ...]) -> Branches:
         """``(probabilistic p1 e1 ...)``: each ``e_i`` with ``p_i``; the rest, no effect."""
@@ -446,21 +726,23 @@ def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tup
     stuck = Atom(STUCK, ())
     is_stuck_domain = predicates.get(STUCK) == ()
     merged: dict[tuple, Fraction] = {}
-    for p, lits in branches:
+    for p, effects in branches:
         if p == 0:
             continue
+        lits = tuple(e for e in effects if isinstance(e, Literal))
+        conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         if is_stuck_domain and Literal(stuck, True) in lits:
             key: tuple = ("stuck",)
         else:
             unique = tuple(dict.fromkeys(lits))
-            key = ("effect", frozenset(unique), unique)
+            key = ("effect", frozenset(unique), unique, frozenset(conds), conds)
         merged[key] = merged.get(key, Fraction(0)) + p
     out = []
     for key, p in merged.items():
         if key[0] == "stuck":
             out.append(Outcome(float(p), (), True))
         else:
-            out.append(Outcome(float(p), key[2]))
+            out.append(Outcome(float(p), key[2], conditional=key[4]))
     return tuple(out)
 
 
@@ -502,51 +784,56 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
     return value
 
 
-def _literals(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
-              types: dict[str, str | None], scope: dict[str, str], ctx: str,
-              reqs: set[str], precondition: bool) -> list[Literal]:
-    """Flatten a conjunction of (possibly negated) atoms."""
-    if node is None:
-        return []
+def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
+               types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Condition:
+    """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
+    :class:`Junction` kinds; :func:`~gdq_pddl.pddl.normalise.nnf` compiles them away)."""
     items = r.lst(node, "a formula")
     if not items:
-        return []
+        return Junction("and", ())
     head = items[0].symbol
-    if head == "and":
-        out: list[Literal] = []
-        for sub in items[1:]:
-            out += _literals(r, sub, predicates, types, scope, ctx, reqs, precondition)
-        return out
+
+    def sub(n: Node, extra: dict[str, str] | None = None) -> Condition:
+        return _condition(r, n, predicates, types, {**scope, **extra} if extra else scope,
+                          ctx)
+
+    if head in ("and", "or"):
+        return Junction(head, tuple(sub(i) for i in items[1:]))
     if head == "not":
         if len(items) != 2:
-            raise r.fail(node.line, f"{ctx}: expected (not (ATOM))")
-        inner = _literals(r, items[1], predicates, types, scope, ctx, reqs, precondition)
-        if len(inner) != 1 or not inner[0].positive:
-            raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
-        # PPDDL domains (pddlgym's, for one) use them without declaring the requirement
-        if precondition and inner[0].atom.predicate != "=" and \
-                not reqs & {":negative-preconditions", ":probabilistic-effects"}:
-            raise r.fail(node.line, f"{ctx}: a negative precondition needs the "
-                         ":negative-preconditions requirement")
-        return [Literal(inner[0].atom, False)]
+            raise r.fail(node.line, f"{ctx}: expected (not FORMULA)")
+        inner = sub(items[1])
+        return Literal(inner.atom, not inner.positive) if isinstance(inner, Literal) else \
+            Junction("not", (inner,))
+    if head == "imply":
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected (imply FORMULA FORMULA)")
+        return Junction("imply", (sub(items[1]), sub(items[2])))
+    if head in ("forall", "exists"):
+        if len(items) != 3:
+            raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
+        typed = r.typed_list(r.lst(items[1], "a variable list"), True, f"{ctx}: variable")
+        for _, t, line in typed:
+            _check_type(r, types, t, line)
+        return Quantified(head, tuple((v, t) for v, t, _ in typed),
+                          sub(items[2], {v: t for v, t, _ in typed}))
     if head == "probabilistic":
         raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
                      f"{'precondition' if ctx.startswith('action') else 'goal'}")
-    if head in ("or", "imply", "forall", "exists", "when", "increase", "decrease", "oneof"):
-        raise r.fail(node.line, f"{ctx}: ({head} ...) is not supported (STRIPS with typing only)")
+    if head in ("when", "increase", "decrease", "oneof"):
+        raise r.fail(node.line, f"{ctx}: ({head} ...) can only be an effect, not part of a "
+                     "condition")
     if head == "=":
-        if not precondition:
-            raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
         args = tuple(r.symbol(a, "a term") for a in items[1:])
         if len(args) != 2:
             raise r.fail(node.line, f"{ctx}: (= a b) takes two terms")
         for a in args:
             if a not in scope:
                 raise r.fail(node.line, f"{ctx}: unknown term {a!r}")
-        return [Literal(Atom("=", args), True)]
+        return Literal(Atom("=", args), True)
     atom = _atom(r, node, predicates, types, scope, ctx)
     _not_stuck(r, atom, predicates, node.line, ctx)
-    return [Literal(atom, True)]
+    return Literal(atom, True)
 
 
 def _not_stuck(r: _Reader, atom: Atom, predicates: dict[str, tuple[str, ...]], line: int,
@@ -592,17 +879,21 @@ def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
     return want == "object"
 
 
-def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Problem:
-    """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit."""
+def parse_problem(text: str, domain: Domain, source: str = "<problem>",
+                  name: str | None = None) -> Problem:
+    """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit.
+
+    ``text`` may hold the domain too, and several problems: ``name`` picks one (needed
+    when there are several)."""
     r = _Reader(text, source)
-    name, body = r.header(r.tree(), "problem")
-    sec = r.sections(body)
-    for key, node in sec.items():
-        if key not in (":domain", ":objects", ":init", ":goal", ":requirements",
-                       ":goal-reward", ":metric"):
-            raise r.fail(node.line, f"{key} is not supported in a problem")
+    r.refuse_outside()
+    top = r.pick("problem", name)
+    name, body = r.header(top, "problem")
+    sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
+    if ":requirements" in sec:
+        _requirements(r, sec[":requirements"])
     if ":domain" not in sec:
-        raise r.fail(None, "expected (:domain NAME)")
+        raise r.fail(top.line, "expected (:domain NAME)")
     dnode = sec[":domain"]
     dname = r.symbol(dnode.items[1], "a domain name") if len(dnode.items) == 2 else None
     if dname != domain.name:
@@ -610,13 +901,14 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
                      f"{domain.name!r} ({domain.source})")
     objects = dict(domain.constants)
     if ":objects" in sec:
-        for o, t in r.typed_list(sec[":objects"].items[1:], variables=False):
-            _check_type(r, domain.types, t, sec[":objects"].line)
+        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object"):
+            _check_type(r, domain.types, t, line)
             if o in objects:
-                raise r.fail(sec[":objects"].line, f"object {o} is declared twice")
+                raise r.fail(line, f"object {o} is declared twice (as a constant of the "
+                             f"domain, {domain.source})")
             objects[o] = t
     if ":init" not in sec:
-        raise r.fail(None, "expected (:init ...), the initial state")
+        raise r.fail(top.line, "expected (:init ...), the initial state")
     init, values = [], {}
     given: dict[str, tuple[float, Node]] = {}  # function term -> its value, where given
     for node in sec[":init"].items[1:]:
@@ -640,15 +932,54 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>") -> Probl
     if ":metric" in sec:
         _metric(r, sec[":metric"])
     if ":goal" not in sec:
-        raise r.fail(None, "expected (:goal ...)")
+        raise r.fail(top.line, "expected (:goal ...)")
     gnode = sec[":goal"]
     if len(gnode.items) != 2:
         raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
                      f"{len(gnode.items) - 1}")
-    goal = _literals(r, gnode.items[1], domain.predicates, domain.types, objects, "goal",
-                     set(domain.requirements), True)
+    goal = _goal(r, gnode.items[1], domain, objects, init)
     return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source, values,
                    goal_reward)
+
+
+def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
+          init: list[Atom]) -> tuple[Literal, ...]:
+    """The goal as literals. A goal with quantifiers is expanded over the problem's
+    objects (it has no free variable); one that still has alternatives once the atoms no
+    action changes are decided is refused: the goal is a set of literals."""
+    cond = nnf(_condition(r, node, domain.predicates, domain.types, objects, "goal"))
+    lits = conjunction(cond)
+    if lits is not None:
+        return lits
+
+    def of_type(t: str) -> list[str]:
+        return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
+
+    def too_many() -> PDDLError:
+        return r.fail(node.line, f"goal: more than {MAX_DISJUNCTS} alternatives or "
+                      f"{MAX_ATOMS} atoms once its quantifiers are expanded")
+
+    fluent = domain.fluent_predicates()
+    static = frozenset(a for a in init if a.predicate not in fluent)
+    dnf = ground_dnf(cond, {}, of_type, lambda a: None, too_many)
+    if len(dnf) > 1:  # decide what no action changes, and look again
+        dnf = ground_dnf(cond, {}, of_type, lambda a: None if a.predicate in fluent else
+                         a in static, too_many)
+    if not dnf:
+        raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
+    if len(dnf) > 1:
+        raise r.fail(node.line, f"goal: it has {len(dnf)} alternatives ((or ...), (exists "
+                     "...), (imply ...)) even once the atoms no action changes are decided; "
+                     "a goal with alternatives is not supported (give one of them)")
+    pos, neg = dnf[0]
+    return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
+        tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+
+
+def _fact_atom(fact: str) -> Atom:
+    """``"(at r1)"`` -> ``Atom("at", ("r1",))`` (names have no spaces or parentheses)."""
+    name, *args = fact[1:-1].split()
+    return Atom(name, tuple(args))
 
 
 def _init_value(r: _Reader, node: Node, domain: Domain,
@@ -710,9 +1041,10 @@ def read_domain(path: str | Path) -> Domain:
     return parse_domain(_read(path), str(path))
 
 
-def read_problem(path: str | Path, domain: Domain) -> Problem:
-    """Read and parse a problem file for ``domain``."""
-    return parse_problem(_read(path), domain, str(path))
+def read_problem(path: str | Path, domain: Domain, name: str | None = None) -> Problem:
+    """Read and parse a problem file for ``domain`` (``name``: which problem of a file
+    that holds several)."""
+    return parse_problem(_read(path), domain, str(path), name)
 
 
 def _read(path: str | Path) -> str:

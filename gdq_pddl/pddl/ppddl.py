@@ -22,19 +22,25 @@ which is what the abstraction O does with the plans.
 
 from __future__ import annotations
 
+import itertools
+import math
+from collections import defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask, ground
-from gdq_pddl.pddl.model import Action, Atom, Domain, Problem
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask, _bindings, _bits, ground
+from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, ground_dnf
+from gdq_pddl.pddl.parser import is_subtype
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
 
 _SEP = "#"
-"""Joins a schema and an outcome index in the grounding of every outcome ('#' is not a
-PDDL name character, so it cannot clash with a name of the domain)."""
+"""Joins a schema and an outcome index in the grounding of every outcome. The reader
+refuses '#' in a name, and :func:`ground_ppddl` refuses a domain built otherwise with
+one, so it cannot clash with a name of the domain."""
 
 
 @dataclass(frozen=True)
@@ -45,9 +51,16 @@ class GroundOutcome:
     add: int
     dele: int
     stuck: bool = False
+    conditional: tuple[tuple[int, int, int, int], ...] = ()
+    """Conditional effects ``(must hold, must not hold, add, delete)``: each adds and
+    deletes when its condition holds in the state the action is taken in (adds win)."""
 
     def apply(self, state: int) -> int:
-        return (state & ~self.dele) | self.add
+        add, dele = self.add, self.dele
+        for pos, neg, a, d in self.conditional:
+            if state & pos == pos and not state & neg:
+                add, dele = add | a, dele | d
+        return (state & ~dele) | add
 
 
 @dataclass(frozen=True)
@@ -57,6 +70,16 @@ class ProbabilisticOp(GroundOp):
 
     outcomes: tuple[GroundOutcome, ...] = ()
     known: tuple[int, ...] = ()
+    alternatives: tuple[tuple[int, int], ...] = ()
+    """A disjunctive precondition: ``(must hold, must not hold)`` pairs, one of which must
+    be met (``pre``/``neg`` are then what all of them share); empty: ``pre``/``neg``."""
+
+    def holds(self, state: int) -> bool:
+        """Whether the precondition holds in ``state``."""
+        if not (state & self.pre == self.pre and not state & self.neg):
+            return False
+        return not self.alternatives or any(state & p == p and not state & n
+                                            for p, n in self.alternatives)
 
     def apply(self, state: int) -> int:
         raise TypeError(f"{self.name} is probabilistic: it has no single effect "
@@ -75,6 +98,14 @@ class ProbabilisticTask(GroundTask):
     origin: Mapping[str, str] = field(default_factory=dict)
     """Planner action (ground, e.g. ``"(move_o2 a b)"``) -> ground action ``"(move a b)"``."""
     determinisation: str = DETERMINISATIONS[0]
+    disjunctive: bool = False
+    """Some op has a disjunctive precondition (:attr:`ProbabilisticOp.alternatives`)."""
+
+    def applicable(self, state: int) -> list[GroundOp]:
+        ops = super().applicable(state)
+        if not self.disjunctive:
+            return ops
+        return [op for op in ops if op.holds(state)]  # type: ignore[attr-defined]
 
     def successors(self, state: int) -> list[tuple[GroundOp, int]]:
         out: list[tuple[GroundOp, int]] = []
@@ -98,7 +129,7 @@ def kept_outcomes(action: Action, determinisation: str) -> tuple[int, ...]:
     if not action.outcomes:
         return (0,)
     useful = [k for k, o in enumerate(action.outcomes)
-              if o.probability > 0 and not o.stuck and o.effect]
+              if o.probability > 0 and not o.stuck and (o.effect or o.conditional)]
     if determinisation == "all-outcomes":
         return tuple(useful)
     if determinisation == "most-likely":
@@ -147,7 +178,14 @@ def ground_ppddl(domain: Domain, problem: Problem,
                                                                       GroundTask]:
     """Ground every outcome of every action once; return reality's task (the learner's
     ground actions) and the planner's (the determinisation), over the same facts."""
+    for action in domain.actions:
+        if _SEP in action.name:
+            raise PDDLError(domain.source, action.line or None, f"action {action.name}: "
+                            f"{_SEP!r} cannot be part of an action name")
     names = planner_names(domain, determinisation)
+    if any(a.condition is not None or any(o.conditional for o in a.outcomes)
+           for a in domain.actions):
+        return _ground_normalised(domain, problem, determinisation, names)
     every = []  # one deterministic schema per outcome: the grounder's relaxed reachability
     for action in domain.actions:  # then gives every fact some outcome can make true
         if not action.outcomes:
@@ -216,3 +254,190 @@ def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[flo
                 total += term
         out.append(total)
     return out
+
+
+MAX_VARIANTS = 4096
+"""Most planner actions one ground action's kept outcome may compile into (conditional
+effects: one per way its conditions can hold or fail); past it, an error names it."""
+
+
+def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
+                       names: dict[tuple[str, int], str]) -> tuple[ProbabilisticTask,
+                                                                   GroundTask]:
+    """:func:`ground_ppddl` of a domain whose conditions have quantifiers or
+    disjunctions, or whose effects are conditional or quantified
+    (:mod:`gdq_pddl.pddl.normalise`). Reality's ops keep them (a disjunctive
+    precondition as alternatives, conditional effects evaluated in the state); the
+    planner's ops are STRIPS: one per alternative and way the conditional effects fire."""
+    fluent = domain.fluent_predicates()
+    statics = frozenset(str(a) for a in problem.init if a.predicate not in fluent)
+    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
+    for a in problem.init:
+        if a.predicate not in fluent:
+            static_tuples[a.predicate].add(a.args)
+    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
+               for t in domain.types}
+    typed = {t: frozenset(objs) for t, objs in by_type.items()}
+
+    def objects(t: str) -> list[str]:
+        return by_type.get(t, [])
+
+    def static(atom: Atom) -> bool | None:
+        return None if atom.predicate in fluent else str(atom) in statics
+
+    raw = []
+    for action in domain.actions:
+        def too_many(action: Action = action) -> PDDLError:
+            return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
+                             f"condition or forall effect grows past {MAX_DISJUNCTS} "
+                             f"alternatives or {MAX_ATOMS} atoms once grounded over the "
+                             "problem's objects")
+        whole = Junction("and", action.precondition + ((action.condition,)
+                                                       if action.condition else ()))
+        for b in _bindings(action, static_tuples, by_type, typed, fluent):
+            pre = ground_dnf(whole, b, objects, static, too_many)
+            if pre:
+                outs = [_ground_outcome(o, b, objects, static, fluent, too_many)
+                        for o in _outcomes_of(action)]
+                args = tuple(b[p] for p, _ in action.parameters)
+                raw.append((action, args, pre, outs))
+    init = {str(a) for a in problem.init if a.predicate in fluent}
+    reached, live = _relaxed(raw, init)
+    facts = tuple(sorted(reached))
+    index = {f: i for i, f in enumerate(facts)}
+
+    def m(atoms) -> int:
+        return sum(1 << index[a] for a in atoms if a in index)
+
+    learner_ops, planner_ops, origin, taken = [], [], {}, set()
+    for (action, args, pre, outs), ok in zip(raw, live, strict=True):
+        if not ok:
+            continue
+        name = "(" + " ".join((action.name, *args)) + ")"
+        alts = [(m(p), m(n)) for p, n in pre if p <= reached]
+        common_pos = common_neg = -1
+        for p, n in alts:
+            common_pos, common_neg = common_pos & p, common_neg & n
+        outcomes = tuple(GroundOutcome(
+            o.probability, m(add), m(dele - add), o.stuck,
+            tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached))
+            for o, (add, dele, conds) in zip(_outcomes_of(action), outs, strict=True))
+        known = kept_outcomes(action, determinisation)
+        learner_ops.append(ProbabilisticOp(name, common_pos, common_neg, 0, 0, outcomes, known,
+                                           tuple(alts) if len(alts) > 1 else ()))
+        for k in known:
+            for j, (p, n, a, d) in enumerate(_variants(alts, outcomes[k], name, domain,
+                                                       action)):
+                schema = names[(action.name, k)] + (f"_v{j + 1}" if j else "")
+                pname = "(" + " ".join((schema, *args)) + ")"
+                if pname in taken:
+                    raise PDDLError(domain.source, action.line or None, f"action "
+                                    f"{action.name}: its planner action {pname} has the name "
+                                    "of another ground action; rename one of them")
+                taken.add(pname)
+                planner_ops.append(GroundOp(pname, p, n, a, d & ~a))
+                origin[pname] = name
+    learner_names = {op.name for op in learner_ops}
+    clash = next((p for p, o in origin.items() if p != o and p in learner_names), None)
+    if clash is not None:
+        raise PDDLError(domain.source, None, f"the planner action {clash} (an outcome of "
+                        f"{origin[clash]}) has the name of a ground action; rename one")
+    goal_pos, goal_neg, possible = set(), set(), True
+    for lit in problem.goal:
+        text = str(lit.atom)
+        if lit.atom.predicate == "=":
+            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
+        elif lit.atom.predicate not in fluent:
+            possible &= (text in statics) == lit.positive
+        elif lit.positive:
+            possible &= text in index
+            goal_pos.add(text)
+        else:
+            goal_neg.add(text)
+    learner = ProbabilisticTask(facts, tuple(learner_ops), m(init), m(goal_pos), m(goal_neg),
+                                possible, statics, index, origin, determinisation,
+                                any(op.alternatives for op in learner_ops))
+    planner = GroundTask(facts, tuple(planner_ops), m(init), m(goal_pos), m(goal_neg), possible,
+                         statics, index)
+    return learner, planner
+
+
+def _outcomes_of(action: Action) -> tuple[Outcome, ...]:
+    """``action``'s outcomes; a STRIPS action's effect is its one outcome."""
+    return action.outcomes or (Outcome(1.0, action.effect),)
+
+
+def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: frozenset[str],
+                    too_many) -> tuple[set[str], set[str], list[tuple]]:
+    """An outcome under binding ``b``: its adds, deletes and conditional effects
+    ``(must hold, must not hold, adds, deletes)`` (fact sets; one per alternative of a
+    condition and binding of a ``forall``)."""
+    def fact(lit: Literal, binding: Mapping[str, str]) -> str:
+        return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
+
+    add = {fact(lit, b) for lit in o.effect if lit.positive and lit.atom.predicate in fluent}
+    dele = {fact(lit, b) for lit in o.effect if not lit.positive and lit.atom.predicate in fluent}
+    conds: list[tuple] = []
+    for ce in o.conditional:
+        names = [v for v, _ in ce.variables]
+        domains = [objects(t) for _, t in ce.variables]
+        if math.prod(len(d) for d in domains) > MAX_ATOMS:
+            raise too_many()
+        for values in itertools.product(*domains):
+            bb = {**b, **dict(zip(names, values, strict=True))}
+            when = TRUE if ce.condition is None else \
+                ground_dnf(ce.condition, bb, objects, static, too_many)
+            f = {fact(ce.literal, bb)}
+            for cp, cn in when:
+                conds.append((cp, cn, f if ce.literal.positive else set(),
+                              set() if ce.literal.positive else f))
+    return add, dele, conds
+
+
+def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
+    """Relaxed reachability (deletes ignored) from ``init``: the facts some sequence of
+    ground actions may make true, and which ground actions may ever apply."""
+    reached, live = set(init), [False] * len(raw)
+    changed = True
+    while changed:
+        changed = False
+        for i, (_, _, pre, outs) in enumerate(raw):
+            if not live[i]:
+                if not any(p <= reached for p, _ in pre):
+                    continue
+                live[i] = changed = True
+            for add, _, conds in outs:
+                new = add - reached
+                for cp, _, a, _ in conds:
+                    if cp <= reached:
+                        new |= a - reached
+                if new:
+                    reached |= new
+                    changed = True
+    return reached, live
+
+
+def _variants(alts: list[tuple[int, int]], outcome: GroundOutcome, name: str, domain: Domain,
+              action: Action) -> list[tuple[int, int, int, int]]:
+    """The STRIPS ops ``(pre, neg, add, delete)`` of one outcome of a ground action: one
+    per alternative of its precondition and way each conditional effect fires (its
+    condition holds) or not (one of its literals fails). In any state where the action
+    applies, some variant applies, and every variant that applies has the effect the
+    outcome has there."""
+    variants = {(p, n, outcome.add, outcome.dele): None for p, n in alts}
+    for cp, cn, a, d in outcome.conditional:
+        nxt: dict[tuple[int, int, int, int], None] = {}
+        for p, n, add, dele in variants:
+            if not (p | cp) & (n | cn):
+                nxt[(p | cp, n | cn, add | a, dele | d)] = None
+            for bit in _bits(cp & ~p):
+                nxt[(p, n | (1 << bit), add, dele)] = None
+            for bit in _bits(cn & ~n):
+                if not (p | (1 << bit)) & n:
+                    nxt[(p | (1 << bit), n, add, dele)] = None
+        variants = nxt
+        if len(variants) > MAX_VARIANTS:
+            raise PDDLError(domain.source, action.line or None, f"action {action.name}: "
+                            f"{name}'s conditional effects need more than {MAX_VARIANTS} "
+                            "STRIPS actions in the planner's determinisation")
+    return list(variants)

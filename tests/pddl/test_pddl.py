@@ -37,7 +37,7 @@ def test_tiny_domain_grounds_to_its_static_links():
     (TINY_DOMAIN.replace("(link ?a ?b))\n", "(link ?a ?b)\n"), 6, "never closed"),
     (TINY_DOMAIN.replace("(link ?a ?b))", "(lnk ?a ?b))"), 6, "unknown predicate 'lnk'"),
     (TINY_DOMAIN.replace("(at ?b)", "(at ?c)"), 7, "unknown variable '?c'"),
-    (TINY_DOMAIN.replace(":typing", ":typing :fluents"), 2, "requirement :fluents"),
+    (TINY_DOMAIN.replace(":typing", ":typing :fluentz"), 2, "requirement :fluentz"),
     (TINY_DOMAIN.replace("(at ?b)", "(at ?a ?b)"), 7, "takes 1 argument(s), got 2"),
     (TINY_DOMAIN.replace("- room)", "- rom)", 1), 4, "unknown type 'rom'"),
     (TINY_DOMAIN + ")", 8, "unexpected ')'"),
