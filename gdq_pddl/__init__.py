@@ -18,7 +18,7 @@ def __getattr__(name: str):
     folder's episodes as a pandas DataFrame), imported on first use: start-up time, the
     analysis layer loads pandas and matplotlib, which an env user does not need."""
     if name == "load_results":
-        from gdq_pddl.analysis.results import load_results
+        from gdq_pddl.analysis.results import load_results  # start-up time: pandas
 
         return load_results
     raise AttributeError(f"module 'gdq_pddl' has no attribute {name!r}")

@@ -96,7 +96,7 @@ class MapPainter:
         """Render ``frame``; returns a fresh ``uint8[H, W, 3]`` array."""
         # start-up time: matplotlib loads only when a frame is drawn
         from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
+        from matplotlib.figure import Figure  # start-up time, as above
 
         w, xy = self.world, self.xy
         fig = Figure(figsize=self.size, dpi=self.dpi)

@@ -92,16 +92,19 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from gdq_pddl.buildings import building_world, generate
 from gdq_pddl.envs.compact import CompactEnv
 from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
 from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, read_config
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
 from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.episodes import run_compact
+from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import check_count, check_memory
 from gdq_pddl.outputs import output_folder
 
@@ -310,8 +313,6 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
     runs only the missing units. On Ctrl-C raises :class:`RunInterrupted`, whose message
     says how to continue (``command``, the command line with ``--resume``).
     """
-    from tqdm import tqdm
-
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
     _check_buildings(seed, buildings)  # before the list of seeds is made
@@ -355,9 +356,6 @@ def _check_buildings(seed: int, buildings: int) -> None:
 def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
            methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
-    from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
-    from gdq_pddl.learners.tables import table_bytes
-
     check_count("runs", runs)
     check_count("episodes", episodes)
     if runs < 1 or episodes < 1:
@@ -431,8 +429,6 @@ def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, metho
                    progress: bool, log: Callable[[str], None], rerun: str) -> BuildingResult:
     """Run the units of building ``(n, seed)`` missing in ``out/units/building-N-sS/``,
     then read them all."""
-    from tqdm import tqdm
-
     name = building_name(n, seed)
     folder = out / "units" / name
     paths = {(m, run): folder / f"{m}-{run}.npz" for m in methods for run in range(runs)}

@@ -82,7 +82,8 @@ class ClingoPlanner:
     def unusable_reason(cls) -> str | None:
         """Why clingo cannot run here (it is not installed), or None when it can."""
         try:
-            import clingo  # noqa: F401  (optional dependency)
+            # optional dependency
+            import clingo  # noqa: F401
         except ImportError:
             return NOT_INSTALLED
         return None

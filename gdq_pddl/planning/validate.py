@@ -45,7 +45,7 @@ def base_up_problem(problem: PlanningProblem) -> UPProblem:
         raise PlanningError("unified-planning needs the domain as PDDL text: build the "
                             "problem with PlanningProblem.from_texts or from_files")
     _up()
-    from unified_planning.io import PDDLReader  # after _up(): see there
+    from unified_planning.io import PDDLReader  # start-up time: after _up(), see there
 
     # the original text keeps goal literals the writer drops (negative or static ones)
     text = problem.problem_text or problem.problem_pddl()
@@ -100,7 +100,7 @@ def up_action_name(instance: Any) -> str:
 
 
 def _up_plan(up: UPProblem, actions: tuple[str, ...]) -> Any:
-    from unified_planning.plans import ActionInstance, SequentialPlan  # see _up()
+    from unified_planning.plans import ActionInstance, SequentialPlan  # start-up time: _up()
 
     steps = []
     for i, action in enumerate(actions):
@@ -131,7 +131,7 @@ def validate_plan(problem: PlanningProblem, plan: Plan, start: State | None = No
     up = up_problem(problem, start, goal)
     _up()  # unified-planning on first use (start-up time), then its validator
     from unified_planning.engines.plan_validator import SequentialPlanValidator
-    from unified_planning.engines.results import ValidationResultStatus
+    from unified_planning.engines.results import ValidationResultStatus  # start-up time
 
     try:
         result = SequentialPlanValidator().validate(up, _up_plan(up, plan.actions))
