@@ -52,6 +52,12 @@ MAX_WORLD_POSITIONS = 30_000
 """The most positions a world may have to be planned over: its PDDL problem's initial
 state has about 3.25 atoms per position, so past this it passes :data:`MAX_INIT_ATOMS`."""
 
+MIN_ADDRESS_SPACE = 1024**3
+"""The smallest address-space limit (``ulimit -v``) the command line starts under: numpy's
+BLAS, scipy and numba's LLVM reserve virtual memory as they load, and below about 700 MB
+they fail inside the import (a MemoryError traceback) or, under 500 MB, OpenBLAS spins
+forever retrying its allocation. 1 GiB leaves room for a run's own arrays."""
+
 FALLBACK_MEMORY = 16 * 1024**3
 """What :func:`physical_memory` assumes where the system does not say."""
 
@@ -78,6 +84,17 @@ def _address_space_cap() -> float:
         return math.inf
     soft = resource.getrlimit(resource.RLIMIT_AS)[0]
     return math.inf if soft == resource.RLIM_INFINITY else soft
+
+
+def address_space_refusal(minimum: int = MIN_ADDRESS_SPACE) -> str | None:
+    """Why the command line cannot start under this process's ``ulimit -v`` (below
+    ``minimum`` bytes), or None when it can."""
+    cap = _address_space_cap()
+    if cap >= minimum:
+        return None
+    return (f"the address-space limit (ulimit -v) is {human_bytes(cap)}; gdq-pddl needs at "
+            f"least {human_bytes(minimum)}, because numpy, scipy and numba reserve virtual "
+            "memory as they load: raise the limit (ulimit -v)")
 
 
 def human_bytes(n: float) -> str:

@@ -392,3 +392,19 @@ def _imports(path: Path) -> set[str]:
 def test_no_import_cycle_between_these_layers(low, high):
     imported = _imports(PACKAGE / "gdq_pddl" / low)
     assert not [m for m in imported if m == high or m.startswith(high + ".")], imported
+
+
+def test_a_tight_address_space_limit_is_refused_before_the_libraries_load():
+    """Under `ulimit -v` 400 MB OpenBLAS used to spin forever while scipy loaded (and
+    under 500 MB numba's import died with a MemoryError traceback): the command line
+    refuses at once, naming the limit."""
+    import resource
+
+    def cap() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (400 * 1000**2, resource.RLIM_INFINITY))
+
+    result = subprocess.run([sys.executable, "-m", "gdq_pddl.cli", "plan", "--task", "C"],
+                            capture_output=True, text=True, timeout=120, preexec_fn=cap)
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert "address-space limit (ulimit -v) is 400 MB" in result.stderr

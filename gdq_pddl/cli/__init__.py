@@ -13,11 +13,17 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import TextIO
 
-from gdq_pddl.cli import experiments, planning
-from gdq_pddl.cli.common import EXIT_ERROR
-from gdq_pddl.errors import GdqError
-from gdq_pddl.experiments.runner import RunInterrupted
-from gdq_pddl.outputs import writing
+from gdq_pddl.limits import address_space_refusal
+
+if (_REFUSAL := address_space_refusal()) is not None:  # before numpy's BLAS and numba load
+    print(f"gdq-pddl: error: {_REFUSAL}", file=sys.stderr)
+    raise SystemExit(2)
+
+from gdq_pddl.cli import experiments, planning  # noqa: E402 (after the check above)
+from gdq_pddl.cli.common import EXIT_ERROR  # noqa: E402
+from gdq_pddl.errors import GdqError  # noqa: E402
+from gdq_pddl.experiments.runner import RunInterrupted  # noqa: E402
+from gdq_pddl.outputs import writing  # noqa: E402
 
 EXIT_INTERRUPTED = 130  # the shell's convention for a program ended by SIGINT
 
