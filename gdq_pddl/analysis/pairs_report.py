@@ -14,6 +14,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.patches import Rectangle
@@ -32,10 +33,10 @@ from gdq_pddl.analysis.pairs import (
     differences,
     iqm_table,
     load_pair_runs,
-    number,
     summarise,
     write_tables,
 )
+from gdq_pddl.analysis.writer import markdown_rows, number
 from gdq_pddl.outputs import write_text
 
 FIGURE_STEM = "pairs"
@@ -163,11 +164,10 @@ def _tuning(res: PairRuns) -> list[str]:
 
 def _summary_table(res: PairRuns, summaries: list[tuple[str, Summary]]) -> list[str]:
     ref = res.reference
-    lines = [f"| {ref} minus | pairs | mean difference (s.e.) | wins | ties | losses |",
-             "|---|---|---|---|---|---|"]
-    for label, s in summaries:
-        lines.append(f"| {s.baseline}{label} | {s.pairs} | {number(s.mean, sign=True)} "
-                     f"({number(s.se)}) | {s.wins} | {s.ties} | {s.losses} |")
+    lines = markdown_rows(pd.DataFrame(
+        [[s.baseline + label, s.pairs, f"{number(s.mean, sign=True)} ({number(s.se)})", s.wins,
+          s.ties, s.losses] for label, s in summaries],
+        columns=[f"{ref} minus", "pairs", "mean difference (s.e.)", "wins", "ties", "losses"]))
     chance = (1 - LEVEL) * len(res.pairs)
     return [*lines, "",
             f"A win (loss) is a pair whose paired {LEVEL:.0%} interval of {ref} minus the "
@@ -242,8 +242,9 @@ def _iqm(res: PairRuns) -> list[str]:
     iqms = iqm_table(res)
     if not len(iqms) or not iqms["pairs"].iloc[0]:
         return []
-    rows = [f"| {m} | {number(r.iqm)} | [{number(r.low)}, {number(r.high)}] |"
-            for m, r in iqms.iterrows()]
+    rows = markdown_rows(pd.DataFrame(
+        [[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"] for m, r in iqms.iterrows()],
+        columns=["method", "IQM of return / V*", "95% interval"]))
     return ["## Over all pairs: interquartile mean", "",
             f"Per method, every run on every pair with V* > 0 ({iqms['pairs'].iloc[0]} "
             "pairs) gives one score, its mean return per episode / V*; the interquartile "
@@ -251,7 +252,7 @@ def _iqm(res: PairRuns) -> list[str]:
             "outlying pairs, less noisy than the median), with a 95% stratified bootstrap "
             "interval (runs resampled within each pair, 2,000 resamples, "
             "`scipy.stats.bootstrap`; n/a with a single run).", "",
-            "| method | IQM of return / V* | 95% interval |", "|---|---|---|", *rows, ""]
+            *rows, ""]
 
 
 def make_pairs_report(out: str | Path) -> list[Path]:

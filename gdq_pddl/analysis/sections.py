@@ -36,7 +36,7 @@ from gdq_pddl.analysis.stats import (
 )
 from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
-from gdq_pddl.analysis.writer import Writer, areas_str, fmt, fmt2, milestone_str, pct, route_str
+from gdq_pddl.analysis.writer import Writer, areas_str, fmt, milestone_str, number, pct, route_str
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.work import make_learner
@@ -206,8 +206,8 @@ def write_task(w: Writer, exp: str, task: str) -> None:
               for n, t in sorted(set(zip(table["episodes"], table["tail"], strict=True)))]
     w.add("; ".join(facts) + ".", "")
     best = table["mean"].idxmax() if table["mean"].notna().any() else None
-    w.table([[f"**{m}**" if m == best else m, int(s.runs), f"{fmt2(s['mean'])} ({fmt2(s.se)})",
-              f"{fmt2(s['last'])} ({fmt2(s.last_se)})", pct(s.success),
+    w.table([[f"**{m}**" if m == best else m, int(s.runs), f"{number(s['mean'])} ({number(s.se)})",
+              f"{number(s['last'])} ({number(s.last_se)})", pct(s.success),
               milestone_str(first_positive(study.returns(exp, m, task), window))]
              for m, s in table.iterrows()],
             ["Method", "runs", "mean return (SE)", "last 10% (SE)", "success rate",
@@ -286,7 +286,7 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
         scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
         scores = [x for x in scores if x.size]
         point, low, high = iqm_ci(scores, seed=w.opts.seed)
-        rows.append([m, len(scores), fmt2(point), f"[{fmt2(low)}, {fmt2(high)}]"])
+        rows.append([m, len(scores), number(point), f"[{number(low)}, {number(high)}]"])
     w.table(rows, ["Method", "tasks", "IQM of return / V*", "95% interval"], "lrrl")
 
 

@@ -48,9 +48,11 @@ class ReportOptions:
 FIGURE_DIR, TABLE_DIR = "figures", "tables"
 
 
-def fmt2(x: float) -> str:
-    """Two decimals, ``n/a`` for NaN."""
-    return "n/a" if math.isnan(x) else f"{x:.2f}"
+def number(x: float, digits: int = 2, sign: bool = False) -> str:
+    """``x`` rounded to ``digits`` decimals (``sign``: always signed; NaN: ``n/a``)."""
+    if x is None or math.isnan(x):
+        return "n/a"
+    return f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
 
 
 def fmt(x: float, digits: int = 3) -> str:
