@@ -11,8 +11,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from gdq_pddl.analysis.figures import grid, save_all
 from gdq_pddl.analysis.figures import method_colour as _colour
-from gdq_pddl.analysis.figures import save_all
 from gdq_pddl.analysis.knowledge import (
     ACCURATE,
     CURVE_WINDOW,
@@ -37,11 +37,8 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     if not cases:
         return paths
     n = len(cases)
-    cols = min(2, n)
-    rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(6.2 * cols, 4.0 * rows), squeeze=False,
-                             layout="constrained")
-    for ax, case in zip(axes.ravel(), cases, strict=False):
+    fig, axes = grid(n, 6.2, 4.0)
+    for ax, case in zip(axes, cases, strict=True):
         for m in case.methods:
             for kind, style in ((WRONG, "-"), (ACCURATE, "--")):
                 r = case.results[kind].get(m)
@@ -59,9 +56,7 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
                      fontsize=10)
         ax.set_xlabel("episode")
         ax.set_ylabel(f"return, {CURVE_WINDOW}-episode mean over runs")
-    for ax in axes.ravel()[n:]:
-        ax.set_visible(False)
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8)
     paths += save_all(fig, out, "knowledge_curves")
 
