@@ -16,6 +16,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
@@ -25,6 +26,7 @@ from gdq_pddl.analysis.pairs import (
     LEVEL,
     LOSS,
     TABLE_STEM,
+    TIE,
     WIN,
     WORST,
     Differences,
@@ -41,6 +43,8 @@ from gdq_pddl.outputs import write_text
 
 FIGURE_STEM = "pairs"
 OUTCOME_COLOURS = {WIN: "#2166ac", "tie": "#999999", LOSS: "#b2182b"}
+TIE_STRENGTH = 0.3
+"""A tie's colour in the heatmap, as a share of its full strength (the rest white)."""
 LABELLED = 30
 """Up to this many pairs, the sorted plot names each one."""
 
@@ -59,7 +63,12 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
         grid).any() else (-1.0, 1.0)
     norm = TwoSlopeNorm(0.0, min(low, -1e-9), max(high, 1e-9))
     cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
-    image = ax.imshow(grid, cmap=cmap, norm=norm)
+    rgba = cmap(norm(np.ma.masked_invalid(grid)))
+    for i, p in enumerate(res.pairs):
+        r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
+        if diff.outcome[i] == TIE:  # faded: a tie's small mean must not look like a loss
+            rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
+    ax.imshow(rgba)
     for i, p in enumerate(res.pairs):
         r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
         mark = {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), "")
@@ -75,8 +84,8 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.set(xlabel="goal", ylabel="start",
            title=f"{res.reference} - {diff.baseline}: mean return difference")
     ax.title.set_fontsize(9)
-    ax.figure.colorbar(image, ax=ax, shrink=0.8,
-                       label="each side of 0 scaled to its own extreme")
+    ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8,
+                       label="each side of 0 scaled to its own extreme; ties faded")
 
 
 def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
@@ -280,8 +289,8 @@ def write_report(res: PairRuns, diffs: list[Differences], out: Path) -> Path:
                   f"![{res.reference} minus each baseline on every pair]"
                   f"(figures/{FIGURE_STEM}.png)", "",
                   f"Left: {res.reference} minus the baseline, mean return per episode, start "
-                  "by goal (blue: "
-                  f"{res.reference} better; `+` win, `\u2212` loss; boxed: tasks A-D). Right: "
+                  f"by goal (blue: {res.reference} better; `+` win, `\u2212` loss, faded: tie; "
+                  "boxed: tasks A-D). Right: "
                   f"every pair's difference, sorted, with its {LEVEL:.0%} interval.", "",
                   *_losses(res, diffs), *_worst(res, diffs, all_pairs)]
     else:
