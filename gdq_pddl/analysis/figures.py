@@ -84,8 +84,10 @@ def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = Figure
     return paths
 
 
-def _grid(n: int, width: float = 5.0, height: float = 3.6,
-          max_cols: int = 2) -> tuple[Figure, list[Axes]]:
+def grid(n: int, width: float = 5.0, height: float = 3.6,
+         max_cols: int = 2) -> tuple[Figure, list[Axes]]:
+    """``n`` panels of ``width`` x ``height`` inches, at most ``max_cols`` a row (constrained
+    layout; the unused cells of the last row hidden)."""
     cols = max(1, min(n, max_cols))
     rows = math.ceil(n / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False,
@@ -153,7 +155,7 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
         return []
     ep = study
     tasks = ep.tasks(exp)
-    fig, axes = _grid(len(tasks))
+    fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
         scale = v_star if fraction_of_vstar else 1.0
@@ -191,7 +193,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     exps = study.switch_experiments
     if not exps:
         return []
-    fig, axes = _grid(2 * len(exps), max_cols=len(exps))
+    fig, axes = grid(2 * len(exps), max_cols=len(exps))
     for k, exp in enumerate(exps):
         switch = study.switch_episode(exp)
         for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):

@@ -66,13 +66,6 @@ def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW)
     return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
 
 
-def median_episode(episodes: list[int | None]) -> float:
-    """Median over runs with unconverged runs as +inf (inf: most runs never converged)."""
-    if not episodes:
-        return float("nan")
-    return float(np.median([np.inf if e is None else e for e in episodes]))
-
-
 def policy_value(world: World, task: Task, policy: dict[int, int] | np.ndarray,
                  model: ModelArrays | None = None) -> float:
     """Exact expected undiscounted return from the start of a stationary learner policy
@@ -174,7 +167,10 @@ class MethodResult:
 
     @property
     def median(self) -> float:
-        return median_episode(self.convergence)
+        """Median over runs, unconverged runs as +inf (inf: most runs never converged)."""
+        if not self.convergence:
+            return float("nan")
+        return float(np.median([np.inf if e is None else e for e in self.convergence]))
 
 
 @dataclass

@@ -4,13 +4,15 @@ case, convergence episodes per method and case, and per case the measurements of
 
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 
+from gdq_pddl.analysis.figures import grid, save_all
 from gdq_pddl.analysis.figures import method_colour as _colour
-from gdq_pddl.analysis.figures import save_all
 from gdq_pddl.analysis.knowledge import (
     ACCURATE,
     CURVE_WINDOW,
@@ -24,6 +26,7 @@ from gdq_pddl.analysis.knowledge import (
     analyse,
     threshold,
 )
+from gdq_pddl.analysis.writer import markdown_rows
 from gdq_pddl.outputs import write_text
 
 
@@ -34,11 +37,8 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     if not cases:
         return paths
     n = len(cases)
-    cols = min(2, n)
-    rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(6.2 * cols, 4.0 * rows), squeeze=False,
-                             layout="constrained")
-    for ax, case in zip(axes.ravel(), cases, strict=False):
+    fig, axes = grid(n, 6.2, 4.0)
+    for ax, case in zip(axes, cases, strict=True):
         for m in case.methods:
             for kind, style in ((WRONG, "-"), (ACCURATE, "--")):
                 r = case.results[kind].get(m)
@@ -56,9 +56,7 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
                      fontsize=10)
         ax.set_xlabel("episode")
         ax.set_ylabel(f"return, {CURVE_WINDOW}-episode mean over runs")
-    for ax in axes.ravel()[n:]:
-        ax.set_visible(False)
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8)
     paths += save_all(fig, out, "knowledge_curves")
 
@@ -116,12 +114,8 @@ def _frac(values: list[float], v_star: float) -> str:
 
 
 def _route_summary(r: MethodResult) -> str:
-    counts: dict[tuple[int, ...], int] = {}
-    for route in r.routes:
-        counts[route] = counts.get(route, 0) + 1
-    parts = [f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
-             for k, v in sorted(counts.items(), key=lambda kv: -kv[1])]
-    return ", ".join(parts) or "n/a"
+    return ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
+                     for k, v in Counter(r.routes).most_common()) or "n/a"
 
 
 def _check_summary(steps: list[RouteStep], attr: str) -> str:
@@ -192,29 +186,24 @@ def write_report(cases: list[CaseResult], out: Path, command: str = "gdq-pddl kn
             f"- optimal route: {' '.join(case.optimal_positions)} (areas "
             f"{'-'.join(map(str, case.optimal_areas))})",
             "",
-            "| method | on route (wrong / accurate) | converged runs | median convergence "
-            "episode | extra episodes | policy value | final return | greedy routes (wrong) |",
-            "|---|---|---|---|---|---|---|---|",
-        ]
-        for m, a, w in case.paired():
-            lines.append(
-                f"| {m} | {w.on_route}/{w.runs} / {a.on_route}/{a.runs} | "
-                f"{w.converged} / {a.converged} | {_ep(w.median)} / {_ep(a.median)} | "
-                f"{_extra(a, w)} | {_frac(w.policy_values, case.v_star)} / "
-                f"{_frac(a.policy_values, case.v_star)} | {w.final_return:.2f} / "
-                f"{a.final_return:.2f} | {_route_summary(w)} |")
-        lines += ["", "(pairs are wrong knowledge / accurate knowledge)", "",
-                  "Does the knowledge contain the true optimum? Along the optimal route:", "",
-                  "| knowledge | DARLING allows an optimal action | an optimal action is "
-                  "applicable in the prior model (GDQ) | ... starts a shortest plan "
-                  "(GDQ-literal) | ... a plan within 1.3x (GDQ-code) |",
-                  "|---|---|---|---|---|"]
-        for kind in (WRONG, ACCURATE):
-            steps = case.checks[kind]
-            lines.append(f"| {kind} | {_check_summary(steps, 'darling_allowed')} | "
-                         f"{_check_summary(steps, 'in_prior')} | "
-                         f"{_check_summary(steps, 'in_shortest_plans')} | "
-                         f"{_check_summary(steps, 'in_tolerant_plans')} |")
+            *markdown_rows(pd.DataFrame([[
+                m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
+                f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
+                _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
+                f"{_frac(a.policy_values, case.v_star)}",
+                f"{w.final_return:.2f} / {a.final_return:.2f}", _route_summary(w)]
+                for m, a, w in case.paired()], columns=[
+                "method", "on route (wrong / accurate)", "converged runs",
+                "median convergence episode", "extra episodes", "policy value",
+                "final return", "greedy routes (wrong)"])),
+            "", "(pairs are wrong knowledge / accurate knowledge)", "",
+            "Does the knowledge contain the true optimum? Along the optimal route:", "",
+            *markdown_rows(pd.DataFrame([[kind, *(_check_summary(case.checks[kind], a) for a in (
+                "darling_allowed", "in_prior", "in_shortest_plans", "in_tolerant_plans"))]
+                for kind in (WRONG, ACCURATE)], columns=[
+                "knowledge", "DARLING allows an optimal action", "an optimal action is "
+                "applicable in the prior model (GDQ)", "... starts a shortest plan "
+                "(GDQ-literal)", "... a plan within 1.3x (GDQ-code)"]))]
         lines += ["", "Findings:", ""] + [f"- {f}" for f in _findings(case)] + [""]
     path = out / "REPORT.md"
     write_text(path, "\n".join(lines))

@@ -19,6 +19,7 @@ from scipy import stats as sps
 
 from gdq_pddl.analysis.results import load_config, order_methods
 from gdq_pddl.analysis.stats import iqm_ci
+from gdq_pddl.analysis.writer import number
 from gdq_pddl.errors import GdqError
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import builtin_world, load_world
@@ -135,13 +136,6 @@ def summarise(diff: Differences, keep: np.ndarray) -> Summary:
     counts = [int(np.sum(diff.outcome[idx] == o)) for o in (WIN, TIE, LOSS)]
     worst = idx[np.argsort(diff.mean[idx], kind="stable")[:WORST]]
     return Summary(diff.baseline, int(idx.size), mean, se, *counts, tuple(int(i) for i in worst))
-
-
-def number(x: float, digits: int = 2, sign: bool = False) -> str:
-    """``x`` rounded to ``digits`` decimals (``sign``: always signed; NaN: ``n/a``)."""
-    if x is None or math.isnan(x):
-        return "n/a"
-    return f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
 
 
 def table(res: PairRuns, diffs: list[Differences]) -> pd.DataFrame:

@@ -14,7 +14,9 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
 from matplotlib.colors import TwoSlopeNorm
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
@@ -24,6 +26,7 @@ from gdq_pddl.analysis.pairs import (
     LEVEL,
     LOSS,
     TABLE_STEM,
+    TIE,
     WIN,
     WORST,
     Differences,
@@ -32,14 +35,16 @@ from gdq_pddl.analysis.pairs import (
     differences,
     iqm_table,
     load_pair_runs,
-    number,
     summarise,
     write_tables,
 )
+from gdq_pddl.analysis.writer import markdown_rows, number
 from gdq_pddl.outputs import write_text
 
 FIGURE_STEM = "pairs"
 OUTCOME_COLOURS = {WIN: "#2166ac", "tie": "#999999", LOSS: "#b2182b"}
+TIE_STRENGTH = 0.3
+"""A tie's colour in the heatmap, as a share of its full strength (the rest white)."""
 LABELLED = 30
 """Up to this many pairs, the sorted plot names each one."""
 
@@ -58,7 +63,12 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
         grid).any() else (-1.0, 1.0)
     norm = TwoSlopeNorm(0.0, min(low, -1e-9), max(high, 1e-9))
     cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
-    image = ax.imshow(grid, cmap=cmap, norm=norm)
+    rgba = cmap(norm(np.ma.masked_invalid(grid)))
+    for i, p in enumerate(res.pairs):
+        r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
+        if diff.outcome[i] == TIE:  # faded: a tie's small mean must not look like a loss
+            rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
+    ax.imshow(rgba)
     for i, p in enumerate(res.pairs):
         r, c = at[res.facts[p]["start"]], at[res.facts[p]["goal"]]
         mark = {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), "")
@@ -74,8 +84,8 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.set(xlabel="goal", ylabel="start",
            title=f"{res.reference} - {diff.baseline}: mean return difference")
     ax.title.set_fontsize(9)
-    ax.figure.colorbar(image, ax=ax, shrink=0.8,
-                       label="each side of 0 scaled to its own extreme")
+    ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8,
+                       label="each side of 0 scaled to its own extreme; ties faded")
 
 
 def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
@@ -163,11 +173,10 @@ def _tuning(res: PairRuns) -> list[str]:
 
 def _summary_table(res: PairRuns, summaries: list[tuple[str, Summary]]) -> list[str]:
     ref = res.reference
-    lines = [f"| {ref} minus | pairs | mean difference (s.e.) | wins | ties | losses |",
-             "|---|---|---|---|---|---|"]
-    for label, s in summaries:
-        lines.append(f"| {s.baseline}{label} | {s.pairs} | {number(s.mean, sign=True)} "
-                     f"({number(s.se)}) | {s.wins} | {s.ties} | {s.losses} |")
+    lines = markdown_rows(pd.DataFrame(
+        [[s.baseline + label, s.pairs, f"{number(s.mean, sign=True)} ({number(s.se)})", s.wins,
+          s.ties, s.losses] for label, s in summaries],
+        columns=[f"{ref} minus", "pairs", "mean difference (s.e.)", "wins", "ties", "losses"]))
     chance = (1 - LEVEL) * len(res.pairs)
     return [*lines, "",
             f"A win (loss) is a pair whose paired {LEVEL:.0%} interval of {ref} minus the "
@@ -242,8 +251,9 @@ def _iqm(res: PairRuns) -> list[str]:
     iqms = iqm_table(res)
     if not len(iqms) or not iqms["pairs"].iloc[0]:
         return []
-    rows = [f"| {m} | {number(r.iqm)} | [{number(r.low)}, {number(r.high)}] |"
-            for m, r in iqms.iterrows()]
+    rows = markdown_rows(pd.DataFrame(
+        [[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"] for m, r in iqms.iterrows()],
+        columns=["method", "IQM of return / V*", "95% interval"]))
     return ["## Over all pairs: interquartile mean", "",
             f"Per method, every run on every pair with V* > 0 ({iqms['pairs'].iloc[0]} "
             "pairs) gives one score, its mean return per episode / V*; the interquartile "
@@ -251,7 +261,7 @@ def _iqm(res: PairRuns) -> list[str]:
             "outlying pairs, less noisy than the median), with a 95% stratified bootstrap "
             "interval (runs resampled within each pair, 2,000 resamples, "
             "`scipy.stats.bootstrap`; n/a with a single run).", "",
-            "| method | IQM of return / V* | 95% interval |", "|---|---|---|", *rows, ""]
+            *rows, ""]
 
 
 def make_pairs_report(out: str | Path) -> list[Path]:
@@ -279,8 +289,8 @@ def write_report(res: PairRuns, diffs: list[Differences], out: Path) -> Path:
                   f"![{res.reference} minus each baseline on every pair]"
                   f"(figures/{FIGURE_STEM}.png)", "",
                   f"Left: {res.reference} minus the baseline, mean return per episode, start "
-                  "by goal (blue: "
-                  f"{res.reference} better; `+` win, `\u2212` loss; boxed: tasks A-D). Right: "
+                  f"by goal (blue: {res.reference} better; `+` win, `\u2212` loss, faded: tie; "
+                  "boxed: tasks A-D). Right: "
                   f"every pair's difference, sorted, with its {LEVEL:.0%} interval.", "",
                   *_losses(res, diffs), *_worst(res, diffs, all_pairs)]
     else:

@@ -15,12 +15,14 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
 from gdq_pddl.analysis.results import order_methods
 from gdq_pddl.analysis.stats import mean_se
+from gdq_pddl.analysis.writer import markdown_rows
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
 from gdq_pddl.outputs import write_text
 
@@ -169,11 +171,9 @@ def _rows(results: list[BuildingResult]) -> list[tuple[str, list[BuildingResult]
 def _table(results: list[BuildingResult], columns: list[str],
            cell: Callable[[list[BuildingResult], str], str]) -> list[str]:
     """A markdown table: a row per building and per size, a column per method."""
-    lines = ["| positions / building | " + " | ".join(columns) + " |",
-             "|---|" + "---|" * len(columns)]
-    for label, group in _rows(results):
-        lines.append(f"| {label} | " + " | ".join(cell(group, c) for c in columns) + " |")
-    return lines + [""]
+    return [*markdown_rows(pd.DataFrame([[label, *(cell(group, c) for c in columns)]
+                                         for label, group in _rows(results)],
+                                        columns=["positions / building", *columns])), ""]
 
 
 def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -> Path:

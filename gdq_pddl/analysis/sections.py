@@ -9,7 +9,6 @@ experiments. Every number is computed from the data; nothing is typed in.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +23,6 @@ from gdq_pddl.analysis.results import (
 from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
-    Comparison,
     compare,
     convergence_episode,
     first_positive,
@@ -38,7 +36,7 @@ from gdq_pddl.analysis.stats import (
 )
 from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
-from gdq_pddl.analysis.writer import Writer, fmt, fmt2, milestone_str, pct, route_str
+from gdq_pddl.analysis.writer import Writer, areas_str, fmt, milestone_str, number, pct, route_str
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.work import make_learner
@@ -71,15 +69,14 @@ def write_header(w: Writer) -> None:
           f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
           f"experiments: {', '.join(study.experiments) or 'none'}.", "")
     if cfg.experiments:
-        w.add("| experiment | world | schedule (task x episodes) | methods | runs | seed |",
-              "|---|---|---|---|--:|--:|")
-        for e in cfg.experiments:
-            sched = e.get("schedule") if isinstance(e.get("schedule"), list) else []
-            w.add(f"| {e.get('name', '?')} | {e.get('world', '?')} | "
-                  f"{', '.join(f'{t} x {n}' for t, n in sched) or '?'} | "
-                  f"{', '.join(e.get('methods') or []) or '?'} | {e.get('runs', '?')} | "
-                  f"{e.get('seed', '?')} |")
-        w.add("")
+        sched = [e.get("schedule") if isinstance(e.get("schedule"), list) else []
+                 for e in cfg.experiments]
+        w.table([[e.get("name", "?"), e.get("world", "?"),
+                  ", ".join(f"{t} x {n}" for t, n in s) or "?",
+                  ", ".join(e.get("methods") or []) or "?", e.get("runs", "?"),
+                  e.get("seed", "?")] for e, s in zip(cfg.experiments, sched, strict=True)],
+                ["experiment", "world", "schedule (task x episodes)", "methods", "runs", "seed"],
+                "llllrr")
     else:
         w.add("Configuration: not recorded (no readable `config.json`).", "")
     if cfg.versions:
@@ -207,17 +204,14 @@ def write_task(w: Writer, exp: str, task: str) -> None:
              "on the true model)" if not math.isnan(v_star) else "V*: not known"]
     facts += [f"{n} episodes per run, last 10% = the final {t}"
               for n, t in sorted(set(zip(table["episodes"], table["tail"], strict=True)))]
-    w.add("; ".join(facts) + ".", "",
-          f"| Method | runs | mean return (SE) | last 10% (SE) | success rate | "
-          f"MA{window} > 0 at episode |", "|---|--:|--:|--:|--:|--:|")
+    w.add("; ".join(facts) + ".", "")
     best = table["mean"].idxmax() if table["mean"].notna().any() else None
-    for method, s in table.iterrows():
-        name = f"**{method}**" if method == best else method
-        ms = first_positive(study.returns(exp, method, task), window)
-        w.add(f"| {name} | {int(s.runs)} | {fmt2(s['mean'])} ({fmt2(s.se)}) | "
-              f"{fmt2(s['last'])} ({fmt2(s.last_se)}) | {pct(s.success)} | "
-              f"{milestone_str(ms)} |")
-    w.add("")
+    w.table([[f"**{m}**" if m == best else m, int(s.runs), f"{number(s['mean'])} ({number(s.se)})",
+              f"{number(s['last'])} ({number(s.last_se)})", pct(s.success),
+              milestone_str(first_positive(study.returns(exp, m, task), window))]
+             for m, s in table.iterrows()],
+            ["Method", "runs", "mean return (SE)", "last 10% (SE)", "success rate",
+             f"MA{window} > 0 at episode"])
     variants = [v for v in w.variants(exp) if v in table.index]
     baselines = [b for b in study.baselines(exp) if b in table.index]
     if not variants or not baselines:
@@ -238,58 +232,40 @@ def write_task(w: Writer, exp: str, task: str) -> None:
 def write_ground_truth(w: Writer) -> None:
     """Ground truth: V*, relevant areas and optimal routes per task, and learning as a
 fraction of V*."""
-    study = w.study
+    study, exp = w.study, TASKS_EXPERIMENT
     w.add("## Ground truth: V* and relevant areas", "")
-    if not study.has(TASKS_EXPERIMENT):
+    if not study.has(exp):
         w.add("_The tasks experiment is missing: skipped._", "")
         return
     w.add("V* is the optimal expected return per episode from value iteration on the "
           "true model; relevant areas are those the optimal policy visits "
-          "(`optimal.json` where given, else > 0.05 expected visits per episode).", "",
-          "| Task | start -> goal | V* | relevant areas | irrelevant (computed) | "
-          "irrelevant (paper) | optimal route (areas) |", "|---|---|--:|---|---|---|---|")
-    pairs = [(TASKS_EXPERIMENT, t) for t in study.tasks(TASKS_EXPERIMENT)]
-    for exp in study.switch_experiments:
-        pairs += [(exp, t) for t in study.tasks(exp)
-                  if t not in [task for _, task in pairs]]
-    for exp, task in pairs:
-        tr = study.truth(exp, task)
-        t = study.task(exp, task)
-        w.add(f"| {task} | {t.start} -> {t.goal} | {tr.v_star:.2f} | "
-              f"{', '.join(map(str, tr.relevant_areas))} | "
-              f"{', '.join(map(str, tr.irrelevant_areas)) or 'none'} | "
-              f"{', '.join(map(str, tr.irrelevant_areas_paper)) or 'none'} | "
-              f"{route_str(tr.optimal_route_areas)} |")
-    w.add("")
-    methods = study.methods(TASKS_EXPERIMENT)
-    fw = w.opts.final_window
+          "(`optimal.json` where given, else > 0.05 expected visits per episode).", "")
+    pairs = {t: exp for t in study.tasks(exp)}
+    for switch in study.switch_experiments:
+        pairs |= {t: switch for t in study.tasks(switch) if t not in pairs}
+    rows = []
+    for task, e in pairs.items():
+        tr, t = study.truth(e, task), study.task(e, task)
+        rows.append([task, f"{t.start} -> {t.goal}", f"{tr.v_star:.2f}",
+                     ", ".join(map(str, tr.relevant_areas)), areas_str(tr.irrelevant_areas),
+                     areas_str(tr.irrelevant_areas_paper), route_str(tr.optimal_route_areas)])
+    w.table(rows, ["Task", "start -> goal", "V*", "relevant areas", "irrelevant (computed)",
+                   "irrelevant (paper)", "optimal route (areas)"], "llrllll")
+    methods, fw = study.methods(exp), w.opts.final_window
+
+    def fraction(task: str, m: str) -> str:
+        r, v = study.returns(exp, m, task), study.truth(exp, task).v_star
+        if r.size == 0:
+            return "–"
+        return (f"{np.nanmean(run_means(r)) / v:.2f} "
+                f"({np.nanmean(run_means(r, max(0, r.shape[1] - fw))) / v:.2f})")
+
     w.add(f"Learning as a fraction of V*: mean return over all episodes / V* "
-          f"(over the last {fw} episodes in brackets), mean over runs.", "",
-          "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
-    for task in study.tasks(TASKS_EXPERIMENT):
-        v = study.truth(TASKS_EXPERIMENT, task).v_star
-        cells = []
-        for m in methods:
-            r = study.returns(TASKS_EXPERIMENT, m, task)
-            if r.size == 0:
-                cells.append("–")
-                continue
-            overall = float(np.nanmean(run_means(r))) / v
-            last = float(np.nanmean(run_means(r, max(0, r.shape[1] - fw)))) / v
-            cells.append(f"{overall:.2f} ({last:.2f})")
-        w.add(f"| {task} | " + " | ".join(cells) + " |")
-    w.add("")
-    write_iqm(w, [(TASKS_EXPERIMENT, t) for t in study.tasks(TASKS_EXPERIMENT)])
+          f"(over the last {fw} episodes in brackets), mean over runs.", "")
+    w.table([[t, *(fraction(t, m) for m in methods)] for t in study.tasks(exp)],
+            ["Task", *methods])
+    write_iqm(w, [(exp, t) for t in study.tasks(exp)])
     w.figure("fraction_of_vstar", "return as a fraction of V*")
-
-
-def against_baselines(w: Writer, exp: str, variant: str,
-                      stat: Callable[[str], np.ndarray], **kw: bool) -> list[Comparison]:
-    """``variant`` against each baseline of ``exp`` with data, on per-run ``stat(method)``
-    (an empty array: no runs)."""
-    a = stat(variant)
-    return [compare(a, b, variant, m, seed=w.opts.seed, **kw)
-            for m in w.study.baselines(exp) if (b := stat(m)).size]
 
 
 def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
@@ -304,14 +280,14 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
           "the interquartile mean (IQM, the mean of the middle 50%) of every run's mean "
           "return / V* on every task, with a 95% stratified bootstrap interval (runs "
           "resampled within each task, 2,000 resamples, `scipy.stats.bootstrap`; n/a with "
-          "fewer than 2 runs per task).", "",
-          "| Method | tasks | IQM of return / V* | 95% interval |", "|---|--:|--:|---|")
+          "fewer than 2 runs per task).", "")
+    rows = []
     for m in order_methods({m for e, _ in slices for m in study.methods(e)}):
         scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
         scores = [x for x in scores if x.size]
         point, low, high = iqm_ci(scores, seed=w.opts.seed)
-        w.add(f"| {m} | {len(scores)} | {fmt2(point)} | [{fmt2(low)}, {fmt2(high)}] |")
-    w.add("")
+        rows.append([m, len(scores), number(point), f"[{number(low)}, {number(high)}]"])
+    w.table(rows, ["Method", "tasks", "IQM of return / V*", "95% interval"], "lrrl")
 
 
 # hypothesis 1
@@ -319,60 +295,43 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
 def write_hypothesis_1(w: Writer) -> None:
     """Hypothesis I: GDQ collects more reward (tasks A-D), and when the moving average of
 return first turns positive."""
-    study, opts = w.study, w.opts
-    if not w.section("Hypothesis I: GDQ collects more reward (tasks A-D)",
-                     study.has(TASKS_EXPERIMENT), "Hypothesis I",
-                     "the tasks experiment (A-D) is missing"):
+    study, opts, exp = w.study, w.opts, TASKS_EXPERIMENT
+    if not w.section("Hypothesis I: GDQ collects more reward (tasks A-D)", study.has(exp),
+                     "Hypothesis I", "the tasks experiment (A-D) is missing"):
         return
     w.figure("learning_curves", "learning curves, tasks A-D")
     w.add("Statistic: per-run mean return over all episodes of the task (the "
           "cumulative reward of a run divided by its episodes).", "")
-    for task in study.tasks(TASKS_EXPERIMENT):
-        variants = [v for v in w.variants(TASKS_EXPERIMENT)
-                    if study.returns(TASKS_EXPERIMENT, v, task).size]
+    for task in study.tasks(exp):
+        variants = [v for v in w.variants(exp) if study.returns(exp, v, task).size]
         if "GDQ" not in variants:
             w.add(f"- {task}: no GDQ runs; skipped.")
         for variant in variants:
-            gdq = study.returns(TASKS_EXPERIMENT, variant, task)
-            comps = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
-                study.returns(TASKS_EXPERIMENT, m, t)))
-            early = against_baselines(w, TASKS_EXPERIMENT, variant, lambda m, t=task: run_means(
-                study.returns(TASKS_EXPERIMENT, m, t), 0, opts.early_window))
-            w.verdict_line("I", f"Task {task}", comps,
-                           "Welch + bootstrap on per-run mean return", variant)
-            w.comparisons(comps)
-            if opts.early_window < gdq.shape[1]:
+            w.test("I", f"Task {task}", "Welch + bootstrap on per-run mean return", variant,
+                   exp, lambda m, t=task: run_means(study.returns(exp, m, t)))
+            if opts.early_window < study.returns(exp, variant, task).shape[1]:
+                a = run_means(study.returns(exp, variant, task), 0, opts.early_window)
+                early = [compare(a, run_means(study.returns(exp, b, task), 0,
+                                              opts.early_window), variant, b, seed=opts.seed)
+                         for b in study.baselines(exp) if study.returns(exp, b, task).size]
                 w.add(f"  First {opts.early_window} episodes only (verdict "
                       f"{verdict(early)}: {variant} {verdict_reason(early)}):")
                 w.comparisons(early)
-    milestones(w)
-
-
-def milestones(w: Writer) -> None:
-    study, window = w.study, w.opts.window
-    methods = study.methods(TASKS_EXPERIMENT)
-    w.add(f"Episode at which the {window}-episode moving average of return first turns "
+    methods = study.methods(exp)
+    w.add(f"Episode at which the {opts.window}-episode moving average of return first turns "
           "positive: on the mean curve over runs; in brackets the mean over the "
-          "runs that reach it and how many do.", "",
-          "| Task | " + " | ".join(methods) + " |", "|---|" + "--:|" * len(methods))
-    for task in study.tasks(TASKS_EXPERIMENT):
-        cells = []
-        for m in methods:
-            r = study.returns(TASKS_EXPERIMENT, m, task)
-            ms = first_positive(r, window)
-            cells.append(milestone_str(ms))
-        w.add(f"| {task} | " + " | ".join(cells) + " |")
-    w.add("")
+          "runs that reach it and how many do.", "")
+    w.table([[t, *(milestone_str(first_positive(study.returns(exp, m, t), opts.window))
+                   for m in methods)] for t in study.tasks(exp)], ["Task", *methods])
 
 
 # hypothesis 2
 
 def write_hypothesis_2(w: Writer) -> None:
     """Hypothesis II: GDQ avoids irrelevant areas."""
-    study = w.study
-    if not w.section("Hypothesis II: GDQ avoids irrelevant areas",
-                     study.has(TASKS_EXPERIMENT), "Hypothesis II",
-                     "the tasks experiment (A-D) is missing"):
+    study, exp = w.study, TASKS_EXPERIMENT
+    if not w.section("Hypothesis II: GDQ avoids irrelevant areas", study.has(exp),
+                     "Hypothesis II", "the tasks experiment (A-D) is missing"):
         return
     table = area_table(study)
     w.add("Area visits summed over a run, mean (SE) over runs; bold: fewest visits "
@@ -382,33 +341,27 @@ def write_hypothesis_2(w: Writer) -> None:
     w.add("Statistic: per run, the visits to the task's irrelevant areas summed over "
           "the run (fewer is better), for the paper's and for the computed set.", "")
     areas = study.areas
-    for task in study.tasks(TASKS_EXPERIMENT):
-        totals = {v: study.area_totals(TASKS_EXPERIMENT, v, task)
-                  for v in w.variants(TASKS_EXPERIMENT)}
-        totals = {v: t for v, t in totals.items() if t.shape[0]}
-        if "GDQ" not in totals:
+    for task in study.tasks(exp):
+        variants = [v for v in w.variants(exp) if study.area_totals(exp, v, task).shape[0]]
+        if "GDQ" not in variants:
             w.add(f"- {task}: no GDQ runs; skipped.")
         for label, irr in (("paper", table.irrelevant_paper[task]),
                            ("computed", table.irrelevant_computed[task])):
             cols = [areas.index(a) for a in irr if a in areas]
             case = f"Task {task}, {label} irrelevant areas {{{', '.join(map(str, irr))}}}"
             if not cols:
-                if totals:
+                if variants:
                     w.add(f"- {case}: no irrelevant areas; nothing to test.", "")
                 continue
-            for variant in totals:
-                comps = against_baselines(
-                    w, TASKS_EXPERIMENT, variant, lambda m, t=task, c=cols: study.area_totals(
-                        TASKS_EXPERIMENT, m, t)[:, c].sum(axis=1), higher_is_better=False)
-                w.verdict_line("II", case, comps,
-                               "Welch + bootstrap on per-run visits to those areas",
-                               variant)
+            for variant in variants:
                 fewest = sum(bool(table.frame.loc[(task, variant), f"area_{a}_bold"])
                              for a in irr if a in areas)
-                w.add(f"  {variant} has the fewest visits in {fewest} of {len(cols)} "
-                      "of these areas.")
-                w.comparisons(comps, " visits")
-    for task in study.tasks(TASKS_EXPERIMENT):
+                w.test("II", case, "Welch + bootstrap on per-run visits to those areas",
+                       variant, exp, lambda m, t=task, c=cols: study.area_totals(
+                           exp, m, t)[:, c].sum(axis=1), higher_is_better=False, unit=" visits",
+                       note=f"{variant} has the fewest visits in {fewest} of {len(cols)} "
+                       "of these areas.")
+    for task in study.tasks(exp):
         w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
 
@@ -439,20 +392,14 @@ def write_hypothesis_3(w: Writer) -> None:
         if "GDQ" not in variants:
             w.add(f"- {exp}: no GDQ runs; skipped.", "")
         for variant in variants:
-            comps = against_baselines(w, exp, variant, lambda m, e=exp, t=new: run_means(
-                study.returns(e, m, t), 0, n))
-            w.verdict_line("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
-                           f"{study.switch_episode(exp)})", comps,
-                           f"Welch + bootstrap on per-run mean return, first {n} "
-                           "episodes after the switch", variant)
-            w.comparisons(comps)
-        if not variants:
-            continue
-        parts = []
-        for m in study.methods(exp):
-            ms = first_positive(study.returns(exp, m, new), opts.window)
-            parts.append(f"{m} {milestone_str(ms)}")
-        w.add("  Recovery episode: " + "; ".join(parts) + ".", "")
+            w.test("III", f"{exp} ({' -> '.join(tasks)}, switch at episode "
+                   f"{study.switch_episode(exp)})", f"Welch + bootstrap on per-run mean "
+                   f"return, first {n} episodes after the switch", variant, exp,
+                   lambda m, e=exp, t=new: run_means(study.returns(e, m, t), 0, n))
+        if variants:
+            w.add("  Recovery episode: " + "; ".join(
+                f"{m} {milestone_str(first_positive(study.returns(exp, m, new), opts.window))}"
+                for m in study.methods(exp)) + ".", "")
 
 
 # route c
@@ -476,35 +423,27 @@ paper's best route."""
           f"{opts.route_window} episodes succeed while visiting exactly the areas of "
           f"{route_str(BEST_ROUTE_C)}, to the end of the run.", "")
     w.figure("routes_C", "Task C greedy routes")
-    have_policies = study.policies is not None
-    if not have_policies:
+    if study.policies is None:
         w.add("_No `policies.csv`: final greedy routes are not available._", "")
-    w.add(f"| Method | final route {route_str(BEST_ROUTE_C)} | most common final route "
-          "| converged runs | convergence episode (mean) |", "|---|--:|---|--:|--:|")
+    rows, conv = [], {}
     for m in study.methods(exp):
-        summary = study.route_summary(exp, m, "C") if have_policies else None
-        share, common = "–", "–"
+        summary = study.route_summary(exp, m, "C") if study.policies is not None else None
+        share = common = "–"
         if summary is not None:
-            on = summary.on_route(world, BEST_ROUTE_C)
+            on, k = summary.on_route(world, BEST_ROUTE_C), summary.count
             share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
-            k = summary.count
-            common = (f"{route_str(summary.areas)} ({summary.end}, {k} "
-                      f"run{'s' if k != 1 else ''})")
-        conv = convergence_episode(study.area_visits(exp, m, "C"),
-                                   study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-                                   study.areas, opts.route_window, opts.route_share)
-        reached = [c for c in conv if not math.isnan(c)]
-        mean_conv = fmt(float(np.mean(reached)), 5) if reached else "never"
-        w.add(f"| {m} | {share} | {common} | {len(reached)}/{len(conv)} | "
-              f"{mean_conv} |")
-    w.add("")
-    gdq = convergence_episode(study.area_visits(exp, "GDQ", "C"),
-                              study.matrix("success", exp, "GDQ", "C"), BEST_ROUTE_C,
-                              study.areas, opts.route_window, opts.route_share)
-    if gdq:
-        w.add("GDQ's convergence episode per run: "
-              + ", ".join(fmt(c, 5) if not math.isnan(c) else "never" for c in gdq)
-              + ".", "")
+            common = f"{route_str(summary.areas)} ({summary.end}, {k} run{'s' * (k != 1)})"
+        conv[m] = convergence_episode(study.area_visits(exp, m, "C"),
+                                      study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
+                                      study.areas, opts.route_window, opts.route_share)
+        reached = [c for c in conv[m] if not math.isnan(c)]
+        rows.append([m, share, common, f"{len(reached)}/{len(conv[m])}",
+                     fmt(float(np.mean(reached)), 5) if reached else "never"])
+    w.table(rows, ["Method", f"final route {route_str(BEST_ROUTE_C)}", "most common final "
+                   "route", "converged runs", "convergence episode (mean)"], "lrlrr")
+    if conv.get("GDQ"):
+        w.add("GDQ's convergence episode per run: " + ", ".join(
+            fmt(c, 5) if not math.isnan(c) else "never" for c in conv["GDQ"]) + ".", "")
 
 
 # variants
@@ -524,26 +463,21 @@ task."""
                      "the tasks experiment lacks GDQ or both of its variants"):
         return
     w.add("Mean return per episode over all episodes, mean (SE) over runs; each "
-          "difference is GDQ minus the variant, with its bootstrap 95% CI and Welch p.", "",
-          "| Task | GDQ | " + " | ".join(f"{m} | GDQ - {m} (95% CI) | p" for m in others)
-          + " |", "|---|--:|" + "--:|--:|--:|" * len(others))
+          "difference is GDQ minus the variant, with its bootstrap 95% CI and Welch p.", "")
+    rows = []
     for task in study.tasks(exp):
         a = run_means(study.returns(exp, "GDQ", task))
         if a.size == 0:
             continue
-        ma, sa = mean_se(a)
-        cells = [f"{ma:.2f} ({sa:.2f})"]
+        cells = [task, "{:.2f} ({:.2f})".format(*mean_se(a))]
         for m in others:
             b = run_means(study.returns(exp, m, task))
-            if b.size == 0:
-                cells += ["–", "–", "–"]
-                continue
             c = compare(a, b, "GDQ", m, seed=w.opts.seed)
-            mb, sb = mean_se(b)
-            cells += [f"{mb:.2f} ({sb:.2f})", f"{c.diff:+.2f} [{c.ci_low:+.2f}, "
-                      f"{c.ci_high:+.2f}]", fmt(c.p)]
-        w.add(f"| {task} | " + " | ".join(cells) + " |")
-    w.add("")
+            cells += ["–", "–", "–"] if b.size == 0 else [
+                "{:.2f} ({:.2f})".format(*mean_se(b)),
+                f"{c.diff:+.2f} [{c.ci_low:+.2f}, {c.ci_high:+.2f}]", fmt(c.p)]
+        rows.append(cells)
+    w.table(rows, ["Task", "GDQ", *(x for m in others for x in (m, f"GDQ - {m} (95% CI)", "p"))])
 
 
 # why gdq fails
@@ -565,28 +499,21 @@ def write_why_gdq_fails(w: Writer) -> None:
     w.add(f"Q values at the start state of Task {task} right after OptInit, measured "
           "by building each learner as the experiment did (before any episode); "
           f"R_max = {r_max:g}, gamma = {gamma:g}, so R_max / (1 - gamma) = "
-          f"{bound:.4g} and gamma R_max / (1 - gamma) = {gamma * bound:.4g}.", "",
-          "| Variant | Q(s0, greedy action) | median Q(s0, ·) | actions at s0 |",
-          "|---|--:|--:|--:|")
-    for method, (greedy, median, n) in init.values.items():
-        w.add(f"| {method} | {greedy:.4g} | {median:.4g} | {n} |")
-    w.add("")
+          f"{bound:.4g} and gamma R_max / (1 - gamma) = {gamma * bound:.4g}.", "")
+    w.table([[m, f"{g:.4g}", f"{med:.4g}", n] for m, (g, med, n) in init.values.items()],
+            ["Variant", "Q(s0, greedy action)", "median Q(s0, ·)", "actions at s0"])
     limit = study.world(exp).step_limit
     w.add(f"How episodes end (tasks {', '.join(tasks)}, all episodes of all runs): the "
           f"share that run out of the {limit}-step limit without reaching the goal "
-          f"(steps = {limit} and success = 0), and the share that reach the goal.", "",
-          "| Method | step limit, no goal | goal reached | mean return |",
-          "|---|--:|--:|--:|")
+          f"(steps = {limit} and success = 0), and the share that reach the goal.", "")
     df = study.rows(exp)
     ends = df.assign(timeout=(df["steps"] == limit) & (df["success"] == 0),
                      goal=df["success"] > 0).groupby("method", observed=True)[
-                         ["timeout", "goal", "return"]].mean()
-    shares = {}
-    for m in study.methods(exp):
-        shares[m] = float(ends.loc[m, "timeout"])
-        w.add(f"| {m} | {shares[m]:.1%} | {ends.loc[m, 'goal']:.1%} | "
-              f"{ends.loc[m, 'return']:.2f} |")
-    w.add("")
+                         ["timeout", "goal", "return"]].mean().loc[study.methods(exp)]
+    shares = ends["timeout"].to_dict()
+    w.table([[m, f"{e.timeout:.1%}", f"{e.goal:.1%}", f"{e['return']:.2f}"]
+             for m, e in ends.iterrows()],
+            ["Method", "step limit, no goal", "goal reached", "mean return"])
     paper = init.values.get("GDQ-literal")
     if paper is not None:
         timeout = shares.get("GDQ-literal", math.nan)
@@ -662,31 +589,25 @@ def write_robot(w: Writer) -> None:
           f"(areas) {route_str(truth.optimal_route_areas)}. A trial *follows the "
           "optimal route* when it succeeds visiting exactly those areas; the route "
           f"*becomes optimal* at the trial from which at least {opts.robot_share:.0%} "
-          f"of the last {opts.robot_window} trials follow it, to the end.", "",
-          "| Method | runs | mean return per trial | runs with a success | first "
-          "success (mean trial) | trial route becomes optimal (per run) | final "
-          "greedy route optimal |", "|---|--:|--:|--:|--:|---|--:|")
+          f"of the last {opts.robot_window} trials follow it, to the end.", "")
+    rows = []
     for m in study.methods(exp):
-        ret = study.returns(exp, m, task)
-        success = study.matrix("success", exp, m, task)
+        ret, success = study.returns(exp, m, task), study.matrix("success", exp, m, task)
         if ret.size == 0:
             continue
-        n = ret.shape[0]
-        succ_runs = int(np.sum(np.nansum(success, axis=1) > 0))
-        firsts = [float(np.flatnonzero(row > 0)[0] + 1) for row in success
-                  if np.any(row > 0)]
+        n, firsts = ret.shape[0], [np.argmax(row > 0) + 1.0 for row in success if any(row > 0)]
         ind = route_indicator(study.area_visits(exp, m, task), success,
                               truth.optimal_route_areas, study.areas)
         conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
-        conv_txt = ", ".join("never" if math.isnan(c) else str(int(c)) for c in conv)
         summary = study.route_summary(exp, m, task)
-        final = "–"
-        if summary is not None:
-            final = f"{summary.on_route(world, truth.optimal_route_areas)}/{summary.runs}"
-        w.add(f"| {m} | {n} | {np.nanmean(ret):.1f} | {succ_runs}/{n} | "
-              f"{fmt(float(np.mean(firsts)), 3) if firsts else 'none'} | {conv_txt} | "
-              f"{final} |")
-    w.add("")
+        rows.append([m, n, f"{np.nanmean(ret):.1f}", f"{len(firsts)}/{n}",
+                     fmt(float(np.mean(firsts)), 3) if firsts else "none",
+                     ", ".join("never" if math.isnan(c) else str(int(c)) for c in conv),
+                     "–" if summary is None else
+                     f"{summary.on_route(world, truth.optimal_route_areas)}/{summary.runs}"])
+    w.table(rows, ["Method", "runs", "mean return per trial", "runs with a success",
+                   "first success (mean trial)", "trial route becomes optimal (per run)",
+                   "final greedy route optimal"], "lrrrrlr")
     if "Dyna-Q" in study.methods(exp):
         success = study.matrix("success", exp, "Dyna-Q", task)
         k = int(np.sum(np.nansum(success, axis=1) > 0))

@@ -18,6 +18,7 @@ import pandas as pd
 
 from gdq_pddl.analysis.results import TASKS_EXPERIMENT
 from gdq_pddl.analysis.study import Study
+from gdq_pddl.analysis.writer import areas_str
 from gdq_pddl.outputs import write_text
 
 TABLE_DIR = "tables"
@@ -76,18 +77,14 @@ def _cells(table: AreaTable, bold: str, sep: str = " ") -> pd.DataFrame:
     return out
 
 
-def _sets(areas: tuple[int, ...]) -> str:
-    return ", ".join(map(str, areas)) if areas else "none"
-
-
 def area_markdown(table: AreaTable) -> str:
     """The table as Markdown (the task cell names both sets of irrelevant areas)."""
     if table.frame.empty:
         return "_No area visits in the data._\n"
     cells = _cells(table, "**{}**").reset_index()
     first = ~cells["task"].duplicated()
-    cells["task"] = [f"**{t}** (irrelevant: paper {_sets(table.irrelevant_paper[t])}; "
-                     f"computed {_sets(table.irrelevant_computed[t])})" if f else ""
+    cells["task"] = [f"**{t}** (irrelevant: paper {areas_str(table.irrelevant_paper[t])}; "
+                     f"computed {areas_str(table.irrelevant_computed[t])})" if f else ""
                      for t, f in zip(cells["task"], first, strict=True)]
     cells = cells.rename(columns={"task": "Task", "method": "Method"})
     return cells.to_markdown(index=False, colalign=("left", "left", *["right"] * (

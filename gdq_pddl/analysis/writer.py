@@ -4,14 +4,22 @@ verdict bookkeeping (:class:`Verdicts`) and the line buffer (:class:`Writer`).""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from gdq_pddl.analysis.results import is_gdq, order_methods
-from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, verdict, verdict_reason
+from gdq_pddl.analysis.stats import (
+    HOLDS,
+    Comparison,
+    Milestone,
+    compare,
+    verdict,
+    verdict_reason,
+)
 from gdq_pddl.analysis.study import Study
 
 
@@ -40,9 +48,11 @@ class ReportOptions:
 FIGURE_DIR, TABLE_DIR = "figures", "tables"
 
 
-def fmt2(x: float) -> str:
-    """Two decimals, ``n/a`` for NaN."""
-    return "n/a" if math.isnan(x) else f"{x:.2f}"
+def number(x: float, digits: int = 2, sign: bool = False) -> str:
+    """``x`` rounded to ``digits`` decimals (``sign``: always signed; NaN: ``n/a``)."""
+    if x is None or math.isnan(x):
+        return "n/a"
+    return f"{x:+.{digits}f}" if sign else f"{x:.{digits}f}"
 
 
 def fmt(x: float, digits: int = 3) -> str:
@@ -60,6 +70,10 @@ def route_str(areas: Sequence[int]) -> str:
     return "->".join(map(str, areas)) if areas else "(none)"
 
 
+def areas_str(areas: Sequence[int]) -> str:
+    return ", ".join(map(str, areas)) or "none"
+
+
 def pct(x: float) -> str:
     return "n/a" if math.isnan(x) else f"{x:.1%}"
 
@@ -69,11 +83,13 @@ VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper
 """How the verdict summary names the GDQ variants."""
 
 
-def markdown_rows(frame: pd.DataFrame) -> list[str]:
+def markdown_rows(frame: pd.DataFrame, align: str = "") -> list[str]:
     """A DataFrame of text as compact Markdown table lines (unpadded, so that a line per
-    row stays greppable: ``| I | Task A | **holds** |``)."""
+    row stays greppable: ``| I | Task A | **holds** |``); ``align``: one ``l`` or ``r``
+    per column (default: every column left-aligned)."""
+    align = align or "l" * len(frame.columns)
     return ["| " + " | ".join(map(str, frame.columns)) + " |",
-            "|" + "---|" * len(frame.columns),
+            "|" + "".join("--:|" if a == "r" else "---|" for a in align),
             *("| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))]
 
 
@@ -153,6 +169,26 @@ class Writer:
         path = self.out_dir / FIGURE_DIR / f"{stem}.png"
         if path.exists():
             self.add(f"![{caption}]({FIGURE_DIR}/{stem}.png)", "")
+
+    def table(self, rows: Sequence[Sequence], columns: Sequence[str], align: str = "") -> None:
+        """``rows`` of cells as a Markdown table (see :func:`markdown_rows`), then a blank
+        line; ``align`` defaults to the first column left, the others right."""
+        frame = pd.DataFrame(list(rows), columns=list(columns), dtype=object)
+        self.add(*markdown_rows(frame, align or "l" + "r" * (len(columns) - 1)), "")
+
+    def test(self, hypothesis: str, case: str, basis: str, variant: str, experiment: str,
+             stat: Callable[[str], np.ndarray], higher_is_better: bool = True,
+             unit: str = "", note: str = "") -> list[Comparison]:
+        """``variant`` against each baseline of ``experiment`` with data, on per-run
+        ``stat(method)`` (an empty array: no runs): its verdict recorded, its bullet, a
+        ``note`` line and the comparisons written."""
+        a = stat(variant)
+        comps = [compare(a, b, variant, m, higher_is_better, seed=self.opts.seed)
+                 for m in self.study.baselines(experiment) if (b := stat(m)).size]
+        self.verdict_line(hypothesis, case, comps, basis, variant)
+        self.add(*([f"  {note}"] if note else []))
+        self.comparisons(comps, unit)
+        return comps
 
     def comparisons(self, comps: Sequence[Comparison], unit: str = "") -> None:
         for c in comps:

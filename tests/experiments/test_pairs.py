@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from gdq_pddl.analysis.pairs import PairRuns, differences, number
+from gdq_pddl.analysis.pairs import PairRuns, differences
+from gdq_pddl.analysis.writer import number
 from gdq_pddl.cli import main
 from gdq_pddl.experiments import pairs as pairs_module
 from gdq_pddl.world import load_world
