@@ -133,8 +133,8 @@ def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
     """Per pair of ``experiments`` (all in one world): start, goal, the shortest plan's
     length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
     from gdq_pddl.envs.model import compile_model, full_state
+    from gdq_pddl.envs.office import office_plan_table
     from gdq_pddl.envs.solve import solve
-    from gdq_pddl.learners.context import office_plan_table
     from gdq_pddl.spaces import LearnerSpaces
 
     if not experiments:
