@@ -52,6 +52,7 @@ from gdq_pddl.envs.model import (
     merge_outcomes,
     office_costs,
     outcome_csr,
+    per_object,
     reality_task,
     slip_outcomes,
 )
@@ -84,7 +85,12 @@ def compile_compact(world: World) -> CompactModel:
     """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
     number of learner states x actions): the rule of
     :func:`~gdq_pddl.envs.model.compile_true_model` on the same grounded building and
-    dynamics, from each learner state's planner state (every other door closed)."""
+    dynamics, from each learner state's planner state (every other door closed).
+    Compiled once per world."""
+    return per_object(world, "compact", lambda: _compile_compact(world))
+
+
+def _compile_compact(world: World) -> CompactModel:
     spaces = LearnerSpaces(world)
     o = OfficeAbstraction(world)
     task = reality_task(world)

@@ -65,7 +65,6 @@ step, with randomness from ``self.np_random`` only. ``env.unwrapped.world``, ``.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -79,7 +78,7 @@ from gdq_pddl.abstraction.prior import PriorModel, prior_from_task
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
@@ -91,23 +90,21 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World, as_world, office_problem, pick_task
 
 
+def _knowledge(world: World, task: Task | str) -> PlanningProblem:
+    """The knowledge of ``world`` for ``task`` (a goal: any other position as start)."""
+    if isinstance(task, str):
+        task = Task("plan-table", next(p for p in world.positions if p != task), task)
+    return PlanningProblem.from_texts(domain_text(), office_problem(world, task))
+
+
 def office_action_masks(world: World, task: Task) -> np.ndarray:
     """``int8[n_states, n_actions]``, read-only: the actions the office's knowledge
     (``domains/office.pddl`` on ``world``'s problem for ``task``) says can do something
     in each learner state, through O (:mod:`gdq_pddl.abstraction.masks`). Cached per
     (world object, start): an experiment makes an env per run, and grounding the
     knowledge costs milliseconds."""
-    key = (id(world), task.start)
-    hit = _MASKS.get(key)
-    if hit is not None and hit[0]() is world:
-        return hit[1]
-    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, task))
-    masks = knowledge_action_mask(OfficeAbstraction(world), problem.task)
-    _MASKS[key] = (weakref.ref(world), masks)
-    return masks
-
-
-_MASKS: dict[tuple[int, str], tuple[weakref.ref, np.ndarray]] = {}
+    return per_object(world, ("masks", task.start), lambda: knowledge_action_mask(
+        OfficeAbstraction(world), _knowledge(world, task).task))
 
 
 def _knowledge_key(world: World) -> tuple:
@@ -115,13 +112,6 @@ def _knowledge_key(world: World) -> tuple:
     whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
     return (world.positions, world.edges,
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
-
-
-def _knowledge(world: World, goal: str) -> PlanningProblem:
-    """The knowledge of ``world`` with goal ``goal`` (and any other position as start)."""
-    start = next(p for p in world.positions if p != goal)
-    return PlanningProblem.from_texts(
-        domain_text(), office_problem(world, Task("plan-table", start, goal)))
 
 
 TOLERANT_KINDS = ("all", "routes")
@@ -156,9 +146,6 @@ def office_plan_table(world: World, goal: str, planner: str = "graph",
                                      abstraction.goal(goal), tolerance)
         _TABLES[key] = table
     return table
-
-
-_CAPACITY: dict[int, tuple[weakref.ref, int]] = {}
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,7 +219,7 @@ class OfficeInstance:
     def r_max(self) -> float:
         return float(self.world.r_max)
 
-    @cached_property
+    @property
     def compact(self) -> CompactModel:
         """The true model per learner state (any size of world; :mod:`.compact`)."""
         return compile_compact(self.world)
@@ -240,12 +227,8 @@ class OfficeInstance:
     @property
     def max_successors(self) -> int:
         """:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the compact model
-        (an upper bound; learner-level, so any size of world), cached per world."""
-        hit = _CAPACITY.get(id(self.world))
-        if hit is None or hit[0]() is not self.world:
-            hit = _CAPACITY[id(self.world)] = (weakref.ref(self.world),
-                                               successor_capacity(self.compact))
-        return hit[1]
+        (an upper bound; learner-level, so any size of world)."""
+        return successor_capacity(self.compact)
 
     @property
     def prior(self) -> PriorModel:

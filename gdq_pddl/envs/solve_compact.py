@@ -50,14 +50,13 @@ cost 0.97 and gothrough cost 1.78, task ``z0 -> z2``, step limit 9).
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel, compile_compact
-from gdq_pddl.envs.model import ModelArrays
+from gdq_pddl.envs.model import ModelArrays, per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
 from gdq_pddl.limits import check_memory
 from gdq_pddl.world import Task, World
@@ -104,9 +103,10 @@ def successor_capacity(model: ModelArrays | CompactModel) -> int:
     (an upper bound: an outcome whose next position has a door other than the one acted
     at may show it open or closed, :func:`next_states`; a pair with no outcome stays
     put). What the learners size their successor slots by; cached per model."""
-    hit = _CAPACITY.get(id(model.ptr))
-    if hit is not None and hit[0]() is model.ptr:
-        return hit[1]
+    return per_object(model.ptr, "capacity", lambda: _capacity(model))
+
+
+def _capacity(model: ModelArrays | CompactModel) -> int:
     n_pairs = len(model.ptr) - 1
     pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
     if isinstance(model, CompactModel):
@@ -119,12 +119,7 @@ def successor_capacity(model: ModelArrays | CompactModel) -> int:
             pair % model.n_actions
         keys = learner_pair * n_states + model.obs_of[model.next]
     per_pair = np.bincount(np.unique(keys) // n_states) if len(keys) else np.zeros(1)
-    capacity = max(1, int(per_pair.max()))
-    _CAPACITY[id(model.ptr)] = (weakref.ref(model.ptr), capacity)
-    return capacity
-
-
-_CAPACITY: dict[int, tuple[weakref.ref, int]] = {}
+    return max(1, int(per_pair.max()))
 
 
 def _stay_actions(model: CompactModel, cost: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -24,25 +24,23 @@ from gdq_pddl.world import Task, World
 
 class Instance(Protocol):
     """What :func:`task_context` reads of an instance, in the learner's states and actions
-    (the image of the instance's observation map)."""
+    (the image of its observation map): ``learner_goal`` is bool[n_states];
+    ``max_successors`` bounds the distinct next learner states of a pair in the true
+    model; ``source`` is the file named when the learners' tables would not fit."""
 
     name: str
     source: str
-    """The file named when the learners' tables would not fit."""
     n_states: int
     n_actions: int
     learner_start: int
     learner_goal: np.ndarray
-    """bool[n_states]: the learner states where the goal holds."""
     r_max: float
     max_successors: int
-    """The most distinct next learner states of any pair in the true model (a bound)."""
     prior: PriorModel
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
-                   kind: str = "all") -> PlanTable:
-        """The planner's plans from every learner state (cached by the instance)."""
-        ...
+                   kind: str = "all") -> PlanTable: ...
+
 
 @dataclass(frozen=True, eq=False)
 class TaskContext:
