@@ -104,8 +104,10 @@ class CompiledEnv(gym.Env[int, int]):
         raise NotImplementedError
 
     def _info(self) -> dict[str, Any]:
-        """``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
+        """What the instance says at the position (the office: ``position``),
+        ``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
         new data on every call), ``area`` (0: none), ``cause`` and ``step``."""
-        return {"action_mask": self.action_masks[self._observe()].copy(),
-                "area": int(self.model.area_of_pos[self._position()]),
-                "cause": self._cause, "step": self._t}
+        pos = self._position()
+        return {**self.instance.info(pos),
+                "action_mask": self.action_masks[self._observe()].copy(),
+                "area": int(self.model.area_of_pos[pos]), "cause": self._cause, "step": self._t}

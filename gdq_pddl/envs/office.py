@@ -271,9 +271,9 @@ class OfficeInstance:
         opened = frozenset(d.name for i, d in enumerate(self.world.doors) if mask >> i & 1)
         return self.world.positions[pos], opened
 
-    def info(self, fs: int) -> dict[str, Any]:
+    def info(self, pos: int) -> dict[str, Any]:
         """What ``info`` says beyond every env's keys: the ``position``'s name."""
-        return {"position": self.world.positions[int(self.model.pos_of[fs])]}
+        return {"position": self.world.positions[pos]}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
         robot, opened = self.decode(fs)
@@ -294,7 +294,6 @@ def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (
     A function, not a class: the office has no env class of its own, so
     ``isinstance(env.unwrapped, OfficeEnv)`` is not a test; ask
     ``isinstance(env.unwrapped.instance, OfficeInstance)``."""
-    PDDLEnv.check_render_mode(render_mode, OfficeInstance.render_modes)
     return PDDLEnv(instance=OfficeInstance.of(task, start, goal, world),
                    render_mode=render_mode)
 
@@ -308,8 +307,6 @@ class CompactEnv(CompiledEnv):
     buildings): same arguments (no rendering), spaces, rewards, episode ends and random
     draws as ``OfficeEnv``; ``info`` has ``open_doors`` (door indices) instead of
     ``full_state``."""
-
-    metadata = {"render_modes": []}
 
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
@@ -335,5 +332,4 @@ class CompactEnv(CompiledEnv):
         return self._pos
 
     def _info(self) -> dict[str, Any]:
-        return {**super()._info(), "position": self.world.positions[self._pos],
-                "open_doors": tuple(np.flatnonzero(self.doors).tolist())}
+        return {**super()._info(), "open_doors": tuple(np.flatnonzero(self.doors).tolist())}

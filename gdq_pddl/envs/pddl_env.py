@@ -313,8 +313,8 @@ class PDDLInstance:
     goal_pos = GOAL_POS
     render_modes = ("ansi",)
 
-    def info(self, fs: int) -> dict[str, Any]:
-        """What ``info`` says beyond every env's keys: nothing."""
+    def info(self, pos: int) -> dict[str, Any]:
+        """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""
         return {}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str:
@@ -624,5 +624,4 @@ class PDDLEnv(CompiledEnv):
         return int(self.model.pos_of[self._fs])
 
     def _info(self) -> dict[str, Any]:
-        """The common keys, ``full_state`` and what the instance adds (``position``)."""
-        return {**self.instance.info(self._fs), **super()._info(), "full_state": self._fs}
+        return {**super()._info(), "full_state": self._fs}
