@@ -8,7 +8,7 @@ and action spaces are identical and only what the knowledge says differs. An
 the knowledge world in ``knowledge`` (None: the real world itself, accurate knowledge).
 
 The derived worlds are built in memory and named ``office:<variant>``;
-:func:`gdq_pddl.experiments.work.load_world_named` resolves those names through
+:func:`load_world_named` resolves those names through
 :data:`WORLDS`.
 
 The cases (all on Task C, p0 -> p17; every case also runs with accurate knowledge, the
@@ -30,9 +30,11 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import cache
+from pathlib import Path
 
 from gdq_pddl.errors import GdqError
-from gdq_pddl.world import World, builtin_world
+from gdq_pddl.spaces import LearnerSpaces
+from gdq_pddl.world import World, builtin_world, load_world
 
 PASSAGE = ("p8", "p17")
 """The corridor that exists in reality but not in the knowledge (case ``passage``)."""
@@ -146,14 +148,22 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
     return out
 
 
+@cache
+def load_world_named(name: str) -> World:
+    """``office`` / ``office_robot`` (built in), a derived world ``office:<variant>``
+    (:data:`WORLDS`), or a world file path."""
+    if name in ("office", "office_robot"):
+        return builtin_world(name)
+    if name.startswith("office:"):
+        return derived_world(name)
+    return load_world(Path(name))
+
+
 def knowledge_world(real: World, knowledge: str | None) -> World:
     """The world to build the knowledge from: ``real`` when ``knowledge`` is None, else the
     named world, which must give the learner the same states and actions as ``real``."""
     if knowledge is None:
         return real
-    from gdq_pddl.experiments.work import load_world_named
-    from gdq_pddl.spaces import LearnerSpaces
-
     world = load_world_named(knowledge)
     a, b = LearnerSpaces(real), LearnerSpaces(world)
     if a.states != b.states or a.n_actions != b.n_actions:

@@ -9,29 +9,18 @@ from __future__ import annotations
 
 from dataclasses import replace
 from functools import cache
-from pathlib import Path
 
 import numpy as np
 
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
-from gdq_pddl.experiments.knowledge import derived_world, knowledge_world
+from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
 from gdq_pddl.learners import precompile
 from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
-from gdq_pddl.world import Task, World, builtin_world, load_world
-
-
-@cache
-def load_world_named(name: str) -> World:
-    """``office`` / ``office_robot`` (built in), or a world file path."""
-    if name in ("office", "office_robot"):
-        return builtin_world(name)
-    if name.startswith("office:"):  # in-memory variants, see experiments/knowledge.py
-        return derived_world(name)
-    return load_world(Path(name))
+from gdq_pddl.world import Task, World
 
 
 def resolve_task(world: World, spec: str) -> Task:
