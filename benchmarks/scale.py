@@ -33,7 +33,7 @@ import numpy as np
 from _timing import median_ms  # benchmarks/_timing.py (this folder is on sys.path)
 
 from gdq_pddl.buildings import building_world
-from gdq_pddl.envs.compact import CompactEnv
+from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.experiments.scale import METHODS, TOLERANCE
 from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.episodes import run_compact

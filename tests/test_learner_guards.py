@@ -17,8 +17,7 @@ import pytest
 
 import gdq_pddl  # noqa: F401  (registers the envs)
 from gdq_pddl.abstraction.prior import PriorModel
-from gdq_pddl.envs.compact import CompactEnv
-from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.experiments.protocol import METHODS as CLI_METHODS
 from gdq_pddl.learners import (

@@ -1,18 +1,15 @@
-"""What every env of this package shares: episodes stepped through one compiled model.
+"""What every env of this package shares: an instance's episodes stepped through one
+compiled model.
 
-:class:`CompiledEnv` holds the episode bookkeeping of both model kinds (step count,
-end cause, the reset-before-step and action-range checks) and implements ``reset`` and
-``step`` once over three hooks: restart the hidden state, advance it by one compiled
-step, and observe it.
-
-:class:`ModelEnv` fills them in for :class:`~gdq_pddl.envs.model.ModelArrays`
-(``model``), the hidden full state an episode starts in (``start_state``) and the
-``goal_pos`` that :func:`env_step`'s goal test compares with, so the office and a PDDL
-domain step through the same code, and the fast episode runner
-(:mod:`gdq_pddl.learners.episodes`) accepts any subclass; the package's one subclass is
-:class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on any instance.
-:class:`~gdq_pddl.envs.compact.CompactEnv` fills them in for the compact model of an
-office instance (large buildings); it is not a :class:`ModelEnv`.
+:class:`CompiledEnv` is the one base: it holds the instance (whose attributes are the
+env's too), the spaces, the action masks and the episode bookkeeping (step count, end
+cause, the reset-before-step and action-range checks), and implements ``reset``,
+``step`` and the common ``info`` once over four hooks: restart the hidden state, advance
+it by one compiled step, observe it, and say where it is. Its two subclasses are the two
+representations of an instance's true model: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`
+over the full states (:class:`~gdq_pddl.envs.model.ModelArrays`; every instance, both
+env ids) and :class:`~gdq_pddl.envs.office.CompactEnv` over the learner states of an
+office instance (:mod:`gdq_pddl.envs.compact`; buildings too large for the full one).
 """
 
 from __future__ import annotations
@@ -23,23 +20,49 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.error import ResetNeeded
+from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.model import CAUSES, ModelArrays, env_step
+from gdq_pddl.envs.model import CAUSES
 
 
 class CompiledEnv(gym.Env[int, int]):
-    """Base class: subclasses set ``model`` and the spaces, call :meth:`_begin` at the
-    end of ``__init__`` and implement :meth:`_restart`, :meth:`_advance`,
-    :meth:`_observe` and :meth:`_info`."""
+    """Base class: subclasses call ``__init__`` with the instance and the compiled model
+    and implement :meth:`_restart`, :meth:`_advance`, :meth:`_observe` and
+    :meth:`_position`; they may extend :meth:`_info`."""
 
     model: tuple
     """The compiled model: :class:`ModelArrays`, or the compact model of
     :mod:`gdq_pddl.envs.compact` (both are named tuples of arrays)."""
 
-    def _begin(self) -> None:
-        """Mark the env as not started (call at the end of ``__init__``)."""
+    def __init__(self, instance: Any, model: tuple, render_mode: str | None = None,
+                 render_modes: tuple[str, ...] = ()) -> None:
+        self.check_render_mode(render_mode, render_modes)
+        self.instance, self.model, self.render_mode = instance, model, render_mode
+        self.metadata = {**self.metadata, "render_modes": list(render_modes)}
+        self.observation_space = Discrete(instance.n_states)
+        self.action_space = Discrete(instance.n_actions)
         self._restart()
-        self._t, self._cause, self._done = 0, "", True
+        self._t, self._cause, self._done = 0, "", True  # not started
+
+    @staticmethod
+    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
+        """Refuse a render mode the instance cannot draw (a ``ValueError``)."""
+        if render_mode is not None and render_mode not in modes:
+            raise ValueError(f"render_mode must be one of {list(modes)} or None, "
+                             f"got {render_mode!r}")
+
+    def __getattr__(self, name: str) -> Any:
+        instance = self.__dict__.get("instance")
+        if instance is None or name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(instance, name)
+
+    @property
+    def action_masks(self) -> np.ndarray:
+        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
+        can do something in the learner state (:mod:`gdq_pddl.abstraction.masks`); row
+        ``obs`` is ``info["action_mask"]``."""
+        return self.instance.action_masks
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
@@ -76,55 +99,15 @@ class CompiledEnv(gym.Env[int, int]):
         """The learner state of the hidden state."""
         raise NotImplementedError
 
-    def _info(self) -> dict[str, Any]:
+    def _position(self) -> int:
+        """The position index of the hidden state (what ``area_of_pos`` is indexed by)."""
         raise NotImplementedError
 
-
-class ModelEnv(CompiledEnv):
-    """Base class of the envs over :class:`ModelArrays`: subclasses set ``model``,
-    ``start_state``, ``goal_pos`` and the spaces, implement :attr:`action_masks`, and
-    may extend :meth:`_info`."""
-
-    model: ModelArrays
-    start_state: int
-    goal_pos: int
-
-    @property
-    def action_masks(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
-        can do something in the learner state (:mod:`gdq_pddl.abstraction.masks`); row
-        ``obs`` is ``info["action_mask"]``."""
-        raise NotImplementedError
-
-    def transition_arrays(self) -> ModelArrays:
-        """The true model (CSR outcomes over full states) for value iteration.
-
-        Pair with ``goal_pos``: ``gdq_pddl.envs.solve.solve(env.transition_arrays(),
-        env.goal_pos)``. The arrays are shared with the env: do not modify them.
-        """
-        return self.model
-
-    def _restart(self) -> None:
-        self._fs = self.start_state
-
-    def _advance(self, a: int) -> tuple[float, bool, bool, int]:
-        fs, reward, terminated, truncated, cause = env_step(
-            self.model, self._fs, a, self._t, self.goal_pos, self.np_random)
-        self._fs = int(fs)
-        return reward, terminated, truncated, cause
-
-    def _observe(self) -> int:
-        return int(self.model.obs_of[self._fs])
-
     def _info(self) -> dict[str, Any]:
-        """``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
-        new data on every call), ``area`` (0: none), ``cause``, ``full_state`` and
-        ``step``."""
-        pos = int(self.model.pos_of[self._fs])
-        return {
-            "action_mask": self.action_masks[self.model.obs_of[self._fs]].copy(),
-            "area": int(self.model.area_of_pos[pos]),
-            "cause": self._cause,
-            "full_state": self._fs,
-            "step": self._t,
-        }
+        """What the instance says at the position (the office: ``position``),
+        ``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
+        new data on every call), ``area`` (0: none), ``cause`` and ``step``."""
+        pos = self._position()
+        return {**self.instance.info(pos),
+                "action_mask": self.action_masks[self._observe()].copy(),
+                "area": int(self.model.area_of_pos[pos]), "cause": self._cause, "step": self._t}

@@ -38,15 +38,12 @@ episode loop (:mod:`gdq_pddl.learners.episodes`) serves both.
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numba
 import numpy as np
-from gymnasium.spaces import Discrete
 
 from gdq_pddl.abstraction import OfficeAbstraction
-from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
     cost_arrays,
     draw_outcome,
@@ -55,10 +52,10 @@ from gdq_pddl.envs.model import (
     merge_outcomes,
     office_costs,
     outcome_csr,
+    per_object,
     reality_task,
     slip_outcomes,
 )
-from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World
 
@@ -88,7 +85,12 @@ def compile_compact(world: World) -> CompactModel:
     """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
     number of learner states x actions): the rule of
     :func:`~gdq_pddl.envs.model.compile_true_model` on the same grounded building and
-    dynamics, from each learner state's planner state (every other door closed)."""
+    dynamics, from each learner state's planner state (every other door closed).
+    Compiled once per world."""
+    return per_object(world, "compact", lambda: _compile_compact(world))
+
+
+def _compile_compact(world: World) -> CompactModel:
     spaces = LearnerSpaces(world)
     o = OfficeAbstraction(world)
     task = reality_task(world)
@@ -161,52 +163,3 @@ def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: i
         if m.opens[k]:
             doors[m.door_of_pos[pos]] = 1
     return finish_step(m, action, nxt, stuck, nxt == goal_pos, t, rng)
-
-
-class CompactEnv(CompiledEnv):
-    """The env of an office instance over its :class:`CompactModel` (large buildings).
-
-    Same arguments, spaces, rewards, episode ends and random draws as ``OfficeEnv``;
-    ``info`` has ``action_mask`` (as the
-    office's), ``position``, ``area``, ``cause``, ``step`` and ``open_doors`` (door
-    indices), not ``full_state``.
-    """
-
-    metadata = {"render_modes": []}
-
-    def __init__(self, task: str | None = None, start: str | None = None,
-                 goal: str | None = None, world: str | Path | World | None = None) -> None:
-        self.instance = OfficeInstance.of(task, start, goal, world)
-        self.world, self.task = self.instance.world, self.instance.task
-        self.spaces = self.instance.spaces
-        self.model = compile_compact(self.world)
-        self.observation_space = Discrete(self.spaces.n_states)
-        self.action_space = Discrete(self.spaces.n_actions)
-        self.goal_pos = self.world.index[self.task.goal]
-        self.start_pos = self.world.index[self.task.start]
-        self.doors = np.zeros(max(1, len(self.world.doors)), dtype=np.uint8)
-        self._begin()
-
-    def _restart(self) -> None:
-        self.doors[:] = 0
-        self._pos = self.start_pos
-
-    def _advance(self, a: int) -> tuple[float, bool, bool, int]:
-        pos, reward, terminated, truncated, cause = compact_step(
-            self.model, self._pos, self.doors, a, self._t, self.goal_pos, self.np_random)
-        self._pos = int(pos)
-        return reward, terminated, truncated, cause
-
-    def _observe(self) -> int:
-        return int(observe_state(self.model, self._pos, self.doors))
-
-    @property
-    def action_masks(self) -> np.ndarray:
-        """The instance's, as the full-state env's."""
-        return self.instance.action_masks
-
-    def _info(self) -> dict[str, Any]:
-        return {"action_mask": self.action_masks[self._observe()].copy(),
-                "position": self.world.positions[self._pos],
-                "area": int(self.model.area_of_pos[self._pos]), "cause": self._cause,
-                "step": self._t, "open_doors": tuple(np.flatnonzero(self.doors).tolist())}

@@ -64,6 +64,18 @@ def full_state(world: World, position: str, open_doors: frozenset[str] = frozens
 
 
 K = TypeVar("K", bound=Hashable)
+V = TypeVar("V")
+_PER_OBJECT: dict[tuple[int, Hashable], tuple[weakref.ref, object]] = {}
+
+
+def per_object(obj: object, key: Hashable, build: Callable[[], V]) -> V:
+    """``build()``, once per live ``obj`` (a world, a model's array...) and ``key``: the
+    caches of what is slow to build from an object and shared by every env of it (an id
+    that a collected object left to a new one is not a hit)."""
+    hit = _PER_OBJECT.get((id(obj), key))
+    if hit is None or hit[0]() is not obj:
+        hit = _PER_OBJECT[id(obj), key] = (weakref.ref(obj), build())
+    return hit[1]  # type: ignore[return-value]
 
 
 def merge_outcomes(outcomes: Iterable[tuple[K, float]]) -> dict[K, float]:
@@ -195,18 +207,10 @@ def reality_task(world: World) -> GroundTask:
     """The building of ``world`` as reality has it, grounded: ``domains/office.pddl`` on
     the world's problem with every door (a locked one too: its dynamics never open it).
     Cached per world."""
-    hit = _REALITY.get(id(world))
-    if hit is not None and hit[0]() is world:
-        return hit[1]
     p = world.positions[0]
-    problem = office_problem(world, Task("reality", p, p), locked_is_wall=False)
-    task = PlanningProblem.from_texts(domain_text(), problem, "office.pddl (built in)",
-                                      f"{world.source} (as PDDL)").task
-    _REALITY[id(world)] = (weakref.ref(world), task)
-    return task
-
-
-_REALITY: dict[int, tuple[weakref.ref, GroundTask]] = {}
+    return per_object(world, "reality", lambda: PlanningProblem.from_texts(
+        domain_text(), office_problem(world, Task("reality", p, p), locked_is_wall=False),
+        "office.pddl (built in)", f"{world.source} (as PDDL)").task)
 
 
 def office_space(world: World, task: GroundTask | None = None) -> StateSpace:
@@ -249,9 +253,6 @@ def office_costs(world: World) -> list[CostDist]:
     return [world.cost(*spaces.action_parts(a)) for a in range(spaces.n_actions)]
 
 
-_COMPILED: dict[int, tuple[weakref.ref, ModelArrays]] = {}
-
-
 def compile_model(world: World) -> ModelArrays:
     """The world's true model: :func:`compile_true_model` of its :func:`office_space`
     under :meth:`World.dynamics <gdq_pddl.world.World.dynamics>` (read-only, compiled
@@ -260,19 +261,17 @@ def compile_model(world: World) -> ModelArrays:
     Every env, solver and analysis of the same :class:`World` object shares one copy:
     building it is the slowest part of making an env, and experiments make thousands.
     """
-    hit = _COMPILED.get(id(world))
-    if hit is not None and hit[0]() is world:
-        return hit[1]
-    n_pos, n_doors = len(world.positions), len(world.doors)
-    n_actions = LearnerSpaces(world).n_actions
-    check_memory(n_pos * (1 << n_doors) * n_actions * PAIR_BYTES,
-                 f"{world.source}: {n_doors} doors: the simulator's true model ({n_pos} "
-                 f"positions x 2**{n_doors} door states x {n_actions} actions)",
-                 "give the world fewer doors (generated buildings run on a compact model: "
-                 "gdq-pddl scale)")
-    model = compile_true_model(office_space(world), world.dynamics(), office_costs(world))
-    _COMPILED[id(world)] = (weakref.ref(world), model)
-    return model
+    def build() -> ModelArrays:
+        n_pos, n_doors = len(world.positions), len(world.doors)
+        n_actions = LearnerSpaces(world).n_actions
+        check_memory(n_pos * (1 << n_doors) * n_actions * PAIR_BYTES,
+                     f"{world.source}: {n_doors} doors: the simulator's true model ({n_pos} "
+                     f"positions x 2**{n_doors} door states x {n_actions} actions)",
+                     "give the world fewer doors (generated buildings run on a compact "
+                     "model: gdq-pddl scale)")
+        return compile_true_model(office_space(world), world.dynamics(), office_costs(world))
+
+    return per_object(world, "model", build)
 
 
 @numba.njit(cache=True)

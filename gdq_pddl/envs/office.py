@@ -9,9 +9,15 @@ An :class:`OfficeInstance` is the instance a world file produces: the knowledge
 ``domains/office.pddl`` with the world's problem, the world's reality
 (:meth:`~gdq_pddl.world.World.dynamics`, compiled through the same
 :func:`~gdq_pddl.envs.model.compile_true_model` as any PDDL problem) and the office's
-observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``OfficeEnv(...)``
-(``gdq_pddl/Office-v0``) is the one env class of the package,
-:class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on such an instance.
+observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`); like a
+:class:`~gdq_pddl.envs.pddl_env.PDDLInstance` it tells
+:func:`~gdq_pddl.learners.context.task_context` its learner start and goal, plans,
+prior and successor bound. ``OfficeEnv(...)`` (``gdq_pddl/Office-v0``) is a function
+returning the env class of every instance, :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on
+such an instance: there is no office env class, so test
+``isinstance(env.unwrapped.instance, OfficeInstance)``, not ``isinstance(env,
+OfficeEnv)``. :class:`CompactEnv` steps the same instance on its compact model
+(:mod:`gdq_pddl.envs.compact`), for buildings too large for the full one.
 
 ## Action space
 ``Discrete(5 * n_positions)`` (95 for the office), verb-major: action
@@ -59,7 +65,6 @@ step, with randomness from ``self.np_random`` only. ``env.unwrapped.world``, ``.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -67,16 +72,29 @@ from typing import Any
 
 import numpy as np
 
-from gdq_pddl.abstraction import OfficeAbstraction
+from gdq_pddl.abstraction import OfficeAbstraction, PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import knowledge_action_mask
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.abstraction.prior import PriorModel, prior_from_task
+from gdq_pddl.abstraction.routes import route_plan_table
+from gdq_pddl.envs.base import CompiledEnv
+from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
+from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World, as_world, office_problem, pick_task
+
+
+def _knowledge(world: World, task: Task | str) -> PlanningProblem:
+    """The knowledge of ``world`` for ``task`` (a goal: any other position as start)."""
+    if isinstance(task, str):
+        task = Task("plan-table", next(p for p in world.positions if p != task), task)
+    return PlanningProblem.from_texts(domain_text(), office_problem(world, task))
 
 
 def office_action_masks(world: World, task: Task) -> np.ndarray:
@@ -85,17 +103,49 @@ def office_action_masks(world: World, task: Task) -> np.ndarray:
     in each learner state, through O (:mod:`gdq_pddl.abstraction.masks`). Cached per
     (world object, start): an experiment makes an env per run, and grounding the
     knowledge costs milliseconds."""
-    key = (id(world), task.start)
-    hit = _MASKS.get(key)
-    if hit is not None and hit[0]() is world:
-        return hit[1]
-    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, task))
-    masks = knowledge_action_mask(OfficeAbstraction(world), problem.task)
-    _MASKS[key] = (weakref.ref(world), masks)
-    return masks
+    return per_object(world, ("masks", task.start), lambda: knowledge_action_mask(
+        OfficeAbstraction(world), _knowledge(world, task).task))
 
 
-_MASKS: dict[tuple[int, str], tuple[weakref.ref, np.ndarray]] = {}
+def _knowledge_key(world: World) -> tuple:
+    """What the planner's knowledge depends on (not the dynamics' probabilities, only
+    whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
+    return (world.positions, world.edges,
+            tuple((d.name, d.sides, d.success > 0) for d in world.doors))
+
+
+TOLERANT_KINDS = ("all", "routes")
+"""How a tolerant plan table is built: ``"all"``, every loop-free plan within the
+tolerance (the planner's); ``"routes"``, every shortest plan plus one plan per door
+route within the tolerance (:func:`gdq_pddl.abstraction.routes.route_plan_table`, for
+buildings, where every plan is too many)."""
+
+_TABLES: dict[tuple, PlanTable] = {}
+_PRIORS: dict[tuple, PriorModel] = {}
+
+
+def office_plan_table(world: World, goal: str, planner: str = "graph",
+                      tolerance: float = 0.0, kind: str = "all") -> PlanTable:
+    """Plans from every learner state to ``goal``, cached per (knowledge, goal, planner,
+    tolerance, kind) for the life of the process; ``kind`` as in :data:`TOLERANT_KINDS`."""
+    if kind not in TOLERANT_KINDS:
+        raise ValueError(f"unknown plan table kind {kind!r} (known: {', '.join(TOLERANT_KINDS)})")
+    if tolerance == 0:
+        kind = "all"  # the shortest plans either way
+    key = (_knowledge_key(world), goal, planner, float(tolerance), kind)
+    table = _TABLES.get(key)
+    if table is None:
+        problem, abstraction = _knowledge(world, goal), OfficeAbstraction(world)
+        if kind == "routes":
+            crossings = {abstraction.spaces.action("gothrough", p) for p in world.door_at}
+            table = route_plan_table(abstraction, problem,
+                                     office_plan_table(world, goal, planner, 0.0),
+                                     tolerance, crossings.__contains__)
+        else:
+            table = build_plan_table(abstraction, problem, get_planner(planner),
+                                     abstraction.goal(goal), tolerance)
+        _TABLES[key] = table
+    return table
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,6 +203,49 @@ class OfficeInstance:
     def action_masks(self) -> np.ndarray:
         return office_action_masks(self.world, self.task)
 
+    @property
+    def source(self) -> str:
+        return self.world.source
+
+    @cached_property
+    def learner_start(self) -> int:
+        return self.spaces.state(self.task.start)
+
+    @cached_property
+    def learner_goal(self) -> np.ndarray:
+        return np.array([p == self.task.goal for p, _ in self.spaces.states], dtype=np.bool_)
+
+    @property
+    def r_max(self) -> float:
+        return float(self.world.r_max)
+
+    @property
+    def compact(self) -> CompactModel:
+        """The true model per learner state (any size of world; :mod:`.compact`)."""
+        return compile_compact(self.world)
+
+    @property
+    def max_successors(self) -> int:
+        """:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the compact model
+        (an upper bound; learner-level, so any size of world)."""
+        return successor_capacity(self.compact)
+
+    @property
+    def prior(self) -> PriorModel:
+        """The prior model of the world's knowledge (goal-independent), cached per
+        knowledge for the life of the process."""
+        key = _knowledge_key(self.world)
+        if key not in _PRIORS:
+            task = _knowledge(self.world, self.world.positions[-1]).task
+            o = OfficeAbstraction(self.world)
+            _PRIORS[key] = prior_from_task(o, task, o.mask_reader(task))
+        return _PRIORS[key]
+
+    def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
+                   kind: str = "all") -> PlanTable:
+        """The planner's plans to the task's goal (:func:`office_plan_table`)."""
+        return office_plan_table(self.world, self.task.goal, planner, tolerance, kind)
+
     def optimal(self) -> dict[str, Any]:
         """The ground truth of the task: start, goal, V*, the relevant areas (visited
         with probability >= 0.05 by the optimal policy), the paper's irrelevant ones
@@ -178,9 +271,9 @@ class OfficeInstance:
         opened = frozenset(d.name for i, d in enumerate(self.world.doors) if mask >> i & 1)
         return self.world.positions[pos], opened
 
-    def info(self, fs: int) -> dict[str, Any]:
+    def info(self, pos: int) -> dict[str, Any]:
         """What ``info`` says beyond every env's keys: the ``position``'s name."""
-        return {"position": self.world.positions[int(self.model.pos_of[fs])]}
+        return {"position": self.world.positions[pos]}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
         robot, opened = self.decode(fs)
@@ -195,12 +288,48 @@ class OfficeInstance:
 def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (an env id's
               goal: str | None = None, world: str | Path | World | None = None,  # class name)
               render_mode: str | None = None) -> PDDLEnv:
-    """``gdq_pddl/Office-v0``: the env on the :class:`OfficeInstance` of a task (see the
-    module docstring for the arguments)."""
-    PDDLEnv.check_render_mode(render_mode, OfficeInstance.render_modes)
+    """``gdq_pddl/Office-v0``: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` on the
+    :class:`OfficeInstance` of a task (see the module docstring for the arguments).
+
+    A function, not a class: the office has no env class of its own, so
+    ``isinstance(env.unwrapped, OfficeEnv)`` is not a test; ask
+    ``isinstance(env.unwrapped.instance, OfficeInstance)``."""
     return PDDLEnv(instance=OfficeInstance.of(task, start, goal, world),
                    render_mode=render_mode)
 
 
 OfficeEnv.metadata = {"render_modes": list(OfficeInstance.render_modes),  # what
                       "render_fps": 4}  # gymnasium.make reads of an entry point
+
+
+class CompactEnv(CompiledEnv):
+    """The env of an office instance over its compact model (:mod:`.compact`; large
+    buildings): same arguments (no rendering), spaces, rewards, episode ends and random
+    draws as ``OfficeEnv``; ``info`` has ``open_doors`` (door indices) instead of
+    ``full_state``."""
+
+    def __init__(self, task: str | None = None, start: str | None = None,
+                 goal: str | None = None, world: str | Path | World | None = None) -> None:
+        instance = OfficeInstance.of(task, start, goal, world)
+        self.start_pos = instance.world.index[instance.task.start]
+        self.doors = np.zeros(max(1, len(instance.world.doors)), dtype=np.uint8)
+        super().__init__(instance, instance.compact)
+
+    def _restart(self) -> None:
+        self.doors[:] = 0
+        self._pos = self.start_pos
+
+    def _advance(self, a: int) -> tuple[float, bool, bool, int]:
+        pos, reward, terminated, truncated, cause = compact_step(
+            self.model, self._pos, self.doors, a, self._t, self.goal_pos, self.np_random)
+        self._pos = int(pos)
+        return reward, terminated, truncated, cause
+
+    def _observe(self) -> int:
+        return int(observe_state(self.model, self._pos, self.doors))
+
+    def _position(self) -> int:
+        return self._pos
+
+    def _info(self) -> dict[str, Any]:
+        return {**super()._info(), "open_doors": tuple(np.flatnonzero(self.doors).tolist())}

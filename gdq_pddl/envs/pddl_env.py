@@ -74,27 +74,32 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.spaces import Discrete
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
 
+from gdq_pddl.abstraction import PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import graph_action_mask
+from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
+from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph
 from gdq_pddl.dynamics import CostDist, Dynamics, parse_dynamics, split_action
-from gdq_pddl.envs.base import ModelEnv
+from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
     PAIR_BYTES,
     ModelArrays,
     StateSpace,
     compile_true_model,
+    env_step,
     merge_outcomes,
 )
 from gdq_pddl.envs.solve import solve
+from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
+from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import data_file
 from gdq_pddl.world import parse_world
@@ -223,6 +228,52 @@ class PDDLInstance:
         return graph_action_mask(self.graph)
 
     @property
+    def source(self) -> str:
+        return self.problem.problem.source
+
+    learner_start = 0
+    """The learner's start state (the initial state: states are the graph's)."""
+
+    @cached_property
+    def learner_goal(self) -> np.ndarray:
+        return np.asarray(self.graph.is_goal, dtype=np.bool_)
+
+    @property
+    def r_max(self) -> float:
+        return float(self.dynamics.r_max)
+
+    @cached_property
+    def max_successors(self) -> int:
+        """:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the true model."""
+        return successor_capacity(self.model)
+
+    @cached_property
+    def prior(self) -> PriorModel:
+        """The knowledge's deterministic model over the graph (its ground actions)."""
+        return prior_from_graph(self.graph)
+
+    @cached_property
+    def _tables(self) -> dict[tuple[str, float], PlanTable]:
+        return {}
+
+    def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
+                   kind: str = "all") -> PlanTable:
+        """Plans from every reachable state, cached per (planner, tolerance). The ``graph``
+        planner's come from one backward BFS over the state graph
+        (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other backend is asked
+        once per state. ``kind`` is the office's (a PDDL problem has one kind)."""
+        key = (planner, float(tolerance))
+        if key not in self._tables:
+            if planner == "graph":
+                table = graph_plan_table(self.graph, tolerance)
+            else:
+                o = PDDLAbstraction(self.graph)
+                table = build_plan_table(o, self.problem, get_planner(planner), o.goal(),
+                                         tolerance)
+            self._tables[key] = table
+        return self._tables[key]
+
+    @property
     def n_states(self) -> int:
         return self.graph.n_states
 
@@ -262,8 +313,8 @@ class PDDLInstance:
     goal_pos = GOAL_POS
     render_modes = ("ansi",)
 
-    def info(self, fs: int) -> dict[str, Any]:
-        """What ``info`` says beyond every env's keys: nothing."""
+    def info(self, pos: int) -> dict[str, Any]:
+        """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""
         return {}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str:
@@ -521,13 +572,13 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
         return PDDLInstance.from_files(*paths, determinisation=determinisation)
 
 
-class PDDLEnv(ModelEnv):
-    """The env of an instance of the one pipeline: a PDDL problem under its dynamics
-    (see the module docstring), or a world's task through the office's map
-    (:class:`~gdq_pddl.envs.office.OfficeInstance`, ``gdq_pddl/Office-v0``).
+class PDDLEnv(CompiledEnv):
+    """The env of an instance of the one pipeline over its full true model: a PDDL
+    problem under its dynamics (see the module docstring), or a world's task through the
+    office's map (:class:`~gdq_pddl.envs.office.OfficeInstance`, ``gdq_pddl/Office-v0``).
 
     The instance's own attributes are the env's too (``env.unwrapped.world``,
-    ``.atoms(s)``, ``.action_name(a)``...)."""
+    ``.atoms(s)``, ``.action_name(a)``, ``.start_state``, ``.goal_pos``...)."""
 
     metadata = {"render_modes": ["ansi"], "render_fps": 4}
     """A PDDL problem's; an env's own are its instance's."""
@@ -540,32 +591,15 @@ class PDDLEnv(ModelEnv):
                                else instance.render_modes)
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
-        self.instance = instance
-        self.metadata = {**self.metadata, "render_modes": list(instance.render_modes)}
-        self.model = instance.model
-        self.observation_space = Discrete(instance.n_states)
-        self.action_space = Discrete(instance.n_actions)
-        self.render_mode = render_mode
-        self.goal_pos = instance.goal_pos
-        self.start_state = instance.start_state
-        self._begin()
+        super().__init__(instance, instance.model, render_mode, instance.render_modes)
 
-    @staticmethod
-    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
-        """Refuse a render mode the instance cannot draw (a ``ValueError``)."""
-        if render_mode is not None and render_mode not in modes:
-            raise ValueError(f"render_mode must be one of {list(modes)} or None, "
-                             f"got {render_mode!r}")
+    def transition_arrays(self) -> ModelArrays:
+        """The true model (CSR outcomes over full states) for value iteration.
 
-    def __getattr__(self, name: str) -> Any:
-        instance = self.__dict__.get("instance")
-        if instance is None or name.startswith("_"):
-            raise AttributeError(name)
-        return getattr(instance, name)
-
-    @property
-    def action_masks(self) -> np.ndarray:
-        return self.instance.action_masks
+        Pair with ``goal_pos``: ``gdq_pddl.envs.solve.solve(env.transition_arrays(),
+        env.goal_pos)``. The arrays are shared with the env: do not modify them.
+        """
+        return self.model
 
     def render(self) -> str | np.ndarray | None:
         if self.render_mode is None:
@@ -574,5 +608,20 @@ class PDDLEnv(ModelEnv):
             return None
         return self.instance.render(self.render_mode, self._fs, self._t, self._cause)
 
+    def _restart(self) -> None:
+        self._fs = self.instance.start_state
+
+    def _advance(self, a: int) -> tuple[float, bool, bool, int]:
+        fs, reward, terminated, truncated, cause = env_step(
+            self.model, self._fs, a, self._t, self.instance.goal_pos, self.np_random)
+        self._fs = int(fs)
+        return reward, terminated, truncated, cause
+
+    def _observe(self) -> int:
+        return int(self.model.obs_of[self._fs])
+
+    def _position(self) -> int:
+        return int(self.model.pos_of[self._fs])
+
     def _info(self) -> dict[str, Any]:
-        return {**self.instance.info(self._fs), **super()._info()}
+        return {**super()._info(), "full_state": self._fs}

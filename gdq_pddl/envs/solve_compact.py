@@ -56,6 +56,7 @@ import numba
 import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel, compile_compact
+from gdq_pddl.envs.model import ModelArrays, per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
 from gdq_pddl.limits import check_memory
 from gdq_pddl.world import Task, World
@@ -93,6 +94,32 @@ def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
     known = (door >= 0) & (model.door_of_pos[nxt] == door)
     closed = model.state_of[nxt, (known & (was_open | model.opens)).astype(np.int64)]
     return closed, np.where(known, closed, model.state_of[nxt, 1])
+
+
+def successor_capacity(model: ModelArrays | CompactModel) -> int:
+    """The most distinct next learner states of one (learner state, action) pair in a
+    true model, at least 1: a :class:`~gdq_pddl.envs.model.ModelArrays` (exact: the
+    union over the full states a learner state stands for) or a :class:`CompactModel`
+    (an upper bound: an outcome whose next position has a door other than the one acted
+    at may show it open or closed, :func:`next_states`; a pair with no outcome stays
+    put). What the learners size their successor slots by; cached per model."""
+    return per_object(model.ptr, "capacity", lambda: _capacity(model))
+
+
+def _capacity(model: ModelArrays | CompactModel) -> int:
+    n_pairs = len(model.ptr) - 1
+    pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
+    if isinstance(model, CompactModel):
+        n_states = len(model.pos_of_state)
+        first, second = next_states(model)  # the two door states an outcome may show
+        keys = np.concatenate([pair * n_states + first, pair * n_states + second])
+    else:
+        n_states = int(model.obs_of.max()) + 1
+        learner_pair = model.obs_of[pair // model.n_actions] * model.n_actions + \
+            pair % model.n_actions
+        keys = learner_pair * n_states + model.obs_of[model.next]
+    per_pair = np.bincount(np.unique(keys) // n_states) if len(keys) else np.zeros(1)
+    return max(1, int(per_pair.max()))
 
 
 def _stay_actions(model: CompactModel, cost: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -16,7 +16,6 @@ from gdq_pddl.envs.solve import check_solvable
 from gdq_pddl.errors import WorldError
 from gdq_pddl.experiments.protocol import Experiment
 from gdq_pddl.experiments.work import instance_of
-from gdq_pddl.learners.context import shortest_plans
 from gdq_pddl.limits import check_memory
 
 EPISODE_BYTES = 400
@@ -45,7 +44,7 @@ def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
     model = instance.model
     source, key = instance.step_limit_key
     check_solvable(model, f"{source}: {key}")
-    shortest = int(shortest_plans(instance).length[model.obs_of[instance.start_state]])
+    shortest = int(instance.plan_table().length[instance.learner_start])
     if shortest < 0:  # World.resolve checks reachability: the knowledge disagrees
         raise WorldError(source, f"tasks.{instance.name}", "the planner finds no plan for "
                          f"task {instance.name}")

@@ -135,8 +135,8 @@ def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
     length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
     # start-up time: the model, solver and plan tables import numba and networkx
     from gdq_pddl.envs.model import compile_model, full_state
+    from gdq_pddl.envs.office import office_plan_table  # start-up time, as above
     from gdq_pddl.envs.solve import solve  # start-up time, as above
-    from gdq_pddl.learners.context import office_plan_table  # start-up time, as above
 
     if not experiments:
         return {}

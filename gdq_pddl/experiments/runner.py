@@ -133,14 +133,10 @@ def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
 
 
 def input_files(experiments: list[Experiment]) -> list[str]:
-    """The files the experiments read: world files, or PDDL domain, problem, dynamics."""
-    files: list[str] = []
-    for e in experiments:
-        if e.pddl is not None:
-            files += e.pddl
-            continue
-        files += [w for w in (e.world, e.knowledge) if w and is_file_name(w)]
-    return files
+    """The files the experiments name: PDDL domain, problem and dynamics, world files (not
+    the built-in worlds, an absent dynamics file or a PPDDL determinisation)."""
+    named = [f for e in experiments for f in (*(e.pddl or ())[:3], e.world, e.knowledge)]
+    return [f for f in named if f and is_file_name(f)]
 
 
 def _held(out: Path) -> bool:

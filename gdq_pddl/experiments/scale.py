@@ -95,14 +95,15 @@ import numpy as np
 from tqdm import tqdm
 
 from gdq_pddl.buildings import building_world, generate
-from gdq_pddl.envs.compact import CompactEnv
+from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
 from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, read_config
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
 from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
-from gdq_pddl.learners import make_learner, office_task_context
+from gdq_pddl.learners import make_learner
+from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import check_count, check_memory
@@ -200,7 +201,8 @@ def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
     JSON-able."""
     world = building_world(positions, seed)
     t0 = time.perf_counter()
-    ctx = office_task_context(world, "A", darling_tolerance=TOLERANCE, darling_kind="routes")
+    ctx = task_context(OfficeInstance.of("A", world=world), darling_tolerance=TOLERANCE,
+                       darling_kind="routes")
     context_s = time.perf_counter() - t0
     env = CompactEnv(task="A", world=world)
     header = {"positions": positions, "seed": seed, "doors": len(world.doors),

@@ -52,9 +52,9 @@ def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
 def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
     """The learners' :class:`~gdq_pddl.learners.context.TaskContext` of ``instance``,
     planned with ``exp.planner`` on ``exp.knowledge`` (None: the instance's own)."""
-    knowledge = None if exp.knowledge is None else \
-        knowledge_world(instance.world, exp.knowledge)
-    return task_context(instance, exp.planner, knowledge=knowledge)
+    if exp.knowledge is not None:  # the same task, planned on another world's building
+        instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
+    return task_context(instance, exp.planner)
 
 
 def run_unit(unit: Unit) -> dict[str, np.ndarray]:

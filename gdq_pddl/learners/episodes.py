@@ -5,7 +5,7 @@ Two paths with identical results for the same seeds:
 - a Python loop over any gymnasium env of this package (``env.reset``, ``env.step``,
   ``learner.act`` / ``learner.observe``);
 - a compiled loop (:func:`_episodes`), used when ``env.unwrapped`` is a
-  :class:`~gdq_pddl.envs.base.ModelEnv` (the office, or a PDDL problem) and the learner a
+  :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` (the office, or a PDDL problem) and the learner a
   :class:`~gdq_pddl.learners.agents.TabularLearner`: it calls
   :func:`gdq_pddl.envs.model.env_step` and the same rules
   (:func:`gdq_pddl.learners.tables.act`, :func:`gdq_pddl.learners.rules.observe`). The
@@ -14,7 +14,7 @@ Two paths with identical results for the same seeds:
 
 Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
 its learned model needs in this env (``learner.reserve_successors`` with
-:func:`~gdq_pddl.learners.context.successor_capacity` of the env's true dynamics): the task
+:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the env's true dynamics): the task
 context's capacity comes from the world the learner was told about, which may differ
 from the one it runs in (a knowledge experiment).
 
@@ -37,13 +37,14 @@ import numpy as np
 from numba import types
 from numba.extending import overload
 
-from gdq_pddl.envs.base import ModelEnv
-from gdq_pddl.envs.compact import CompactEnv, CompactModel, compact_step, observe_state
+from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
 from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
+from gdq_pddl.envs.office import CompactEnv
+from gdq_pddl.envs.pddl_env import PDDLEnv
+from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards
 from gdq_pddl.learners.agents import Learner, TabularLearner
-from gdq_pddl.learners.context import successor_capacity
 from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.rules import observe
@@ -92,11 +93,11 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
                  "episode records", "run fewer episodes at a time")
     if isinstance(learner, TabularLearner):
         guards.check_env(*learner.q.shape, env)
-    can_fast = isinstance(env.unwrapped, ModelEnv) and isinstance(learner, TabularLearner)
+    can_fast = isinstance(env.unwrapped, PDDLEnv) and isinstance(learner, TabularLearner)
     if fast is None:
         fast = can_fast
     if fast and not can_fast:
-        raise TypeError("the fast path needs an env of this package (a ModelEnv) and a "
+        raise TypeError("the fast path needs an env of this package (a PDDLEnv) and a "
                         "TabularLearner")
     if fast:
         return _run_fast(learner, env, n_episodes, rng)  # type: ignore[arg-type]
@@ -105,7 +106,7 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
 
 def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
                 rng: np.random.Generator) -> EpisodeRecords:
-    """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.compact.CompactEnv`
+    """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.office.CompactEnv`
     (seed ``env`` with ``reset`` first): the compiled loop over its compact dynamics, the
     same draws and records as :func:`run_episodes` on the office (tested)."""
     check_count("n_episodes", n_episodes)
@@ -145,7 +146,7 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
 
 def _run_fast(learner: TabularLearner, env: gym.Env, n_episodes: int,
               rng: np.random.Generator) -> EpisodeRecords:
-    office: ModelEnv = env.unwrapped  # type: ignore[assignment]
+    office: PDDLEnv = env.unwrapped  # type: ignore[assignment]
     return run_compiled(office.model, int(office.start_state), int(office.goal_pos),
                         _NO_DOORS, learner, office.np_random, n_episodes, rng, _n_areas(env))
 

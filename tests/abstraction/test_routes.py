@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.abstraction.routes import knowledge_edges, route_plan_table
 from gdq_pddl.buildings import building_world
-from gdq_pddl.learners.context import office_plan_table, office_task_context
+from gdq_pddl.envs.office import office_plan_table
+from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.planning import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces

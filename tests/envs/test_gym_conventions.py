@@ -12,8 +12,7 @@ from hypothesis import strategies as st
 
 import gdq_pddl  # noqa: F401  (registers the envs)
 from gdq_pddl.envs import ENV_IDS, OFFICE_ID, PDDL_ID
-from gdq_pddl.envs.compact import CompactEnv
-from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, shipped_names
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners import office_task_context

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gdq_pddl.buildings import building_world
-from gdq_pddl.envs.compact import CompactEnv, CompactModel, compile_compact
+from gdq_pddl.envs.compact import CompactModel, compile_compact
+from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.solve import TIE_TOLERANCE, expected_costs, optimal_value
 from gdq_pddl.envs.solve_compact import (
     open_door_deficit,

@@ -10,9 +10,9 @@ import pytest
 
 from gdq_pddl.buildings import _distances, _graph, building_world, generate, to_toml
 from gdq_pddl.cli import main
-from gdq_pddl.envs.compact import CompactEnv, compile_compact
+from gdq_pddl.envs.compact import compile_compact
 from gdq_pddl.envs.model import compile_model, full_state
-from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.envs.solve_compact import next_states, solve_compact_task
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.episodes import run_compact

@@ -287,7 +287,7 @@ def test_gdq_learns_on_a_shipped_pddl_problem(problem):
 
 def test_gdq_runs_on_a_generated_building():
     from gdq_pddl.buildings import building_world
-    from gdq_pddl.envs.compact import CompactEnv
+    from gdq_pddl.envs.office import CompactEnv
     from gdq_pddl.learners.episodes import run_compact
 
     world = building_world(100, seed=1)

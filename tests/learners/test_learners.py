@@ -252,7 +252,7 @@ def test_model_free_learners_allocate_no_transition_slots(ctx_c):
 def test_context_capacity_is_the_most_successors_of_any_pair(ctx_c):
     from gdq_pddl.envs.compact import compile_compact
     from gdq_pddl.envs.model import compile_model
-    from gdq_pddl.learners.context import successor_capacity
+    from gdq_pddl.envs.solve_compact import successor_capacity
 
     exact = successor_capacity(compile_model(WORLD))  # union over the full states
     assert exact == successor_capacity(compile_compact(WORLD)) == ctx_c.max_successors
