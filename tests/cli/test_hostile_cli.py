@@ -34,7 +34,7 @@ KEYS_PROBLEM = data_file("problems", "keys-1.pddl").read_text(encoding="utf-8")
 KEYS_DYNAMICS = data_file("dynamics", "keys.toml").read_text(encoding="utf-8")
 FAST = ["--episodes", "3", "--runs", "1", "--method", "Q-learning", "--jobs", "1",
         "--no-report"]
-PACKAGE = Path(__file__).resolve().parent.parent
+PACKAGE = Path(__file__).resolve().parents[2]
 
 
 def cli(capsys, *argv) -> tuple[int, str]:
