@@ -95,11 +95,13 @@ def test_tables_replaced_by_hand_are_checked_before_the_compiled_loop(ctx):
     env = OfficeEnv(task="C")
     env.reset(seed=0)
     learner = DynaQ(ctx)
-    learner.tables = learner.tables._replace(v=np.zeros(3))
+    t = learner.tables
+    learner.tables = t._replace(table=t.table._replace(v=np.zeros(3)))
     with pytest.raises(ConfigError, match="v must be a contiguous float64 array of shape"):
         run_episodes(learner, env, 2, np.random.default_rng(0))
     learner = GDQ(ctx)
-    learner.tables = learner.tables._replace(pp_pair=learner.tables.pp_pair + 10**6)
+    t = learner.tables
+    learner.tables = t._replace(prior=t.prior._replace(pp_pair=t.prior.pp_pair + 10**6))
     with pytest.raises(ConfigError, match="pp_pair must hold values in"):
         run_episodes(learner, env, 2, np.random.default_rng(0))
 

@@ -165,10 +165,7 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     guards.check_generator(rng)
     guards.check_generator(env_rng, "the env's generator")
     n_s, n_a = learner.q.shape
-    if isinstance(dynamics, CompactModel):
-        most = guards.check_compact_dynamics(dynamics, start, doors, n_s, n_a)
-    else:
-        most = guards.check_dynamics(dynamics, start, n_s, n_a)
+    most = guards.check_dynamics(dynamics, start, doors, n_s, n_a)
     check_count("n_areas", n_areas)
     if n_areas < most:
         raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")
@@ -271,7 +268,7 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     entries before that episode (the caller grows it and calls again from there). Trusts
     its arguments: :func:`run_compiled` checks them."""
     for ep in range(first, len(returns)):
-        if p.kind == KIND_GDQ and len(t.rev_pair) - t.rev_n[0] < room:
+        if p.kind == KIND_GDQ and len(t.prior.rev_pair) - t.prior.rev_n[0] < room:
             return ep
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)

@@ -51,11 +51,12 @@ def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated:
     """
     if p.kind == KIND_GDQ:
         return after_step(t, p, s, a, r, s2, terminated, truncated)
-    target = r if (terminated or truncated) else r + p.gamma * t.v[s2]
-    td_update(t, s, a, target, p.alpha)
+    table = t.table
+    target = r if (terminated or truncated) else r + p.gamma * table.v[s2]
+    td_update(table, s, a, target, p.alpha)
     if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
         return True
-    if not record(t, p, s, a, r, s2, terminated, truncated):
+    if not record(t.model, table.goal, p, s, a, r, s2, terminated, truncated):
         return False
     if p.kind == KIND_GDQ_PLANS and backup_plans(t, p, s, rng):
         return True
