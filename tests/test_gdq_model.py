@@ -344,7 +344,7 @@ def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_tas
     t, p = learner.tables, learner.params
     init = gdq.prior_values(t.table, t.prior, p)
     assert np.allclose(init, learner.v, atol=1e-9)
-    assert gdq.value_iteration(t, p, 1e-9, 1000) == 1
+    assert gdq.value_iteration(t.table, t.model, t.prior, t.queue, p, 1e-9, 1000) == 1
     # a state that cannot reach the goal by the knowledge's actions: -c / (1 - gamma)
     dead = PriorModel(np.where(np.arange(ctx_c.n_states)[:, None] == ctx_c.s0, NO_CHANGE,
                                ctx_c.prior.next_state))

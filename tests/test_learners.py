@@ -59,6 +59,11 @@ def greedy_walk(learner, world, task: str, limit: int) -> tuple[list[tuple[int, 
     return taken, info["cause"]
 
 
+def expected_backup(t, p, s, a, v):
+    """learned_model.expected_value of ``(s, a)`` on a learner's tables."""
+    return learned_model.expected_value(t.model, t.table.goal, t.plans.opt_r, p, s, a, v)
+
+
 @pytest.mark.parametrize("config", [GDQConfig(variant="literal"),
                                     GDQConfig(variant="code", plan_tolerance=0.0)])
 def test_optinit_greedy_policy_follows_a_shortest_plan(config):
@@ -119,7 +124,7 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     s, a = (int(x[0]) for x in np.nonzero(learner.optimistic_pairs))
     t.table.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
     tables.recompute_all_v(t.table)
-    learned_model.model_backup(t, p, s, a, rng)
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
     assert t.table.q[s, a] == 50.0  # never tried: left alone
     s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
     # one ordinary step to s2 at cost 2
@@ -127,7 +132,7 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     assert learner.successors(s, a) == {s2: 1} and t.model.visits[s, a] == 1
     t.table.q[s2, :] = 10.0
     tables.recompute_v(t.table, s2)
-    learned_model.model_backup(t, p, s, a, rng)
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
     target = -2.0 + p.gamma * 10.0
     assert t.table.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
 
@@ -157,14 +162,14 @@ def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     optimistic = ctx_c.r_max + p.gamma * v[ctx_c.s0]
     rng = np.random.default_rng(0)
     for k in range(m + 1):
-        value = learned_model.expected_value(t, p, s, a, v)
+        value = expected_backup(t, p, s, a, v)
         assert value == optimistic, f"changed after {k} visits"
         learner.observe(s, a, -1.0, s2, False, False, rng)
         # sample-based backups (the code variant) replay experience from the first trial
         assert learned_model.sample_outcome(t.model, ctx_c.goal, p, s, a, rng) == (-1.0, s2, False)
     # m + 1 visits: the learned model (always -1 to s2) takes over
     assert learner.visits[s, a] == m + 1
-    assert learned_model.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
+    assert expected_backup(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
     assert learned_model.sample_outcome(t.model, ctx_c.goal, p, s, a, rng) == (-1.0, s2, False)
 
 
@@ -208,7 +213,7 @@ def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
         if dense[1, 5, s2]:
             total += dense[1, 5, s2] * (learner.params.gamma * v[s2] - 1.0)
     learner.params = learner.params._replace(m=0)
-    assert learned_model.expected_value(t, learner.params, 1, 5, v) == total / len(order)
+    assert expected_backup(t, learner.params, 1, 5, v) == total / len(order)
 
 
 def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
@@ -294,10 +299,10 @@ def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
     v = np.full(ctx_c.n_states, 1000.0)  # absurdly high values everywhere
     for _ in range(3):
         learner.observe(5, 9, 20.0, goal, True, False, rng)
-    assert learned_model.expected_value(t, p, 5, 9, v) == ctx_c.r_max
+    assert expected_backup(t, p, 5, 9, v) == ctx_c.r_max
     for _ in range(2):
         learner.observe(6, 9, -20.0, 6, True, False, rng)
-    assert learned_model.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
+    assert expected_backup(t, p, 6, 9, v) == -ctx_c.r_max
     outcome = learned_model.sample_outcome
     assert outcome(t.model, ctx_c.goal, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
     assert outcome(t.model, ctx_c.goal, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
@@ -306,7 +311,7 @@ def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
     tables.recompute_all_v(t.table)
     t.table.q[5, 9] = 0.0
     sample = tables.Params(**{**p._asdict(), "backup": tables.BACKUP_SAMPLE, "alpha": 1.0})
-    learned_model.model_backup(t, sample, 5, 9, rng)
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, sample, 5, 9, rng)
     assert t.table.q[5, 9] == ctx_c.r_max
 
 
@@ -501,7 +506,7 @@ def test_task_switch_keeps_the_model_and_reruns_optinit(ctx_c):
     known = np.argwhere(visits > learner.params.m)
     assert len(known)
     s, a = map(int, known[0])
-    assert learned_model.expected_value(learner.tables, learner.params, s, a, learner.v) == \
+    assert expected_backup(learner.tables, learner.params, s, a, learner.v) == \
         pytest.approx(learner.q[s, a], abs=1e-6)
     run(learner, OfficeEnv(task="E"), 10, 5)  # keeps learning on the new task
     assert learner.visits.sum() > visits.sum()
@@ -532,7 +537,7 @@ def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
     t, p = learner.tables, learner.params
     s, a = (int(x[0]) for x in np.nonzero(opt))
     high = np.full(ctx_c.n_states, 100.0)
-    assert learned_model.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation
+    assert expected_backup(t, p, s, a, high) == ctx_c.r_max  # no continuation
 
 
 def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):

@@ -188,7 +188,8 @@ class TabularLearner:
         tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
-        return int(act(self.tables, self.params, s, rng))
+        t = self.tables
+        return int(act(t.table, t.model.visits, t.prior.next_state, self.params, s, rng))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
@@ -197,7 +198,7 @@ class TabularLearner:
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
         guards.check_generator(rng)
-        if not rules.observe(self.tables, self.params, s, a, r, s2, bool(terminated),
+        if not rules.observe(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
 
@@ -499,10 +500,14 @@ class GDQ(TabularLearner):
         self.q[:, :] = 0.0
         if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
-            if gdq.value_iteration(self.tables, self.params, tol, 1_000_000) < 0:
+            t = self.tables
+            if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
+                                   1_000_000) < 0:
                 raise AssertionError("reverse index sized too small")  # _prior_arrays
         elif self.config.variant == "literal":
-            self.policy = gdq_paper.policy_iteration(self.tables, self.params)
+            t = self.tables
+            self.policy = gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r,
+                                                     self.params)
             return
         else:
             gdq_paper.seed_plan_pairs(self.tables.table, self.tables.plans.opt_r,

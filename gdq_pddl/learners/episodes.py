@@ -267,18 +267,20 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
     its arguments: :func:`run_compiled` checks them."""
+    table, model, plans, prior, queue = t
     for ep in range(first, len(returns)):
-        if p.kind == KIND_GDQ and len(t.prior.rev_pair) - t.prior.rev_n[0] < room:
+        if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
             return ep
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = act(t, p, s, rng)
+            a = act(table, model.visits, prior.next_state, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not observe(t, p, s, a, r, s2, terminated, truncated, rng):
+            if not observe(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
+                           truncated, rng):
                 return -1
             step += 1
             returns[ep] += r

@@ -52,18 +52,17 @@ import numba
 import numpy as np
 
 from gdq_pddl.learners.learned_model import has_successor, learned_value, record, slot_successor
-from gdq_pddl.learners.tables import Model, Params, Prior, QTable, Queue, Tables, set_q
+from gdq_pddl.learners.tables import Model, Params, Prior, QTable, Queue, set_q
 
 # --- the rule --------------------------------------------------------------------------------
 
 
 @numba.njit(cache=True)
-def after_step(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-               truncated: bool) -> bool:
+def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s: int,
+               a: int, r: float, s2: int, terminated: bool, truncated: bool) -> bool:
     """The default GDQ after one real step: record it in the learned model, index what
     became known, then :func:`sweep`. False when the model had no slot for the step or
     the reverse index is full (the callers keep room: :func:`reverse_room`)."""
-    table, model, prior = t.table, t.model, t.prior
     # a successor not indexed yet (stuck and goal steps end the episode: never indexed;
     # the prior successor is indexed from the start when the prior has weight)
     new = not terminated and not has_successor(model.slots, s, a, s2) and not (
@@ -77,7 +76,7 @@ def after_step(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminat
                 return False
         elif new and not _index_add(prior, s2, s * table.q.shape[1] + a):
             return False
-    sweep(table, model, prior, t.queue, p, s, a)
+    sweep(table, model, prior, queue, p, s, a)
     return True
 
 
@@ -167,7 +166,8 @@ def prior_successor(prior_next: np.ndarray, s: int, a: int) -> int:
 # --- OptInit ---------------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
+def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params,
+                    tol: float, max_sweeps: int) -> int:
     """OptInit of the default GDQ: value iteration on the hybrid model (Gauss-Seidel sweeps
     over the allowed pairs until no state value moves by more than ``tol``), then every
     other pair's Q from the converged values, the reverse index rebuilt for the known
@@ -175,7 +175,6 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
     values (:func:`prior_values`), exact when no pair is known yet, so a first task
     takes one sweep however large the world. Returns the number of sweeps, or -1 when
     the reverse index is too small (the caller sizes it for the known pairs)."""
-    table, model, prior = t.table, t.model, t.prior
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     visits, prior_next = model.visits, prior.next_state
     n_states, n_actions = q.shape
@@ -232,8 +231,8 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
             if is_known(visits, prior_next, p.m, s, a) and \
                     not _index_known_pair(model, goal, prior, p, s, a):
                 return -1
-    t.queue.pos[:] = -1
-    t.queue.n[0] = 0
+    queue.pos[:] = -1
+    queue.n[0] = 0
     return sweeps
 
 

@@ -20,29 +20,31 @@ import numba
 import numpy as np
 
 from gdq_pddl.learners.learned_model import expected_value, model_backup
-from gdq_pddl.learners.tables import Params, QTable, Tables, recompute_all_v
+from gdq_pddl.learners.tables import Model, Params, Plans, QTable, recompute_all_v
 
 
 @numba.njit(cache=True)
-def backup_plans(t: Tables, p: Params, s: int, rng: np.random.Generator) -> bool:
+def backup_plans(table: QTable, model: Model, plans: Plans, p: Params, s: int,
+                 rng: np.random.Generator) -> bool:
     """N backups of a random transition of a random plan from ``s``.
 
     Returns False (and does nothing) when ``s`` has no plan.
     """
-    plans = t.plans
     lo, hi = plans.plan_ptr[s], plans.plan_ptr[s + 1]
     if hi <= lo:
         return False
     for _ in range(p.n_backups):
         k = lo + rng.integers(0, hi - lo)
         j = plans.pair_ptr[k] + rng.integers(0, plans.pair_ptr[k + 1] - plans.pair_ptr[k])
-        model_backup(t, p, plans.pair_state[j], plans.pair_action[j], rng)
+        model_backup(table, model, plans.opt_r, p, plans.pair_state[j], plans.pair_action[j],
+                     rng)
     return True
 
 
 @numba.njit(cache=True)
-def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
-                     improve_tol: float = 1e-6, max_iter: int = 10_000) -> np.ndarray:
+def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
+                     eval_tol: float = 1e-10, improve_tol: float = 1e-6,
+                     max_iter: int = 10_000) -> np.ndarray:
     """GDQ-literal's OptInit: policy iteration on the model (learned for known pairs,
     optimistic otherwise).
 
@@ -51,8 +53,8 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
     action on ties (within ``improve_tol``) and else taking the lowest index, until the
     policy is stable. Writes that final Q into the Q table (goal rows 0) and returns pi.
     """
-    goal = t.table.goal
-    n_states, n_actions = t.table.q.shape
+    goal = table.goal
+    n_states, n_actions = table.q.shape
     pi = np.zeros(n_states, dtype=np.int64)
     v = np.zeros(n_states)
     qq = np.zeros((n_states, n_actions))
@@ -62,7 +64,7 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
             for s in range(n_states):
                 if goal[s]:
                     continue
-                x = expected_value(t, p, s, pi[s], v)
+                x = expected_value(model, goal, opt_r, p, s, pi[s], v)
                 delta = max(delta, abs(x - v[s]))
                 v[s] = x
             if delta < eval_tol:
@@ -73,7 +75,7 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
                 continue
             best = -np.inf
             for a in range(n_actions):
-                qq[s, a] = expected_value(t, p, s, a, v)
+                qq[s, a] = expected_value(model, goal, opt_r, p, s, a, v)
                 best = max(best, qq[s, a])
             if qq[s, pi[s]] < best - improve_tol:
                 stable = False
@@ -83,8 +85,8 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
                         break
         if stable:
             break
-    t.table.q[:, :] = qq
-    recompute_all_v(t.table)
+    table.q[:, :] = qq
+    recompute_all_v(table)
     return pi
 
 

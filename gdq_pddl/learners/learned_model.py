@@ -48,7 +48,7 @@ from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
     Model,
     Params,
-    Tables,
+    QTable,
     set_q,
     td_update,
 )
@@ -212,12 +212,14 @@ def learned_value(model: Model, goal: np.ndarray, v: np.ndarray, p: Params, s: i
 
 
 @numba.njit(cache=True, inline="always")
-def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+def expected_value(model: Model, goal: np.ndarray, opt_r: np.ndarray, p: Params, s: int,
+                   a: int, v: np.ndarray) -> float:
     """The expected Bellman backup of ``(s, a)``, with state values ``v``: the learned
-    model's for a known pair (``visits > m``), else the optimism of GDQ-literal."""
-    if t.model.visits[s, a] > p.m:
-        return learned_value(t.model, t.table.goal, v, p, s, a)
-    r = p.r_max if t.plans.opt_r[s, a] else 0.0
+    model's for a known pair (``visits > m``), else the optimism of GDQ-literal (R_max on
+    OptInit's plan pairs ``opt_r``)."""
+    if model.visits[s, a] > p.m:
+        return learned_value(model, goal, v, p, s, a)
+    r = p.r_max if opt_r[s, a] else 0.0
     return r + p.opt_continue * p.gamma * v[p.s0]
 
 
@@ -247,30 +249,30 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
 # --- Dyna-Q's planning ---------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator) -> None:
+def model_backup(table: QTable, model: Model, opt_r: np.ndarray, p: Params, s: int, a: int,
+                 rng: np.random.Generator) -> None:
     """One simulated update of ``(s, a)``.
 
     ``BACKUP_EXPECTED``: assign the expected backup (:func:`expected_value`).
     ``BACKUP_SAMPLE`` (GDQ-code): a TD update on an outcome replayed from experience; a
     pair never tried is left alone.
     """
-    table = t.table
     if p.backup == BACKUP_EXPECTED:
-        set_q(table, s, a, expected_value(t, p, s, a, table.v))
-    elif t.model.visits[s, a] > 0:
-        r, s2, terminal = sample_outcome(t.model, table.goal, p, s, a, rng)
+        set_q(table, s, a, expected_value(model, table.goal, opt_r, p, s, a, table.v))
+    elif model.visits[s, a] > 0:
+        r, s2, terminal = sample_outcome(model, table.goal, p, s, a, rng)
         target = r if terminal else r + p.gamma * table.v[s2]
         td_update(table, s, a, target, p.alpha)
 
 
 @numba.njit(cache=True)
-def backup_known(t: Tables, p: Params, rng: np.random.Generator) -> None:
+def backup_known(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
+                 rng: np.random.Generator) -> None:
     """Dyna-Q planning: N backups of uniformly random known pairs."""
-    model = t.model
     nk = model.n_known[0]
     if nk == 0:
         return
     n_actions = model.visits.shape[1]
     for _ in range(p.n_backups):
         i = model.known[rng.integers(0, nk)]
-        model_backup(t, p, i // n_actions, i % n_actions, rng)
+        model_backup(table, model, opt_r, p, i // n_actions, i % n_actions, rng)

@@ -2,7 +2,11 @@
 
 Every learner (Q-learning, Dyna-Q, DARLING, the GDQs) is the same data, :class:`Tables`,
 plus scalar :class:`Params` whose ``kind`` says which rules run after a real step
-(:func:`gdq_pddl.learners.rules.observe`). This module holds:
+(:func:`gdq_pddl.learners.rules.observe`). ``Tables`` holds five small groups, one per
+concern: :class:`QTable` (Q and acting, this module), :class:`Model` (the learned model),
+:class:`Plans` (the paper's GDQs), :class:`Prior` and :class:`Queue` (the default GDQ's
+prior and sweep). A compiled function takes the groups it touches, so its signature says
+what it reads and writes. This module holds:
 
 - the Q table and its maximum: :func:`set_q` (the only writer of single Q entries, so
   ``v[s]`` stays the max of ``q[s, a]`` over the allowed actions) and :func:`td_update`,
@@ -24,11 +28,12 @@ The compiled functions here and in the other rule modules trust their arguments 
 bounds checks in compiled code): the learners' methods and the episode loops check what
 they are given before calling them (:mod:`gdq_pddl.learners.guards`).
 
-Speed. A call of a compiled function that is not inlined and takes :class:`Tables` costs
-a reference-count update per array the tuple holds; the small rules called in inner loops
-(``set_q``, ``td_update``, ``record``, the backups' value functions) are therefore
-``inline="always"`` and take arrays, not the tuple (Task C, env steps/s: Q-learning 531k
--> 1.05M, Dyna-Q 165k -> 260k, GDQ 182k -> 215k, ``benchmarks/learners.py speed``), while
+Speed. A call of a compiled function that is not inlined costs a reference-count update
+per array of every tuple it takes; the small rules called in inner loops (``set_q``,
+``td_update``, ``record``, the backups' value functions) are therefore
+``inline="always"`` (Task C, env steps/s: Q-learning 531k -> 1.05M, Dyna-Q 165k -> 260k,
+GDQ 182k -> 215k, ``benchmarks/learners.py speed``), and the loops read a group's arrays
+into locals once (a field read in a loop can cost a count update each time), while
 ``act`` and ``observe`` stay calls: inlining ``observe`` into the episode loop made numba
 0.68 compile a loop whose results differ from the Python path's (caught by the fast ==
 Python tests), and inlining more tripled the compile time.
@@ -243,7 +248,8 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 
 
 @numba.njit(cache=True)
-def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
+def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+        rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
 
     With probability epsilon a uniform action of ``guide[s]`` (or, for a share
@@ -252,16 +258,16 @@ def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
     of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
     if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
     when exploring with ``explore_all > 0``, then one integer when exploring or when
-    several actions tie, and one more for a replacement.
+    several actions tie, and one more for a replacement. (``visits`` and ``prior_next``
+    only for those draws of every action.)
     """
-    table = t.table
     q, allowed = table.q, table.allowed
     n_actions = q.shape[1]
     if rng.random() < p.epsilon:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
-                or not _one_step_from_goal(table.goal, t.prior.next_state, s)):
-            return _draw_untried(t.model.visits, s, rng)
+                or not _one_step_from_goal(table.goal, prior_next, s)):
+            return _draw_untried(visits, s, rng)
         return _draw_guided(table, s, rng)
     best = table.v[s]
     ties = 0
