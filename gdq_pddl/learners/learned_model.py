@@ -194,10 +194,24 @@ def learned_value(model: Model, goal: np.ndarray, v: np.ndarray, p: Params, s: i
                   a: int) -> float:
     """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
     with state values ``v``."""
+    return learned_value_arrays(model.slots, model.stuck, model.visits, model.cost_sum,
+                                model.cost_n, model.cost_all, goal, v, p, s, a)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def learned_value_arrays(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
+                         cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
+                         goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
+    """:func:`learned_value` on the arrays it reads, for the default GDQ's sweep (its
+    inner loop would pay a reference count per read of a group's field)."""
     r_max, gamma = p.r_max, p.gamma
-    c = mean_cost(model, s, a)
-    total = model.stuck[s, a] * -r_max
-    slots = model.slots
+    if cost_n[s, a] > 0:
+        c = cost_sum[s, a] / cost_n[s, a]
+    elif cost_all[1] > 0:
+        c = cost_all[0] / cost_all[1]
+    else:
+        c = 0.0
+    total = stuck[s, a] * -r_max
     for j in range(slots.shape[2]):  # successors in increasing order
         here = slots[s, a, j]
         if here == 0:
@@ -208,7 +222,7 @@ def learned_value(model: Model, goal: np.ndarray, v: np.ndarray, p: Params, s: i
             total += k * r_max
         else:
             total += k * (gamma * v[s2] - c)
-    return total / model.visits[s, a]
+    return total / visits[s, a]
 
 
 @numba.njit(cache=True, inline="always")

@@ -186,15 +186,26 @@ def recompute_all_v(table: QTable) -> None:
 @numba.njit(cache=True, inline="always")
 def set_q(table: QTable, s: int, a: int, value: float) -> None:
     """``q[s, a] <- value``, keeping ``v`` exact."""
-    q, v = table.q, table.v
+    set_q_arrays(table.q, table.v, table.allowed, s, a, value)
+
+
+@numba.njit(cache=True, inline="always")
+def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
+                 value: float) -> None:
+    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (its inner loop
+    would pay a reference count per read of a group's field: module doc)."""
     old = q[s, a]
     q[s, a] = value
-    if not table.allowed[s, a]:
+    if not allowed[s, a]:
         return
     if value >= v[s]:
         v[s] = value
     elif old >= v[s]:
-        recompute_v(table, s)
+        best = -np.inf
+        for b in range(q.shape[1]):
+            if allowed[s, b] and q[s, b] > best:
+                best = q[s, b]
+        v[s] = best
 
 
 @numba.njit(cache=True, inline="always")
