@@ -131,7 +131,7 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     learned_model.record(t.model, t.table.goal, p, s, a, -2.0, s2, False, False)
     assert learner.successors(s, a) == {s2: 1} and t.model.visits[s, a] == 1
     t.table.q[s2, :] = 10.0
-    tables.recompute_v(t.table, s2)
+    tables.recompute_all_v(t.table)
     learned_model.model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
     target = -2.0 + p.gamma * 10.0
     assert t.table.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))

@@ -108,9 +108,7 @@ def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
     """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.compact.CompactEnv`
     (seed ``env`` with ``reset`` first): the compiled loop over its compact dynamics, the
     same draws and records as :func:`run_episodes` on the office (tested)."""
-    check_count("n_episodes", n_episodes)
-    guards.check_generator(rng)
-    guards.check_env(*learner.q.shape, env)
+    guards.check_env(*learner.q.shape, env)  # run_compiled checks the rest
     env = env.unwrapped
     return run_compiled(env.model, env.start_pos, env.goal_pos, env.doors, learner,
                         env.np_random, n_episodes, rng, max(1, int(env.model.area_of_pos.max())))

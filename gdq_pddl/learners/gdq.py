@@ -53,7 +53,7 @@ import numpy as np
 
 from gdq_pddl.learners.learned_model import (
     has_successor,
-    learned_value_arrays,
+    learned_value,
     record,
     slot_successor,
 )
@@ -93,13 +93,6 @@ def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray, p: Params
     (computed by :func:`_hybrid`, on the arrays)."""
     return _hybrid(table.v, table.goal, prior_next, model.slots, model.stuck, model.visits,
                    model.cost_sum, model.cost_n, model.cost_all, p, s, a)
-
-
-@numba.njit(cache=True, inline="always")
-def prior_backup(table: QTable, prior_next: np.ndarray, p: Params, s: int, a: int) -> float:
-    """The backup of ``(s, a)`` under the prior alone, with the current ``v``: R_max if
-    its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
-    return _prior(table.v, table.goal, prior_next, p, s, a)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -163,19 +156,21 @@ def _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, co
 def _hybrid(v, goal, prior_next, slots, stuck, visits, cost_sum, cost_n, cost_all,
             p: Params, s: int, a: int) -> float:
     """:func:`hybrid_backup`: the prior backup, mixed with the learned model's once known."""
-    prior = _prior(v, goal, prior_next, p, s, a)
+    prior = prior_backup(v, goal, prior_next, p, s, a)
     if is_known(visits, prior_next, p.m, s, a):
         n = visits[s, a]
-        learned = learned_value_arrays(slots, stuck, visits, cost_sum, cost_n, cost_all,
-                                       goal, v, p, s, a)
+        learned = learned_value(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, p,
+                                s, a)
         w = p.prior_weight
         return (n * learned + w * prior) / (n + w)
     return prior
 
 
 @numba.njit(cache=True, inline="always")
-def _prior(v, goal, prior_next, p: Params, s: int, a: int) -> float:
-    """:func:`prior_backup`."""
+def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+                 a: int) -> float:
+    """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
+    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
     s2 = prior_successor(prior_next, s, a)
     return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
 

@@ -1,22 +1,15 @@
-"""Checks at the entry of the compiled code: nothing given to a public function of the
-learners can make a compiled rule read or write outside an array.
+"""Checks at the entry of the compiled code, which has no bounds checks: nothing given to a
+public function of the learners can make a compiled rule read or write outside an array.
+Bad input raises :class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument.
 
-Compiled code has no bounds checks, so every index it reads must be in range before it
-runs. The public entry points check what they are given and raise
-:class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument and the range:
-
-- a learner's construction and ``start_task`` check the task context
-  (:func:`check_context`), then the tables built from it (:func:`check_tables`);
-- ``act`` and ``observe`` check the states, the action, the reward and the generator;
-- :func:`gdq_pddl.learners.episodes.run_compiled` checks the generators, the env's
-  compiled dynamics against the learner's sizes (:func:`check_dynamics`) and, before each
-  call of the compiled loop, the learner's tables again (they may have been replaced).
-
-Every array is checked against one table, :data:`TABLES` (and :data:`DYNAMICS` for the
-env's arrays): its dtype, its shape in the learner's sizes, and, for an array whose values
-index another, their range. What is not checked: the *contents* the compiled rules write
-themselves (the learned model's slots, the queue), in range by construction as long as
-every index that reaches them was; replacing them by hand is not supported.
+A learner's construction and ``start_task`` check the task context (:func:`check_context`)
+and the tables built from it (:func:`check_tables`); ``act`` and ``observe`` their
+arguments; :func:`gdq_pddl.learners.episodes.run_compiled` the generators, the env's
+dynamics (:func:`check_dynamics`) and, before each call of the loop, the tables again
+(they may have been replaced). Every array is checked against one table, :data:`TABLES`
+(:data:`DYNAMICS` for the env's): dtype, shape in the learner's sizes, the range of an
+index array's values. Not checked: what the compiled rules write themselves (the model's
+slots, the queue), in range by construction while every index that reaches them is.
 """
 
 from __future__ import annotations

@@ -179,38 +179,25 @@ def record(model: Model, goal: np.ndarray, p: Params, s: int, a: int, r: float, 
 # --- what the model says a pair is worth -------------------------------------------------------
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def mean_cost(model: Model, s: int, a: int) -> float:
+def mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s: int,
+              a: int) -> float:
     """The mean step cost of ``(s, a)``; of every pair where it has none; else 0."""
-    if model.cost_n[s, a] > 0:
-        return model.cost_sum[s, a] / model.cost_n[s, a]
-    cost_all = model.cost_all
+    if cost_n[s, a] > 0:
+        return cost_sum[s, a] / cost_n[s, a]
     if cost_all[1] > 0:
         return cost_all[0] / cost_all[1]
     return 0.0
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def learned_value(model: Model, goal: np.ndarray, v: np.ndarray, p: Params, s: int,
-                  a: int) -> float:
+def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
+                  cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
+                  goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
     """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
-    with state values ``v``."""
-    return learned_value_arrays(model.slots, model.stuck, model.visits, model.cost_sum,
-                                model.cost_n, model.cost_all, goal, v, p, s, a)
-
-
-@numba.njit(cache=True, inline="always", error_model="numpy")
-def learned_value_arrays(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
-                         cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
-                         goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
-    """:func:`learned_value` on the arrays it reads, for the default GDQ's sweep (its
-    inner loop would pay a reference count per read of a group's field)."""
+    with state values ``v``. (The model's arrays one by one: the default GDQ's sweep calls
+    it in its inner loop, where a read of a group's field would cost a reference count.)"""
     r_max, gamma = p.r_max, p.gamma
-    if cost_n[s, a] > 0:
-        c = cost_sum[s, a] / cost_n[s, a]
-    elif cost_all[1] > 0:
-        c = cost_all[0] / cost_all[1]
-    else:
-        c = 0.0
+    c = mean_cost(cost_sum, cost_n, cost_all, s, a)
     total = stuck[s, a] * -r_max
     for j in range(slots.shape[2]):  # successors in increasing order
         here = slots[s, a, j]
@@ -232,7 +219,8 @@ def expected_value(model: Model, goal: np.ndarray, opt_r: np.ndarray, p: Params,
     model's for a known pair (``visits > m``), else the optimism of GDQ-literal (R_max on
     OptInit's plan pairs ``opt_r``)."""
     if model.visits[s, a] > p.m:
-        return learned_value(model, goal, v, p, s, a)
+        return learned_value(model.slots, model.stuck, model.visits, model.cost_sum,
+                             model.cost_n, model.cost_all, goal, v, p, s, a)
     r = p.r_max if opt_r[s, a] else 0.0
     return r + p.opt_continue * p.gamma * v[p.s0]
 
@@ -256,8 +244,8 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
             s2 = slot_successor(slots[s, a, j])
             if goal[s2]:
                 return p.r_max, s2, True
-            return -mean_cost(model, s, a), s2, False
-    return -mean_cost(model, s, a), s, False  # unreachable: counts + stuck == visits
+            return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s2, False
+    return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s, False
 
 
 # --- Dyna-Q's planning ---------------------------------------------------------------------------

@@ -167,20 +167,20 @@ def table_bytes(n_states: int, n_actions: int, max_successors: int,
 # --- the Q table and its maximum ---------------------------------------------------------
 
 @numba.njit(cache=True, inline="always")
-def recompute_v(table: QTable, s: int) -> None:
-    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions."""
-    q, allowed = table.q, table.allowed
+def _best(q: np.ndarray, allowed: np.ndarray, s: int) -> float:
     best = -np.inf
     for a in range(q.shape[1]):
         if allowed[s, a] and q[s, a] > best:
             best = q[s, a]
-    table.v[s] = best
+    return best
 
 
 @numba.njit(cache=True)
 def recompute_all_v(table: QTable) -> None:
-    for s in range(table.q.shape[0]):
-        recompute_v(table, s)
+    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions, every ``s``."""
+    q, v, allowed = table.q, table.v, table.allowed
+    for s in range(q.shape[0]):
+        v[s] = _best(q, allowed, s)
 
 
 @numba.njit(cache=True, inline="always")
@@ -201,11 +201,7 @@ def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: i
     if value >= v[s]:
         v[s] = value
     elif old >= v[s]:
-        best = -np.inf
-        for b in range(q.shape[1]):
-            if allowed[s, b] and q[s, b] > best:
-                best = q[s, b]
-        v[s] = best
+        v[s] = _best(q, allowed, s)
 
 
 @numba.njit(cache=True, inline="always")
