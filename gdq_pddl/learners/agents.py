@@ -36,6 +36,10 @@ from gdq_pddl.learners.tables import (
     KIND_GDQ_PLANS,
     KIND_QLEARNING,
     Params,
+    Plans,
+    Prior,
+    QTable,
+    Queue,
     Tables,
     act,
     greedy,
@@ -48,12 +52,11 @@ MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
 successor slots)."""
 
 _I0 = np.zeros(0, dtype=np.int64)
-_NO_PRIOR: dict[str, np.ndarray] = {
-    "prior_next": np.zeros((0, 0), dtype=np.int64), "pp_ptr": _I0, "pp_pair": _I0,
-    "rev_head": _I0, "rev_next": _I0, "rev_pair": _I0, "rev_n": np.zeros(1, dtype=np.int64),
-    "heap": _I0, "heap_pos": _I0, "heap_prio": np.zeros(0), "heap_n": np.zeros(1, np.int64)}
-"""The :class:`Tables` fields of the default GDQ, for the other learners (never read by
-them; the two counters are never written either)."""
+_NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
+                   np.zeros(1, dtype=np.int64)),
+             Queue(_I0, _I0, np.zeros(0), np.zeros(1, dtype=np.int64)))
+"""The default GDQ's prior and queue, for the other learners (never read by them; the
+two counters are never written either)."""
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
@@ -104,7 +107,7 @@ class TabularLearner:
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
         self.context = context
         self.tables, self.params = self._build(context)
-        recompute_all_v(self.tables)
+        recompute_all_v(self.tables.table)
         self._init_task()
 
     # -- per-learner hooks -------------------------------------------------------------
@@ -135,8 +138,8 @@ class TabularLearner:
     def _opt_continue(self) -> float:
         return 1.0
 
-    def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
-        """The :class:`Tables` fields only the default GDQ uses (empty here)."""
+    def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
+        """The :class:`Tables` groups only the default GDQ uses (empty here)."""
         return _NO_PRIOR
 
     def _extra_params(self) -> dict[str, float]:
@@ -153,16 +156,13 @@ class TabularLearner:
         for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
             lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
             opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
-        tables = Tables(
-            q=self.q, v=np.zeros(len(self.q)), allowed=allowed, guide=guide,
-            n_guide=guide.sum(axis=1).astype(np.int64),
-            goal=np.ascontiguousarray(context.goal, dtype=np.bool_), opt_r=opt_r,
-            **self._model,
-            plan_ptr=np.ascontiguousarray(plans.plan_ptr, dtype=np.int64),
-            pair_ptr=np.ascontiguousarray(plans.pair_ptr, dtype=np.int64),
-            pair_state=np.ascontiguousarray(plans.pair_state, dtype=np.int64),
-            pair_action=np.ascontiguousarray(plans.pair_action, dtype=np.int64),
-            **self._prior_arrays(context))
+        table = QTable(self.q, np.zeros(len(self.q)), allowed, guide,
+                       guide.sum(axis=1).astype(np.int64),
+                       np.ascontiguousarray(context.goal, dtype=np.bool_))
+        plan_arrays = (np.ascontiguousarray(x, dtype=np.int64) for x in (
+            plans.plan_ptr, plans.pair_ptr, plans.pair_state, plans.pair_action))
+        tables = Tables(table, self._model, Plans(opt_r, *plan_arrays),
+                        *self._prior_arrays(context))
         c = self.config
         params = Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
@@ -180,7 +180,7 @@ class TabularLearner:
         self.context = context
         self._model = self._slots(_capacity(context))
         self.tables, self.params = self._build(context)
-        recompute_all_v(self.tables)
+        recompute_all_v(self.tables.table)
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
@@ -188,7 +188,8 @@ class TabularLearner:
         tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
-        return int(act(self.tables, self.params, s, rng))
+        t = self.tables
+        return int(act(t.table, t.model.visits, t.prior.next_state, self.params, s, rng))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
@@ -197,23 +198,23 @@ class TabularLearner:
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
         guards.check_generator(rng)
-        if not rules.observe(self.tables, self.params, s, a, r, s2, bool(terminated),
+        if not rules.observe(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
 
     def greedy_policy(self) -> np.ndarray:
         """Per state, the lowest-index allowed action of maximal Q."""
-        return greedy(self.tables, self.params)
+        return greedy(self.tables.table, self.params)
 
     @property
     def v(self) -> np.ndarray:
         """max_a Q(s, a) over the allowed actions, per state."""
-        return self.tables.v
+        return self.tables.table.v
 
     @property
     def visits(self) -> np.ndarray:
         """Trials per (s, a) recorded in the learned model (model-based learners only)."""
-        return self.tables.visits
+        return self.tables.model.visits
 
     @property
     def counts(self) -> np.ndarray:
@@ -224,13 +225,13 @@ class TabularLearner:
         if n_s * n_a * n_s > MAX_DENSE_COUNTS:
             raise ValueError(f"a dense C[s, a, s'] of {n_s} x {n_a} x {n_s} entries is too "
                              f"large; use successors(s, a)")
-        return learned_model.dense_counts(self.tables.slots, n_s)
+        return learned_model.dense_counts(self.tables.model.slots, n_s)
 
     def successors(self, s: int, a: int) -> dict[int, int]:
         """``{s': count}`` of the recorded transitions of ``(s, a)``, in increasing ``s'``."""
         n_s, n_a = self.q.shape
         s, a = guards.check_state("s", s, n_s), guards.check_action("a", a, n_a)
-        slots = self.tables.slots[s, a]
+        slots = self.tables.model.slots[s, a]
         slots = slots[slots != 0]
         return dict(zip((slots >> learned_model.SLOT_SHIFT).tolist(),
                         (slots & learned_model.COUNT_MASK).tolist(), strict=True))
@@ -240,13 +241,13 @@ class TabularLearner:
         """Bytes of the learner's arrays (allocated; the pages of pairs never tried are
         never written, so the memory actually used can be much less)."""
         # guide is usually the allowed array itself: count each array once
-        arrays = {id(x): x for x in self.tables if isinstance(x, np.ndarray)}
+        arrays = {id(x): x for group in self.tables for x in group}
         return sum(x.nbytes for x in arrays.values())
 
     @property
     def max_successors(self) -> int:
         """Successor slots per pair of the learned model (0 for the model-free learners)."""
-        return int(self.tables.slots.shape[2])
+        return int(self.tables.model.slots.shape[2])
 
     def reserve_successors(self, k: int) -> None:
         """Make room for ``k`` distinct successors per pair (model-based learners; the
@@ -256,9 +257,9 @@ class TabularLearner:
         k = min(int(k), len(self.q))
         if self.kind in MODEL_BASED and k > self.max_successors:
             self._model = self._slots(k)
-            self.tables = self.tables._replace(slots=self._model["slots"])
+            self.tables = self.tables._replace(model=self._model)
 
-    def _slots(self, k: int) -> dict[str, np.ndarray]:
+    def _slots(self, k: int) -> learned_model.Model:
         if self.kind not in MODEL_BASED:
             return self._model
         return learned_model.with_successor_slots(self._model, k)
@@ -386,7 +387,7 @@ class GDQ(TabularLearner):
         changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
         entries, so they are filled in here, when the table is read."""
         if self.kind == KIND_GDQ and hasattr(self, "tables"):
-            gdq.fill_untried(self.tables, self.params)
+            gdq.fill_untried(self.tables.table, self.params)
         return self._q
 
     @q.setter
@@ -446,29 +447,27 @@ class GDQ(TabularLearner):
                               "actions")
         return context.prior
 
-    def _prior_arrays(self, context: TaskContext) -> dict[str, np.ndarray]:
+    def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
         if self.kind != KIND_GDQ:
             return _NO_PRIOR
         prior = self._prior(context)
         n_s = context.n_states
         pp_ptr, pp_pair = prior.predecessors()
         capacity = max(self._rev_capacity,
-                       self._rev_needed() + gdq.reverse_room(self._model["slots"].shape[2], 64))
+                       self._rev_needed() + gdq.reverse_room(self._model.slots.shape[2], 64))
         self._rev_capacity = capacity
-        return {"prior_next": np.ascontiguousarray(prior.next_state, dtype=np.int64),
-                "pp_ptr": pp_ptr, "pp_pair": pp_pair,
-                "rev_head": np.full(n_s, -1, dtype=np.int64),
-                "rev_next": np.full(capacity, -1, dtype=np.int64),
-                "rev_pair": np.zeros(capacity, dtype=np.int64),
-                "rev_n": np.zeros(1, dtype=np.int64),
-                "heap": np.zeros(n_s, dtype=np.int64),
-                "heap_pos": np.full(n_s, -1, dtype=np.int64),
-                "heap_prio": np.zeros(n_s), "heap_n": np.zeros(1, dtype=np.int64)}
+        return (Prior(np.ascontiguousarray(prior.next_state, dtype=np.int64), pp_ptr, pp_pair,
+                      rev_head=np.full(n_s, -1, dtype=np.int64),
+                      rev_next=np.full(capacity, -1, dtype=np.int64),
+                      rev_pair=np.zeros(capacity, dtype=np.int64),
+                      rev_n=np.zeros(1, dtype=np.int64)),
+                Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
+                      np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 
     def _rev_needed(self) -> int:
         """At least the reverse-index entries the known pairs need: the recorded successors
         of every pair tried, and one prior successor each."""
-        slots, visits = self._model["slots"], self._model["visits"]
+        slots, visits = self._model.slots, self._model.visits
         tried = visits > 0
         return int(np.count_nonzero(slots[tried])) + int(np.count_nonzero(tried))
 
@@ -476,16 +475,18 @@ class GDQ(TabularLearner):
         """Make room for ``entries`` more reverse-index entries (the default GDQ; the
         episode loops call it with what the coming steps can add)."""
         check_count("entries", entries)
-        t = self.tables
-        if self.kind != KIND_GDQ or len(t.rev_pair) - int(t.rev_n[0]) >= entries:
+        prior = self.tables.prior
+        used = int(prior.rev_n[0])
+        if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
             return
-        capacity = max(2 * len(t.rev_pair), int(t.rev_n[0]) + entries)
+        capacity = max(2 * len(prior.rev_pair), used + entries)
         rev_next = np.full(capacity, -1, dtype=np.int64)
         rev_pair = np.zeros(capacity, dtype=np.int64)
-        rev_next[:len(t.rev_next)] = t.rev_next
-        rev_pair[:len(t.rev_pair)] = t.rev_pair
+        rev_next[:len(prior.rev_next)] = prior.rev_next
+        rev_pair[:len(prior.rev_pair)] = prior.rev_pair
         self._rev_capacity = capacity
-        self.tables = t._replace(rev_next=rev_next, rev_pair=rev_pair)
+        self.tables = self.tables._replace(
+            prior=prior._replace(rev_next=rev_next, rev_pair=rev_pair))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
@@ -499,20 +500,25 @@ class GDQ(TabularLearner):
         self.q[:, :] = 0.0
         if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
-            if gdq.value_iteration(self.tables, self.params, tol, 1_000_000) < 0:
+            t = self.tables
+            if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
+                                   1_000_000) < 0:
                 raise AssertionError("reverse index sized too small")  # _prior_arrays
         elif self.config.variant == "literal":
-            self.policy = gdq_paper.policy_iteration(self.tables, self.params)
+            t = self.tables
+            self.policy = gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r,
+                                                     self.params)
             return
         else:
-            gdq_paper.seed_plan_pairs(self.tables, self.params.r_max)
-        self.policy = greedy(self.tables, self.params)
+            gdq_paper.seed_plan_pairs(self.tables.table, self.tables.plans.opt_r,
+                                      self.params.r_max)
+        self.policy = greedy(self.tables.table, self.params)
 
     @property
     def optimistic_pairs(self) -> np.ndarray:
         """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model of the
         ``literal`` variant; Q = R_max in the ``code`` variant's OptInit)."""
-        return self.tables.opt_r
+        return self.tables.plans.opt_r
 
     @property
     def applicable(self) -> np.ndarray:

@@ -109,9 +109,7 @@ def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
     """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.office.CompactEnv`
     (seed ``env`` with ``reset`` first): the compiled loop over its compact dynamics, the
     same draws and records as :func:`run_episodes` on the office (tested)."""
-    check_count("n_episodes", n_episodes)
-    guards.check_generator(rng)
-    guards.check_env(*learner.q.shape, env)
+    guards.check_env(*learner.q.shape, env)  # run_compiled checks the rest
     env = env.unwrapped
     return run_compiled(env.model, env.start_pos, env.goal_pos, env.doors, learner,
                         env.np_random, n_episodes, rng, max(1, int(env.model.area_of_pos.max())))
@@ -166,10 +164,7 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     guards.check_generator(rng)
     guards.check_generator(env_rng, "the env's generator")
     n_s, n_a = learner.q.shape
-    if isinstance(dynamics, CompactModel):
-        most = guards.check_compact_dynamics(dynamics, start, doors, n_s, n_a)
-    else:
-        most = guards.check_dynamics(dynamics, start, n_s, n_a)
+    most = guards.check_dynamics(dynamics, start, doors, n_s, n_a)
     check_count("n_areas", n_areas)
     if n_areas < most:
         raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")
@@ -271,18 +266,20 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
     its arguments: :func:`run_compiled` checks them."""
+    table, model, plans, prior, queue = t
     for ep in range(first, len(returns)):
-        if p.kind == KIND_GDQ and len(t.rev_pair) - t.rev_n[0] < room:
+        if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
             return ep
         state = _restart(m, start, doors)
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = act(t, p, s, rng)
+            a = act(table, model.visits, prior.next_state, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not observe(t, p, s, a, r, s2, terminated, truncated, rng):
+            if not observe(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
+                           truncated, rng):
                 return -1
             step += 1
             returns[ep] += r

@@ -51,99 +51,78 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from gdq_pddl.learners.learned_model import _learned, has_successor, record, slot_successor
-from gdq_pddl.learners.tables import Params, Tables, _set_q
+from gdq_pddl.learners.learned_model import (
+    has_successor,
+    learned_value,
+    record,
+    slot_successor,
+)
+from gdq_pddl.learners.tables import Model, Params, Prior, QTable, Queue, set_q_arrays
 
 # --- the rule --------------------------------------------------------------------------------
 
 
 @numba.njit(cache=True)
-def after_step(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-               truncated: bool) -> bool:
+def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s: int,
+               a: int, r: float, s2: int, terminated: bool, truncated: bool) -> bool:
     """The default GDQ after one real step: record it in the learned model, index what
     became known, then :func:`sweep`. False when the model had no slot for the step or
     the reverse index is full (the callers keep room: :func:`reverse_room`)."""
     # a successor not indexed yet (stuck and goal steps end the episode: never indexed;
     # the prior successor is indexed from the start when the prior has weight)
-    new = not terminated and not has_successor(t.slots, s, a, s2) and not (
-        p.prior_weight > 0.0 and s2 == prior_successor(t.prior_next, s, a))
-    if not record(t, p, s, a, r, s2, terminated, truncated):
+    new = not terminated and not has_successor(model.slots, s, a, s2) and not (
+        p.prior_weight > 0.0 and s2 == prior_successor(prior.next_state, s, a))
+    if not record(model, table.goal, p, s, a, r, s2, terminated, truncated):
         return False
-    if is_known(t.visits, t.prior_next, p.m, s, a):
-        if t.visits[s, a] == (p.m if t.prior_next[s, a] >= 0 else 0) + 1:  # just known
-            t.allowed[s, a] = True
-            if not _index_known_pair(t, p, s, a):
+    if is_known(model.visits, prior.next_state, p.m, s, a):
+        if model.visits[s, a] == (p.m if prior.next_state[s, a] >= 0 else 0) + 1:  # just known
+            table.allowed[s, a] = True
+            if not _index_known_pair(model, table.goal, prior, p, s, a):
                 return False
-        elif new and not _index_add(t.rev_head, t.rev_next, t.rev_pair, t.rev_n, s2,
-                                    s * t.q.shape[1] + a):
+        elif new and not _index_add(prior, s2, s * table.q.shape[1] + a):
             return False
-    sweep(t, p, s, a)
+    sweep(table, model, prior, queue, p, s, a)
     return True
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _hybrid_backup(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
-                   cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
-                   goal: np.ndarray, v: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
-                   a: int) -> float:
-    """:func:`hybrid_backup` on the arrays it reads (the sweep's inner loop calls this)."""
-    prior = _prior_backup(goal, v, prior_next, p, s, a)
-    if is_known(visits, prior_next, p.m, s, a):
-        n = visits[s, a]
-        learned = _learned(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, s, a,
-                           p.r_max, p.gamma)
-        w = p.prior_weight
-        return (n * learned + w * prior) / (n + w)
-    return prior
-
-
-@numba.njit(cache=True)
-def hybrid_backup(t: Tables, p: Params, s: int, a: int) -> float:
-    """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
-    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
-    return _hybrid_backup(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal,
-                          t.v, t.prior_next, p, s, a)
-
-
-@numba.njit(cache=True)
-def prior_backup(t: Tables, p: Params, s: int, a: int) -> float:
-    """The backup of ``(s, a)`` under the prior alone, with the current ``v``: R_max if
-    its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
-    return _prior_backup(t.goal, t.v, t.prior_next, p, s, a)
-
-
-@numba.njit(cache=True, inline="always")
-def _prior_backup(goal: np.ndarray, v: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray, p: Params, s: int,
                   a: int) -> float:
-    s2 = prior_successor(prior_next, s, a)
-    return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+    """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
+    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known
+    (computed by :func:`_hybrid`, on the arrays)."""
+    return _hybrid(table.v, table.goal, prior_next, model.slots, model.stuck, model.visits,
+                   model.cost_sum, model.cost_n, model.cost_all, p, s, a)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def sweep(t: Tables, p: Params, s: int, a: int) -> None:
+def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s: int,
+          a: int) -> None:
     """Revalue the real step's pair ``(s, a)`` if it is known, then sweep: recompute the
     pairs leading to the most changed states until ``n_backups`` pairs are done (a popped
     state's pairs are all done) or none is queued."""
-    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
-    slots, stuck, visits = t.slots, t.stuck, t.visits
-    cost_sum, cost_n, cost_all = t.cost_sum, t.cost_n, t.cost_all
-    prior_next, pp_ptr, pp_pair = t.prior_next, t.pp_ptr, t.pp_pair
-    rev_head, rev_next, rev_pair = t.rev_head, t.rev_next, t.rev_pair
-    heap, heap_pos, heap_prio, heap_n = t.heap, t.heap_pos, t.heap_prio, t.heap_n
+    # the arrays as locals, passed to _revalue one by one: a read of a group's field in
+    # this loop would cost a reference count each time (GDQ ~20% fewer steps/s)
+    q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
+    slots, stuck, visits = model.slots, model.stuck, model.visits
+    cost_sum, cost_n, cost_all = model.cost_sum, model.cost_n, model.cost_all
+    prior_next, pp_ptr, pp_pair = prior.next_state, prior.pp_ptr, prior.pp_pair
+    rev_head, rev_next, rev_pair = prior.rev_head, prior.rev_next, prior.rev_pair
+    heap, pos, prio, heap_n = queue.heap, queue.pos, queue.prio, queue.n
     n_actions = q.shape[1]
     if is_known(visits, prior_next, p.m, s, a):
-        _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
-                 prior_next, heap, heap_pos, heap_prio, heap_n, p, s, a)
+        _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
+                 cost_all, heap, pos, prio, heap_n, p, s, a)
     budget = p.n_backups
     while budget > 0 and heap_n[0] > 0:
-        x = _pop(heap, heap_pos, heap_prio, heap_n)
+        x = _pop(queue)
         for k in range(pp_ptr[x], pp_ptr[x + 1]):  # unknown pairs the prior leads to x
             pair = pp_pair[k]
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps] or is_known(visits, prior_next, p.m, ps, pa):
                 continue  # goal rows keep 0; known pairs are in the reverse index
-            _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
-                     prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
+                     cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
         e = rev_head[x]
         while e >= 0:  # known pairs whose backup reads x
@@ -152,28 +131,48 @@ def sweep(t: Tables, p: Params, s: int, a: int) -> None:
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps]:  # known before a task switch made its state a goal
                 continue
-            _revalue(q, v, allowed, slots, stuck, visits, cost_sum, cost_n, cost_all, goal,
-                     prior_next, heap, heap_pos, heap_prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
+                     cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
 
 
+# The sweep's inner loop on arrays (the groups' fields, one by one: see sweep).
+
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _revalue(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, slots: np.ndarray,
-             stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray, cost_n: np.ndarray,
-             cost_all: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, heap: np.ndarray,
-             heap_pos: np.ndarray, heap_prio: np.ndarray, heap_n: np.ndarray, p: Params,
-             s: int, a: int) -> None:
+def _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
+             cost_all, heap, pos, prio, heap_n, p: Params, s: int, a: int) -> None:
     """``q[s, a] <-`` its hybrid backup; queue ``s`` if that moved its value by more than
-    the sweep threshold. (The arrays one by one, not :class:`Tables`: this is the sweep's
-    inner loop, see :mod:`gdq_pddl.learners.tables`. The untried pairs the knowledge says
-    do nothing are not allowed: nothing here reads their Q, which :func:`fill_untried`
-    fills in when it is read.)"""
+    the sweep threshold. (The untried pairs the knowledge says do nothing are not allowed:
+    nothing here reads their Q, which :func:`fill_untried` fills in when it is read.)"""
     old = v[s]
-    _set_q(q, v, allowed, s, a, _hybrid_backup(slots, stuck, visits, cost_sum, cost_n,
-                                               cost_all, goal, v, prior_next, p, s, a))
+    set_q_arrays(q, v, allowed, s, a, _hybrid(v, goal, prior_next, slots, stuck, visits,
+                                              cost_sum, cost_n, cost_all, p, s, a))
     change = abs(v[s] - old)
     if change > p.sweep_threshold:
-        _push(heap, heap_pos, heap_prio, heap_n, s, change)
+        _push(heap, pos, prio, heap_n, s, change)
+
+
+@numba.njit(cache=True, inline="always", error_model="numpy")
+def _hybrid(v, goal, prior_next, slots, stuck, visits, cost_sum, cost_n, cost_all,
+            p: Params, s: int, a: int) -> float:
+    """:func:`hybrid_backup`: the prior backup, mixed with the learned model's once known."""
+    prior = prior_backup(v, goal, prior_next, p, s, a)
+    if is_known(visits, prior_next, p.m, s, a):
+        n = visits[s, a]
+        learned = learned_value(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, p,
+                                s, a)
+        w = p.prior_weight
+        return (n * learned + w * prior) / (n + w)
+    return prior
+
+
+@numba.njit(cache=True, inline="always")
+def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+                 a: int) -> float:
+    """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
+    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
+    s2 = prior_successor(prior_next, s, a)
+    return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
 
 
 @numba.njit(cache=True, inline="always")
@@ -181,12 +180,6 @@ def is_known(visits: np.ndarray, prior_next: np.ndarray, m: int, s: int, a: int)
     """Whether ``(s, a)`` is valued by the learned model: tried more than m times if the
     knowledge says it applies, at least once if it says it does nothing."""
     return visits[s, a] > (m if prior_next[s, a] >= 0 else 0)
-
-
-@numba.njit(cache=True)
-def known(t: Tables, p: Params, s: int, a: int) -> bool:
-    """:func:`is_known` of ``(s, a)`` in a learner's tables."""
-    return is_known(t.visits, t.prior_next, p.m, s, a)
 
 
 @numba.njit(cache=True, inline="always")
@@ -199,7 +192,8 @@ def prior_successor(prior_next: np.ndarray, s: int, a: int) -> int:
 # --- OptInit ---------------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
+def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params,
+                    tol: float, max_sweeps: int) -> int:
     """OptInit of the default GDQ: value iteration on the hybrid model (Gauss-Seidel sweeps
     over the allowed pairs until no state value moves by more than ``tol``), then every
     other pair's Q from the converged values, the reverse index rebuilt for the known
@@ -207,9 +201,9 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
     values (:func:`prior_values`), exact when no pair is known yet, so a first task
     takes one sweep however large the world. Returns the number of sweeps, or -1 when
     the reverse index is too small (the caller sizes it for the known pairs)."""
-    n_states, n_actions = t.q.shape
-    q, v, allowed, goal, visits, prior_next = t.q, t.v, t.allowed, t.goal, t.visits, \
-        t.prior_next
+    q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
+    visits, prior_next = model.visits, prior.next_state
+    n_states, n_actions = q.shape
     ptr = np.zeros(n_states + 1, dtype=np.int64)
     for s in range(n_states):
         n = 0
@@ -231,7 +225,7 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
                 pairs[k] = a
                 k += 1
     q[:, :] = 0.0
-    v[:] = prior_values(t, p)
+    v[:] = prior_values(table, prior, p)
     sweeps = 0
     while sweeps < max_sweeps:
         sweeps += 1
@@ -242,7 +236,7 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
             best = -np.inf
             for k in range(ptr[s], ptr[s + 1]):
                 a = pairs[k]
-                x = hybrid_backup(t, p, s, a)
+                x = hybrid_backup(table, model, prior_next, p, s, a)
                 q[s, a] = x
                 if x > best:
                     best = x
@@ -255,26 +249,27 @@ def value_iteration(t: Tables, p: Params, tol: float, max_sweeps: int) -> int:
             continue
         for a in range(n_actions):
             if not allowed[s, a]:
-                q[s, a] = hybrid_backup(t, p, s, a)
-    t.rev_head[:] = -1
-    t.rev_n[0] = 0
+                q[s, a] = hybrid_backup(table, model, prior_next, p, s, a)
+    prior.rev_head[:] = -1
+    prior.rev_n[0] = 0
     for s in range(n_states):
         for a in range(n_actions):
-            if is_known(visits, prior_next, p.m, s, a) and not _index_known_pair(t, p, s, a):
+            if is_known(visits, prior_next, p.m, s, a) and \
+                    not _index_known_pair(model, goal, prior, p, s, a):
                 return -1
-    t.heap_pos[:] = -1
-    t.heap_n[0] = 0
+    queue.pos[:] = -1
+    queue.n[0] = 0
     return sweeps
 
 
 @numba.njit(cache=True)
-def prior_values(t: Tables, p: Params) -> np.ndarray:
+def prior_values(table: QTable, prior: Prior, p: Params) -> np.ndarray:
     """The state values of the prior alone: a state ``d`` prior steps from the goal
     is worth R_max for d = 1 and ``-prior_cost + gamma * V_{d-1}`` beyond (backward
     breadth-first search over the prior's edges); one that cannot reach it
     ``-prior_cost / (1 - gamma)``; a goal 0."""
-    n_states, n_actions = t.q.shape
-    goal, pp_ptr, pp_pair = t.goal, t.pp_ptr, t.pp_pair
+    n_states, n_actions = table.q.shape
+    goal, pp_ptr, pp_pair = table.goal, prior.pp_ptr, prior.pp_pair
     dist = np.full(n_states, -1, dtype=np.int64)
     queue = np.empty(n_states, dtype=np.int64)
     head, tail = 0, 0
@@ -305,11 +300,11 @@ def prior_values(t: Tables, p: Params) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def fill_untried(t: Tables, p: Params) -> None:
+def fill_untried(table: QTable, p: Params) -> None:
     """Q of every pair that is not allowed (untried, and the knowledge says it does
     nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]``; goal rows
     stay 0. The sweeps never read these entries, so they leave them to this."""
-    q, v, allowed, goal = t.q, t.v, t.allowed, t.goal
+    q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     for s in range(q.shape[0]):
         if goal[s]:
             continue
@@ -329,36 +324,36 @@ def reverse_room(max_successors: int, steps: int = 1) -> int:
 
 
 @numba.njit(cache=True, inline="always")
-def _index_add(rev_head: np.ndarray, rev_next: np.ndarray, rev_pair: np.ndarray,
-               rev_n: np.ndarray, x: int, pair: int) -> bool:
+def _index_add(prior: Prior, x: int, pair: int) -> bool:
     """Record that known ``pair`` has reached state ``x``; False when the index is full."""
+    rev_n = prior.rev_n
     e = rev_n[0]
-    if e >= rev_pair.shape[0]:
+    if e >= prior.rev_pair.shape[0]:
         return False
-    rev_pair[e] = pair
-    rev_next[e] = rev_head[x]
-    rev_head[x] = e
+    prior.rev_pair[e] = pair
+    prior.rev_next[e] = prior.rev_head[x]
+    prior.rev_head[x] = e
     rev_n[0] = e + 1
     return True
 
 
 @numba.njit(cache=True)
-def _index_known_pair(t: Tables, p: Params, s: int, a: int) -> bool:
+def _index_known_pair(model: Model, goal: np.ndarray, prior: Prior, p: Params, s: int,
+                      a: int) -> bool:
     """Index the states the newly known pair ``(s, a)``'s backup reads: its recorded
     non-goal successors and, with ``prior_weight > 0``, its prior successor."""
-    slots, goal = t.slots, t.goal
-    rev_head, rev_next, rev_pair, rev_n = t.rev_head, t.rev_next, t.rev_pair, t.rev_n
-    pair = s * t.q.shape[1] + a
+    slots = model.slots
+    pair = s * slots.shape[1] + a
     for j in range(slots.shape[2]):
         here = slots[s, a, j]
         if here == 0:
             break
         x = slot_successor(here)
-        if not goal[x] and not _index_add(rev_head, rev_next, rev_pair, rev_n, x, pair):
+        if not goal[x] and not _index_add(prior, x, pair):
             return False
-    x = prior_successor(t.prior_next, s, a)
+    x = prior_successor(prior.next_state, s, a)
     if p.prior_weight > 0.0 and not goal[x] and not has_successor(slots, s, a, x):
-        return _index_add(rev_head, rev_next, rev_pair, rev_n, x, pair)
+        return _index_add(prior, x, pair)
     return True
 
 
@@ -415,13 +410,14 @@ def _push(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarra
 
 
 @numba.njit(cache=True, inline="always")
-def _pop(heap: np.ndarray, pos: np.ndarray, prio: np.ndarray, heap_n: np.ndarray) -> int:
+def _pop(queue: Queue) -> int:
     """The queued state of highest priority, removed from the queue."""
+    heap, pos = queue.heap, queue.pos
     x = heap[0]
-    n = heap_n[0] - 1
-    heap_n[0] = n
+    n = queue.n[0] - 1
+    queue.n[0] = n
     pos[x] = -1
     if n > 0:
         heap[0] = heap[n]
-        _sift_down(heap, pos, prio, n, 0)
+        _sift_down(heap, pos, queue.prio, n, 0)
     return x

@@ -20,37 +20,41 @@ import numba
 import numpy as np
 
 from gdq_pddl.learners.learned_model import expected_value, model_backup
-from gdq_pddl.learners.tables import Params, Tables, recompute_all_v
+from gdq_pddl.learners.tables import Model, Params, Plans, QTable, recompute_all_v
 
 
 @numba.njit(cache=True)
-def backup_plans(t: Tables, p: Params, s: int, rng: np.random.Generator) -> bool:
+def backup_plans(table: QTable, model: Model, plans: Plans, p: Params, s: int,
+                 rng: np.random.Generator) -> bool:
     """N backups of a random transition of a random plan from ``s``.
 
     Returns False (and does nothing) when ``s`` has no plan.
     """
-    lo, hi = t.plan_ptr[s], t.plan_ptr[s + 1]
+    lo, hi = plans.plan_ptr[s], plans.plan_ptr[s + 1]
     if hi <= lo:
         return False
     for _ in range(p.n_backups):
         k = lo + rng.integers(0, hi - lo)
-        j = t.pair_ptr[k] + rng.integers(0, t.pair_ptr[k + 1] - t.pair_ptr[k])
-        model_backup(t, p, t.pair_state[j], t.pair_action[j], rng)
+        j = plans.pair_ptr[k] + rng.integers(0, plans.pair_ptr[k + 1] - plans.pair_ptr[k])
+        model_backup(table, model, plans.opt_r, p, plans.pair_state[j], plans.pair_action[j],
+                     rng)
     return True
 
 
 @numba.njit(cache=True)
-def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
-                     improve_tol: float = 1e-6, max_iter: int = 10_000) -> np.ndarray:
+def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
+                     eval_tol: float = 1e-10, improve_tol: float = 1e-6,
+                     max_iter: int = 10_000) -> np.ndarray:
     """GDQ-literal's OptInit: policy iteration on the model (learned for known pairs,
     optimistic otherwise).
 
     Starts from the policy "action 0 everywhere", evaluates V^pi (in-place sweeps to
     ``eval_tol``), computes Q(s, a) for every action and improves, keeping the current
     action on ties (within ``improve_tol``) and else taking the lowest index, until the
-    policy is stable. Writes that final Q into ``t.q`` (goal rows 0) and returns pi.
+    policy is stable. Writes that final Q into the Q table (goal rows 0) and returns pi.
     """
-    n_states, n_actions = t.q.shape
+    goal = table.goal
+    n_states, n_actions = table.q.shape
     pi = np.zeros(n_states, dtype=np.int64)
     v = np.zeros(n_states)
     qq = np.zeros((n_states, n_actions))
@@ -58,20 +62,20 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
         for _sweep in range(1_000_000):
             delta = 0.0
             for s in range(n_states):
-                if t.goal[s]:
+                if goal[s]:
                     continue
-                x = expected_value(t, p, s, pi[s], v)
+                x = expected_value(model, goal, opt_r, p, s, pi[s], v)
                 delta = max(delta, abs(x - v[s]))
                 v[s] = x
             if delta < eval_tol:
                 break
         stable = True
         for s in range(n_states):
-            if t.goal[s]:
+            if goal[s]:
                 continue
             best = -np.inf
             for a in range(n_actions):
-                qq[s, a] = expected_value(t, p, s, a, v)
+                qq[s, a] = expected_value(model, goal, opt_r, p, s, a, v)
                 best = max(best, qq[s, a])
             if qq[s, pi[s]] < best - improve_tol:
                 stable = False
@@ -81,17 +85,19 @@ def policy_iteration(t: Tables, p: Params, eval_tol: float = 1e-10,
                         break
         if stable:
             break
-    t.q[:, :] = qq
-    recompute_all_v(t)
+    table.q[:, :] = qq
+    recompute_all_v(table)
     return pi
 
 
 @numba.njit(cache=True)
-def seed_plan_pairs(t: Tables, value: float) -> None:
-    """GDQ-code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's plan pairs."""
-    t.q[:, :] = 0.0
-    for s in range(t.q.shape[0]):
-        for a in range(t.q.shape[1]):
-            if t.opt_r[s, a]:
-                t.q[s, a] = value
-    recompute_all_v(t)
+def seed_plan_pairs(table: QTable, opt_r: np.ndarray, value: float) -> None:
+    """GDQ-code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's plan pairs
+    ``opt_r``."""
+    q = table.q
+    q[:, :] = 0.0
+    for s in range(q.shape[0]):
+        for a in range(q.shape[1]):
+            if opt_r[s, a]:
+                q[s, a] = value
+    recompute_all_v(table)

@@ -44,7 +44,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from gdq_pddl.learners.tables import BACKUP_EXPECTED, Params, Tables, set_q, td_update
+from gdq_pddl.learners.tables import (
+    BACKUP_EXPECTED,
+    Model,
+    Params,
+    QTable,
+    set_q,
+    td_update,
+)
 
 SLOT_SHIFT = 32
 COUNT_MASK = (1 << SLOT_SHIFT) - 1
@@ -58,36 +65,30 @@ by their callers)."""
 
 
 def new_model(n_states: int, n_actions: int, max_successors: int,
-              transitions: bool = True) -> dict[str, np.ndarray]:
-    """Fresh (empty) model arrays, the part of :class:`Tables` kept across tasks.
+              transitions: bool = True) -> Model:
+    """A fresh (empty) learned model.
 
     ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
     ``transitions`` is False (the model-free learners never record one).
     """
     k = int(max_successors) if transitions else 0
-    return {
-        "slots": np.zeros((n_states, n_actions, k), dtype=np.int64),
-        "stuck": np.zeros((n_states, n_actions), dtype=np.int64),
-        "visits": np.zeros((n_states, n_actions), dtype=np.int64),
-        "cost_sum": np.zeros((n_states, n_actions), dtype=np.float64),
-        "cost_n": np.zeros((n_states, n_actions), dtype=np.int64),
-        "cost_all": np.zeros(2, dtype=np.float64),
-        "known": np.zeros(n_states * n_actions, dtype=np.int64),
-        "n_known": np.zeros(1, dtype=np.int64),
-    }
+    pair = (n_states, n_actions)
+    return Model(slots=np.zeros((*pair, k), dtype=np.int64),
+                 stuck=np.zeros(pair, dtype=np.int64), visits=np.zeros(pair, dtype=np.int64),
+                 cost_sum=np.zeros(pair), cost_n=np.zeros(pair, dtype=np.int64),
+                 cost_all=np.zeros(2), known=np.zeros(n_states * n_actions, dtype=np.int64),
+                 n_known=np.zeros(1, dtype=np.int64))
 
 
-def with_successor_slots(model: dict[str, np.ndarray],
-                         max_successors: int) -> dict[str, np.ndarray]:
+def with_successor_slots(model: Model, max_successors: int) -> Model:
     """``model`` with at least ``max_successors`` slots per pair (a copy of the slot
     array when it had fewer, the recorded transitions kept; else ``model`` itself)."""
-    slots = model["slots"]
-    n_states, n_actions, k = slots.shape
+    n_states, n_actions, k = model.slots.shape
     if max_successors <= k:
         return model
     wider = np.zeros((n_states, n_actions, max_successors), dtype=np.int64)
-    wider[:, :, :k] = slots
-    return {**model, "slots": wider}
+    wider[:, :, :k] = model.slots
+    return model._replace(slots=wider)
 
 
 def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
@@ -154,36 +155,32 @@ def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
-def record(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-           truncated: bool) -> bool:
+def record(model: Model, goal: np.ndarray, p: Params, s: int, a: int, r: float, s2: int,
+           terminated: bool, truncated: bool) -> bool:
     """Count one real transition in the model; False, and nothing recorded, when its
     successor finds no free slot (:data:`OVERFLOW`)."""
-    if terminated and not t.goal[s2]:
-        t.stuck[s, a] += 1
-    elif not add_successor(t.slots, s, a, s2):
+    if terminated and not goal[s2]:
+        model.stuck[s, a] += 1
+    elif not add_successor(model.slots, s, a, s2):
         return False
     if not terminated and not truncated:
-        t.cost_sum[s, a] -= r
-        t.cost_n[s, a] += 1
-        t.cost_all[0] -= r
-        t.cost_all[1] += 1.0
-    t.visits[s, a] += 1
-    if t.visits[s, a] == p.m + 1:
-        t.known[t.n_known[0]] = s * t.q.shape[1] + a
-        t.n_known[0] += 1
+        model.cost_sum[s, a] -= r
+        model.cost_n[s, a] += 1
+        model.cost_all[0] -= r
+        model.cost_all[1] += 1.0
+    visits = model.visits
+    visits[s, a] += 1
+    if visits[s, a] == p.m + 1:
+        model.known[model.n_known[0]] = s * visits.shape[1] + a
+        model.n_known[0] += 1
     return True
 
 
 # --- what the model says a pair is worth -------------------------------------------------------
 
-@numba.njit(cache=True, inline="always")
-def mean_cost(t: Tables, s: int, a: int) -> float:
-    return _mean_cost(t.cost_sum, t.cost_n, t.cost_all, s, a)
-
-
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s: int,
-               a: int) -> float:
+def mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s: int,
+              a: int) -> float:
     """The mean step cost of ``(s, a)``; of every pair where it has none; else 0."""
     if cost_n[s, a] > 0:
         return cost_sum[s, a] / cost_n[s, a]
@@ -192,19 +189,15 @@ def _mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s
     return 0.0
 
 
-@numba.njit(cache=True, inline="always")
-def learned_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
-    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
-    with state values ``v``."""
-    return _learned(t.slots, t.stuck, t.visits, t.cost_sum, t.cost_n, t.cost_all, t.goal, v,
-                    s, a, p.r_max, p.gamma)
-
-
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _learned(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray, cost_sum: np.ndarray,
-             cost_n: np.ndarray, cost_all: np.ndarray, goal: np.ndarray, v: np.ndarray,
-             s: int, a: int, r_max: float, gamma: float) -> float:
-    c = _mean_cost(cost_sum, cost_n, cost_all, s, a)
+def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
+                  cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
+                  goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
+    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
+    with state values ``v``. (The model's arrays one by one: the default GDQ's sweep calls
+    it in its inner loop, where a read of a group's field would cost a reference count.)"""
+    r_max, gamma = p.r_max, p.gamma
+    c = mean_cost(cost_sum, cost_n, cost_all, s, a)
     total = stuck[s, a] * -r_max
     for j in range(slots.shape[2]):  # successors in increasing order
         here = slots[s, a, j]
@@ -220,42 +213,46 @@ def _learned(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray, cost_sum:
 
 
 @numba.njit(cache=True, inline="always")
-def expected_value(t: Tables, p: Params, s: int, a: int, v: np.ndarray) -> float:
+def expected_value(model: Model, goal: np.ndarray, opt_r: np.ndarray, p: Params, s: int,
+                   a: int, v: np.ndarray) -> float:
     """The expected Bellman backup of ``(s, a)``, with state values ``v``: the learned
-    model's for a known pair (``visits > m``), else the optimism of GDQ-literal."""
-    if t.visits[s, a] > p.m:
-        return learned_value(t, p, s, a, v)
-    r = p.r_max if t.opt_r[s, a] else 0.0
+    model's for a known pair (``visits > m``), else the optimism of GDQ-literal (R_max on
+    OptInit's plan pairs ``opt_r``)."""
+    if model.visits[s, a] > p.m:
+        return learned_value(model.slots, model.stuck, model.visits, model.cost_sum,
+                             model.cost_n, model.cost_all, goal, v, p, s, a)
+    r = p.r_max if opt_r[s, a] else 0.0
     return r + p.opt_continue * p.gamma * v[p.s0]
 
 
 @numba.njit(cache=True, inline="always")
-def sample_outcome(t: Tables, p: Params, s: int, a: int,
+def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
                    rng: np.random.Generator) -> tuple[float, int, bool]:
     """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
 
     The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
     (stuck, goal, or an ordinary step at the pair's mean cost), never the optimism.
     """
-    k = rng.integers(0, t.visits[s, a])
-    if k < t.stuck[s, a]:
+    k = rng.integers(0, model.visits[s, a])
+    if k < model.stuck[s, a]:
         return -p.r_max, s, True
-    k -= t.stuck[s, a]
-    slots = t.slots  # a local: a tuple field read in a loop costs more
+    k -= model.stuck[s, a]
+    slots = model.slots  # a local: a tuple field read in a loop costs more
     for j in range(slots.shape[2]):  # successors in increasing order
         k -= slot_count(slots[s, a, j])
         if k < 0:
             s2 = slot_successor(slots[s, a, j])
-            if t.goal[s2]:
+            if goal[s2]:
                 return p.r_max, s2, True
-            return -mean_cost(t, s, a), s2, False
-    return -mean_cost(t, s, a), s, False  # unreachable: counts + stuck == visits
+            return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s2, False
+    return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s, False
 
 
 # --- Dyna-Q's planning ---------------------------------------------------------------------------
 
 @numba.njit(cache=True)
-def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator) -> None:
+def model_backup(table: QTable, model: Model, opt_r: np.ndarray, p: Params, s: int, a: int,
+                 rng: np.random.Generator) -> None:
     """One simulated update of ``(s, a)``.
 
     ``BACKUP_EXPECTED``: assign the expected backup (:func:`expected_value`).
@@ -263,20 +260,21 @@ def model_backup(t: Tables, p: Params, s: int, a: int, rng: np.random.Generator)
     pair never tried is left alone.
     """
     if p.backup == BACKUP_EXPECTED:
-        set_q(t, s, a, expected_value(t, p, s, a, t.v))
-    elif t.visits[s, a] > 0:
-        r, s2, terminal = sample_outcome(t, p, s, a, rng)
-        target = r if terminal else r + p.gamma * t.v[s2]
-        td_update(t, s, a, target, p.alpha)
+        set_q(table, s, a, expected_value(model, table.goal, opt_r, p, s, a, table.v))
+    elif model.visits[s, a] > 0:
+        r, s2, terminal = sample_outcome(model, table.goal, p, s, a, rng)
+        target = r if terminal else r + p.gamma * table.v[s2]
+        td_update(table, s, a, target, p.alpha)
 
 
 @numba.njit(cache=True)
-def backup_known(t: Tables, p: Params, rng: np.random.Generator) -> None:
+def backup_known(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
+                 rng: np.random.Generator) -> None:
     """Dyna-Q planning: N backups of uniformly random known pairs."""
-    nk = t.n_known[0]
+    nk = model.n_known[0]
     if nk == 0:
         return
-    n_actions = t.q.shape[1]
+    n_actions = model.visits.shape[1]
     for _ in range(p.n_backups):
-        i = t.known[rng.integers(0, nk)]
-        model_backup(t, p, i // n_actions, i % n_actions, rng)
+        i = model.known[rng.integers(0, nk)]
+        model_backup(table, model, opt_r, p, i // n_actions, i % n_actions, rng)

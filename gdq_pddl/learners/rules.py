@@ -34,15 +34,20 @@ from gdq_pddl.learners.tables import (
     KIND_GDQ,
     KIND_GDQ_PLANS,
     KIND_QLEARNING,
+    Model,
     Params,
-    Tables,
+    Plans,
+    Prior,
+    QTable,
+    Queue,
     td_update,
 )
 
 
 @numba.njit(cache=True)
-def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
-            truncated: bool, rng: np.random.Generator) -> bool:
+def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, p: Params,
+            s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+            rng: np.random.Generator) -> bool:
     """Everything a learner does after one real step ``(s, a, r, s2)`` (module table).
 
     The TD update's target is ``r`` alone for a terminated or truncated step. False when
@@ -50,14 +55,14 @@ def observe(t: Tables, p: Params, s: int, a: int, r: float, s2: int, terminated:
     raise ValueError(:data:`gdq_pddl.learners.learned_model.OVERFLOW`).
     """
     if p.kind == KIND_GDQ:
-        return after_step(t, p, s, a, r, s2, terminated, truncated)
-    target = r if (terminated or truncated) else r + p.gamma * t.v[s2]
-    td_update(t, s, a, target, p.alpha)
+        return after_step(table, model, prior, queue, p, s, a, r, s2, terminated, truncated)
+    target = r if (terminated or truncated) else r + p.gamma * table.v[s2]
+    td_update(table, s, a, target, p.alpha)
     if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
         return True
-    if not record(t, p, s, a, r, s2, terminated, truncated):
+    if not record(model, table.goal, p, s, a, r, s2, terminated, truncated):
         return False
-    if p.kind == KIND_GDQ_PLANS and backup_plans(t, p, s, rng):
+    if p.kind == KIND_GDQ_PLANS and backup_plans(table, model, plans, p, s, rng):
         return True
-    backup_known(t, p, rng)
+    backup_known(table, model, plans.opt_r, p, rng)
     return True

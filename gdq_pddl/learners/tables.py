@@ -2,7 +2,11 @@
 
 Every learner (Q-learning, Dyna-Q, DARLING, the GDQs) is the same data, :class:`Tables`,
 plus scalar :class:`Params` whose ``kind`` says which rules run after a real step
-(:func:`gdq_pddl.learners.rules.observe`). This module holds:
+(:func:`gdq_pddl.learners.rules.observe`). ``Tables`` holds five small groups, one per
+concern: :class:`QTable` (Q and acting, this module), :class:`Model` (the learned model),
+:class:`Plans` (the paper's GDQs), :class:`Prior` and :class:`Queue` (the default GDQ's
+prior and sweep). A compiled function takes the groups it touches, so its signature says
+what it reads and writes. This module holds:
 
 - the Q table and its maximum: :func:`set_q` (the only writer of single Q entries, so
   ``v[s]`` stays the max of ``q[s, a]`` over the allowed actions) and :func:`td_update`,
@@ -24,11 +28,12 @@ The compiled functions here and in the other rule modules trust their arguments 
 bounds checks in compiled code): the learners' methods and the episode loops check what
 they are given before calling them (:mod:`gdq_pddl.learners.guards`).
 
-Speed. A call of a compiled function that is not inlined and takes :class:`Tables` costs
-a reference-count update per array the tuple holds; the small rules called in inner loops
-(``set_q``, ``td_update``, ``record``, the backups' value functions) are therefore
-``inline="always"`` and take arrays, not the tuple (Task C, env steps/s: Q-learning 531k
--> 1.05M, Dyna-Q 165k -> 260k, GDQ 182k -> 215k, ``benchmarks/learners.py speed``), while
+Speed. A call of a compiled function that is not inlined costs a reference-count update
+per array of every tuple it takes; the small rules called in inner loops (``set_q``,
+``td_update``, ``record``, the backups' value functions) are therefore
+``inline="always"`` (Task C, env steps/s: Q-learning 531k -> 1.05M, Dyna-Q 165k -> 260k,
+GDQ 182k -> 215k, ``benchmarks/learners.py speed``), and the loops read a group's arrays
+into locals once (a field read in a loop can cost a count update each time), while
 ``act`` and ``observe`` stay calls: inlining ``observe`` into the episode loop made numba
 0.68 compile a loop whose results differ from the Python path's (caught by the fast ==
 Python tests), and inlining more tripled the compile time.
@@ -78,21 +83,20 @@ class Params(NamedTuple):
     """Pseudo-observations of the prior in a known pair's model (``KIND_GDQ``)."""
 
 
-class Tables(NamedTuple):
-    """All arrays of a learner, S states x A actions, in four groups.
+class QTable(NamedTuple):
+    """The Q table of the current task and what acting reads (this module)."""
 
-    One flat tuple rather than nested groups: the compiled loop reads its fields in inner
-    loops, where every extra level costs reference-count updates (module docstring).
-    """
-
-    # -- the Q table and acting (this module) --
     q: np.ndarray  # float64[S, A]
     v: np.ndarray  # float64[S], max of q over allowed actions
     allowed: np.ndarray  # bool[S, A], what the max (v, greedy) ranges over
     guide: np.ndarray  # bool[S, A], what exploration draws from (module doc)
     n_guide: np.ndarray  # int64[S], the count of guide[s], at least 1
     goal: np.ndarray  # bool[S], goal learner states of the current task
-    # -- the learned model, kept across tasks (gdq_pddl.learners.learned_model) --
+
+
+class Model(NamedTuple):
+    """The learned model, kept across tasks (:mod:`gdq_pddl.learners.learned_model`)."""
+
     slots: np.ndarray  # int64[S, A, K]: s' << 32 | count, sorted, 0 = empty
     stuck: np.ndarray  # int64[S, A]
     visits: np.ndarray  # int64[S, A]
@@ -101,24 +105,51 @@ class Tables(NamedTuple):
     cost_all: np.ndarray  # float64[2]: sum and number of all recorded step costs
     known: np.ndarray  # int64[S * A]: pairs s * A + a in the order they became known
     n_known: np.ndarray  # int64[1]
-    # -- the plans of GDQ-literal and GDQ-code (gdq_pddl.learners.gdq_paper) --
+
+
+class Plans(NamedTuple):
+    """The plans of GDQ-literal and GDQ-code (:mod:`gdq_pddl.learners.gdq_paper`): a
+    :class:`~gdq_pddl.abstraction.PlanTable` of the current task, and OptInit's pairs."""
+
     opt_r: np.ndarray  # bool[S, A], OptInit's plan pairs (R = R_max in the optimism)
-    plan_ptr: np.ndarray  # PlanTable (tolerance 0) arrays of the current task
-    pair_ptr: np.ndarray
-    pair_state: np.ndarray
-    pair_action: np.ndarray
-    # -- the default GDQ's prior and sweep (gdq_pddl.learners.gdq; empty for the others) --
-    prior_next: np.ndarray  # int64[S, A]: the knowledge's successor, -1 = no change
+    plan_ptr: np.ndarray  # int64[S + 1]: plans from state s ...
+    pair_ptr: np.ndarray  # int64[P + 1]: ... the pairs of plan k ...
+    pair_state: np.ndarray  # int64[N]: ... as states
+    pair_action: np.ndarray  # int64[N]: ... and actions
+
+
+class Prior(NamedTuple):
+    """The default GDQ's prior and the index of what each state's value feeds
+    (:mod:`gdq_pddl.learners.gdq`; empty arrays for the other learners)."""
+
+    next_state: np.ndarray  # int64[S, A]: the knowledge's successor, -1 = no change
     pp_ptr: np.ndarray  # int64[S + 1]: applicable pairs by prior successor (CSR) ...
     pp_pair: np.ndarray  # int64[E]: ... as s * A + a
     rev_head: np.ndarray  # int64[S]: first reverse entry of a successor state, -1 none
     rev_next: np.ndarray  # int64[C]: next entry of the same successor, -1 none
     rev_pair: np.ndarray  # int64[C]: the known pair s * A + a of an entry
     rev_n: np.ndarray  # int64[1]: entries used
-    heap: np.ndarray  # int64[S]: states whose value change awaits propagation (max-heap)
-    heap_pos: np.ndarray  # int64[S]: a state's place in ``heap``, -1 when not queued
-    heap_prio: np.ndarray  # float64[S]: a queued state's priority (size of its value change)
-    heap_n: np.ndarray  # int64[1]
+
+
+class Queue(NamedTuple):
+    """The default GDQ's sweep queue: states whose value change awaits propagation, a
+    max-heap by the size of the change (empty arrays for the other learners)."""
+
+    heap: np.ndarray  # int64[S]: the queued states, heap-ordered
+    pos: np.ndarray  # int64[S]: a state's place in ``heap``, -1 when not queued
+    prio: np.ndarray  # float64[S]: a queued state's priority (size of its value change)
+    n: np.ndarray  # int64[1]: states queued
+
+
+class Tables(NamedTuple):
+    """All arrays of a learner, S states x A actions, by concern. A compiled function
+    takes the groups it touches (or the whole, when it touches most of them)."""
+
+    table: QTable
+    model: Model
+    plans: Plans
+    prior: Prior
+    queue: Queue
 
 
 def table_bytes(n_states: int, n_actions: int, max_successors: int,
@@ -136,38 +167,33 @@ def table_bytes(n_states: int, n_actions: int, max_successors: int,
 # --- the Q table and its maximum ---------------------------------------------------------
 
 @numba.njit(cache=True, inline="always")
-def recompute_v(t: Tables, s: int) -> None:
-    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions."""
-    _recompute_v(t.q, t.v, t.allowed, s)
-
-
-# The rules that run in inner loops take arrays, not Tables: a call that takes the tuple
-# costs a reference count update per array it holds (measured: the default GDQ's
-# backup took 650 ns through Tables, 60 ns on arrays).
-@numba.njit(cache=True, inline="always")
-def _recompute_v(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int) -> None:
+def _best(q: np.ndarray, allowed: np.ndarray, s: int) -> float:
     best = -np.inf
     for a in range(q.shape[1]):
         if allowed[s, a] and q[s, a] > best:
             best = q[s, a]
-    v[s] = best
+    return best
 
 
 @numba.njit(cache=True)
-def recompute_all_v(t: Tables) -> None:
-    for s in range(t.q.shape[0]):
-        recompute_v(t, s)
+def recompute_all_v(table: QTable) -> None:
+    """``v[s] <- max`` of ``q[s, a]`` over the allowed actions, every ``s``."""
+    q, v, allowed = table.q, table.v, table.allowed
+    for s in range(q.shape[0]):
+        v[s] = _best(q, allowed, s)
 
 
 @numba.njit(cache=True, inline="always")
-def set_q(t: Tables, s: int, a: int, value: float) -> None:
+def set_q(table: QTable, s: int, a: int, value: float) -> None:
     """``q[s, a] <- value``, keeping ``v`` exact."""
-    _set_q(t.q, t.v, t.allowed, s, a, value)
+    set_q_arrays(table.q, table.v, table.allowed, s, a, value)
 
 
 @numba.njit(cache=True, inline="always")
-def _set_q(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
-           value: float) -> None:
+def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
+                 value: float) -> None:
+    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (its inner loop
+    would pay a reference count per read of a group's field: module doc)."""
     old = q[s, a]
     q[s, a] = value
     if not allowed[s, a]:
@@ -175,23 +201,25 @@ def _set_q(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
     if value >= v[s]:
         v[s] = value
     elif old >= v[s]:
-        _recompute_v(q, v, allowed, s)
+        v[s] = _best(q, allowed, s)
 
 
 @numba.njit(cache=True, inline="always")
-def td_update(t: Tables, s: int, a: int, target: float, alpha: float) -> None:
+def td_update(table: QTable, s: int, a: int, target: float, alpha: float) -> None:
     """``Q(s,a) += alpha (target - Q(s,a))``: real and sample-based simulated experience."""
-    set_q(t, s, a, t.q[s, a] + alpha * (target - t.q[s, a]))
+    q = table.q
+    set_q(table, s, a, q[s, a] + alpha * (target - q[s, a]))
 
 
 # --- acting --------------------------------------------------------------------------------
 
 @numba.njit(cache=True, inline="always")
-def _draw_guided(t: Tables, s: int, rng: np.random.Generator) -> int:
+def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
     """A uniformly random action of ``guide[s]``."""
-    k = rng.integers(0, t.n_guide[s])
-    for a in range(t.q.shape[1]):
-        if t.guide[s, a]:
+    k = rng.integers(0, table.n_guide[s])
+    guide = table.guide
+    for a in range(guide.shape[1]):
+        if guide[s, a]:
             if k == 0:
                 return a
             k -= 1
@@ -217,19 +245,18 @@ def _draw_untried(visits: np.ndarray, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True, inline="always")
-def _one_step_from_goal(t: Tables, p: Params, s: int) -> bool:
+def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> bool:
     """Whether the knowledge reaches the goal from ``s`` in one action (``KIND_GDQ``)."""
-    if p.kind != KIND_GDQ:
-        return False
-    for a in range(t.prior_next.shape[1]):
-        s2 = t.prior_next[s, a]
-        if s2 >= 0 and t.goal[s2]:
+    for a in range(prior_next.shape[1]):
+        s2 = prior_next[s, a]
+        if s2 >= 0 and goal[s2]:
             return True
     return False
 
 
 @numba.njit(cache=True)
-def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
+def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+        rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
 
     With probability epsilon a uniform action of ``guide[s]`` (or, for a share
@@ -238,46 +265,50 @@ def act(t: Tables, p: Params, s: int, rng: np.random.Generator) -> int:
     of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
     if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
     when exploring with ``explore_all > 0``, then one integer when exploring or when
-    several actions tie, and one more for a replacement.
+    several actions tie, and one more for a replacement. (``visits`` and ``prior_next``
+    only for those draws of every action.)
     """
-    n_actions = t.q.shape[1]
+    q, allowed = table.q, table.allowed
+    n_actions = q.shape[1]
     if rng.random() < p.epsilon:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
-                p.explore_all_last > 0.0 or not _one_step_from_goal(t, p, s)):
-            return _draw_untried(t.visits, s, rng)
-        return _draw_guided(t, s, rng)
-    best = t.v[s]
+                p.explore_all_last > 0.0 or p.kind != KIND_GDQ
+                or not _one_step_from_goal(table.goal, prior_next, s)):
+            return _draw_untried(visits, s, rng)
+        return _draw_guided(table, s, rng)
+    best = table.v[s]
     ties = 0
     last = 0
     for a in range(n_actions):
-        if t.allowed[s, a] and t.q[s, a] == best:
+        if allowed[s, a] and q[s, a] == best:
             ties += 1
             last = a
     if ties > 1:
         k = rng.integers(0, ties)
         for a in range(n_actions):
-            if t.allowed[s, a] and t.q[s, a] == best:
+            if allowed[s, a] and q[s, a] == best:
                 if k == 0:
                     last = a
                     break
                 k -= 1
-    if p.kind == KIND_DARLING and not t.guide[s, last]:
-        return _draw_guided(t, s, rng)
+    if p.kind == KIND_DARLING and not table.guide[s, last]:
+        return _draw_guided(table, s, rng)
     return last
 
 
 @numba.njit(cache=True)
-def greedy(t: Tables, p: Params) -> np.ndarray:
+def greedy(table: QTable, p: Params) -> np.ndarray:
     """The greedy policy: per state, the lowest-index action of maximal Q among those it
     may execute: the allowed ones (DARLING: ``guide``, which is ``allowed`` but for
     DARLING-code)."""
-    n_states, n_actions = t.q.shape
-    mask = t.guide if p.kind == KIND_DARLING else t.allowed
+    q = table.q
+    n_states, n_actions = q.shape
+    mask = table.guide if p.kind == KIND_DARLING else table.allowed
     out = np.zeros(n_states, dtype=np.int64)
     for s in range(n_states):
         best = -np.inf
         for a in range(n_actions):
-            if mask[s, a] and t.q[s, a] > best:
-                best = t.q[s, a]
+            if mask[s, a] and q[s, a] > best:
+                best = q[s, a]
                 out[s] = a
     return out

@@ -41,6 +41,16 @@ def greedy_path(learner, ctx) -> list[tuple[int, int]]:
 
 # --- the prior model ----------------------------------------------------------------------
 
+def known_pair(t, p, s, a):
+    """Whether the pair is valued by the learned model (gdq.is_known on a learner's tables)."""
+    return gdq.is_known(t.model.visits, t.prior.next_state, p.m, s, a)
+
+
+def hybrid(t, p, s, a):
+    """gdq.hybrid_backup on a learner's tables."""
+    return gdq.hybrid_backup(t.table, t.model, t.prior.next_state, p, s, a)
+
+
 def test_the_office_prior_follows_the_knowledge(ctx_c):
     sp = LearnerSpaces(WORLD)
     prior = ctx_c.prior
@@ -92,15 +102,15 @@ def test_a_pair_switches_from_prior_to_learned_after_more_than_m_visits(ctx_c, m
     rng = np.random.default_rng(0)
     for k in range(m + 1):
         prior_value = -p.prior_cost + p.gamma * learner.v[s_prior]
-        assert not gdq.known(t, p, s, a)
-        assert gdq.hybrid_backup(t, p, s, a) == pytest.approx(prior_value), k
+        assert not known_pair(t, p, s, a)
+        assert hybrid(t, p, s, a) == pytest.approx(prior_value), k
         learner.observe(s, a, -3.0, stuck_at, False, False, rng)
-    assert gdq.known(t, p, s, a) and learner.visits[s, a] == m + 1
+    assert known_pair(t, p, s, a) and learner.visits[s, a] == m + 1
     n, v = m + 1, learner.v
     learned = -3.0 + p.gamma * v[stuck_at]
     prior_value = -p.prior_cost + p.gamma * v[s_prior]
     expected = (n * learned + w * prior_value) / (n + w)  # the prior as w pseudo-trials
-    assert gdq.hybrid_backup(t, p, s, a) == pytest.approx(expected)
+    assert hybrid(t, p, s, a) == pytest.approx(expected)
     assert learner.q[s, a] == pytest.approx(expected)  # the real step's pair is revalued
 
 
@@ -109,11 +119,11 @@ def test_an_inapplicable_action_is_known_after_its_first_trial(ctx_c):
     t, p = learner.tables, learner.params
     s = ctx_c.s0
     a = int(np.flatnonzero(~ctx_c.prior.applicable[s])[0])
-    assert not learner.tables.allowed[s, a] and not gdq.known(t, p, s, a)
+    assert not learner.tables.table.allowed[s, a] and not known_pair(t, p, s, a)
     x = int(np.flatnonzero(ctx_c.prior.applicable[s])[0])
     s2 = int(ctx_c.prior.next_state[s, x])  # reality surprises: it does move
     learner.observe(s, a, -1.0, s2, False, False, np.random.default_rng(0))
-    assert gdq.known(t, p, s, a) and learner.tables.allowed[s, a]
+    assert known_pair(t, p, s, a) and learner.tables.table.allowed[s, a]
     v, w = learner.v, p.prior_weight  # the prior, "no change", as w pseudo-trials
     expected = ((-1.0 + p.gamma * v[s2]) + w * (-p.prior_cost + p.gamma * v[s])) / (1 + w)
     assert learner.q[s, a] == pytest.approx(expected)
@@ -125,16 +135,16 @@ def _untried_inapplicable_below_v(learner) -> None:
     untried = ~learner.context.prior.applicable & (learner.visits == 0)
     untried[learner.context.goal] = False
     t = learner.tables
-    assert not np.any(t.allowed & untried)
+    assert not np.any(t.table.allowed & untried)
     # the learner's own values, before the Q property fills the untried no-ops in: v and
     # the greedy choice range over the allowed pairs only
-    raw_best = np.where(t.allowed, t.q, -np.inf).max(axis=1)
-    has = t.allowed.any(axis=1)
-    assert np.array_equal(t.v[has], raw_best[has])
+    raw_best = np.where(t.table.allowed, t.table.q, -np.inf).max(axis=1)
+    has = t.table.allowed.any(axis=1)
+    assert np.array_equal(t.table.v[has], raw_best[has])
     policy = learner.greedy_policy()
     assert not untried[np.arange(len(policy)), policy].any(), "greedy picks an untried no-op"
     # and the Q table a user reads values them below v
-    best = np.where(t.allowed, learner.q, -np.inf).max(axis=1)
+    best = np.where(t.table.allowed, learner.q, -np.inf).max(axis=1)
     rows, cols = np.nonzero(untried)
     assert np.all(learner.q[rows, cols] <= best[rows]), "an untried no-op valued above v"
 
@@ -160,7 +170,7 @@ def test_q_is_the_hybrid_backup_of_every_pair_after_optinit(ctx_c):
     t, p = learner.tables, learner.params
     for s in np.flatnonzero(~ctx_c.goal):
         for a in range(ctx_c.n_actions):
-            assert learner.q[s, a] == pytest.approx(gdq.hybrid_backup(t, p, s, a), abs=1e-6)
+            assert learner.q[s, a] == pytest.approx(hybrid(t, p, s, a), abs=1e-6)
 
 
 # --- determinism, both loops, growth --------------------------------------------------------
@@ -177,29 +187,29 @@ def test_same_seed_same_bits_and_fast_equals_python(ctx_c):
 
 
 def _indexed(t, x: int) -> set[int]:
-    out, e = set(), t.rev_head[x]
+    out, e = set(), t.prior.rev_head[x]
     while e >= 0:
-        out.add(int(t.rev_pair[e]))
-        e = t.rev_next[e]
+        out.add(int(t.prior.rev_pair[e]))
+        e = t.prior.rev_next[e]
     return out
 
 
 @pytest.mark.parametrize("fast", [True, False])
 def test_the_reverse_index_grows_and_holds_every_state_a_known_backup_reads(ctx_c, fast):
     learner = GDQ(ctx_c, GDQConfig(epsilon=1.0, explore_all=1.0))
-    start = len(learner.tables.rev_pair)
+    start = len(learner.tables.prior.rev_pair)
     run(learner, OfficeEnv(task="C"), 300, 2, fast=fast)
     if not fast:  # the Python loop grows it only when full: make it grow once
         before = [_indexed(learner.tables, x) for x in range(ctx_c.n_states)]
-        learner.reserve_reverse(len(learner.tables.rev_pair))
+        learner.reserve_reverse(len(learner.tables.prior.rev_pair))
         assert [_indexed(learner.tables, x) for x in range(ctx_c.n_states)] == before
         run(learner, OfficeEnv(task="C"), 100, 3, fast=fast)
     t, n_a = learner.tables, ctx_c.n_actions
-    assert len(t.rev_pair) > start  # grew (the fast loop keeps an episode's worth free)
+    assert len(t.prior.rev_pair) > start  # grew (the fast loop keeps an episode's worth free)
     index = [_indexed(t, x) for x in range(ctx_c.n_states)]
     known = 0
     for s, a in zip(*np.nonzero(learner.visits), strict=True):
-        assert gdq.known(t, learner.params, s, a)  # m = 0: one trial
+        assert known_pair(t, learner.params, s, a)  # m = 0: one trial
         known += 1
         prior = int(ctx_c.prior.next_state[s, a])
         reads = {*learner.successors(s, a), s if prior == NO_CHANGE else prior}
@@ -326,9 +336,9 @@ def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_tas
     """The closed form from the goal distances is the prior's fixed point."""
     learner = GDQ(ctx_c)
     t, p = learner.tables, learner.params
-    init = gdq.prior_values(t, p)
+    init = gdq.prior_values(t.table, t.prior, p)
     assert np.allclose(init, learner.v, atol=1e-9)
-    assert gdq.value_iteration(t, p, 1e-9, 1000) == 1
+    assert gdq.value_iteration(t.table, t.model, t.prior, t.queue, p, 1e-9, 1000) == 1
     # a state that cannot reach the goal by the knowledge's actions: -c / (1 - gamma)
     dead = PriorModel(np.where(np.arange(ctx_c.n_states)[:, None] == ctx_c.s0, NO_CHANGE,
                                ctx_c.prior.next_state))

@@ -54,6 +54,11 @@ def greedy_walk(learner, world, task: str, limit: int) -> tuple[list[tuple[int, 
     return taken, info["cause"]
 
 
+def expected_backup(t, p, s, a, v):
+    """learned_model.expected_value of ``(s, a)`` on a learner's tables."""
+    return learned_model.expected_value(t.model, t.table.goal, t.plans.opt_r, p, s, a, v)
+
+
 @pytest.mark.parametrize("config", [GDQConfig(variant="literal"),
                                     GDQConfig(variant="code", plan_tolerance=0.0)])
 def test_optinit_greedy_policy_follows_a_shortest_plan(config):
@@ -112,18 +117,19 @@ def test_code_variant_backups_replay_experience_and_skip_untried_pairs(ctx_c):
     t, p = learner.tables, learner.params
     rng = np.random.default_rng(0)
     s, a = (int(x[0]) for x in np.nonzero(learner.optimistic_pairs))
-    t.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
-    tables.recompute_all_v(t)
-    learned_model.model_backup(t, p, s, a, rng)
-    assert t.q[s, a] == 50.0  # never tried: left alone
+    t.table.q[:, :] = 50.0  # a backup through the optimistic model would move Q(s, a)
+    tables.recompute_all_v(t.table)
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
+    assert t.table.q[s, a] == 50.0  # never tried: left alone
     s2 = int(np.flatnonzero(~ctx_c.goal & (np.arange(ctx_c.n_states) != s))[0])
-    learned_model.record(t, p, s, a, -2.0, s2, False, False)  # one ordinary step to s2 at cost 2
-    assert learner.successors(s, a) == {s2: 1} and t.visits[s, a] == 1
-    t.q[s2, :] = 10.0
-    tables.recompute_v(t, s2)
-    learned_model.model_backup(t, p, s, a, rng)
+    # one ordinary step to s2 at cost 2
+    learned_model.record(t.model, t.table.goal, p, s, a, -2.0, s2, False, False)
+    assert learner.successors(s, a) == {s2: 1} and t.model.visits[s, a] == 1
+    t.table.q[s2, :] = 10.0
+    tables.recompute_all_v(t.table)
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
     target = -2.0 + p.gamma * 10.0
-    assert t.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
+    assert t.table.q[s, a] == pytest.approx(50.0 + p.alpha * (target - 50.0))
 
 
 def test_code_variant_task_switch_keeps_the_model_and_reseeds_q(ctx_c):
@@ -151,15 +157,15 @@ def test_r_and_t_change_only_after_more_than_m_visits(ctx_c):
     optimistic = ctx_c.r_max + p.gamma * v[ctx_c.s0]
     rng = np.random.default_rng(0)
     for k in range(m + 1):
-        value = learned_model.expected_value(t, p, s, a, v)
+        value = expected_backup(t, p, s, a, v)
         assert value == optimistic, f"changed after {k} visits"
         learner.observe(s, a, -1.0, s2, False, False, rng)
         # sample-based backups (the code variant) replay experience from the first trial
-        assert learned_model.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
+        assert learned_model.sample_outcome(t.model, ctx_c.goal, p, s, a, rng) == (-1.0, s2, False)
     # m + 1 visits: the learned model (always -1 to s2) takes over
     assert learner.visits[s, a] == m + 1
-    assert learned_model.expected_value(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
-    assert learned_model.sample_outcome(t, p, s, a, rng) == (-1.0, s2, False)
+    assert expected_backup(t, p, s, a, v) == pytest.approx(-1.0 + p.gamma * 3.0)
+    assert learned_model.sample_outcome(t.model, ctx_c.goal, p, s, a, rng) == (-1.0, s2, False)
 
 
 def test_model_is_goal_independent_counts(ctx_c):
@@ -171,11 +177,11 @@ def test_model_is_goal_independent_counts(ctx_c):
     learner.observe(3, 7, -20.0, 4, False, True, rng)  # timeout: transition counted
     learner.observe(3, 7, -2.0, 4, False, False, rng)  # ordinary step, cost 2
     t = learner.tables
-    assert learner.successors(3, 7) == {4: 2, goal: 1} and t.stuck[3, 7] == 1
+    assert learner.successors(3, 7) == {4: 2, goal: 1} and t.model.stuck[3, 7] == 1
     assert learner.counts[3, 7, goal] == 1 and learner.counts[3, 7, 4] == 2
     assert learner.counts.sum() == 3
-    assert t.visits[3, 7] == 4
-    assert t.cost_n[3, 7] == 1 and t.cost_sum[3, 7] == 2.0
+    assert t.model.visits[3, 7] == 4
+    assert t.model.cost_n[3, 7] == 1 and t.model.cost_sum[3, 7] == 2.0
 
 
 def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
@@ -187,7 +193,7 @@ def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
         learner.observe(1, 5, -1.0, s2, False, False, rng)
     expected = {s2: order.count(s2) for s2 in sorted(set(order))}
     n = len(expected)
-    slots = t.slots[1, 5]
+    slots = t.model.slots[1, 5]
     assert list(slots[:n] >> learned_model.SLOT_SHIFT) == sorted(expected)  # sorted, first slots
     assert list(slots[:n] & learned_model.COUNT_MASK) == [expected[s2] for s2 in sorted(expected)]
     assert np.all(slots[n:] == 0)
@@ -202,7 +208,7 @@ def test_sparse_model_keeps_successors_sorted_and_matches_dense_counts(ctx_c):
         if dense[1, 5, s2]:
             total += dense[1, 5, s2] * (learner.params.gamma * v[s2] - 1.0)
     learner.params = learner.params._replace(m=0)
-    assert learned_model.expected_value(t, learner.params, 1, 5, v) == total / len(order)
+    assert expected_backup(t, learner.params, 1, 5, v) == total / len(order)
 
 
 def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
@@ -237,12 +243,12 @@ def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
     assert _episodes(office.model, int(office.start_state), int(office.goal_pos),
                      np.zeros(1, dtype=np.uint8), learner.tables, learner.params,
                      office.np_random, np.random.default_rng(1), *records, 0, 0) == -1
-    assert learner.visits.sum() == learner.counts.sum() + learner.tables.stuck.sum()
+    assert learner.visits.sum() == learner.counts.sum() + learner.tables.model.stuck.sum()
 
 
 def test_model_free_learners_allocate_no_transition_slots(ctx_c):
     for learner in (QLearning(ctx_c), Darling(ctx_c)):
-        assert learner.max_successors == 0 and learner.tables.slots.nbytes == 0
+        assert learner.max_successors == 0 and learner.tables.model.slots.nbytes == 0
         learner.reserve_successors(10)
         assert learner.max_successors == 0
         run(learner, OfficeEnv(task="C"), 5, 0)
@@ -259,7 +265,7 @@ def test_context_capacity_is_the_most_successors_of_any_pair(ctx_c):
     assert exact > int(np.diff(compile_compact(WORLD).ptr).max())  # > outcomes per pair
     learner = make_learner("dynaq", ctx_c)
     run(learner, OfficeEnv(task="C"), 300, 0)
-    n_successors = (learner.tables.slots != 0).sum(axis=2)
+    n_successors = (learner.tables.model.slots != 0).sum(axis=2)
     assert n_successors.max() <= exact
 
 
@@ -288,33 +294,34 @@ def test_backups_never_bootstrap_through_a_terminal_transition(ctx_c):
     v = np.full(ctx_c.n_states, 1000.0)  # absurdly high values everywhere
     for _ in range(3):
         learner.observe(5, 9, 20.0, goal, True, False, rng)
-    assert learned_model.expected_value(t, p, 5, 9, v) == ctx_c.r_max
+    assert expected_backup(t, p, 5, 9, v) == ctx_c.r_max
     for _ in range(2):
         learner.observe(6, 9, -20.0, 6, True, False, rng)
-    assert learned_model.expected_value(t, p, 6, 9, v) == -ctx_c.r_max
-    assert learned_model.sample_outcome(t, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
-    assert learned_model.sample_outcome(t, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
+    assert expected_backup(t, p, 6, 9, v) == -ctx_c.r_max
+    outcome = learned_model.sample_outcome
+    assert outcome(t.model, ctx_c.goal, p, 5, 9, rng) == (ctx_c.r_max, goal, True)
+    assert outcome(t.model, ctx_c.goal, p, 6, 9, rng) == (-ctx_c.r_max, 6, True)
     # the sample-based backup with inflated V must not exceed R_max either
-    t.q[:, :] = 1000.0
-    tables.recompute_all_v(t)
-    t.q[5, 9] = 0.0
+    t.table.q[:, :] = 1000.0
+    tables.recompute_all_v(t.table)
+    t.table.q[5, 9] = 0.0
     sample = tables.Params(**{**p._asdict(), "backup": tables.BACKUP_SAMPLE, "alpha": 1.0})
-    learned_model.model_backup(t, sample, 5, 9, rng)
-    assert t.q[5, 9] == ctx_c.r_max
+    learned_model.model_backup(t.table, t.model, t.plans.opt_r, sample, 5, 9, rng)
+    assert t.table.q[5, 9] == ctx_c.r_max
 
 
 def test_real_terminal_and_truncated_steps_do_not_bootstrap(ctx_c):
     learner = QLearning(ctx_c)
     t = learner.tables
-    t.q[:, :] = 500.0
-    tables.recompute_all_v(t)
+    t.table.q[:, :] = 500.0
+    tables.recompute_all_v(t.table)
     rng = np.random.default_rng(0)
-    t.q[1, 2] = 0.0
+    t.table.q[1, 2] = 0.0
     learner.observe(1, 2, -20.0, 4, False, True, rng)  # timeout
-    assert t.q[1, 2] == pytest.approx(learner.config.alpha * -20.0)
-    t.q[1, 3] = 0.0
+    assert t.table.q[1, 2] == pytest.approx(learner.config.alpha * -20.0)
+    t.table.q[1, 3] = 0.0
     learner.observe(1, 3, 20.0, 4, True, False, rng)  # goal
-    assert t.q[1, 3] == pytest.approx(learner.config.alpha * 20.0)
+    assert t.table.q[1, 3] == pytest.approx(learner.config.alpha * 20.0)
 
 
 @pytest.mark.parametrize("method", ["dynaq", "gdq"])
@@ -352,8 +359,8 @@ def test_darling_never_leaves_its_allowed_set(ctx_c):
 def test_darling_maximises_over_allowed_actions_only(ctx_c):
     learner = Darling(ctx_c)
     s = ctx_c.s0
-    banned = int(np.flatnonzero(~learner.tables.allowed[s])[0])
-    tables.set_q(learner.tables, s, banned, 99.0)
+    banned = int(np.flatnonzero(~learner.tables.table.allowed[s])[0])
+    tables.set_q(learner.tables.table, s, banned, 99.0)
     assert learner.v[s] == 0.0
     assert learner.greedy_policy()[s] != banned
 
@@ -365,14 +372,14 @@ def test_darling_code_executes_only_plan_actions_but_maximises_over_all(ctx_c):
     s = ctx_c.s0
     learner = Darling(ctx_c, DarlingConfig(variant="code", epsilon=0.0))
     banned = int(np.flatnonzero(~plan[s])[0])
-    tables.set_q(learner.tables, s, banned, 99.0)
+    tables.set_q(learner.tables.table, s, banned, 99.0)
     assert learner.v[s] == 99.0  # the update's target sees the non-plan action
     rng = np.random.default_rng(0)
     picks = {learner.act(s, rng) for _ in range(500)}  # greedy is banned: replaced
     assert picks == set(np.flatnonzero(plan[s]).tolist())
     assert plan[s, learner.greedy_policy()[s]]
     paper = Darling(ctx_c)
-    tables.set_q(paper.tables, s, banned, 99.0)
+    tables.set_q(paper.tables.table, s, banned, 99.0)
     assert paper.v[s] == 0.0
     rec = Recording(Darling(ctx_c, DarlingConfig(variant="code")))
     run(rec, OfficeEnv(task="C"), 100, 0, fast=False)
@@ -392,7 +399,7 @@ def test_darling_code_bootstraps_from_non_plan_actions(ctx_c):
     rng = np.random.default_rng(0)
     for variant, expected in (("code", 0.1 * (-1.0 + 0.95 * 10.0)), ("paper", 0.1 * -1.0)):
         learner = Darling(ctx_c, DarlingConfig(variant=variant))
-        tables.set_q(learner.tables, s2, banned, 10.0)
+        tables.set_q(learner.tables.table, s2, banned, 10.0)
         learner.observe(s, a, -1.0, s2, False, False, rng)
         assert learner.q[s, a] == pytest.approx(expected)
 
@@ -400,7 +407,7 @@ def test_darling_code_bootstraps_from_non_plan_actions(ctx_c):
 def test_darling_allows_everything_where_there_is_no_plan(ctx_c):
     empty = empty_plan_table(ctx_c.n_states, ctx_c.n_actions)
     learner = Darling(replace(ctx_c, darling_plans=empty))
-    assert learner.tables.allowed.all()
+    assert learner.tables.table.allowed.all()
 
 
 # --- equivalences and determinism ---------------------------------------------------------
@@ -438,7 +445,7 @@ def test_fast_path_equals_python_path(ctx_c, method, kw):
     for f in ("returns", "steps", "success", "area_visits"):
         assert np.array_equal(getattr(rf, f), getattr(rs, f)), f
     assert np.array_equal(fast.q, slow.q)
-    assert np.array_equal(fast.tables.slots, slow.tables.slots)  # the same slots, too
+    assert np.array_equal(fast.tables.model.slots, slow.tables.model.slots)  # the same slots, too
     assert np.array_equal(fast.counts, slow.counts)
     assert rf.area_visits.sum() == rf.steps.sum()  # every office position has an area
     assert rf.area_visits.shape == (40, 7)
@@ -485,7 +492,7 @@ def test_task_switch_keeps_the_model_and_reruns_optinit(ctx_c):
     assert np.array_equal(learner.counts, counts)
     assert np.array_equal(learner.visits, visits)
     assert learner.params.s0 == ctx_e.s0
-    assert np.array_equal(learner.tables.goal, ctx_e.goal)
+    assert np.array_equal(learner.tables.table.goal, ctx_e.goal)
     # OptInit for E: the plan pairs from E's start are the optimistic ones, and the
     # greedy action at E's start begins one of its plans (unknown pairs dominate there)
     firsts = {p[0][1] for p in ctx_e.plans.plans_from(ctx_e.s0)}
@@ -494,7 +501,7 @@ def test_task_switch_keeps_the_model_and_reruns_optinit(ctx_c):
     known = np.argwhere(visits > learner.params.m)
     assert len(known)
     s, a = map(int, known[0])
-    assert learned_model.expected_value(learner.tables, learner.params, s, a, learner.v) == \
+    assert expected_backup(learner.tables, learner.params, s, a, learner.v) == \
         pytest.approx(learner.q[s, a], abs=1e-6)
     run(learner, OfficeEnv(task="E"), 10, 5)  # keeps learning on the new task
     assert learner.visits.sum() > visits.sum()
@@ -525,7 +532,7 @@ def test_terminal_optimism_bounds_optinit_values_by_r_max(ctx_c):
     t, p = learner.tables, learner.params
     s, a = (int(x[0]) for x in np.nonzero(opt))
     high = np.full(ctx_c.n_states, 100.0)
-    assert learned_model.expected_value(t, p, s, a, high) == ctx_c.r_max  # no continuation
+    assert expected_backup(t, p, s, a, high) == ctx_c.r_max  # no continuation
 
 
 def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):
