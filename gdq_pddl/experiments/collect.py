@@ -36,9 +36,9 @@ POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "sta
 def csv_field(text: str) -> str:
     """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only when it holds a
     comma, a quote or a line break: a plain name is written as it is)."""
-    buffer = io.StringIO()
-    csv.writer(buffer, lineterminator="").writerow([text])
-    return buffer.getvalue()
+    buffer = io.StringIO()  # "\n" as the terminator, so that a line break gets quoted too
+    csv.writer(buffer, lineterminator="\n").writerow([text])
+    return buffer.getvalue().removesuffix("\n")
 
 
 def collect(out: Path, experiments: list[Experiment]) -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ast
 import csv
+import io
 import json
 import os
 import signal
@@ -25,6 +26,7 @@ from gdq_pddl.cli import main
 from gdq_pddl.errors import ResultsError
 from gdq_pddl.experiments import Experiment, run_experiments, task_experiments
 from gdq_pddl.experiments import runner as runner_module
+from gdq_pddl.experiments.collect import csv_field
 from gdq_pddl.experiments.protocol import Unit, safe_name
 from gdq_pddl.resources import data_file, world_text
 
@@ -111,31 +113,35 @@ def test_a_fresh_run_never_reuses_saved_runs_it_cannot_check(tmp_path):
 
 
 def test_a_problem_name_never_becomes_a_path(capsys, tmp_path, monkeypatch):
-    """``(problem ../../../../x)``: every file stays inside --out (and inside results/
-    without it)."""
+    """``(problem ../../../../x)`` used to write outside --out (and outside results/): the
+    reader now refuses a name that is not a PDDL name, at its line, and nothing is
+    written anywhere."""
     work = tmp_path / "a" / "b" / "c" / "d"
     work.mkdir(parents=True)
     monkeypatch.chdir(work)
     files = keys_files(work, KEYS_PROBLEM.replace("(problem keys-1)", "(problem ../../../../x)"))
-    code, text = keys_run(capsys, files, "--out", "o")
-    assert code == 0, text
-    code, text = keys_run(capsys, files)  # the default --out is built from the name
-    assert code == 0, text
-    outside = [p for p in tmp_path.rglob("*") if work not in p.parents and p != work
-               and p not in work.parents]
-    assert not outside, outside
-    assert len(list((work / "o" / "units").glob("*.npz"))) == 1
-    assert len(list((work / "results").glob("run-*"))) == 1
+    for extra in (("--out", "o"), ()):  # the default --out was built from the name
+        code, text = keys_run(capsys, files, *extra)
+        assert code == 2 and "keys-1.pddl:2: expected a problem name" in text, text
+    written = [p for p in tmp_path.rglob("*") if p.is_file() and p.suffix != ".pddl"
+               and p.suffix != ".toml"]
+    assert not written, written
 
 
-def test_a_comma_in_a_problem_name_stays_one_csv_field(capsys, tmp_path):
+def test_a_comma_in_a_problem_name_is_refused_at_its_line(capsys, tmp_path):
+    """A comma in a problem name used to break episodes.csv's columns: it is not a PDDL
+    name character, so the reader refuses it where it stands."""
     files = keys_files(tmp_path, KEYS_PROBLEM.replace("(problem keys-1)", '(problem a,b"c)'))
     code, text = keys_run(capsys, files, "--out", tmp_path / "o")
-    assert code == 0, text
-    with open(tmp_path / "o" / "episodes.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    assert {r["task"] for r in rows} == {'a,b"c'}
-    assert all(None not in r and r["success"] in ("0", "1") for r in rows)
+    assert code == 2 and "keys-1.pddl:2:" in text and "','" in text, text
+    assert not (tmp_path / "o" / "episodes.csv").exists()
+
+
+@pytest.mark.parametrize("name", ['a,b"c', "p3->p13", "line\nbreak", "plain"])
+def test_a_name_stays_one_csv_field(name):
+    """Names reach episodes.csv from world files and the API too: each is one field."""
+    row = f"{csv_field(name)},{csv_field('GDQ')}\n"
+    assert next(csv.reader(io.StringIO(row))) == [name, "GDQ"]
 
 
 @pytest.mark.parametrize("name", ["../../x", "a/b", ".hidden", "a" * 300, "p3->p13 x"])

@@ -3,6 +3,7 @@ terminal handling, determinism, fast path == Python path and task switches."""
 
 from __future__ import annotations
 
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -547,7 +548,8 @@ def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):
     cached.write_text("stale")
     assert _jit_cache.refresh(tmp_path)  # no stamp yet: dropped, stamp written
     assert not cached.exists()
-    cached.write_text("fresh")
+    # a whole .nbi file is two pickles (the index); a damaged one is dropped on its own
+    cached.write_bytes(pickle.dumps("index") + pickle.dumps("entries"))
     assert not _jit_cache.refresh(tmp_path) and cached.exists()  # nothing changed
     (tmp_path / "learners" / "mod.py").write_text("x = 2\n")  # a callee changes
     assert _jit_cache.refresh(tmp_path) and not cached.exists()
