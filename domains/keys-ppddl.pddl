@@ -2,7 +2,7 @@
 ; well its actions work, so it needs no dynamics file. With the overlay
 ; gdq_pddl/data/dynamics/keys-ppddl.toml (the step limit, and the mud cost as a
 ; distribution instead of its mean) its true model is exactly keys.pddl's with
-; gdq_pddl/data/dynamics/keys.toml (tests/test_ppddl.py checks V* to 1e-9).
+; gdq_pddl/data/dynamics/keys.toml (tests/pddl/test_ppddl.py checks V* to 1e-9).
 ; keys.toml's per-door lock probabilities become two schemas: unlock for sound locks,
 ; unlock-stiff for the stiff ones (the red lock, c13).
 (define (domain keys-ppddl)
