@@ -150,19 +150,8 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
 
     ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
                 for name, pre, neg, add, dele in live)
-    goal_pos, goal_neg, possible = set(), set(), True
     static_strs = {str(a) for a in statics}
-    for lit in problem.goal:
-        s = str(lit.atom)
-        if lit.atom.predicate == "=":
-            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
-        elif lit.atom.predicate not in fluent:
-            possible &= (s in static_strs) == lit.positive
-        elif lit.positive:
-            possible &= s in index
-            goal_pos.add(s)
-        else:
-            goal_neg.add(s)
+    goal_pos, goal_neg, possible = ground_goal(problem.goal, fluent, static_strs, index)
     return GroundTask(facts, ops, m(init_fluents), m(goal_pos), m(goal_neg), possible,
                       frozenset(static_strs), index)
 
@@ -237,3 +226,22 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
     name = "(" + " ".join((action.name, *(b[p] for p, _ in action.parameters))) + ")"
     return (name, part(action.precondition, True), part(action.precondition, False),
             part(action.effect, True), part(action.effect, False))
+
+
+def ground_goal(goal, fluent, statics, index) -> tuple[set[str], set[str], bool]:
+    """A conjunctive goal as ``(fluent atoms that must hold, fluent atoms that must not,
+    whether it can hold at all)``: equalities and static atoms (``statics``, their
+    strings) are decided here; a positive fluent atom outside ``index`` never holds."""
+    goal_pos, goal_neg, possible = set(), set(), True
+    for lit in goal:
+        s = str(lit.atom)
+        if lit.atom.predicate == "=":
+            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
+        elif lit.atom.predicate not in fluent:
+            possible &= (s in statics) == lit.positive
+        elif lit.positive:
+            possible &= s in index
+            goal_pos.add(s)
+        else:
+            goal_neg.add(s)
+    return goal_pos, goal_neg, possible

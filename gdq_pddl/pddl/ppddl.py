@@ -29,7 +29,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask, _bindings, _bits, ground
+from gdq_pddl.pddl.grounding import (
+    GroundOp,
+    GroundTask,
+    _bindings,
+    _bits,
+    ground,
+    ground_goal,
+)
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, ground_dnf
 from gdq_pddl.pddl.parser import is_subtype
@@ -342,18 +349,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     if clash is not None:
         raise PDDLError(domain.source, None, f"the planner action {clash} (an outcome of "
                         f"{origin[clash]}) has the name of a ground action; rename one")
-    goal_pos, goal_neg, possible = set(), set(), True
-    for lit in problem.goal:
-        text = str(lit.atom)
-        if lit.atom.predicate == "=":
-            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
-        elif lit.atom.predicate not in fluent:
-            possible &= (text in statics) == lit.positive
-        elif lit.positive:
-            possible &= text in index
-            goal_pos.add(text)
-        else:
-            goal_neg.add(text)
+    goal_pos, goal_neg, possible = ground_goal(problem.goal, fluent, statics, index)
     learner = ProbabilisticTask(facts, tuple(learner_ops), m(init), m(goal_pos), m(goal_neg),
                                 possible, statics, index, origin, determinisation,
                                 any(op.alternatives for op in learner_ops))
