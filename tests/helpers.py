@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gdq_pddl.cli import main
 from gdq_pddl.learners import run_episodes
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -73,3 +74,13 @@ def run(learner, env, n, seed, fast=None):
     ``seed + 1``."""
     env.reset(seed=seed)
     return run_episodes(learner, env, n, np.random.default_rng(seed + 1), fast=fast)
+
+
+def cli(capsys, *argv) -> tuple[int, str]:
+    """Exit status and everything printed; an exception escaping main fails the test."""
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse's errors
+        code = exc.code
+    out = capsys.readouterr()
+    return code, out.out + out.err

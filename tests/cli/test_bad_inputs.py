@@ -24,22 +24,13 @@ import pytest
 from gdq_pddl.cli import main
 from gdq_pddl.errors import GdqError
 from gdq_pddl.resources import data_file, world_text
+from tests.helpers import cli
 
 OFFICE = world_text("office")
 KEYS_DOMAIN = data_file("domains", "keys.pddl").read_text(encoding="utf-8")
 KEYS_PROBLEM = data_file("problems", "keys-1.pddl").read_text(encoding="utf-8")
 KEYS_DYNAMICS = data_file("dynamics", "keys.toml").read_text(encoding="utf-8")
 FAST = ["--episodes", "3", "--runs", "1", "--method", "Q-learning", "--jobs", "1"]
-
-
-def cli(capsys, *argv) -> tuple[int, str]:
-    """Exit status and everything printed; an exception escaping main fails the test."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse's errors
-        code = exc.code
-    out = capsys.readouterr()
-    return code, out.out + out.err
 
 
 def refused(code, text: str, *names: str) -> None:

@@ -22,13 +22,13 @@ from pathlib import Path
 import pytest
 
 from gdq_pddl import _jit_cache
-from gdq_pddl.cli import main
 from gdq_pddl.errors import ResultsError
 from gdq_pddl.experiments import Experiment, run_experiments, task_experiments
 from gdq_pddl.experiments import runner as runner_module
 from gdq_pddl.experiments.collect import csv_field
 from gdq_pddl.experiments.protocol import Unit, safe_name
 from gdq_pddl.resources import data_file, world_text
+from tests.helpers import cli
 
 OFFICE = world_text("office")
 KEYS_DOMAIN = data_file("domains", "keys.pddl").read_text(encoding="utf-8")
@@ -37,16 +37,6 @@ KEYS_DYNAMICS = data_file("dynamics", "keys.toml").read_text(encoding="utf-8")
 FAST = ["--episodes", "3", "--runs", "1", "--method", "Q-learning", "--jobs", "1",
         "--no-report"]
 PACKAGE = Path(__file__).resolve().parents[2]
-
-
-def cli(capsys, *argv) -> tuple[int, str]:
-    """Exit status and everything printed; an exception escaping main fails the test."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse's errors
-        code = exc.code
-    out = capsys.readouterr()
-    return code, out.out + out.err
 
 
 def refused(code, text: str, *names: str) -> None:
