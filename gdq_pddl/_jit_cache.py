@@ -1,23 +1,12 @@
 """Keep numba's on-disk cache of this package's compiled functions in step with the source,
 and never let a damaged cache file stop a run.
 
-numba caches a compiled function (``@numba.njit(cache=True)``) in ``__pycache__`` and
-reuses it while the function's *own* file is unchanged, with the code of everything it
-calls from other files baked in. The fast episode loop (``learners/episodes.py``) calls
-the learning rules (``learners/gdq.py`` and the other rule modules) and the env step
-(``envs/model.py``): edit a rule and the loop would go on running the old one, silently,
-while the Python path runs the new one. So on import we hash the sources of the modules
-with compiled functions and, when the hash differs from the one the cache was built
-with, delete the package's cache files. An installed package never changes, so this is a
-check of a few files per process.
-
-A cache file cut short (a full disk, a copy interrupted, a hand edit) made numba raise
-``UnpicklingError`` on every later run until it was deleted by hand. So each cache file
-is also read once as a pickle stream (its opcodes walked, no object built, numba not
-imported) when it first appears or changes; a damaged one is deleted, and numba compiles
-that function again. Where the cache folder cannot be written (a read-only install) and
-a damaged file cannot be deleted, numba is pointed at a cache folder of its own
-(``NUMBA_CACHE_DIR``, unless the user set one) before it is imported.
+numba reuses a cached function while its *own* file is unchanged, with the code it calls
+from other files baked in: edit a learning rule and the compiled episode loop would run
+the old one. So on import the sources of :data:`JIT_FOLDERS` are hashed and, when the
+hash changed, the package's cache files are deleted. Each cache file is also read once as
+a pickle stream (no object built); a damaged one is deleted, or where it cannot be,
+numba gets a cache folder of its own (``NUMBA_CACHE_DIR``).
 """
 
 from __future__ import annotations

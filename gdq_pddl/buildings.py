@@ -1,32 +1,14 @@
 """Generated office-like buildings of any size, as world files (``gdq-pddl building``).
 
-A building is rows of corridor joined by a few short vertical corridors, rooms hanging
-off the corridors behind doors, some rooms with a second door to another corridor (a
-shortcut), and a few fire doors inside the corridors. Every door joins two door-side
-positions: for a room door, a stub beside the corridor and the room's entrance.
-
-Layout, from a seed (``numpy.random.default_rng(seed)``, the only source of randomness):
-
-- ``--doors K`` doors (default ``positions // 8``, 5 to ``positions``): about 1/6 fire
-  doors, about 1/6 second room doors, the rest one per room. Rooms have 3-8 positions, a
-  chain with sometimes a closing edge.
-- The positions left over form ``R = round(sqrt(n / 4))`` corridor rows of random
-  lengths, split into segments of 4-8 positions; rows are joined by 2-3 vertical
-  corridors (1-3 positions) at random places, so routes have alternatives but few ties.
-- Areas: one per room, one per corridor segment (a fire door's stubs belong to the
-  segments they face; a room door's corridor stub to the corridor's segment).
-- Doors of mixed difficulty, the office's kinds (:data:`DOOR_KINDS`); doors that can jam
-  are rare, and the doors of the tasks' start and goal rooms never jam (a trial that
-  can only fail at its first or last door teaches nothing about routes).
-- Tasks A, B, C: start and goal in rooms far apart (A and B the farthest pair found,
-  in both directions; C another far pair). Where a task's shortest route crosses a fire
-  door or a second room door that an alternative route avoids (also avoiding the doors
-  already made so for an earlier task), that door is made "most difficult", so the best
-  route is not a shortest one (the office's Task C); a task whose route already crosses
-  such a door gets no second one.
-- ``step_limit = ceil(2.5 * L)`` with ``L`` the longest shortest plan of the tasks (the
-  office: plans of 7-9 actions, limit 20) and ``r_max = step_limit``: as in the office,
-  reaching the goal by the optimal route must beat failing, whatever the route's length.
+From a seed (``numpy.random.default_rng(seed)``, the only randomness): rows of corridor
+joined by short vertical corridors, rooms of 3-8 positions off the corridors behind doors,
+some with a second door (a shortcut), and fire doors inside corridors; ``--doors K``
+(default ``positions // 8``) doors in all, of the office's kinds (:data:`DOOR_KINDS`).
+One area per room and per corridor segment. Tasks A, B, C join rooms far apart; where a
+task's shortest route crosses a door an alternative route avoids, that door is made "most
+difficult", so the best route is not a shortest one (as the office's Task C).
+``step_limit = ceil(2.5 L)`` (``L`` the longest shortest plan of the tasks) and
+``r_max = step_limit``.
 """
 
 from __future__ import annotations
@@ -54,10 +36,8 @@ DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
     ("most difficult", 0.6, 0.4, 0.0),
 )
 """Door kinds as in the office: label, success and stuck probabilities, and the weight of
-the random draw. Doors that jam are rare in the draw: a route of a large building
-crosses many doors, and with the office's mix (a door in two jams) even the optimal
-policy of a 300-position building failed more often than it arrived. The "most
-difficult" kind is placed on purpose instead (see :func:`_tasks`)."""
+the random draw (doors that jam are rare: a long route crosses many; the "most difficult"
+kind is placed on purpose by :func:`_tasks`)."""
 
 MIN_POSITIONS = 40
 POSITION_BYTES = 2000

@@ -1,35 +1,12 @@
 """The dynamics file: reality for a PDDL domain (what its actions really do, and cost).
 
-A PDDL domain says what an action does when it works; a dynamics file (TOML) says how
-often it works, what happens when it does not, and what it costs. See
-``docs/domains.md`` for the annotated format; in short::
-
-    [dynamics]
-    r_max = 20.0            # +r_max on reaching the goal, -r_max on failure
-    step_limit = 30         # actions per episode
-
-    [actions.move]          # one table per action schema (others: always succeed, cost 1)
-    success = 0.95          # probability that the action has its PDDL effect
-    stuck = 0.0             # probability that the trial fails (episode over, -r_max)
-    failure = ["move"]      # the rest: "nothing" (default), "stuck", or a list of schemas:
-                            # the effect of a uniformly random applicable ground action
-                            # of those schemas happens instead (a slip)
-    cost = 1.0              # or {dist = "uniform", low, high} / {dist = "normal", mean, sd}
-
-    [actions.move.objects.door3]   # overrides for ground actions that name door3
-    success = 0.6
-    stuck = 0.2
-
-An object override applies to every ground action of the schema that has the object
-among its arguments; when several arguments have one, the leftmost wins. Keys it does
-not give come from the schema's table. :func:`parse_dynamics` checks everything against
-the domain and problem and names the file and key of every error, as world files do.
-
-A cost the file does not give is the one the domain states (``(increase (total-cost)
-X)``), else 1. For a PPDDL domain the file is an *overlay* (``overlay=True``): the
-domain gives the outcomes, so ``success``, ``stuck`` and ``failure`` are errors, and
-the file gives only what PPDDL cannot say: ``r_max`` and ``step_limit`` (they replace
-the domain's), costs (they replace the domain's; a distribution, say).
+A PDDL domain says what an action does when it works; a dynamics file (TOML, annotated in
+``docs/domains.md``) says per action schema, optionally per object, how often it works
+(``success``), how often the trial fails (``stuck``), what the rest does (``failure``:
+nothing, or a slip to a random applicable action of some schemas) and what it costs.
+:func:`parse_dynamics` checks it against the domain and problem and names the file and
+key of every error. For a PPDDL domain the file is an *overlay* (``overlay=True``): the
+domain gives the outcomes, the file only ``r_max``, ``step_limit`` and costs.
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""Reading the files a user gives (world, domain, problem, dynamics), and fingerprinting them.
-
-:func:`read_text` turns every way a file can fail to be text (missing, a folder, a device
-or a FIFO, larger than :data:`~gdq_pddl.limits.MAX_INPUT_BYTES`, no permission, not
-UTF-8) into the caller's own error, naming the file, before more than that many bytes
-are read; a UTF-8 byte-order mark at the start is dropped. :func:`file_hash` is what
-``--resume`` compares to tell that an input changed between two runs.
+"""Reading the files a user gives (world, domain, problem, dynamics), and fingerprinting
+them (:func:`file_hash`, what ``--resume`` compares). :func:`read_text` turns every way a
+file can fail to be text into the caller's own error, naming the file.
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """Sizes checked before anything is allocated, and numbers checked before they are used.
 
-A world file's ``step_limit``, ``--episodes`` or ``--runs`` can ask for arrays no machine
-holds. Each place that allocates in proportion to one of them estimates the bytes first
-(:func:`check_memory`) and raises :class:`~gdq_pddl.errors.SizeError` naming the
-setting, the size it would need and the memory there is, instead of growing until the
-operating system kills the process or numpy fails deep inside a computation.
-
-The range checks (:func:`check_real`, :func:`check_count`) are what every configuration
-dataclass and option calls, so a NaN, ``2.5`` backups or ``10**12`` of them is refused
-where it is given, not deep inside a compiled loop. Every number an input file gives
-(world, dynamics, PDDL) is at most :data:`MAX_NUMBER` in size.
+:func:`check_memory` estimates the bytes a setting asks for and raises
+:class:`~gdq_pddl.errors.SizeError` naming it instead of letting the process be killed;
+:func:`check_real` and :func:`check_count` are the range checks of every option and
+configuration dataclass.
 """
 
 from __future__ import annotations
@@ -26,37 +20,30 @@ except ImportError:  # pragma: no cover (not POSIX: no limit to read)
 from gdq_pddl.errors import ConfigError, SizeError
 
 MAX_NUMBER = 1e15
-"""The largest magnitude a number of an input file (world, dynamics, PDDL) may have: far
-beyond any reward or cost, and small enough that a return (a sum over an episode's
-steps) and ``r_max / (1 - gamma)`` stay finite."""
+"""The largest magnitude a number of an input file (world, dynamics, PDDL) may have (so
+that returns and ``r_max / (1 - gamma)`` stay finite)."""
 
 MAX_COUNT = 2**62
 """The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""
 
 MAX_TOLERANCE = 100.0
-"""The largest plan-length tolerance: plans of up to 101 x the shortest length (the paper
-uses 0.3). Past it a "tolerance" is a tour, not a near-shortest plan; and the bound
-``(1 + tolerance) x L`` still grows with it, past every loop-free plan (clingo grounds a
-horizon per step up to it) and, near 1e308, past any float."""
+"""The largest plan-length tolerance: plans of up to 101 x the shortest (the paper uses
+0.3)."""
 
 MAX_INPUT_BYTES = 16 * 1000**2
-"""The largest input file (world, domain, problem, dynamics) read: 16 MB, a few times a
-generated building of 100,000 positions (5 MB), far past any published PDDL problem."""
+"""The largest input file (world, domain, problem, dynamics) read: 16 MB."""
 
 MAX_INIT_ATOMS = 100_000
-"""The most atoms a PDDL problem's initial state may hold to be planned over (a generated
-building of 10,000 positions has 32,500, planned in seconds): the grounded task keeps a
-bitmask over every fact per action, so its memory grows with the square of this."""
+"""The most atoms a PDDL problem's initial state may hold to be planned over (grounding's
+memory grows with its square)."""
 
 MAX_WORLD_POSITIONS = 30_000
 """The most positions a world may have to be planned over: its PDDL problem's initial
 state has about 3.25 atoms per position, so past this it passes :data:`MAX_INIT_ATOMS`."""
 
 MIN_ADDRESS_SPACE = 1024**3
-"""The smallest address-space limit (``ulimit -v``) the command line starts under: numpy's
-BLAS, scipy and numba's LLVM reserve virtual memory as they load, and below about 700 MB
-they fail inside the import (a MemoryError traceback) or, under 500 MB, OpenBLAS spins
-forever retrying its allocation. 1 GiB leaves room for a run's own arrays."""
+"""The smallest address-space limit (``ulimit -v``) the command line starts under (numpy,
+scipy and numba reserve virtual memory as they load, and fail below about 700 MB)."""
 
 FALLBACK_MEMORY = 16 * 1024**3
 """What :func:`physical_memory` assumes where the system does not say."""

@@ -1,12 +1,7 @@
-"""Where results go: one check of an output folder or file, before anything is computed.
-
-Every command that writes (``run``, ``switch``, ``robot``, ``reproduce``, ``knowledge``,
-``scale``, ``report``, ``building``, ``problem``) calls :func:`output_folder` or
-:func:`output_file` first, so an existing file given as ``--out``, a path under a file,
-``/dev/null``, ``/proc`` or a read-only file system is one clear
-:class:`~gdq_pddl.errors.OutputError` naming the path, not a traceback after the work.
-Every write goes through :func:`writing` (or :func:`write_text`, :func:`save_figure`), so
-a disk that fills up during the work is named too.
+"""Where results go: one check of an output folder or file before anything is computed
+(:func:`output_folder`, :func:`output_file`), and writes that name their file when they
+fail (:func:`writing`, :func:`write_text`, :func:`save_figure`, :func:`atomic_write`),
+each an :class:`~gdq_pddl.errors.OutputError`.
 """
 
 from __future__ import annotations

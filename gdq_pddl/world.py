@@ -1,15 +1,10 @@
 """The world file: an office building as data (reality for the simulator).
 
-A world file is TOML (see ``gdq_pddl/data/office.toml`` for the annotated original). It
-lists positions, their undirected adjacency, doors (two sides each, a success and a
-stuck probability, optional per-door costs), per-verb action costs, areas, landmarks and
-tasks. :func:`load_world` validates all of it and names the file and the key on every
-error, so a user editing a door never meets a traceback.
-
-A world is a way to produce an instance of the one pipeline: its knowledge is
-``domains/office.pddl`` with the problem :func:`office_problem` writes, its reality the
-door dynamics of the file (:meth:`World.dynamics`), and the learner sees it through the
-office's observation map (:mod:`gdq_pddl.abstraction.office`).
+A world file is TOML (``gdq_pddl/data/office.toml`` is the annotated original): positions,
+their adjacency, doors (two sides, success and stuck probabilities, optional costs),
+per-verb costs, areas, landmarks and tasks. :func:`load_world` validates it and names the
+file and key of every error. Its knowledge is ``domains/office.pddl`` with the problem
+:func:`office_problem` writes, its reality :meth:`World.dynamics`.
 """
 
 from __future__ import annotations
@@ -211,15 +206,11 @@ class World:
 
 def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
     """The world's knowledge as a PDDL problem of ``domains/office.pddl``: reach
-    ``task.goal`` from ``task.start`` with every door closed.
+    ``task.goal`` from ``task.start`` with every door closed (``problems/`` holds its
+    output for the office's tasks).
 
-    The files in ``problems/`` are its output for the office's tasks (a test fails if
-    they drift). The PDDL has no probabilities, so a door's difficulty is not knowledge,
-    with one exception: a door whose success probability is 0 (locked) gets no
-    ``connects`` facts, since knowing that a door never opens is knowing that it is a
-    wall (the knowledge-vs-reality experiments of :mod:`gdq_pddl.experiments.knowledge`
-    rely on this for their accurate reference). ``locked_is_wall=False`` keeps them: the
-    building as reality has it, where such a door is one whose dynamics never open it."""
+    A locked door (success 0) gets no ``connects`` facts: knowing that a door never opens
+    is knowing that it is a wall. ``locked_is_wall=False`` keeps them."""
     door_sides = {p for d in world.doors for p in d.sides}
     walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
                   ((p, n) for n in ns))

@@ -1,20 +1,7 @@
-"""Which learner actions the knowledge says can do something, in every learner state.
-
-An action *can do something* in learner state ``s`` when some ground planner action
-applicable in the planner state of ``s`` (O^-1) maps to it (O). The envs put the row of
-the current state in ``info["action_mask"]``, as Gymnasium's Taxi does; the arrays are
-``int8[n_states, n_actions]``, 1 where the action can do something, built once per env.
-
-- :func:`knowledge_action_mask`: through any :class:`~gdq_pddl.abstraction.Abstraction`
-  and the grounded task (the office: :class:`~gdq_pddl.abstraction.OfficeAbstraction`,
-  where ``stay`` has no planner counterpart and is never 1).
-- :func:`graph_action_mask`: a PDDL problem's reachable state graph, where a learner
-  state is a planner state and a learner action a ground action: its edges are the
-  applicable actions (goal states, which the graph does not expand, are asked of the
-  task directly).
-
-The mask says what the *knowledge* believes, not what reality does: an applicable action
-may still fail, and where knowledge and reality differ, the mask follows the knowledge.
+"""Which learner actions the knowledge says can do something, in every learner state:
+``int8[n_states, n_actions]``, 1 where some ground action applicable in the planner state
+of ``s`` (O^-1) maps to the action (O). The envs put the current row in
+``info["action_mask"]``. It follows the knowledge, not reality: an action may still fail.
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
-"""O for a generic PDDL problem: the learner state *is* the planner state.
-
-The learner of a PDDL env (:mod:`gdq_pddl.envs.pddl_env`) sees every reachable planner
-state as one index and acts with the ground actions, so O is a lookup both ways. For a
-PPDDL domain the planner's actions are outcomes of the ground actions (its
-determinisation, :mod:`gdq_pddl.pddl.ppddl`): O maps each to the ground action it is an
-outcome of, e.g. ``(move_o2 a b)`` to ``(move a b)``.
-
-:func:`graph_plan_table` builds the plan table of every state at once from the reachable
-state graph and one backward BFS (:mod:`gdq_pddl.pddl.reachable`), with the ``graph``
-planner's semantics: plans end where the goal first holds; with tolerance 0 every
-shortest plan; with tolerance ``t`` every loop-free plan of at most
-``floor((1 + t) * L)`` actions, ``L`` the shortest length from that state; at most
-``max_plans`` plans per state, sorted by (length, action names).
+"""O for a generic PDDL problem: the learner state *is* the reachable planner state, the
+learner action the ground action (for a PPDDL domain, the ground action a determinised
+outcome comes from). :func:`graph_plan_table` builds every state's plans at once from the
+reachable state graph, with the ``graph`` planner's semantics: plans end where the goal
+first holds, every loop-free plan of at most ``floor((1 + t) L)`` actions, at most
+``max_plans`` per state, sorted by (length, action names).
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 """The action knowledge as a deterministic model over learner (state, action) pairs.
 
-GDQ's default variant plans on this *prior model* before it has any experience: for every
-learner state ``s`` and learner action ``a`` it says where ``a`` leads if the knowledge
-is right. The planner's state graph gives it: ``O^-1(s)`` is the planner state of ``s``,
-each ground action applicable there is mapped by O to a learner action, and its successor
-planner state by O to a learner state. Where the knowledge says ``a`` does nothing (no
-applicable ground action maps to it), the prior says "no change" and the pair is
-*knowledge-inapplicable*.
-
-It is goal-independent, so one prior serves every task of a world (the learner decides
-which of its states are goals), and it holds no probabilities or costs: the knowledge
-has none (PDDL), which is what makes it optimistic.
+GDQ's default variant plans on this *prior model* before it has experience: where each
+learner action leads from each learner state if the knowledge is right (through O^-1,
+the applicable ground actions, and O), or "no change" where the knowledge says it does
+nothing (*knowledge-inapplicable*). It is goal-independent and holds no probabilities or
+costs (PDDL has none), which is what makes it optimistic.
 """
 
 from __future__ import annotations

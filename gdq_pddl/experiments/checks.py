@@ -1,11 +1,6 @@
-"""What is checked before an experiment runs: its tasks can be learnt and it fits in memory.
-
-:func:`preflight` runs in the driver before the output folder is touched, so a task whose
-goal cannot be reached, a step limit below the shortest plan, or sizes past what memory
-holds are one clear error naming the file and key (or option) at fault, instead of a
-folder of meaningless results or a crash after hours of work. It also compiles each
-world's model and builds each task's shortest plans once in the driver, which forked
-workers then share.
+"""What is checked before an experiment runs (:func:`preflight`, in the driver, before the
+output folder is touched): its tasks can be learnt and it fits in memory. It also builds
+each world's model and each task's plans once, which forked workers then share.
 """
 
 from __future__ import annotations

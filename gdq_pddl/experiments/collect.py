@@ -1,15 +1,10 @@
 """Turn the per-unit files of an output folder into its CSV and JSON results.
 
-``episodes.csv`` has the columns :data:`EPISODE_COLUMNS`, then, when an office
-experiment is among them, ``area_1 .. area_K``: the steps of the episode that end in
-each area of the world file, ``K`` the largest area number of the experiments' worlds
-(7 in the office; a PDDL domain has no areas, so a folder of PDDL runs has no such
-columns). Text fields (experiment, method and task names, which may come from input
-files) are quoted as the ``csv`` module quotes them: a name with a comma or a quote
-stays one field. ``policies.csv`` has :data:`POLICY_COLUMNS`: each run's final greedy
-action per learner state, by index and by name (``state_name``: ``p1 (door open)`` in
-the office, the state's fluent atoms for a PDDL domain; ``action_name``: ``gothrough
-p3``, or the ground action ``(move c11 c12)``).
+``episodes.csv``: :data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` when an office
+experiment is among them (the steps of the episode that end in each area; none for a PDDL
+domain). ``policies.csv``: :data:`POLICY_COLUMNS`, each run's final greedy action per
+learner state, by index and by name. Text fields are quoted as the ``csv`` module quotes
+them, so a name with a comma stays one field.
 """
 
 from __future__ import annotations

@@ -1,16 +1,6 @@
-"""An output folder as the runners use it: locked, its config and unit files checked.
-
-What both runners (:mod:`gdq_pddl.experiments.runner` and
-:mod:`gdq_pddl.experiments.scale`) share about the folder they write:
-
-- :class:`FolderLock`: one process at a time per folder (a second ``--resume`` started
-  while the first runs would run the same units again);
-- :func:`read_config`: ``config.json`` read back, or one clear error if it is damaged;
-- :func:`input_hashes` / :func:`changed_input`: the content of every input file, so a
-  resume refuses inputs edited since the run began (one world for some runs and another
-  for the rest);
-- :func:`load_unit` / :func:`read_unit`: a unit file read back, or an error naming it
-  and saying how to rerun that one unit.
+"""An output folder as both runners use it: locked (:class:`FolderLock`), its
+``config.json`` read back (:func:`read_config`), its input files fingerprinted
+(:func:`input_hashes`) and its unit files read back or named as damaged (:func:`load_unit`).
 """
 
 from __future__ import annotations
@@ -44,14 +34,11 @@ _HELD: set[int] = set()
 
 
 class FolderLock:
-    """An exclusive, non-blocking lock on ``folder/.lock`` for the ``with`` block.
+    """An exclusive, non-blocking ``flock`` on ``folder/.lock`` for the ``with`` block.
 
-    The lock is the operating system's (``flock``): it ends with the process, however the
-    process ends, so a killed run never leaves a folder locked. Entering raises
-    :class:`ResultsError` naming the process that holds it. Leaving the block removes the
-    lock file while still holding the lock, so a finished folder holds no ``.lock``; a
-    process that was waiting on the removed file sees that it is gone and locks a new one
-    (so two processes never hold "the" lock at once). Only a killed run leaves the file.
+    It ends with the process, however it ends. Entering raises :class:`ResultsError`
+    naming the process that holds it. Leaving removes the lock file while still holding
+    the lock; a process waiting on the removed file then locks a new one.
     """
 
     def __init__(self, folder: Path) -> None:

@@ -1,28 +1,11 @@
 """Experiments where the robot's knowledge (the PDDL) disagrees with reality (the world).
 
-The learners' knowledge is built from a *knowledge world* (the PDDL problem is generated
-from it and planned with, :func:`gdq_pddl.learners.office_task_context`); the env
-simulates a *real world*. Both have the same positions and doors, so the learner's state
-and action spaces are identical and only what the knowledge says differs. An
-:class:`~gdq_pddl.experiments.protocol.Experiment` names the real world in ``world`` and
-the knowledge world in ``knowledge`` (None: the real world itself, accurate knowledge).
-
-The derived worlds are built in memory and named ``office:<variant>``;
-:func:`gdq_pddl.experiments.worlds.load_world_named` resolves those names through
-:data:`~gdq_pddl.experiments.worlds.WORLDS`.
-
-The cases (all on Task C, p0 -> p17; every case also runs with accurate knowledge, the
-same real world with knowledge built from it, as the reference):
-
-- ``locked-d3`` / ``locked-d1``: a door the knowledge believes usable is locked in
-  reality (success 0, stuck 0: opening it never works, but is harmless).
-- ``passage``: reality has a corridor p8-p17 that the knowledge lacks; it makes a much
-  shorter route (through d1 only) that no plan contains.
-- ``no-difficulty``: the control. The PDDL has no notion of a door's difficulty (the
-  planner ignores success/stuck probabilities), so knowledge built from a world in which
-  every door always works (:func:`~gdq_pddl.envs.variants.deterministic_world`) is the
-  same knowledge as the accurate one: the paper's own Task C situation. Its "extra
-  episodes" measure the noise of the comparison (different seeds, same information).
+An :class:`~gdq_pddl.experiments.protocol.Experiment` names the real world the env
+simulates in ``world`` and the world the knowledge is built from in ``knowledge`` (None:
+the real world itself). Both have the same positions and doors, so the learner spaces are
+the same and only the knowledge differs. The derived worlds (``office:<variant>``) are
+built in memory by :mod:`gdq_pddl.experiments.worlds`; the :data:`CASES` all use Task C,
+each also run with accurate knowledge as its reference (``docs/decisions.md``).
 """
 
 from __future__ import annotations

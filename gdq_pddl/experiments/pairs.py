@@ -1,30 +1,16 @@
 """Every ordered (start, goal) pair of a world: ``gdq-pddl pairs``.
 
-Settings were chosen on tasks A-D only (SPEC section 4); this evaluation runs every
-method, with the paper's hyperparameters (:class:`~gdq_pddl.experiments.protocol.Hyper`),
-on each of the ``n (n - 1)`` ordered pairs of distinct positions (342 in the office).
-Each pair is one :class:`~gdq_pddl.experiments.protocol.Experiment` named ``pairs``
-with schedule ``(("p3->p13", episodes),)``, so the office runner does the work: units
-in parallel (``--jobs``, Ray), saved as they finish, ``--resume``, Ctrl-C, and seeds
-from the pair and the run only (run ``r`` of every method on a pair starts from the
-same seeds, so differences between methods are paired).
-
-What is kept differs from the other commands: at 342 x 5 x 10 x 300 an ``episodes.csv``
-would have 5.1M rows (240 MB, measured on one pair and scaled), and the units another
-410 MB, most of it area visits. So a unit keeps only its returns and successes (3 KB
-instead of 24; :func:`run_pair_unit`) and the folder's collected result is one row per
-run (:func:`collect_pairs`)::
+Each pair is one :class:`~gdq_pddl.experiments.protocol.Experiment` named ``pairs`` with
+schedule ``(("p3->p13", episodes),)``, run by the office runner (parallel, resumable,
+seeds from the pair and the run only). A unit keeps only its returns and successes
+(:func:`run_pair_unit`), and the folder collects one row per run (:func:`collect_pairs`)::
 
     config.json   the experiments (one per pair), seeds and package versions
-    units/*.npz   one (pair, method, run): ``returns`` (float64) and ``success`` (bool)
-                  per episode
-    runs.csv      one row per (pair, method, run), :data:`RUN_COLUMNS`: the run's mean
-                  return and success rate over its episodes (exact: ``repr`` of the float)
-    optimal.json  per pair: start, goal, shortest plan length, V* (value iteration on the
-                  true model), and the tuning task (A-D) it is, if any
+    units/*.npz   one (pair, method, run): ``returns`` (float64), ``success`` (bool)
+    runs.csv      :data:`RUN_COLUMNS`: each run's mean return and success rate (``repr``)
+    optimal.json  per pair: start, goal, shortest plan length, V*, its tuning task (A-D)
 
-:mod:`gdq_pddl.analysis.pairs` turns ``runs.csv`` and ``optimal.json`` into the table,
-figure and ``REPORT.md``.
+:mod:`gdq_pddl.analysis.pairs` reports them; why so little is kept: ``docs/decisions.md``.
 """
 
 from __future__ import annotations

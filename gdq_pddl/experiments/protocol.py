@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -182,7 +182,3 @@ def paper_protocol(quick: bool = False, seed: int = 0) -> list[Experiment]:
             robot_experiment(runs=runs, seed=seed)]
     return out
 
-
-def with_overrides(exp: Experiment, **changes) -> Experiment:
-    """A copy of ``exp`` with some fields changed (None values are ignored)."""
-    return replace(exp, **{k: v for k, v in changes.items() if v is not None})

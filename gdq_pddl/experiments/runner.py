@@ -8,18 +8,10 @@ Layout of an output folder::
     policies.csv     each run's final greedy policy, by index and by name
     optimal.json     V* and area relevance of each task, from the true model
 
-A run that is interrupted (Ctrl-C, or killed) loses at most the units in flight;
-``resume=True`` checks that the configuration and the content of every input file are
-the same and runs only what is missing. One process at a time writes a folder
-(:class:`~gdq_pddl.experiments.folder.FolderLock`); everything that can be checked
-without running (:func:`~gdq_pddl.experiments.checks.preflight`) is checked before the
-folder is touched, and a run that fails before saving any unit leaves no ``config.json``
-that would block the corrected command.
-
-What a unit returns and what is collected at the end can be swapped (``work`` and
-``collect`` of :func:`run_experiments`): ``gdq-pddl pairs`` keeps only returns and
-successes per unit and collects one row per run instead of one per episode
-(:mod:`gdq_pddl.experiments.pairs`).
+An interrupted run loses at most the units in flight; ``resume=True`` checks that the
+configuration and every input file are the same and runs only what is missing. What a
+unit returns and what is collected can be swapped (``work`` and ``collect`` of
+:func:`run_experiments`; :mod:`gdq_pddl.experiments.pairs` does).
 """
 
 from __future__ import annotations

@@ -1,84 +1,22 @@
-"""Learning against building size: every method on generated buildings of N positions.
+"""Learning against building size (``gdq-pddl scale``): every method on generated buildings.
 
-For each size N (default 100, 300, 1000) and each of ``buildings`` building seeds
-``S = seed, seed + 1, ...`` (default 2), the building of ``gdq-pddl building --positions N
---seed S`` and its task A (start and goal in rooms far apart): each method runs ``runs``
-times for ``episodes`` episodes over the compact model (:mod:`gdq_pddl.envs.compact`; the
-full-state model would need ``2**n_doors`` states). Run ``r`` on building ``S`` of size
-``N`` is seeded by ``(S, N, r)`` only: every method's run ``r`` on a building starts from
-the same env and learner seeds (paired runs, common random numbers), and a run gives the
-same returns whether it ran straight through or was interrupted and resumed, whatever
-other sizes, buildings or methods the command holds.
-
-:func:`run_scale` (``gdq-pddl scale``) writes to its output folder, as the office
-runner (:mod:`gdq_pddl.experiments.runner`) does::
+For each size N and each of ``buildings`` building seeds ``S = seed, seed + 1, ...``, the
+building of ``gdq-pddl building --positions N --seed S`` and its task A: each method runs
+``runs`` times for ``episodes`` episodes over the compact model
+(:mod:`gdq_pddl.envs.compact`). Run ``r`` is seeded by ``(S, N, r)`` only, so run ``r`` of
+every method starts from the same seeds (paired runs) and gives the same returns whether
+or not it was interrupted and resumed. :func:`run_scale` writes::
 
     config.json           sizes, buildings, runs, episodes, seed, methods, package versions
-    units/building-N-sS/building.json
-                          the building, learner tables and plan-table time of one building
+    units/building-N-sS/building.json     the building, learner tables, plan-table time
     units/building-N-sS/<method>-<run>.npz
-                          one finished run, written atomically as soon as it is done:
-                          returns, success (per episode), steps, wall_s, table_mb
-    building-N-sS.npz     every run on that building (:func:`save_building`), once its
-                          units are done
-    scale.png/pdf, REPORT.md  drawn from the results by the analysis layer
-                          (:func:`gdq_pddl.analysis.scale.make_scale_report`, which
-                          ``gdq-pddl scale`` calls once this module has run)
+                          one finished run, written atomically: returns, success (per
+                          episode), steps, wall_s, table_mb
+    building-N-sS.npz     every run on that building (:func:`save_building`)
 
-An interrupted run (Ctrl-C, or killed) loses at most the run in flight; ``--resume``
-checks that the configuration is the same and runs only the missing units (it cannot add
-sizes, buildings or methods: those go into another folder). Env steps/s are the saved
-runs' steps over their wall time, so a resumed run's building files, figure and report
-are made the same way.
-
-Decisions, where the office protocol does not carry over:
-
-- **Buildings per size**: ``--buildings K`` consecutive seeds from ``--seed`` (not a list
-  of seeds): ``K`` is the number the question is about ("at least two building seeds per
-  size"), and building ``S`` is the one ``gdq-pddl building --seed S`` writes. The
-  default ``--seed 0`` keeps the building of the one-building runs before this option.
-  At most :data:`MAX_BUILDINGS` (1000) per size.
-- **Paired runs**: a run's seeds come from its building, size and number, not from the
-  method, so run ``r`` of every method starts from the same env and learner seeds and
-  the report's GDQ-minus-method differences are taken run by run (the office protocol
-  does the same, :meth:`gdq_pddl.experiments.protocol.Unit.seeds`). Nor do they depend
-  on the other buildings, sizes or methods of the command, so building ``S`` of a run
-  with ``--seed 0 --buildings 2`` and of one with ``--seed S --buildings 1`` agree.
-- **Early learning**: the mean return over the first :data:`FIRST` (300) episodes, as
-  issue 11 judges GDQ against DARLING on the office, besides episodes to convergence.
-- **Reference value** ``V_ref``: the pessimistic value iteration of
-  :func:`gdq_pddl.envs.solve_compact.reference_value`, a proven lower bound on V* (equal
-  to it on the office), since V* itself needs ``2**n_doors`` door masks. The worst
-  return is ``R_fail = -r_max - (step_limit - 1)`` (a timeout).
-- **Discount** ``gamma = 1 - 1 / step_limit`` (the office: 0.95 = 1 - 1/20). With the
-  office's 0.95, a goal 65 actions away is worth 0.95**65 x r_max, about 2, less than the
-  step costs on the way: no learner would go for it.
-- **Episodes to convergence**: the first episode at which the trailing 50-episode moving
-  average of the return reaches ``R_fail + 0.9 (V_ref - R_fail)`` (nine tenths of the
-  way from the worst return to the reference), the issue's own measure for the office
-  ("the 50-episode moving average first turned positive at episode ~84"); a run that
-  never gets there counts as not converged (``> episodes``). Not "stays above it to the
-  end": episodes succeed or time out (returns ~300 apart at 1000 positions), so the
-  average of a learner that has settled varies by +-20 and dips under any threshold
-  near its level again and again (measured: under that rule DARLING at 300 positions
-  "converged" at episodes 4764-4994 of 5000, whatever it did before).
-- **Door-route plans** for DARLING and GDQ-code: tolerance 1.3 x as on the office, but
-  the table holds every shortest plan plus the shortest plan through each door that a
-  plan within 1.3 x can cross (:func:`gdq_pddl.abstraction.routes.route_plan_table`),
-  not every plan within 1.3 x: at 300 positions one query for those takes seconds and
-  returns thousands of plans, at 1000 about 100 s and 7000 plans, for each of ~1100
-  learner states, and nearly all of them differ only inside rooms and corridors. The
-  detour round the jammed door of the task is in the table; with shortest plans only,
-  it is not, and neither method can learn it (measured before this choice: 0 of 2 runs
-  of GDQ-code reached the goal once in 1000 episodes at 100 positions).
-- **Memory**: a learner keeps, per (state, action) pair, its Q value and the model's
-  visit and cost statistics (50 bytes), and GDQ and Dyna-Q ``max_successors`` slots of
-  8 bytes for the transitions (the sparse model of :mod:`gdq_pddl.learners.learned_model`; at
-  1000 positions the compact model bounds a pair's distinct next states by 8). At 1000
-  positions, 1250 states x 5000 actions, a learner allocates 0.3 GB (Q-learning,
-  DARLING) or 0.7 GB (GDQ, Dyna-Q; ``table_mb``), of which only the pages of the pairs
-  it tries are written: 160 MB or less after 200 episodes (measured). No size is
-  skipped.
+``--resume`` checks that the configuration is the same and runs only the missing units.
+The measures (early learning, episodes to convergence, ``V_ref``, the discount, door-route
+plans, memory) and why: ``docs/decisions.md``, "Generated buildings".
 """
 
 from __future__ import annotations
@@ -116,10 +54,8 @@ FIRST = 300
 """Episodes of the early-learning measure: the mean return over the first ``FIRST``
 episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
 MAX_BUILDINGS = 1000
-"""The most ``--buildings`` per size: 500 times the published runs' 2. Each building has
-its own marker (and legend entry) in ``scale.png``, its own row in every table of
-``REPORT.md`` and its own folder of units, all generated and checked before the first
-run; past a thousand the report is unreadable and the runs take weeks."""
+"""The most ``--buildings`` per size (each is a marker of ``scale.png`` and a row of every
+table of ``REPORT.md``)."""
 
 
 @dataclass
@@ -179,11 +115,6 @@ class BuildingResult:
 def building_name(positions: int, seed: int) -> str:
     """``building-N-sS``: the name :func:`gdq_pddl.buildings.generate` gives a building."""
     return f"building-{positions}-s{seed}"
-
-
-def building_seeds(seed: int, buildings: int) -> list[int]:
-    """The building seeds of a run: ``seed, seed + 1, ...``, ``buildings`` of them."""
-    return list(range(seed, seed + buildings))
 
 
 def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) -> int | None:
@@ -318,7 +249,7 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
     _check_buildings(seed, buildings)  # before the list of seeds is made
-    seeds = building_seeds(seed, buildings)
+    seeds = list(range(seed, seed + buildings))
     _check(sizes, runs, episodes, seeds, methods)
     out = output_folder(out)
     rerun = command or "the same command and --resume"

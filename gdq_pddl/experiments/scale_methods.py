@@ -17,7 +17,4 @@ door-route plans within 1.3 x the shortest (see :mod:`gdq_pddl.experiments.scale
 
 DEFAULT_METHODS = tuple(m for m in METHODS if m != "GDQ-literal")
 """What ``gdq-pddl scale`` runs unless ``--method`` says otherwise: every method but
-GDQ-literal, which never learns (on the office either) and would take a third of the
-default command's time (measured: in 1 run x 5000 episodes on each of the six default
-buildings, its mean return was within 0.3 of a timeout's on every one, and it took 30%
-of the six methods' time)."""
+GDQ-literal, which never learns (``docs/decisions.md``)."""

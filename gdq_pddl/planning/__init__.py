@@ -1,13 +1,8 @@
 """Planners: one result type, backends found through the ``gdq_pddl.planners`` entry points.
 
 A backend is any class with the :class:`~gdq_pddl.planning.base.Planner` interface,
-declared by any installed distribution::
-
-    [project.entry-points."gdq_pddl.planners"]
-    mine = "my_package.planner:MyPlanner"
-
-Backends are imported only when asked for, so a missing optional one (clingo) does not
-break the others.
+declared by any installed distribution under that group (``mine =
+"my_package.planner:MyPlanner"``); each is imported only when asked for.
 """
 
 from __future__ import annotations

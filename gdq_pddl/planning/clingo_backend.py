@@ -1,20 +1,12 @@
 """All shortest plans by answer-set programming (clingo), over the grounded task.
 
-The grounded task (:attr:`PlanningProblem.task`) becomes ASP facts: ``pre/neg/add/del``
-of each operator over numbered fluent facts, the start state and the goal. The encoding
-(:data:`ENCODING`) takes one action per step with frame axioms, forbids a state that
-repeats an earlier one and a goal state before the last step (a plan ends where the goal
-first holds), and asks for the goal at the last step. clingo's multi-shot solving grows
-the horizon ``h = 0, 1, 2, ...`` until the goal query is satisfiable at some ``L``, then
-enumerates every answer set at ``L``: one per plan, since the actions fix the states.
-
-With ``tolerance = t`` it goes on to every horizon up to ``floor((1 + t) * L)``, so it
-returns every loop-free plan within that length, as the ``graph`` backend does.
-
-A horizon search alone cannot prove that no plan exists, so whether the goal is
-reachable at all is settled first by a breadth-first pass over the grounded task; its
-distance also bounds the horizon, and a disagreement with clingo is reported as an error.
-clingo is an optional dependency (``pip install gdq_pddl[clingo]``), imported lazily.
+The grounded task becomes ASP facts (``pre/neg/add/del`` of each operator over numbered
+facts, the start and the goal); the :data:`ENCODING` takes one action per step, forbids
+repeated states and a goal before the last step. Multi-shot solving grows the horizon
+until the goal is reached at ``L``, then enumerates every answer set (one per plan) up to
+``floor((1 + t) L)``. Whether the goal is reachable at all is settled first by a
+breadth-first pass (a horizon search cannot prove that no plan exists). clingo is an
+optional dependency (``pip install gdq_pddl[clingo]``).
 """
 
 from __future__ import annotations

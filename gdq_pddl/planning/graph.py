@@ -1,16 +1,11 @@
-"""The default planner: all shortest plans from the grounded state graph.
+"""The default planner: all shortest plans (or all loop-free plans within a length
+tolerance) from the grounded state graph, for any STRIPS + typing problem.
 
-It grounds the problem once (:mod:`gdq_pddl.pddl.grounding`), then for each query
-finds the shortest length ``L`` by A* with h_max (:mod:`gdq_pddl.planning.heuristic`)
-and builds, breadth first, the part of the state graph with ``depth + h_max <= L``
-(or the tolerance's bound) as a :class:`networkx.DiGraph`: h_max is admissible, so
-that part holds every state of every plan within the bound, and the rest of the state
-space (which doubles with every door of a building) is never generated. Goal states are
-not expanded: a plan ends where the goal first holds. With ``tolerance == 0`` it
-returns every shortest plan (networkx's ``all_shortest_paths`` to a sink joined to
-every goal state); with ``tolerance = t`` it returns every loop-free plan of at most
-``floor((1 + t) * L)`` actions by a depth-first search pruned with each state's
-distance to the goal. Works for any STRIPS + typing problem, not only the office.
+Per query, A* with h_max (:mod:`gdq_pddl.planning.heuristic`) finds the shortest length
+``L``; a breadth-first search then keeps only the states with ``depth + h_max <=
+floor((1 + t) L)`` (h_max is admissible, so no plan within the bound is lost, and the
+rest of the state space is never generated), as a :class:`networkx.DiGraph`. Goal states
+are not expanded: a plan ends where the goal first holds.
 """
 
 from __future__ import annotations
@@ -83,13 +78,8 @@ class GraphPlanner:
 
     def _explore(self, problem: PlanningProblem, s0: int, goal: tuple[int, int],
                  tolerance: float) -> tuple[nx.DiGraph, list[int], int]:
-        """The part of the state graph that plans within the tolerance can use.
-
-        First A* with h_max finds the shortest length ``L``; then a breadth-first search
-        keeps only states with ``depth + h_max <= bound`` (``bound = floor((1+t) L)``).
-        h_max is admissible, so every state of every plan of at most ``bound`` actions
-        is kept, at its BFS depth, and the rest of the state space is never generated.
-        """
+        """The part of the state graph that plans within the tolerance can use (see the
+        module docstring), its goal states and the shortest length."""
         task = problem.task
         hmax = hmax_for(task)
         h_cache: dict[int, int] = {}

@@ -1,16 +1,9 @@
-"""h_max, the admissible delete-relaxation heuristic, compiled for a grounded task.
+"""h_max, the admissible and consistent delete-relaxation heuristic (Bonet & Geffner 2001),
+compiled for a grounded task.
 
-For a state ``s`` and a goal (a set of facts), h_max is the cost of the most expensive
-goal fact when every action costs 1, delete effects and negative preconditions are
-ignored, and the cost of a set of facts is the cost of its most expensive member
-(Bonet & Geffner 2001). It never overestimates the length of a shortest plan, and it is
-consistent (it drops by at most 1 per action), so a search that keeps only states with
-``g + h <= L`` keeps every state of every plan of at most ``L`` actions.
-
-With unit costs h_max is a breadth-first search over facts: a fact first reached in
+With unit costs h_max is a breadth-first search over facts (a fact first reached in
 layer ``k`` costs ``k``; an operator fires once all its positive preconditions are
-reached, in the layer after its last one. :func:`_hmax` runs it in compiled code over
-CSR arrays, stopping as soon as every goal fact is reached.
+reached); :func:`_hmax` runs it over CSR arrays and stops when every goal fact is reached.
 """
 
 from __future__ import annotations

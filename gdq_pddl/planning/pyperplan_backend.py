@@ -1,15 +1,9 @@
 """One optimal plan from pyperplan, run through unified-planning.
 
-The query is handed to unified-planning's ``pyperplan`` engine as a problem parsed from
-the PDDL text (see :mod:`gdq_pddl.planning.validate` for how it is built). The engine's
-default search, weighted A* with h_add, is not optimal; this backend asks for A* with
-h_max, which is admissible, so the plan has the shortest length (actions cost 1).
-The plan's intermediate states are computed by replaying its actions on the grounded
-task, which also checks that pyperplan and our grounder agree.
-
-With ``tolerance > 0`` the result is still the one optimal plan: pyperplan finds a
-single plan, and a shortest plan is within any tolerance. Use ``graph`` or ``clingo``
-for every plan within a tolerance.
+The query goes to unified-planning's ``pyperplan`` engine with A* and h_max (admissible,
+so the plan is a shortest one; the engine's default search is not optimal). The plan's
+states are replayed on the grounded task, which also checks that pyperplan and our
+grounder agree. With ``tolerance > 0`` the result is still the one optimal plan.
 """
 
 from __future__ import annotations

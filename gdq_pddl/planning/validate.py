@@ -1,14 +1,10 @@
 """Check plans with unified-planning's plan validator, and the bridge to unified-planning.
 
-:func:`validate_plan` replays a :class:`~gdq_pddl.planning.base.Plan` with
-unified-planning's sequential plan validator, independently of our own grounder, and
-also checks that the plan's recorded states are the ones its actions lead through.
-
-The bridge (:func:`up_problem`, :func:`up_action_name`) is shared with the pyperplan
-backend: the domain and problem are parsed by unified-planning's PDDL reader once per
-:class:`~gdq_pddl.planning.base.PlanningProblem` (the first parse in a process builds
-the reader's grammar and takes about a second), and each query is a clone of that with
-another initial state and goal. unified-planning is imported only when needed.
+:func:`validate_plan` replays a plan with unified-planning's sequential plan validator,
+independently of our own grounder, and checks its recorded states. The bridge
+(:func:`up_problem`, :func:`up_action_name`), shared with the pyperplan backend, parses
+the domain and problem once per :class:`~gdq_pddl.planning.base.PlanningProblem` and
+clones it per query with another initial state and goal.
 """
 
 from __future__ import annotations
