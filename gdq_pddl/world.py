@@ -258,7 +258,7 @@ def load_world(path: str | Path | None = None) -> World:
     Raises :class:`WorldError` naming the file and key of the first problem found.
     """
     if path is None:
-        return parse_world(world_text("office"), source="office.toml (built in)")
+        return builtin_world("office")
     path = Path(path)
     return parse_world(read_text(path, lambda src, msg: WorldError(src, "", msg)),
                        source=str(path))
@@ -292,22 +292,14 @@ def as_world(world: str | Path | World | None) -> World:
 
 
 def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
-    """The task to run: by name, from start/goal, or the default.
-
-    The default is task ``C`` when the world has one, else the world's first task.
-    Raises :class:`WorldError` if start and goal are the same position.
-    """
+    """The task to run (see :meth:`World.resolve`): by name, from start/goal, or the
+    default, task ``C`` when the world has one, else the world's first task."""
     if task is None and start is None and goal is None:
         if DEFAULT_TASK not in world.tasks and world.tasks:
             task = next(iter(world.tasks))
         else:
             task = DEFAULT_TASK
-    chosen = world.resolve(task=task, start=start, goal=goal)
-    if chosen.start == chosen.goal:
-        raise WorldError(world.source, f"tasks.{chosen.name}" if task else "start/goal",
-                         f"start and goal are the same position ({chosen.start}); "
-                         "the episode would be over before it begins")
-    return chosen
+    return world.resolve(task=task, start=start, goal=goal)
 
 
 def parse_world(text: str, source: str = "<string>") -> World:

@@ -26,7 +26,8 @@ except ImportError:  # pragma: no cover (not POSIX: no lock, as before)
 LOCK_NAME = ".lock"
 
 __all__ = ["FolderLock", "ResultsError", "changed_input", "close_inherited_locks",
-           "input_hashes", "load_unit", "read_config", "read_unit", "unit_path"]
+           "input_hashes", "load_unit", "read_config", "read_unit", "resume_config",
+           "unit_path"]
 
 
 _HELD: set[int] = set()
@@ -111,6 +112,30 @@ def read_config(path: Path) -> dict:
         raise ResultsError(f"{path} is damaged (a JSON {type(raw).__name__}, not an "
                            "object); --resume cannot go on: start again in another --out")
     return raw
+
+
+def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | None:
+    """The ``config.json`` of the run ``resume`` continues (None when not resuming).
+
+    Refuses a folder that holds results (``held``; ``results`` names them) without
+    ``resume``, and, with it, a folder without results or without ``config.json``.
+    """
+    cfg_path = out / "config.json"
+    if held and not resume:
+        if cfg_path.exists():
+            raise ResultsError(f"{out} already holds results: continue them with --resume, "
+                               "or choose another --out")
+        raise ResultsError(f"{out} holds results ({results}) but no config.json saying of "
+                           "what: they cannot be checked, so they are not reused; choose "
+                           "another --out, or delete them")
+    if not resume:
+        return None
+    if not cfg_path.exists():
+        if held:
+            raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
+        raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
+                           "there); to start one, give the same command without --resume")
+    return read_config(cfg_path)
 
 
 def input_hashes(files: Iterable[str]) -> dict[str, str]:

@@ -61,14 +61,6 @@ CASES: tuple[Case, ...] = (
 KNOWLEDGE_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
 
 
-def accurate_name(case: Case) -> str:
-    return f"{case.name}--accurate"
-
-
-def wrong_name(case: Case) -> str:
-    return f"{case.name}--wrong"
-
-
 def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
                           methods: tuple[str, ...] = KNOWLEDGE_METHODS,
                           cases: tuple[Case, ...] = CASES, planner: str = "graph"
@@ -79,8 +71,8 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
     for c in cases:
         common = {"methods": methods, "runs": runs, "seed": seed, "planner": planner,
                   "world": c.real}
-        out.append(Experiment(accurate_name(c), ((c.task, episodes),), **common))
-        out.append(Experiment(wrong_name(c), ((c.task, episodes),), knowledge=c.knowledge,
+        out.append(Experiment(f"{c.name}--accurate", ((c.task, episodes),), **common))
+        out.append(Experiment(f"{c.name}--wrong", ((c.task, episodes),), knowledge=c.knowledge,
                               **common))
     return out
 

@@ -45,6 +45,7 @@ from gdq_pddl.experiments.folder import (
     input_hashes,
     read_config,
     read_unit,
+    resume_config,
     unit_path,
 )
 from gdq_pddl.experiments.protocol import Experiment, Unit
@@ -162,22 +163,8 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
     config = config_of(experiments) | {"inputs": input_hashes(input_files(experiments))}
-    cfg_path = out / "config.json"
-    if not resume and _held(out):
-        if cfg_path.exists():
-            raise ResultsError(f"{out} already holds results: continue them with --resume, "
-                               "or choose another --out")
-        raise ResultsError(f"{out} holds results (units/*.npz or episodes.csv) but no "
-                           "config.json saying of what: they cannot be checked, so they are "
-                           "not reused; choose another --out, or delete them")
-    if resume:
-        if not cfg_path.exists():
-            if _held(out):
-                raise ResultsError(f"{out}: config.json is missing, cannot check what to "
-                                   "resume")
-            raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
-                               "there); to start one, give the same command without --resume")
-        old = read_config(cfg_path)
+    old = resume_config(out, _held(out), resume, "units/*.npz or episodes.csv")
+    if old is not None:
         new = json.loads(json.dumps(config["experiments"]))
         if old.get("experiments") != new:
             raise ResultsError(f"{out} holds results of a different configuration "
@@ -195,7 +182,7 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     remove_temporary(out)
     remove_temporary(out / "units")
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
+    atomic_write(out / "config.json", lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
     done = [u for u in units if unit_path(out, u).exists()]
     if resume:
         for u in done:  # a damaged unit file: say which, before running the others

@@ -37,7 +37,13 @@ from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
-from gdq_pddl.experiments.folder import FolderLock, ResultsError, load_unit, read_config
+from gdq_pddl.experiments.folder import (
+    FolderLock,
+    ResultsError,
+    load_unit,
+    read_config,
+    resume_config,
+)
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
 from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
 from gdq_pddl.learners import make_learner
@@ -318,16 +324,8 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
     remove what a killed write left; write ``config.json``."""
     cfg_path = out / "config.json"
     held = cfg_path.exists() or (out / "units").exists() or any(out.glob("building-*.npz"))
-    if held and not resume:
-        raise ResultsError(f"{out} holds results: continue them with --resume, "
-                           "or choose another --out")
-    if resume and not held:
-        raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
-                           "there); to start one, give the same command without --resume")
-    if held:
-        if not cfg_path.exists():
-            raise ResultsError(f"{out}: config.json is missing, cannot check what to resume")
-        old = read_config(cfg_path)
+    old = resume_config(out, held, resume, "units/ or building-*.npz")
+    if old is not None:
         differ = [f"{k} {old.get(k)} there, {v} now" for k, v in config.items()
                   if old.get(k) != v]
         if differ:
@@ -341,7 +339,7 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
     # those appear only by an atomic rename)
     for stale in out.glob("**/.*.tmp"):
         stale.unlink(missing_ok=True)
-    if held:  # keep the record of the run being continued (its versions, its start)
+    if old is not None:  # keep the record of the run being continued (its versions, start)
         return
     config = config | {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))

@@ -189,6 +189,21 @@ class PlanningProblem:
                 f"  (:goal (and {' '.join(sorted(goal))})))\n")
 
 
+def replay(task: GroundTask, state: int, actions: tuple[str, ...]) -> Plan:
+    """The plan of ``actions`` from the bitmask ``state``, with the states they lead
+    through on the grounded task; :class:`PlanningError` naming the first step that does
+    not apply."""
+    ops = {op.name: op for op in task.ops}
+    states = [state]
+    for i, action in enumerate(actions):
+        op = ops.get(action)
+        if op is None or not op.applicable(states[-1]):
+            raise PlanningError(f"step {i + 1} of the plan, {action}, is not applicable in "
+                                "the grounded task")
+        states.append(op.apply(states[-1]))
+    return Plan(actions, tuple(task.atoms(s) for s in states))
+
+
 def check_size(problem: Problem, source: str) -> None:
     """Refuse, naming ``source``, a problem too large to plan over: one whose initial state
     has more than :data:`~gdq_pddl.limits.MAX_INIT_ATOMS` atoms (grounding keeps a

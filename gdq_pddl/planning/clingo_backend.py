@@ -17,6 +17,7 @@ from collections import deque
 from typing import Any
 
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.pddl.grounding import _bits
 from gdq_pddl.planning.base import (
     Plan,
     PlanningProblem,
@@ -193,11 +194,4 @@ def _replay(task, s0: int, ops: tuple[int, ...]) -> Plan:
     for i in ops:
         states.append(task.ops[i].apply(states[-1]))
     return Plan(tuple(task.ops[i].name for i in ops), tuple(task.atoms(s) for s in states))
-
-
-def _bits(mask: int):
-    while mask:
-        low = mask & -mask
-        yield low.bit_length() - 1
-        mask ^= low
 

@@ -12,7 +12,7 @@ import time
 from importlib.util import find_spec
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.planning.base import Plan, PlanningProblem, PlanResult, State, Status
+from gdq_pddl.planning.base import PlanningProblem, PlanResult, State, Status, replay
 from gdq_pddl.planning.validate import up_action_name, up_problem
 
 SEARCH = {"search": "astar", "heuristic": "hmax"}
@@ -53,7 +53,8 @@ class PyperplanPlanner:
         if result.status not in (S.SOLVED_SATISFICING, S.SOLVED_OPTIMALLY):
             raise PlanningError(f"pyperplan did not solve the problem: {result.status.name}")
         actions = tuple(up_action_name(a) for a in result.plan.actions)
-        plan = _replay(problem, start, actions)
+        task = problem.task
+        plan = replay(task, task.init if start is None else task.mask(start), actions)
         metrics = {"time_s": time.perf_counter() - t0, "plans": 1}
         engine_time = result.metrics.get("engine_internal_time") if result.metrics else None
         if engine_time is not None:
@@ -74,18 +75,3 @@ class PyperplanPlanner:
         except Exception as exc:
             raise PlanningError(f"pyperplan failed: {type(exc).__name__}: {exc}") from None
 
-
-def _replay(problem: PlanningProblem, start: State | None, actions: tuple[str, ...]) -> Plan:
-    """The plan with the states its actions lead through on the grounded task."""
-    task = problem.task
-    ops = {op.name: op for op in task.ops}
-    state = task.init if start is None else task.mask(start)
-    states = [state]
-    for action in actions:
-        op = ops.get(action)
-        if op is None or not op.applicable(state):
-            raise PlanningError(f"pyperplan's plan step {action} is not applicable in the "
-                                "grounded task")
-        state = op.apply(state)
-        states.append(state)
-    return Plan(actions, tuple(task.atoms(s) for s in states))

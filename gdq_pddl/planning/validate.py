@@ -13,7 +13,7 @@ import weakref
 from typing import TYPE_CHECKING, Any
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.planning.base import Plan, PlanningProblem, State
+from gdq_pddl.planning.base import Plan, PlanningProblem, State, replay
 
 if TYPE_CHECKING:
     from unified_planning.model import Problem as UPProblem
@@ -142,20 +142,9 @@ def validate_plan(problem: PlanningProblem, plan: Plan, start: State | None = No
         where = f" at {up_action_name(bad)}" if bad is not None else ""
         raise PlanningError(f"plan rejected by unified-planning's validator ({why}{where}): "
                             f"{' '.join(plan.actions) or '(empty plan)'}")
-    _check_states(problem, plan)
-
-
-def _check_states(problem: PlanningProblem, plan: Plan) -> None:
-    """The plan's states must be the ones its actions lead through on the grounded task."""
-    task = problem.task
-    ops = {op.name: op for op in task.ops}
-    state = task.mask(plan.states[0])
-    for i, action in enumerate(plan.actions):
-        op = ops.get(action)
-        if op is None or not op.applicable(state):
-            raise PlanningError(f"step {i + 1} of the plan, {action}, is not applicable in "
-                                "the grounded task")
-        state = op.apply(state)
-        if task.atoms(state) != plan.states[i + 1]:
+    # the plan's states must be the ones its actions lead through on the grounded task
+    replayed = replay(problem.task, problem.task.mask(plan.states[0]), plan.actions).states
+    for i, (state, action) in enumerate(zip(plan.states[1:], plan.actions, strict=True)):
+        if state != replayed[i + 1]:
             raise PlanningError(f"state {i + 1} of the plan is not the state {action} leads "
                                 "to")
