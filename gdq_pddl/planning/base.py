@@ -68,6 +68,12 @@ class PlanResult:
         return min((len(p) for p in self.plans), default=None)
 
 
+def no_plan(planner: str, started: float, **metrics: float) -> PlanResult:
+    """The answer "no plan", timed from ``started`` (``time.perf_counter()``)."""
+    return PlanResult(Status.NO_PLAN, (), planner,
+                      {"time_s": time.perf_counter() - started, **metrics, "plans": 0})
+
+
 class PlanningProblem:
     """A parsed domain and problem; grounded on first use, then shared by all queries.
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections import deque
 from typing import Any
 
 from gdq_pddl.errors import PlanningError
@@ -25,7 +24,9 @@ from gdq_pddl.planning.base import (
     State,
     Status,
     length_bound,
+    no_plan,
 )
+from gdq_pddl.planning.graph import shortest_length
 
 ENCODING = """
 #program base.
@@ -88,11 +89,9 @@ class ClingoPlanner:
         if q.hit is not None:
             return q.hit
         key, t0, task, s0, gmask = q.key, q.started, problem.task, q.start, q.goal
-        distance = None if gmask is None else _distance(task, s0, gmask)
+        distance = None if gmask is None else shortest_length(task, s0, gmask)
         if distance is None:
-            return problem.remember(key, PlanResult(
-                Status.NO_PLAN, (), self.name,
-                {"time_s": time.perf_counter() - t0, "plans": 0}))
+            return problem.remember(key, no_plan(self.name, t0))
         found, shortest, horizons, capped = self._search(task, s0, gmask, distance, tolerance)
         if capped:
             warnings.warn(f"clingo planner: more than {self.max_plans} plans within tolerance "
@@ -172,21 +171,6 @@ def _facts(task, s0: int, goal: tuple[int, int]) -> str:
     out.extend(f"goal({b})." for b in _bits(goal[0]))
     out.extend(f"goal_neg({b})." for b in _bits(goal[1]))
     return "\n".join(out)
-
-
-def _distance(task, s0: int, goal: tuple[int, int]) -> int | None:
-    """Breadth-first distance from ``s0`` to the nearest goal state, or None if unreachable."""
-    depth = {s0: 0}
-    queue = deque([s0])
-    while queue:
-        s = queue.popleft()
-        if task.is_goal(s, goal):
-            return depth[s]
-        for _, t in task.successors(s):
-            if t not in depth:
-                depth[t] = depth[s] + 1
-                queue.append(t)
-    return None
 
 
 def _replay(task, s0: int, ops: tuple[int, ...]) -> Plan:

@@ -25,6 +25,7 @@ from gdq_pddl.planning.base import (
     State,
     Status,
     length_bound,
+    no_plan,
 )
 from gdq_pddl.planning.heuristic import INFINITE, hmax_for
 
@@ -54,10 +55,11 @@ class GraphPlanner:
             return q.hit
         key, t0, task, s0, gmask = q.key, q.started, problem.task, q.start, q.goal
         if gmask is None:
-            return problem.remember(key, self._none(t0, 0))
+            return problem.remember(key, no_plan(self.name, t0, states=0))
         graph, goals, depth = self._explore(problem, s0, gmask, tolerance)
         if not goals:
-            return problem.remember(key, self._none(t0, graph.number_of_nodes()))
+            return problem.remember(key, no_plan(self.name, t0,
+                                                 states=graph.number_of_nodes()))
         if tolerance == 0:
             paths = nx.all_shortest_paths(graph, s0, _SINK)
         else:
@@ -71,10 +73,6 @@ class GraphPlanner:
                    "generated": self._generated, "plans": len(plans)}
         return problem.remember(key, PlanResult(Status.SOLVED, tuple(plans), self.name,
                                                 metrics, capped))
-
-    def _none(self, t0: float, states: int) -> PlanResult:
-        return PlanResult(Status.NO_PLAN, (), self.name,
-                          {"time_s": time.perf_counter() - t0, "states": states, "plans": 0})
 
     def _explore(self, problem: PlanningProblem, s0: int, goal: tuple[int, int],
                  tolerance: float) -> tuple[nx.DiGraph, list[int], int]:
@@ -92,7 +90,7 @@ class GraphPlanner:
 
         graph = nx.DiGraph()
         graph.add_node(s0)
-        shortest = _astar(task, s0, goal, h)
+        shortest = shortest_length(task, s0, goal, h)
         if shortest is None:
             return graph, [], 0
         bound = length_bound(shortest, tolerance)
@@ -142,9 +140,9 @@ class GraphPlanner:
         return plans, False
 
 
-def _astar(task, s0: int, goal: tuple[int, int], h) -> int | None:
-    """Length of a shortest plan from ``s0`` by A* with the consistent heuristic ``h``,
-    or None when there is none."""
+def shortest_length(task, s0: int, goal: tuple[int, int], h=lambda s: 0) -> int | None:
+    """Length of a shortest plan from ``s0`` by A* with the consistent heuristic ``h``
+    (default 0: a breadth-first search), or None when there is none."""
     h0 = h(s0)
     if h0 == INFINITE:
         return None

@@ -12,7 +12,7 @@ import time
 from importlib.util import find_spec
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.planning.base import PlanningProblem, PlanResult, State, Status, replay
+from gdq_pddl.planning.base import PlanningProblem, PlanResult, State, Status, no_plan, replay
 from gdq_pddl.planning.validate import up_action_name, up_problem
 
 SEARCH = {"search": "astar", "heuristic": "hmax"}
@@ -42,14 +42,14 @@ class PyperplanPlanner:
             return q.hit
         key, t0 = q.key, q.started
         if q.goal is None:  # a goal no action can make true: no need to ask pyperplan
-            return problem.remember(key, self._none(t0))
+            return problem.remember(key, no_plan(self.name, t0))
         up = up_problem(problem, start, goal)
         result = self._run(up)
         # unified-planning: imported once it is known to be there (and for start-up time)
         from unified_planning.engines import PlanGenerationResultStatus as S
 
         if result.status in (S.UNSOLVABLE_PROVEN, S.UNSOLVABLE_INCOMPLETELY):
-            return problem.remember(key, self._none(t0))
+            return problem.remember(key, no_plan(self.name, t0))
         if result.status not in (S.SOLVED_SATISFICING, S.SOLVED_OPTIMALLY):
             raise PlanningError(f"pyperplan did not solve the problem: {result.status.name}")
         actions = tuple(up_action_name(a) for a in result.plan.actions)
@@ -60,10 +60,6 @@ class PyperplanPlanner:
         if engine_time is not None:
             metrics["engine_time_s"] = float(engine_time)
         return problem.remember(key, PlanResult(Status.SOLVED, (plan,), self.name, metrics))
-
-    def _none(self, t0: float) -> PlanResult:
-        return PlanResult(Status.NO_PLAN, (), self.name,
-                          {"time_s": time.perf_counter() - t0, "plans": 0})
 
     @staticmethod
     def _run(up):
