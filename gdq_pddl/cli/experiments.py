@@ -36,11 +36,10 @@ from gdq_pddl.experiments import (
     robot_experiment,
     switch_experiment,
 )
-from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments
+from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
 from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS as SCALE_DEFAULT_METHODS
 from gdq_pddl.experiments.scale_methods import METHODS as SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
-from gdq_pddl.experiments.worlds import world_name
 from gdq_pddl.outputs import output_folder
 
 

@@ -1,31 +1,106 @@
-"""Experiments where the robot's knowledge (the PDDL) disagrees with reality (the world).
+"""What a world name of an experiment means, and the experiments where the robot's
+knowledge (the PDDL) disagrees with reality (the world).
+
+A world name is told apart by its form alone, never by the files in the working
+directory: ``office`` or ``office_robot`` (shipped with the package); ``office:<variant>``
+(derived from the office in memory, :data:`WORLDS`); anything else is the path of a world
+file (the command line records ``--world`` by its absolute path, :func:`world_name`).
 
 An :class:`~gdq_pddl.experiments.protocol.Experiment` names the real world the env
 simulates in ``world`` and the world the knowledge is built from in ``knowledge`` (None:
 the real world itself). Both have the same positions and doors, so the learner spaces are
-the same and only the knowledge differs. The derived worlds (``office:<variant>``) are
-built in memory by :mod:`gdq_pddl.experiments.worlds`; the :data:`CASES` all use Task C,
-each also run with accurate knowledge as its reference (``docs/decisions.md``).
+the same and only the knowledge differs. The :data:`CASES` all use Task C, each also run
+with accurate knowledge as its reference (``docs/decisions.md``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from functools import cache
+from pathlib import Path
 
+from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Experiment
-from gdq_pddl.experiments.worlds import (
-    PASSAGE,
-    WORLDS,
-    derived_world,
-    load_world_named,
-    with_edge,
-)
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World
+from gdq_pddl.world import World, builtin_world, load_world
 
-__all__ = ["CASES", "KNOWLEDGE_METHODS", "PASSAGE", "WORLDS", "Case", "derived_world",
-           "knowledge_experiments", "knowledge_world", "with_edge"]
+BUILTIN = ("office", "office_robot")
+"""The names of the worlds shipped with the package."""
+
+DERIVED_PREFIX = "office:"
+"""How the names of in-memory worlds derived from the office begin."""
+
+PASSAGE = ("p8", "p17")
+"""The corridor that exists in reality but not in the knowledge (case ``passage``)."""
+
+
+def is_file_name(name: str) -> bool:
+    """Whether the world name ``name`` is the path of a world file (not built in)."""
+    return name not in BUILTIN and not name.startswith(DERIVED_PREFIX)
+
+
+def world_name(path: Path | None) -> str:
+    """The name an experiment records for the ``--world`` option ``path``: ``office`` for
+    none, else the file's absolute path (which no built-in name can be mistaken for)."""
+    return "office" if path is None else str(Path(path).absolute())
+
+
+@cache
+def load_world_named(name: str) -> World:
+    """The world ``name`` means (see the module docstring), loaded once per process."""
+    if name in BUILTIN:
+        return builtin_world(name)
+    if name.startswith(DERIVED_PREFIX):
+        return derived_world(name)
+    return load_world(Path(name))
+
+
+def with_edge(world: World, a: str, b: str) -> World:
+    """``world`` with an extra walkway ``a``-``b`` (both must be existing positions)."""
+    for p in (a, b):
+        world.position(p)  # raises WorldError for an unknown position
+    if frozenset((a, b)) in {frozenset(e) for e in world.edges}:
+        raise GdqError(f"{world.name} already has the edge {a}-{b}")
+    return replace(world, edges=(*world.edges, (a, b)))
+
+
+def _office() -> World:
+    return builtin_world("office")
+
+
+def _locked(door: str) -> Callable[[], World]:
+    def build() -> World:
+        return replace(with_door(_office(), door, success=0.0, stuck=0.0),
+                       name=f"office-locked-{door}")
+    return build
+
+
+def _passage() -> World:
+    return replace(with_edge(_office(), *PASSAGE), name="office-passage")
+
+
+def _deterministic() -> World:
+    return deterministic_world(_office())
+
+
+WORLDS: dict[str, Callable[[], World]] = {
+    "office:locked-d1": _locked("d1"),
+    "office:locked-d3": _locked("d3"),
+    "office:passage": _passage,
+    "office:deterministic": _deterministic,
+}
+"""In-memory derived worlds by name (resolved by :func:`load_world_named`)."""
+
+
+@cache
+def derived_world(name: str) -> World:
+    """The derived world ``name`` (a key of :data:`WORLDS`), built once per process."""
+    try:
+        return WORLDS[name]()
+    except KeyError:
+        raise GdqError(f"unknown derived world {name!r} (known: {', '.join(WORLDS)})") from None
 
 
 @dataclass(frozen=True)

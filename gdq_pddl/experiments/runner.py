@@ -48,9 +48,9 @@ from gdq_pddl.experiments.folder import (
     resume_config,
     unit_path,
 )
+from gdq_pddl.experiments.knowledge import is_file_name
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import run_unit, warm_up
-from gdq_pddl.experiments.worlds import is_file_name
 from gdq_pddl.limits import check_count
 from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
 

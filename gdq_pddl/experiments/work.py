@@ -14,9 +14,8 @@ import numpy as np
 
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
-from gdq_pddl.experiments.knowledge import knowledge_world
+from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
-from gdq_pddl.experiments.worlds import load_world_named
 from gdq_pddl.learners import precompile
 from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
