@@ -11,6 +11,7 @@ numba gets a cache folder of its own (``NUMBA_CACHE_DIR``).
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
@@ -18,6 +19,9 @@ import os
 import pickletools
 import tempfile
 from pathlib import Path
+
+from gdq_pddl.errors import GdqError
+from gdq_pddl.outputs import atomic_write
 
 PACKAGE = Path(__file__).resolve().parent
 JIT_FOLDERS = ("envs", "learners", "planning")
@@ -122,13 +126,7 @@ def remove_damaged(root: Path = PACKAGE) -> list[Path]:
 
 
 def _write_record(path: Path, checked: dict[str, list[int]]) -> None:
-    """Save the list of files read whole (atomically; nothing if the folder is
-    read-only: the files are then read again by the next process)."""
-    try:
-        path.parent.mkdir(exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        with os.fdopen(fd, "w") as fh:
-            json.dump(checked, fh)
-        os.replace(tmp, path)
-    except OSError:
-        return
+    """Save the list of files read whole (nothing if the folder is read-only: the files
+    are then read again by the next process)."""
+    with contextlib.suppress(OSError, GdqError):
+        atomic_write(path, lambda tmp: tmp.write_text(json.dumps(checked)))

@@ -86,11 +86,11 @@ def address_space_refusal(minimum: int = MIN_ADDRESS_SPACE) -> str | None:
 
 def human_bytes(n: float) -> str:
     """``1.5 GB``, ``17.7 TB``: decimal units, three significant digits."""
-    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
-        if abs(n) < 1000 or unit == "PB":
+    for unit in ("B", "kB", "MB", "GB", "TB"):
+        if abs(n) < 1000:
             return f"{n:.3g} {unit}"
         n /= 1000
-    return f"{n:.3g} PB"  # pragma: no cover (the loop always returns)
+    return f"{n:.3g} PB"
 
 
 def check_memory(need: float, what: str, fix: str) -> None:

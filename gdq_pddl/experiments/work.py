@@ -114,16 +114,11 @@ def warm_up(units: list[Unit]) -> None:
             tiny[u.experiment.world, u.method] = Unit(exp, u.method, 0)
     loop = precompile.start()
     try:
-        for unit in tiny.values():
-            first_learner(unit)
+        for unit in tiny.values():  # a learner for the first task: its OptInit kernels
+            exp = unit.experiment
+            make_learner(unit.method, context_of(exp, instance_of(exp, exp.schedule[0][0])),
+                         exp.hyper)
     finally:
         precompile.wait(loop)
     for unit in tiny.values():
         run_unit(unit)
-
-
-def first_learner(unit: Unit):
-    """A learner of ``unit`` for its first task, OptInit done (what it learns from)."""
-    exp = unit.experiment
-    context = context_of(exp, instance_of(exp, exp.schedule[0][0]))
-    return make_learner(unit.method, context, exp.hyper)
