@@ -46,6 +46,14 @@ class CostDist:
         return (self.a + self.b) / 2 if self.kind == "uniform" else self.a
 
 
+def read_toml(text: str, source: str) -> dict[str, Any]:
+    """The tables of a TOML text; :class:`WorldError` naming ``source`` if it is not TOML."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise WorldError(source, "", f"not valid TOML: {exc}") from None
+
+
 class Checks:
     """The checks every data file of reality shares (world and dynamics files): strict
     keys, typed values, finite numbers of at most :data:`MAX_NUMBER` in size,
@@ -188,11 +196,8 @@ def split_action(name: str) -> tuple[str, tuple[str, ...]]:
 def parse_dynamics(text: str, domain: Domain, problem: Problem,
                    source: str = "<string>", overlay: bool = False) -> Dynamics:
     """Validate the TOML ``text`` of a dynamics file; ``source`` names it in errors."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise WorldError(source, "", f"not valid TOML: {exc}") from None
-    return _DynamicsValidator(source, raw, domain, problem, overlay).dynamics()
+    return _DynamicsValidator(source, read_toml(text, source), domain, problem,
+                              overlay).dynamics()
 
 
 OUTCOME_KEYS = ("success", "stuck", "failure")

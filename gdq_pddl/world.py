@@ -10,7 +10,6 @@ file and key of every error. Its knowledge is ``domains/office.pddl`` with the p
 from __future__ import annotations
 
 import re
-import tomllib
 from collections import deque
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
@@ -18,7 +17,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
-from gdq_pddl.dynamics import Checks, CostDist, Dynamics, Outcomes
+from gdq_pddl.dynamics import Checks, CostDist, Dynamics, Outcomes, read_toml
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.resources import world_text
@@ -304,11 +303,7 @@ def pick_task(world: World, task: str | None, start: str | None, goal: str | Non
 
 def parse_world(text: str, source: str = "<string>") -> World:
     """Validate the TOML ``text`` of a world file; ``source`` names it in errors."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise WorldError(source, "", f"not valid TOML: {exc}") from None
-    return _WorldChecks(source, raw).world()
+    return _WorldChecks(source, read_toml(text, source)).world()
 
 
 class _WorldChecks(Checks):

@@ -54,8 +54,11 @@ from gdq_pddl.limits import check_count, check_memory
 from gdq_pddl.outputs import output_folder
 
 WINDOW = 50
+"""Episodes of the moving average of the return that decides convergence."""
 FRACTION = 0.9
+"""A run has converged once that average reaches ``r_fail + FRACTION (v_ref - r_fail)``."""
 TOLERANCE = 0.3
+"""Plan-length tolerance of DARLING's and GDQ-code's door-route plans."""
 FIRST = 300
 """Episodes of the early-learning measure: the mean return over the first ``FIRST``
 episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
@@ -101,7 +104,7 @@ class BuildingResult:
 
     @property
     def threshold(self) -> float:
-        """The moving average a converged run stays at or above."""
+        """The moving average at which a run has converged (:func:`converged_at`)."""
         return self.r_fail + FRACTION * (self.v_ref - self.r_fail)
 
     def steps_per_s(self, name: str) -> float:
@@ -124,7 +127,8 @@ def building_name(positions: int, seed: int) -> str:
 
 
 def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) -> int | None:
-    """Episodes to convergence of one run (see the module docstring), or None."""
+    """Episodes to convergence of one run: the first episode at which the trailing
+    ``window``-episode mean return reaches ``threshold`` (first passage), or None."""
     if len(returns) < window:
         return None
     avg = np.convolve(returns, np.ones(window) / window, mode="valid")
