@@ -162,11 +162,8 @@ def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Ex
 
 
 def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
-    """SPEC section 6: the real-robot protocol, simulated with durations as costs.
-
-    The paper compared GDQ with Dyna-Q; the two readings of the paper's GDQ are run
-    too by default, as in every other experiment of the report.
-    """
+    """SPEC section 6: the real-robot protocol, simulated with durations as costs (GDQ,
+    the two readings of the paper's GDQ, and Dyna-Q, which the paper compared it with)."""
     kw.setdefault("methods", ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"))
     return Experiment("robot", (("X", trials),), runs=runs, world="office_robot",
                       hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)

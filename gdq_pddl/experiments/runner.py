@@ -153,13 +153,9 @@ def _difference(old: object, new: list) -> str:
 
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
             arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
-    """Check or create ``out``; return the units still to run (on ``resume``, every saved
-    unit is read first: one without ``arrays`` is named as damaged).
-
-    Saved results are reused only on ``resume``, and only when ``config.json`` says they
-    are of the same experiments and inputs: without ``resume`` a folder holding any (a
-    unit file, ``episodes.csv``) is refused, whether or not its ``config.json`` is there.
-    """
+    """Check or create ``out``; return the units still to run. Saved results are reused
+    only on ``resume``, when ``config.json`` says they are of the same experiments and
+    inputs (each saved unit is read first: one without ``arrays`` is named as damaged)."""
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
     config = config_of(experiments) | {"inputs": input_hashes(input_files(experiments))}

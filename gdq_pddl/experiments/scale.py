@@ -247,15 +247,9 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
               buildings: int = 2, methods: list[str] | None = None, resume: bool = False,
               progress: bool = True, log: Callable[[str], None] | None = None,
               command: str | None = None) -> list[BuildingResult]:
-    """Run every building of every size into ``out``, each (size, building, method, run)
-    saved as it finishes; then ``building-N-sS.npz`` from the saved runs. Returns the
-    buildings' results, by size then seed (the report is drawn from them by the analysis
-    layer).
-
-    ``resume=True`` checks that ``out/config.json`` holds the same configuration and
-    runs only the missing units. On Ctrl-C raises :class:`RunInterrupted`, whose message
-    says how to continue (``command``, the command line with ``--resume``).
-    """
+    """Run every building of every size into ``out`` (see the module docstring) and return
+    their results, by size then seed. On Ctrl-C raises :class:`RunInterrupted`, whose
+    message says how to continue (``command``: the command line with ``--resume``)."""
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
     _check_buildings(seed, buildings)  # before the list of seeds is made

@@ -99,13 +99,8 @@ def load_pddl_instance(files: tuple[str, ...]):
 
 
 def warm_up(units: list[Unit]) -> None:
-    """Compile every kernel once in this process (so forked workers need not).
-
-    The episode loop compiles in a second process meanwhile
-    (:mod:`gdq_pddl.learners.precompile`): first every learner is built here (its OptInit
-    kernels), then, once the other process is done, one tiny run each loads the loop
-    from numba's cache.
-    """
+    """Compile every kernel once in this process, so forked workers need not (the episode
+    loop compiles meanwhile in a second process, :mod:`gdq_pddl.learners.precompile`)."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
         if (u.experiment.world, u.method) not in tiny:
