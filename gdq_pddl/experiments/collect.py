@@ -60,8 +60,9 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
             for unit in units:
                 exp = unit.experiment
                 key = (exp.world, exp.pddl and tuple(exp.pddl))
-                if key not in namers:
-                    namers[key] = _namers(exp)
+                if key not in namers:  # learner indices named in exp's world or problem
+                    instance = instance_of(exp, exp.schedule[0][0])
+                    namers[key] = instance.state_name, instance.action_name
                 state_name, action_name = namers[key]
                 data = read_unit(out, unit)
                 task = str(data["tasks"][-1])
@@ -73,12 +74,6 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
     atomic_write(out / "policies.csv", write_policies)
     optimal = optimal_summary(experiments)
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
-
-
-def _namers(exp: Experiment) -> tuple[Callable[[int], str], Callable[[int], str]]:
-    """``(state name, action name)`` of learner indices in ``exp``'s world or problem."""
-    instance = instance_of(exp, exp.schedule[0][0])
-    return instance.state_name, instance.action_name
 
 
 CHUNK = 50_000

@@ -191,9 +191,9 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int],
 
 
 def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
-             runs: int) -> BuildingResult:
+             runs: int, log: Callable[[str], None]) -> BuildingResult:
     """A building's :class:`BuildingResult` from its description and its (method, run)
-    units."""
+    units; ``log`` is told each method's env steps/s, table size and convergence."""
     out = BuildingResult(**header)
     for name in methods:
         done = [units[name, run] for run in range(runs)]
@@ -202,14 +202,9 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
         out.steps[name] = sum(int(u["steps"]) for u in done)
         out.wall_s[name] = sum(float(u["wall_s"]) for u in done)
         out.table_mb[name] = float(done[-1]["table_mb"])
+        log(f"  {name}: {out.steps_per_s(name):,.0f} steps/s, tables "
+            f"{out.table_mb[name]:,.0f} MB, converged at {out.converged(name)}")
     return out
-
-
-def summary(result: BuildingResult) -> list[str]:
-    """One line per method: env steps/s, table size, episodes to convergence."""
-    return [f"  {name}: {result.steps_per_s(name):,.0f} steps/s, tables "
-            f"{result.table_mb[name]:,.0f} MB, converged at {result.converged(name)}"
-            for name in result.returns]
 
 
 def run_building(positions: int, seed: int, runs: int, episodes: int,
@@ -221,10 +216,7 @@ def run_building(positions: int, seed: int, runs: int, episodes: int,
     log(describe(header))
     units = {(name, run): run_one(setting, name, (seed, positions, run), episodes)
              for name in methods for run in range(runs)}
-    result = assemble(header, units, methods, runs)
-    for line in summary(result):
-        log(line)
-    return result
+    return assemble(header, units, methods, runs, log)
 
 
 def save_building(result: BuildingResult, path) -> None:
@@ -382,7 +374,4 @@ def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, metho
               "table_mb": -1}
     units = {(m, run): load_unit(path, f"{m}, run {run} of {name}", expect, rerun)
              for (m, run), path in paths.items()}
-    result = assemble(header, units, methods, runs)
-    for line in summary(result):
-        log(line)
-    return result
+    return assemble(header, units, methods, runs, log)
