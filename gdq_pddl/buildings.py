@@ -203,20 +203,13 @@ def _rooms(b: Building, rng: np.random.Generator, rows: list[list[str]], sizes: 
             b.edges.append((room[0], room[2]))
         b.rooms.append(room)
         area += 1
-    order = rng.permutation(len(b.rooms))
-    made = 0
-    for i in order:
-        room = b.rooms[i]
-        if made == n_second:
-            break
-        if len(room) < 3:
-            continue
+    for i in rng.permutation(len(b.rooms))[:n_second]:  # a second door to some rooms
+        room = b.rooms[i]  # (of 3 positions at least)
         at = corridor[int(rng.integers(0, len(corridor)))]
         corridor_area = next(a for a, ps in b.areas.items() if at in ps)
         stub = b.add(corridor_area)
         b.edges += [(at, stub), (stub, room[-1])]
         b.doors[f"d{len(b.doors)}"] = {"sides": (stub, room[-1])}
-        made += 1
     kinds = rng.choice(len(DOOR_KINDS), size=len(b.doors),
                        p=[k[3] for k in DOOR_KINDS])
     for door, kind in zip(b.doors.values(), kinds, strict=True):
