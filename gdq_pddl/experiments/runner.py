@@ -101,11 +101,6 @@ def _stop_on_signals() -> Iterator[None]:
             signal.signal(s, handler)
 
 
-def config_of(experiments: list[Experiment]) -> dict:
-    """The JSON-able description of a list of experiments (what --resume compares)."""
-    return {"experiments": [asdict(e) for e in experiments]}
-
-
 def versions() -> dict[str, str]:
     """Versions of the packages that shape the results."""
     out = {"python": sys.version.split()[0]}
@@ -158,7 +153,8 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     inputs (each saved unit is read first: one without ``arrays`` is named as damaged)."""
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
-    config = config_of(experiments) | {"inputs": input_hashes(input_files(experiments))}
+    config = {"experiments": [asdict(e) for e in experiments],  # what --resume compares
+              "inputs": input_hashes(input_files(experiments))}
     old = resume_config(out, _held(out), resume, "units/*.npz or episodes.csv")
     if old is not None:
         new = json.loads(json.dumps(config["experiments"]))
