@@ -51,6 +51,7 @@ from gdq_pddl.learners.agents import GDQ, Darling, DynaQ, Learner, QLearning, Ta
 from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.rules import observe
+from gdq_pddl.learners.saving import GreedyPolicy
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.limits import check_count, check_memory
 
@@ -72,6 +73,16 @@ class EpisodeRecords:
 
     def __len__(self) -> int:
         return len(self.returns)
+
+    @property
+    def mean_return(self) -> float:
+        """The mean of :attr:`returns`."""
+        return float(self.returns.mean())
+
+    @property
+    def success_rate(self) -> float:
+        """The share of episodes that reached the goal, in [0, 1]."""
+        return float(self.success.mean())
 
 
 def _n_areas(env: gym.Env) -> int:
@@ -132,6 +143,24 @@ def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
     if not isinstance(env.unwrapped, CompactEnv):
         raise ConfigError(f"run_compact needs a CompactEnv, got {type(env.unwrapped).__name__}")
     return _run(learner, env, n_episodes, rng, None, max(1, _n_areas(env)))
+
+
+def evaluate_policy(env: gym.Env, policy: GreedyPolicy | TabularLearner, episodes: int = 100,
+                    seed: int = 0) -> EpisodeRecords:
+    """Run ``policy`` (a :class:`~gdq_pddl.learners.saving.GreedyPolicy`, or a learner's
+    greedy policy now) for ``episodes`` episodes in ``env`` without learning, stepping
+    it through its wrappers, after ``env.reset(seed=seed)``. The records' ``mean_return``
+    and ``success_rate`` summarise them."""
+    if isinstance(policy, TabularLearner):
+        policy = GreedyPolicy.of(policy)
+    if not isinstance(policy, GreedyPolicy):
+        raise ConfigError(f"evaluate_policy takes a GreedyPolicy or a learner, got "
+                          f"{type(policy).__name__}")
+    guards.check_env(len(policy.actions), policy.n_actions, env)
+    check_count("seed", seed)
+    env.reset(seed=seed)
+    return _run(policy, env, episodes, np.random.default_rng(seed), False,  # type: ignore
+                _n_areas(env))
 
 
 def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generator,
