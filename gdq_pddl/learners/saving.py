@@ -83,14 +83,6 @@ def _read(file: File, kind: str) -> tuple[dict[str, Any], dict[str, np.ndarray]]
     return header, arrays
 
 
-def _check_size(name: str, header: dict[str, Any], n_states: int, n_actions: int,
-                what: str) -> None:
-    saved = (header.get("n_states"), header.get("n_actions"))
-    if saved != (n_states, n_actions):
-        raise ResultsError(f"{name}: saved for {saved[0]} states x {saved[1]} actions, "
-                           f"{what} has {n_states} x {n_actions}")
-
-
 def save_learner(file: File, learner: TabularLearner, **generators: np.random.Generator
                  ) -> None:
     """Write ``learner`` (every array, its config and params) to ``file`` (module doc),
@@ -125,7 +117,11 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
     name = _name(file)
     header, arrays = _read(file, "learner")
     guards.check_context(context)
-    _check_size(name, header, context.n_states, context.n_actions, "the task context")
+    saved, size = (header.get("n_states"), header.get("n_actions")), \
+        (context.n_states, context.n_actions)
+    if saved != size:
+        raise ResultsError(f"{name}: saved for {saved[0]} states x {saved[1]} actions, the "
+                           f"task context has {size[0]} x {size[1]}")
     try:
         cls = _CLASSES[header["class"]]
         learner = cls(context, cls.config_type(**header["config"]))
@@ -208,5 +204,4 @@ class GreedyPolicy:
             policy = cls(arrays["actions"], int(header["n_actions"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise ResultsError(f"{_name(file)}: damaged policy file ({exc})") from None
-        _check_size(_name(file), header, len(policy.actions), policy.n_actions, "its array")
         return policy
