@@ -1,5 +1,7 @@
 """gdq_pddl: Guided Dyna-Q, reinforcement learning guided by a PDDL planner."""
 
+import importlib
+
 from gdq_pddl import _jit_cache
 
 _jit_cache.refresh()  # before any compiled function loads its cache (see _jit_cache)
@@ -10,15 +12,18 @@ __version__ = "0.1.0"
 
 register_envs()  # gymnasium.make("gdq_pddl/Office-v0" or "gdq_pddl/PDDL-v0", ...) after import
 
-__all__ = ["__version__", "load_results"]
+_LAZY = {"load_results": "gdq_pddl.analysis.results",
+         **dict.fromkeys(("GreedyPolicy", "evaluate_policy", "load_generators", "load_learner",
+                          "save_learner"), "gdq_pddl.learners")}
+__all__ = ["__version__", *_LAZY]
 
 
 def __getattr__(name: str):
-    """``load_results`` (:func:`gdq_pddl.analysis.results.load_results`: an output
-    folder's episodes as a pandas DataFrame), imported on first use: start-up time, the
-    analysis layer loads pandas and matplotlib, which an env user does not need."""
-    if name == "load_results":
-        from gdq_pddl.analysis.results import load_results  # start-up time: pandas
-
-        return load_results
+    """The names of :data:`_LAZY`, imported on first use (start-up time: an env user needs
+    neither the learners' compiled code nor pandas and matplotlib): ``load_results``
+    (:func:`gdq_pddl.analysis.results.load_results`: an output folder's episodes as a
+    pandas DataFrame) and save, load and evaluate (:mod:`gdq_pddl.learners.saving`,
+    :func:`gdq_pddl.learners.evaluate_policy`)."""
+    if name in _LAZY:
+        return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'gdq_pddl' has no attribute {name!r}")

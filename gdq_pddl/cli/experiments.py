@@ -59,6 +59,9 @@ def register_run(sub) -> None:
                         "a PPDDL domain an optional overlay: r_max, step_limit, costs")
     determinisation_arg(p)
     run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
+    p.add_argument("--keep-learners", action="store_true",
+                   help="save each run's final learner in --out/learners/<run>.npz "
+                        "(gdq_pddl.load_learner reads it)")
     p.set_defaults(func=cmd_run)
 
 
@@ -72,7 +75,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     check_planner(args.planner, kw["methods"])
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
     exp = Experiment("run", ((spec, args.episodes),), world=world_name(args.world), **kw)
-    return execute([exp], args, f"run-{task.name}")
+    return execute([exp], args, f"run-{task.name}", keep_learners=args.keep_learners)
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
@@ -95,7 +98,7 @@ def _run_pddl(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
     check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
-    return execute([exp], args, f"run-{instance.name}")
+    return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)
 
 
 def register_switch(sub) -> None:

@@ -7,6 +7,8 @@ Layout of an output folder::
     episodes.csv     one row per episode (written from units/ at the end)
     policies.csv     each run's final greedy policy, by index and by name
     optimal.json     V* and area relevance of each task, from the true model
+    learners/*.npz   with keep_learners: each run's final learner, named as its unit
+                     (:func:`gdq_pddl.learners.load_learner` reads it)
 
 An interrupted run loses at most the units in flight; ``resume=True`` checks that the
 configuration and every input file are the same and runs only what is missing. What a
@@ -173,6 +175,7 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     # appear only by an atomic rename); remove them before going on
     remove_temporary(out)
     remove_temporary(out / "units")
+    remove_temporary(out / "learners")
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(out / "config.json", lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
     done = [u for u in units if unit_path(out, u).exists()]
@@ -214,6 +217,11 @@ def check_jobs(jobs: int | None) -> int:
     return jobs
 
 
+def run_unit_keeping_learner(unit: Unit) -> dict[str, np.ndarray]:
+    """:func:`run_unit` returning the final learner's file too (``keep_learners``)."""
+    return run_unit(unit, keep_learner=True)
+
+
 Work = Callable[[Unit], dict[str, np.ndarray]]
 """What runs one unit (a module-level function: worker processes and Ray pickle it by name)."""
 
@@ -223,17 +231,20 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                     resume: bool = False, progress: bool = True, work: Work | None = None,
                     collect: Callable[[Path, list[Experiment]], None] | None = None,
                     log: Callable[[str], None] | None = None,
-                    unit_arrays: tuple[str, ...] = UNIT_ARRAYS) -> Path:
+                    unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False
+                    ) -> Path:
     """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
     :func:`run_unit`), then collect the results with ``collect`` (default:
     :func:`gdq_pddl.experiments.collect.collect`).
 
     ``log`` (if given) is told how many runs are left and on how many processes;
     ``unit_arrays`` are the arrays ``work`` saves (what ``--resume`` checks saved units
-    for). Ctrl-C, SIGTERM and SIGHUP end the workers and raise :class:`RunInterrupted`,
-    saying what is saved and how to go on.
+    for); ``keep_learners`` (with the default ``work``) saves each run's final learner in
+    ``learners/`` (runs saved before a resume keep none). Ctrl-C, SIGTERM and SIGHUP end
+    the workers and raise :class:`RunInterrupted`, saying what is saved and how to go on.
     """
-    work = work or run_unit  # read at call time: tests replace run_unit
+    # read at call time: tests replace run_unit
+    work = work or (run_unit_keeping_learner if keep_learners else run_unit)
     collect = collect or collect_episodes
     out = Path(out)
     wanted = check_jobs(jobs)
@@ -305,6 +316,10 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
     units_dir = out / "units"
     try:
         for unit, result in _execute(pending, jobs, executor, address, work):
+            learner = result.pop("learner", None)
+            if learner is not None:  # before its unit: a saved unit has its learner
+                atomic_write(out / "learners" / f"{unit.key}.npz",
+                             lambda tmp, data=learner: tmp.write_bytes(data.tobytes()))
             save_unit(units_dir / f"{unit.key}.npz", result)
             bar.update(1)
     finally:

@@ -7,6 +7,7 @@ it returns.
 
 from __future__ import annotations
 
+import io
 from dataclasses import replace
 from functools import cache
 
@@ -20,6 +21,7 @@ from gdq_pddl.learners import precompile
 from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
+from gdq_pddl.learners.saving import save_learner
 from gdq_pddl.world import Task, World
 
 
@@ -56,8 +58,10 @@ def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> Task
     return task_context(instance, exp.planner)
 
 
-def run_unit(unit: Unit) -> dict[str, np.ndarray]:
-    """Run one unit; returns per-episode arrays, the tasks in force and the final policy."""
+def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
+    """Run one unit; returns per-episode arrays, the tasks in force and the final policy
+    (``keep_learner``: and under ``learner`` the bytes of the final learner's file, with
+    its generators ``rng`` and ``env``: :func:`~gdq_pddl.learners.saving.save_learner`)."""
     exp = unit.experiment
     rng, env_seed = unit.seeds()
     learner, parts, names = None, [], []
@@ -72,7 +76,12 @@ def run_unit(unit: Unit) -> dict[str, np.ndarray]:
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
         names.append(instance.name)
-    return _unit_result(parts, names, exp, learner)
+    result = _unit_result(parts, names, exp, learner)
+    if keep_learner:
+        buf = io.BytesIO()
+        save_learner(buf, learner, rng=rng, env=env.np_random)
+        result["learner"] = np.frombuffer(buf.getvalue(), dtype=np.uint8)
+    return result
 
 
 def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.ndarray]:

@@ -15,7 +15,9 @@ Where things are:
 - :mod:`~gdq_pddl.learners.agents`: the learner classes and :func:`make_learner`;
 - :mod:`~gdq_pddl.learners.config`: their settings, one frozen dataclass each;
 - :mod:`~gdq_pddl.learners.context`: what a learner is told about a task;
-- :mod:`~gdq_pddl.learners.episodes`: :func:`run_episodes`, the Python and compiled loops;
+- :mod:`~gdq_pddl.learners.episodes`: :func:`run_episodes`, the Python and compiled loops,
+  and :func:`evaluate_policy`;
+- :mod:`~gdq_pddl.learners.saving`: save and load a learner or a :class:`GreedyPolicy`;
 - the rules, each compiled once: :mod:`~gdq_pddl.learners.rules` (which rule runs after
   a real step, per learner), :mod:`~gdq_pddl.learners.tables` (the arrays, the Q table,
   the TD update, acting), :mod:`~gdq_pddl.learners.learned_model` (the learned model and
@@ -49,11 +51,19 @@ from gdq_pddl.learners.context import (
     office_task_context,
     pddl_task_context,
 )
-from gdq_pddl.learners.episodes import EpisodeRecords, run_compact, run_episodes
+from gdq_pddl.learners.episodes import (
+    EpisodeRecords,
+    evaluate_policy,
+    run_compact,
+    run_episodes,
+)
+from gdq_pddl.learners.saving import GreedyPolicy, load_generators, load_learner, save_learner
 
 __all__ = [
     "GDQ", "METHODS", "Darling", "DarlingConfig", "DynaQ", "DynaQConfig", "EpisodeRecords",
-    "GDQConfig", "Learner", "LearnerConfig", "QLearning", "QLearningConfig", "TabularLearner",
+    "GDQConfig", "GreedyPolicy", "Learner", "LearnerConfig", "QLearning", "QLearningConfig",
+    "TabularLearner",
     "TaskContext", "empty_plan_table", "make_learner", "office_task_context", "pddl_task_context",
-    "run_compact", "run_episodes",
+    "run_compact", "run_episodes", "evaluate_policy", "load_generators", "load_learner",
+    "save_learner",
 ]

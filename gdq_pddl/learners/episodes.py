@@ -4,13 +4,15 @@ Two paths with identical results for the same seeds:
 
 - a Python loop over any gymnasium env of this package (``env.reset``, ``env.step``,
   ``learner.act`` / ``learner.observe``);
-- a compiled loop (:func:`_episodes`), used when ``env.unwrapped`` is a
-  :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` (the office, or a PDDL problem) and the learner a
-  :class:`~gdq_pddl.learners.agents.TabularLearner`: it calls
-  :func:`gdq_pddl.envs.model.env_step` and the same rules
-  (:func:`gdq_pddl.learners.tables.act`, :func:`gdq_pddl.learners.rules.observe`). The
-  same loop, compiled for a :class:`~gdq_pddl.envs.compact.CompactModel` (large worlds,
-  :func:`run_compact`), calls :func:`gdq_pddl.envs.compact.compact_step` instead.
+- a compiled loop (:func:`_episodes`) over the true dynamics under the env, used only
+  where it gives exactly what stepping the env gives (:func:`why_not_compiled`: a
+  :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` or :class:`~gdq_pddl.envs.office.CompactEnv`,
+  bare or in ``gymnasium.make``'s own wrappers, and a learner of this package): it calls
+  :func:`gdq_pddl.envs.model.env_step` (or :func:`gdq_pddl.envs.compact.compact_step`)
+  and the same rules (:func:`gdq_pddl.learners.tables.act`,
+  :func:`gdq_pddl.learners.rules.observe`). Any other wrapper (``TransformReward``, a
+  shorter ``TimeLimit``, ``RecordEpisodeStatistics``, an ``ObservationWrapper``...) gets
+  the Python loop, which steps the env through it.
 
 Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
 its learned model needs in this env (``learner.reserve_successors`` with
@@ -34,6 +36,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numba
 import numpy as np
+from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
 from numba import types
 from numba.extending import overload
 
@@ -44,10 +47,11 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import Learner, TabularLearner
+from gdq_pddl.learners.agents import GDQ, Darling, DynaQ, Learner, QLearning, TabularLearner
 from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.rules import observe
+from gdq_pddl.learners.saving import GreedyPolicy
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.limits import check_count, check_memory
 
@@ -70,6 +74,16 @@ class EpisodeRecords:
     def __len__(self) -> int:
         return len(self.returns)
 
+    @property
+    def mean_return(self) -> float:
+        """The mean of :attr:`returns`."""
+        return float(self.returns.mean())
+
+    @property
+    def success_rate(self) -> float:
+        """The share of episodes that reached the goal, in [0, 1]."""
+        return float(self.success.mean())
+
 
 def _n_areas(env: gym.Env) -> int:
     model = getattr(env.unwrapped, "model", None)
@@ -78,46 +92,101 @@ def _n_areas(env: gym.Env) -> int:
     return int(model.area_of_pos.max())
 
 
+SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
+"""The wrappers the compiled loop may look through (exact types, not subclasses):
+``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
+limit (the env ends every episode first, or at the same step)."""
+COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ)
+"""The learner classes the compiled loop runs (exact types: a subclass may override
+``act`` or ``observe``)."""
+
+
+def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
+    """None when the compiled loop gives exactly what stepping ``env`` gives: ``env`` is a
+    :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` or :class:`~gdq_pddl.envs.office.CompactEnv`,
+    bare or wrapped only in :data:`SAME_RESULTS_WRAPPERS`, and ``learner`` is one of
+    :data:`COMPILED_LEARNERS`; otherwise the reason, in words."""
+    base = env.unwrapped
+    if type(base) not in (PDDLEnv, CompactEnv):
+        return f"the env is a {type(base).__name__}, not a PDDLEnv or CompactEnv"
+    if type(learner) not in COMPILED_LEARNERS:
+        return f"the learner is a {type(learner).__name__}, not one of " + \
+            ", ".join(c.__name__ for c in COMPILED_LEARNERS)
+    while env is not base:
+        if type(env) not in SAME_RESULTS_WRAPPERS or type(env) is TimeLimit and \
+                env._max_episode_steps < base.model.step_limit:
+            return f"the env is wrapped in {type(env).__name__}, which the compiled loop " \
+                "would bypass"
+        env = env.env
+    return None
+
+
 def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
                  rng: np.random.Generator, fast: bool | None = None) -> EpisodeRecords:
     """Run ``n_episodes`` episodes of ``learner`` in ``env`` (learning as it goes).
 
-    ``fast=None`` picks the compiled loop when possible; ``True`` demands it and
-    ``False`` forces the Python loop (both give the same results). Raises
-    :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a ``numpy.random.Generator``
-    or the learner's states and actions are not the env's.
+    ``fast=None`` picks the compiled loop where it gives the same results as stepping
+    ``env`` (:func:`why_not_compiled`), else the Python loop, which calls ``env.reset``
+    and ``env.step`` through every wrapper; ``True`` demands the compiled loop (a
+    :class:`~gdq_pddl.errors.ConfigError` says why it cannot run), ``False`` forces the
+    Python loop. Raises :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a
+    ``numpy.random.Generator`` or the learner's states and actions are not the env's.
     """
-    check_count("n_episodes", n_episodes)
-    guards.check_generator(rng)
-    check_memory(n_episodes * (17 + 8 * _n_areas(env)), f"n_episodes = {n_episodes:,}: the "
-                 "episode records", "run fewer episodes at a time")
-    if isinstance(learner, TabularLearner):
-        guards.check_env(*learner.q.shape, env)
-    can_fast = isinstance(env.unwrapped, PDDLEnv) and isinstance(learner, TabularLearner)
-    if fast is None:
-        fast = can_fast
-    if fast and not can_fast:
-        raise TypeError("the fast path needs an env of this package (a PDDLEnv) and a "
-                        "TabularLearner")
-    if fast:
-        return _run_fast(learner, env, n_episodes, rng)  # type: ignore[arg-type]
-    return _run_python(learner, env, n_episodes, rng)
+    return _run(learner, env, n_episodes, rng, fast, _n_areas(env))
 
 
 def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
                 rng: np.random.Generator) -> EpisodeRecords:
-    """Run ``n_episodes`` of ``learner`` in a :class:`~gdq_pddl.envs.office.CompactEnv`
-    (seed ``env`` with ``reset`` first): the compiled loop over its compact dynamics, the
-    same draws and records as :func:`run_episodes` on the office (tested)."""
-    guards.check_env(*learner.q.shape, env)  # run_compiled checks the rest
-    env = env.unwrapped
-    return run_compiled(env.model, env.start_pos, env.goal_pos, env.doors, learner,
-                        env.np_random, n_episodes, rng, max(1, int(env.model.area_of_pos.max())))
+    """:func:`run_episodes` in a :class:`~gdq_pddl.envs.office.CompactEnv` (seed ``env``
+    with ``reset`` first), with at least one column of area visits: the same draws and
+    records as :func:`run_episodes` on the office (tested)."""
+    if not isinstance(env.unwrapped, CompactEnv):
+        raise ConfigError(f"run_compact needs a CompactEnv, got {type(env.unwrapped).__name__}")
+    return _run(learner, env, n_episodes, rng, None, max(1, _n_areas(env)))
+
+
+def evaluate_policy(env: gym.Env, policy: GreedyPolicy | TabularLearner, episodes: int = 100,
+                    seed: int = 0) -> EpisodeRecords:
+    """Run ``policy`` (a :class:`~gdq_pddl.learners.saving.GreedyPolicy`, or a learner's
+    greedy policy now) for ``episodes`` episodes in ``env`` without learning, stepping
+    it through its wrappers, after ``env.reset(seed=seed)``. The records' ``mean_return``
+    and ``success_rate`` summarise them."""
+    if isinstance(policy, TabularLearner):
+        policy = GreedyPolicy.of(policy)
+    if not isinstance(policy, GreedyPolicy):
+        raise ConfigError(f"evaluate_policy takes a GreedyPolicy or a learner, got "
+                          f"{type(policy).__name__}")
+    guards.check_env(len(policy.actions), policy.n_actions, env)
+    check_count("seed", seed)
+    env.reset(seed=seed)
+    return _run(policy, env, episodes, np.random.default_rng(seed), False,  # type: ignore
+                _n_areas(env))
+
+
+def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generator,
+         fast: bool | None, n_areas: int) -> EpisodeRecords:
+    check_count("n_episodes", n_episodes)
+    guards.check_generator(rng)
+    check_memory(n_episodes * (17 + 8 * n_areas), f"n_episodes = {n_episodes:,}: the "
+                 "episode records", "run fewer episodes at a time")
+    if isinstance(learner, TabularLearner):
+        guards.check_env(*learner.q.shape, env)
+    reason = why_not_compiled(learner, env)
+    if fast and reason is not None:
+        raise ConfigError(f"fast=True: {reason}")
+    if fast is False or reason is not None:
+        return _run_python(learner, env, n_episodes, rng, n_areas)
+    base = env.unwrapped
+    if isinstance(base, CompactEnv):
+        args = base.model, base.start_pos, base.goal_pos, base.doors
+    else:
+        args = base.model, int(base.start_state), int(base.goal_pos), _NO_DOORS
+    return run_compiled(*args, learner, base.np_random, n_episodes, rng,  # type: ignore
+                        n_areas)
 
 
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
-                rng: np.random.Generator) -> EpisodeRecords:
-    n_areas = _n_areas(env)
+                rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     if isinstance(learner, TabularLearner):
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
     returns = np.zeros(n_episodes)
@@ -140,13 +209,6 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
             done = terminated or truncated
             s = s2
     return EpisodeRecords(returns, steps, success, areas)
-
-
-def _run_fast(learner: TabularLearner, env: gym.Env, n_episodes: int,
-              rng: np.random.Generator) -> EpisodeRecords:
-    office: PDDLEnv = env.unwrapped  # type: ignore[assignment]
-    return run_compiled(office.model, int(office.start_state), int(office.goal_pos),
-                        _NO_DOORS, learner, office.np_random, n_episodes, rng, _n_areas(env))
 
 
 _NO_DOORS = np.zeros(1, dtype=np.uint8)  # a ModelArrays state carries its doors itself

@@ -248,12 +248,11 @@ def check_reward(value: object) -> float:
 
 
 def check_env(n_states: int, n_actions: int, env: object) -> None:
-    """The env's observations and actions must be the learner's states and actions (its
-    spaces, when they are ``Discrete``)."""
-    inner = getattr(env, "unwrapped", env)
+    """The env's observations and actions (what its outermost wrapper shows) must be the
+    learner's states and actions (its spaces, when they are ``Discrete``)."""
     for space, n, what in (("observation_space", n_states, "states"),
                            ("action_space", n_actions, "actions")):
-        size = getattr(getattr(inner, space, None), "n", None)
+        size = getattr(getattr(env, space, None), "n", None)
         if size is not None and int(size) != n:
             raise ConfigError(f"the learner was built for {n_states} states x {n_actions} "
                               f"actions, the env has {int(size)} {what} (its {space}): build "

@@ -1,0 +1,147 @@
+"""Save and load (:mod:`gdq_pddl.learners.saving`): a loaded learner continues bit for bit,
+a policy exports and evaluates in one call, bad files are refused naming the file."""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.wrappers import TransformReward
+
+from gdq_pddl.envs.office import OfficeEnv
+from gdq_pddl.errors import ResultsError
+from gdq_pddl.learners import (
+    GreedyPolicy,
+    evaluate_policy,
+    load_generators,
+    load_learner,
+    make_learner,
+    office_task_context,
+    pddl_task_context,
+    run_episodes,
+    save_learner,
+)
+from gdq_pddl.learners.saving import FORMAT_VERSION
+from gdq_pddl.learners.tables import Tables
+
+METHODS = ["Q-learning", "Dyna-Q", "DARLING", "DARLING-code", "GDQ", "GDQ-literal",
+           "GDQ-code"]
+
+
+def _arrays(learner):
+    learner.q  # noqa: B018 (the default GDQ fills its untried entries when q is read)
+    return [x for group in learner.tables for x in group]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_loaded_learner_continues_bit_for_bit(ctx_c, tmp_path, method):
+    """N episodes, save (learner, its generator and the env's), load into a fresh env, M
+    more: the same as N + M uninterrupted."""
+    env = OfficeEnv(task="C")
+    whole = make_learner(method, ctx_c)
+    env.reset(seed=3)
+    ref = run_episodes(whole, env, 25, np.random.default_rng(4))
+
+    part = make_learner(method, ctx_c)
+    env.reset(seed=3)
+    rng = np.random.default_rng(4)
+    first = run_episodes(part, env, 10, rng)
+    path = tmp_path / "learner.npz"
+    save_learner(path, part, rng=rng, env=env.np_random)
+    del part, rng
+
+    fresh = OfficeEnv(task="C")
+    learner = load_learner(path, office_task_context(fresh.world, "C"))
+    gens = load_generators(path)
+    fresh.np_random = gens["env"]
+    rest = run_episodes(learner, fresh, 15, gens["rng"])
+    for f in ("returns", "steps", "success", "area_visits"):
+        assert np.array_equal(np.concatenate([getattr(first, f), getattr(rest, f)]),
+                              getattr(ref, f)), f
+    assert type(learner) is type(whole) and learner.config == whole.config
+    assert learner.params == whole.params
+    for a, b in zip(_arrays(learner), _arrays(whole), strict=True):
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_the_file_is_plain_arrays_and_a_json_header(ctx_c):
+    learner = make_learner("GDQ", ctx_c)
+    buf = io.BytesIO()
+    save_learner(buf, learner)
+    buf.seek(0)
+    with np.load(buf, allow_pickle=False) as z:  # no pickled object in it
+        header = json.loads(str(z["header"]))
+        keys = set(z.files)
+    assert header["format"] == "gdq_pddl learner" and header["format_version"] == FORMAT_VERSION
+    assert header["class"] == "GDQ" and header["config"]["variant"] == "prior"
+    assert {"gdq_pddl", "numpy"} <= set(header["versions"])
+    assert (header["n_states"], header["n_actions"]) == (31, 95)
+    every = {f"{g}.{f}" for g, grp in zip(Tables._fields, learner.tables, strict=True)
+             for f in grp._fields}
+    assert keys | set(header["aliases"]) == every | {"header"}
+
+
+def _rewrite(src, dst, change):
+    """Copy the npz ``src`` to ``dst`` with its header changed by ``change``."""
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    header = json.loads(str(arrays.pop("header")))
+    change(header)
+    np.savez(dst, header=np.array(json.dumps(header)), **arrays)
+
+
+def test_loading_refuses_other_versions_sizes_and_damaged_files(ctx_c, tmp_path):
+    path = tmp_path / "q.npz"
+    save_learner(path, make_learner("Q-learning", ctx_c))
+    other = tmp_path / "v2.npz"
+    _rewrite(path, other, lambda h: h.update(format_version=FORMAT_VERSION + 1))
+    with pytest.raises(ResultsError, match=rf"v2\.npz: file format version {FORMAT_VERSION + 1}"):
+        load_learner(other, ctx_c)
+    delivery = gymnasium.make("gdq_pddl/PDDL-v0", domain="delivery", problem="delivery-2")
+    bigger = pddl_task_context(delivery.unwrapped.instance)
+    with pytest.raises(ResultsError, match=r"q\.npz: saved for 31 states x 95 actions, the "
+                                           r"task context has \d+ x \d+"):
+        load_learner(path, bigger)
+    (tmp_path / "junk.npz").write_bytes(b"not a zip")
+    with pytest.raises(ResultsError, match=r"junk\.npz: not a gdq_pddl learner file"):
+        load_learner(tmp_path / "junk.npz", ctx_c)
+    with pytest.raises(ResultsError, match=r"missing\.npz: no such file"):
+        load_learner(tmp_path / "missing.npz", ctx_c)
+    GreedyPolicy.of(make_learner("GDQ", ctx_c)).save(tmp_path / "p.npz")
+    with pytest.raises(ResultsError, match=r"p\.npz: not a gdq_pddl learner file"):
+        load_learner(tmp_path / "p.npz", ctx_c)
+    cut = tmp_path / "cut.npz"
+    with np.load(path, allow_pickle=False) as z, zipfile.ZipFile(cut, "w") as out:
+        for k in z.files:
+            if k != "table.q":
+                with out.open(f"{k}.npy", "w") as fh:
+                    np.lib.format.write_array(fh, z[k])
+    with pytest.raises(ResultsError, match=r"cut\.npz: damaged learner file"):
+        load_learner(cut, ctx_c)
+
+
+def test_a_greedy_policy_exports_saves_and_evaluates_in_one_call(ctx_c, tmp_path):
+    learner = make_learner("GDQ", ctx_c)
+    env = OfficeEnv(task="C")
+    env.reset(seed=0)
+    run_episodes(learner, env, 60, np.random.default_rng(0))
+    policy = GreedyPolicy.of(learner)
+    assert np.array_equal(policy.actions, learner.greedy_policy())
+    policy.save(tmp_path / "policy.npz")
+    loaded = GreedyPolicy.load(tmp_path / "policy.npz")
+    assert np.array_equal(loaded.actions, policy.actions) and loaded.n_actions == 95
+
+    made = gymnasium.make("gdq_pddl/Office-v0", task="C")
+    res = evaluate_policy(made, loaded, episodes=50, seed=1)
+    assert len(res) == 50 and res.success_rate > 0.8
+    assert res.mean_return == pytest.approx(res.returns.mean())
+    again = evaluate_policy(made, learner, episodes=50, seed=1)  # a learner: its greedy policy
+    assert np.array_equal(again.returns, res.returns)
+    assert np.array_equal(learner.greedy_policy(), policy.actions)  # evaluating learns nothing
+    # it steps the env through its wrappers
+    wrapped = evaluate_policy(TransformReward(made, lambda r: -1.0), loaded, 50, seed=1)
+    assert np.array_equal(wrapped.returns, -res.steps.astype(float))
