@@ -21,7 +21,8 @@ from importlib.resources import files
 from importlib.resources.abc import Traversable
 from pathlib import Path
 
-from gdq_pddl.errors import PlanningError
+from gdq_pddl.errors import PDDLError, PlanningError
+from gdq_pddl.inputs import read_text
 
 
 def data_file(*parts: str) -> Traversable:
@@ -96,8 +97,8 @@ def resolve_pddl(domain: str | Path, problem: str | Path, dynamics: str | Path |
             None if dynamics is None else resolve("dynamics", dynamics))
 
 
-def problem_domain(problem: Traversable | Path) -> str:
+def problem_domain(problem: Path) -> str:
     """The domain a PDDL problem file names in its ``(:domain X)`` ("" if none)."""
-    found = re.search(r"\(:domain\s+([^\s()]+)", problem.read_text(encoding="utf-8"),
-                      re.IGNORECASE)
+    text = read_text(problem, lambda src, msg: PDDLError(src, None, msg))
+    found = re.search(r"\(:domain\s+([^\s()]+)", text, re.IGNORECASE)
     return found.group(1) if found else ""

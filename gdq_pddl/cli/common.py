@@ -22,6 +22,7 @@ from gdq_pddl.experiments.runner import saved_units
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.planning import get_planner
+from gdq_pddl.resources import problem_domain, resolve, resolve_pddl, shipped_names
 from gdq_pddl.world import Task, World, load_world
 
 EXIT_ERROR, EXIT_NO_PLAN = 2, 1
@@ -70,7 +71,19 @@ def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
     p.add_argument("--start", help="start position or landmark (with --goal, instead of --task)")
     p.add_argument("--goal", help="goal position or landmark")
     if world:
-        p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+        world_arg(p)
+
+
+def world_arg(p: argparse.ArgumentParser) -> None:
+    """--world: a world file, or a shipped world's name, resolved to its file at once."""
+    def parse(text: str) -> Path:
+        try:
+            return resolve("world", text)
+        except GdqError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    p.add_argument("--world", type=parse, help=f"world file (TOML), or a shipped world "
+                   f"({', '.join(shipped_names('world'))}; default: office)")
 
 
 def determinisation_arg(p: argparse.ArgumentParser) -> None:
@@ -85,6 +98,23 @@ def determinisation_arg(p: argparse.ArgumentParser) -> None:
 def determinisation(args: argparse.Namespace) -> str:
     """The --determinisation given, or the default one."""
     return args.determinisation or DETERMINISATIONS[0]
+
+
+SHIPPED_HELP = "a file, or a shipped name (`gdq-pddl list` shows them)"
+
+
+def pddl_files(args: argparse.Namespace, default_domain: str | None = None
+               ) -> tuple[Path | None, Path | None, Path | None]:
+    """--domain, --problem and --dynamics (each a file or a shipped name) as files. With
+    no --domain: the domain the problem names if it ships, else ``default_domain``; a
+    shipped domain without --dynamics gets its shipped dynamics if there is one."""
+    domain = args.domain
+    if domain is None and args.problem is not None:
+        named = problem_domain(resolve("problem", args.problem))
+        domain = named if named in shipped_names("domain") else default_domain
+    if domain is None or args.problem is None:
+        return None, None, None
+    return resolve_pddl(domain, args.problem, getattr(args, "dynamics", None))
 
 
 def refuse_given(args: argparse.Namespace, options: Sequence[str], why: str) -> None:

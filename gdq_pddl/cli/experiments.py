@@ -15,6 +15,7 @@ from pathlib import Path
 from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
+    SHIPPED_HELP,
     check_planner,
     checked_methods,
     determinisation,
@@ -23,10 +24,12 @@ from gdq_pddl.cli.common import (
     execute,
     experiment_kw,
     load_world_checked,
+    pddl_files,
     refuse_given,
     run_args,
     task_args,
     world_and_task,
+    world_arg,
 )
 from gdq_pddl.errors import GdqError, SizeError
 from gdq_pddl.experiments import (
@@ -50,14 +53,15 @@ def register_run(sub) -> None:
                                    "--episodes episodes. Writes episodes.csv, figures and "
                                    "REPORT.md to --out.")
     task_args(p)
-    p.add_argument("--domain", type=Path,
-                   help="a PDDL domain: with --problem, learn on that problem instead of an "
-                        "office task; a STRIPS domain needs --dynamics, a PPDDL domain is "
-                        "its own reality (see docs/domains.md)")
-    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
-    p.add_argument("--dynamics", type=Path,
-                   help="the dynamics file (TOML) of --domain: success, failure, costs; for "
-                        "a PPDDL domain an optional overlay: r_max, step_limit, costs")
+    p.add_argument("--domain", help="a PDDL domain: with --problem, learn on that problem "
+                   "instead of an office task; a STRIPS domain needs --dynamics, a PPDDL "
+                   f"domain is its own reality (docs/domains.md); {SHIPPED_HELP}; default: "
+                   "the domain --problem names, if it ships")
+    p.add_argument("--problem", help=f"a PDDL problem of --domain; {SHIPPED_HELP}")
+    p.add_argument("--dynamics", help="the dynamics file (TOML) of --domain: success, "
+                   "failure, costs; for a PPDDL domain an optional overlay: r_max, "
+                   f"step_limit, costs; {SHIPPED_HELP}; default: the shipped dynamics of a "
+                   "shipped --domain, if there is one")
     determinisation_arg(p)
     run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
     p.set_defaults(func=cmd_run)
@@ -77,20 +81,21 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
-    if not (args.domain and args.problem):
-        raise GdqError("a PDDL run needs --domain and --problem (and --dynamics for a STRIPS "
-                       "domain)")
     if args.task or args.start or args.goal or args.world:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
-    files = (str(args.domain), str(args.problem),
-             "" if args.dynamics is None else str(args.dynamics), determinisation(args))
+    domain, problem, dynamics = pddl_files(args)
+    if domain is None or problem is None:
+        raise GdqError("a PDDL run needs --problem, and --domain unless the problem names a "
+                       "shipped domain (and --dynamics for a STRIPS domain of your own)")
+    files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
+             determinisation(args))
     try:  # check the files (and size) before any worker
         load_pddl_instance(files).model  # noqa: B018
     except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
         if isinstance(exc, SizeError):
             raise
-        raise SizeError(f"{args.problem}: grounding the problem ran out of memory; give a "
+        raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
                         "smaller problem") from None
     instance = load_pddl_instance(files)
     kw = experiment_kw(args)
@@ -105,7 +110,7 @@ def register_switch(sub) -> None:
                                    "GDQ keeps its learned model and replans for the new goal.")
     p.add_argument("--from", dest="first", default="C", help="first task (default C)")
     p.add_argument("--to", dest="second", default="D", help="second task (default D)")
-    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    world_arg(p)
     run_args(p, "results/switch-<from>-<to>")
     p.set_defaults(func=cmd_switch)
 
@@ -260,7 +265,7 @@ def register_pairs(sub) -> None:
                                    "episodes, with the paper's hyperparameters and paired "
                                    "seeds. Writes runs.csv, a table of GDQ minus each "
                                    "baseline per pair, its figure and REPORT.md to --out.")
-    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    world_arg(p)
     p.add_argument("--pairs", nargs="+", metavar="START->GOAL",
                    help="only these pairs (quote them: --pairs 'p3->p13 p10->p0')")
     p.add_argument("--sample", type=int, metavar="K",
