@@ -150,18 +150,24 @@ def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
              episodes: int = 2500, runs: int = 10) -> None:
     """The options of a command that runs methods; ``out`` names its default --out."""
-    default = list(methods or DEFAULT_METHODS)  # GDQ, GDQ-code and the baselines
-    p.add_argument("--method", nargs="+", metavar="M", default=default,
-                   help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(METHODS)})")
+    size_args(p, methods or DEFAULT_METHODS, METHODS, episodes, runs)
+    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
+    exec_args(p, out)
+
+
+def size_args(p: argparse.ArgumentParser, methods: Sequence[str], known: Sequence[str],
+              episodes: int, runs: int, seed: str = "base seed (each run derives its own)"
+              ) -> None:
+    """--method (default ``methods``, from ``known``), --episodes, --runs and --seed."""
+    p.add_argument("--method", nargs="+", metavar="M", default=list(methods),
+                   help=f"methods to compare (default: {' '.join(methods)}; "
+                        f"from: {', '.join(known)})")
     p.add_argument("--episodes", type=POSITIVE, default=episodes,
                    help=f"episodes per run (per task; default {episodes})")
     p.add_argument("--runs", type=POSITIVE, default=runs,
-                   help=f"independent runs per method (default {runs})")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="base seed (each run derives its own)")
-    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
-    exec_args(p, out)
+                   help=f"independent runs per method (and case, or building; paired "
+                        f"across methods; default {runs})")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0, help=seed)
 
 
 def exec_args(p: argparse.ArgumentParser, out: str) -> None:
@@ -187,8 +193,11 @@ def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def experiment_kw(args: argparse.Namespace) -> dict:
-    """Experiment fields from the run options (methods, runs, seed, planner)."""
-    return {"methods": checked_methods(args), "runs": args.runs, "seed": args.seed,
+    """Experiment fields from the run options (methods, runs, seed, planner), the planner
+    checked (:func:`check_planner`)."""
+    methods = checked_methods(args)
+    check_planner(args.planner, methods)
+    return {"methods": methods, "runs": args.runs, "seed": args.seed,
             "planner": args.planner}
 
 

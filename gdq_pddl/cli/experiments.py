@@ -16,7 +16,6 @@ from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
     SHIPPED_HELP,
-    check_planner,
     checked_methods,
     determinisation,
     determinisation_arg,
@@ -27,6 +26,7 @@ from gdq_pddl.cli.common import (
     pddl_files,
     refuse_given,
     run_args,
+    size_args,
     task_args,
     world_and_task,
     world_arg,
@@ -74,7 +74,6 @@ def cmd_run(args: argparse.Namespace) -> int:
                  "--problem); an office task has no determinisation to choose")
     world, task = world_and_task(args)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
     exp = Experiment("run", ((spec, args.episodes),), world=world_name(args.world), **kw)
     return execute([exp], args, f"run-{task.name}")
@@ -99,7 +98,6 @@ def _run_pddl(args: argparse.Namespace) -> int:
                         "smaller problem") from None
     instance = load_pddl_instance(files)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}")
 
@@ -121,7 +119,6 @@ def cmd_switch(args: argparse.Namespace) -> int:
     if first == second:  # task names are upper-cased: c and C are one task
         raise GdqError(f"--from and --to are the same task ({first}): a switch needs two")
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = switch_experiment(first, second, args.episodes, world=world_name(args.world), **kw)
     return execute([exp], args, exp.name)
 
@@ -137,7 +134,6 @@ def register_robot(sub) -> None:
 
 def cmd_robot(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = robot_experiment(runs=kw.pop("runs"), **kw)
     exp = replace(exp, schedule=(("X", args.episodes),))
     return execute([exp], args, "robot")
@@ -165,14 +161,7 @@ def register_knowledge(sub) -> None:
                                    "knowledge (d3, d1), a corridor only reality has, and a "
                                    "control; each also with accurate knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
-    p.add_argument("--episodes", type=POSITIVE, default=1500,
-                   help="episodes per run (default 1500)")
-    p.add_argument("--runs", type=POSITIVE, default=10,
-                   help="independent runs per method and case (default 10)")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="base seed (each run derives its own)")
-    p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
-                   help=f"methods to compare (default: {' '.join(KNOWLEDGE_METHODS)})")
+    size_args(p, KNOWLEDGE_METHODS, KNOWLEDGE_METHODS, 1500, 10)
     exec_args(p, "results/knowledge")
     p.set_defaults(func=cmd_knowledge)
 
@@ -209,7 +198,6 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def register_scale(sub) -> None:
-    default = list(SCALE_DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
                        description="Run each --method on --buildings generated buildings of "
                                    "each size (building seeds --seed, --seed + 1, ...) and "
@@ -223,16 +211,9 @@ def register_scale(sub) -> None:
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
                         "(default 2, at most 1000)")
-    p.add_argument("--method", nargs="+", metavar="M", default=default,
-                   help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(SCALE_METHODS)})")
-    p.add_argument("--runs", type=POSITIVE, default=5,
-                   help="runs per method and building, paired across methods (default 5)")
-    p.add_argument("--episodes", type=POSITIVE, default=5000,
-                   help="episodes per run (default 5000)")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="the first building seed (each run derives its own seeds from its "
-                        "building, size and run number)")
+    size_args(p, SCALE_DEFAULT_METHODS, SCALE_METHODS, 5000, 5,
+              seed="the first building seed (each run derives its own seeds from its "
+                   "building, size and run number)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out (same command line; sizes, "
@@ -285,7 +266,6 @@ def cmd_pairs(args: argparse.Namespace) -> int:
     else:
         chosen = pairs.all_pairs(world)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exps = pairs.pair_experiments(chosen, args.episodes, world=world_name(args.world), **kw)
     return execute(exps, args, "pairs", pairs_report, results="runs.csv",
                    work=pairs.run_pair_unit, collect=pairs.collect_pairs,
