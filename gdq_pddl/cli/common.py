@@ -100,7 +100,20 @@ def determinisation(args: argparse.Namespace) -> str:
     return args.determinisation or DETERMINISATIONS[0]
 
 
-SHIPPED_HELP = "a file, or a shipped name (`gdq-pddl list` shows them)"
+def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> None:
+    """--domain, --problem (instead of an office task; ``what`` the command does with
+    it), --dynamics if ``dynamics``, and --determinisation."""
+    named = "a file, or a shipped name (`gdq-pddl list` shows them)"
+    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
+                   "--problem names")
+    p.add_argument("--problem", help=f"a PDDL problem instead of an office task ({named}): "
+                   f"{what}")
+    if dynamics:
+        p.add_argument("--dynamics", help=f"the dynamics file (TOML) of --domain: {named}; "
+                       "success, failure and costs of a STRIPS domain's actions, an optional "
+                       "overlay (r_max, step_limit, costs) for a PPDDL domain; default: the "
+                       "shipped dynamics of a shipped --domain, if there is one")
+    determinisation_arg(p)
 
 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None

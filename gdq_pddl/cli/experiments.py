@@ -15,14 +15,13 @@ from pathlib import Path
 from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
-    SHIPPED_HELP,
     checked_methods,
     determinisation,
-    determinisation_arg,
     exec_args,
     execute,
     experiment_kw,
     load_world_checked,
+    pddl_args,
     pddl_files,
     refuse_given,
     run_args,
@@ -53,16 +52,8 @@ def register_run(sub) -> None:
                                    "--episodes episodes. Writes episodes.csv, figures and "
                                    "REPORT.md to --out.")
     task_args(p)
-    p.add_argument("--domain", help="a PDDL domain: with --problem, learn on that problem "
-                   "instead of an office task; a STRIPS domain needs --dynamics, a PPDDL "
-                   f"domain is its own reality (docs/domains.md); {SHIPPED_HELP}; default: "
-                   "the domain --problem names, if it ships")
-    p.add_argument("--problem", help=f"a PDDL problem of --domain; {SHIPPED_HELP}")
-    p.add_argument("--dynamics", help="the dynamics file (TOML) of --domain: success, "
-                   "failure, costs; for a PPDDL domain an optional overlay: r_max, "
-                   f"step_limit, costs; {SHIPPED_HELP}; default: the shipped dynamics of a "
-                   "shipped --domain, if there is one")
-    determinisation_arg(p)
+    pddl_args(p, "learn on it (a STRIPS domain needs --dynamics, a PPDDL domain is its "
+              "own reality: docs/domains.md)", dynamics=True)
     run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
     p.set_defaults(func=cmd_run)
 

@@ -13,10 +13,9 @@ from gdq_pddl.cli.common import (
     EXIT_NO_PLAN,
     NONNEGATIVE,
     POSITIVE,
-    SHIPPED_HELP,
     determinisation,
-    determinisation_arg,
     load_world_checked,
+    pddl_args,
     pddl_files,
     refuse_given,
     task_args,
@@ -88,11 +87,7 @@ def register_plan(sub) -> None:
     p.add_argument("--planner", default="graph", help="planner backend (see `gdq-pddl planners`)")
     p.add_argument("--tolerance", type=tolerance_arg, default=0.0,
                    help="also every loop-free plan up to (1+T) x the shortest length")
-    p.add_argument("--domain", help=f"PDDL domain: {SHIPPED_HELP} (default: the domain "
-                   "--problem names if it ships, else office)")
-    p.add_argument("--problem", help=f"PDDL problem: {SHIPPED_HELP} (instead of "
-                   "--task/--start/--goal; no learner mapping)")
-    determinisation_arg(p)
+    pddl_args(p, "plan for it (no learner mapping; default domain: office)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_plan)
 
