@@ -1,4 +1,4 @@
-"""Subcommands about knowledge and planning: problem, building, plan, planners."""
+"""Subcommands about knowledge and planning: problem, building, plan, planners, list."""
 
 from __future__ import annotations
 
@@ -174,7 +174,6 @@ def cmd_planners(args: argparse.Namespace) -> int:
         state = "usable" if i.usable else f"not usable: {i.reason}"
         print(f"{i.name:12s} {state}   ({i.target})")
     return 0
-
 
 
 def register_list(sub) -> None:
