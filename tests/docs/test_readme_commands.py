@@ -12,8 +12,7 @@ that keep the test cheap and leave each command's point intact:
   episodes of one run (argparse keeps the last value of an option given twice);
 - :data:`PLACEHOLDERS`: a template's placeholder (``--domain D``) gets a shipped name.
 
-``reproduce``, ``pairs`` and ``knowledge`` take 30 s or more even so (:data:`SLOW`): they
-run with the slow tests.
+The protocol commands (:data:`SLOW`) run with the slow tests.
 """
 
 from __future__ import annotations
@@ -37,9 +36,10 @@ PLACEHOLDERS = {"--domain": "keys-ppddl", "--problem": "keys-ppddl-2",
                 "--dynamics": "keys-ppddl", "--positions": "40", "--seed": "1"}
 """The value a placeholder (an upper-case word or ``...``) after each option stands for."""
 
-SLOW = {"reproduce", "pairs", "knowledge"}
-"""Subcommands whose size is their point (the paper's protocol, all 342 pairs, every
-knowledge case): run with the slow tests (``pytest -m slow``)."""
+SLOW = {"reproduce", "pairs", "knowledge", "switch", "robot"}
+"""Subcommands of a fixed protocol (the paper's, all 342 pairs, every knowledge case, a
+switch, the robot's): 10 s to a minute each even so, run with the slow tests
+(``pytest -m slow``); ``tests/experiments`` covers them in the default suite."""
 
 
 def readme_commands() -> list[str]:
