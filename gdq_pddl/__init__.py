@@ -1,8 +1,16 @@
 """gdq_pddl: Guided Dyna-Q, reinforcement learning guided by a PDDL planner."""
 
+from __future__ import annotations
+
 import importlib
+from typing import TYPE_CHECKING
 
 from gdq_pddl import _jit_cache
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    import pandas
 
 _jit_cache.refresh()  # before any compiled function loads its cache (see _jit_cache)
 
@@ -15,7 +23,14 @@ register_envs()  # gymnasium.make("gdq_pddl/Office-v0" or "gdq_pddl/PDDL-v0", ..
 _LAZY = {"load_results": "gdq_pddl.analysis.results",
          **dict.fromkeys(("GreedyPolicy", "evaluate_policy", "load_generators", "load_learner",
                           "save_learner"), "gdq_pddl.learners")}
-__all__ = ["__version__", *_LAZY]
+__all__ = ["__version__", *_LAZY, "envs", "learners", "errors", "resources"]
+"""The API: the envs (ids and docs), the learners (with save, load and evaluate), the
+errors raised on bad input, and the shipped files by name. ``pdoc gdq_pddl -o docs/api``
+writes its pages."""
+
+load_results: Callable[..., pandas.DataFrame]
+"""An output folder's episodes as a pandas DataFrame, one row per episode
+(:func:`gdq_pddl.analysis.results.load_results`)."""
 
 
 def __getattr__(name: str):

@@ -1,13 +1,28 @@
-"""Files that ship inside the package: PDDL domains and problems, world files.
+"""Files that ship inside the package (PDDL domains and problems, dynamics and world
+files) and the names that find them.
 
 Everything is found with :mod:`importlib.resources`, so the package works the same from
-a wheel, a zip or a source install, whatever the working directory.
+a wheel or a source install, whatever the working directory.
+
+A shipped file is named by its file name without folder or suffix (:func:`shipped_names`
+lists them): domain ``keys`` is ``domains/keys.pddl``, problem ``keys-2`` is
+``problems/keys-2.pddl``, dynamics ``keys`` is ``dynamics/keys.toml`` (a world name is
+a dynamics name too: the office's reality), world ``office_robot`` is
+``office_robot.toml``. :func:`resolve` is the one rule, for the envs and the command line
+alike: a value with a folder or a suffix, or one that names an existing file, is a path
+(so a file of yours always wins over a shipped name); any other value is a shipped name,
+and an unknown one is an error listing the shipped names.
 """
 
 from __future__ import annotations
 
+import re
 from importlib.resources import files
 from importlib.resources.abc import Traversable
+from pathlib import Path
+
+from gdq_pddl.errors import PDDLError, PlanningError
+from gdq_pddl.inputs import read_text
 
 
 def data_file(*parts: str) -> Traversable:
@@ -31,3 +46,59 @@ def problem_text(task: str) -> str:
 def world_text(name: str = "office") -> str:
     """Return the text of the shipped world file ``<name>.toml``."""
     return data_file(f"{name}.toml").read_text(encoding="utf-8")
+
+
+SHIPPED = {"domain": (("domains",), ".pddl"), "problem": (("problems",), ".pddl"),
+           "dynamics": (("dynamics", ""), ".toml"), "world": (("",), ".toml")}
+"""Per kind of file: the folders under ``gdq_pddl/data/`` that hold the shipped ones (the
+built-in worlds are dynamics too), and their suffix."""
+
+
+def _shipped_files(kind: str) -> dict[str, Traversable]:
+    folders, suffix = SHIPPED[kind]
+    return {f.name.removesuffix(suffix): f for folder in folders
+            for f in (data_file(folder) if folder else data_file()).iterdir()
+            if f.name.endswith(suffix)}
+
+
+def shipped_names(kind: str) -> list[str]:
+    """The sorted names of the shipped files of ``kind`` (``domain``, ``problem``,
+    ``dynamics`` or ``world``)."""
+    return sorted(_shipped_files(kind))
+
+
+def is_shipped_name(value: str | Path) -> bool:
+    """Whether ``value`` is read as a shipped name, not a path (see the module docstring)."""
+    path = Path(value)
+    return (isinstance(value, str) and not path.suffix and path.name == value
+            and not path.is_file())
+
+
+def resolve(kind: str, value: str | Path) -> Path:
+    """The file that ``value`` means for ``kind``: the path as given, or the shipped file
+    it names. Raises :class:`~gdq_pddl.errors.PlanningError` for an unknown name."""
+    if not is_shipped_name(value):
+        return Path(value)
+    found = _shipped_files(kind).get(str(value))
+    if found is None:
+        raise PlanningError(f"{kind} {str(value)!r}: no such file, and no shipped {kind} of "
+                            f"that name (shipped: {', '.join(shipped_names(kind))})")
+    return Path(str(found))
+
+
+def resolve_pddl(domain: str | Path, problem: str | Path, dynamics: str | Path | None
+                 ) -> tuple[Path, Path, Path | None]:
+    """:func:`resolve` a domain, a problem and a dynamics file; a shipped domain without
+    ``dynamics`` gets the shipped dynamics of its name when there is one."""
+    if dynamics is None and is_shipped_name(domain) and str(domain) in _shipped_files(
+            "dynamics"):
+        dynamics = str(domain)
+    return (resolve("domain", domain), resolve("problem", problem),
+            None if dynamics is None else resolve("dynamics", dynamics))
+
+
+def problem_domain(problem: Path) -> str:
+    """The domain a PDDL problem file names in its ``(:domain X)`` ("" if none)."""
+    text = read_text(problem, lambda src, msg: PDDLError(src, None, msg))
+    found = re.search(r"\(:domain\s+([^\s()]+)", text, re.IGNORECASE)
+    return found.group(1) if found else ""

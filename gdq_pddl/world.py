@@ -20,7 +20,7 @@ from typing import Any
 from gdq_pddl.dynamics import Checks, CostDist, Dynamics, Outcomes, read_toml
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
-from gdq_pddl.resources import world_text
+from gdq_pddl.resources import is_shipped_name, resolve, world_text
 from gdq_pddl.spaces import VERBS
 
 DOOR_VERBS = ("opendoor", "gothrough")
@@ -274,20 +274,17 @@ DEFAULT_TASK = "C"
 def as_world(world: str | Path | World | None) -> World:
     """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
 
-    A bare name without a suffix that is not an existing file (``"office"``) is a
-    built-in world; anything else is read as a world file.
+    A name is read as :func:`gdq_pddl.resources.resolve` says (``"office"``: a built-in
+    world; an unknown name: an error listing them).
     """
     if world is None:
         return load_world(None)
     if isinstance(world, World):
         return world
-    path = Path(world)
-    if isinstance(world, str) and not path.suffix and path.name == world and not path.exists():
-        try:
-            return builtin_world(world)
-        except OSError:
-            raise WorldError(world, "", "no such world file or built-in world") from None
-    return load_world(path)
+    if is_shipped_name(world):
+        resolve("world", world)  # an unknown name: the error listing the shipped ones
+        return builtin_world(str(world))
+    return load_world(world)
 
 
 def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:

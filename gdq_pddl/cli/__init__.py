@@ -34,7 +34,8 @@ def _exit_signal(exc: BaseException) -> int:
 
 COMMANDS: list[Callable] = [
     planning.register_problem, planning.register_building, planning.register_plan,
-    planning.register_planners, experiments.register_run, experiments.register_switch,
+    planning.register_planners, planning.register_list, experiments.register_run,
+    experiments.register_switch,
     experiments.register_robot, experiments.register_reproduce, experiments.register_report,
     experiments.register_knowledge, experiments.register_scale,
     experiments.register_pairs,
@@ -101,7 +102,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="gdq-pddl",
         description="Guided Dyna-Q: reinforcement learning whose exploration is guided by "
                     "a PDDL planner. Start with `gdq-pddl plan --task C` to see the plans "
-                    "the learner is given, then `gdq-pddl run --task C`.")
+                    "the learner is given, then `gdq-pddl run --task C`. Options that take "
+                    "a domain, problem, dynamics or world file also take the name of a "
+                    "shipped one (`gdq-pddl list`), e.g. `gdq-pddl run --domain keys-ppddl "
+                    "--problem keys-ppddl-2`; an existing file of that name wins.")
     sub = parser.add_subparsers(title="commands", metavar="COMMAND")
     for register in COMMANDS:
         register(sub)

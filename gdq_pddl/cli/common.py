@@ -22,6 +22,7 @@ from gdq_pddl.experiments.runner import saved_units
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.planning import get_planner
+from gdq_pddl.resources import problem_domain, resolve, resolve_pddl, shipped_names
 from gdq_pddl.world import Task, World, load_world
 
 EXIT_ERROR, EXIT_NO_PLAN = 2, 1
@@ -70,7 +71,19 @@ def task_args(p: argparse.ArgumentParser, world: bool = True) -> None:
     p.add_argument("--start", help="start position or landmark (with --goal, instead of --task)")
     p.add_argument("--goal", help="goal position or landmark")
     if world:
-        p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+        world_arg(p)
+
+
+def world_arg(p: argparse.ArgumentParser) -> None:
+    """--world: a world file, or a shipped world's name, resolved to its file at once."""
+    def parse(text: str) -> Path:
+        try:
+            return resolve("world", text)
+        except GdqError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    p.add_argument("--world", type=parse, help=f"world file (TOML), or a shipped world "
+                   f"({', '.join(shipped_names('world'))}; default: office)")
 
 
 def determinisation_arg(p: argparse.ArgumentParser) -> None:
@@ -85,6 +98,36 @@ def determinisation_arg(p: argparse.ArgumentParser) -> None:
 def determinisation(args: argparse.Namespace) -> str:
     """The --determinisation given, or the default one."""
     return args.determinisation or DETERMINISATIONS[0]
+
+
+def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> None:
+    """--domain, --problem (instead of an office task; ``what`` the command does with
+    it), --dynamics if ``dynamics``, and --determinisation."""
+    named = "a file, or a shipped name (`gdq-pddl list` shows them)"
+    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
+                   "--problem names")
+    p.add_argument("--problem", help=f"a PDDL problem instead of an office task ({named}): "
+                   f"{what}")
+    if dynamics:
+        p.add_argument("--dynamics", help=f"the dynamics file (TOML) of --domain: {named}; "
+                       "success, failure and costs of a STRIPS domain's actions, an optional "
+                       "overlay (r_max, step_limit, costs) for a PPDDL domain; default: the "
+                       "shipped dynamics of a shipped --domain, if there is one")
+    determinisation_arg(p)
+
+
+def pddl_files(args: argparse.Namespace, default_domain: str | None = None
+               ) -> tuple[Path | None, Path | None, Path | None]:
+    """--domain, --problem and --dynamics (each a file or a shipped name) as files. With
+    no --domain: the domain the problem names if it ships, else ``default_domain``; a
+    shipped domain without --dynamics gets its shipped dynamics if there is one."""
+    domain = args.domain
+    if domain is None and args.problem is not None:
+        named = problem_domain(resolve("problem", args.problem))
+        domain = named if named in shipped_names("domain") else default_domain
+    if domain is None or args.problem is None:
+        return None, None, None
+    return resolve_pddl(domain, args.problem, getattr(args, "dynamics", None))
 
 
 def refuse_given(args: argparse.Namespace, options: Sequence[str], why: str) -> None:
@@ -120,18 +163,24 @@ def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
              episodes: int = 2500, runs: int = 10) -> None:
     """The options of a command that runs methods; ``out`` names its default --out."""
-    default = list(methods or DEFAULT_METHODS)  # GDQ, GDQ-code and the baselines
-    p.add_argument("--method", nargs="+", metavar="M", default=default,
-                   help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(METHODS)})")
+    size_args(p, methods or DEFAULT_METHODS, METHODS, episodes, runs)
+    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
+    exec_args(p, out)
+
+
+def size_args(p: argparse.ArgumentParser, methods: Sequence[str], known: Sequence[str],
+              episodes: int, runs: int, seed: str = "base seed (each run derives its own)"
+              ) -> None:
+    """--method (default ``methods``, from ``known``), --episodes, --runs and --seed."""
+    p.add_argument("--method", nargs="+", metavar="M", default=list(methods),
+                   help=f"methods to compare (default: {' '.join(methods)}; "
+                        f"from: {', '.join(known)})")
     p.add_argument("--episodes", type=POSITIVE, default=episodes,
                    help=f"episodes per run (per task; default {episodes})")
     p.add_argument("--runs", type=POSITIVE, default=runs,
-                   help=f"independent runs per method (default {runs})")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="base seed (each run derives its own)")
-    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
-    exec_args(p, out)
+                   help=f"independent runs per method (and case, or building; paired "
+                        f"across methods; default {runs})")
+    p.add_argument("--seed", type=NONNEGATIVE, default=0, help=seed)
 
 
 def exec_args(p: argparse.ArgumentParser, out: str) -> None:
@@ -157,8 +206,11 @@ def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def experiment_kw(args: argparse.Namespace) -> dict:
-    """Experiment fields from the run options (methods, runs, seed, planner)."""
-    return {"methods": checked_methods(args), "runs": args.runs, "seed": args.seed,
+    """Experiment fields from the run options (methods, runs, seed, planner), the planner
+    checked (:func:`check_planner`)."""
+    methods = checked_methods(args)
+    check_planner(args.planner, methods)
+    return {"methods": methods, "runs": args.runs, "seed": args.seed,
             "planner": args.planner}
 
 

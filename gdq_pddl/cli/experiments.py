@@ -15,18 +15,20 @@ from pathlib import Path
 from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
-    check_planner,
     checked_methods,
     determinisation,
-    determinisation_arg,
     exec_args,
     execute,
     experiment_kw,
     load_world_checked,
+    pddl_args,
+    pddl_files,
     refuse_given,
     run_args,
+    size_args,
     task_args,
     world_and_task,
+    world_arg,
 )
 from gdq_pddl.errors import GdqError, SizeError
 from gdq_pddl.experiments import (
@@ -49,15 +51,8 @@ def register_run(sub) -> None:
                                    "--episodes episodes. Writes episodes.csv, figures and "
                                    "REPORT.md to --out.")
     task_args(p)
-    p.add_argument("--domain", type=Path,
-                   help="a PDDL domain: with --problem, learn on that problem instead of an "
-                        "office task; a STRIPS domain needs --dynamics, a PPDDL domain is "
-                        "its own reality (see docs/domains.md)")
-    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
-    p.add_argument("--dynamics", type=Path,
-                   help="the dynamics file (TOML) of --domain: success, failure, costs; for "
-                        "a PPDDL domain an optional overlay: r_max, step_limit, costs")
-    determinisation_arg(p)
+    pddl_args(p, "learn on it (a STRIPS domain needs --dynamics, a PPDDL domain is its "
+              "own reality: docs/domains.md)", dynamics=True)
     run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
     p.add_argument("--keep-learners", action="store_true",
                    help="save each run's final learner in --out/learners/<run>.npz "
@@ -72,31 +67,30 @@ def cmd_run(args: argparse.Namespace) -> int:
                  "--problem); an office task has no determinisation to choose")
     world, task = world_and_task(args)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
     exp = Experiment("run", ((spec, args.episodes),), world=world_name(args.world), **kw)
     return execute([exp], args, f"run-{task.name}", keep_learners=args.keep_learners)
 
 
 def _run_pddl(args: argparse.Namespace) -> int:
-    if not (args.domain and args.problem):
-        raise GdqError("a PDDL run needs --domain and --problem (and --dynamics for a STRIPS "
-                       "domain)")
     if args.task or args.start or args.goal or args.world:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
-    files = (str(args.domain), str(args.problem),
-             "" if args.dynamics is None else str(args.dynamics), determinisation(args))
+    domain, problem, dynamics = pddl_files(args)
+    if domain is None or problem is None:
+        raise GdqError("a PDDL run needs --problem, and --domain unless the problem names a "
+                       "shipped domain (and --dynamics for a STRIPS domain of your own)")
+    files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
+             determinisation(args))
     try:  # check the files (and size) before any worker
         load_pddl_instance(files).model  # noqa: B018
     except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
         if isinstance(exc, SizeError):
             raise
-        raise SizeError(f"{args.problem}: grounding the problem ran out of memory; give a "
+        raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
                         "smaller problem") from None
     instance = load_pddl_instance(files)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)
 
@@ -107,7 +101,7 @@ def register_switch(sub) -> None:
                                    "GDQ keeps its learned model and replans for the new goal.")
     p.add_argument("--from", dest="first", default="C", help="first task (default C)")
     p.add_argument("--to", dest="second", default="D", help="second task (default D)")
-    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    world_arg(p)
     run_args(p, "results/switch-<from>-<to>")
     p.set_defaults(func=cmd_switch)
 
@@ -118,7 +112,6 @@ def cmd_switch(args: argparse.Namespace) -> int:
     if first == second:  # task names are upper-cased: c and C are one task
         raise GdqError(f"--from and --to are the same task ({first}): a switch needs two")
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = switch_experiment(first, second, args.episodes, world=world_name(args.world), **kw)
     return execute([exp], args, exp.name)
 
@@ -134,7 +127,6 @@ def register_robot(sub) -> None:
 
 def cmd_robot(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exp = robot_experiment(runs=kw.pop("runs"), **kw)
     exp = replace(exp, schedule=(("X", args.episodes),))
     return execute([exp], args, "robot")
@@ -162,14 +154,7 @@ def register_knowledge(sub) -> None:
                                    "knowledge (d3, d1), a corridor only reality has, and a "
                                    "control; each also with accurate knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
-    p.add_argument("--episodes", type=POSITIVE, default=1500,
-                   help="episodes per run (default 1500)")
-    p.add_argument("--runs", type=POSITIVE, default=10,
-                   help="independent runs per method and case (default 10)")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="base seed (each run derives its own)")
-    p.add_argument("--method", nargs="+", metavar="M", default=list(KNOWLEDGE_METHODS),
-                   help=f"methods to compare (default: {' '.join(KNOWLEDGE_METHODS)})")
+    size_args(p, KNOWLEDGE_METHODS, KNOWLEDGE_METHODS, 1500, 10)
     exec_args(p, "results/knowledge")
     p.set_defaults(func=cmd_knowledge)
 
@@ -206,7 +191,6 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def register_scale(sub) -> None:
-    default = list(SCALE_DEFAULT_METHODS)
     p = sub.add_parser("scale", help="learning against building size (generated buildings)",
                        description="Run each --method on --buildings generated buildings of "
                                    "each size (building seeds --seed, --seed + 1, ...) and "
@@ -220,16 +204,9 @@ def register_scale(sub) -> None:
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
                         "(default 2, at most 1000)")
-    p.add_argument("--method", nargs="+", metavar="M", default=default,
-                   help=f"methods to compare (default: {' '.join(default)}; "
-                        f"from: {', '.join(SCALE_METHODS)})")
-    p.add_argument("--runs", type=POSITIVE, default=5,
-                   help="runs per method and building, paired across methods (default 5)")
-    p.add_argument("--episodes", type=POSITIVE, default=5000,
-                   help="episodes per run (default 5000)")
-    p.add_argument("--seed", type=NONNEGATIVE, default=0,
-                   help="the first building seed (each run derives its own seeds from its "
-                        "building, size and run number)")
+    size_args(p, SCALE_DEFAULT_METHODS, SCALE_METHODS, 5000, 5,
+              seed="the first building seed (each run derives its own seeds from its "
+                   "building, size and run number)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run in --out (same command line; sizes, "
@@ -262,7 +239,7 @@ def register_pairs(sub) -> None:
                                    "episodes, with the paper's hyperparameters and paired "
                                    "seeds. Writes runs.csv, a table of GDQ minus each "
                                    "baseline per pair, its figure and REPORT.md to --out.")
-    p.add_argument("--world", type=Path, help="world file (TOML); default: the built-in office")
+    world_arg(p)
     p.add_argument("--pairs", nargs="+", metavar="START->GOAL",
                    help="only these pairs (quote them: --pairs 'p3->p13 p10->p0')")
     p.add_argument("--sample", type=int, metavar="K",
@@ -282,7 +259,6 @@ def cmd_pairs(args: argparse.Namespace) -> int:
     else:
         chosen = pairs.all_pairs(world)
     kw = experiment_kw(args)
-    check_planner(args.planner, kw["methods"])
     exps = pairs.pair_experiments(chosen, args.episodes, world=world_name(args.world), **kw)
     return execute(exps, args, "pairs", pairs_report, results="runs.csv",
                    work=pairs.run_pair_unit, collect=pairs.collect_pairs,

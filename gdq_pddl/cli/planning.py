@@ -1,4 +1,4 @@
-"""Subcommands about knowledge and planning: problem, building, plan, planners."""
+"""Subcommands about knowledge and planning: problem, building, plan, planners, list."""
 
 from __future__ import annotations
 
@@ -14,8 +14,9 @@ from gdq_pddl.cli.common import (
     NONNEGATIVE,
     POSITIVE,
     determinisation,
-    determinisation_arg,
     load_world_checked,
+    pddl_args,
+    pddl_files,
     refuse_given,
     task_args,
     tolerance_arg,
@@ -25,8 +26,8 @@ from gdq_pddl.errors import ConfigError, SizeError
 from gdq_pddl.outputs import output_file, output_folder, write_text
 from gdq_pddl.pddl.parser import _read
 from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
-from gdq_pddl.resources import data_file, domain_text
-from gdq_pddl.world import office_problem
+from gdq_pddl.resources import domain_text, problem_domain, resolve, shipped_names
+from gdq_pddl.world import builtin_world, office_problem
 
 
 def register_problem(sub) -> None:
@@ -86,10 +87,7 @@ def register_plan(sub) -> None:
     p.add_argument("--planner", default="graph", help="planner backend (see `gdq-pddl planners`)")
     p.add_argument("--tolerance", type=tolerance_arg, default=0.0,
                    help="also every loop-free plan up to (1+T) x the shortest length")
-    p.add_argument("--domain", type=Path, help="PDDL domain file (default: the office domain)")
-    p.add_argument("--problem", type=Path,
-                   help="PDDL problem file (instead of --task/--start/--goal; no learner mapping)")
-    determinisation_arg(p)
+    pddl_args(p, "plan for it (no learner mapping; default domain: office)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_plan)
 
@@ -105,8 +103,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         refuse_given(args, ["--task", "--start", "--goal", "--world"],
                      "is for an office task; with --problem the start and goal are the "
                      "problem's own")
-        domain = args.domain or _shipped_domain()
-        problem = PlanningProblem.from_files(domain, args.problem, determinisation(args))
+        domain, path, _ = pddl_files(args, "office")
+        problem = PlanningProblem.from_files(domain, path, determinisation(args))
         start = goal = None
         source = str(args.problem)
     else:
@@ -114,7 +112,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                      "an office task has no determinisation to choose")
         world, task = world_and_task(args)
         dtext, dsrc = (domain_text(), "office.pddl (built in)") if args.domain is None else \
-            (_read(args.domain), str(args.domain))
+            (_read(resolve("domain", args.domain)), args.domain)
         source = f"task {task.name} (generated from {world.source})"
         problem = PlanningProblem.from_texts(dtext, office_problem(world, task), dsrc, source)
         abstraction = OfficeAbstraction(world)
@@ -158,10 +156,6 @@ def _plan_json(plan, abstraction) -> dict:
     return out
 
 
-def _shipped_domain() -> Path:
-    return Path(str(data_file("domains", "office.pddl")))
-
-
 def register_planners(sub) -> None:
     p = sub.add_parser("planners", help="list the planner backends and whether they can run",
                        description="List every backend registered under the `gdq_pddl.planners` "
@@ -181,3 +175,38 @@ def cmd_planners(args: argparse.Namespace) -> int:
         print(f"{i.name:12s} {state}   ({i.target})")
     return 0
 
+
+def register_list(sub) -> None:
+    p = sub.add_parser("list", help="the shipped domains, problems, dynamics, worlds, planners",
+                       description="List what every --domain, --problem, --dynamics and "
+                                   "--world option (and gymnasium.make) takes by name: the "
+                                   "files that ship with the package; and the planners "
+                                   "registered under the `gdq_pddl.planners` entry-point "
+                                   "group.")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_list)
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    shipped = {
+        "domains": shipped_names("domain"),
+        "problems": {name: problem_domain(resolve("problem", name))
+                     for name in shipped_names("problem")},
+        "dynamics": shipped_names("dynamics"),
+        "worlds": {name: list(builtin_world(name).tasks) for name in shipped_names("world")},
+        "planners": {i.name: i.reason if not i.usable else "usable" for i in planners()}}
+    if args.json:
+        print(json.dumps(shipped, indent=2))
+        return 0
+    print("domains (--domain):   ", " ".join(shipped["domains"]))
+    print("problems (--problem), with their domain:")
+    for name, domain in shipped["problems"].items():
+        print(f"  {name:22s} {domain}")
+    print("dynamics (--dynamics):", " ".join(shipped["dynamics"]))
+    print("worlds (--world), with their tasks (--task):")
+    for name, tasks in shipped["worlds"].items():
+        print(f"  {name:22s} {' '.join(tasks)}")
+    print("planners (--planner; entry-point group gdq_pddl.planners):")
+    for name, state in shipped["planners"].items():
+        print(f"  {name:22s} {state}")
+    return 0

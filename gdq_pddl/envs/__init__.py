@@ -32,8 +32,12 @@ from __future__ import annotations
 
 import gymnasium
 
+__all__ = ["ENV_IDS", "OFFICE_ID", "PDDL_ID", "register_envs"]
+
 OFFICE_ID = "gdq_pddl/Office-v0"
+"""The office's env id (:class:`~gdq_pddl.envs.office.OfficeEnv`)."""
 PDDL_ID = "gdq_pddl/PDDL-v0"
+"""Any PDDL problem's env id (:mod:`gdq_pddl.envs.pddl_env`)."""
 ENV_IDS = {OFFICE_ID: "gdq_pddl.envs.office:OfficeEnv",
            PDDL_ID: "gdq_pddl.envs.pddl_env:PDDLEnv"}
 """Every env id this package registers, and its entry point."""

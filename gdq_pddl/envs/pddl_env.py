@@ -18,9 +18,8 @@ Registered as ``gdq_pddl/PDDL-v0``::
     gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
 
 ``domain``, ``problem`` and ``dynamics`` are file paths, or names of the shipped files
-(a bare name without a suffix that is not an existing file: ``domains/<name>.pddl``,
-``problems/<name>.pddl``, ``gdq_pddl/data/dynamics/<name>.toml``); a shipped domain
-given without ``dynamics`` gets the shipped dynamics of the same name.
+(:func:`gdq_pddl.resources.resolve`; ``gdq-pddl list`` shows them); a shipped domain
+given without ``dynamics`` gets the shipped dynamics of the same name if there is one.
 ``determinisation`` (``"all-outcomes"``, the default, or ``"most-likely"``; the CLI's
 ``--determinisation``) is what the planner knows of a PPDDL domain
 (:mod:`gdq_pddl.pddl.ppddl`); a STRIPS domain's knowledge is the domain itself.
@@ -65,10 +64,8 @@ from __future__ import annotations
 
 import math
 import tomllib
-from contextlib import ExitStack
 from dataclasses import dataclass, replace
 from functools import cached_property
-from importlib.resources import as_file
 from pathlib import Path
 from typing import Any
 
@@ -101,7 +98,7 @@ from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
-from gdq_pddl.resources import data_file
+from gdq_pddl.resources import resolve_pddl, shipped_names
 from gdq_pddl.world import parse_world
 
 GOAL_POS = 1
@@ -524,52 +521,19 @@ def ppddl_outcomes(graph: StateGraph):
                     for o in op.outcomes)
 
 
-SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
-           "dynamics": ("dynamics", ".toml")}
-"""Where the shipped files of each kind are (under ``gdq_pddl/data/``), and their suffix."""
-
-
-def shipped_names(kind: str) -> list[str]:
-    """The names of the shipped files of ``kind`` (``domain``, ``problem``, ``dynamics``)."""
-    folder, suffix = SHIPPED[kind]
-    found = [*data_file(folder).iterdir(), *(data_file().iterdir() if kind == "dynamics"
-                                           else ())]  # the built-in worlds are dynamics
-    return sorted(f.name.removesuffix(suffix) for f in found if f.name.endswith(suffix))
-
-
-def _shipped(kind: str, value: str | Path):
-    """The shipped file (a Traversable) that ``value`` names, or None when ``value`` is
-    a path: a bare name without a suffix that is not an existing file names one."""
-    path = Path(value)
-    if not isinstance(value, str) or path.suffix or path.name != value or path.exists():
-        return None
-    folder, suffix = SHIPPED[kind]
-    found = data_file(folder, value + suffix)
-    if not found.is_file() and kind == "dynamics":
-        found = data_file(value + suffix)  # a built-in world file: the office's reality
-    if not found.is_file():
-        raise PlanningError(f"{kind} {value!r}: no such file, and no shipped {kind} of that "
-                            f"name (shipped: {', '.join(shipped_names(kind))})")
-    return found
-
-
 def load_instance(domain: str | Path | None, problem: str | Path | None,
                   dynamics: str | Path | None = None,
                   determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
     """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
-    ``problem="keys-2"``). A shipped domain without ``dynamics`` gets its shipped
-    dynamics file; a PPDDL domain's planner knows its ``determinisation``."""
+    ``problem="keys-2"``; :func:`gdq_pddl.resources.resolve`). A shipped domain without
+    ``dynamics`` gets its shipped dynamics file if there is one; a PPDDL domain's planner
+    knows its ``determinisation``."""
     if domain is None or problem is None:
         raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
                             f"domains {', '.join(shipped_names('domain'))}; problems "
                             f"{', '.join(shipped_names('problem'))})")
-    if dynamics is None and _shipped("domain", domain) is not None:
-        dynamics = str(domain)
-    with ExitStack() as stack:  # no dynamics: a PPDDL domain (from_files says otherwise)
-        paths = [value if value is None or (found := _shipped(kind, value)) is None
-                 else stack.enter_context(as_file(found))
-                 for kind, value in zip(SHIPPED, (domain, problem, dynamics), strict=True)]
-        return PDDLInstance.from_files(*paths, determinisation=determinisation)
+    return PDDLInstance.from_files(*resolve_pddl(domain, problem, dynamics),
+                                   determinisation=determinisation)
 
 
 class PDDLEnv(CompiledEnv):

@@ -76,15 +76,20 @@ class Learner(Protocol):
     """What the episode loop needs from a learner."""
 
     q: np.ndarray
+    """The Q table, float64[n_states, n_actions], in the env's reward units."""
 
-    def act(self, state: int, rng: np.random.Generator) -> int: ...
+    def act(self, state: int, rng: np.random.Generator) -> int:
+        """The action index to take in learner state ``state``, drawing from ``rng``."""
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
-                rng: np.random.Generator) -> None: ...
+                rng: np.random.Generator) -> None:
+        """Learn from one real step: ``a`` in ``s`` gave reward ``r`` and led to ``s2``."""
 
-    def start_task(self, context: TaskContext) -> None: ...
+    def start_task(self, context: TaskContext) -> None:
+        """Switch to the task ``context``, keeping what was learned."""
 
-    def greedy_policy(self) -> np.ndarray: ...
+    def greedy_policy(self) -> np.ndarray:
+        """int64[n_states]: the greedy action of each state."""
 
 
 class TabularLearner:
@@ -92,8 +97,18 @@ class TabularLearner:
     the compiled modules (:mod:`gdq_pddl.learners.rules`)."""
 
     kind: int = KIND_QLEARNING
+    """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
     name: str = "tabular"
+    """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
+    """The config class the constructor takes."""
+    config: LearnerConfig
+    """The learner's settings (frozen)."""
+    context: TaskContext
+    """The current task (:meth:`start_task` replaces it)."""
+    q: np.ndarray
+    """The Q table, float64[n_states, n_actions], in the env's reward units (the world's
+    or problem's reward scale)."""
 
     def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
         if not isinstance(config, self.config_type):
@@ -184,8 +199,9 @@ class TabularLearner:
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """The action to take in ``state`` (epsilon-greedy, :func:`~gdq_pddl.learners.
-        tables.act`)."""
+        """The action index (in ``[0, n_actions)``) to take in learner state ``state``:
+        epsilon-greedy with random tie-breaking, drawing from ``rng``
+        (:func:`~gdq_pddl.learners.tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
@@ -193,7 +209,10 @@ class TabularLearner:
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        """Learn from one real step (:func:`~gdq_pddl.learners.rules.observe`)."""
+        """Learn from one real step: action ``a`` in state ``s`` gave reward ``r`` (the
+        env's units) and led to ``s2``; ``terminated``/``truncated`` as Gymnasium's step
+        says; planning backups draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`).
+        """
         n_s, n_a = self.q.shape
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
@@ -203,7 +222,7 @@ class TabularLearner:
             raise ValueError(learned_model.OVERFLOW)
 
     def greedy_policy(self) -> np.ndarray:
-        """Per state, the lowest-index allowed action of maximal Q."""
+        """int64[n_states]: per state, the lowest-index allowed action of maximal Q."""
         return greedy(self.tables.table, self.params)
 
     @property
@@ -286,6 +305,7 @@ class DynaQ(TabularLearner):
     kind = KIND_DYNAQ
     name = "Dyna-Q"
     config: DynaQConfig
+    """The learner's settings (frozen)."""
     config_type = DynaQConfig
 
     def __init__(self, context: TaskContext, config: DynaQConfig | None = None) -> None:
@@ -371,6 +391,7 @@ class GDQ(TabularLearner):
     kind = KIND_GDQ
     name = "GDQ"
     config: GDQConfig
+    """The learner's settings (frozen)."""
     config_type = GDQConfig
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
@@ -490,6 +511,8 @@ class GDQ(TabularLearner):
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
+        """:meth:`TabularLearner.observe`, then a sweep (the default variant) or N backups
+        along plans (``literal``, ``code``)."""
         if self.kind == KIND_GDQ:
             self.reserve_reverse(gdq.reverse_room(self.max_successors))
         super().observe(s, a, r, s2, terminated, truncated, rng)

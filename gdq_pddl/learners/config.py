@@ -8,7 +8,11 @@ file), and every learner reads it from the task context.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import ast
+import inspect
+import sys
+from dataclasses import dataclass, fields
+from functools import cache
 from typing import Literal
 
 from gdq_pddl.errors import ConfigError
@@ -25,6 +29,32 @@ MAX_BACKUPS = 1_000_000
 """The most model backups per real step a config accepts (each costs about a
 microsecond; the paper's settings are 3-5)."""
 
+@cache
+def _field_docs() -> dict[tuple[str, str], str]:
+    """``{(class, field): docstring}`` of this module's source ({} if it has none)."""
+    try:
+        tree = ast.parse(inspect.getsource(sys.modules[__name__]))
+    except (OSError, TypeError):
+        return {}
+    return {(c.name, f.target.id): inspect.cleandoc(d.value.value)
+            for c in tree.body if isinstance(c, ast.ClassDef)
+            for f, d in zip(c.body, c.body[1:], strict=False)
+            if isinstance(f, ast.AnnAssign) and isinstance(f.target, ast.Name)
+            and isinstance(d, ast.Expr) and isinstance(d.value, ast.Constant)}
+
+
+def documented(cls: type) -> type:
+    """Append each field's docstring (which ``help()`` does not show) to the class
+    docstring, as an ``Attributes`` list."""
+    docs = {f.name: doc for f in fields(cls) for base in cls.__mro__[::-1]
+            if (doc := _field_docs().get((base.__name__, f.name)))}
+    items = "\n".join(f"    {name}: " + doc.replace("\n", "\n        ")
+                      for name, doc in docs.items())
+    cls.__doc__ = f"{inspect.cleandoc(cls.__doc__ or '')}\n\nAttributes:\n{items}"
+    return cls
+
+
+@documented
 @dataclass(frozen=True)
 class LearnerConfig:
     """Parameters shared by every tabular learner."""
@@ -43,11 +73,13 @@ class LearnerConfig:
         check_real("epsilon", self.epsilon, 0.0, 1.0)
 
 
+@documented
 @dataclass(frozen=True)
 class QLearningConfig(LearnerConfig):
     """Q-learning: nothing beyond the shared parameters."""
 
 
+@documented
 @dataclass(frozen=True)
 class DynaQConfig(LearnerConfig):
     """Dyna-Q: Q-learning plus ``n_backups`` model backups per real step."""
@@ -66,6 +98,7 @@ class DynaQConfig(LearnerConfig):
         check_count("m", self.m)  # at most MAX_COUNT, as int64 holds
 
 
+@documented
 @dataclass(frozen=True)
 class GDQConfig(LearnerConfig):
     """Guided Dyna-Q. Three variants (``docs/learners.md`` compares them):
@@ -181,6 +214,7 @@ class GDQConfig(LearnerConfig):
             check_real(name, getattr(self, name), 0.0, MAX_NUMBER)
 
 
+@documented
 @dataclass(frozen=True)
 class DarlingConfig(LearnerConfig):
     """DARLING (Leonetti, Iocchi & Stone 2016): Q-learning over plan-restricted actions."""

@@ -77,10 +77,12 @@ class TaskContext:
 
     @property
     def n_states(self) -> int:
+        """Number of learner states (observations)."""
         return len(self.goal)
 
     @property
     def n_actions(self) -> int:
+        """Number of learner actions."""
         return int(self.plans.first_actions.shape[1])
 
 
