@@ -54,7 +54,8 @@ def register_run(sub) -> None:
                    help="a PDDL domain: with --problem, learn on that problem instead of an "
                         "office task; a STRIPS domain needs --dynamics, a PPDDL domain is "
                         "its own reality (see docs/domains.md)")
-    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain")
+    p.add_argument("--problem", type=Path, help="a PDDL problem of --domain; FILE:NAME picks "
+                   "the problem NAME of a file that holds several")
     p.add_argument("--dynamics", type=Path,
                    help="the dynamics file (TOML) of --domain: success, failure, costs; for "
                         "a PPDDL domain an optional overlay: r_max, step_limit, costs")

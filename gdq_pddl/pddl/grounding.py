@@ -48,6 +48,9 @@ class GroundTask:
     goal_possible: bool
     statics: frozenset[str]
     fact_index: dict[str, int] = field(repr=False, default_factory=dict)
+    goal_alternatives: tuple[tuple[int, int], ...] = ()
+    """A goal with alternatives: ``(must hold, must not hold)`` masks, one of which must
+    be met besides ``goal_pos``/``goal_neg`` (the part they share). Empty: none."""
 
     @cached_property
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
@@ -88,6 +91,9 @@ class GroundTask:
         if goal is None and not self.goal_possible:
             return False
         pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
+        if goal is None and self.goal_alternatives and not any(
+                state & p == p and not state & n for p, n in self.goal_alternatives):
+            return False
         return state & pos == pos and not state & neg
 
     def atoms(self, state: int) -> frozenset[str]:
@@ -151,9 +157,8 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
                 for name, pre, neg, add, dele in live)
     static_strs = {str(a) for a in statics}
-    goal_pos, goal_neg, possible = ground_goal(problem.goal, fluent, static_strs, index)
-    return GroundTask(facts, ops, m(init_fluents), m(goal_pos), m(goal_neg), possible,
-                      frozenset(static_strs), index)
+    return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
+                      fact_index=index, **goal_masks(problem, fluent, static_strs, index))
 
 
 def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
@@ -226,6 +231,22 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
     name = "(" + " ".join((action.name, *(b[p] for p, _ in action.parameters))) + ")"
     return (name, part(action.precondition, True), part(action.precondition, False),
             part(action.effect, True), part(action.effect, False))
+
+
+def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:
+    """The goal fields of a :class:`GroundTask` (``goal_pos``, ``goal_neg``,
+    ``goal_possible``, ``goal_alternatives``): the alternatives that can never hold are
+    dropped, and the goal can never hold if all are."""
+    def masks(lits) -> tuple[int, int, bool]:
+        pos, neg, possible = ground_goal(lits, fluent, statics, index)
+        return (sum(1 << index[a] for a in pos if a in index),
+                sum(1 << index[a] for a in neg if a in index), possible)
+
+    pos, neg, possible = masks(problem.goal)
+    alternatives = [m[:2] for m in map(masks, problem.goal_alternatives) if m[2]]
+    return {"goal_pos": pos, "goal_neg": neg, "goal_alternatives": tuple(alternatives),
+            "goal_possible": possible and (bool(alternatives)
+                                           or not problem.goal_alternatives)}
 
 
 def ground_goal(goal, fluent, statics, index) -> tuple[set[str], set[str], bool]:

@@ -15,7 +15,7 @@ from gdq_pddl.errors import PlanningError, SizeError
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem
+from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem, problem_file
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
 from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
 
@@ -89,12 +89,13 @@ class PlanningProblem:
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
-                   problem_source: str = "<problem>",
-                   determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Parse a domain and problem. A PPDDL domain is grounded with all its outcomes
-        and planned on through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
+                   problem_source: str = "<problem>", determinisation: str = "all-outcomes",
+                   problem_name: str | None = None) -> PlanningProblem:
+        """Parse a domain and problem (``problem_name``: which one of a text that holds
+        several). A PPDDL domain is grounded with all its outcomes and planned on
+        through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
         domain = parse_domain(domain_text, domain_source)
-        problem = parse_problem(problem_text, domain, problem_source)
+        problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
         if not domain.probabilistic:
             return cls(domain, problem, domain_text, problem_text)
@@ -105,9 +106,12 @@ class PlanningProblem:
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,
                    determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Read and parse a domain and problem file (see :meth:`from_texts`)."""
-        return cls.from_texts(_read(domain_path), _read(problem_path), str(domain_path),
-                              str(problem_path), determinisation)
+        """Read and parse a domain and problem file (see :meth:`from_texts`);
+        ``problem_path`` may be ``FILE:NAME``, one problem of a file that holds several
+        (:func:`~gdq_pddl.pddl.parser.problem_file`)."""
+        path, name = problem_file(problem_path)
+        return cls.from_texts(_read(domain_path), _read(path), str(domain_path),
+                              str(path), determinisation, name)
 
     @cached_property
     def task(self) -> GroundTask:
