@@ -17,7 +17,7 @@ from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem, problem_file
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
-from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
+from gdq_pddl.pddl.writer import untold, write_domain, write_parsed_problem
 
 State = frozenset[str]
 """A planner state: the fluent atoms that hold, e.g. ``{"(at p0)", "(closed d0)", ...}``."""
@@ -86,6 +86,9 @@ class PlanningProblem:
         if tasks is not None:  # (learner's, planner's): a PPDDL problem, grounded already
             self.__dict__["learner_task"], self.__dict__["task"] = tasks
         self._results: dict[tuple, PlanResult] = {}
+        self.text_gap = ""
+        """Why ``domain_text`` is empty: the text cannot carry the domain (pyperplan and
+        unified-planning cannot be used; :func:`~gdq_pddl.pddl.writer.untold`)."""
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
@@ -99,9 +102,12 @@ class PlanningProblem:
         check_size(problem, problem_source)
         if not domain.probabilistic:
             return cls(domain, problem, domain_text, problem_text)
-        det = determinise(domain, determinisation)
-        return cls(det, problem, write_domain(det), write_parsed_problem(problem, domain),
-                   domain, ground_ppddl(domain, problem, determinisation))
+        det, gap = determinise(domain, determinisation), untold(domain, problem)
+        out = cls(det, problem, "" if gap else write_domain(det),
+                  write_parsed_problem(problem, domain), domain,
+                  ground_ppddl(domain, problem, determinisation))
+        out.text_gap = gap
+        return out
 
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,

@@ -301,9 +301,9 @@ def test_a_goal_with_real_alternatives_is_read_as_them():
     text = GATE.replace("(:goal (and (open) (forall (?k - key) (imply (bent ?k) (not "
                         "(has ?k))))))", "(:goal (or (open) (not (has k1))))")
     problem = parse_problem(text, parse_domain(text), "p.pddl")
-    assert problem.goal == () and [[str(lit.atom) for lit in alt]
-                                   for alt in problem.goal_alternatives] == [["(has k1)"],
-                                                                             ["(open)"]]
+    assert problem.goal == () and [[(lit.positive, str(lit.atom)) for lit in alt]
+                                   for alt in problem.goal_alternatives] == \
+        [[(True, "(open)")], [(False, "(has k1)")]]
 
 
 BULB = """; one file: a lamp to switch on and boxes to tip out (1/2: the tipping jams)
