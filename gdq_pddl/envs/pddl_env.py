@@ -596,7 +596,7 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
                             f"domains {', '.join(shipped_names('domain'))}; problems "
                             f"{', '.join(shipped_names('problem'))})")
     if dynamics is None and _shipped("domain", domain) is not None and \
-            data_file("dynamics", f"{domain}.toml").is_file():
+            str(domain) in shipped_names("dynamics"):
         dynamics = str(domain)
     with ExitStack() as stack:  # no dynamics: a PPDDL domain (from_files says otherwise)
         paths = [value if value is None or (found := _shipped(kind, value)) is None

@@ -235,34 +235,29 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
 
 def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:
     """The goal fields of a :class:`GroundTask` (``goal_pos``, ``goal_neg``,
-    ``goal_possible``, ``goal_alternatives``): the alternatives that can never hold are
-    dropped, and the goal can never hold if all are."""
+    ``goal_possible``, ``goal_alternatives``). Equalities and static atoms (``statics``,
+    their strings) are decided here and a positive fluent atom outside ``index`` never
+    holds; the alternatives that can never hold are dropped, and the goal can never
+    hold if all are."""
     def masks(lits) -> tuple[int, int, bool]:
-        pos, neg, possible = ground_goal(lits, fluent, statics, index)
-        return (sum(1 << index[a] for a in pos if a in index),
-                sum(1 << index[a] for a in neg if a in index), possible)
+        pos = neg = 0
+        possible = True
+        for lit in lits:
+            s = str(lit.atom)
+            if lit.atom.predicate == "=":
+                possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
+            elif lit.atom.predicate not in fluent:
+                possible &= (s in statics) == lit.positive
+            elif s not in index:
+                possible &= not lit.positive
+            elif lit.positive:
+                pos |= 1 << index[s]
+            else:
+                neg |= 1 << index[s]
+        return pos, neg, possible
 
     pos, neg, possible = masks(problem.goal)
     alternatives = [m[:2] for m in map(masks, problem.goal_alternatives) if m[2]]
     return {"goal_pos": pos, "goal_neg": neg, "goal_alternatives": tuple(alternatives),
             "goal_possible": possible and (bool(alternatives)
                                            or not problem.goal_alternatives)}
-
-
-def ground_goal(goal, fluent, statics, index) -> tuple[set[str], set[str], bool]:
-    """A conjunctive goal as ``(fluent atoms that must hold, fluent atoms that must not,
-    whether it can hold at all)``: equalities and static atoms (``statics``, their
-    strings) are decided here; a positive fluent atom outside ``index`` never holds."""
-    goal_pos, goal_neg, possible = set(), set(), True
-    for lit in goal:
-        s = str(lit.atom)
-        if lit.atom.predicate == "=":
-            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
-        elif lit.atom.predicate not in fluent:
-            possible &= (s in statics) == lit.positive
-        elif lit.positive:
-            possible &= s in index
-            goal_pos.add(s)
-        else:
-            goal_neg.add(s)
-    return goal_pos, goal_neg, possible
