@@ -289,9 +289,6 @@ class _Reader:
             if key == ":action" and kind == "domain":
                 actions.append(node)
                 continue
-            if key in _UNSUPPORTED_SECTIONS:
-                raise self.fail(node.line, f"{key} is not supported (gdq_pddl reads "
-                                f"{_LANGUAGE})")
             if key not in known:
                 expected = (*known, ":action") if kind == "domain" else known
                 raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
