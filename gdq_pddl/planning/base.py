@@ -101,7 +101,9 @@ class PlanningProblem:
         problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
         if not domain.probabilistic:
-            return cls(domain, problem, domain_text, problem_text)
+            out = cls(domain, problem, domain_text, problem_text)
+            out.text_gap = untold(domain, problem)  # a goal with alternatives
+            return out
         det, gap = determinise(domain, determinisation), untold(domain, problem)
         out = cls(det, problem, "" if gap else write_domain(det),
                   write_parsed_problem(problem, domain), domain,
@@ -168,6 +170,10 @@ class PlanningProblem:
                 known = ", ".join(task.facts[:8])
                 raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start "
                                     f"state (fluent atoms look like: {known}, ...)") from None
+        if goal is None and task.goal_alternatives:
+            raise PlanningError(f"{self.problem.source}: the goal has alternatives ((or ...), "
+                                "(exists ...), (imply ...)); a planner query takes one "
+                                "conjunctive goal (the state graph's plan tables read them)")
         if goal is None:
             masks = (task.goal_pos, task.goal_neg) if task.goal_possible else None
         elif set(goal) <= task.fact_index.keys():

@@ -123,3 +123,9 @@ def test_backends_that_read_text_say_they_cannot_carry_conditional_effects():
                        r"which the STRIPS text .* use one of them"):
         instance.plan_table("pyperplan")
     assert instance.plan_table("graph").length[0] == 3
+
+
+def test_a_planner_query_refuses_a_goal_with_alternatives():
+    instance = load_instance("courier", "courier-1")
+    with pytest.raises(PlanningError, match=r"courier-1.pddl: the goal has alternatives"):
+        instance.problem.query("graph", None, None, 0.0)
