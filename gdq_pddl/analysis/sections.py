@@ -189,7 +189,10 @@ def _facts(info: dict) -> list[str]:
     return [f"- PDDL domain `{info.get('domain')}`, problem `{info.get('problem')}`, {reality}",
             f"- learner: {info.get('states')} states (every reachable planner state), "
             f"{info.get('actions')} actions (ground actions)",
-            f"- shortest plan: {info.get('shortest_plan')} actions", ""]
+            f"- shortest plan: {info.get('shortest_plan')} actions",
+            *(["- returns on the problem's own scale, as the IPPC scores them: its rewards "
+               "minus its costs, the goal reward once at the goal, no penalty for a failed "
+               "or late end"] if info.get("reward_scale") == "problem" else []), ""]
 
 
 def write_task(w: Writer, exp: str, task: str) -> None:

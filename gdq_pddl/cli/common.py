@@ -107,7 +107,7 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
     p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
                    "--problem names")
     p.add_argument("--problem", help=f"a PDDL problem instead of an office task ({named}): "
-                   f"{what}")
+                   f"{what}; FILE:NAME picks the problem NAME of a file that holds several")
     if dynamics:
         p.add_argument("--dynamics", help=f"the dynamics file (TOML) of --domain: {named}; "
                        "success, failure and costs of a STRIPS domain's actions, an optional "

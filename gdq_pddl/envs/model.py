@@ -55,6 +55,10 @@ class ModelArrays(NamedTuple):
     obs_of: np.ndarray  # int64[n_full], learner state of a full state
     pos_of: np.ndarray  # int64[n_full], position index of a full state
     area_of_pos: np.ndarray  # int64[n_positions], area number (0: none)
+    gain: np.ndarray = np.zeros(0)  # float64[n_outcomes]: the problem's own rewards
+    """Empty: the library's rewards (:func:`finish_step`). Else the problem's own, as the
+    IPPC scores them (:func:`file_step`): each outcome's reward besides the action's
+    cost, and ``r_max`` once on reaching the goal; no penalty for a stuck or late end."""
 
 
 def full_state(world: World, position: str, open_doors: frozenset[str] = frozenset()) -> int:
@@ -170,11 +174,12 @@ def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes
 
 def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDist],
                        pairs: Iterable[tuple[int, dict[tuple, float]]] | None = None,
-                       ) -> ModelArrays:
+                       gains: bool = False) -> ModelArrays:
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
     one per learner action): for each (state, learner action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
-    ``pairs`` replaces them (a PPDDL domain's outcomes are its own)."""
+    ``pairs`` replaces them (a PPDDL domain's outcomes are its own; ``gains``: their keys
+    are ``(next, stuck, reward)``, on the problem's own scale)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
@@ -189,14 +194,14 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                 yield s * n_a + a, {(s, False): 1.0} if k is None else merge_outcomes(
                     slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
 
-    ptr, prob, (nxt, stuck) = outcome_csr(space.n_states * n_a,
-                                          rule() if pairs is None else pairs,
-                                          (np.int64, np.bool_))
+    ptr, prob, (nxt, stuck, *gain) = outcome_csr(
+        space.n_states * n_a, rule() if pairs is None else pairs,
+        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
         **cost_arrays(costs), obs_of=space.obs_of, pos_of=space.pos_of,
-        area_of_pos=space.area_of_pos)
+        area_of_pos=space.area_of_pos, **({"gain": gain[0]} if gains else {}))
     for array in model:
         if isinstance(array, np.ndarray):
             array.setflags(write=False)
@@ -329,4 +334,20 @@ def env_step(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
     """
     k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + action, rng)  # never -1 here
     nxt = m.next[k]
+    if m.gain.shape[0]:
+        return file_step(m, action, k, nxt, m.pos_of[nxt] == goal_pos, t, rng)
     return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)
+
+
+@numba.njit(cache=True, inline="always")
+def file_step(m: ModelArrays, action: int, k: int, nxt: int, at_goal: bool, t: int,
+              rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """:func:`finish_step` on the problem's own scale (:attr:`ModelArrays.gain`)."""
+    reward = m.gain[k] - sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action],
+                                     rng)
+    if m.stuck[k]:
+        return nxt, reward, True, False, CAUSE_STUCK
+    if at_goal:
+        return nxt, reward + m.r_max, True, False, CAUSE_GOAL
+    return nxt, reward, False, t + 1 >= m.step_limit, \
+        CAUSE_TIMEOUT if t + 1 >= m.step_limit else CAUSE_NONE

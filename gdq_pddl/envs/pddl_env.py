@@ -169,20 +169,29 @@ class PDDLInstance:
         return getattr(self.problem.learner_task, "determinisation", None)
 
     @cached_property
+    def reward_scale(self) -> str:
+        """``"problem"``: the file's own rewards, as the IPPC scores them (its metric
+        maximises ``(reward)``, or, with no metric, it declares ``:rewards`` or changes
+        ``(reward)``); ``"goal"``: +r_max at the goal, -r_max on a failed or late end,
+        minus the costs (docs/decisions.md, "Rewards of a PDDL problem")."""
+        domain, metric = self.problem.source_domain, self.problem.problem.metric
+        own = metric == "maximize (reward)" if metric is not None else \
+            domain.reward_effects or ":rewards" in domain.requirements
+        return "problem" if own else "goal"
+
+    @cached_property
     def dynamics(self) -> Dynamics:
         """Reality's r_max and step limit (and the dynamics file's outcomes, if STRIPS)."""
-        if not self.ppddl:
-            assert self.overlay is not None
-            dynamics = self.overlay
-        else:
-            overlay = self.overlay or Dynamics(source="")
-            r_max = overlay.r_max if "r_max" in overlay.stated else \
-                (self.problem.problem.goal_reward or DEFAULT_R_MAX)
-            limit = overlay.step_limit if "step_limit" in overlay.stated else \
-                default_step_limit(self.graph)
-            dynamics = replace(overlay, r_max=r_max, step_limit=limit)
-        check_step_limit(self.problem, self.graph, dynamics)
-        return dynamics
+        overlay = self.overlay or Dynamics(source="")
+        goal_reward = self.problem.problem.goal_reward
+        if "r_max" not in overlay.stated and (goal_reward or self.reward_scale == "problem"):
+            overlay = replace(overlay, r_max=goal_reward or 0.0)
+        elif "r_max" not in overlay.stated and self.ppddl:
+            overlay = replace(overlay, r_max=DEFAULT_R_MAX)
+        if self.ppddl and "step_limit" not in overlay.stated:
+            overlay = replace(overlay, step_limit=default_step_limit(self.graph))
+        check_step_limit(self.problem, self.graph, overlay)
+        return overlay
 
     @cached_property
     def graph(self) -> StateGraph:
@@ -195,14 +204,16 @@ class PDDLInstance:
 
     @cached_property
     def costs(self) -> list[CostDist]:
-        """The cost of every ground action (see the module docstring)."""
+        """The cost of every ground action (see the module docstring; on the problem's
+        own scale, an action that states none costs 0)."""
         names = [op.name for op in self.graph.task.ops]
         stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
+        unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
         out = []
         for name, domain_cost in zip(names, stated, strict=True):
             given = self.overlay.outcomes(*split_action(name)).cost if self.overlay else None
             out.append(given or (CostDist("const", domain_cost) if domain_cost is not None
-                                 else CostDist()))
+                                 else unstated))
         return out
 
     @cached_property
@@ -213,8 +224,12 @@ class PDDLInstance:
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
                      f"of {self.n_states} states x {self.n_actions} ground actions",
                      "make the problem smaller (fewer objects)")
+        own = self.reward_scale == "problem"
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   ppddl_outcomes(self.graph) if self.ppddl else None)
+                                   ppddl_outcomes(self.graph, own) if self.ppddl else None,
+                                   own and self.ppddl)
+        if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
+            model = model._replace(gain=np.zeros(len(model.prob)))
         check_reality(self.problem, self.graph, self.dynamics, model)
         return model
 
@@ -263,6 +278,10 @@ class PDDLInstance:
         if key not in self._tables:
             if planner == "graph":
                 table = graph_plan_table(self.graph, tolerance)
+            elif self.problem.problem.goal_alternatives:
+                raise PlanningError(f"{self.source}: the goal has alternatives ((or ...), "
+                                    f"(exists ...) or (imply ...)); the {planner} planner "
+                                    "reads one conjunctive goal: use --planner graph")
             else:
                 o = PDDLAbstraction(self.graph)
                 table = build_plan_table(o, self.problem, get_planner(planner), o.goal(),
@@ -290,6 +309,7 @@ class PDDLInstance:
         """The ground truth: V* (value iteration on the true model), the shortest plan,
         the sizes (a PDDL problem has no areas)."""
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
+                "reward_scale": self.reward_scale,
                 "step_limit": self.dynamics.step_limit,
                 "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
                 "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
@@ -303,7 +323,7 @@ class PDDLInstance:
     @property
     def step_limit_key(self) -> tuple[str, str]:
         """The file and key that give the step limit."""
-        return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
+        return limit_key(self.problem, self.dynamics)
 
     start_state = 0
     """The initial state (the env's state numbers are the graph's)."""
@@ -376,7 +396,7 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
     look like a success (or a certain failure). Raises :class:`PlanningError` naming the
     problem file (and a PPDDL domain, whose outcomes are reality)."""
     source = problem.problem.source
-    if not problem.problem.goal:
+    if not problem.problem.goal and not problem.problem.goal_alternatives:
         raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
                             "there is nothing to learn; give a goal")
     if graph.is_goal[0]:
@@ -399,13 +419,23 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
                             f"initial state: {why}")
 
 
+def limit_key(problem: PlanningProblem, dynamics: Dynamics) -> tuple[str, str]:
+    """The file and key that give the step limit: the dynamics file's ``step_limit``, or,
+    where no file the user gave states it, the problem file and the default's rule."""
+    if dynamics.source and (not problem.source_domain.probabilistic
+                            or "step_limit" in dynamics.stated):
+        return dynamics.source, "dynamics.step_limit"
+    return problem.problem.source, (f"the default step limit max({MIN_STEP_LIMIT}, ceil("
+                                    f"{STEP_LIMIT_FACTOR:g} x the fewest actions to the goal))")
+
+
 def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics) -> None:
     """Refuse a step limit below the shortest plan (no episode could reach the goal),
     with a :class:`~gdq_pddl.errors.WorldError` naming the dynamics file's
     ``step_limit``."""
     shortest = int(graph.distances[0])
     if shortest > dynamics.step_limit:
-        raise WorldError(dynamics.source or problem.problem.source, "dynamics.step_limit",
+        raise WorldError(*limit_key(problem, dynamics),
                          f"{dynamics.step_limit} is less than the shortest plan of "
                          f"{problem.problem.source} ({shortest} actions): no episode can "
                          "reach the goal")
@@ -432,7 +462,7 @@ def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamic
                             "from the initial state reaches it with positive probability "
                             f"(success = 0: {', '.join(never_working(dynamics))}); give "
                             "those actions a success > 0")
-    raise WorldError(dynamics.source or source, "dynamics.step_limit",
+    raise WorldError(*limit_key(problem, dynamics),
                      f"{dynamics.step_limit} is less than the fewest actions that can reach "
                      f"the goal of {source} in reality ({int(fewest)} actions; "
                      + (f"the knowledge's shortest plan has {plan}" if plan >= 0 else
@@ -501,10 +531,11 @@ def graph_space(graph: StateGraph) -> StateSpace:
         area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
 
 
-def ppddl_outcomes(graph: StateGraph):
+def ppddl_outcomes(graph: StateGraph, gains: bool = False):
     """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
     every applicable ground action (``graph.task`` is a
-    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`), a no-op elsewhere."""
+    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`), a no-op elsewhere; ``gains``: the
+    keys are ``(next, stuck, the outcome's reward)``."""
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
@@ -514,10 +545,11 @@ def ppddl_outcomes(graph: StateGraph):
         for k in range(n_ops):
             op = here.get(k)
             if op is None:
-                yield s * n_ops + k, {(s, False): 1.0}
+                yield s * n_ops + k, {(s, False, 0.0)[:2 + gains]: 1.0}
             else:
                 yield s * n_ops + k, merge_outcomes(
-                    ((s, True) if o.stuck else (index[o.apply(state)], False), o.probability)
+                    (((s, True) if o.stuck else (index[o.apply(state)], False))
+                     + ((o.gain(state),) if gains else ()), o.probability)
                     for o in op.outcomes)
 
 

@@ -13,7 +13,9 @@ Expected rewards mirror :func:`gdq_pddl.envs.model.env_step` outcome by outcome:
 outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
 any other outcome of the last allowed action gives -r_max; otherwise the reward is minus
 the mean cost of the action (for a normal cost, the mean of the draw clipped at 0).
-Returns are undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
+On the problem's own scale (:attr:`~gdq_pddl.envs.model.ModelArrays.gain`), every outcome
+pays its reward minus the cost, and reaching the goal adds r_max once. Returns are
+undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
 per episode that the experiments report.
 """
 
@@ -89,6 +91,9 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
     end_reward = np.where(model.stuck, -r, np.where(at_goal, r, -r))
+    if model.gain.size:  # the problem's own rewards (model.file_step): no penalty
+        cost = cost - model.gain
+        end_reward = -cost + np.where(at_goal & ~model.stuck, r, 0.0)
     goal_states = model.pos_of == goal_pos
 
     V = np.zeros((limit + 1, n_full))

@@ -48,6 +48,9 @@ class GroundTask:
     goal_possible: bool
     statics: frozenset[str]
     fact_index: dict[str, int] = field(repr=False, default_factory=dict)
+    goal_alternatives: tuple[tuple[int, int], ...] = ()
+    """A goal with alternatives: ``(must hold, must not hold)`` masks, one of which must
+    be met besides ``goal_pos``/``goal_neg`` (the part they share). Empty: none."""
 
     @cached_property
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
@@ -88,6 +91,9 @@ class GroundTask:
         if goal is None and not self.goal_possible:
             return False
         pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
+        if goal is None and self.goal_alternatives and not any(
+                state & p == p and not state & n for p, n in self.goal_alternatives):
+            return False
         return state & pos == pos and not state & neg
 
     def atoms(self, state: int) -> frozenset[str]:
@@ -151,9 +157,8 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
                 for name, pre, neg, add, dele in live)
     static_strs = {str(a) for a in statics}
-    goal_pos, goal_neg, possible = ground_goal(problem.goal, fluent, static_strs, index)
-    return GroundTask(facts, ops, m(init_fluents), m(goal_pos), m(goal_neg), possible,
-                      frozenset(static_strs), index)
+    return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
+                      fact_index=index, **goal_masks(problem, fluent, static_strs, index))
 
 
 def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
@@ -228,20 +233,31 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
             part(action.effect, True), part(action.effect, False))
 
 
-def ground_goal(goal, fluent, statics, index) -> tuple[set[str], set[str], bool]:
-    """A conjunctive goal as ``(fluent atoms that must hold, fluent atoms that must not,
-    whether it can hold at all)``: equalities and static atoms (``statics``, their
-    strings) are decided here; a positive fluent atom outside ``index`` never holds."""
-    goal_pos, goal_neg, possible = set(), set(), True
-    for lit in goal:
-        s = str(lit.atom)
-        if lit.atom.predicate == "=":
-            possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
-        elif lit.atom.predicate not in fluent:
-            possible &= (s in statics) == lit.positive
-        elif lit.positive:
-            possible &= s in index
-            goal_pos.add(s)
-        else:
-            goal_neg.add(s)
-    return goal_pos, goal_neg, possible
+def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:
+    """The goal fields of a :class:`GroundTask` (``goal_pos``, ``goal_neg``,
+    ``goal_possible``, ``goal_alternatives``). Equalities and static atoms (``statics``,
+    their strings) are decided here and a positive fluent atom outside ``index`` never
+    holds; the alternatives that can never hold are dropped, and the goal can never
+    hold if all are."""
+    def masks(lits) -> tuple[int, int, bool]:
+        pos = neg = 0
+        possible = True
+        for lit in lits:
+            s = str(lit.atom)
+            if lit.atom.predicate == "=":
+                possible &= (lit.atom.args[0] == lit.atom.args[1]) == lit.positive
+            elif lit.atom.predicate not in fluent:
+                possible &= (s in statics) == lit.positive
+            elif s not in index:
+                possible &= not lit.positive
+            elif lit.positive:
+                pos |= 1 << index[s]
+            else:
+                neg |= 1 << index[s]
+        return pos, neg, possible
+
+    pos, neg, possible = masks(problem.goal)
+    alternatives = [m[:2] for m in map(masks, problem.goal_alternatives) if m[2]]
+    return {"goal_pos": pos, "goal_neg": neg, "goal_alternatives": tuple(alternatives),
+            "goal_possible": possible and (bool(alternatives)
+                                           or not problem.goal_alternatives)}

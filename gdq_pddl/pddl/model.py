@@ -59,6 +59,22 @@ class CondEffect:
     literal: Literal
 
 
+CostTerm = float | Atom
+"""A number, or a function term such as ``(road-length ?from ?to)`` valued in the problem."""
+
+
+@dataclass(frozen=True)
+class Reward:
+    """``sign * amount`` added to the reward of an outcome (``(increase (reward) X)``: +1;
+    a cost: -1), for every binding of ``variables`` under which ``condition`` (None:
+    always) holds in the state the action is taken in."""
+
+    amount: CostTerm
+    sign: float = 1.0
+    variables: tuple[tuple[str, str], ...] = ()
+    condition: Condition | None = None
+
+
 @dataclass(frozen=True)
 class Outcome:
     """One outcome of a probabilistic action: its probability and the literals it makes
@@ -69,10 +85,9 @@ class Outcome:
     effect: tuple[Literal, ...]
     stuck: bool = False
     conditional: tuple[CondEffect, ...] = ()
-
-
-CostTerm = float | Atom
-"""A number, or a function term such as ``(road-length ?from ?to)`` valued in the problem."""
+    rewards: tuple[Reward, ...] = ()
+    """Rewards that depend on the outcome or the state, or that an action earns
+    (``(increase (reward) X)``); a plain cost is the action's :attr:`Action.cost`."""
 
 
 @dataclass(frozen=True)
@@ -112,6 +127,8 @@ class Domain:
     source: str = "<domain>"
     functions: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     """Declared numeric functions (``:functions``) and their parameter types."""
+    reward_effects: bool = False
+    """Some effect changes ``(reward)`` (the IPPC's reward-oriented problems)."""
 
     @property
     def probabilistic(self) -> bool:
@@ -142,3 +159,8 @@ class Problem:
     """Function values of ``:init`` (``(= (road-length a b) 3)``), keyed ``"(road-length a b)"``."""
     goal_reward: float | None = None
     """PPDDL's ``(:goal-reward N)``, if given."""
+    metric: str | None = None
+    """``"maximize (reward)"`` or ``"minimize (total-cost)"``, if given."""
+    goal_alternatives: tuple[tuple[Literal, ...], ...] = ()
+    """A goal with alternatives (``or``, ``exists``, ``imply``) once grounded: it holds
+    where one of them does (``goal``: the literals all share). Empty: ``goal`` alone."""

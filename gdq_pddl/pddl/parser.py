@@ -46,6 +46,7 @@ from gdq_pddl.pddl.model import (
     Outcome,
     Problem,
     Quantified,
+    Reward,
 )
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, conjunction, ground_dnf, nnf
 
@@ -173,7 +174,8 @@ class _Reader:
         if len(found) > 1:
             labels = ", ".join(label for label, _ in found)
             raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
-                            f"({labels}): pick one by name")
+                            f"({labels}): pick one by name"
+                            + (f" ({self.source}:{found[0][0]})" if kind == "problem" else ""))
         return found[0][1]
 
     def refuse_outside(self) -> None:
@@ -287,9 +289,6 @@ class _Reader:
             if key == ":action" and kind == "domain":
                 actions.append(node)
                 continue
-            if key in _UNSUPPORTED_SECTIONS:
-                raise self.fail(node.line, f"{key} is not supported (gdq_pddl reads "
-                                f"{_LANGUAGE})")
             if key not in known:
                 expected = (*known, ":action") if kind == "domain" else known
                 raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
@@ -383,15 +382,17 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
             predicates[pname] = signature
     functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
     actions: list[Action] = []
+    rewards = False
     for node in action_nodes:
-        action = _action(r, node, predicates, types, constants, functions)
+        action, uses_reward = _action(r, node, predicates, types, constants, functions)
+        rewards |= uses_reward
         twin = next((a for a in actions if a.name == action.name), None)
         if twin is not None:
             raise r.fail(node.line, f"action {action.name} is declared twice (first at line "
                          f"{twin.line})")
         actions.append(action)
     return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source,
-                  functions)
+                  functions, rewards)
 
 
 def _requirements(r: _Reader, node: Node) -> set[str]:
@@ -477,7 +478,8 @@ def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> 
 
 def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
             types: dict[str, str | None], constants: dict[str, str],
-            functions: dict[str, tuple[str, ...]]) -> Action:
+            functions: dict[str, tuple[str, ...]]) -> tuple[Action, bool]:
+    """An action, and whether an effect of it changes ``(reward)``."""
     items = node.items
     assert items is not None
     if len(items) < 2:
@@ -508,9 +510,9 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     branches = reader.effect(fields.get(":effect"), inside=False)
     if not reader.probabilistic and not reader.conditional and rest is None:
         return Action(name, tuple(params), pre, branches[0][1], node.line,  # type: ignore
-                      cost=tuple(reader.costs))
-    return Action(name, tuple(params), pre, (), node.line,
-                  _outcomes(branches, predicates), tuple(reader.costs), rest)
+                      cost=tuple(reader.costs)), reader.reward_effects
+    return Action(name, tuple(params), pre, (), node.line, _outcomes(branches, predicates),
+                  tuple(reader.costs), rest), reader.reward_effects
 
 
 def _precondition(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
@@ -532,9 +534,9 @@ def _precondition(r: _Reader, node: Node | None, predicates: dict[str, tuple[str
     return literals, (others[0] if len(others) == 1 else Junction("and", others))
 
 
-Branches = list[tuple[Fraction, tuple[Literal | CondEffect, ...]]]
+Branches = list[tuple[Fraction, tuple[Literal | CondEffect | Reward, ...]]]
 """An effect as a distribution: ``(probability, effects)`` pairs summing to 1; each
-effect a literal, or a conditional or quantified one."""
+effect a literal, a conditional or quantified one, or a reward."""
 
 
 class _Effects:
@@ -548,6 +550,7 @@ class _Effects:
         self.costs: list[CostTerm] = []
         self.probabilistic = False
         self.conditional = False
+        self.reward_effects = False
         self.variables: tuple[tuple[str, str], ...] = ()
         """The variables of the ``forall`` effects around the effect being read."""
         self.when: Condition | None = None
@@ -575,15 +578,12 @@ class _Effects:
         if head == "probabilistic":
             return self.probabilistic_effect(node, items)
         if head in ("increase", "decrease"):
-            if inside:
-                raise r.fail(node.line, f"{ctx}: a cost inside (probabilistic ...) is not "
-                             "supported: an action's cost cannot depend on its outcome; "
-                             "state it outside the probabilistic effect")
-            if self.when is not None or self.variables:
-                raise r.fail(node.line, f"{ctx}: a cost inside (when ...) or (forall ...) "
-                             "is not supported: an action's cost cannot depend on the state")
-            self.costs.append(self.cost(node, items))
-            return [(Fraction(1), ())]
+            term, sign = self.cost(node, items)
+            if not inside and self.when is None and not self.variables and sign < 0:
+                self.costs.append(term)  # the action's cost, whatever happens
+                return [(Fraction(1), ())]
+            self.conditional = True  # a reward of the outcome or the state
+            return [(Fraction(1), (Reward(term, sign, self.variables, self.when),))]
         if head == "not":
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
@@ -668,8 +668,9 @@ class _Effects:
             out.append((1 - total, ()))
         return out
 
-    def cost(self, node: Node, items: tuple[Node, ...]) -> CostTerm:
-        """The term an ``(increase (total-cost) X)`` / ``(decrease (reward) X)`` adds."""
+    def cost(self, node: Node, items: tuple[Node, ...]) -> tuple[CostTerm, float]:
+        """The term of ``(increase (reward) X)`` (sign +1), ``(decrease (reward) X)`` or
+        ``(increase (total-cost) X)`` (sign -1)."""
         r, ctx = self.r, self.ctx
         head = items[0].symbol
         target = items[1] if len(items) == 3 else None
@@ -681,17 +682,15 @@ class _Effects:
                          f"{node.text()}")
         if (head, fluent) == ("decrease", "total-cost"):
             raise r.fail(node.line, f"{ctx}: (decrease (total-cost) ...): a cost must be >= 0")
-        if (head, fluent) == ("increase", "reward"):
-            raise r.fail(node.line, f"{ctx}: (increase (reward) ...): a reward for an action is "
-                         "not supported; rewards are +r_max at the goal and minus each "
-                         "action's cost (give costs with (decrease (reward) X))")
+        self.reward_effects |= fluent == "reward"
+        sign = 1.0 if (head, fluent) == ("increase", "reward") else -1.0
         value = items[2]
         if not value.is_list:
             number = _number(r, value, ctx)
             if number is None or number < 0:
-                raise r.fail(value.line, f"{ctx}: expected a cost >= 0 (a number or a "
+                raise r.fail(value.line, f"{ctx}: expected an amount >= 0 (a number or a "
                              f"function term), found {value.symbol!r}")
-            return float(number)
+            return float(number), sign
         term = r.lst(value, "a function term")
         fname = term[0].symbol if term and not term[0].is_list else ""
         if fname not in self.functions or fname in COST_FLUENTS:
@@ -708,7 +707,7 @@ class _Effects:
             if not is_subtype(self.types, self.scope[a], t):
                 raise r.fail(value.line, f"{ctx}: {a} is a {self.scope[a]}, but {fname} "
                              f"expects a {t}")
-        return Atom(fname, args)
+        return Atom(fname, args), sign
 
 
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
@@ -731,18 +730,19 @@ def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tup
             continue
         lits = tuple(e for e in effects if isinstance(e, Literal))
         conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
+        rewards = tuple(e for e in effects if isinstance(e, Reward))  # two add up: no merge
         if is_stuck_domain and Literal(stuck, True) in lits:
-            key: tuple = ("stuck",)
+            key: tuple = ("stuck", rewards)
         else:
             unique = tuple(dict.fromkeys(lits))
-            key = ("effect", frozenset(unique), unique, frozenset(conds), conds)
+            key = ("effect", frozenset(unique), unique, frozenset(conds), conds, rewards)
         merged[key] = merged.get(key, Fraction(0)) + p
     out = []
     for key, p in merged.items():
         if key[0] == "stuck":
-            out.append(Outcome(float(p), (), True))
+            out.append(Outcome(float(p), (), True, rewards=key[1]))
         else:
-            out.append(Outcome(float(p), key[2], conditional=key[4]))
+            out.append(Outcome(float(p), key[2], conditional=key[4], rewards=key[5]))
     return tuple(out)
 
 
@@ -929,28 +929,27 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
         _not_stuck(r, atom, domain.predicates, node.line, "init")
         init.append(atom)
     goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
-    if ":metric" in sec:
-        _metric(r, sec[":metric"])
+    metric = _metric(r, sec[":metric"]) if ":metric" in sec else None
     if ":goal" not in sec:
         raise r.fail(top.line, "expected (:goal ...)")
     gnode = sec[":goal"]
     if len(gnode.items) != 2:
         raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
                      f"{len(gnode.items) - 1}")
-    goal = _goal(r, gnode.items[1], domain, objects, init)
-    return Problem(name, domain.name, objects, frozenset(init), tuple(goal), source, values,
-                   goal_reward)
+    goal, alternatives = _goal(r, gnode.items[1], domain, objects, init)
+    return Problem(name, domain.name, objects, frozenset(init), goal, source, values,
+                   goal_reward, metric, alternatives)
 
 
-def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
-          init: list[Atom]) -> tuple[Literal, ...]:
-    """The goal as literals. A goal with quantifiers is expanded over the problem's
-    objects (it has no free variable); one that still has alternatives once the atoms no
-    action changes are decided is refused: the goal is a set of literals."""
+def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init: list[Atom],
+          ) -> tuple[tuple[Literal, ...], tuple[tuple[Literal, ...], ...]]:
+    """The goal as the literals every alternative has, and its alternatives (none: it is
+    a conjunction). Quantifiers are expanded over the problem's objects (the goal has no
+    free variable), and the atoms no action changes are decided."""
     cond = nnf(_condition(r, node, domain.predicates, domain.types, objects, "goal"))
     lits = conjunction(cond)
     if lits is not None:
-        return lits
+        return lits, ()
 
     def of_type(t: str) -> list[str]:
         return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
@@ -967,13 +966,14 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str],
                          a in static, too_many)
     if not dnf:
         raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
-    if len(dnf) > 1:
-        raise r.fail(node.line, f"goal: it has {len(dnf)} alternatives ((or ...), (exists "
-                     "...), (imply ...)) even once the atoms no action changes are decided; "
-                     "a goal with alternatives is not supported (give one of them)")
-    pos, neg = dnf[0]
-    return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
-        tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+
+    def literals(pos: frozenset[str], neg: frozenset[str]) -> tuple[Literal, ...]:
+        return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
+            tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+
+    common = literals(frozenset.intersection(*(p for p, _ in dnf)),
+                      frozenset.intersection(*(n for _, n in dnf)))
+    return common, (tuple(literals(p, n) for p, n in dnf) if len(dnf) > 1 else ())
 
 
 def _fact_atom(fact: str) -> Atom:
@@ -1027,13 +1027,15 @@ def _goal_reward(r: _Reader, node: Node) -> float:
     return float(value)
 
 
-def _metric(r: _Reader, node: Node) -> None:
-    """Only the metrics that mean "pay the action costs": the others change the task."""
+def _metric(r: _Reader, node: Node) -> str:
+    """The metrics that keep the task: maximise the reward the file defines, or minimise
+    the action costs; the others (e.g. a probability or a time) would change it."""
     text = node.text()
     if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
-        raise r.fail(node.line, f"{text} is not supported: gdq_pddl's return is +r_max at "
-                     "the goal minus the action costs, (:metric minimize (total-cost)) or "
-                     "(:metric maximize (reward))")
+        raise r.fail(node.line, f"{text} is not supported: the metrics read are (:metric "
+                     "maximize (reward)) and (:metric minimize (total-cost)) "
+                     "(docs/domains.md, \"Rewards\")")
+    return text[len("(:metric "):-1]
 
 
 def read_domain(path: str | Path) -> Domain:
@@ -1045,6 +1047,16 @@ def read_problem(path: str | Path, domain: Domain, name: str | None = None) -> P
     """Read and parse a problem file for ``domain`` (``name``: which problem of a file
     that holds several)."""
     return parse_problem(_read(path), domain, str(path), name)
+
+
+def problem_file(path: str | Path) -> tuple[str | Path, str | None]:
+    """``FILE:NAME`` -> ``(FILE, NAME)``: one problem of a file that holds several; a path
+    that exists, or whose part before the last ``:`` does not, is a path."""
+    text = str(path)
+    head, sep, name = text.rpartition(":")
+    if not sep or not name or Path(text).exists() or not Path(head).is_file():
+        return path, None
+    return head, name
 
 
 def _read(path: str | Path) -> str:

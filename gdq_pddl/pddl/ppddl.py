@@ -34,8 +34,8 @@ from gdq_pddl.pddl.grounding import (
     GroundTask,
     _bindings,
     _bits,
+    goal_masks,
     ground,
-    ground_goal,
 )
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, ground_dnf
@@ -61,6 +61,17 @@ class GroundOutcome:
     conditional: tuple[tuple[int, int, int, int], ...] = ()
     """Conditional effects ``(must hold, must not hold, add, delete)``: each adds and
     deletes when its condition holds in the state the action is taken in (adds win)."""
+    reward: float = 0.0
+    """The reward the outcome's effects state (:class:`~gdq_pddl.pddl.model.Reward`),
+    besides the action's cost; those under a condition are in ``rewards``."""
+    rewards: tuple[tuple[tuple[tuple[int, int], ...], float], ...] = ()
+    """``(alternatives (must hold, must not hold), amount)``: the amount is earned when
+    one alternative holds in the state the action is taken in."""
+
+    def gain(self, state: int) -> float:
+        """The outcome's reward when the action is taken in ``state``."""
+        return self.reward + sum(amount for alts, amount in self.rewards
+                                 if any(state & p == p and not state & n for p, n in alts))
 
     def apply(self, state: int) -> int:
         add, dele = self.add, self.dele
@@ -190,7 +201,7 @@ def ground_ppddl(domain: Domain, problem: Problem,
             raise PDDLError(domain.source, action.line or None, f"action {action.name}: "
                             f"{_SEP!r} cannot be part of an action name")
     names = planner_names(domain, determinisation)
-    if any(a.condition is not None or any(o.conditional for o in a.outcomes)
+    if any(a.condition is not None or any(o.conditional or o.rewards for o in a.outcomes)
            for a in domain.actions):
         return _ground_normalised(domain, problem, determinisation, names)
     every = []  # one deterministic schema per outcome: the grounder's relaxed reachability
@@ -228,7 +239,8 @@ def ground_ppddl(domain: Domain, problem: Problem,
             origin[pname] = name
     learner = ProbabilisticTask(task.facts, tuple(learner_ops), task.init, task.goal_pos,
                                 task.goal_neg, task.goal_possible, task.statics,
-                                task.fact_index, origin, determinisation)
+                                task.fact_index, task.goal_alternatives, origin,
+                                determinisation)
     planner = replace(task, ops=tuple(planner_ops))
     return learner, planner
 
@@ -245,22 +257,27 @@ def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[flo
             out.append(None)
             continue
         binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
-        total = 0.0
-        for term in action.cost:
-            if isinstance(term, Atom):
-                key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
-                if key not in problem.values:
-                    raise PDDLError(problem.source, None, f"no value for {key} in :init (the "
-                                    f"cost of {name}, {domain.source}:{action.line})")
-                value = problem.values[key]
-                if value < 0:
-                    raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: the "
-                                    f"cost of {name} must be >= 0")
-                total += value
-            else:
-                total += term
+        total = sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
+                    for term in action.cost)
         out.append(total)
     return out
+
+
+def term_value(term, binding: Mapping[str, str], domain: Domain, problem: Problem,
+               action: Action, what: str) -> float:
+    """A cost or reward term under ``binding``: a number, or a function term valued in
+    the problem's ``:init``."""
+    if not isinstance(term, Atom):
+        return term
+    key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
+    if key not in problem.values:
+        raise PDDLError(problem.source, None, f"no value for {key} in :init ({what}, "
+                        f"{domain.source}:{action.line})")
+    value = problem.values[key]
+    if value < 0:
+        raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: {what} must be "
+                        ">= 0")
+    return value
 
 
 MAX_VARIANTS = 4096
@@ -304,7 +321,10 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         for b in _bindings(action, static_tuples, by_type, typed, fluent):
             pre = ground_dnf(whole, b, objects, static, too_many)
             if pre:
-                outs = [_ground_outcome(o, b, objects, static, fluent, too_many)
+                def value(term, binding, action: Action = action) -> float:
+                    return term_value(term, binding, domain, problem, action,
+                                      f"a reward of {action.name}")
+                outs = [_ground_outcome(o, b, objects, static, fluent, too_many, value)
                         for o in _outcomes_of(action)]
                 args = tuple(b[p] for p, _ in action.parameters)
                 raw.append((action, args, pre, outs))
@@ -327,8 +347,11 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
             common_pos, common_neg = common_pos & p, common_neg & n
         outcomes = tuple(GroundOutcome(
             o.probability, m(add), m(dele - add), o.stuck,
-            tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached))
-            for o, (add, dele, conds) in zip(_outcomes_of(action), outs, strict=True))
+            tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached),
+            reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts if cp <= reached),
+                                       amount) for alts, amount in rewards) if r[0]))
+            for o, (add, dele, conds, reward, rewards) in zip(_outcomes_of(action), outs,
+                                                               strict=True))
         known = kept_outcomes(action, determinisation)
         learner_ops.append(ProbabilisticOp(name, common_pos, common_neg, 0, 0, outcomes, known,
                                            tuple(alts) if len(alts) > 1 else ()))
@@ -349,12 +372,13 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     if clash is not None:
         raise PDDLError(domain.source, None, f"the planner action {clash} (an outcome of "
                         f"{origin[clash]}) has the name of a ground action; rename one")
-    goal_pos, goal_neg, possible = ground_goal(problem.goal, fluent, statics, index)
-    learner = ProbabilisticTask(facts, tuple(learner_ops), m(init), m(goal_pos), m(goal_neg),
-                                possible, statics, index, origin, determinisation,
-                                any(op.alternatives for op in learner_ops))
-    planner = GroundTask(facts, tuple(planner_ops), m(init), m(goal_pos), m(goal_neg), possible,
-                         statics, index)
+    goal = goal_masks(problem, fluent, statics, index)
+    learner = ProbabilisticTask(facts, tuple(learner_ops), m(init), statics=statics,
+                                fact_index=index, origin=origin,
+                                determinisation=determinisation,
+                                disjunctive=any(op.alternatives for op in learner_ops), **goal)
+    planner = GroundTask(facts, tuple(planner_ops), m(init), statics=statics, fact_index=index,
+                         **goal)
     return learner, planner
 
 
@@ -364,10 +388,12 @@ def _outcomes_of(action: Action) -> tuple[Outcome, ...]:
 
 
 def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: frozenset[str],
-                    too_many) -> tuple[set[str], set[str], list[tuple]]:
+                    too_many, value) -> tuple[set[str], set[str], list[tuple], float, list]:
     """An outcome under binding ``b``: its adds, deletes and conditional effects
     ``(must hold, must not hold, adds, deletes)`` (fact sets; one per alternative of a
-    condition and binding of a ``forall``)."""
+    condition and binding of a ``forall``), the reward it always earns and its
+    conditional rewards ``(alternatives, amount)`` (``value(term, binding)``: a term's
+    amount)."""
     def fact(lit: Literal, binding: Mapping[str, str]) -> str:
         return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
 
@@ -387,7 +413,21 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
             for cp, cn in when:
                 conds.append((cp, cn, f if ce.literal.positive else set(),
                               set() if ce.literal.positive else f))
-    return add, dele, conds
+    reward, rewards = 0.0, []
+    for rw in o.rewards:
+        domains = [objects(t) for _, t in rw.variables]
+        if math.prod(len(d) for d in domains) > MAX_ATOMS:
+            raise too_many()
+        for values in itertools.product(*domains):
+            bb = {**b, **dict(zip((v for v, _ in rw.variables), values, strict=True))}
+            when = TRUE if rw.condition is None else \
+                ground_dnf(rw.condition, bb, objects, static, too_many)
+            amount = rw.sign * value(rw.amount, bb)
+            if when == TRUE:
+                reward += amount
+            elif when:
+                rewards.append((when, amount))
+    return add, dele, conds, reward, rewards
 
 
 def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
@@ -402,7 +442,7 @@ def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
                 if not any(p <= reached for p, _ in pre):
                     continue
                 live[i] = changed = True
-            for add, _, conds in outs:
+            for add, _, conds, *_ in outs:
                 new = add - reached
                 for cp, _, a, _ in conds:
                     if cp <= reached:

@@ -48,5 +48,24 @@ def write_parsed_problem(problem: Problem, domain: Domain) -> str:
             f"  (:goal (and {_literals(problem.goal)})))\n")
 
 
+def untold(domain: Domain, problem: Problem) -> str:
+    """Why the STRIPS text of ``domain``'s determinisation cannot carry it (conditional or
+    quantified effects, a precondition beyond a conjunction, a goal with alternatives):
+    the backends that read text (pyperplan, unified-planning's validator) cannot be
+    used; "" if it can."""
+    found = {"conditional or quantified effects": [a.name for a in domain.actions if any(
+                 o.conditional for o in a.outcomes)],
+             "a disjunctive or quantified precondition": [a.name for a in domain.actions
+                                                          if a.condition is not None]}
+    parts = [f"{what} ({', '.join(names)})" for what, names in found.items() if names]
+    if problem.goal_alternatives:
+        parts.append(f"a goal with alternatives ({problem.source})")
+    if not parts:
+        return ""
+    return (f"{domain.source} has {'; '.join(parts)}, which the STRIPS text read by "
+            "pyperplan and unified-planning's plan validator cannot carry; the graph and "
+            "clingo planners read the grounded task: use one of them")
+
+
 def _literals(lits: tuple[Literal, ...]) -> str:
     return " ".join(str(lit.atom) if lit.positive else f"(not {lit.atom})" for lit in lits)

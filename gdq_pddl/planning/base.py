@@ -15,9 +15,9 @@ from gdq_pddl.errors import PlanningError, SizeError
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem
+from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem, problem_file
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
-from gdq_pddl.pddl.writer import write_domain, write_parsed_problem
+from gdq_pddl.pddl.writer import untold, write_domain, write_parsed_problem
 
 State = frozenset[str]
 """A planner state: the fluent atoms that hold, e.g. ``{"(at p0)", "(closed d0)", ...}``."""
@@ -92,28 +92,40 @@ class PlanningProblem:
         if tasks is not None:  # (learner's, planner's): a PPDDL problem, grounded already
             self.__dict__["learner_task"], self.__dict__["task"] = tasks
         self._results: dict[tuple, PlanResult] = {}
+        self.text_gap = ""
+        """Why ``domain_text`` is empty: the text cannot carry the domain (pyperplan and
+        unified-planning cannot be used; :func:`~gdq_pddl.pddl.writer.untold`)."""
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
-                   problem_source: str = "<problem>",
-                   determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Parse a domain and problem. A PPDDL domain is grounded with all its outcomes
-        and planned on through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
+                   problem_source: str = "<problem>", determinisation: str = "all-outcomes",
+                   problem_name: str | None = None) -> PlanningProblem:
+        """Parse a domain and problem (``problem_name``: which one of a text that holds
+        several). A PPDDL domain is grounded with all its outcomes and planned on
+        through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
         domain = parse_domain(domain_text, domain_source)
-        problem = parse_problem(problem_text, domain, problem_source)
+        problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
         if not domain.probabilistic:
-            return cls(domain, problem, domain_text, problem_text)
-        det = determinise(domain, determinisation)
-        return cls(det, problem, write_domain(det), write_parsed_problem(problem, domain),
-                   domain, ground_ppddl(domain, problem, determinisation))
+            out = cls(domain, problem, domain_text, problem_text)
+            out.text_gap = untold(domain, problem)  # a goal with alternatives
+            return out
+        det, gap = determinise(domain, determinisation), untold(domain, problem)
+        out = cls(det, problem, "" if gap else write_domain(det),
+                  write_parsed_problem(problem, domain), domain,
+                  ground_ppddl(domain, problem, determinisation))
+        out.text_gap = gap
+        return out
 
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,
                    determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Read and parse a domain and problem file (see :meth:`from_texts`)."""
-        return cls.from_texts(_read(domain_path), _read(problem_path), str(domain_path),
-                              str(problem_path), determinisation)
+        """Read and parse a domain and problem file (see :meth:`from_texts`);
+        ``problem_path`` may be ``FILE:NAME``, one problem of a file that holds several
+        (:func:`~gdq_pddl.pddl.parser.problem_file`)."""
+        path, name = problem_file(problem_path)
+        return cls.from_texts(_read(domain_path), _read(path), str(domain_path),
+                              str(path), determinisation, name)
 
     @cached_property
     def task(self) -> GroundTask:
@@ -164,6 +176,10 @@ class PlanningProblem:
                 known = ", ".join(task.facts[:8])
                 raise PlanningError(f"unknown or unreachable atom {exc.args[0]} in a start "
                                     f"state (fluent atoms look like: {known}, ...)") from None
+        if goal is None and task.goal_alternatives:
+            raise PlanningError(f"{self.problem.source}: the goal has alternatives ((or ...), "
+                                "(exists ...), (imply ...)); a planner query takes one "
+                                "conjunctive goal (the state graph's plan tables read them)")
         if goal is None:
             masks = (task.goal_pos, task.goal_neg) if task.goal_possible else None
         elif set(goal) <= task.fact_index.keys():

@@ -62,7 +62,8 @@ def test_a_domain_and_its_problems_in_one_file_are_read_by_name():
 def test_several_problems_and_no_name_is_refused_listing_them():
     domain = parse_domain(ONE_FILE)
     with pytest.raises(PDDLError, match=r"^door.pddl:20: this file has 2 problems "
-                                        r"\(door-1, door-2\): pick one by name$"):
+                                        r"\(door-1, door-2\): pick one by name "
+                                        r"\(door.pddl:door-1\)$"):
         parse_problem(ONE_FILE, domain, "door.pddl")
     with pytest.raises(PDDLError, match=r"no problem named 'door-3' in this file \(it has "
                                         r"door-1, door-2\)"):
@@ -296,12 +297,13 @@ def test_or_imply_not_forall_exists_equality_and_constants_in_conditions():
     planner_agrees(learner, planner)
 
 
-def test_a_goal_with_real_alternatives_is_refused_at_its_line():
+def test_a_goal_with_real_alternatives_is_read_as_them():
     text = GATE.replace("(:goal (and (open) (forall (?k - key) (imply (bent ?k) (not "
                         "(has ?k))))))", "(:goal (or (open) (not (has k1))))")
-    domain = parse_domain(text)
-    with pytest.raises(PDDLError, match=r"^p.pddl:16: goal: it has 2 alternatives"):
-        parse_problem(text, domain, "p.pddl")
+    problem = parse_problem(text, parse_domain(text), "p.pddl")
+    assert problem.goal == () and [[(lit.positive, str(lit.atom)) for lit in alt]
+                                   for alt in problem.goal_alternatives] == \
+        [[(True, "(open)")], [(False, "(has k1)")]]
 
 
 BULB = """; one file: a lamp to switch on and boxes to tip out (1/2: the tipping jams)
