@@ -83,6 +83,7 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
 from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.errors import ConfigError, WorldError
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
@@ -200,8 +201,18 @@ class OfficeInstance:
         return self.world.index[self.task.goal]
 
     @cached_property
-    def action_masks(self) -> np.ndarray:
+    def mask_table(self) -> np.ndarray:
         return office_action_masks(self.world, self.task)
+
+    def restarted(self, start: str | None = None, goal: str | None = None) -> OfficeInstance:
+        """The instance from ``start`` to ``goal`` (position or landmark names, as
+        ``gdq-pddl run --start p3 --goal p13``; None: the task's) in the same world."""
+        try:
+            return OfficeInstance(self.world, pick_task(
+                self.world, None, self.task.start if start is None else start,
+                self.task.goal if goal is None else goal))
+        except WorldError as exc:
+            raise ConfigError(f"reset options: {exc.message}") from None
 
     @property
     def source(self) -> str:
@@ -311,9 +322,13 @@ class CompactEnv(CompiledEnv):
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
         instance = OfficeInstance.of(task, start, goal, world)
-        self.start_pos = instance.world.index[instance.task.start]
         self.doors = np.zeros(max(1, len(instance.world.doors)), dtype=np.uint8)
         super().__init__(instance, instance.compact)
+
+    @property
+    def start_pos(self) -> int:
+        """The position index where an episode starts."""
+        return self.world.index[self.task.start]
 
     def _restart(self) -> None:
         self.doors[:] = 0

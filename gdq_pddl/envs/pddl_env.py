@@ -63,8 +63,11 @@ Taxi) is 1 for the ground actions whose precondition holds in the state.
 
 from __future__ import annotations
 
+import copy
 import math
+import re
 import tomllib
+from collections.abc import Iterable
 from contextlib import ExitStack
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -93,7 +96,7 @@ from gdq_pddl.envs.model import (
 )
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.envs.solve_compact import successor_capacity
-from gdq_pddl.errors import PlanningError, WorldError
+from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
@@ -123,6 +126,8 @@ class PDDLInstance:
     problem: PlanningProblem
     overlay: Dynamics | None
     max_states: int = MAX_STATES
+    start_state: int = 0
+    """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
 
     @classmethod
     def from_files(cls, domain: str | Path, problem: str | Path,
@@ -222,7 +227,7 @@ class PDDLInstance:
         return model
 
     @cached_property
-    def action_masks(self) -> np.ndarray:
+    def mask_table(self) -> np.ndarray:
         """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
         applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
         return graph_action_mask(self.graph)
@@ -231,8 +236,10 @@ class PDDLInstance:
     def source(self) -> str:
         return self.problem.problem.source
 
-    learner_start = 0
-    """The learner's start state (the initial state: states are the graph's)."""
+    @property
+    def learner_start(self) -> int:
+        """The learner's start state (:attr:`start_state`: states are the graph's)."""
+        return self.start_state
 
     @cached_property
     def learner_goal(self) -> np.ndarray:
@@ -292,10 +299,11 @@ class PDDLInstance:
     def optimal(self) -> dict[str, Any]:
         """The ground truth: V* (value iteration on the true model), the shortest plan,
         the sizes (a PDDL problem has no areas)."""
+        s0 = self.start_state
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "step_limit": self.dynamics.step_limit,
-                "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
-                "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
+                "v_star": float(solve(self.model, GOAL_POS).V[0, s0]),
+                "shortest_plan": int(self.graph.distances[s0]), "states": self.n_states,
                 "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
                 "expected_area_visits": {}}
 
@@ -308,10 +316,36 @@ class PDDLInstance:
         """The file and key that give the step limit."""
         return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
 
-    start_state = 0
-    """The initial state (the env's state numbers are the graph's)."""
     goal_pos = GOAL_POS
     render_modes = ("ansi",)
+    """No ``rgb_array``: a PDDL state's facts have no layout to draw."""
+
+    def restarted(self, start: str | Iterable[str] | None = None,
+                  goal: None = None) -> PDDLInstance:
+        """The instance whose episodes start in the reachable state where exactly the
+        fluent facts ``start`` hold (``"(at c12) (open c11) ..."`` or a list of facts, as
+        ``render()`` lists them; static facts may be left out). The goal is the problem's:
+        a ``goal`` is refused (:class:`ConfigError`; write another problem file)."""
+        if goal is not None:
+            raise ConfigError(f"reset options: goal {goal!r}: a PDDL env's goal is its "
+                              f"problem's ({self.source}); write another problem file")
+        if start is None:
+            return self
+        task, graph = self.graph.task, self.graph
+        facts = {"(" + " ".join(f.strip("() ").lower().split()) + ")" for f in
+                 (re.findall(r"\([^()]*\)", start) if isinstance(start, str) else start)}
+        facts -= set(task.statics)
+        unknown = sorted(facts - set(task.fact_index))
+        s = None if unknown else graph.index.get(task.mask(facts))
+        if s is None or graph.is_goal[s]:
+            why = (f"{unknown[0]} is no fluent fact of {self.source}" if unknown else
+                   "the goal holds there" if s is not None else
+                   "no state reachable from the initial state has exactly these fluent "
+                   "facts true (list them all, as render() does)")
+            raise ConfigError(f"reset options: start {start!r}: {why}")
+        new = copy.copy(self)  # shares the graph, model and plan tables
+        object.__setattr__(new, "start_state", int(s))
+        return new
 
     def info(self, pos: int) -> dict[str, Any]:
         """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""

@@ -137,7 +137,7 @@ class MapPainter:
 
         Each position is coloured by its best ``max_a Q`` over its learner states, and
         an arrow points to where its greedy action leads (:func:`greedy_target`). With
-        ``masks`` (an env's ``action_masks``), a greedy action the knowledge says does
+        ``masks`` (an env's ``mask_table``), a greedy action the knowledge says does
         nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
         range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
         """
