@@ -31,7 +31,8 @@ at this position open); one state per open-floor position, two per door-side pos
 The full simulator state (which doors are open anywhere) is in ``info["full_state"]``.
 
 ## Starting state
-The task's start position, every door closed.
+The task's start position, every door closed; ``reset(options={"start": "p3", "goal":
+"p13"})`` gives one episode another start and goal (:meth:`OfficeInstance.restarted`).
 
 ## Rewards
 ``+r_max`` on reaching the goal, ``-r_max`` on failure (stuck at a door, or the last
@@ -41,16 +42,16 @@ allowed action taken without reaching the goal), otherwise minus the action's co
 ## Episode end
 Terminated on reaching the goal or getting stuck. Truncated after ``step_limit``
 actions (20 for the office) with reward ``-r_max``: the env counts its own steps, so no
-``TimeLimit`` wrapper is needed (or registered).
+``TimeLimit`` wrapper is needed (or registered); ``spec.max_episode_steps`` says the limit.
 
 ## Information
 ``info`` holds ``action_mask``, ``position`` (name), ``area`` (int, 0 if none),
 ``cause`` (``""``, ``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and
 ``step`` (actions taken so far). ``action_mask`` (``int8[n_actions]``, as in
-Gymnasium's Taxi) is 1 for the actions the robot's PDDL knowledge says can do something
-in the observed state: a ground action applicable there maps to it. ``stay`` is never 1
-(the knowledge has no such action). Use it as
-``env.action_space.sample(mask=info["action_mask"])``.
+Gymnasium's Taxi; ``env.action_masks()`` gives it as booleans) is 1 for the actions the
+robot's PDDL knowledge says can do something in the observed state: a ground action
+applicable there maps to it. ``stay`` is never 1 (the knowledge has no such action).
+Use it as ``env.action_space.sample(mask=info["action_mask"])``.
 
 ## Arguments
 ``task`` (a task name of the world, default ``"C"``) or ``start`` and ``goal``

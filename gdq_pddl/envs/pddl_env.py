@@ -33,8 +33,10 @@ cost and changes nothing.
 ## Observation space
 ``Discrete(n_states)``: the states reachable from the problem's initial state (goal
 states are not expanded), numbered breadth first; 0 is the initial state
-(``env.unwrapped.atoms(s)`` lists a state's fluent atoms). The learner sees the full
-planner state: nothing is hidden.
+(``env.unwrapped.atoms(s)`` lists a state's fluent atoms; ``render_mode="ansi"`` too, and
+there is no ``rgb_array``). The learner sees the full planner state: nothing is hidden.
+``reset(options={"start": "(at c12) (open c11) ..."})`` starts one episode in another
+reachable state (:meth:`PDDLInstance.restarted`).
 
 ## Rewards and episode end
 As in the office: ``+r_max`` on reaching a state where the problem's goal holds
