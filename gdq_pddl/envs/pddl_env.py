@@ -34,7 +34,7 @@ cost and changes nothing.
 ``Discrete(n_states)``: the states reachable from the problem's initial state (goal
 states are not expanded), numbered breadth first; 0 is the initial state
 (``env.unwrapped.atoms(s)`` lists a state's fluent atoms; ``render_mode="ansi"`` too, and
-there is no ``rgb_array``). The learner sees the full planner state: nothing is hidden.
+``"rgb_array"`` draws that text). The learner sees the full planner state: nothing is hidden.
 ``reset(options={"start": "(at c12) (open c11) ..."})`` starts one episode in another
 reachable state (:meth:`PDDLInstance.restarted`).
 
@@ -96,6 +96,7 @@ from gdq_pddl.envs.model import (
     env_step,
     merge_outcomes,
 )
+from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
@@ -319,8 +320,7 @@ class PDDLInstance:
         return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
 
     goal_pos = GOAL_POS
-    render_modes = ("ansi",)
-    """No ``rgb_array``: a PDDL state's facts have no layout to draw."""
+    render_modes = ("ansi", "rgb_array")
 
     def restarted(self, start: str | Iterable[str] | None = None,
                   goal: None = None) -> PDDLInstance:
@@ -353,10 +353,14 @@ class PDDLInstance:
         """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""
         return {}
 
-    def render(self, mode: str, fs: int, step: int, cause: str) -> str:
-        """The state's atoms after ``step`` actions (and why the episode ended)."""
+    def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
+        """The state's fluent atoms after ``step`` actions (and why the episode ended):
+        the text (``ansi``), or that text drawn (``rgb_array``, 640 x 480)."""
         why = f" ({cause})" if cause else ""
-        return f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
+        text = f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
+        if mode == "ansi":
+            return text
+        return text_image(f"{self.name}\n" + text.replace(" ", "\u00a0").replace(")\u00a0(", ") ("))
 
 
 def parse_reality(text: str, planning: PlanningProblem, source: str = "<string>") -> Dynamics:
@@ -616,7 +620,7 @@ class PDDLEnv(CompiledEnv):
     The instance's own attributes are the env's too (``env.unwrapped.world``,
     ``.atoms(s)``, ``.action_name(a)``, ``.start_state``, ``.goal_pos``...)."""
 
-    metadata = {"render_modes": ["ansi"], "render_fps": 4}
+    metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
     """A PDDL problem's; an env's own are its instance's."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,

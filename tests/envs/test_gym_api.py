@@ -141,7 +141,7 @@ def _chain(env: gymnasium.Env):
         env = env.env
 
 
-def test_pddl_ansi_lists_the_true_facts_and_rgb_array_is_refused():
+def test_pddl_ansi_lists_the_true_facts():
     env = make(PDDL_ID, render_mode="ansi")
     obs, info = env.reset(seed=0)
     for _ in range(3):
@@ -150,5 +150,14 @@ def test_pddl_ansi_lists_the_true_facts_and_rgb_array_is_refused():
         assert set(text.split(": ", 1)[1].replace(") (", ")|(").split("|")) == \
             set(env.unwrapped.atoms(obs))
         obs, *_, info = env.step(int(np.flatnonzero(info["action_mask"])[-1]))
-    with pytest.raises(ConfigError, match="draws only 'ansi'"), pytest.warns(UserWarning):
-        gymnasium.make(PDDL_ID, **KWARGS[PDDL_ID], render_mode="rgb_array")
+
+
+def test_pddl_rgb_array_draws_the_facts_at_one_size():
+    """What sb3's ``make_vec_env`` asks for by default, and a video needs: one shape."""
+    env = make(PDDL_ID, render_mode="rgb_array")
+    _, info = env.reset(seed=0)
+    first = env.render()
+    env.step(int(np.flatnonzero(info["action_mask"])[0]))
+    second = env.render()
+    assert first.shape == second.shape == (480, 640, 3) and first.dtype == np.uint8
+    assert first.min() < 128 and not np.array_equal(first, second)
