@@ -334,7 +334,7 @@ class PDDLInstance:
         if start is None:
             return self
         task, graph = self.graph.task, self.graph
-        facts = {"(" + " ".join(f.strip("() ").lower().split()) + ")" for f in
+        facts = {"(" + " ".join(str(f).strip("() ").lower().split()) + ")" for f in
                  (re.findall(r"\([^()]*\)", start) if isinstance(start, str) else start)}
         facts -= set(task.statics)
         unknown = sorted(facts - set(task.fact_index))
