@@ -41,23 +41,21 @@ class CompiledEnv(gym.Env[int, int]):
     """The compiled model: :class:`ModelArrays`, or the compact model of
     :mod:`gdq_pddl.envs.compact` (both are named tuples of arrays)."""
 
-    def __init__(self, instance: Any, model: tuple, render_mode: str | None = None,
-                 render_modes: tuple[str, ...] = ()) -> None:
-        self.check_render_mode(render_mode, render_modes)
+    def __init__(self, instance: Any, model: tuple, render_mode: str | None = None) -> None:
+        self.check_render_mode(render_mode)
         self.instance, self.model, self.render_mode = instance, model, render_mode
         self._given = instance  # what reset() without options goes back to
-        self.metadata = {**self.metadata, "render_modes": list(render_modes)}
         self.observation_space = Discrete(instance.n_states)
         self.action_space = Discrete(instance.n_actions)
         self._restart()
         self._t, self._cause, self._done = 0, "", True  # not started
 
-    @staticmethod
-    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
-        """Refuse a render mode the instance cannot draw (a :class:`ConfigError`)."""
+    def check_render_mode(self, render_mode: str | None) -> None:
+        """Refuse a render mode this env class cannot draw (a :class:`ConfigError`)."""
+        modes = self.metadata["render_modes"]
         if render_mode is not None and render_mode not in modes:
             raise ConfigError(f"render_mode {render_mode!r}: this env draws only "
-                              f"{', '.join(map(repr, modes))} (or None)")
+                              f"{', '.join(map(repr, modes)) or 'nothing'} (or None)")
 
     def __getattr__(self, name: str) -> Any:
         instance = self.__dict__.get("instance")

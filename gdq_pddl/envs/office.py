@@ -156,7 +156,6 @@ class OfficeInstance:
 
     world: World
     task: Task
-    render_modes = ("ansi", "rgb_array")
 
     @classmethod
     def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
@@ -310,8 +309,7 @@ def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (
                    render_mode=render_mode)
 
 
-OfficeEnv.metadata = {"render_modes": list(OfficeInstance.render_modes),  # what
-                      "render_fps": 4}  # gymnasium.make reads of an entry point
+OfficeEnv.metadata = PDDLEnv.metadata  # what gymnasium.make reads of an entry point
 
 
 class CompactEnv(CompiledEnv):

@@ -320,7 +320,6 @@ class PDDLInstance:
         return self.dynamics.source or self.problem.problem.source, "dynamics.step_limit"
 
     goal_pos = GOAL_POS
-    render_modes = ("ansi", "rgb_array")
 
     def restarted(self, start: str | Iterable[str] | None = None,
                   goal: None = None) -> PDDLInstance:
@@ -621,17 +620,17 @@ class PDDLEnv(CompiledEnv):
     ``.atoms(s)``, ``.action_name(a)``, ``.start_state``, ``.goal_pos``...)."""
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
-    """A PDDL problem's; an env's own are its instance's."""
+    """Both kinds of instance draw both modes (:meth:`PDDLInstance.render`,
+    :meth:`~gdq_pddl.envs.office.OfficeInstance.render`)."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
                  dynamics: str | Path | None = None, instance: Any = None,
                  render_mode: str | None = None,
                  determinisation: str = DETERMINISATIONS[0]) -> None:
-        self.check_render_mode(render_mode, PDDLInstance.render_modes if instance is None
-                               else instance.render_modes)
+        self.check_render_mode(render_mode)  # before loading, which can take long
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
-        super().__init__(instance, instance.model, render_mode, instance.render_modes)
+        super().__init__(instance, instance.model, render_mode)
 
     def transition_arrays(self) -> ModelArrays:
         """The true model (CSR outcomes over full states) for value iteration.
