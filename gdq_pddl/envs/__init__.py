@@ -24,8 +24,8 @@ the true model :func:`~gdq_pddl.envs.model.compile_true_model` builds.
 
 No ``max_episode_steps`` is registered: the env counts its own steps and ends an episode
 at the world's (or the dynamics file's) ``step_limit`` with the failure reward
-``-r_max``; a ``TimeLimit`` wrapper would duplicate that, and with a fixed number it
-would be wrong for a world file whose step limit differs from the office's 20.
+``-r_max``, and its ``spec.max_episode_steps`` says that limit (a registered
+``TimeLimit`` would duplicate it, with one number for every world file).
 """
 
 from __future__ import annotations

@@ -3,8 +3,9 @@ compiled model.
 
 :class:`CompiledEnv` is the one base: it holds the instance (whose attributes are the
 env's too), the spaces, the action masks and the episode bookkeeping (step count, end
-cause, the reset-before-step and action-range checks), and implements ``reset``,
-``step`` and the common ``info`` once over four hooks: restart the hidden state, advance
+cause, the reset-before-step and action-range checks), and implements ``reset`` (with
+its ``start``/``goal`` options), ``step``, ``action_masks()``, ``spec`` and the common
+``info`` once over four hooks: restart the hidden state, advance
 it by one compiled step, observe it, and say where it is. Its two subclasses are the two
 representations of an instance's true model: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`
 over the full states (:class:`~gdq_pddl.envs.model.ModelArrays`; every instance, both
@@ -15,14 +16,20 @@ office instance (:mod:`gdq_pddl.envs.compact`; buildings too large for the full 
 from __future__ import annotations
 
 import operator
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
 from gdq_pddl.envs.model import CAUSES
+from gdq_pddl.errors import ConfigError
+
+RESET_OPTIONS = ("start", "goal")
+"""The keys ``reset(options=...)`` takes (any other is refused)."""
 
 
 class CompiledEnv(gym.Env[int, int]):
@@ -34,22 +41,21 @@ class CompiledEnv(gym.Env[int, int]):
     """The compiled model: :class:`ModelArrays`, or the compact model of
     :mod:`gdq_pddl.envs.compact` (both are named tuples of arrays)."""
 
-    def __init__(self, instance: Any, model: tuple, render_mode: str | None = None,
-                 render_modes: tuple[str, ...] = ()) -> None:
-        self.check_render_mode(render_mode, render_modes)
+    def __init__(self, instance: Any, model: tuple, render_mode: str | None = None) -> None:
+        self.check_render_mode(render_mode)
         self.instance, self.model, self.render_mode = instance, model, render_mode
-        self.metadata = {**self.metadata, "render_modes": list(render_modes)}
+        self._given = instance  # what reset() without options goes back to
         self.observation_space = Discrete(instance.n_states)
         self.action_space = Discrete(instance.n_actions)
         self._restart()
         self._t, self._cause, self._done = 0, "", True  # not started
 
-    @staticmethod
-    def check_render_mode(render_mode: str | None, modes: tuple[str, ...]) -> None:
-        """Refuse a render mode the instance cannot draw (a ``ValueError``)."""
+    def check_render_mode(self, render_mode: str | None) -> None:
+        """Refuse a render mode this env class cannot draw (a :class:`ConfigError`)."""
+        modes = self.metadata["render_modes"]
         if render_mode is not None and render_mode not in modes:
-            raise ValueError(f"render_mode must be one of {list(modes)} or None, "
-                             f"got {render_mode!r}")
+            raise ConfigError(f"render_mode {render_mode!r}: this env draws only "
+                              f"{', '.join(map(repr, modes)) or 'nothing'} (or None)")
 
     def __getattr__(self, name: str) -> Any:
         instance = self.__dict__.get("instance")
@@ -58,15 +64,40 @@ class CompiledEnv(gym.Env[int, int]):
         return getattr(instance, name)
 
     @property
-    def action_masks(self) -> np.ndarray:
+    def mask_table(self) -> np.ndarray:
         """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
         can do something in the learner state (:mod:`gdq_pddl.abstraction.masks`); row
         ``obs`` is ``info["action_mask"]``."""
-        return self.instance.action_masks
+        return self.instance.mask_table
+
+    def action_masks(self) -> np.ndarray:
+        """``bool[n_actions]``: the current state's row of :attr:`mask_table` (what
+        sb3-contrib's ``MaskablePPO`` asks an env for)."""
+        return self.mask_table[self._observe()].astype(bool)
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        """The spec ``gymnasium.make`` gave (None if built directly), with
+        ``max_episode_steps`` the env's own step limit (no ``TimeLimit`` is registered:
+        the env truncates itself, with reward ``-r_max``)."""
+        spec = self.__dict__.get("_spec")
+        return None if spec is None else replace(spec, max_episode_steps=int(self.model.step_limit))
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = value
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
+        """Start an episode; ``options`` may give this episode's ``start`` and ``goal``
+        (the instance's :meth:`restarted` says in what form); a later reset without them
+        goes back to the env's own. Other keys: :class:`ConfigError`."""
         super().reset(seed=seed)
+        unknown = [k for k in options or {} if k not in RESET_OPTIONS]
+        if unknown:
+            raise ConfigError(f"reset options: unknown key {unknown[0]!r} (known: "
+                              f"{', '.join(RESET_OPTIONS)})")
+        self.instance = self._given.restarted(**options) if options else self._given
         self._restart()
         self._t, self._cause, self._done = 0, "", False
         return self._observe(), self._info()
@@ -105,9 +136,9 @@ class CompiledEnv(gym.Env[int, int]):
 
     def _info(self) -> dict[str, Any]:
         """What the instance says at the position (the office: ``position``),
-        ``action_mask`` (a copy of the state's row of :attr:`action_masks`: info must be
+        ``action_mask`` (a copy of the state's row of :attr:`mask_table`: info must be
         new data on every call), ``area`` (0: none), ``cause`` and ``step``."""
         pos = self._position()
         return {**self.instance.info(pos),
-                "action_mask": self.action_masks[self._observe()].copy(),
+                "action_mask": self.mask_table[self._observe()].copy(),
                 "area": int(self.model.area_of_pos[pos]), "cause": self._cause, "step": self._t}

@@ -31,7 +31,8 @@ at this position open); one state per open-floor position, two per door-side pos
 The full simulator state (which doors are open anywhere) is in ``info["full_state"]``.
 
 ## Starting state
-The task's start position, every door closed.
+The task's start position, every door closed; ``reset(options={"start": "p3", "goal":
+"p13"})`` gives one episode another start and goal (:meth:`OfficeInstance.restarted`).
 
 ## Rewards
 ``+r_max`` on reaching the goal, ``-r_max`` on failure (stuck at a door, or the last
@@ -41,16 +42,16 @@ allowed action taken without reaching the goal), otherwise minus the action's co
 ## Episode end
 Terminated on reaching the goal or getting stuck. Truncated after ``step_limit``
 actions (20 for the office) with reward ``-r_max``: the env counts its own steps, so no
-``TimeLimit`` wrapper is needed (or registered).
+``TimeLimit`` wrapper is needed (or registered); ``spec.max_episode_steps`` says the limit.
 
 ## Information
 ``info`` holds ``action_mask``, ``position`` (name), ``area`` (int, 0 if none),
 ``cause`` (``""``, ``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and
 ``step`` (actions taken so far). ``action_mask`` (``int8[n_actions]``, as in
-Gymnasium's Taxi) is 1 for the actions the robot's PDDL knowledge says can do something
-in the observed state: a ground action applicable there maps to it. ``stay`` is never 1
-(the knowledge has no such action). Use it as
-``env.action_space.sample(mask=info["action_mask"])``.
+Gymnasium's Taxi; ``env.action_masks()`` gives it as booleans) is 1 for the actions the
+robot's PDDL knowledge says can do something in the observed state: a ground action
+applicable there maps to it. ``stay`` is never 1 (the knowledge has no such action).
+Use it as ``env.action_space.sample(mask=info["action_mask"])``.
 
 ## Arguments
 ``task`` (a task name of the world, default ``"C"``) or ``start`` and ``goal``
@@ -83,6 +84,7 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
 from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.errors import ConfigError, WorldError
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
@@ -154,7 +156,6 @@ class OfficeInstance:
 
     world: World
     task: Task
-    render_modes = ("ansi", "rgb_array")
 
     @classmethod
     def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
@@ -200,8 +201,18 @@ class OfficeInstance:
         return self.world.index[self.task.goal]
 
     @cached_property
-    def action_masks(self) -> np.ndarray:
+    def mask_table(self) -> np.ndarray:
         return office_action_masks(self.world, self.task)
+
+    def restarted(self, start: str | None = None, goal: str | None = None) -> OfficeInstance:
+        """The instance from ``start`` to ``goal`` (position or landmark names, as
+        ``gdq-pddl run --start p3 --goal p13``; None: the task's) in the same world."""
+        try:
+            return OfficeInstance(self.world, pick_task(
+                self.world, None, self.task.start if start is None else start,
+                self.task.goal if goal is None else goal))
+        except WorldError as exc:
+            raise ConfigError(f"reset options: {exc.message}") from None
 
     @property
     def source(self) -> str:
@@ -298,8 +309,7 @@ def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (
                    render_mode=render_mode)
 
 
-OfficeEnv.metadata = {"render_modes": list(OfficeInstance.render_modes),  # what
-                      "render_fps": 4}  # gymnasium.make reads of an entry point
+OfficeEnv.metadata = PDDLEnv.metadata  # what gymnasium.make reads of an entry point
 
 
 class CompactEnv(CompiledEnv):
@@ -311,9 +321,13 @@ class CompactEnv(CompiledEnv):
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
         instance = OfficeInstance.of(task, start, goal, world)
-        self.start_pos = instance.world.index[instance.task.start]
         self.doors = np.zeros(max(1, len(instance.world.doors)), dtype=np.uint8)
         super().__init__(instance, instance.compact)
+
+    @property
+    def start_pos(self) -> int:
+        """The position index where an episode starts."""
+        return self.world.index[self.task.start]
 
     def _restart(self) -> None:
         self.doors[:] = 0

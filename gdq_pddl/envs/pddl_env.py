@@ -32,8 +32,10 @@ cost and changes nothing.
 ## Observation space
 ``Discrete(n_states)``: the states reachable from the problem's initial state (goal
 states are not expanded), numbered breadth first; 0 is the initial state
-(``env.unwrapped.atoms(s)`` lists a state's fluent atoms). The learner sees the full
-planner state: nothing is hidden.
+(``env.unwrapped.atoms(s)`` lists a state's fluent atoms; ``render_mode="ansi"`` too, and
+``"rgb_array"`` draws that text). The learner sees the full planner state: nothing is hidden.
+``reset(options={"start": "(at c12) (open c11) ..."})`` starts one episode in another
+reachable state (:meth:`PDDLInstance.restarted`).
 
 ## Rewards and episode end
 As in the office: ``+r_max`` on reaching a state where the problem's goal holds
@@ -62,8 +64,11 @@ Taxi) is 1 for the ground actions whose precondition holds in the state.
 
 from __future__ import annotations
 
+import copy
 import math
+import re
 import tomllib
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
@@ -88,9 +93,10 @@ from gdq_pddl.envs.model import (
     env_step,
     merge_outcomes,
 )
+from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.envs.solve_compact import successor_capacity
-from gdq_pddl.errors import PlanningError, WorldError
+from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
@@ -120,6 +126,8 @@ class PDDLInstance:
     problem: PlanningProblem
     overlay: Dynamics | None
     max_states: int = MAX_STATES
+    start_state: int = 0
+    """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
 
     @classmethod
     def from_files(cls, domain: str | Path, problem: str | Path,
@@ -234,7 +242,7 @@ class PDDLInstance:
         return model
 
     @cached_property
-    def action_masks(self) -> np.ndarray:
+    def mask_table(self) -> np.ndarray:
         """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
         applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
         return graph_action_mask(self.graph)
@@ -243,8 +251,10 @@ class PDDLInstance:
     def source(self) -> str:
         return self.problem.problem.source
 
-    learner_start = 0
-    """The learner's start state (the initial state: states are the graph's)."""
+    @property
+    def learner_start(self) -> int:
+        """The learner's start state (:attr:`start_state`: states are the graph's)."""
+        return self.start_state
 
     @cached_property
     def learner_goal(self) -> np.ndarray:
@@ -308,11 +318,12 @@ class PDDLInstance:
     def optimal(self) -> dict[str, Any]:
         """The ground truth: V* (value iteration on the true model), the shortest plan,
         the sizes (a PDDL problem has no areas)."""
+        s0 = self.start_state
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "reward_scale": self.reward_scale,
                 "step_limit": self.dynamics.step_limit,
-                "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
-                "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
+                "v_star": float(solve(self.model, GOAL_POS).V[0, s0]),
+                "shortest_plan": int(self.graph.distances[s0]), "states": self.n_states,
                 "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
                 "expected_area_visits": {}}
 
@@ -325,19 +336,47 @@ class PDDLInstance:
         """The file and key that give the step limit."""
         return limit_key(self.problem, self.dynamics)
 
-    start_state = 0
-    """The initial state (the env's state numbers are the graph's)."""
     goal_pos = GOAL_POS
-    render_modes = ("ansi",)
+
+    def restarted(self, start: str | Iterable[str] | None = None,
+                  goal: None = None) -> PDDLInstance:
+        """The instance whose episodes start in the reachable state where exactly the
+        fluent facts ``start`` hold (``"(at c12) (open c11) ..."`` or a list of facts, as
+        ``render()`` lists them; static facts may be left out). The goal is the problem's:
+        a ``goal`` is refused (:class:`ConfigError`; write another problem file)."""
+        if goal is not None:
+            raise ConfigError(f"reset options: goal {goal!r}: a PDDL env's goal is its "
+                              f"problem's ({self.source}); write another problem file")
+        if start is None:
+            return self
+        task, graph = self.graph.task, self.graph
+        facts = {"(" + " ".join(str(f).strip("() ").lower().split()) + ")" for f in
+                 (re.findall(r"\([^()]*\)", start) if isinstance(start, str) else start)}
+        facts -= set(task.statics)
+        unknown = sorted(facts - set(task.fact_index))
+        s = None if unknown else graph.index.get(task.mask(facts))
+        if s is None or graph.is_goal[s]:
+            why = (f"{unknown[0]} is no fluent fact of {self.source}" if unknown else
+                   "the goal holds there" if s is not None else
+                   "no state reachable from the initial state has exactly these fluent "
+                   "facts true (list them all, as render() does)")
+            raise ConfigError(f"reset options: start {start!r}: {why}")
+        new = copy.copy(self)  # shares the graph, model and plan tables
+        object.__setattr__(new, "start_state", int(s))
+        return new
 
     def info(self, pos: int) -> dict[str, Any]:
         """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""
         return {}
 
-    def render(self, mode: str, fs: int, step: int, cause: str) -> str:
-        """The state's atoms after ``step`` actions (and why the episode ended)."""
+    def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
+        """The state's fluent atoms after ``step`` actions (and why the episode ended):
+        the text (``ansi``), or that text drawn (``rgb_array``, 640 x 480)."""
         why = f" ({cause})" if cause else ""
-        return f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
+        text = f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
+        if mode == "ansi":
+            return text
+        return text_image(f"{self.name}\n" + text.replace(" ", "\u00a0").replace(")\u00a0(", ") ("))
 
 
 def parse_reality(text: str, planning: PlanningProblem, source: str = "<string>") -> Dynamics:
@@ -576,18 +615,18 @@ class PDDLEnv(CompiledEnv):
     The instance's own attributes are the env's too (``env.unwrapped.world``,
     ``.atoms(s)``, ``.action_name(a)``, ``.start_state``, ``.goal_pos``...)."""
 
-    metadata = {"render_modes": ["ansi"], "render_fps": 4}
-    """A PDDL problem's; an env's own are its instance's."""
+    metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
+    """Both kinds of instance draw both modes (:meth:`PDDLInstance.render`,
+    :meth:`~gdq_pddl.envs.office.OfficeInstance.render`)."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
                  dynamics: str | Path | None = None, instance: Any = None,
                  render_mode: str | None = None,
                  determinisation: str = DETERMINISATIONS[0]) -> None:
-        self.check_render_mode(render_mode, PDDLInstance.render_modes if instance is None
-                               else instance.render_modes)
+        self.check_render_mode(render_mode)  # before loading, which can take long
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
-        super().__init__(instance, instance.model, render_mode, instance.render_modes)
+        super().__init__(instance, instance.model, render_mode)
 
     def transition_arrays(self) -> ModelArrays:
         """The true model (CSR outcomes over full states) for value iteration.

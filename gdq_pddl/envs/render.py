@@ -1,5 +1,6 @@
 """Pictures of an office world: a text map (``ansi``), an image (``rgb_array``) and a
-learner's Q table on the map (:meth:`MapPainter.draw_q`).
+learner's Q table on the map (:meth:`MapPainter.draw_q`); and any text as an image
+(:func:`text_image`, a PDDL state's ``rgb_array``).
 
 The first two take a :class:`Frame` (what to show) and know nothing about the env, so
 they can draw any world a user loads. The image layout is a Kamada-Kawai layout of the
@@ -9,6 +10,7 @@ position graph (deterministic: no random seed involved), computed once per
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -71,6 +73,23 @@ def ansi(frame: Frame) -> str:
         lines.append("doors: " + ", ".join(doors))
     lines.append("(@ robot, * goal)")
     return "\n".join(lines) + "\n"
+
+
+def text_image(text: str, size: tuple[int, int] = (640, 480)) -> np.ndarray:
+    """``text`` in monospace on white, wrapped at spaces (not at non-breaking ones) and cut
+    with ``...`` where it overflows, as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)``
+    in pixels (as a video needs)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time: matplotlib
+    from matplotlib.figure import Figure  # start-up time, as above
+
+    lines = [part for line in text.splitlines() for part in textwrap.wrap(line, 76) or [""]]
+    rows = size[1] // 12 - 1
+    fig = Figure(figsize=(size[0] / 80, size[1] / 80), dpi=80)
+    fig.text(0.01, 0.99, "\n".join(lines[:rows - 1] + ["..."] if len(lines) > rows else lines),
+             family="monospace", fontsize=9, va="top")
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
 
 
 ROBOT, GOAL, FLOOR, DOOR_SIDE = "#d62728", "#2ca02c", "#dddddd", "#bbbbff"
@@ -137,7 +156,7 @@ class MapPainter:
 
         Each position is coloured by its best ``max_a Q`` over its learner states, and
         an arrow points to where its greedy action leads (:func:`greedy_target`). With
-        ``masks`` (an env's ``action_masks``), a greedy action the knowledge says does
+        ``masks`` (an env's ``mask_table``), a greedy action the knowledge says does
         nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
         range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
         """

@@ -46,3 +46,23 @@ def test_example_runs(script, results):
 def test_there_is_an_example_per_task():
     assert {p.stem for p in EXAMPLES.glob("task_*.py")} == {f"task_{t}" for t in "abcdex"}
     assert (EXAMPLES / "planner_plugin" / "pyproject.toml").exists()
+
+
+def _maskable_ppo(*argv: str, prelude: str = "") -> subprocess.CompletedProcess:
+    code = (f"import runpy, sys; {prelude}sys.argv = ['maskable_ppo.py', *{list(argv)}]; "
+            f"runpy.run_path({str(EXAMPLES / 'maskable_ppo.py')!r}, run_name='__main__')")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=600)
+
+
+def test_maskable_ppo_example_says_what_it_needs():
+    result = _maskable_ppo(prelude="sys.modules['sb3_contrib'] = None; ")
+    assert result.returncode == 1 and "pip install 'gdq_pddl[sb3]'" in result.stderr
+
+
+@pytest.mark.slow  # torch: a minute to import and train on a busy machine
+def test_maskable_ppo_example_runs():
+    pytest.importorskip("sb3_contrib")  # the [sb3] extra, not in the test install
+    result = _maskable_ppo("--steps", "2048", "--eval-every", "1024", "--eval-episodes", "5")
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "MaskablePPO" in result.stdout and "GDQ" in result.stdout

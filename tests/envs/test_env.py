@@ -61,7 +61,7 @@ def test_spaces_and_default_task() -> None:
     assert env.observation_space == Discrete(31)
     assert env.action_space == Discrete(95)
     assert env.unwrapped.task.name == "C"
-    assert env.spec is not None and env.spec.max_episode_steps is None
+    assert env.spec is not None and env.spec.max_episode_steps == 20  # the env's own limit
 
 
 def test_make_by_task_start_goal_and_file(tiny_file: Path) -> None:
@@ -243,7 +243,7 @@ def test_greedy_target_reads_a_q_table_on_the_map(office) -> None:
     from gdq_pddl.spaces import LearnerSpaces
 
     spaces = LearnerSpaces(office)
-    masks = OfficeEnv(task="C").action_masks
+    masks = OfficeEnv(task="C").mask_table
     q = np.zeros((spaces.n_states, spaces.n_actions))
     assert greedy_target(spaces, q, "p0") is None  # every action ties
     q[spaces.state("p0"), spaces.action("approach", "p2")] = 1.0
@@ -277,7 +277,7 @@ def test_draw_q_draws_one_arrow_per_greedy_move(office) -> None:
     for s, a in first_plan:
         q[s, a] = 1.0
     ax = Figure().add_subplot()
-    mapping = painter.draw_q(ax, q, masks=OfficeEnv(task="C").action_masks)
+    mapping = painter.draw_q(ax, q, masks=OfficeEnv(task="C").mask_table)
     arrows = [c for c in ax.get_children() if type(c).__name__ == "Annotation"]
     # p0 -> p1, through d0 to p3, p3 -> p5, p5 -> p6, through d3 to p7, p7 -> p17
     assert len(arrows) == 6

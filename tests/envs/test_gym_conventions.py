@@ -48,7 +48,7 @@ def test_action_mask_in_reset_and_step_infos(env_id):
     for _ in range(5):
         mask = info["action_mask"]
         assert mask.dtype == np.int8 and mask.shape == (n,) and set(np.unique(mask)) <= {0, 1}
-        np.testing.assert_array_equal(mask, env.unwrapped.action_masks[obs])
+        np.testing.assert_array_equal(mask, env.unwrapped.mask_table[obs])
         assert mask.any()
         a = env.action_space.sample(mask=mask)  # Gymnasium takes it as Discrete's mask
         obs, _, terminated, truncated, info = env.step(a)
@@ -62,7 +62,7 @@ def test_office_mask_is_the_knowledge_through_o():
     _, info = env.reset(seed=0)
     names = {spaces.action_name(a) for a in np.flatnonzero(info["action_mask"])}
     assert names == {"approach p1", "approach p2"}
-    masks = env.action_masks
+    masks = env.mask_table
     closed, opened = spaces.state("p1", False), spaces.state("p1", True)
     assert masks[closed, spaces.action("opendoor", "p1")] == 1
     assert masks[closed, spaces.action("gothrough", "p3")] == 0
@@ -78,7 +78,7 @@ def test_office_mask_agrees_with_the_true_model_everywhere():
     env = OfficeEnv(task="C")
     model = env.model
     for fs in range(len(model.obs_of)):
-        row = env.action_masks[model.obs_of[fs]]
+        row = env.mask_table[model.obs_of[fs]]
         for a in range(model.n_actions):
             assert bool(row[a]) == does_something(model, fs, a), (env.decode(fs), a)
 
@@ -89,7 +89,7 @@ def test_every_plan_action_is_unmasked():
     for s in range(table.n_states):
         for plan in table.plans_from(s):
             for state, action in plan:
-                assert env.action_masks[state, action] == 1
+                assert env.mask_table[state, action] == 1
 
 
 def test_pddl_mask_is_the_applicable_ground_actions():
@@ -99,7 +99,7 @@ def test_pddl_mask_is_the_applicable_ground_actions():
     assert graph.is_goal.any()
     for s in range(graph.n_states):
         applicable = [op.applicable(graph.states[s]) for op in graph.task.ops]
-        np.testing.assert_array_equal(env.action_masks[s], np.array(applicable, np.int8))
+        np.testing.assert_array_equal(env.mask_table[s], np.array(applicable, np.int8))
         if not graph.is_goal[s]:  # goal states end the episode: the model never steps them
             for a in range(model.n_actions):
                 assert bool(applicable[a]) == does_something(model, s, a)
@@ -125,19 +125,19 @@ def test_a_masked_action_never_changes_anything(seed, env_id):
 
 def test_compact_env_has_the_office_mask():
     office, compact = OfficeEnv(task="C"), CompactEnv(task="C")
-    np.testing.assert_array_equal(compact.action_masks, office.action_masks)
+    np.testing.assert_array_equal(compact.mask_table, office.mask_table)
     _, info = compact.reset(seed=0)
     start = compact.spaces.state("p0")
-    np.testing.assert_array_equal(info["action_mask"], office.action_masks[start])
+    np.testing.assert_array_equal(info["action_mask"], office.mask_table[start])
 
 
 def test_masks_are_read_only_and_infos_are_fresh():
     env = make(OFFICE_ID)
     _, info = env.reset(seed=0)
     with pytest.raises(ValueError):
-        env.unwrapped.action_masks[0, 0] = 1
+        env.unwrapped.mask_table[0, 0] = 1
     info["action_mask"][:] = 0  # the user's copy: the env's table is untouched
-    assert env.unwrapped.action_masks[0].any()
+    assert env.unwrapped.mask_table[0].any()
 
 
 def test_pddl_env_by_shipped_names_equals_by_files():
