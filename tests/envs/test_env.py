@@ -14,7 +14,7 @@ import gdq_pddl  # noqa: F401  (registers the env)
 from gdq_pddl.envs import register_envs
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world, with_door
-from gdq_pddl.errors import WorldError
+from gdq_pddl.errors import PlanningError, WorldError
 
 ENV_ID = "gdq_pddl/Office-v0"
 
@@ -98,8 +98,8 @@ def test_bad_arguments_are_world_errors() -> None:
         OfficeEnv(start="p0", goal="p99")
     with pytest.raises(WorldError, match="not both"):
         OfficeEnv(task="C", start="p0", goal="p17")
-    with pytest.raises(WorldError, match="no such world"):
-        OfficeEnv(world="no_such_building")
+    with pytest.raises(PlanningError, match="no shipped world of that name"):
+        OfficeEnv(world="no_such_building")  # names resolve as the CLI's do (resources)
 
 
 def run(env: gymnasium.Env, seed: int, n: int) -> list:
