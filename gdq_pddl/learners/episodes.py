@@ -177,10 +177,11 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
     if fast is False or reason is not None:
         return _run_python(learner, env, n_episodes, rng, n_areas)
     base = env.unwrapped
+    own = base._given  # every episode starts as reset() without options starts it
     if isinstance(base, CompactEnv):
-        args = base.model, base.start_pos, base.goal_pos, base.doors
+        args = base.model, own.world.index[own.task.start], own.goal_pos, base.doors
     else:
-        args = base.model, int(base.start_state), int(base.goal_pos), _NO_DOORS
+        args = base.model, int(own.start_state), int(own.goal_pos), _NO_DOORS
     return run_compiled(*args, learner, base.np_random, n_episodes, rng,  # type: ignore
                         n_areas)
 

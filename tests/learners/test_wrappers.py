@@ -85,3 +85,15 @@ def test_run_compact_honours_wrappers_too(ctx_c):
     env.reset(seed=0)
     rec = run_compact(QLearning(ctx_c), env, 10, np.random.default_rng(0))
     assert np.array_equal(rec.returns, -rec.steps.astype(float))
+
+
+def test_a_reset_with_options_does_not_move_the_compiled_loops_start(ctx_c):
+    """reset(options=...) holds for one episode: run_episodes' episodes then start where
+    reset() without options starts them, on the compiled loop as on the Python loop."""
+    recs = []
+    for fast in (True, False):
+        env = office()
+        env.reset(options={"start": "p3"})
+        recs.append(run(QLearning(ctx_c), env, 30, 2, fast=fast))
+    for f in ("returns", "steps", "success", "area_visits"):
+        assert np.array_equal(getattr(recs[0], f), getattr(recs[1], f)), f
