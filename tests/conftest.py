@@ -10,6 +10,23 @@ import pytest
 
 from gdq_pddl.learners import office_task_context
 from gdq_pddl.world import World, load_world
+from tests.helpers import BACKGROUND
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "background(start): start(item) queues the test's "
+                            "subprocess when collection ends (tests.helpers.Background)")
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    for item in session.items:
+        mark = item.get_closest_marker("background")
+        if mark is not None:
+            mark.args[0](item)
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    BACKGROUND.stop()
 
 
 @pytest.fixture(scope="session")
