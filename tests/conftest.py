@@ -14,17 +14,20 @@ from tests.helpers import BACKGROUND
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "background(start): start(item) queues the test's "
-                            "subprocess when collection ends (tests.helpers.Background)")
+    config.addinivalue_line("markers", "background(start, first=False): start(item) queues the "
+                            "test's subprocess when collection ends (first ones first; "
+                            "tests.helpers.Background)")
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     if session.config.option.collectonly:
         return
-    for item in session.items:
-        mark = item.get_closest_marker("background")
-        if mark is not None:
-            mark.args[0](item)
+    marked = [(item, item.get_closest_marker("background")) for item in session.items]
+    marked = [(item, mark) for item, mark in marked if mark is not None]
+    # first the subprocesses with a numba cache of their own: on a fresh checkout the others
+    # then find the kernels this process has compiled meanwhile, instead of compiling them
+    for item, mark in sorted(marked, key=lambda pair: not pair[1].kwargs.get("first")):
+        mark.args[0](item)
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

@@ -254,7 +254,7 @@ def start_bounds_checked(item=None):
                                              BOUNDS_CHECKED], env=env, timeout=1200)
 
 
-@pytest.mark.background.with_args(start_bounds_checked)
+@pytest.mark.background.with_args(start_bounds_checked, first=True)
 def test_compiled_code_runs_with_numba_bounds_checking():
     """Every learner's compiled loop and OptInit, compiled afresh with bounds checking:
     any index out of range raises IndexError there. One process for every learner (the
