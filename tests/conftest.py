@@ -10,6 +10,28 @@ import pytest
 
 from gdq_pddl.learners import office_task_context
 from gdq_pddl.world import World, load_world
+from tests.helpers import BACKGROUND
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "background(start, first=False): start(item) queues the "
+                            "test's subprocess when collection ends (first ones first; "
+                            "tests.helpers.Background)")
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    if session.config.option.collectonly:
+        return
+    marked = [(item, item.get_closest_marker("background")) for item in session.items]
+    marked = [(item, mark) for item, mark in marked if mark is not None]
+    # first the subprocesses with a numba cache of their own: on a fresh checkout the others
+    # then find the kernels this process has compiled meanwhile, instead of compiling them
+    for item, mark in sorted(marked, key=lambda pair: not pair[1].kwargs.get("first")):
+        mark.args[0](item)
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    BACKGROUND.stop()
 
 
 @pytest.fixture(scope="session")

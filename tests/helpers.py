@@ -6,6 +6,9 @@ packages, so pytest puts the repository root on ``sys.path`` wherever a test fil
 
 from __future__ import annotations
 
+import subprocess
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -84,3 +87,56 @@ def cli(capsys, *argv) -> tuple[int, str]:
         code = exc.code
     out = capsys.readouterr()
     return code, out.out + out.err
+
+
+class Background:
+    """Subprocesses that run on the second core beside the tests before them.
+
+    A test marked ``@pytest.mark.background.with_args(start)`` has ``start(item)`` called when
+    collection ends (``tests/conftest.py``); ``start`` calls :meth:`run`, which queues the
+    command and returns a future of its ``CompletedProcess``. The test calls ``start`` again
+    and waits on that same future. One command at a time, in the tests' order: the suite
+    spends most of its time in one process, so the other core is otherwise idle.
+    """
+
+    def __init__(self) -> None:
+        self.pool = ThreadPoolExecutor(1, thread_name_prefix="background")
+        self.futures: dict[str, Future] = {}
+        self.running: set[subprocess.Popen] = set()
+        self.lock, self.stopped = threading.Lock(), False
+
+    def run(self, key: str, argv: list[str], timeout: float = 600, **kwargs) -> Future:
+        """``subprocess.run(argv, capture_output=True, text=True, **kwargs)``, once per key."""
+        with self.lock:
+            if key not in self.futures:
+                self.futures[key] = self.pool.submit(self._run, argv, timeout, kwargs)
+            return self.futures[key]
+
+    def _run(self, argv: list[str], timeout: float, kwargs) -> subprocess.CompletedProcess:
+        with self.lock:
+            if self.stopped:
+                raise RuntimeError("the test session has ended")
+            proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    text=True, **kwargs)
+            self.running.add(proc)
+        try:
+            out, err = proc.communicate(timeout=timeout)
+        finally:
+            proc.kill()
+            proc.communicate()
+            with self.lock:
+                self.running.discard(proc)
+        return subprocess.CompletedProcess(argv, proc.returncode, out, err)
+
+    def stop(self) -> None:
+        """Kill what runs and drop what waits (the session is over)."""
+        with self.lock:
+            self.stopped = True
+            for future in self.futures.values():
+                future.cancel()
+            for proc in self.running:
+                proc.kill()
+        self.pool.shutdown(wait=True)
+
+
+BACKGROUND = Background()

@@ -2,43 +2,34 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future
 
 import pytest
 
-from tests.helpers import REPO_ROOT
+from tests.helpers import BACKGROUND, REPO_ROOT
 
 EXAMPLES = REPO_ROOT / "examples"
 BUDGET = {"task_x.py": ["--trials", "5"]}
 SCRIPTS = sorted(p.name for p in [*EXAMPLES.glob("task_*.py"), *EXAMPLES.glob("domain_*.py")])
 
 
-def _run(script: str) -> subprocess.CompletedProcess:
-    """The example as a user runs it: a fresh interpreter (nothing imported before it)."""
+def start(item) -> Future:
+    """The example as a user runs it: a fresh interpreter (nothing imported before it),
+    queued when collection ends to run beside the other tests (``tests.helpers.Background``):
+    each spends most of its time starting an interpreter and loading the compiled kernels."""
+    script = item.callspec.params["script"]
     argv = BUDGET.get(script, ["--episodes", "20"])
     if script == "task_b.py" or script.startswith("domain_"):
         argv += ["--runs", "1"]
-    return subprocess.run([sys.executable, str(EXAMPLES / script), *argv],
-                          capture_output=True, text=True, timeout=300)
-
-
-@pytest.fixture(scope="module")
-def results(request) -> dict[str, subprocess.CompletedProcess]:
-    """The selected examples, run side by side, one per core: each spends most of its
-    time starting an interpreter and loading the compiled kernels."""
-    chosen = [item.callspec.params["script"] for item in request.session.items
-              if getattr(item, "originalname", None) == "test_example_runs"
-              and item.module is request.module]
-    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
-        return dict(zip(chosen, pool.map(_run, chosen), strict=True))
+    return BACKGROUND.run(f"example {script}", [sys.executable, str(EXAMPLES / script), *argv],
+                          timeout=300)
 
 
 @pytest.mark.parametrize("script", SCRIPTS)
-def test_example_runs(script, results):
-    result = results[script]
+@pytest.mark.background.with_args(start)
+def test_example_runs(script, request):
+    result = start(request.node).result()
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.strip()
 

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import csv
+import importlib.util
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -22,6 +25,7 @@ from gdq_pddl.experiments import (
     switch_experiment,
     task_experiments,
 )
+from tests.helpers import BACKGROUND
 
 SMALL = dict(episodes=20, runs=2, methods=("GDQ", "Q-learning"))
 COLUMNS = ["experiment", "method", "task", "run", "episode", "return", "steps", "success",
@@ -99,10 +103,10 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
     proc.wait()
     done = len(list(units.glob("*.npz")))
     assert 2 <= done < 12, "the run should have been killed mid-way"
-    result = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stderr
+    # the resume and a fresh run of the same command, in this process: its kernels are loaded
+    assert main([*argv[3:], "--resume"]) == 0
     assert not list(units.glob(".*.tmp")), "no half-written files may remain"
-    fresh = tmp_path / "fresh"  # the same command, in this process: its kernels are loaded
+    fresh = tmp_path / "fresh"
     assert main([*argv[3:-3], "--out", str(fresh), "--no-report"]) == 0
     assert (out / "episodes.csv").read_bytes() == (fresh / "episodes.csv").read_bytes()
     keys = [(r["method"], r["run"], r["episode"]) for r in read_rows(out)]
@@ -111,7 +115,7 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
 
 def test_interrupt_message_says_how_to_resume(tmp_path):
     """Ctrl-C while the workers run: one clear line, no traceback, runs already saved."""
-    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "30000",
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "10000",
             "--runs", "8", "--method", "GDQ", "Dyna-Q", "--jobs", "2", "--out", str(tmp_path),
             "--no-report"]
     # as from a terminal: a shell starts background jobs with SIGINT ignored, and a
@@ -212,17 +216,33 @@ def _can_unshare_network() -> bool:
         return False
 
 
+RAY_OUT: list[Path] = []
+
+
+def start_ray(item=None):
+    """The Ray run, queued when collection ends to run beside the other tests
+    (``tests.helpers.Background``); None where the test is skipped."""
+    if importlib.util.find_spec("ray") is None or not _can_unshare_network():
+        return None
+    if not RAY_OUT:
+        RAY_OUT.append(Path(tempfile.mkdtemp(prefix="gdq-ray-test-")) / "ray")
+    env = dict(os.environ, RAY_AUTH_MODE="disabled", RAY_USAGE_STATS_ENABLED="0")
+    return BACKGROUND.run("ray", ["unshare", "-n", sys.executable, "-c", RAY_SCRIPT,
+                                  str(RAY_OUT[0])], env=env, timeout=600)
+
+
 @pytest.mark.skipif(not _can_unshare_network(), reason="needs a private network namespace")
-def test_ray_executor_matches_local_processes(tmp_path, two_jobs):
+@pytest.mark.background.with_args(start_ray)
+def test_ray_executor_matches_local_processes(two_jobs):
     """A local Ray cluster, started by the test inside a loopback-only network namespace."""
     pytest.importorskip("ray")
-    env = dict(os.environ, RAY_AUTH_MODE="disabled", RAY_USAGE_STATS_ENABLED="0")
-    result = subprocess.run(["unshare", "-n", sys.executable, "-c", RAY_SCRIPT,
-                             str(tmp_path / "ray")], capture_output=True, text=True, env=env,
-                            timeout=600)
-    assert result.returncode == 0, result.stderr[-3000:]
-    assert (tmp_path / "ray" / "episodes.csv").read_bytes() == \
-        (two_jobs / "episodes.csv").read_bytes()
+    try:
+        result = start_ray().result()
+        assert result.returncode == 0, result.stderr[-3000:]
+        assert (RAY_OUT[0] / "episodes.csv").read_bytes() == \
+            (two_jobs / "episodes.csv").read_bytes()
+    finally:
+        shutil.rmtree(RAY_OUT[0].parent, ignore_errors=True)
 
 
 def test_unreachable_ray_address_is_a_clear_error(tmp_path):

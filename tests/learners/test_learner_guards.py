@@ -6,7 +6,6 @@ with numba's bounds checking on."""
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -38,6 +37,7 @@ from gdq_pddl.learners import (
 from gdq_pddl.learners.episodes import run_compiled
 from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.world import load_world
+from tests.helpers import BACKGROUND
 
 WORLD = load_world()
 
@@ -213,6 +213,10 @@ def test_make_learner_takes_every_name_the_command_line_takes(ctx):
 # --- the compiled code under numba's bounds checking --------------------------------------------
 
 BOUNDS_CHECKED = '''
+import atexit, os, shutil, tempfile
+os.environ["NUMBA_CACHE_DIR"] = cache = tempfile.mkdtemp(prefix="gdq-bounds-")
+os.chdir(cache)
+atexit.register(shutil.rmtree, cache, True)  # compiled afresh, and nothing left behind
 import numba, numpy as np
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.learners import METHODS, make_learner, office_task_context, run_episodes
@@ -241,20 +245,26 @@ print("bounds-checked")
 '''
 
 
-def test_compiled_code_runs_with_numba_bounds_checking(tmp_path):
+def start_bounds_checked(item=None):
+    env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_OPT": "0",
+           "PYTHONPATH": os.pathsep.join(
+               [str(Path(gdq_pddl.__file__).resolve().parents[1]),
+                os.environ.get("PYTHONPATH", "")])}
+    return BACKGROUND.run("bounds-checked", [sys.executable, "-W", "ignore", "-c",
+                                             BOUNDS_CHECKED], env=env, timeout=1200)
+
+
+@pytest.mark.background.with_args(start_bounds_checked, first=True)
+def test_compiled_code_runs_with_numba_bounds_checking():
     """Every learner's compiled loop and OptInit, compiled afresh with bounds checking:
     any index out of range raises IndexError there. One process for every learner (the
     rules compile once; the loop has one signature for all), 3 episodes each on the office
     (the compact loop compiles the same rules), and LLVM's optimisations off
     (``NUMBA_OPT=0``): the bounds checks are placed before them, and without them the
-    compiling takes a third less. (A learner run in another env is refused before any
-    compiled code runs: ``test_a_learner_run_in_another_env_is_refused``.)"""
-    env = {**os.environ, "NUMBA_BOUNDSCHECK": "1", "NUMBA_OPT": "0",
-           "NUMBA_CACHE_DIR": str(tmp_path),
-           "PYTHONPATH": os.pathsep.join(
-               [str(Path(gdq_pddl.__file__).resolve().parents[1]),
-                os.environ.get("PYTHONPATH", "")])}
-    done = subprocess.run([sys.executable, "-W", "ignore", "-c", BOUNDS_CHECKED], env=env,
-                          cwd=tmp_path, capture_output=True, text=True, timeout=1200)
+    compiling takes a third less. The process starts when collection ends and compiles on
+    the second core while the tests before this one run (``tests.helpers.Background``).
+    (A learner run in another env is refused before any compiled code runs:
+    ``test_a_learner_run_in_another_env_is_refused``.)"""
+    done = start_bounds_checked().result()
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.strip() == "bounds-checked"

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import sys
+
 import pytest
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import ground, parse_domain, parse_problem
 from gdq_pddl.resources import domain_text, problem_text
 from gdq_pddl.world import load_world, office_problem
+from tests.helpers import BACKGROUND
 
 TINY_DOMAIN = """(define (domain tiny)
   (:requirements :strips :typing)
@@ -112,13 +116,7 @@ def test_knowledge_and_reality_agree_on_every_move():
                     assert model.obs_of[likeliest] == planned[a]
 
 
-def test_grounding_and_a_pddl_run_do_not_depend_on_the_hash_seed():
-    """Ground action order (a PDDL env's action indices) must be the same in every process."""
-    import os
-    import subprocess
-    import sys
-
-    script = """
+HASH_SEED_SCRIPT = """
 import numpy as np
 from gdq_pddl.pddl import ground, parse_domain, parse_problem
 from gdq_pddl.resources import data_file
@@ -135,9 +133,20 @@ env.reset(seed=0)
 learner = make_learner("gdq", pddl_task_context(env.instance), variant="code")
 print(run_episodes(learner, env, 30, np.random.default_rng(0)).returns.tolist())
 """
-    outs = [subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+
+
+def start_hash_seeds(item=None) -> list:
+    """The script under three hash seeds, queued when collection ends to run beside the
+    other tests (``tests.helpers.Background``)."""
+    return [BACKGROUND.run(f"pddl hash seed {seed}", [sys.executable, "-c", HASH_SEED_SCRIPT],
                            env=dict(os.environ, PYTHONHASHSEED=seed), timeout=300)
             for seed in ("1", "2", "3")]
+
+
+@pytest.mark.background.with_args(start_hash_seeds)
+def test_grounding_and_a_pddl_run_do_not_depend_on_the_hash_seed():
+    """Ground action order (a PDDL env's action indices) must be the same in every process."""
+    outs = [future.result() for future in start_hash_seeds()]
     for out in outs:
         assert out.returncode == 0, out.stderr[-2000:]
     assert outs[0].stdout == outs[1].stdout == outs[2].stdout

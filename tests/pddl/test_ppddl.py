@@ -6,6 +6,8 @@ PPDDL domain written here."""
 from __future__ import annotations
 
 import json
+import os
+import sys
 from fractions import Fraction
 from pathlib import Path
 
@@ -25,6 +27,7 @@ from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.planning.validate import validate_plan
+from tests.helpers import BACKGROUND
 from tests.helpers import DYNAMICS as DYN
 from tests.helpers import REPO_ROOT as ROOT
 
@@ -590,28 +593,39 @@ def test_a_strips_domain_s_stated_cost_is_the_default_of_its_dynamics_file():
     assert expected_costs(inst.model).tolist() == [3.0, 0.5]
 
 
-def test_ppddl_runs_do_not_depend_on_the_hash_seed(tmp_path):
-    """Ground actions, planner actions and outcomes come out in one order in every process."""
-    import os
-    import subprocess
-    import sys
-
-    (tmp_path / "d.pddl").write_text(HIKE_DOMAIN)
-    (tmp_path / "p.pddl").write_text(HIKE_PROBLEM)
-    script = f"""
+PPDDL_HASH_SEED_SCRIPT = """
+import shutil, sys, tempfile
+from pathlib import Path
 import numpy as np
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
-env = PDDLEnv({str(tmp_path / "d.pddl")!r}, {str(tmp_path / "p.pddl")!r})
+folder = Path(tempfile.mkdtemp(prefix="gdq-hike-"))
+(folder / "d.pddl").write_text(sys.argv[1])
+(folder / "p.pddl").write_text(sys.argv[2])
+env = PDDLEnv(str(folder / "d.pddl"), str(folder / "p.pddl"))
+shutil.rmtree(folder)
 inst = env.instance
 print([op.name for op in inst.problem.task.ops], inst.model.prob.tolist())
 env.reset(seed=0)
 learner = make_learner("gdq", pddl_task_context(inst), variant="code")
 print(run_episodes(learner, env, 20, np.random.default_rng(0)).returns.tolist())
 """
-    outs = [subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+
+
+def start_ppddl_hash_seeds(item=None) -> list:
+    """The hike run under two hash seeds, queued when collection ends to run beside the
+    other tests (``tests.helpers.Background``)."""
+    return [BACKGROUND.run(f"ppddl hash seed {seed}", [sys.executable, "-c",
+                                                       PPDDL_HASH_SEED_SCRIPT, HIKE_DOMAIN,
+                                                       HIKE_PROBLEM],
                            env=dict(os.environ, PYTHONHASHSEED=seed), timeout=300)
             for seed in ("1", "2")]
+
+
+@pytest.mark.background.with_args(start_ppddl_hash_seeds)
+def test_ppddl_runs_do_not_depend_on_the_hash_seed():
+    """Ground actions, planner actions and outcomes come out in one order in every process."""
+    outs = [future.result() for future in start_ppddl_hash_seeds()]
     for out in outs:
         assert out.returncode == 0, out.stderr[-2000:]
     assert outs[0].stdout == outs[1].stdout
