@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.abstraction.table import PlanTable, pack_plans
+from gdq_pddl.abstraction.table import PlanTable, plan_arrays
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.limits import MAX_TOLERANCE, check_real
 from gdq_pddl.pddl.ppddl import ProbabilisticTask
@@ -72,21 +72,69 @@ class PDDLAbstraction:
 
 def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
                      max_plans: int = 10_000) -> PlanTable:
-    """Plans from every reachable state (see the module docstring)."""
+    """Plans from every reachable state (see the module docstring), kept as the graph's
+    distance layers; the plans themselves are enumerated only when read.
+
+    A pair ``(s, a)`` starts a plan iff an edge ``s -a-> s'`` (``s' != s``) has
+    ``1 + d'(s') <= B(s)``, ``B(s) = floor((1 + tolerance) * d(s))`` and ``d'(s')`` the
+    shortest length from ``s'`` to the goal that avoids ``s`` (a loop-free plan through
+    ``s'`` is ``s`` then such a path). ``d'(s') = d(s')`` whenever ``d(s') <= d(s)`` (a
+    path through ``s`` is longer); otherwise a breadth-first search from ``s'`` that
+    avoids ``s`` finds it (:func:`_avoiding`). With tolerance 0 these are the edges
+    one step closer to the goal: the shortest-path graph."""
     check_real("tolerance", tolerance, 0.0, MAX_TOLERANCE)
     dist = graph.distances
-    names = [op.name for op in graph.task.ops]
-    edges = [graph.edges(s) for s in range(graph.n_states)]
-    plans: list[list[list[tuple[int, int]]]] = []
-    capped = False
-    for s in range(graph.n_states):
-        plans.append([])
-        if dist[s] > 0:
-            bound = length_bound(int(dist[s]), tolerance)
-            plans[s], cut = _paths(s, edges, dist, bound, max_plans)
-            capped |= cut
-            plans[s].sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))
-    return pack_plans(len(names), plans, dist.astype(np.int64, copy=True), capped)
+    n_ops = len(graph.task.ops)
+    src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
+    op, nxt = graph.edge_op, graph.edge_next
+    bound = np.array([length_bound(int(d), tolerance) if d > 0 else -1 for d in dist],
+                     dtype=np.int64)
+    d2 = dist[nxt]
+    ok = (nxt != src) & (d2 >= 0) & (1 + d2 <= bound[src])
+    for e in np.flatnonzero(ok & (d2 > dist[src])).tolist():
+        ok[e] = _avoiding(graph, int(nxt[e]), int(src[e]), int(bound[src[e]]) - 1)
+    first = np.zeros((graph.n_states, n_ops), dtype=np.bool_)
+    first[src[ok], op[ok]] = True
+    layers = None
+    if tolerance == 0.0:
+        layers = np.stack([src[ok], op[ok], nxt[ok]], axis=1)
+    names = [o.name for o in graph.task.ops]
+
+    def enumerate_plans():
+        edges = [graph.edges(s) for s in range(graph.n_states)]
+        plans: list[list[list[tuple[int, int]]]] = []
+        capped = False
+        for s in range(graph.n_states):
+            plans.append([])
+            if dist[s] > 0:
+                plans[s], cut = _paths(s, edges, dist, int(bound[s]), max_plans)
+                capped |= cut
+                plans[s].sort(key=lambda p: (len(p), tuple(names[a] for _, a in p)))
+        return plan_arrays(plans, capped)
+
+    return PlanTable(first, dist.astype(np.int64, copy=True), enumerate_plans, layers)
+
+
+def _avoiding(graph: StateGraph, start: int, avoid: int, budget: int) -> bool:
+    """Whether a path from ``start`` to the goal of at most ``budget`` actions avoids
+    ``avoid``: breadth first from ``start`` without ``avoid``, each state ``v`` reached
+    in ``k`` actions closing with its shortest ``d(v)`` if ``d(v) <= d(avoid)`` (then no
+    shortest path from ``v`` crosses ``avoid``)."""
+    dist = graph.distances
+    limit = dist[avoid]
+    seen = {start, avoid}
+    frontier = [start]
+    for k in range(budget + 1):
+        if any(0 <= dist[v] <= limit and k + dist[v] <= budget for v in frontier):
+            return True
+        nxt = []
+        for v in frontier:
+            for w in graph.edge_next[graph.edge_ptr[v]:graph.edge_ptr[v + 1]].tolist():
+                if w not in seen and dist[w] >= 0:
+                    seen.add(w)
+                    nxt.append(w)
+        frontier = nxt
+    return False
 
 
 def _paths(start: int, edges: list[list[tuple[int, int]]], dist: np.ndarray, bound: int,
