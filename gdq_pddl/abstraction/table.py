@@ -57,7 +57,8 @@ class PlanTable:
     ``pair_state[pair_ptr[k]:pair_ptr[k + 1]]`` and ``pair_action[...]``.
     ``layers`` (int64[E, 3], optional) lists the edges ``(s, a, s')`` of the
     shortest-path graph (``s'`` one step closer to the goal than ``s``; a table of
-    shortest plans only): :meth:`start_pairs` reads them instead of the plans. ``capped``: a cap cut the plans (read the plans first).
+    shortest plans only): :meth:`start_pairs` reads them instead of the plans.
+    ``capped``: a cap cut the plans (reading it enumerates them).
     """
 
     first_actions: np.ndarray

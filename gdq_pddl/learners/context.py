@@ -15,8 +15,8 @@ from typing import Protocol
 import numpy as np
 
 from gdq_pddl.abstraction import PlanTable
-from gdq_pddl.abstraction.table import pack_plans
 from gdq_pddl.abstraction.prior import PriorModel
+from gdq_pddl.abstraction.table import pack_plans
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
