@@ -110,6 +110,26 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
+def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
+               ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck) with every pair
+    that lists no outcome given one: a no-op, ``(its state, not stuck)`` with probability
+    1 (most pairs of a large problem: filled without a Python loop)."""
+    counts = np.diff(ptr)
+    empty = counts == 0
+    new_ptr = np.zeros_like(ptr)
+    np.cumsum(np.where(empty, 1, counts), out=new_ptr[1:])
+    at = np.repeat(new_ptr[:-1] - ptr[:-1], counts) + np.arange(len(prob))
+    out_prob = np.ones(new_ptr[-1], dtype=np.float64)
+    out_prob[at] = prob
+    nxt = np.zeros(new_ptr[-1], dtype=np.int64)
+    nxt[at] = fields[0]
+    nxt[new_ptr[:-1][empty]] = np.flatnonzero(empty) // n_actions
+    stuck = np.zeros(new_ptr[-1], dtype=np.bool_)
+    stuck[at] = fields[1]
+    return new_ptr, out_prob, [nxt, stuck]
+
+
 def cost_arrays(costs: list[CostDist]) -> dict[str, np.ndarray]:
     """``cost_kind``, ``cost_a`` and ``cost_b`` of every model kind, from one
     :class:`~gdq_pddl.dynamics.CostDist` per action."""
@@ -174,7 +194,8 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
     one per learner action): for each (state, learner action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
-    ``pairs`` replaces them (a PPDDL domain's outcomes are its own)."""
+    ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
+    yield is a no-op)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
@@ -184,14 +205,13 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
             acting: dict[int, int] = {}
             for k in applicable:
                 acting.setdefault(space.action_of_op[k], k)
-            for a in range(n_a):
-                k = acting.get(a)
-                yield s * n_a + a, {(s, False): 1.0} if k is None else merge_outcomes(
+            for a in sorted(acting):
+                k = acting[a]
+                yield s * n_a + a, merge_outcomes(
                     slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
 
-    ptr, prob, (nxt, stuck) = outcome_csr(space.n_states * n_a,
-                                          rule() if pairs is None else pairs,
-                                          (np.int64, np.bool_))
+    ptr, prob, (nxt, stuck) = with_noops(*outcome_csr(
+        space.n_states * n_a, rule() if pairs is None else pairs, (np.int64, np.bool_)), n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,

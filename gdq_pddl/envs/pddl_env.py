@@ -74,8 +74,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import shortest_path
 
 from gdq_pddl.abstraction import PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import graph_action_mask
@@ -91,7 +89,7 @@ from gdq_pddl.envs.model import (
     env_step,
     merge_outcomes,
 )
-from gdq_pddl.envs.solve import solve
+from gdq_pddl.envs.solve import reality_distances, value_within
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.inputs import read_text
@@ -290,11 +288,12 @@ class PDDLInstance:
         return self.graph.task.atoms(self.graph.states[s])
 
     def optimal(self) -> dict[str, Any]:
-        """The ground truth: V* (value iteration on the true model), the shortest plan,
-        the sizes (a PDDL problem has no areas)."""
+        """The ground truth: V* (value iteration on the true model, within
+        :data:`~gdq_pddl.envs.solve.VSTAR_BUDGET`, else a bound and why), the shortest
+        plan, the sizes (a PDDL problem has no areas)."""
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "step_limit": self.dynamics.step_limit,
-                "v_star": float(solve(self.model, GOAL_POS).V[0, 0]),
+                **value_within(self.model, GOAL_POS, 0),
                 "shortest_plan": int(self.graph.distances[0]), "states": self.n_states,
                 "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
                 "expected_area_visits": {}}
@@ -442,18 +441,6 @@ def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamic
                         "the knowledge has no plan") + "): no episode can reach the goal")
 
 
-def reality_distances(model: ModelArrays) -> np.ndarray:
-    """``float64[n_states]``: the fewest actions from the initial state (0) to each state
-    in the true model, over outcomes of positive probability that do not end the trial
-    (inf: none reaches it). One breadth-first search over the model's arrays."""
-    n = model.obs_of.shape[0]
-    src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
-    keep = (model.prob > 0) & ~model.stuck & (model.next != src)
-    graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
-                       shape=(n, n))
-    return shortest_path(graph, directed=True, unweighted=True, indices=0)
-
-
 def never_working(dynamics: Dynamics) -> list[str]:
     """The keys of the dynamics file whose actions never have their effect
     (``success = 0``; an object override only where its schema's table differs)."""
@@ -507,21 +494,18 @@ def graph_space(graph: StateGraph) -> StateSpace:
 def ppddl_outcomes(graph: StateGraph):
     """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
     every applicable ground action (``graph.task`` is a
-    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`), a no-op elsewhere."""
+    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`); the other pairs are no-ops."""
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
     index = graph.index
     for s, state in enumerate(graph.states):
         here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
-        for k in range(n_ops):
-            op = here.get(k)
-            if op is None:
-                yield s * n_ops + k, {(s, False): 1.0}
-            else:
-                yield s * n_ops + k, merge_outcomes(
-                    ((s, True) if o.stuck else (index[o.apply(state)], False), o.probability)
-                    for o in op.outcomes)
+        for k in sorted(here):
+            op = here[k]
+            yield s * n_ops + k, merge_outcomes(
+                ((s, True) if o.stuck else (index[o.apply(state)], False), o.probability)
+                for o in op.outcomes)
 
 
 SHIPPED = {"domain": ("domains", ".pddl"), "problem": ("problems", ".pddl"),
