@@ -24,6 +24,7 @@ from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.dynamics import COST_KINDS, CostDist, Dynamics, Outcomes, split_action
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
@@ -210,8 +211,15 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                 yield s * n_a + a, merge_outcomes(
                     slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
 
+    def shown(pairs):
+        with slow_progress("true model", " states", space.n_states) as bar:
+            for i, merged in pairs:
+                bar.update(i // n_a - bar.n)
+                yield i, merged
+
     ptr, prob, (nxt, stuck) = with_noops(*outcome_csr(
-        space.n_states * n_a, rule() if pairs is None else pairs, (np.int64, np.bool_)), n_a)
+        space.n_states * n_a, shown(rule() if pairs is None else pairs),
+        (np.int64, np.bool_)), n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,

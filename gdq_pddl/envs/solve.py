@@ -29,6 +29,7 @@ from scipy.stats import norm
 from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
 from gdq_pddl.limits import check_memory, human_bytes
+from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.world import Task, World
 
 TIE_TOLERANCE = 1e-9
@@ -107,7 +108,7 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     V = np.zeros((limit + 1, n_full))
     Q = np.empty((limit if tables else 0, n_full, n_actions))
     policy = np.empty((limit if tables else 0, n_full), dtype=np.int64)
-    for t in range(limit - 1, -1, -1):
+    for t in slow_progress("value iteration", " steps", limit, range(limit - 1, -1, -1)):
         if t == limit - 1:
             value = end_reward
         else:
