@@ -257,9 +257,10 @@ class PDDLInstance:
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
         """Plans from every reachable state, cached per (planner, tolerance). The ``graph``
-        planner's come from one backward BFS over the state graph
-        (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other backend is asked
-        once per state. ``kind`` is the office's (a PDDL problem has one kind)."""
+        planner's are the state graph's distance layers, enumerated only if a learner
+        walks plans (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other
+        backend is asked once per state, capped at its own plan limit (it warns).
+        ``kind`` is the office's (a PDDL problem has one kind)."""
         key = (planner, float(tolerance))
         if key not in self._tables:
             if planner == "graph":
