@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import json
 
-from gdq_pddl.envs.pddl_env import load_instance
+from gdq_pddl.envs.pddl_env import PDDLInstance, load_instance
 from gdq_pddl.envs.solve import Budget, solve, value_within
+from gdq_pddl.experiments.checks import check_instance
 from gdq_pddl.resources import data_file
 from tests.helpers import cli
 
@@ -34,3 +35,13 @@ def test_a_run_past_the_budget_writes_the_note(capsys, tmp_path, monkeypatch):
     assert code == 0
     (entry,) = json.loads((tmp_path / "o" / "optimal.json").read_text()).values()
     assert entry["v_star"] is None and entry["v_star_upper_bound"] <= entry["r_max"]
+
+
+def test_a_step_limit_past_memory_leaves_vstar_out_instead_of_refusing_the_problem():
+    text = data_file("dynamics", "keys.toml").read_text().replace(
+        "step_limit = 25", "step_limit = 3000000000")
+    inst = PDDLInstance.from_texts(data_file("domains", "keys.pddl").read_text(),
+                                   data_file("problems", "keys-1.pddl").read_text(), text)
+    check_instance(inst)  # preflight lets it run
+    out = inst.optimal()
+    assert out["v_star"] is None and "GB" in out["v_star_note"]
