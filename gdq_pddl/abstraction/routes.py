@@ -1,41 +1,20 @@
 """Tolerant plans for large worlds: one plan per door route instead of every plan.
 
-DARLING's allowed actions and the code variant of GDQ use every loop-free plan within
-``(1 + tolerance)`` x the shortest length (the authors' 1.3 x). On the office that is a
-handful of plans per state. On a generated building it is not: from a state 65 actions
-from the goal, 1.3 x allows 19 spare actions, and the plans that spend them (wander into
-a room and out, take the corridor's other side, go round a pillar) number in the
-thousands, are found in seconds per state at 300 positions and in about 100 s at 1000,
-for each of ~1100 states. Almost all of them cross the same doors as a shortest plan:
-what tolerance buys a learner is the *other door routes*, the detour round a jammed door.
+DARLING and GDQ-code use every loop-free plan within ``(1 + tolerance)`` x the shortest;
+on a generated building those number in the thousands per state (about 100 s per state
+at 1000 positions), and almost all cross the doors of a shortest plan. What tolerance
+buys a learner is the *other door routes*. :func:`route_plan_table` keeps, from each
+learner state ``x`` (bound ``B = floor((1 + tolerance) * L(x))``), every shortest plan
+and, per *route* (a sequence of *branch* pairs, for the office every ``gothrough``, that
+no state repeats), one plan: shortest *legs* (paths taking no branch pair) between the
+branch pairs and to the goal, if it has at most ``B`` actions, never revisits a learner
+state, ends at the first goal state and replays in the planner's semantics. So the table
+is a subset of the full tolerant set; a route is lost only where its shortest legs cross
+where longer ones would not (never on the office tasks A-E and a 100-position building:
+tested). At 1000 positions: 10 plans per state on average, built in 3.5 s.
 
-:func:`route_plan_table` keeps exactly that. Call *branch* pairs the ones at which routes
-differ (for the office: every ``gothrough``), and a *leg* a shortest path that takes no
-branch pair (breadth first, lowest index first). From each learner state ``x`` with
-shortest length ``L(x)`` and bound ``B = floor((1 + tolerance) * L(x))``, its plans are
-
-- every shortest plan (the tolerance-0 table), and
-- for every *route*, a sequence of branch pairs that no state repeats, one plan: a leg
-  to the first branch pair, the pair, a leg to the next, ..., and a leg to the goal,
-  if it has at most ``B`` actions. It is kept only if it never revisits a learner state,
-  ends at the first goal state it reaches and replays in the planner's own semantics
-  (every ground action applicable in the planner state it reaches, each step mapping
-  back to the learner state it claims).
-
-Every plan kept is a loop-free plan within the bound, so the table is a subset of the
-full tolerant plan set. Legs are shortest, so a route has a plan within the bound in the
-full set only if its legs' plan is within it too; the one way to lose a route is that
-its shortest legs cross each other where longer ones would not. On the office tasks A-E
-and a 100-position building that never happens: the door sequences of the two tables
-are equal, state by state (tested). Its size is the number of shortest plans plus the
-number of door routes: at 1000 positions 10 plans per state on average, 78 at most
-(against thousands), built in 3.5 s.
-
-The knowledge graph is built once: the planner's successors of each learner state's
-planner state ``O^-1(s)`` (every unobserved door closed), mapped by O. Leg lengths
-between all states come from one all-pairs breadth-first search of its non-branch
-edges (:mod:`scipy.sparse.csgraph`); the length from a branch pair's next state to the
-goal is the shortest plan's, and prunes the depth-first search over routes.
+The knowledge graph is built once (the successors of each ``O^-1(s)``, mapped by O); leg
+lengths come from one all-pairs breadth-first search of its non-branch edges.
 """
 
 from __future__ import annotations

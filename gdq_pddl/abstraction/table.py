@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -38,28 +40,50 @@ def plan_pairs(abstraction: Abstraction, plan: Plan) -> list[tuple[int, int]]:
     return [(abstraction.learner_state(s), abstraction.learner_action(a)) for s, a in plan.pairs()]
 
 
-@dataclass(frozen=True)
-class PlanTable:
-    """For every learner state, its plans to the goal as learner ``(state, action)`` pairs.
+PlanArrays = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]
+"""``plan_ptr``, ``pair_ptr``, ``pair_state``, ``pair_action`` and whether a cap cut them."""
 
-    Plans from state ``s`` are ``plan_ptr[s]:plan_ptr[s + 1]``; the pairs of plan ``k``
-    are ``pair_state[pair_ptr[k]:pair_ptr[k + 1]]`` and ``pair_action[...]``.
+
+@dataclass(frozen=True, eq=False)
+class PlanTable:
+    """For every learner state, its plans to the goal: the first actions and lengths
+    always, the plans themselves as learner ``(state, action)`` pairs on demand.
+
     ``first_actions[s, a]`` says whether some plan from ``s`` starts with ``a``
-    (DARLING's allowed set); ``has_plan[s]`` whether ``s`` has any plan.
+    (DARLING's allowed set); ``length[s]`` is the shortest plan length (-1: no plan).
+    ``plans`` gives the plan arrays, or a function that enumerates them when first read
+    (only the paper's GDQs walk plans): plans from state ``s`` are
+    ``plan_ptr[s]:plan_ptr[s + 1]``, the pairs of plan ``k`` are
+    ``pair_state[pair_ptr[k]:pair_ptr[k + 1]]`` and ``pair_action[...]``.
+    ``layers`` (int64[E, 3], optional) lists the edges ``(s, a, s')`` of the
+    shortest-path graph (``s'`` one step closer to the goal than ``s``; a table of
+    shortest plans only): :meth:`start_pairs` reads them instead of the plans.
+    ``capped``: a cap cut the plans (reading it enumerates them).
     """
 
-    plan_ptr: np.ndarray
-    pair_ptr: np.ndarray
-    pair_state: np.ndarray
-    pair_action: np.ndarray
     first_actions: np.ndarray
     length: np.ndarray
-    """Shortest plan length from each state (-1: no plan)."""
-    capped: bool = False
+    plans: PlanArrays | Callable[[], PlanArrays]
+    layers: np.ndarray | None = None
+
+    @cached_property
+    def _arrays(self) -> PlanArrays:
+        return self.plans() if callable(self.plans) else self.plans
+
+    plan_ptr = property(lambda self: self._arrays[0])
+    pair_ptr = property(lambda self: self._arrays[1])
+    pair_state = property(lambda self: self._arrays[2])
+    pair_action = property(lambda self: self._arrays[3])
+    capped = property(lambda self: self._arrays[4])
+
+    @property
+    def enumerated(self) -> bool:
+        """Whether the plan arrays exist (were given, or read once)."""
+        return not callable(self.plans) or "_arrays" in self.__dict__
 
     @property
     def n_states(self) -> int:
-        return len(self.plan_ptr) - 1
+        return len(self.length)
 
     @property
     def has_plan(self) -> np.ndarray:
@@ -72,6 +96,27 @@ class PlanTable:
         allowed[~allowed.any(axis=1)] = True
         return allowed
 
+    def start_pairs(self, s0: int) -> np.ndarray:
+        """bool[n_states, n_actions]: the pairs on some plan from ``s0`` (OptInit's)."""
+        out = np.zeros_like(self.first_actions, dtype=np.bool_)
+        if self.layers is not None:  # the shortest-path graph: forward from s0
+            s, a = self.layers[:, 0], self.layers[:, 1]
+            nxt = self.layers[:, 2]
+            seen = np.zeros(self.n_states, dtype=np.bool_)
+            seen[s0] = self.length[s0] > 0
+            while True:
+                on = seen[s]
+                out[s[on], a[on]] = True
+                grown = seen.copy()
+                grown[nxt[on]] = True
+                if (grown == seen).all():
+                    return out
+                seen = grown
+        for k in range(self.plan_ptr[s0], self.plan_ptr[s0 + 1]):
+            lo, hi = self.pair_ptr[k], self.pair_ptr[k + 1]
+            out[self.pair_state[lo:hi], self.pair_action[lo:hi]] = True
+        return out
+
     def plans_from(self, state: int) -> list[list[tuple[int, int]]]:
         """The plans from ``state`` as lists of learner pairs (for inspection and tests)."""
         out = []
@@ -82,26 +127,32 @@ class PlanTable:
         return out
 
 
-def pack_plans(n_actions: int, plans: list[list[list[tuple[int, int]]]], length: np.ndarray,
-               capped: bool) -> PlanTable:
-    """The :class:`PlanTable` of ``plans[s]``, the plans from each learner state ``s`` as
-    lists of learner ``(state, action)`` pairs (empty plans are left out)."""
+def plan_arrays(plans: list[list[list[tuple[int, int]]]], capped: bool) -> PlanArrays:
+    """The plan arrays of ``plans[s]``, the plans from each learner state ``s`` as lists
+    of learner ``(state, action)`` pairs (empty plans are left out)."""
     plan_ptr, pair_ptr = [0], [0]
     pair_s: list[int] = []
     pair_a: list[int] = []
+    for state_plans in plans:
+        for pairs in state_plans:
+            if pairs:
+                pair_s += [p for p, _ in pairs]
+                pair_a += [a for _, a in pairs]
+                pair_ptr.append(len(pair_s))
+        plan_ptr.append(len(pair_ptr) - 1)
+    return (np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
+            np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64), capped)
+
+
+def pack_plans(n_actions: int, plans: list[list[list[tuple[int, int]]]], length: np.ndarray,
+               capped: bool) -> PlanTable:
+    """The :class:`PlanTable` of ``plans[s]`` (see :func:`plan_arrays`)."""
     first = np.zeros((len(plans), n_actions), dtype=np.bool_)
     for s, state_plans in enumerate(plans):
         for pairs in state_plans:
-            if not pairs:
-                continue
-            first[s, pairs[0][1]] = True
-            pair_s += [p for p, _ in pairs]
-            pair_a += [a for _, a in pairs]
-            pair_ptr.append(len(pair_s))
-        plan_ptr.append(len(pair_ptr) - 1)
-    return PlanTable(np.array(plan_ptr, dtype=np.int64), np.array(pair_ptr, dtype=np.int64),
-                     np.array(pair_s, dtype=np.int64), np.array(pair_a, dtype=np.int64),
-                     first, length, capped)
+            if pairs:
+                first[s, pairs[0][1]] = True
+    return PlanTable(first, length, plan_arrays(plans, capped))
 
 
 def build_plan_table(abstraction: Abstraction, problem: PlanningProblem, planner: Planner,

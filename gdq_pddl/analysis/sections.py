@@ -204,7 +204,8 @@ def write_task(w: Writer, exp: str, task: str) -> None:
     w.add(f"### {exp}: task {task}", "", *_facts(optimal_entry(study.optimal, task)))
     v_star = study.v_star(exp, task)
     facts = [f"V* = {v_star:.2f} (optimal expected return per episode, value iteration "
-             "on the true model)" if not math.isnan(v_star) else "V*: not known"]
+             "on the true model)" if not math.isnan(v_star) else
+             f"V*: {optimal_entry(study.optimal, task).get('v_star_note', 'not known')}"]
     facts += [f"{n} episodes per run, last 10% = the final {t}"
               for n, t in sorted(set(zip(table["episodes"], table["tail"], strict=True)))]
     w.add("; ".join(facts) + ".", "")

@@ -24,6 +24,7 @@ from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.dynamics import COST_KINDS, CostDist, Dynamics, Outcomes, split_action
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
@@ -114,6 +115,26 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
+def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
+               ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
+    reward) with every pair that lists no outcome given one: a no-op, ``(its state, not
+    stuck, reward 0)`` with probability 1 (most pairs of a large problem: filled without
+    a Python loop)."""
+    counts = np.diff(ptr)
+    empty = counts == 0
+    new_ptr = np.zeros_like(ptr)
+    np.cumsum(np.where(empty, 1, counts), out=new_ptr[1:])
+    at = np.repeat(new_ptr[:-1] - ptr[:-1], counts) + np.arange(len(prob))
+    out_prob = np.ones(new_ptr[-1], dtype=np.float64)
+    out_prob[at] = prob
+    out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
+    for field, given in zip(out, fields, strict=True):
+        field[at] = given
+    out[0][new_ptr[:-1][empty]] = np.flatnonzero(empty) // n_actions  # a no-op stays
+    return new_ptr, out_prob, out
+
+
 def cost_arrays(costs: list[CostDist]) -> dict[str, np.ndarray]:
     """``cost_kind``, ``cost_a`` and ``cost_b`` of every model kind, from one
     :class:`~gdq_pddl.dynamics.CostDist` per action."""
@@ -178,8 +199,9 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
     one per learner action): for each (state, learner action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
-    ``pairs`` replaces them (a PPDDL domain's outcomes are its own; ``gains``: their keys
-    are ``(next, stuck, reward)``, on the problem's own scale)."""
+    ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
+    yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
+    problem's own scale)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
@@ -189,14 +211,20 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
             acting: dict[int, int] = {}
             for k in applicable:
                 acting.setdefault(space.action_of_op[k], k)
-            for a in range(n_a):
-                k = acting.get(a)
-                yield s * n_a + a, {(s, False): 1.0} if k is None else merge_outcomes(
+            for a in sorted(acting):
+                k = acting[a]
+                yield s * n_a + a, merge_outcomes(
                     slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
 
-    ptr, prob, (nxt, stuck, *gain) = outcome_csr(
-        space.n_states * n_a, rule() if pairs is None else pairs,
-        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
+    def shown(pairs):
+        with slow_progress("true model", " states", space.n_states) as bar:
+            for i, merged in pairs:
+                bar.update(i // n_a - bar.n)
+                yield i, merged
+
+    ptr, prob, (nxt, stuck, *gain) = with_noops(*outcome_csr(
+        space.n_states * n_a, shown(rule() if pairs is None else pairs),
+        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_)), n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,

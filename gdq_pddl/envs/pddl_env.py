@@ -76,8 +76,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import shortest_path
 
 from gdq_pddl.abstraction import PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import graph_action_mask
@@ -94,7 +92,7 @@ from gdq_pddl.envs.model import (
     merge_outcomes,
 )
 from gdq_pddl.envs.render import text_image
-from gdq_pddl.envs.solve import solve
+from gdq_pddl.envs.solve import reality_distances, value_within
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
@@ -281,9 +279,10 @@ class PDDLInstance:
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
         """Plans from every reachable state, cached per (planner, tolerance). The ``graph``
-        planner's come from one backward BFS over the state graph
-        (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other backend is asked
-        once per state. ``kind`` is the office's (a PDDL problem has one kind)."""
+        planner's are the state graph's distance layers, enumerated only if a learner
+        walks plans (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other
+        backend is asked once per state, capped at its own plan limit (it warns).
+        ``kind`` is the office's (a PDDL problem has one kind)."""
         key = (planner, float(tolerance))
         if key not in self._tables:
             if planner == "graph":
@@ -316,13 +315,14 @@ class PDDLInstance:
         return self.graph.task.atoms(self.graph.states[s])
 
     def optimal(self) -> dict[str, Any]:
-        """The ground truth: V* (value iteration on the true model), the shortest plan,
-        the sizes (a PDDL problem has no areas)."""
+        """The ground truth: V* (value iteration on the true model, within
+        :data:`~gdq_pddl.envs.solve.VSTAR_BUDGET`, else a bound and why), the shortest
+        plan, the sizes (a PDDL problem has no areas)."""
         s0 = self.start_state
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "reward_scale": self.reward_scale,
                 "step_limit": self.dynamics.step_limit,
-                "v_star": float(solve(self.model, GOAL_POS).V[0, s0]),
+                **value_within(self.model, GOAL_POS, s0),
                 "shortest_plan": int(self.graph.distances[s0]), "states": self.n_states,
                 "actions": self.n_actions, "relevant_areas": [], "irrelevant_areas_paper": [],
                 "expected_area_visits": {}}
@@ -508,18 +508,6 @@ def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamic
                         "the knowledge has no plan") + "): no episode can reach the goal")
 
 
-def reality_distances(model: ModelArrays) -> np.ndarray:
-    """``float64[n_states]``: the fewest actions from the initial state (0) to each state
-    in the true model, over outcomes of positive probability that do not end the trial
-    (inf: none reaches it). One breadth-first search over the model's arrays."""
-    n = model.obs_of.shape[0]
-    src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
-    keep = (model.prob > 0) & ~model.stuck & (model.next != src)
-    graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
-                       shape=(n, n))
-    return shortest_path(graph, directed=True, unweighted=True, indices=0)
-
-
 def never_working(dynamics: Dynamics) -> list[str]:
     """The keys of the dynamics file whose actions never have their effect
     (``success = 0``; an object override only where its schema's table differs)."""
@@ -573,23 +561,19 @@ def graph_space(graph: StateGraph) -> StateSpace:
 def ppddl_outcomes(graph: StateGraph, gains: bool = False):
     """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
     every applicable ground action (``graph.task`` is a
-    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`), a no-op elsewhere; ``gains``: the
-    keys are ``(next, stuck, the outcome's reward)``."""
+    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`); the other pairs are no-ops;
+    ``gains``: the keys are ``(next, stuck, the outcome's reward)``."""
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
     index = graph.index
     for s, state in enumerate(graph.states):
         here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
-        for k in range(n_ops):
-            op = here.get(k)
-            if op is None:
-                yield s * n_ops + k, {(s, False, 0.0)[:2 + gains]: 1.0}
-            else:
-                yield s * n_ops + k, merge_outcomes(
-                    (((s, True) if o.stuck else (index[o.apply(state)], False))
-                     + ((o.gain(state),) if gains else ()), o.probability)
-                    for o in op.outcomes)
+        for k in sorted(here):
+            yield s * n_ops + k, merge_outcomes(
+                (((s, True) if o.stuck else (index[o.apply(state)], False))
+                 + ((o.gain(state),) if gains else ()), o.probability)
+                for o in here[k].outcomes)
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,

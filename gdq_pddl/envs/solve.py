@@ -24,11 +24,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import shortest_path
 from scipy.stats import norm
 
 from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
-from gdq_pddl.limits import check_memory
+from gdq_pddl.limits import check_memory, human_bytes
+from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.world import Task, World
 
 TIE_TOLERANCE = 1e-9
@@ -61,24 +64,34 @@ def expected_costs(model: ModelArrays) -> np.ndarray:
     return out
 
 
+def solve_bytes(model: ModelArrays, tables: bool = True) -> int:
+    """Memory :func:`solve` needs at most: per outcome and per pair its work arrays, per
+    step V (and, with ``tables``, Q and the policy)."""
+    n_full, limit = model.obs_of.shape[0], model.step_limit
+    per_step = n_full * ((model.n_actions + 2) if tables else 1) * 8
+    return (limit + 1) * per_step + len(model.prob) * 8 * 6 + (len(model.ptr) - 1) * 8 * 3
+
+
 def check_solvable(model: ModelArrays, where: str = "") -> None:
     """Raise :class:`~gdq_pddl.errors.SizeError` if :func:`solve` on ``model`` would need
     more memory than the machine has. ``where`` names the step limit's file and key (the
     message says ``step_limit = N`` otherwise)."""
     n_full, limit = model.obs_of.shape[0], model.step_limit
-    per_step = n_full * (model.n_actions + 2) * 8 + len(model.prob) * 8 * 4
-    check_memory((limit + 1) * per_step,
+    check_memory(solve_bytes(model),
                  f"{where or 'step_limit'} = {limit}: V* by value iteration ({n_full} states x "
                  f"{model.n_actions} actions at each of the {limit} steps)",
                  "use a smaller step_limit")
 
 
-def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
-    """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``.
+def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
+          tables: bool = True) -> Solution:
+    """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``
+    (``tables=False``: the values only; ``Q`` and ``policy`` are then empty).
 
     Raises :class:`~gdq_pddl.errors.SizeError` up front when the tables (``Q`` is
     ``step_limit x states x actions``) would not fit in memory."""
-    check_solvable(model)
+    if tables:
+        check_solvable(model)
     n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
     n_full = model.obs_of.shape[0]
     counts = np.diff(model.ptr)
@@ -87,6 +100,7 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
     starts = model.ptr[:-1]
     pair = np.repeat(np.arange(n_full * n_actions), counts)
     cost = expected_costs(model)[pair % n_actions]
+    del pair
     at_goal = model.pos_of[model.next] == goal_pos
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
@@ -97,19 +111,68 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0) -> Solution:
     goal_states = model.pos_of == goal_pos
 
     V = np.zeros((limit + 1, n_full))
-    Q = np.empty((limit, n_full, n_actions))
-    policy = np.empty((limit, n_full), dtype=np.int64)
-    for t in range(limit - 1, -1, -1):
+    Q = np.empty((limit if tables else 0, n_full, n_actions))
+    policy = np.empty((limit if tables else 0, n_full), dtype=np.int64)
+    for t in slow_progress("value iteration", " steps", limit, range(limit - 1, -1, -1)):
         if t == limit - 1:
             value = end_reward
         else:
             value = np.where(ending, end_reward, -cost + gamma * V[t + 1, model.next])
         q = np.add.reduceat(model.prob * value, starts).reshape(n_full, n_actions)
         best = q.max(axis=1)
-        Q[t] = q
-        policy[t] = np.argmax(q >= best[:, None] - TIE_TOLERANCE, axis=1)
+        if tables:
+            Q[t] = q
+            policy[t] = np.argmax(q >= best[:, None] - TIE_TOLERANCE, axis=1)
         V[t] = np.where(goal_states, 0.0, best)
     return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma))
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What computing V* may take before a run goes on without it: memory (bytes, of
+    :func:`solve` without tables) and work (outcome updates: ``step_limit`` x outcomes;
+    value iteration does some 10**7 to 10**8 a second)."""
+
+    bytes: int = 1_000_000_000
+    work: int = 100_000_000
+
+
+VSTAR_BUDGET = Budget()
+"""The budget :func:`value_within` keeps to unless given another."""
+
+
+def value_within(model: ModelArrays, goal_pos: int, start: int,
+                 budget: Budget = VSTAR_BUDGET) -> dict[str, float | str | None]:
+    """``{"v_star": V* from ``start``, or None past ``budget``, "v_star_note": why not,
+    "v_star_upper_bound": a bound on V* when not computed}``. The bound: no episode
+    reaches the goal in fewer actions than reality's shortest path L (from
+    :func:`reality_distances`) and each action before the last costs at least the least
+    mean cost c, so V* <= max(r_max - (L - 1) c, -r_max)."""
+    need, work = solve_bytes(model, tables=False), model.step_limit * len(model.prob)
+    if need <= budget.bytes and work <= budget.work:
+        return {"v_star": float(solve(model, goal_pos, tables=False).V[0, start])}
+    fewest = reality_distances(model, start)[model.pos_of == goal_pos].min(initial=np.inf)
+    c = max(0.0, float(expected_costs(model).min()))
+    bound = -model.r_max if np.isinf(fewest) else max(model.r_max - (fewest - 1) * c,
+                                                      -model.r_max)
+    note = (f"not computed: value iteration would need {human_bytes(need)} and "
+            f"{work:.2g} outcome updates, past the budget ({human_bytes(budget.bytes)}, "
+            f"{budget.work:.2g}: gdq_pddl.envs.solve.VSTAR_BUDGET); V* <= {bound:g} "
+            f"(r_max minus the least cost of the {int(fewest) if np.isfinite(fewest) else 'no'}"
+            " actions of reality's shortest path to the goal)")
+    return {"v_star": None, "v_star_note": note, "v_star_upper_bound": float(bound)}
+
+
+def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:
+    """``float64[n_states]``: the fewest actions from ``start`` to each state in the true
+    model, over outcomes of positive probability that do not end the trial (inf: none
+    reaches it). One breadth-first search over the model's arrays."""
+    n = model.obs_of.shape[0]
+    src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
+    keep = (model.prob > 0) & ~model.stuck & (model.next != src)
+    graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
+                       shape=(n, n))
+    return shortest_path(graph, directed=True, unweighted=True, indices=start)
 
 
 def _task(world: World, task: Task | str) -> Task:

@@ -118,6 +118,8 @@ def _capacity(model: ModelArrays | CompactModel) -> int:
         learner_pair = model.obs_of[pair // model.n_actions] * model.n_actions + \
             pair % model.n_actions
         keys = learner_pair * n_states + model.obs_of[model.next]
+        if np.array_equal(model.obs_of, np.arange(len(model.obs_of))):  # seen as it is:
+            keys = keys[(np.diff(model.ptr) > 1)[pair]]  # one outcome, one successor
     per_pair = np.bincount(np.unique(keys) // n_states) if len(keys) else np.zeros(1)
     return max(1, int(per_pair.max()))
 

@@ -32,13 +32,14 @@ def preflight(experiments: list[Experiment], jobs: int = 1) -> None:
 
 
 def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
-    """Refuse an instance whose V* would not fit in memory, or on which no episode can
-    reach the goal: no plan from the start, or a shortest plan longer than the step
-    limit (a :class:`~gdq_pddl.errors.WorldError` naming the file and key). Building a
+    """Refuse an office task whose V* would not fit in memory, or an instance on which no
+    episode can reach the goal: no plan from the start, or a shortest plan longer than
+    the step limit (a :class:`~gdq_pddl.errors.WorldError` naming the file and key). Building a
     PDDL problem's model checks the same (:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`)."""
     model = instance.model
     source, key = instance.step_limit_key
-    check_solvable(model, f"{source}: {key}")
+    if not isinstance(instance, PDDLInstance):  # a PDDL problem's V* is within a budget
+        check_solvable(model, f"{source}: {key}")
     shortest = int(instance.plan_table().length[instance.learner_start])
     if shortest < 0:  # World.resolve checks reachability: the knowledge disagrees
         raise WorldError(source, f"tasks.{instance.name}", "the planner finds no plan for "

@@ -167,15 +167,14 @@ class TabularLearner:
         allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
         guide = np.ascontiguousarray(self._guide(context, allowed), dtype=np.bool_)
         plans = self._plans(context)
-        opt_r = np.zeros_like(allowed)
-        for k in range(plans.plan_ptr[context.s0], plans.plan_ptr[context.s0 + 1]):
-            lo, hi = plans.pair_ptr[k], plans.pair_ptr[k + 1]
-            opt_r[plans.pair_state[lo:hi], plans.pair_action[lo:hi]] = True
+        opt_r = plans.start_pairs(context.s0)
+        walked = (plans.plan_ptr, plans.pair_ptr, plans.pair_state, plans.pair_action) \
+            if self.kind == KIND_GDQ_PLANS else (  # only the paper's GDQs walk plans
+                np.zeros(len(allowed) + 1, dtype=np.int64), np.zeros(1, dtype=np.int64), _I0, _I0)
         table = QTable(self.q, np.zeros(len(self.q)), allowed, guide,
                        guide.sum(axis=1).astype(np.int64),
                        np.ascontiguousarray(context.goal, dtype=np.bool_))
-        plan_arrays = (np.ascontiguousarray(x, dtype=np.int64) for x in (
-            plans.plan_ptr, plans.pair_ptr, plans.pair_state, plans.pair_action))
+        plan_arrays = (np.ascontiguousarray(x, dtype=np.int64) for x in walked)
         tables = Tables(table, self._model, Plans(opt_r, *plan_arrays),
                         *self._prior_arrays(context))
         c = self.config

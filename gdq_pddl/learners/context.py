@@ -16,6 +16,7 @@ import numpy as np
 
 from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.abstraction.prior import PriorModel
+from gdq_pddl.abstraction.table import pack_plans
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
@@ -88,10 +89,8 @@ class TaskContext:
 
 def empty_plan_table(n_states: int, n_actions: int) -> PlanTable:
     """A plan table with no plan at all (what a planner that finds nothing yields)."""
-    return PlanTable(np.zeros(n_states + 1, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                     np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-                     np.zeros((n_states, n_actions), dtype=np.bool_),
-                     np.full(n_states, -1, dtype=np.int64))
+    return pack_plans(n_actions, [[] for _ in range(n_states)],
+                      np.full(n_states, -1, dtype=np.int64), False)
 
 
 MAX_TABLE_BYTES = 16_000_000_000

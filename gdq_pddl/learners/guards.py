@@ -176,11 +176,14 @@ def check_context(context: object, n_states: int | None = None,
                           f" got {r_max!r}")
     for name in ("plans", "darling_plans"):
         table = getattr(context, name)
-        if table is not None:  # as the learner's Plans group, first_actions as opt_r
+        if table is not None and table.enumerated:  # as the learner's Plans group
             group = Plans(np.ascontiguousarray(table.first_actions), table.plan_ptr,
                           table.pair_ptr, table.pair_state, table.pair_action)
             check_arrays(f"TaskContext.{name}", group, TABLES["plans"],
                          _sizes(*size, group))
+        elif table is not None:  # plans enumerated when read: their first actions now
+            check_arrays(f"TaskContext.{name}", table,
+                         {"first_actions": TABLES["plans"]["opt_r"]}, _sizes(*size, None))
     if context.prior is not None:
         check_arrays("TaskContext.prior", context.prior,
                      {"next_state": TABLES["prior"]["next_state"]}, _sizes(*size, None))

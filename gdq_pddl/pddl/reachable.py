@@ -18,13 +18,24 @@ give every state's shortest plans without calling a planner once per state.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from tqdm import tqdm
 
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.pddl.grounding import GroundTask
+
+
+def slow_progress(desc: str, unit: str, total: int | None = None,
+                  iterable: Iterable | None = None) -> tqdm:
+    """A progress bar on stderr that shows only after 2 s, and only on a terminal
+    (``TQDM_DISABLE=1`` silences it): state enumeration, models, value iteration."""
+    return tqdm(iterable, total=total, desc=desc, unit=unit, delay=2.0, disable=None,
+                leave=False)
+
 
 MAX_STATES = 200_000
 """Default cap on the number of reachable states (beyond it, an error says so)."""
@@ -85,8 +96,10 @@ def reachable_graph(task: GroundTask, max_states: int = MAX_STATES,
     ptr, ops, nxt = [0], [], []
     goal = []
     queue = deque([task.init])
+    bar = slow_progress("reachable states", " states")
     while queue:
         s = queue.popleft()
+        bar.update()
         g = task.is_goal(s)
         goal.append(g)
         if not g:
@@ -108,6 +121,7 @@ def reachable_graph(task: GroundTask, max_states: int = MAX_STATES,
                     states.append(t)
                     queue.append(t)
         ptr.append(len(ops))
+    bar.close()
     return StateGraph(task, tuple(states), np.array(ptr, dtype=np.int64),
                       np.array(ops, dtype=np.int64), np.array(nxt, dtype=np.int64),
                       np.array(goal, dtype=np.bool_))

@@ -191,8 +191,6 @@ DYNAMICS = {
                                  '[["move"]]'), ["actions.move.failure"]),
     "step_limit-below-shortest-plan": (edit(KEYS_DYNAMICS, "step_limit = 25", "step_limit = 5"),
                                        ["dynamics.step_limit", "5", "8 actions"]),
-    "step_limit-past-memory": (edit(KEYS_DYNAMICS, "step_limit = 25", "step_limit = 3000000000"),
-                               ["dynamics.step_limit", "3000000000"]),
 }
 
 

@@ -165,10 +165,11 @@ def test_the_largest_settings_accepted_keep_the_q_table_finite(ctx):
 
 def test_a_context_whose_arrays_leave_the_spaces_is_refused(ctx):
     plans = ctx.plans
-    bad_state = replace(plans, pair_state=plans.pair_state + 1000)
+    arrays = (plans.plan_ptr, plans.pair_ptr, plans.pair_state, plans.pair_action, False)
+    bad_state = replace(plans, plans=(*arrays[:2], arrays[2] + 1000, *arrays[3:]))
     with pytest.raises(ConfigError, match="TaskContext.plans: pair_state must hold values"):
         DynaQ(replace(ctx, plans=bad_state))
-    cut = replace(plans, pair_ptr=plans.pair_ptr[:-1])
+    cut = replace(plans, plans=(arrays[0], arrays[1][:-1], *arrays[2:]))
     with pytest.raises(ConfigError, match="TaskContext.plans: plan_ptr must"):
         GDQ(replace(ctx, plans=cut), GDQConfig(variant="literal"))
     far = PriorModel(np.full((ctx.n_states, ctx.n_actions), 500, dtype=np.int64))

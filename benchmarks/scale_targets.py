@@ -1,0 +1,105 @@
+"""The size targets of issue 22 item 4: time split and peak memory of GDQ end to end.
+
+    python benchmarks/scale_targets.py blocks 7 --episodes 300 [--repeats 3]
+    python benchmarks/scale_targets.py switches 20 --episodes 100
+
+Generates the problem (:mod:`scale_problems`), then times each phase in one process:
+parse (read the files), enumerate (ground and reach every state: grounding is done when
+first needed), model (the true model), V*
+(within the budget, or its bound), prior and plans (the task context), learning (GDQ,
+``--episodes`` episodes of one run). Peak memory is the process's maximum resident set
+(``resource.getrusage``). Targets: blocks ~10^5 states, 300 episodes, < 60 s and < 2 GB;
+switches >= 10^6 states, 100 episodes, < 5 min and < 8 GB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from scale_problems import write  # benchmarks/ is on sys.path
+
+from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+from gdq_pddl.envs.solve import VSTAR_BUDGET
+from gdq_pddl.experiments.protocol import Hyper
+from gdq_pddl.experiments.work import make_learner
+from gdq_pddl.learners.context import task_context
+from gdq_pddl.learners.episodes import run_episodes
+
+TARGETS = {"blocks": (60.0, 2e9), "switches": (300.0, 8e9)}
+
+
+def once(kind: str, n: int, episodes: int) -> dict[str, float]:
+    """One end-to-end run in this process: seconds per phase, peak bytes."""
+    domain, problem = write(kind, n, Path(tempfile.mkdtemp()))
+    out: dict[str, float] = {}
+
+    def timed(name, build):
+        t0 = time.perf_counter()
+        value = build()
+        out[name] = time.perf_counter() - t0
+        return value
+
+    inst = timed("parse", lambda: PDDLInstance.from_files(domain, problem))
+    timed("enumerate", lambda: inst.graph)
+    timed("model", lambda: inst.model)
+    v = timed("V*", inst.optimal)["v_star"]
+    timed("prior", lambda: inst.prior)
+    ctx = timed("plans", lambda: task_context(inst))
+    env = PDDLEnv(instance=inst)
+
+    def learn():
+        learner = make_learner("GDQ", ctx, Hyper())
+        env.reset(seed=0)
+        return run_episodes(learner, env, episodes, np.random.default_rng(0))
+
+    records = timed("learning", learn)
+    out["states"], out["actions"] = inst.n_states, inst.n_actions
+    out["v_star"] = float("nan") if v is None else v
+    out["mean_return"] = float(np.mean(records.returns))
+    out["total"] = sum(out[k] for k in ("parse", "enumerate", "model", "V*", "prior", "plans",
+                                        "learning"))
+    out["peak_bytes"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("kind", choices=sorted(TARGETS))
+    parser.add_argument("n", type=int)
+    parser.add_argument("--episodes", type=int, default=300)
+    parser.add_argument("--repeats", type=int, default=1, help="fresh processes (median)")
+    parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        print(json.dumps(once(args.kind, args.n, args.episodes)))
+        return
+    runs = []
+    for _ in range(args.repeats):  # a fresh process each: peak memory is per process
+        text = subprocess.run([sys.executable, __file__, args.kind, str(args.n), "--episodes",
+                               str(args.episodes), "--child"], check=True,
+                              capture_output=True, text=True).stdout
+        runs.append(json.loads(text.strip().splitlines()[-1]))
+    med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
+    seconds, memory = TARGETS[args.kind]
+    print(f"{args.kind} {args.n}: {int(med['states'])} states, {int(med['actions'])} ground "
+          f"actions, GDQ {args.episodes} episodes, median of {len(runs)} run(s); V* budget "
+          f"{VSTAR_BUDGET}")
+    for k in ("parse", "enumerate", "model", "V*", "prior", "plans", "learning", "total"):
+        print(f"  {k:>9} {med[k]:8.1f} s")
+    print(f"  peak memory {med['peak_bytes'] / 1e9:.2f} GB; V* {med['v_star']:.3f}; mean "
+          f"return {med['mean_return']:.2f}")
+    print(f"  target < {seconds:g} s and < {memory / 1e9:g} GB: "
+          f"{'met' if med['total'] < seconds and med['peak_bytes'] < memory else 'NOT met'}")
+
+
+if __name__ == "__main__":
+    main()
