@@ -147,17 +147,21 @@ def value_within(model: ModelArrays, goal_pos: int, start: int,
     "v_star_upper_bound": a bound on V* when not computed}``. The bound: no episode
     reaches the goal in fewer actions than reality's shortest path L (from
     :func:`reality_distances`) and each action before the last costs at least the least
-    mean cost c, so V* <= max(r_max - (L - 1) c, -r_max)."""
+    mean cost c, so V* <= max(r_max - (L - 1) c, -r_max). On the problem's own reward
+    scale (``model.gain``) no such bound holds: None."""
     need, work = solve_bytes(model, tables=False), model.step_limit * len(model.prob)
     if need <= budget.bytes and work <= budget.work:
         return {"v_star": float(solve(model, goal_pos, tables=False).V[0, start])}
+    past = (f"not computed: value iteration would need {human_bytes(need)} and {work:.2g} "
+            f"outcome updates, past the budget ({human_bytes(budget.bytes)}, "
+            f"{budget.work:.2g}: gdq_pddl.envs.solve.VSTAR_BUDGET)")
+    if model.gain.size:  # rewards of the file's own: a step may pay, no cheap bound
+        return {"v_star": None, "v_star_note": past, "v_star_upper_bound": None}
     fewest = reality_distances(model, start)[model.pos_of == goal_pos].min(initial=np.inf)
     c = max(0.0, float(expected_costs(model).min()))
     bound = -model.r_max if np.isinf(fewest) else max(model.r_max - (fewest - 1) * c,
                                                       -model.r_max)
-    note = (f"not computed: value iteration would need {human_bytes(need)} and "
-            f"{work:.2g} outcome updates, past the budget ({human_bytes(budget.bytes)}, "
-            f"{budget.work:.2g}: gdq_pddl.envs.solve.VSTAR_BUDGET); V* <= {bound:g} "
+    note = (f"{past}; V* <= {bound:g} "
             f"(r_max minus the least cost of the {int(fewest) if np.isfinite(fewest) else 'no'}"
             " actions of reality's shortest path to the goal)")
     return {"v_star": None, "v_star_note": note, "v_star_upper_bound": float(bound)}
