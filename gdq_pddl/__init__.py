@@ -12,6 +12,8 @@ if TYPE_CHECKING:
 
     import pandas
 
+    from gdq_pddl.learners import episodes, saving
+
 _jit_cache.refresh()  # before any compiled function loads its cache (see _jit_cache)
 
 from gdq_pddl.envs import register_envs  # noqa: E402
@@ -31,6 +33,21 @@ writes its pages."""
 load_results: Callable[..., pandas.DataFrame]
 """An output folder's episodes as a pandas DataFrame, one row per episode
 (:func:`gdq_pddl.analysis.results.load_results`)."""
+save_learner: Callable[..., None]
+"""Save a learner's tables, config and generators to a ``.npz`` file, no pickle
+(:func:`gdq_pddl.learners.saving.save_learner`)."""
+load_learner: Callable[..., saving.TabularLearner]
+"""A learner saved by ``save_learner``, ready to continue bit-identically
+(:func:`gdq_pddl.learners.saving.load_learner`)."""
+load_generators: Callable[..., dict]
+"""The random generators saved beside a learner
+(:func:`gdq_pddl.learners.saving.load_generators`)."""
+GreedyPolicy: type[saving.GreedyPolicy]
+"""A learner's greedy policy, state -> action, savable
+(:class:`gdq_pddl.learners.saving.GreedyPolicy`)."""
+evaluate_policy: Callable[..., episodes.EpisodeRecords]
+"""Mean return and success of a policy over episodes of an env, through its wrappers
+(:func:`gdq_pddl.learners.episodes.evaluate_policy`)."""
 
 
 def __getattr__(name: str):

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import gymnasium
 
-__all__ = ["ENV_IDS", "OFFICE_ID", "PDDL_ID", "register_envs"]
+__all__ = ["ENV_IDS", "OFFICE_ID", "PDDL_ID", "office", "pddl_env", "register_envs"]
 
 OFFICE_ID = "gdq_pddl/Office-v0"
 """The office's env id (:class:`~gdq_pddl.envs.office.OfficeEnv`)."""

@@ -46,7 +46,9 @@ class CompiledEnv(gym.Env[int, int]):
         self.instance, self.model, self.render_mode = instance, model, render_mode
         self._given = instance  # what reset() without options goes back to
         self.observation_space = Discrete(instance.n_states)
+        """One observation per learner state."""
         self.action_space = Discrete(instance.n_actions)
+        """One action per learner action (the office: 95, verb-major)."""
         self._restart()
         self._t, self._cause, self._done = 0, "", True  # not started
 

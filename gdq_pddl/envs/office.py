@@ -155,7 +155,9 @@ class OfficeInstance:
     """A task of a world as an instance of the one pipeline (see the module docstring)."""
 
     world: World
+    """The world: its map, doors and their dynamics."""
     task: Task
+    """The task: start, goal, name."""
 
     @classmethod
     def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
@@ -167,6 +169,7 @@ class OfficeInstance:
 
     @property
     def name(self) -> str:
+        """The task's name, e.g. ``"C"``."""
         return self.task.name
 
     @property
@@ -186,22 +189,27 @@ class OfficeInstance:
 
     @property
     def n_states(self) -> int:
+        """How many learner states (the office: 31)."""
         return self.spaces.n_states
 
     @property
     def n_actions(self) -> int:
+        """How many learner actions (the office: 95)."""
         return self.spaces.n_actions
 
     @cached_property
     def start_state(self) -> int:
+        """The full state an episode starts in (robot at the start, doors closed)."""
         return full_state(self.world, self.task.start)
 
     @cached_property
     def goal_pos(self) -> int:
+        """The goal's position index in the world."""
         return self.world.index[self.task.goal]
 
     @cached_property
     def mask_table(self) -> np.ndarray:
+        """``int8[n_states, n_actions]``: 1 where the knowledge says the action can act."""
         return office_action_masks(self.world, self.task)
 
     def restarted(self, start: str | None = None, goal: str | None = None) -> OfficeInstance:
@@ -216,18 +224,22 @@ class OfficeInstance:
 
     @property
     def source(self) -> str:
+        """The world file (or built-in name) errors name."""
         return self.world.source
 
     @cached_property
     def learner_start(self) -> int:
+        """The learner state an episode starts in."""
         return self.spaces.state(self.task.start)
 
     @cached_property
     def learner_goal(self) -> np.ndarray:
+        """``bool[n_states]``: the learner states at the goal."""
         return np.array([p == self.task.goal for p, _ in self.spaces.states], dtype=np.bool_)
 
     @property
     def r_max(self) -> float:
+        """The success reward (failure: ``-r_max``)."""
         return float(self.world.r_max)
 
     @property
@@ -287,6 +299,7 @@ class OfficeInstance:
         return {"position": self.world.positions[pos]}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
+        """Full state ``fs`` drawn as text (``"ansi"``) or an RGB array (``"rgb_array"``)."""
         robot, opened = self.decode(fs)
         frame = Frame(self.world, self.task.name, robot, self.task.goal, opened, step, cause)
         return ansi(frame) if mode == "ansi" else self._painter(frame)
@@ -322,6 +335,7 @@ class CompactEnv(CompiledEnv):
                  goal: str | None = None, world: str | Path | World | None = None) -> None:
         instance = OfficeInstance.of(task, start, goal, world)
         self.doors = np.zeros(max(1, len(instance.world.doors)), dtype=np.uint8)
+        """``uint8[n_doors]``: 1 for each door now open."""
         super().__init__(instance, instance.compact)
 
     @property

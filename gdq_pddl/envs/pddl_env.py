@@ -122,8 +122,11 @@ class PDDLInstance:
     """
 
     problem: PlanningProblem
+    """The domain and problem as read, with the planner's determinisation."""
     overlay: Dynamics | None
+    """The dynamics file as given (None: none)."""
     max_states: int = MAX_STATES
+    """The most reachable states explored before the problem is refused as too large."""
     start_state: int = 0
     """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
 
@@ -143,6 +146,7 @@ class PDDLInstance:
     def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
                    max_states: int = MAX_STATES,
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
+        """:meth:`from_files` of texts in memory (errors name ``<domain>``, ``<problem>``)."""
         planning = PlanningProblem.from_texts(domain, problem,
                                               determinisation=_checked(determinisation))
         overlay = None if dynamics is None else parse_reality(dynamics, planning)
@@ -247,6 +251,7 @@ class PDDLInstance:
 
     @property
     def source(self) -> str:
+        """The problem file errors name."""
         return self.problem.problem.source
 
     @property
@@ -256,10 +261,12 @@ class PDDLInstance:
 
     @cached_property
     def learner_goal(self) -> np.ndarray:
+        """``bool[n_states]``: the reachable states where the goal holds."""
         return np.asarray(self.graph.is_goal, dtype=np.bool_)
 
     @property
     def r_max(self) -> float:
+        """The goal reward (the goal scale: failure is ``-r_max``)."""
         return float(self.dynamics.r_max)
 
     @cached_property
@@ -300,10 +307,12 @@ class PDDLInstance:
 
     @property
     def n_states(self) -> int:
+        """How many reachable states (the env's observations)."""
         return self.graph.n_states
 
     @property
     def n_actions(self) -> int:
+        """How many ground actions (the env's actions)."""
         return len(self.graph.task.ops)
 
     def action_name(self, a: int) -> str:
@@ -337,6 +346,7 @@ class PDDLInstance:
         return limit_key(self.problem, self.dynamics)
 
     goal_pos = GOAL_POS
+    """``pos_of`` of a goal state (:data:`GOAL_POS`): what a step compares to end in success."""
 
     def restarted(self, start: str | Iterable[str] | None = None,
                   goal: None = None) -> PDDLInstance:
