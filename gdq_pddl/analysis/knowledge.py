@@ -23,11 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.analysis.routes import likeliest_next, optimal_route, walk_policy
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
-from gdq_pddl.envs.solve import expected_costs, solve_task
+from gdq_pddl.envs.evaluate import likeliest_next, optimal_route, policy_value, walk_policy
+from gdq_pddl.envs.model import compile_model
+from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.experiments.knowledge import CASES, knowledge_world
 from gdq_pddl.experiments.work import load_world_named, resolve_task
 from gdq_pddl.learners.context import office_task_context
@@ -64,39 +64,6 @@ def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW)
     ma = moving_average(returns, window)
     hits = np.flatnonzero(ma >= level)
     return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
-
-
-def policy_value(world: World, task: Task, policy: dict[int, int] | np.ndarray,
-                 model: ModelArrays | None = None) -> float:
-    """Exact expected undiscounted return from the start of a stationary learner policy
-    (learner state -> action) in ``world``, by backward induction over the step limit
-    (the same outcome rewards as :func:`gdq_pddl.envs.solve.solve`)."""
-    model = compile_model(world) if model is None else model
-    n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
-    n_full = model.obs_of.shape[0]
-    if isinstance(policy, dict):
-        pi = np.zeros(int(model.obs_of.max()) + 1, dtype=np.int64)
-        for s, a in policy.items():
-            pi[s] = a
-    else:
-        pi = np.asarray(policy, dtype=np.int64)
-    act = pi[model.obs_of]
-    pairs = np.arange(n_full) * n_actions + act
-    lo, hi = model.ptr[pairs], model.ptr[pairs + 1]
-    owner = np.repeat(np.arange(n_full), hi - lo)
-    k = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])
-    prob, nxt, stuck = model.prob[k], model.next[k], model.stuck[k]
-    goal_pos = world.index[task.goal]
-    at_goal = model.pos_of[nxt] == goal_pos
-    ending = stuck | at_goal
-    end_reward = np.where(stuck, -r, np.where(at_goal, r, -r))
-    cost = expected_costs(model)[act[owner]]
-    goal_states = model.pos_of == goal_pos
-    v = np.zeros(n_full)
-    for t in range(limit - 1, -1, -1):
-        value = end_reward if t == limit - 1 else np.where(ending, end_reward, -cost + v[nxt])
-        v = np.where(goal_states, 0.0, np.bincount(owner, prob * value, minlength=n_full))
-    return float(v[full_state(world, task.start)])
 
 
 @dataclass(frozen=True)

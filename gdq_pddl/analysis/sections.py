@@ -20,7 +20,6 @@ from gdq_pddl.analysis.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
@@ -403,6 +402,10 @@ def write_hypothesis_3(w: Writer) -> None:
 
 
 # route c
+
+BEST_ROUTE_C = (1, 3, 2, 6)
+"""The paper's best Task C route in areas (easy doors d1 and d3)."""
+
 
 def write_route_c(w: Writer) -> None:
     """Task C route finding: final greedy routes and behavioural convergence to the

@@ -31,7 +31,7 @@ from gdq_pddl.analysis.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.analysis.routes import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
+from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
 from gdq_pddl.errors import GdqError
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
