@@ -289,7 +289,7 @@ def cmd_pairs(args: argparse.Namespace) -> int:
 
 def pairs_report(out: Path) -> str:
     """Table, figure and REPORT.md of a pairs folder; returns what was written."""
-    from gdq_pddl.analysis.pairs_report import make_pairs_report  # start-up time
+    from gdq_pddl.analysis.pairs import make_pairs_report  # start-up time
 
     paths = make_pairs_report(out)
     return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"
