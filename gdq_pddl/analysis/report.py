@@ -15,7 +15,7 @@ from pathlib import Path
 
 from gdq_pddl.analysis import sections
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
-from gdq_pddl.analysis.knowledge_report import make_knowledge_report
+from gdq_pddl.analysis.knowledge import make_knowledge_report
 from gdq_pddl.analysis.pairs import make_pairs_report
 from gdq_pddl.analysis.results import load_config
 from gdq_pddl.analysis.study import Study

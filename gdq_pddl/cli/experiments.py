@@ -177,7 +177,7 @@ def cmd_knowledge(args: argparse.Namespace) -> int:
     command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
 
     def report(out: Path) -> str:
-        from gdq_pddl.analysis.knowledge_report import make_knowledge_report  # start-up time
+        from gdq_pddl.analysis.knowledge import make_knowledge_report  # start-up time
 
         paths = make_knowledge_report(out, command)
         return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
