@@ -131,7 +131,7 @@ def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
     n = matrix.shape[0]
     smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
         matrix / scale
-    mean, se = mean_se(smooth, axis=0)
+    mean, se = mean_se(smooth)
     se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
     colour = method_colour(method)
     ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")

@@ -23,7 +23,6 @@ from gdq_pddl.analysis.results import (
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
-    convergence_episode,
     first_positive,
     iqm_ci,
     mean_se,
@@ -68,14 +67,13 @@ def write_header(w: Writer) -> None:
           f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
           f"experiments: {', '.join(study.experiments) or 'none'}.", "")
     if cfg.experiments:
-        sched = [e.get("schedule") if isinstance(e.get("schedule"), list) else []
-                 for e in cfg.experiments]
-        w.table([[e.get("name", "?"), e.get("world", "?"),
-                  ", ".join(f"{t} x {n}" for t, n in s) or "?",
-                  ", ".join(e.get("methods") or []) or "?", e.get("runs", "?"),
-                  e.get("seed", "?")] for e, s in zip(cfg.experiments, sched, strict=True)],
-                ["experiment", "world", "schedule (task x episodes)", "methods", "runs", "seed"],
-                "llllrr")
+        w.table([[e.get("name", "?"), e.get("world", "?"), ", ".join(
+            f"{t} x {n}" for t, n in (e.get("schedule") if isinstance(
+                e.get("schedule"), list) else [])) or "?",
+            ", ".join(e.get("methods") or []) or "?", e.get("runs", "?"), e.get("seed", "?")]
+            for e in cfg.experiments],
+            ["experiment", "world", "schedule (task x episodes)", "methods", "runs", "seed"],
+            "llllrr")
     else:
         w.add("Configuration: not recorded (no readable `config.json`).", "")
     if cfg.versions:
@@ -436,9 +434,9 @@ paper's best route."""
             on, k = summary.on_route(world, BEST_ROUTE_C), summary.count
             share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
             common = f"{route_str(summary.areas)} ({summary.end}, {k} run{'s' * (k != 1)})"
-        conv[m] = convergence_episode(study.area_visits(exp, m, "C"),
-                                      study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-                                      study.areas, opts.route_window, opts.route_share)
+        conv[m] = [settles(row, opts.route_window, opts.route_share) for row in route_indicator(
+            study.area_visits(exp, m, "C"), study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
+            study.areas)]
         reached = [c for c in conv[m] if not math.isnan(c)]
         rows.append([m, share, common, f"{len(reached)}/{len(conv[m])}",
                      fmt(float(np.mean(reached)), 5) if reached else "never"])
