@@ -33,8 +33,17 @@ from gdq_pddl.analysis.stats import (
     verdict_reason,
 )
 from gdq_pddl.analysis.study import Study, curves_stem, slug
-from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
-from gdq_pddl.analysis.writer import Writer, areas_str, fmt, milestone_str, number, pct, route_str
+from gdq_pddl.analysis.tables import area_markdown, area_table
+from gdq_pddl.analysis.writer import (
+    TABLE_DIR,
+    Writer,
+    areas_str,
+    fmt,
+    milestone_str,
+    number,
+    pct,
+    route_str,
+)
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.work import make_learner
