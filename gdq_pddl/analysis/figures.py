@@ -14,25 +14,22 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
+from matplotlib.collections import LineCollection
+from matplotlib.colors import PowerNorm
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+from scipy import stats as sps
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.colors import PowerNorm  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.patches import Circle  # noqa: E402
-from scipy import stats as sps  # noqa: E402
-
-from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
-from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
-from gdq_pddl.analysis.study import Study, curves_stem, slug  # noqa: E402
-from gdq_pddl.envs.render import MapPainter  # noqa: E402
-from gdq_pddl.outputs import save_figure  # noqa: E402
-from gdq_pddl.world import Task, World  # noqa: E402
+from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
+from gdq_pddl.analysis.stats import mean_se, moving_average
+from gdq_pddl.analysis.study import Study, curves_stem, slug
+from gdq_pddl.envs.render import MapPainter
+from gdq_pddl.outputs import save_figure
+from gdq_pddl.world import Task, World
 
 METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
     "GDQ": "#D55E00",  # vermillion
@@ -80,7 +77,6 @@ def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = Figure
         # the first save laid the figure out; keep that layout for the other formats
         # rather than solving it again (constrained layout is most of a save's time)
         fig.set_layout_engine("none")
-    plt.close(fig)
     return paths
 
 
@@ -90,8 +86,8 @@ def grid(n: int, width: float = 5.0, height: float = 3.6,
     layout; the unused cells of the last row hidden)."""
     cols = max(1, min(n, max_cols))
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False,
-                             layout="constrained")
+    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False)
     flat = list(axes.ravel())
     for ax in flat[n:]:
         ax.set_visible(False)
@@ -109,7 +105,7 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
     rows = math.ceil(n / cols)
     head, title, foot, side, bar = 0.45, 0.3, 0.3, 0.05, (1.3 if colorbar else 0.0)
     fig_w, fig_h = width * cols + bar, height * rows + head
-    fig = plt.figure(figsize=(fig_w, fig_h))
+    fig = Figure(figsize=(fig_w, fig_h))
     axes = []
     for i in range(n):
         r, c = divmod(i, cols)
@@ -302,7 +298,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 continue
             top = max(float(np.max(m)) for m in means.values()) or 1.0
             norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=top)  # keep small counts visible
-            cmap = plt.get_cmap("magma_r")
+            cmap = colormaps["magma_r"]
             fig, axes, cax = _map_grid(len(means), colorbar=True)
             for ax, (method, mean) in zip(axes, means.items(), strict=True):
                 _draw_map(ax, world, xy, alpha=0.6)
@@ -319,7 +315,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 _outline_areas(ax, world, xy)
                 _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
-            sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
+            sm = ScalarMappable(norm=norm, cmap=cmap)
             fig.colorbar(sm, cax=cax,
                          label="area visits per run (mean; square-root colour scale)")
             label = "robot " if exp == ROBOT_EXPERIMENT else ""
@@ -387,7 +383,8 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     if not study.has(exp):
         return []
     ep = study
-    fig, ax = plt.subplots(figsize=(6.0, 3.8), layout="constrained")
+    fig = Figure(figsize=(6.0, 3.8), layout="constrained")
+    ax = fig.subplots()
     tasks = ep.tasks(exp)
     for method in ep.methods(exp):
         m = ep.matrix("return", exp, method)

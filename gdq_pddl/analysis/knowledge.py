@@ -18,9 +18,9 @@ from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
@@ -229,8 +229,8 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
     paths = save_all(fig, out, "knowledge_curves")
 
     methods = list(dict.fromkeys(m for c in cases for m in c.methods))
-    fig, axes = plt.subplots(1, len(cases), figsize=(max(3.2 * len(cases), 6), 3.8),
-                             squeeze=False, layout="constrained")
+    fig = Figure(figsize=(max(3.2 * len(cases), 6), 3.8), layout="constrained")
+    axes = fig.subplots(1, len(cases), squeeze=False)
     for ax, case in zip(axes.ravel(), cases, strict=True):
         episodes = max((r.episodes for k in case.results.values() for r in k.values()),
                        default=1)

@@ -18,12 +18,13 @@ import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.cm import ScalarMappable
 from matplotlib.colors import TwoSlopeNorm
+from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
 from scipy import stats as sps
@@ -191,7 +192,7 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     finite = np.isfinite(grid).any()
     norm = TwoSlopeNorm(0.0, min(float(np.nanmin(grid)) if finite else -1.0, -1e-9),
                         max(float(np.nanmax(grid)) if finite else 1.0, 1e-9))
-    cmap = plt.get_cmap("RdBu").with_extremes(bad="#b0b0b0")
+    cmap = colormaps["RdBu"].with_extremes(bad="#b0b0b0")
     rgba = cmap(norm(np.ma.masked_invalid(grid)))
     for (r, c), outcome in zip(at, diff.outcome, strict=True):
         if outcome == TIE:  # faded: a tie's small mean must not look like a loss
@@ -367,8 +368,8 @@ def make_pairs_report(out: str | Path) -> list[Path]:
     write_text(paths[0], frame.to_csv(index=False, lineterminator="\n"))
     write_text(paths[1], table_markdown(res, diffs))
     if diffs:
-        fig, axes = plt.subplots(len(diffs), 2, figsize=(12.5, 5.2 * len(diffs)),
-                                 squeeze=False, layout="constrained", width_ratios=(1, 1.25))
+        fig = Figure(figsize=(12.5, 5.2 * len(diffs)), layout="constrained")
+        axes = fig.subplots(len(diffs), 2, squeeze=False, width_ratios=(1, 1.25))
         for (hx, sx), diff in zip(axes, diffs, strict=True):
             heatmap(hx, res, diff)
             sorted_differences(sx, res, diff)

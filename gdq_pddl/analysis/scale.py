@@ -13,10 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
@@ -95,7 +95,8 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
     names, others = _names(results)
     sizes = by_size(results)
     seeds = list(dict.fromkeys(r.seed for r in results))
-    fig, axes = plt.subplots(1, 3 if others else 2, figsize=(15 if others else 10, 4.6))
+    fig = Figure(figsize=(15 if others else 10, 4.6))
+    axes = fig.subplots(1, 3 if others else 2)
     ax, bx = axes[0], axes[-1]
 
     def panel(axis, name: str, i: int, n: int, value: Callable, whole: Callable,
@@ -138,7 +139,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
                title=f"{_first_label(episodes)}, paired runs (mean, s.e.)")
         cx.set_yscale("symlog", linthresh=10)
         cx.legend(fontsize=8, title=f"{REFERENCE} minus", title_fontsize=8)
-    handles = [plt.Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
+    handles = [Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
                           label=f"building seed {s}") for k, s in enumerate(seeds)]
     ax.legend(fontsize=8, loc="center left")
     bx.legend(handles=handles, fontsize=8, loc="lower left")
