@@ -90,9 +90,6 @@ def write_header(w: Writer) -> None:
     w.add(*planner_lines(study), method_paragraph(w), "")
 
 
-TITLE = "Methods compared"
-
-
 def setup_lines(study: Study) -> list[str]:
     """What produced the folder, per experiment (from ``config.json``), then the
     planners (:func:`planner_lines`)."""
@@ -150,7 +147,7 @@ def write_methods(w: Writer, full: bool = True) -> None:
         "Welch's t-test (two-sided) and a percentile bootstrap 95% CI of the difference in "
         f"means over runs (`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}); "
         f"a difference counts when the CI excludes 0 and p < {ALPHA}.")
-    w.add(f"## {TITLE}", "",
+    w.add("## Methods compared", "",
           f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
           f"each task of the experiment. {definitions(w.opts.window)} {how}", "")
     for exp in exps:
@@ -233,8 +230,6 @@ def write_task(w: Writer, exp: str, task: str) -> None:
             w.comparisons(comps)
 
 
-# ground truth
-
 def write_ground_truth(w: Writer) -> None:
     """Ground truth: V*, relevant areas and optimal routes per task, and learning as a
 fraction of V*."""
@@ -296,8 +291,6 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
     w.table(rows, ["Method", "tasks", "IQM of return / V*", "95% interval"], "lrrl")
 
 
-# hypothesis 1
-
 def write_hypothesis_1(w: Writer) -> None:
     """Hypothesis I: GDQ collects more reward (tasks A-D), and when the moving average of
 return first turns positive."""
@@ -330,8 +323,6 @@ return first turns positive."""
     w.table([[t, *(milestone_str(first_positive(study.returns(exp, m, t), opts.window))
                    for m in methods)] for t in study.tasks(exp)], ["Task", *methods])
 
-
-# hypothesis 2
 
 def write_hypothesis_2(w: Writer) -> None:
     """Hypothesis II: GDQ avoids irrelevant areas."""
@@ -371,8 +362,6 @@ def write_hypothesis_2(w: Writer) -> None:
         w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
 
-# hypothesis 3
-
 def write_hypothesis_3(w: Writer) -> None:
     """Hypothesis III: GDQ adapts faster to a goal change (the switch experiments)."""
     study, opts = w.study, w.opts
@@ -407,8 +396,6 @@ def write_hypothesis_3(w: Writer) -> None:
                 f"{m} {milestone_str(first_positive(study.returns(exp, m, new), opts.window))}"
                 for m in study.methods(exp)) + ".", "")
 
-
-# route c
 
 BEST_ROUTE_C = (1, 3, 2, 6)
 """The paper's best Task C route in areas (easy doors d1 and d3)."""
@@ -456,18 +443,13 @@ paper's best route."""
             fmt(c, 5) if not math.isnan(c) else "never" for c in conv["GDQ"]) + ".", "")
 
 
-# variants
-
-OTHERS = ("GDQ-literal", "GDQ-code")
-
-
 def write_variants(w: Writer) -> None:
     """GDQ against the two readings of the paper's GDQ (GDQ-literal, GDQ-code), task by
 task."""
     study = w.study
     exp = TASKS_EXPERIMENT
     methods = study.methods(exp) if study.has(exp) else []
-    others = [m for m in OTHERS if m in methods]
+    others = [m for m in ("GDQ-literal", "GDQ-code") if m in methods]
     if not w.section("GDQ vs the paper read literally (GDQ-literal) and the authors' code "
                      "(GDQ-code)", "GDQ" in methods and bool(others), "GDQ vs its variants",
                      "the tasks experiment lacks GDQ or both of its variants"):
@@ -489,8 +471,6 @@ task."""
         rows.append(cells)
     w.table(rows, ["Task", "GDQ", *(x for m in others for x in (m, f"GDQ - {m} (95% CI)", "p"))])
 
-
-# why gdq fails
 
 def write_why_gdq_fails(w: Writer) -> None:
     """Measured evidence for the literal reading's failure: Q right after OptInit and
@@ -578,8 +558,6 @@ def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
         values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
     return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
 
-
-# robot
 
 def write_robot(w: Writer) -> None:
     """The robot protocol (simulated): returns, first successes and routes per trial."""
