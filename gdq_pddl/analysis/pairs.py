@@ -210,7 +210,9 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.set_yticks(range(len(names)), names, fontsize=6)
     ax.set(xlabel="goal", ylabel="start")
     ax.set_title(f"{res.reference} - {diff.baseline}: mean return difference", fontsize=9)
-    ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8,
+    ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8, format="%.3g",
+                       ticks=[t for t in (norm.vmin, norm.vmin / 2, 0, norm.vmax / 2,
+                                          norm.vmax) if t == 0 or abs(t) > 1e-9],
                        label="each side of 0 scaled to its own extreme; ties faded")
 
 
@@ -226,13 +228,16 @@ def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.scatter(x[tuning], mean[tuning], s=40, facecolors="none", edgecolors="black", lw=1,
                zorder=4, label="tuning task (A-D)")
     ax.axhline(0, color="black", lw=0.6)
+    if (losses := diff.mean[diff.outcome == LOSS]).size:  # linear up to the largest loss
+        ax.set_yscale("symlog", linthresh=float(-losses.min()))  # so that losses show
     if len(order) <= LABELLED:
         ax.set_xticks(x, [res.pairs[i] for i in order], rotation=90, fontsize=7)
     else:
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     n = {o: int(np.sum(diff.outcome == o)) for o in (WIN, TIE, LOSS)}
     ax.set(xlabel="pair, sorted by difference",
-           ylabel=f"{res.reference} - {diff.baseline} (95% interval)")
+           ylabel=f"{res.reference} - {diff.baseline} (95% interval)"
+           + (", symmetric log scale" if losses.size else ""))
     ax.set_title(f"{n[WIN]} wins, {n[TIE]} ties, {n[LOSS]} losses of {len(order)} pairs",
                  fontsize=9)
     if tuning.any():
