@@ -149,16 +149,16 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     exp = experiment
     if not study.has(exp):
         return []
-    ep = study
-    tasks = ep.tasks(exp)
+    tasks = study.tasks(exp)
     fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
         scale = v_star if fraction_of_vstar else 1.0
-        for method in ep.methods(exp):
-            m = ep.matrix("return", exp, method, task)
+        for method in study.methods(exp):
+            m = study.matrix("return", exp, method, task)
             if m.size:
-                _band(ax, ep.episode_numbers(exp, method, task), m, method, opts.window, scale)
+                _band(ax, study.episode_numbers(exp, method, task), m, method, opts.window,
+                      scale)
         ref = 1.0 if fraction_of_vstar else v_star
         if not math.isnan(ref):
             ax.axhline(ref, color="black", ls="--", lw=0.8,
@@ -362,14 +362,13 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     exp = ROBOT_EXPERIMENT
     if not study.has(exp):
         return []
-    ep = study
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
-    tasks = ep.tasks(exp)
-    for method in ep.methods(exp):
-        m = ep.matrix("return", exp, method)
+    tasks = study.tasks(exp)
+    for method in study.methods(exp):
+        m = study.matrix("return", exp, method)
         if m.size:
-            x = ep.episode_numbers(exp, method)
+            x = study.episode_numbers(exp, method)
             _band(ax, x, m, method, window=1)
             ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
     if len(tasks) == 1:
