@@ -1,4 +1,5 @@
-"""Figures of an experiment output folder (matplotlib, Agg backend; PNG and PDF each).
+"""Figures of an experiment output folder (matplotlib Figure objects, no pyplot: the
+caller's backend is left alone; PNG and PDF each).
 
 Every function takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and
 returns the paths it wrote (empty when its experiment is missing). A method has the same
@@ -67,7 +68,7 @@ class FigureOptions:
 
 def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = FigureOptions()
              ) -> list[Path]:
-    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``; close it."""
+    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for ext in opts.formats:
