@@ -1,4 +1,5 @@
-"""Figures of an experiment output folder (matplotlib, Agg backend; PNG and PDF each).
+"""Figures of an experiment output folder (matplotlib Figure objects, no pyplot: the
+caller's backend is left alone; PNG and PDF each).
 
 Every function takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and
 returns the paths it wrote (empty when its experiment is missing). A method has the same
@@ -14,25 +15,22 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
+from matplotlib.collections import LineCollection
+from matplotlib.colors import PowerNorm
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle
+from scipy import stats as sps
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axes import Axes  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.colors import PowerNorm  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-from matplotlib.patches import Circle  # noqa: E402
-from scipy import stats as sps  # noqa: E402
-
-from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT  # noqa: E402
-from gdq_pddl.analysis.stats import mean_se, moving_average  # noqa: E402
-from gdq_pddl.analysis.study import Study, curves_stem, slug  # noqa: E402
-from gdq_pddl.envs.render import MapPainter  # noqa: E402
-from gdq_pddl.outputs import save_figure  # noqa: E402
-from gdq_pddl.world import Task, World  # noqa: E402
+from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
+from gdq_pddl.analysis.stats import mean_se, moving_average
+from gdq_pddl.analysis.study import Study, curves_stem, slug
+from gdq_pddl.envs.render import MapPainter
+from gdq_pddl.outputs import save_figure
+from gdq_pddl.world import Task, World
 
 METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
     "GDQ": "#D55E00",  # vermillion
@@ -70,7 +68,7 @@ class FigureOptions:
 
 def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = FigureOptions()
              ) -> list[Path]:
-    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``; close it."""
+    """Save ``fig`` as ``out_dir/stem.<format>`` for each of ``opts.formats``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for ext in opts.formats:
@@ -80,7 +78,6 @@ def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = Figure
         # the first save laid the figure out; keep that layout for the other formats
         # rather than solving it again (constrained layout is most of a save's time)
         fig.set_layout_engine("none")
-    plt.close(fig)
     return paths
 
 
@@ -90,8 +87,8 @@ def grid(n: int, width: float = 5.0, height: float = 3.6,
     layout; the unused cells of the last row hidden)."""
     cols = max(1, min(n, max_cols))
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, height * rows), squeeze=False,
-                             layout="constrained")
+    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
+    axes = fig.subplots(rows, cols, squeeze=False)
     flat = list(axes.ravel())
     for ax in flat[n:]:
         ax.set_visible(False)
@@ -109,7 +106,7 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
     rows = math.ceil(n / cols)
     head, title, foot, side, bar = 0.45, 0.3, 0.3, 0.05, (1.3 if colorbar else 0.0)
     fig_w, fig_h = width * cols + bar, height * rows + head
-    fig = plt.figure(figsize=(fig_w, fig_h))
+    fig = Figure(figsize=(fig_w, fig_h))
     axes = []
     for i in range(n):
         r, c = divmod(i, cols)
@@ -131,7 +128,7 @@ def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
     n = matrix.shape[0]
     smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
         matrix / scale
-    mean, se = mean_se(smooth, axis=0)
+    mean, se = mean_se(smooth)
     se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
     colour = method_colour(method)
     ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
@@ -153,16 +150,16 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     exp = experiment
     if not study.has(exp):
         return []
-    ep = study
-    tasks = ep.tasks(exp)
+    tasks = study.tasks(exp)
     fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
         scale = v_star if fraction_of_vstar else 1.0
-        for method in ep.methods(exp):
-            m = ep.matrix("return", exp, method, task)
+        for method in study.methods(exp):
+            m = study.matrix("return", exp, method, task)
             if m.size:
-                _band(ax, ep.episode_numbers(exp, method, task), m, method, opts.window, scale)
+                _band(ax, study.episode_numbers(exp, method, task), m, method, opts.window,
+                      scale)
         ref = 1.0 if fraction_of_vstar else v_star
         if not math.isnan(ref):
             ax.axhline(ref, color="black", ls="--", lw=0.8,
@@ -236,24 +233,35 @@ def _map_xy(world: World) -> dict[str, np.ndarray]:
     return hit[1]
 
 
-def _draw_map(ax: Axes, world: World, xy: dict[str, np.ndarray], alpha: float = 1.0) -> None:
-    """Corridors as thin grey lines, doors as thick dotted brown ones with their names."""
-    door_edges = {frozenset(d.sides): d for d in world.doors}
-    walls = [(xy[a], xy[b]) for a, b in world.edges if frozenset((a, b)) not in door_edges]
-    doors = [(xy[a], xy[b]) for a, b in world.edges if frozenset((a, b)) in door_edges]
-    ax.add_collection(LineCollection(walls, colors="#999999", linewidths=1.2, alpha=alpha,
-                                     zorder=1))
-    ax.add_collection(LineCollection(doors, colors="#8c564b", linewidths=3.0,
-                                     linestyles=":", alpha=alpha, zorder=1))
+def _map_panel(ax: Axes, world: World, xy: dict[str, np.ndarray], task: Task | None,
+               alpha: float, colours: object, sizes: object, text: list[str]) -> None:
+    """A world map: corridors as thin grey lines, doors as thick dotted brown ones with
+    their names, each position a marker (``colours``, ``sizes``) with its number in
+    ``text`` colours, the task's start ringed blue and its goal green."""
+    door_edges = {frozenset(d.sides) for d in world.doors}
+    for doors, style in ((False, {"colors": "#999999", "linewidths": 1.2}),
+                         (True, {"colors": "#8c564b", "linewidths": 3.0, "linestyles": ":"})):
+        ax.add_collection(LineCollection(
+            [(xy[a], xy[b]) for a, b in world.edges if (frozenset((a, b)) in door_edges)
+             == doors], alpha=alpha, zorder=1, **style))
     for d in world.doors:
         if all(side in xy for side in d.sides):
-            mid = (xy[d.sides[0]] + xy[d.sides[1]]) / 2
-            ax.text(*mid, d.name, fontsize=6, ha="center", va="bottom", color="#8c564b",
-                    zorder=5, in_layout=False)
+            ax.text(*(xy[d.sides[0]] + xy[d.sides[1]]) / 2, d.name, fontsize=6, ha="center",
+                    va="bottom", color="#8c564b", zorder=5, in_layout=False)
     ax.set_axis_off()
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.margins(0.1)
+    pts = np.array([xy[p] for p in world.positions])
+    ax.scatter(pts[:, 0], pts[:, 1], s=sizes, c=colours, edgecolors="#555555" if alpha < 0.6
+               else "#333333", linewidths=0.6, zorder=2 if alpha < 0.6 else 3)
+    for p, colour in zip(world.positions, text, strict=True):
+        ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6, color=colour,
+                in_layout=False)
+    if task is not None and task.start in xy and task.goal in xy:
+        for where, colour in ((task.start, "#1f77b4"), (task.goal, "#2ca02c")):
+            ax.scatter(*xy[where], s=420, facecolors="none", edgecolors=colour, lw=2.2,
+                       zorder=4)
 
 
 def _outline_areas(ax: Axes, world: World, xy: dict[str, np.ndarray]) -> None:
@@ -271,73 +279,52 @@ def _outline_areas(ax: Axes, world: World, xy: dict[str, np.ndarray]) -> None:
                 va="bottom", color="#333333", zorder=6, in_layout=False)
 
 
-def _mark_task(ax: Axes, xy: dict[str, np.ndarray], t: Task | None) -> None:
-    if t is None or t.start not in xy or t.goal not in xy:
-        return
-    ax.scatter(*xy[t.start], s=420, facecolors="none", edgecolors="#1f77b4", lw=2.2, zorder=4)
-    ax.scatter(*xy[t.goal], s=420, facecolors="none", edgecolors="#2ca02c", lw=2.2, zorder=4)
-
-
 def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                    ) -> list[Path]:
     """Per task (and for the robot task): one map panel per method, each position coloured
     and sized by its area's visits summed over a run, mean over runs (the CSV counts areas,
     not positions, so all positions of an area share a value)."""
     paths: list[Path] = []
-    ep = study
     for exp in (TASKS_EXPERIMENT, ROBOT_EXPERIMENT):
         if not study.has(exp) or not study.has_areas(exp):
             continue
         world = study.world(exp)
         xy = _map_xy(world)
-        areas = ep.areas
-        for task in ep.tasks(exp):
-            methods = ep.methods(exp)
-            means = {}
-            for method in methods:
-                v = ep.area_visits(exp, method, task)
-                if v.size:
-                    means[method] = np.nanmean(np.nansum(v, axis=1), axis=0)
+        for task in study.tasks(exp):
+            means = {m: np.nanmean(np.nansum(v, axis=1), axis=0) for m in study.methods(exp)
+                     if (v := study.area_visits(exp, m, task)).size}
             if not means:
                 continue
             top = max(float(np.max(m)) for m in means.values()) or 1.0
             norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=top)  # keep small counts visible
-            cmap = plt.get_cmap("magma_r")
+            cmap = colormaps["magma_r"]
             fig, axes, cax = _map_grid(len(means), colorbar=True)
             for ax, (method, mean) in zip(axes, means.items(), strict=True):
-                _draw_map(ax, world, xy, alpha=0.6)
-                by_area = dict(zip(areas, mean, strict=True))
+                by_area = dict(zip(study.areas, mean, strict=True))
                 values = np.array([by_area.get(world.area_of.get(p, -1), 0.0)
                                    for p in world.positions])
-                pts = np.array([xy[p] for p in world.positions])
-                ax.scatter(pts[:, 0], pts[:, 1], s=60 + 400 * np.sqrt(values / top),
-                           c=cmap(norm(values)), edgecolors="#333333", linewidths=0.6,
-                           zorder=3)
-                for p, value in zip(world.positions, values, strict=True):
-                    ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
-                            color="white" if value > 0.3 * top else "black", in_layout=False)
+                _map_panel(ax, world, xy, study.task(exp, task), 0.6, cmap(norm(values)),
+                           60 + 400 * np.sqrt(values / top),
+                           ["white" if v > 0.3 * top else "black" for v in values])
                 _outline_areas(ax, world, xy)
-                _mark_task(ax, xy, study.task(exp, task))
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
-            sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-            fig.colorbar(sm, cax=cax,
+            fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=cax,
                          label="area visits per run (mean; square-root colour scale)")
-            label = "robot " if exp == ROBOT_EXPERIMENT else ""
-            fig.suptitle(f"{label}{_task_title(study, exp, task)}: visits per area "
+            robot = "robot " if exp == ROBOT_EXPERIMENT else ""
+            fig.suptitle(f"{robot}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
-            stem = f"heatmap_{'robot_' if exp == ROBOT_EXPERIMENT else ''}{slug(task)}"
-            paths += save_all(fig, out_dir, stem, opts)
+            paths += save_all(fig, out_dir, f"heatmap_{robot.replace(' ', '_')}{slug(task)}",
+                              opts)
     return paths
 
 
 def _draw_route(ax: Axes, xy: dict[str, np.ndarray], positions: Sequence[str],
                 colour: str) -> None:
     for a, b in zip(positions[:-1], positions[1:], strict=True):
-        if a == b:
-            continue
-        ax.annotate("", xy=xy[b], xytext=xy[a], zorder=4, in_layout=False,
-                    arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.2,
-                                "shrinkA": 6, "shrinkB": 6})
+        if a != b:
+            ax.annotate("", xy=xy[b], xytext=xy[a], zorder=4, in_layout=False,
+                        arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.2,
+                                    "shrinkA": 6, "shrinkB": 6})
 
 
 def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
@@ -349,31 +336,21 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
     world = study.world(experiment)
     xy = _map_xy(world)
     best = study.truth(experiment, task).optimal_route_areas
-    panels = []
-    for method in study.methods(experiment):
-        summary = study.route_summary(experiment, method, task)
-        if summary is not None:
-            panels.append((method, summary))
+    panels = [(m, s) for m in study.methods(experiment)
+              if (s := study.route_summary(experiment, m, task)) is not None]
     if not panels:
         return []
     fig, axes, _ = _map_grid(len(panels), width=3.6, height=3.8)
     for ax, (method, summary) in zip(axes, panels, strict=True):
-        _draw_map(ax, world, xy, alpha=0.5)
-        pts = np.array([xy[p] for p in world.positions])
-        ax.scatter(pts[:, 0], pts[:, 1], s=80, c="#eeeeee", edgecolors="#555555",
-                   linewidths=0.6, zorder=2)
-        for p in world.positions:
-            ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6,
-                    in_layout=False)
+        _map_panel(ax, world, xy, study.task(experiment, task), 0.5, "#eeeeee", 80,
+                   ["black"] * len(world.positions))
         _draw_route(ax, xy, summary.example.positions, method_colour(method))
-        _mark_task(ax, xy, study.task(experiment, task))
-        on_best = summary.on_route(world, best)
         areas = "->".join(map(str, summary.areas)) or "(none)"
         ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
                      fontsize=9, color=method_colour(method), y=1.0)
         ax.text(0.5, -0.02, f"areas {areas} ({summary.end}); optimal route: "
-                f"{on_best}/{summary.runs} runs", transform=ax.transAxes, ha="center",
-                va="top", fontsize=7)
+                f"{summary.on_route(world, best)}/{summary.runs} runs", transform=ax.transAxes,
+                ha="center", va="top", fontsize=7)
     fig.suptitle(f"{_task_title(study, experiment, task)}: most common final greedy route "
                  f"per method (optimal: areas {'->'.join(map(str, best))})", fontsize=10)
     stem = f"routes_{'robot_' if experiment == ROBOT_EXPERIMENT else ''}{slug(task)}"
@@ -386,13 +363,13 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     exp = ROBOT_EXPERIMENT
     if not study.has(exp):
         return []
-    ep = study
-    fig, ax = plt.subplots(figsize=(6.0, 3.8), layout="constrained")
-    tasks = ep.tasks(exp)
-    for method in ep.methods(exp):
-        m = ep.matrix("return", exp, method)
+    fig = Figure(figsize=(6.0, 3.8), layout="constrained")
+    ax = fig.subplots()
+    tasks = study.tasks(exp)
+    for method in study.methods(exp):
+        m = study.matrix("return", exp, method)
         if m.size:
-            x = ep.episode_numbers(exp, method)
+            x = study.episode_numbers(exp, method)
             _band(ax, x, m, method, window=1)
             ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
     if len(tasks) == 1:

@@ -1,59 +1,57 @@
-"""Analysis of the wrong-knowledge experiments (``gdq-pddl knowledge``): the measures.
+"""Figures and ``REPORT.md`` of the wrong-knowledge experiments (``gdq-pddl knowledge``).
 
-An output folder of :func:`gdq_pddl.experiments.knowledge.knowledge_experiments` holds,
-per case, two experiments on the same *real* world: ``<case>--accurate`` (knowledge built
-from the real world) and ``<case>--wrong`` (from the case's knowledge world).
-:func:`analyse` measures per case and method: **convergence** (per run, the first
+Per case the folder holds two experiments on the same *real* world: ``<case>--accurate``
+(knowledge built from the real world) and ``<case>--wrong`` (from the case's knowledge
+world). :func:`analyse` measures per case and method: **convergence** (per run, the first
 episode at which the trailing :data:`WINDOW`-episode mean return reaches
-:func:`threshold`, 85% of V* when V* > 0; the median over runs, unconverged runs
-counting as later than any episode; docs/decisions.md says why first passage and why
-85%); **the final greedy policy**, walked along likeliest outcomes in the real world,
-its area route against the true optimal one and its exact expected return
-(:func:`policy_value`); and along the true optimal route, whether an optimal action is
-in DARLING's allowed set, GDQ's prior, its shortest plans and its 1.3x plans
-(:func:`route_check`). :mod:`.knowledge_report` writes the figures and ``REPORT.md``.
+:func:`threshold`; the median over runs, unconverged runs later than any episode;
+docs/decisions.md says why first passage and why 85%); **the final greedy policy**,
+walked in the real world, its area route against the optimal one and its exact value;
+and along the optimal route, whether an optimal action is in DARLING's allowed set,
+GDQ's prior, the shortest plans and the 1.3x plans (:func:`route_check`).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
 
-from gdq_pddl.analysis.routes import likeliest_next, optimal_route, walk_policy
+from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
-from gdq_pddl.envs.solve import expected_costs, solve_task
+from gdq_pddl.analysis.writer import markdown_rows
+from gdq_pddl.envs.evaluate import likeliest_next, optimal_route, policy_value, walk_policy
+from gdq_pddl.envs.model import compile_model
+from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.experiments.knowledge import CASES, knowledge_world
 from gdq_pddl.experiments.work import load_world_named, resolve_task
 from gdq_pddl.learners.context import office_task_context
+from gdq_pddl.outputs import write_text
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World
 
-WINDOW = 100
-"""Moving-average window (episodes) of the convergence criterion."""
-CURVE_WINDOW = 50
-"""Moving-average window (episodes) of the learning curves."""
+WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100
+"""Moving-average windows (episodes) of convergence and of the curves; episodes at the
+end over which the final mean return is reported."""
 FRACTION = 0.85
 """Convergence threshold: V* - (1 - FRACTION) |V*|."""
-FINAL = 100
-"""Episodes at the end over which the final mean return is reported."""
 ACCURATE, WRONG = "accurate", "wrong"
 
 
 def threshold(v_star: float, fraction: float = FRACTION) -> float:
-    """The return level a converged learner's moving average stays at or above."""
+    """The return level a converged learner's moving average reaches."""
     return v_star - (1.0 - fraction) * abs(v_star)
 
 
 def moving_average(returns: np.ndarray, window: int = WINDOW) -> np.ndarray:
-    """Trailing means over full windows of ``window`` episodes (at most all of them);
-    entry i covers episodes i+1 .. i+window (1-based). Works on [episodes] or
-    [runs, episodes]."""
+    """Trailing means over full windows of ``window`` episodes (at most all of them) along
+    the last axis; entry i covers episodes i+1 .. i+window (1-based)."""
     w = min(window, np.shape(returns)[-1])
     return rolling_mean(returns, w)[..., w - 1:]
 
@@ -61,83 +59,47 @@ def moving_average(returns: np.ndarray, window: int = WINDOW) -> np.ndarray:
 def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW) -> int | None:
     """First episode (1-based) at which the trailing ``window``-episode mean return is
     >= ``level``; None if it never is."""
-    ma = moving_average(returns, window)
-    hits = np.flatnonzero(ma >= level)
+    hits = np.flatnonzero(moving_average(returns, window) >= level)
     return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
-
-
-def policy_value(world: World, task: Task, policy: dict[int, int] | np.ndarray,
-                 model: ModelArrays | None = None) -> float:
-    """Exact expected undiscounted return from the start of a stationary learner policy
-    (learner state -> action) in ``world``, by backward induction over the step limit
-    (the same outcome rewards as :func:`gdq_pddl.envs.solve.solve`)."""
-    model = compile_model(world) if model is None else model
-    n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
-    n_full = model.obs_of.shape[0]
-    if isinstance(policy, dict):
-        pi = np.zeros(int(model.obs_of.max()) + 1, dtype=np.int64)
-        for s, a in policy.items():
-            pi[s] = a
-    else:
-        pi = np.asarray(policy, dtype=np.int64)
-    act = pi[model.obs_of]
-    pairs = np.arange(n_full) * n_actions + act
-    lo, hi = model.ptr[pairs], model.ptr[pairs + 1]
-    owner = np.repeat(np.arange(n_full), hi - lo)
-    k = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])
-    prob, nxt, stuck = model.prob[k], model.next[k], model.stuck[k]
-    goal_pos = world.index[task.goal]
-    at_goal = model.pos_of[nxt] == goal_pos
-    ending = stuck | at_goal
-    end_reward = np.where(stuck, -r, np.where(at_goal, r, -r))
-    cost = expected_costs(model)[act[owner]]
-    goal_states = model.pos_of == goal_pos
-    v = np.zeros(n_full)
-    for t in range(limit - 1, -1, -1):
-        value = end_reward if t == limit - 1 else np.where(ending, end_reward, -cost + v[nxt])
-        v = np.where(goal_states, 0.0, np.bincount(owner, prob * value, minlength=n_full))
-    return float(v[full_state(world, task.start)])
 
 
 @dataclass(frozen=True)
 class RouteStep:
-    """One step of the true optimal route and what the knowledge allows there."""
+    """One step of the true optimal route: its optimal actions (ties within 1e-9) and
+    whether one is allowed by DARLING, starts a shortest / tolerant plan, or is applicable
+    in GDQ's prior model (valued before it is tried)."""
 
     state: str
     optimal: tuple[str, ...]
-    """Optimal actions (ties within 1e-9) at this step."""
     darling_allowed: bool
     in_shortest_plans: bool
     in_tolerant_plans: bool
     in_prior: bool = False
-    """An optimal action is one the knowledge says can do something here (GDQ's prior
-    model values it before it is tried)."""
+
+
+CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an optimal "
+          "action is applicable in the prior model (GDQ)", "in_shortest_plans": "... starts "
+          "a shortest plan (GDQ-literal)", "in_tolerant_plans": "... a plan within 1.3x "
+          "(GDQ-code)"}
 
 
 def route_check(real: World, knowledge: World, task: Task,
                 darling_tolerance: float = 0.3) -> list[RouteStep]:
-    """Along the likeliest route of the true optimal policy in ``real``: are the optimal
-    actions in DARLING's allowed set / in the plans / applicable in GDQ's prior model,
-    with knowledge from ``knowledge``?"""
+    """:class:`RouteStep` along the likeliest route of the true optimal policy in
+    ``real``, with knowledge from ``knowledge``."""
     ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
-    allowed = ctx.darling_plans.allowed_actions()
-    shortest = ctx.plans.first_actions
-    tolerant = ctx.darling_plans.first_actions
+    tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
+              ctx.darling_plans.first_actions, ctx.prior.applicable)
     model = compile_model(real)
     solution, fs = solve_task(real, task, model)
     spaces = LearnerSpaces(real)
     out: list[RouteStep] = []
     for t in range(model.step_limit):
-        obs = int(model.obs_of[fs])
-        q = solution.Q[t, fs]
+        obs, q = int(model.obs_of[fs]), solution.Q[t, fs]
         best = np.flatnonzero(q >= q.max() - 1e-9)
-        out.append(RouteStep(
-            state=spaces.state_name(obs),
-            optimal=tuple(spaces.action_name(int(a)) for a in best),
-            darling_allowed=bool(allowed[obs, best].any()),
-            in_shortest_plans=bool(shortest[obs, best].any()),
-            in_tolerant_plans=bool(tolerant[obs, best].any()),
-            in_prior=bool(ctx.prior.applicable[obs, best].any())))
+        out.append(RouteStep(spaces.state_name(obs),
+                             tuple(spaces.action_name(int(a)) for a in best),
+                             *(bool(table[obs, best].any()) for table in tables)))
         nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
         if nxt is None or model.pos_of[nxt] == solution.goal_pos:
             break
@@ -147,19 +109,19 @@ def route_check(real: World, knowledge: World, task: Task,
 
 @dataclass
 class MethodResult:
-    """One method in one experiment (accurate or wrong knowledge) of a case."""
+    """One method in one experiment (accurate or wrong knowledge) of a case: per run the
+    convergence episode, final greedy policy's value and area route (``()``: no goal);
+    ``on_route``: runs whose policy follows the optimal area route to the goal; ``curve``:
+    mean over runs of the trailing moving average (episodes CURVE_WINDOW..n)."""
 
     runs: int
     episodes: int
     convergence: list[int | None]
     final_return: float
-    """Mean return over the last :data:`FINAL` episodes and all runs."""
     on_route: int
-    """Runs whose final greedy policy follows the optimal area route to the goal."""
     policy_values: list[float]
     routes: list[tuple[int, ...]]
     curve: np.ndarray
-    """Mean over runs of the trailing moving average (episode numbers CURVE_WINDOW..n)."""
 
     @property
     def converged(self) -> int:
@@ -175,6 +137,8 @@ class MethodResult:
 
 @dataclass
 class CaseResult:
+    """One case: ``results[ACCURATE|WRONG][method]`` and ``checks[ACCURATE|WRONG]``."""
+
     name: str
     description: str
     real: str
@@ -185,28 +149,19 @@ class CaseResult:
     optimal_areas: tuple[int, ...]
     methods: list[str]
     results: dict[str, dict[str, MethodResult]]
-    """``{ACCURATE|WRONG: {method: MethodResult}}``."""
     checks: dict[str, list[RouteStep]]
-    """``{ACCURATE|WRONG: route check}``."""
 
-    def paired(self) -> Iterator[tuple[str, MethodResult, MethodResult]]:
-        """``(method, accurate, wrong)`` for each method with results in both experiments,
-        in method order."""
-        for m in self.methods:
-            a, w = self.results[ACCURATE].get(m), self.results[WRONG].get(m)
-            if a is not None and w is not None:
-                yield m, a, w
-
-
-def _experiments(out: Path) -> dict[str, dict]:
-    cfg = json.loads((out / "config.json").read_text(encoding="utf-8"))
-    return {e["name"]: e for e in cfg.get("experiments", [])}
+    def paired(self) -> list[tuple[str, MethodResult, MethodResult]]:
+        """``(method, accurate, wrong)`` for each method with results in both."""
+        return [(m, self.results[ACCURATE][m], self.results[WRONG][m]) for m in self.methods
+                if m in self.results[ACCURATE] and m in self.results[WRONG]]
 
 
 def analyse(out: str | Path) -> list[CaseResult]:
     """Measure every case of an output folder of ``gdq-pddl knowledge``."""
     out = Path(out)
-    exps = _experiments(out)
+    cfg = json.loads((out / "config.json").read_text(encoding="utf-8"))
+    exps = {e["name"]: e for e in cfg.get("experiments", [])}
     study = Study.open(out)
     described = {c.name: c.description for c in CASES}
     names = sorted({n.rsplit("--", 1)[0] for n in exps if n.endswith(("--accurate", "--wrong"))},
@@ -217,37 +172,168 @@ def analyse(out: str | Path) -> list[CaseResult]:
         if acc is None or wrong is None:
             continue
         real = load_world_named(wrong["world"])
-        kworld = knowledge_world(real, wrong.get("knowledge"))
         task = resolve_task(real, wrong["schedule"][0][0])
         route = optimal_route(real, task)
         model = compile_model(real)
         solution, s0 = solve_task(real, task, model)
         v_star = float(solution.V[0, s0])
-        level = threshold(v_star)
-        results: dict[str, dict[str, MethodResult]] = {}
         methods = [m for m in wrong["methods"] if m in acc["methods"]]
+        results: dict[str, dict[str, MethodResult]] = {}
         for kind, exp in ((ACCURATE, acc), (WRONG, wrong)):
             results[kind] = {}
             for m in methods:
                 returns = study.returns(exp["name"], m)
                 if returns.size == 0:
                     continue
-                pols = [study.policy(exp["name"], m, task.name, r) for r in range(len(returns))]
-                walks = [walk_policy(real, p, task.start, task.goal) for p in pols if p]
+                pols = [p for r in range(len(returns))
+                        if (p := study.policy(exp["name"], m, task.name, r))]
+                walks = [walk_policy(real, p, task.start, task.goal) for p in pols]
                 results[kind][m] = MethodResult(
-                    runs=len(returns), episodes=returns.shape[1],
-                    convergence=[convergence_episode(row, level) for row in returns],
-                    final_return=float(np.mean(returns[:, -FINAL:])),
-                    on_route=sum(w.reached_goal and w.areas(real) == route.areas(real)
-                                 for w in walks),
-                    policy_values=[policy_value(real, task, p, model) for p in pols if p],
-                    routes=[w.areas(real) if w.reached_goal else () for w in walks],
-                    curve=moving_average(returns, CURVE_WINDOW).mean(axis=0))
-        checks = {ACCURATE: route_check(real, real, task),
-                  WRONG: route_check(real, kworld, task)}
+                    len(returns), returns.shape[1],
+                    [convergence_episode(row, threshold(v_star)) for row in returns],
+                    float(np.mean(returns[:, -FINAL:])),
+                    sum(w.reached_goal and w.areas(real) == route.areas(real) for w in walks),
+                    [policy_value(real, task, p, model) for p in pols],
+                    [w.areas(real) if w.reached_goal else () for w in walks],
+                    moving_average(returns, CURVE_WINDOW).mean(axis=0))
+        kworld = knowledge_world(real, wrong.get("knowledge"))
         cases.append(CaseResult(
-            name=name, description=described.get(name, ""), real=wrong["world"],
-            knowledge=str(wrong.get("knowledge") or wrong["world"]), task=task, v_star=v_star,
-            optimal_positions=route.positions, optimal_areas=route.areas(real),
-            methods=methods, results=results, checks=checks))
+            name, described.get(name, ""), wrong["world"],
+            str(wrong.get("knowledge") or wrong["world"]), task, v_star, route.positions,
+            route.areas(real), methods, results,
+            {ACCURATE: route_check(real, real, task), WRONG: route_check(real, kworld, task)}))
     return cases
+
+
+def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
+    """Learning curves per case (wrong solid, accurate dashed, V* and the convergence
+    threshold) and a bar chart of convergence episodes per method and case."""
+    if not cases:
+        return []
+    fig, axes = grid(len(cases), 6.2, 4.0)
+    for ax, case in zip(axes, cases, strict=True):
+        for m in case.methods:
+            for kind, style, lw in ((WRONG, "-", 1.2), (ACCURATE, "--", 0.9)):
+                if (r := case.results[kind].get(m)) is not None:
+                    ax.plot(np.arange(len(r.curve)) + min(CURVE_WINDOW, r.episodes), r.curve,
+                            style, color=method_colour(m), lw=lw, label=f"{m} ({kind})")
+        level = threshold(case.v_star)
+        ax.axhline(case.v_star, color="black", lw=1, ls=":", label="V* (real world)")
+        ax.axhline(level, color="grey", lw=0.8, ls="-.", label="convergence threshold")
+        ax.set_ylim(max(-40.0, min(case.v_star, level) - 25.0), max(case.v_star, 0.0) + 4.0)
+        ax.set_title(f"{case.name}: task {case.task.name} ({case.task.start}->{case.task.goal})",
+                     fontsize=10)
+        ax.set(xlabel="episode", ylabel=f"return, {CURVE_WINDOW}-episode mean over runs")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=4,
+               fontsize=8)
+    paths = save_all(fig, out, "knowledge_curves")
+
+    methods = list(dict.fromkeys(m for c in cases for m in c.methods))
+    fig = Figure(figsize=(max(3.2 * len(cases), 6), 3.8), layout="constrained")
+    axes = fig.subplots(1, len(cases), squeeze=False)
+    for ax, case in zip(axes.ravel(), cases, strict=True):
+        episodes = max((r.episodes for k in case.results.values() for r in k.values()),
+                       default=1)
+        for j, (kind, hatch) in enumerate(((ACCURATE, "//"), (WRONG, ""))):
+            for i, m in enumerate(methods):
+                if (r := case.results[kind].get(m)) is None:
+                    continue
+                never = not np.isfinite(r.median)
+                ax.bar(i + (j - 0.5) * 0.38, episodes if never else r.median, width=0.38,
+                       color="white" if never else method_colour(m),
+                       edgecolor=method_colour(m), hatch="xx" if never else hatch, lw=1)
+        ax.set_xticks(np.arange(len(methods)), methods, rotation=45, ha="right", fontsize=8)
+        ax.set_title(case.name, fontsize=10)
+        ax.set_ylim(0, episodes * 1.05)
+    axes.ravel()[0].set_ylabel("convergence episode (median of runs)")
+    fig.suptitle("left bar of each pair (hatched //): accurate knowledge; right: wrong "
+                 "knowledge; crossed white bar: never converged", fontsize=8)
+    return paths + save_all(fig, out, "knowledge_convergence")
+
+
+def _ep(value: float) -> str:
+    return "n/a" if np.isnan(value) else "never" if not np.isfinite(value) else f"{value:.0f}"
+
+
+def _extra(acc: MethodResult, wrong: MethodResult) -> str:
+    a, w = np.isfinite(acc.median), np.isfinite(wrong.median)
+    return (f"{wrong.median - acc.median:+.0f}" if a and w else "never converges" if a else
+            "converges only with wrong knowledge" if w else "neither converges")
+
+
+def _frac(values: list[float], v_star: float) -> str:
+    m = float(np.mean(values)) if values else np.nan
+    return "n/a" if not values else f"{m / v_star:.2f}" if v_star > 0 else f"{m:.2f}"
+
+
+def _check(steps: list[RouteStep], attr: str) -> str:
+    missing = [f"{s.state} ({' / '.join(s.optimal)})" for s in steps if not getattr(s, attr)]
+    return "no, not at " + "; ".join(missing) if missing else "yes, at every step"
+
+
+def case_lines(case: CaseResult) -> list[str]:
+    """A case's section of ``REPORT.md``."""
+    rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
+             f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
+             _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
+             f"{_frac(a.policy_values, case.v_star)}",
+             f"{w.final_return:.2f} / {a.final_return:.2f}",
+             ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
+                       for k, v in Counter(w.routes).most_common()) or "n/a"]
+            for m, a, w in case.paired()]
+    excluded = [s.state for s in case.checks[WRONG] if not s.darling_allowed]
+    return [
+        f"## {case.name}", "", case.description + "." if case.description else "", "",
+        f"- real world `{case.real}`, knowledge world `{case.knowledge}`, task "
+        f"{case.task.name} ({case.task.start} -> {case.task.goal})",
+        f"- V* = {case.v_star:.3f}; convergence threshold {threshold(case.v_star):.3f}",
+        f"- optimal route: {' '.join(case.optimal_positions)} (areas "
+        f"{'-'.join(map(str, case.optimal_areas))})", "",
+        *markdown_rows(pd.DataFrame(rows, columns=[
+            "method", "on route (wrong / accurate)", "converged runs",
+            "median convergence episode", "extra episodes", "policy value", "final return",
+            "greedy routes (wrong)"])),
+        "", "(pairs are wrong knowledge / accurate knowledge)", "",
+        "Does the knowledge contain the true optimum? Along the optimal route:", "",
+        *markdown_rows(pd.DataFrame([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
+                                     for kind in (WRONG, ACCURATE)],
+                                    columns=["knowledge", *CHECKS.values()])),
+        "", "Findings:", "",
+        *(f"- **{m}**: greedy policy on the optimal route in {w.on_route}/{w.runs} runs with "
+          f"wrong knowledge, {a.on_route}/{a.runs} with accurate; converged in "
+          f"{w.converged}/{w.runs} vs {a.converged}/{a.runs} runs (median episode "
+          f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)})." for m, a, w in case.paired()),
+        "- DARLING's allowed set (wrong knowledge) excludes every optimal action at "
+        + ", ".join(excluded) + "." if excluded else "- DARLING's allowed set (wrong "
+        "knowledge) contains an optimal action at every step of the optimal route.", ""]
+
+
+def make_knowledge_report(out: str | Path, command: str = "gdq-pddl knowledge") -> list[Path]:
+    """Analyse ``out`` and write its figures and ``REPORT.md``; returns the paths."""
+    out = Path(out)
+    cases = analyse(out)
+    lines = [
+        "# Knowledge that disagrees with the world", "",
+        f"Command: `{command}`. The env simulates the *real* world; the learners' knowledge "
+        "(PDDL problem, plans) is built from the *knowledge* world. Each case is run twice on "
+        "the same real world: with wrong knowledge, and with accurate knowledge (built from "
+        "the real world) as the reference. V* and the optimal route come from value "
+        "iteration on the real world.", "",
+        "Definitions (measured, see `gdq_pddl/analysis/knowledge.py`):", "",
+        f"- *converged at episode e*: e is the first episode at which the trailing {WINDOW}"
+        f"-episode mean return of a run reaches V* - {1 - FRACTION:.2f} |V*| (first passage; "
+        "'stays above until the end' measured mostly the last exploration dip). The median "
+        "is over runs, unconverged runs counting as 'never'; *extra* = median with wrong "
+        "knowledge - median with accurate knowledge. The control case's extra episodes "
+        "show the noise of this comparison.",
+        "- *on route*: the final greedy policy, walked along likeliest outcomes in the real "
+        "world, reaches the goal along the optimal policy's area route.",
+        "- *policy value*: the exact expected return of the final greedy policy in the real "
+        "world, as a fraction of V* (the raw value when V* <= 0).",
+        f"- *final return*: mean return of the last {FINAL} episodes over all runs.", "",
+        "Figures: `knowledge_curves.png` (learning curves; solid: wrong knowledge, dashed: "
+        "accurate), `knowledge_convergence.png` (convergence episodes).", "",
+        *(line for case in cases for line in case_lines(case))]
+    path = out / "REPORT.md"
+    write_text(path, "\n".join(lines))
+    return [*write_figures(cases, out), path]

@@ -1,49 +1,65 @@
-"""The data and statistics of a pairs folder (``gdq-pddl pairs``), from ``runs.csv``
-(one mean return per pair, method and run) and ``optimal.json``: per pair and method
-the mean over runs and its standard error; per pair and baseline the paired difference
-of the reference (GDQ when it ran) minus the baseline, its Student's t 95% interval and
-win / tie / loss; summaries over sets of pairs; the IQM over pairs. docs/decisions.md
-("Every start/goal pair") defines each; :mod:`.pairs_report` writes the figure and text.
+"""Tables, figure and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``).
+
+From ``runs.csv`` (one mean return per pair, method and run) and ``optimal.json``: per
+pair and method the mean over runs and its standard error; per pair and baseline the
+paired difference of the reference (GDQ when it ran) minus the baseline, its Student's t
+95% interval and win / tie / loss; summaries over sets of pairs; the IQM over pairs.
+docs/decisions.md ("Every start/goal pair") defines each. The figure has a row per
+baseline: a start-by-goal heatmap of the mean difference (diverging colours centred at
+0, ``+`` on wins and ``-`` on losses, the tuning tasks boxed) and every pair's
+difference sorted, with its 95% interval.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
+from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import TwoSlopeNorm
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+from matplotlib.ticker import MaxNLocator
 from scipy import stats as sps
 
+from gdq_pddl.analysis.figures import save_all
 from gdq_pddl.analysis.results import load_config, order_methods
 from gdq_pddl.analysis.stats import iqm_ci
-from gdq_pddl.analysis.writer import number
+from gdq_pddl.analysis.writer import markdown_rows, number
 from gdq_pddl.errors import GdqError
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import builtin_world, load_world
 
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
+OUTCOME_COLOURS = {WIN: "#2166ac", TIE: "#999999", LOSS: "#b2182b"}
 WORST = 10
-"""How many of the worst pairs the summary lists per baseline."""
-TABLE_STEM = "pairs"
+"""How many of the worst pairs the report lists per baseline."""
+TIE_STRENGTH = 0.3
+"""A tie's colour in the heatmap, as a share of its full strength (the rest white)."""
+LABELLED, LISTED_PAIRS = 30, 12
+"""Up to this many pairs the sorted plot names each one / the command line lists them."""
 
 
 @dataclass(frozen=True)
 class PairRuns:
     """A pairs folder's results: ``means[pair, method, run]`` (NaN: no such run), methods
-    in the report's order (:func:`~gdq_pddl.analysis.results.order_methods`)."""
+    in the report's order; ``facts``: ``optimal.json`` (start, goal, shortest_plan, v_star,
+    tuning per pair); ``positions``: the world's, in its order (the heatmap's axes)."""
 
     pairs: tuple[str, ...]
     methods: tuple[str, ...]
     means: np.ndarray
     facts: dict[str, dict]
-    """``optimal.json``: start, goal, shortest_plan, v_star, tuning per pair."""
     config: dict
     positions: tuple[str, ...]
-    """The world's positions, in its order (the heatmaps' rows and columns)."""
 
     @property
     def reference(self) -> str:
@@ -58,15 +74,20 @@ class PairRuns:
         """bool[pairs]: the pair is one of the tuning tasks A-D."""
         return np.array([bool(self.facts[p].get("tuning")) for p in self.pairs])
 
+    def label(self, i: int) -> str:
+        """Pair ``i``'s name, with ``(task X)`` when it is a tuning task."""
+        tuning = self.facts[self.pairs[i]].get("tuning")
+        return self.pairs[i] + (f" (task {tuning})" if tuning else "")
+
 
 def load_pair_runs(out: Path) -> PairRuns:
     """Read ``runs.csv``, ``optimal.json`` and ``config.json`` of a pairs folder."""
-    path = out / "runs.csv"
-    if not path.exists():
+    if not (out / "runs.csv").exists():
         raise GdqError(f"{out} has no runs.csv: the pairs run has not finished "
                        "(continue it with --resume)")
     facts = json.loads((out / "optimal.json").read_text(encoding="utf-8"))
-    runs = pd.read_csv(path, dtype={"pair": str, "method": str}, keep_default_na=False)
+    runs = pd.read_csv(out / "runs.csv", dtype={"pair": str, "method": str},
+                       keep_default_na=False)
     config = load_config(out).raw
     exp = config["experiments"][0]
     pairs, methods = tuple(facts), tuple(order_methods(exp["methods"]))
@@ -79,9 +100,8 @@ def load_pair_runs(out: Path) -> PairRuns:
 
 
 def over_runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and standard error (ddof 1) over the last axis, the runs. Unlike
-    :func:`gdq_pddl.analysis.stats.mean_se`, one run has no standard error (NaN, shown
-    ``n/a``), not 0: a single run is no evidence of a difference."""
+    """Mean and standard error (ddof 1) over the last axis, the runs; one run has no
+    standard error (NaN, shown ``n/a``): a single run is no evidence of a difference."""
     n = x.shape[-1]
     se = x.std(axis=-1, ddof=1) / math.sqrt(n) if n > 1 else np.full(x.shape[:-1], np.nan)
     return x.mean(axis=-1), se
@@ -89,7 +109,8 @@ def over_runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class Differences:
-    """The reference minus one baseline, per pair (arrays over pairs)."""
+    """The reference minus one baseline, per pair; ``outcome``: ``win`` when the 95%
+    interval ``[low, high]`` lies above 0, ``loss`` below, ``tie`` otherwise."""
 
     baseline: str
     mean: np.ndarray
@@ -97,45 +118,30 @@ class Differences:
     low: np.ndarray
     high: np.ndarray
     outcome: np.ndarray
-    """``win`` / ``tie`` / ``loss`` per pair (the module docstring's rule)."""
+
+    def interval(self, i: int) -> str:
+        return f"[{number(self.low[i], sign=True)}, {number(self.high[i], sign=True)}]"
 
 
 def differences(res: PairRuns, baseline: str) -> Differences:
     """Paired differences ``reference - baseline`` on every pair."""
-    ref, base = res.methods.index(res.reference), res.methods.index(baseline)
-    d = res.means[:, ref, :] - res.means[:, base, :]
+    d = (res.means[:, res.methods.index(res.reference), :]
+         - res.means[:, res.methods.index(baseline), :])
     mean, se = over_runs(d)
     n = d.shape[-1]
     half = sps.t.ppf((1 + LEVEL) / 2, n - 1) * se if n > 1 else np.full_like(mean, np.nan)
-    low, high = mean - half, mean + half
-    outcome = np.where(low > 0, WIN, np.where(high < 0, LOSS, TIE))
-    return Differences(baseline, mean, se, low, high, outcome)
+    outcome = np.where(mean - half > 0, WIN, np.where(mean + half < 0, LOSS, TIE))
+    return Differences(baseline, mean, se, mean - half, mean + half, outcome)
 
 
-@dataclass(frozen=True)
-class Summary:
-    """One baseline over a set of pairs."""
-
-    baseline: str
-    pairs: int
-    mean: float
-    """Mean over the pairs of the per-pair mean difference."""
-    se: float
-    wins: int
-    ties: int
-    losses: int
-    worst: tuple[int, ...]
-    """Indices of the :data:`WORST` pairs with the lowest mean difference, worst first."""
-
-
-def summarise(diff: Differences, keep: np.ndarray) -> Summary:
-    """:class:`Summary` of ``diff`` over the pairs where ``keep`` is True."""
+def summary_row(d: Differences, keep: np.ndarray, label: str = "") -> list:
+    """Over the pairs where ``keep``: the baseline, pairs, the mean of the per-pair
+    differences (s.e. sqrt(sum se^2) / pairs), wins, ties and losses."""
     idx = np.flatnonzero(keep)
-    mean = float(diff.mean[idx].mean()) if idx.size else math.nan
-    se = float(np.sqrt(np.sum(diff.se[idx] ** 2)) / idx.size) if idx.size else math.nan
-    counts = [int(np.sum(diff.outcome[idx] == o)) for o in (WIN, TIE, LOSS)]
-    worst = idx[np.argsort(diff.mean[idx], kind="stable")[:WORST]]
-    return Summary(diff.baseline, int(idx.size), mean, se, *counts, tuple(int(i) for i in worst))
+    mean = float(d.mean[idx].mean()) if idx.size else math.nan
+    se = float(np.sqrt(np.sum(d.se[idx] ** 2)) / idx.size) if idx.size else math.nan
+    return [d.baseline + label, int(idx.size), f"{number(mean, sign=True)} ({number(se)})",
+            *(int(np.sum(d.outcome[idx] == o)) for o in (WIN, TIE, LOSS))]
 
 
 def table(res: PairRuns, diffs: list[Differences]) -> pd.DataFrame:
@@ -157,26 +163,194 @@ def table(res: PairRuns, diffs: list[Differences]) -> pd.DataFrame:
 def table_markdown(res: PairRuns, diffs: list[Differences]) -> str:
     """The table as Markdown (rounded; the CSV has every digit)."""
     full = table(res, diffs)
-    ref = res.reference
     md = pd.DataFrame({
         "pair": [f"**{p}**" if t else p for p, t in zip(full["pair"], full["tuning"],
                                                          strict=True)],
         "tuning": [f"task {t}" if t else "" for t in full["tuning"]],
         "shortest plan": [str(n) if n >= 0 else "none" for n in full["shortest_plan"]],
-        "V*": [number(v) for v in full["v_star"]]})
+        "V*": full["v_star"].map(number)})
     for m in res.methods:
         md[m] = [f"{number(a)} ({number(b)})" for a, b in zip(full[f"mean_{m}"],
                                                              full[f"se_{m}"], strict=True)]
     for d in diffs:
-        md[f"{ref} - {d.baseline}"] = [f"{number(a, sign=True)} ({number(b)}) {o}" for a, b, o
-                                       in zip(d.mean, d.se, d.outcome, strict=True)]
+        md[f"{res.reference} - {d.baseline}"] = [
+            f"{number(a, sign=True)} ({number(b)}) {o}"
+            for a, b, o in zip(d.mean, d.se, d.outcome, strict=True)]
     return md.to_markdown(index=False, disable_numparse=True) + "\n"
 
 
+def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
+    """Start (rows) by goal (columns), colour = mean difference, each side of 0 scaled to
+    its own extreme (small losses against large wins still show in full red); ties faded;
+    grey: the diagonal and pairs not run."""
+    names = res.positions
+    at = [(names.index(res.facts[p]["start"]), names.index(res.facts[p]["goal"]))
+          for p in res.pairs]
+    grid = np.full((len(names), len(names)), np.nan)
+    for (r, c), value in zip(at, diff.mean, strict=True):
+        grid[r, c] = value
+    finite = np.isfinite(grid).any()
+    norm = TwoSlopeNorm(0.0, min(float(np.nanmin(grid)) if finite else -1.0, -1e-9),
+                        max(float(np.nanmax(grid)) if finite else 1.0, 1e-9))
+    cmap = colormaps["RdBu"].with_extremes(bad="#b0b0b0")
+    rgba = cmap(norm(np.ma.masked_invalid(grid)))
+    for (r, c), outcome in zip(at, diff.outcome, strict=True):
+        if outcome == TIE:  # faded: a tie's small mean must not look like a loss
+            rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
+    ax.imshow(rgba)
+    for i, p in enumerate(res.pairs):
+        r, c = at[i]
+        if mark := {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), ""):
+            ax.text(c, r, mark, ha="center", va="center", fontsize=7,
+                    color="white" if abs(norm(diff.mean[i]) - 0.5) > 0.3 else "black")
+        if res.facts[p].get("tuning"):
+            ax.add_patch(Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, lw=1.5,
+                                   edgecolor="black"))
+    ax.set_xticks(range(len(names)), names, rotation=90, fontsize=6)
+    ax.set_yticks(range(len(names)), names, fontsize=6)
+    ax.set(xlabel="goal", ylabel="start")
+    ax.set_title(f"{res.reference} - {diff.baseline}: mean return difference", fontsize=9)
+    ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8, format="%.3g",
+                       ticks=[t for t in (norm.vmin, norm.vmin / 2, 0, norm.vmax / 2,
+                                          norm.vmax) if t == 0 or abs(t) > 1e-9],
+                       label="each side of 0 scaled to its own extreme; ties faded")
+
+
+def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:
+    """Every pair's mean difference, lowest first, with its 95% interval."""
+    order = np.argsort(diff.mean, kind="stable")
+    x, mean = np.arange(len(order)), diff.mean[order]
+    err = np.vstack([mean - diff.low[order], diff.high[order] - mean])
+    colours = [OUTCOME_COLOURS[str(o)] for o in diff.outcome[order]]
+    ax.errorbar(x, mean, yerr=np.nan_to_num(err), fmt="none", ecolor=colours, lw=0.6)
+    ax.scatter(x, mean, c=colours, s=6, zorder=3)
+    tuning = res.tuning()[order]
+    ax.scatter(x[tuning], mean[tuning], s=40, facecolors="none", edgecolors="black", lw=1,
+               zorder=4, label="tuning task (A-D)")
+    ax.axhline(0, color="black", lw=0.6)
+    if (losses := diff.mean[diff.outcome == LOSS]).size:  # linear up to the largest loss
+        ax.set_yscale("symlog", linthresh=float(-losses.min()))  # so that losses show
+    if len(order) <= LABELLED:
+        ax.set_xticks(x, [res.pairs[i] for i in order], rotation=90, fontsize=7)
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    n = {o: int(np.sum(diff.outcome == o)) for o in (WIN, TIE, LOSS)}
+    ax.set(xlabel="pair, sorted by difference",
+           ylabel=f"{res.reference} - {diff.baseline} (95% interval)"
+           + (", symmetric log scale" if losses.size else ""))
+    ax.set_title(f"{n[WIN]} wins, {n[TIE]} ties, {n[LOSS]} losses of {len(order)} pairs",
+                 fontsize=9)
+    if tuning.any():
+        ax.legend(fontsize=7, loc="upper left")
+
+
+def command(res: PairRuns) -> str:
+    """The command line that makes this folder (its pairs listed when they are few)."""
+    exp = res.config["experiments"][0]
+    argv = ["gdq-pddl", "pairs", "--method", *res.methods, "--episodes",
+            str(exp["schedule"][0][1]), "--runs", str(exp["runs"]), "--seed", str(exp["seed"])]
+    argv += ["--world", exp["world"]] if exp["world"] != "office" else []
+    argv += ["--planner", exp["planner"]] if exp["planner"] != "graph" else []
+    n = len(res.positions)
+    if len(res.pairs) < n * (n - 1) and len(res.pairs) <= LISTED_PAIRS:
+        argv += ["--pairs", " ".join(res.pairs)]
+    return shlex.join(argv)
+
+
+def report_lines(res: PairRuns, diffs: list[Differences]) -> list[str]:
+    """``REPORT.md``: setup, tuning, summary, figure, losses, worst pairs, IQM, the table."""
+    exp, ref, n = res.config["experiments"][0], res.reference, len(res.positions)
+    hyper = ", ".join(f"{k} = {v}" for k, v in exp["hyper"].items())
+    subset = "" if len(res.pairs) == n * (n - 1) else f" (of the {n * (n - 1)})"
+    tuned = ", ".join(res.label(i) for i in np.flatnonzero(res.tuning()))
+    lines = [
+        "# Every ordered start/goal pair", "",
+        f"**Setup.** {len(res.pairs)} ordered (start, goal) pairs{subset} of the world "
+        f"`{exp['world']}`; methods {', '.join(res.methods)}; each learns every pair from "
+        f"scratch {exp['runs']} times for {exp['schedule'][0][1]} episodes, with the paper's "
+        f"hyperparameters ({hyper}), planner `{exp['planner']}`, seed {exp['seed']}. Run r of "
+        "every method on a pair starts from the same seeds, so differences are paired.", "",
+        f"    {command(res)}", "",
+        f"**Tuning.** Every setting of the learners was chosen on tasks A-D only: {tuned}. "
+        "They are bold in the table and boxed in the figure, and the summary is given "
+        "over all pairs and over the others." if tuned else
+        "**Tuning.** Every setting of the learners was chosen on tasks A-D only; "
+        "none of their pairs is among these, so every pair here is untuned.", ""]
+    if not diffs:
+        lines += ["Only one method ran: there is nothing to compare.", ""]
+    else:
+        untuned = ~res.tuning()
+        rows = [summary_row(d, np.ones(len(res.pairs), bool)) for d in diffs]
+        rows += [summary_row(d, untuned, ", excluding A-D") for d in diffs
+                 if untuned.sum() < len(res.pairs)]
+        lost = [i for i in range(len(res.pairs)) if any(d.outcome[i] == LOSS for d in diffs)]
+        lines += [
+            "## Summary", "", *markdown_rows(pd.DataFrame(rows, columns=[
+                f"{ref} minus", "pairs", "mean difference (s.e.)", "wins", "ties", "losses"])),
+            "", f"A win (loss) is a pair whose paired {LEVEL:.0%} interval of {ref} minus the "
+            f"baseline lies above (below) 0. With {len(res.pairs)} pairs, two methods that "
+            f"were equal everywhere would still show about {(1 - LEVEL) * len(res.pairs):.1f} "
+            "wins or losses by chance.", "",
+            f"![{ref} minus each baseline on every pair](figures/pairs.png)", "",
+            f"Left: {ref} minus the baseline, mean return per episode, start by goal (blue: "
+            f"{ref} better; `+` win, `\u2212` loss, faded: tie; boxed: tasks A-D). Right: "
+            f"every pair's difference, sorted, with its {LEVEL:.0%} interval.", "",
+            f"## Where {ref} loses", ""]
+        if not lost:
+            lines += ["Nowhere: no pair's interval lies below 0 against any baseline.", ""]
+        else:
+            worst = min((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
+                        if d.outcome[i] == LOSS)
+            lines += [f"{len(lost)} pairs, where {ref} minus the baseline is significantly "
+                      "negative against at least one baseline (mean difference, its interval); "
+                      f"the largest loss is {number(worst[0], sign=True)} per episode "
+                      f"({worst[2]} against {worst[1]}):", ""]
+            lines += [f"- {res.label(i)}: against " + "; ".join(
+                f"{d.baseline} {number(d.mean[i], sign=True)} {d.interval(i)}"
+                for d in diffs if d.outcome[i] == LOSS) for i in lost] + [""]
+        lines += ["## The worst pairs against each baseline", "",
+                  f"The {WORST} pairs with the lowest mean difference, worst first.", ""]
+        for d in diffs:
+            lines += [f"**{ref} - {d.baseline}:**", "", *(
+                f"{k}. {res.label(i)}: {number(d.mean[i], sign=True)} ({LEVEL:.0%} interval "
+                f"{d.interval(i)}), {d.outcome[i]}" for k, i in enumerate(
+                    np.argsort(d.mean, kind="stable")[:WORST], 1)), ""]
+    iqms = iqm_table(res)
+    if len(iqms) and iqms["pairs"].iloc[0]:
+        lines += [
+            "## Over all pairs: interquartile mean", "",
+            f"Per method, every run on every pair with V* > 0 ({iqms['pairs'].iloc[0]} "
+            "pairs) gives one score, its mean return per episode / V*; the interquartile "
+            "mean (IQM) of all scores is the mean of their middle 50% (robust to a few "
+            "outlying pairs, less noisy than the median), with a 95% stratified bootstrap "
+            "interval (runs resampled within each pair, 2,000 resamples, "
+            "`scipy.stats.bootstrap`; n/a with a single run).", "",
+            *markdown_rows(pd.DataFrame(
+                [[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"]
+                 for m, r in iqms.iterrows()],
+                columns=["method", "IQM of return / V*", "95% interval"])), ""]
+    return lines + [
+        "## The table", "",
+        "[`tables/pairs.md`](tables/pairs.md) (rounded) and "
+        "[`tables/pairs.csv`](tables/pairs.csv) (every digit), one row per pair:", "",
+        "- `shortest plan`: actions in a shortest plan of the knowledge from start to goal "
+        "(`none`: no plan); `V*`: the optimal expected return of an episode (value "
+        "iteration on the true model, doors closed at the start);",
+        "- per method, the mean return per episode over a run's episodes, then the mean "
+        "over runs (standard error);",
+        f"- per baseline, {ref} minus it: the mean over runs of the paired difference of "
+        f"per-run means (standard error), and the outcome: `win` when the {LEVEL:.0%} "
+        "interval mean +- t(0.975, runs - 1) x s.e. lies above 0, `loss` when below, "
+        "`tie` otherwise (always with one run).", "",
+        "The summary's mean difference is the mean over pairs of the per-pair differences; "
+        "its standard error sqrt(sum of squared per-pair s.e.) / pairs (runs on different "
+        "pairs are independent). The raw data: `runs.csv` (one mean return per pair, "
+        "method and run) and `units/` (every episode's return and success).", ""]
+
+
 def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
-    """Per method over the pairs with V* > 0: the interquartile mean of every run's mean
-    return / V* (one score per pair and run) and its stratified bootstrap 95% CI (runs
-    resampled within each pair, :func:`~gdq_pddl.analysis.stats.iqm_ci`)."""
+    """Per method over the pairs with V* > 0: the IQM of every run's mean return / V*
+    and its stratified bootstrap 95% CI (:func:`~gdq_pddl.analysis.stats.iqm_ci`)."""
     v_star = np.array([float(res.facts[p].get("v_star") or math.nan) for p in res.pairs])
     keep = np.flatnonzero(v_star > 0)
     rows = {m: iqm_ci([res.means[i, j] / v_star[i] for i in keep], seed)
@@ -185,14 +359,26 @@ def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
         pairs=len(keep))
 
 
-def write_tables(res: PairRuns, diffs: list[Differences], out: Path) -> list[Path]:
-    """``tables/pairs.csv`` and ``tables/pairs.md``."""
-    target = out / "tables"
-    target.mkdir(parents=True, exist_ok=True)
-    csv_path, md_path = target / f"{TABLE_STEM}.csv", target / f"{TABLE_STEM}.md"
+def make_pairs_report(out: str | Path) -> list[Path]:
+    """``tables/pairs.{csv,md}``, ``figures/pairs.{png,pdf}`` (a row per baseline; none
+    when one method ran) and ``REPORT.md`` of a pairs folder; returns the paths."""
+    out = Path(out)
+    res = load_pair_runs(out)
+    diffs = [differences(res, b) for b in res.baselines]
+    (out / "tables").mkdir(parents=True, exist_ok=True)
+    paths = [out / "tables" / "pairs.csv", out / "tables" / "pairs.md"]
     frame = table(res, diffs)
     floats = [c for c in frame if frame[c].dtype == float]
     frame[floats] = frame[floats].map(lambda x: repr(float(x)))  # every digit
-    write_text(csv_path, frame.to_csv(index=False, lineterminator="\n"))
-    write_text(md_path, table_markdown(res, diffs))
-    return [csv_path, md_path]
+    write_text(paths[0], frame.to_csv(index=False, lineterminator="\n"))
+    write_text(paths[1], table_markdown(res, diffs))
+    if diffs:
+        fig = Figure(figsize=(12.5, 5.2 * len(diffs)), layout="constrained")
+        axes = fig.subplots(len(diffs), 2, squeeze=False, width_ratios=(1, 1.25))
+        for (hx, sx), diff in zip(axes, diffs, strict=True):
+            heatmap(hx, res, diff)
+            sorted_differences(sx, res, diff)
+        paths += save_all(fig, out / "figures", "pairs")
+    paths.append(out / "REPORT.md")
+    write_text(paths[-1], "\n".join(report_lines(res, diffs)))
+    return paths

@@ -1,7 +1,7 @@
 """``REPORT.md`` of an output folder, with its figures and tables.
 
 What the folder holds decides the report: ``runs.csv`` without ``episodes.csv`` is a
-pairs folder (:mod:`.pairs_report`); experiments with ``knowledge`` in ``config.json``
+pairs folder (:mod:`.pairs`); experiments with ``knowledge`` in ``config.json``
 are the wrong-knowledge cases (:mod:`.knowledge`); a folder with one of the paper's
 experiments (``tasks``, ``switch-*``, ``robot``) gets the paper's hypotheses tested, with
 verdicts (:data:`SECTIONS`); any other (``gdq-pddl run`` on the office or a PDDL problem)
@@ -15,8 +15,8 @@ from pathlib import Path
 
 from gdq_pddl.analysis import sections
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
-from gdq_pddl.analysis.knowledge_report import make_knowledge_report
-from gdq_pddl.analysis.pairs_report import make_pairs_report
+from gdq_pddl.analysis.knowledge import make_knowledge_report
+from gdq_pddl.analysis.pairs import make_pairs_report
 from gdq_pddl.analysis.results import load_config
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import make_tables

@@ -13,10 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
@@ -53,16 +53,6 @@ def first_means(group: list[BuildingResult], name: str) -> np.ndarray:
     return np.concatenate([r.first_mean(name) for r in group])
 
 
-def all_mean(group: list[BuildingResult], name: str) -> float:
-    """Mean over the runs of ``name`` on ``group`` of each run's mean return."""
-    return float(np.concatenate([r.returns[name].mean(axis=1) for r in group]).mean())
-
-
-def last_success(group: list[BuildingResult], name: str) -> float:
-    """Success rate of ``name`` over the last 100 episodes of all runs on ``group``."""
-    return float(np.mean([r.success[name][:, -100:].mean() for r in group]))
-
-
 def steps_per_s(group: list[BuildingResult], name: str) -> float:
     """Env steps/s of ``name`` on ``group``: all its runs' steps over their wall time."""
     wall = sum(r.wall_s[name] for r in group)
@@ -76,8 +66,10 @@ def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[floa
     return float(mean), float(se)
 
 
-def _names(results: list[BuildingResult]) -> list[str]:
-    return order_methods(n for r in results for n in r.returns)
+def _names(results: list[BuildingResult]) -> tuple[list[str], list[str]]:
+    """Every method, and those compared with :data:`REFERENCE` (none when it did not run)."""
+    names = order_methods(n for r in results for n in r.returns)
+    return names, [n for n in names if n != REFERENCE] if REFERENCE in names else []
 
 
 def _first_label(episodes: int) -> str:
@@ -100,11 +92,11 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
     """The figure: episodes to convergence, GDQ minus each other method in mean return over
     the first episodes (when GDQ ran) and env steps/s against size; each building its own
     marker, a line through each size's value over all its buildings."""
-    names = _names(results)
-    others = [n for n in names if n != REFERENCE] if REFERENCE in names else []
+    names, others = _names(results)
     sizes = by_size(results)
     seeds = list(dict.fromkeys(r.seed for r in results))
-    fig, axes = plt.subplots(1, 3 if others else 2, figsize=(15 if others else 10, 4.6))
+    fig = Figure(figsize=(15 if others else 10, 4.6))
+    axes = fig.subplots(1, 3 if others else 2)
     ax, bx = axes[0], axes[-1]
 
     def panel(axis, name: str, i: int, n: int, value: Callable, whole: Callable,
@@ -147,7 +139,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
                title=f"{_first_label(episodes)}, paired runs (mean, s.e.)")
         cx.set_yscale("symlog", linthresh=10)
         cx.legend(fontsize=8, title=f"{REFERENCE} minus", title_fontsize=8)
-    handles = [plt.Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
+    handles = [Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
                           label=f"building seed {s}") for k, s in enumerate(seeds)]
     ax.legend(fontsize=8, loc="center left")
     bx.legend(handles=handles, fontsize=8, loc="lower left")
@@ -158,38 +150,29 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
     return fig
 
 
-def _rows(results: list[BuildingResult]) -> list[tuple[str, list[BuildingResult]]]:
-    """Table rows: each building, then its size over all its buildings (when several)."""
-    rows = []
-    for n, group in by_size(results).items():
-        rows += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
-        if len(group) > 1:
-            rows.append((f"**{n} / all {len(group)}**", group))
-    return rows
-
-
-def _table(results: list[BuildingResult], columns: list[str],
-           cell: Callable[[list[BuildingResult], str], str]) -> list[str]:
-    """A markdown table: a row per building and per size, a column per method."""
-    return [*markdown_rows(pd.DataFrame([[label, *(cell(group, c) for c in columns)]
-                                         for label, group in _rows(results)],
-                                        columns=["positions / building", *columns])), ""]
-
-
 def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -> Path:
-    """REPORT.md: the definitions, the buildings, and a table per measure."""
-    names = _names(results)
-    others = [n for n in names if n != REFERENCE] if REFERENCE in names else []
+    """REPORT.md: the definitions, the buildings, and a table per measure (a row per
+    building and, in bold, per size over all its buildings; a column per method)."""
+    names, others = _names(results)
     seeds = list(dict.fromkeys(r.seed for r in results))
     first = _first_label(episodes)
+    groups = []
+    for n, group in by_size(results).items():
+        groups += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
+        groups += [(f"**{n} / all {len(group)}**", group)] if len(group) > 1 else []
 
-    def conv(group, name):
+    def table(columns: list[str], cell: Callable[[list[BuildingResult], str], str]
+              ) -> list[str]:
+        return [*markdown_rows(pd.DataFrame([[label, *(cell(g, c) for c in columns)]
+                                             for label, g in groups],
+                                            columns=["positions / building", *columns])), ""]
+
+    def conv(group: list[BuildingResult], name: str) -> str:
         med, n, total = convergence(group, name)
         return f"{med:.0f} ({n}/{total})" if med is not None else f"> {episodes} (0/{total})"
 
-    def diff(group, name):
-        mean, se = paired_difference(group, REFERENCE, name)
-        return f"{mean:+.1f} ± {se:.1f}"
+    def diff(group: list[BuildingResult], name: str) -> str:
+        return "{:+.1f} ± {:.1f}".format(*paired_difference(group, REFERENCE, name))
 
     lines = [
         "# Learning against building size", "",
@@ -210,31 +193,27 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
         "steps/s of all their runs).", "",
         "![episodes to convergence, paired differences and steps/s](scale.png)", "",
         "## Buildings", "",
-        "| positions / building | doors | learner states x actions | L | step limit | "
-        "r_max | V_ref | R_fail | threshold | plan tables (s) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    lines += [f"| {r.positions} / seed {r.seed} | {r.doors} | {r.n_states} x {r.n_actions} | "
-              f"{r.plan_length} | {r.step_limit} | {r.r_max:g} | {r.v_ref:.1f} | "
-              f"{r.r_fail:g} | {r.threshold:.1f} | {r.context_s:.1f} |" for r in results]
-    lines += ["", "## Episodes to convergence", ""] + _table(results, names, conv)
-    lines += [f"## Mean return over the {first}", "",
-              "Mean over runs of each run's mean return.", ""]
-    lines += _table(results, names, lambda g, m: f"{first_means(g, m).mean():.1f}")
+        *markdown_rows(pd.DataFrame([[
+            f"{r.positions} / seed {r.seed}", r.doors, f"{r.n_states} x {r.n_actions}",
+            r.plan_length, r.step_limit, f"{r.r_max:g}", f"{r.v_ref:.1f}", f"{r.r_fail:g}",
+            f"{r.threshold:.1f}", f"{r.context_s:.1f}"] for r in results], columns=[
+            "positions / building", "doors", "learner states x actions", "L", "step limit",
+            "r_max", "V_ref", "R_fail", "threshold", "plan tables (s)"])),
+        "", "## Episodes to convergence", "", *table(names, conv),
+        f"## Mean return over the {first}", "", "Mean over runs of each run's mean return.",
+        "", *table(names, lambda g, m: f"{first_means(g, m).mean():.1f}")]
     if others:
         lines += [f"## {REFERENCE} minus each method: mean return over the {first}",
                   "", f"Paired: run r of {REFERENCE} minus run r of the method on the same "
                   "building; mean ± standard error over those differences (over all the "
-                  "size's runs in the bold rows).", ""]
-        lines += _table(results, others, diff)
-    lines += [f"## Mean return over all {episodes} episodes", ""]
-    lines += _table(results, names, lambda g, m: f"{all_mean(g, m):.1f}")
-    lines += ["## Success rate over the last 100 episodes", ""]
-    lines += _table(results, names, lambda g, m: f"{last_success(g, m):.2f}")
-    lines += ["## Env steps/s", "", "Steps of all runs over their wall time (the compiled "
-              "loop of learner and env, one core, the first episode of each method in a "
-              "process untimed).", ""]
-    lines += _table(results, names, lambda g, m: f"{steps_per_s(g, m):,.0f}")
+                  "size's runs in the bold rows).", "", *table(others, diff)]
+    lines += [f"## Mean return over all {episodes} episodes", "", *table(
+        names, lambda g, m: f"{np.concatenate([r.returns[m].mean(axis=1) for r in g]).mean():.1f}"),
+        "## Success rate over the last 100 episodes", "", *table(
+        names, lambda g, m: f"{np.mean([r.success[m][:, -100:].mean() for r in g]):.2f}"),
+        "## Env steps/s", "", "Steps of all runs over their wall time (the compiled "
+        "loop of learner and env, one core, the first episode of each method in a "
+        "process untimed).", "", *table(names, lambda g, m: f"{steps_per_s(g, m):,.0f}")]
     path = out / "REPORT.md"
     write_text(path, "\n".join(lines))
     return path

@@ -20,11 +20,9 @@ from gdq_pddl.analysis.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.analysis.routes import BEST_ROUTE_C
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
-    convergence_episode,
     first_positive,
     iqm_ci,
     mean_se,
@@ -35,8 +33,17 @@ from gdq_pddl.analysis.stats import (
     verdict_reason,
 )
 from gdq_pddl.analysis.study import Study, curves_stem, slug
-from gdq_pddl.analysis.tables import TABLE_DIR, area_markdown, area_table
-from gdq_pddl.analysis.writer import Writer, areas_str, fmt, milestone_str, number, pct, route_str
+from gdq_pddl.analysis.tables import area_markdown, area_table
+from gdq_pddl.analysis.writer import (
+    TABLE_DIR,
+    Writer,
+    areas_str,
+    fmt,
+    milestone_str,
+    number,
+    pct,
+    route_str,
+)
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.work import make_learner
@@ -69,22 +76,18 @@ def write_header(w: Writer) -> None:
           f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
           f"experiments: {', '.join(study.experiments) or 'none'}.", "")
     if cfg.experiments:
-        sched = [e.get("schedule") if isinstance(e.get("schedule"), list) else []
-                 for e in cfg.experiments]
-        w.table([[e.get("name", "?"), e.get("world", "?"),
-                  ", ".join(f"{t} x {n}" for t, n in s) or "?",
-                  ", ".join(e.get("methods") or []) or "?", e.get("runs", "?"),
-                  e.get("seed", "?")] for e, s in zip(cfg.experiments, sched, strict=True)],
-                ["experiment", "world", "schedule (task x episodes)", "methods", "runs", "seed"],
-                "llllrr")
+        w.table([[e.get("name", "?"), e.get("world", "?"), ", ".join(
+            f"{t} x {n}" for t, n in (e.get("schedule") if isinstance(
+                e.get("schedule"), list) else [])) or "?",
+            ", ".join(e.get("methods") or []) or "?", e.get("runs", "?"), e.get("seed", "?")]
+            for e in cfg.experiments],
+            ["experiment", "world", "schedule (task x episodes)", "methods", "runs", "seed"],
+            "llllrr")
     else:
         w.add("Configuration: not recorded (no readable `config.json`).", "")
     if cfg.versions:
         w.add("Versions: " + ", ".join(f"{k} {v}" for k, v in cfg.versions.items()), "")
     w.add(*planner_lines(study), method_paragraph(w), "")
-
-
-TITLE = "Methods compared"
 
 
 def setup_lines(study: Study) -> list[str]:
@@ -144,7 +147,7 @@ def write_methods(w: Writer, full: bool = True) -> None:
         "Welch's t-test (two-sided) and a percentile bootstrap 95% CI of the difference in "
         f"means over runs (`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}); "
         f"a difference counts when the CI excludes 0 and p < {ALPHA}.")
-    w.add(f"## {TITLE}", "",
+    w.add("## Methods compared", "",
           f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
           f"each task of the experiment. {definitions(w.opts.window)} {how}", "")
     for exp in exps:
@@ -231,8 +234,6 @@ def write_task(w: Writer, exp: str, task: str) -> None:
             w.comparisons(comps)
 
 
-# ground truth
-
 def write_ground_truth(w: Writer) -> None:
     """Ground truth: V*, relevant areas and optimal routes per task, and learning as a
 fraction of V*."""
@@ -294,8 +295,6 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
     w.table(rows, ["Method", "tasks", "IQM of return / V*", "95% interval"], "lrrl")
 
 
-# hypothesis 1
-
 def write_hypothesis_1(w: Writer) -> None:
     """Hypothesis I: GDQ collects more reward (tasks A-D), and when the moving average of
 return first turns positive."""
@@ -328,8 +327,6 @@ return first turns positive."""
     w.table([[t, *(milestone_str(first_positive(study.returns(exp, m, t), opts.window))
                    for m in methods)] for t in study.tasks(exp)], ["Task", *methods])
 
-
-# hypothesis 2
 
 def write_hypothesis_2(w: Writer) -> None:
     """Hypothesis II: GDQ avoids irrelevant areas."""
@@ -369,8 +366,6 @@ def write_hypothesis_2(w: Writer) -> None:
         w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
 
-# hypothesis 3
-
 def write_hypothesis_3(w: Writer) -> None:
     """Hypothesis III: GDQ adapts faster to a goal change (the switch experiments)."""
     study, opts = w.study, w.opts
@@ -406,7 +401,9 @@ def write_hypothesis_3(w: Writer) -> None:
                 for m in study.methods(exp)) + ".", "")
 
 
-# route c
+BEST_ROUTE_C = (1, 3, 2, 6)
+"""The paper's best Task C route in areas (easy doors d1 and d3)."""
+
 
 def write_route_c(w: Writer) -> None:
     """Task C route finding: final greedy routes and behavioural convergence to the
@@ -437,9 +434,9 @@ paper's best route."""
             on, k = summary.on_route(world, BEST_ROUTE_C), summary.count
             share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
             common = f"{route_str(summary.areas)} ({summary.end}, {k} run{'s' * (k != 1)})"
-        conv[m] = convergence_episode(study.area_visits(exp, m, "C"),
-                                      study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-                                      study.areas, opts.route_window, opts.route_share)
+        conv[m] = [settles(row, opts.route_window, opts.route_share) for row in route_indicator(
+            study.area_visits(exp, m, "C"), study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
+            study.areas)]
         reached = [c for c in conv[m] if not math.isnan(c)]
         rows.append([m, share, common, f"{len(reached)}/{len(conv[m])}",
                      fmt(float(np.mean(reached)), 5) if reached else "never"])
@@ -450,18 +447,13 @@ paper's best route."""
             fmt(c, 5) if not math.isnan(c) else "never" for c in conv["GDQ"]) + ".", "")
 
 
-# variants
-
-OTHERS = ("GDQ-literal", "GDQ-code")
-
-
 def write_variants(w: Writer) -> None:
     """GDQ against the two readings of the paper's GDQ (GDQ-literal, GDQ-code), task by
 task."""
     study = w.study
     exp = TASKS_EXPERIMENT
     methods = study.methods(exp) if study.has(exp) else []
-    others = [m for m in OTHERS if m in methods]
+    others = [m for m in ("GDQ-literal", "GDQ-code") if m in methods]
     if not w.section("GDQ vs the paper read literally (GDQ-literal) and the authors' code "
                      "(GDQ-code)", "GDQ" in methods and bool(others), "GDQ vs its variants",
                      "the tasks experiment lacks GDQ or both of its variants"):
@@ -483,8 +475,6 @@ task."""
         rows.append(cells)
     w.table(rows, ["Task", "GDQ", *(x for m in others for x in (m, f"GDQ - {m} (95% CI)", "p"))])
 
-
-# why gdq fails
 
 def write_why_gdq_fails(w: Writer) -> None:
     """Measured evidence for the literal reading's failure: Q right after OptInit and
@@ -572,8 +562,6 @@ def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
         values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
     return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
 
-
-# robot
 
 def write_robot(w: Writer) -> None:
     """The robot protocol (simulated): returns, first successes and routes per trial."""

@@ -1,23 +1,14 @@
 """Statistics for the reports: GDQ-vs-baseline tests, verdicts, milestones, the IQM.
 
-Every comparison is between *runs* (the independent unit): one number per run for each
-method, then Welch's t-test (unequal variances, :func:`scipy.stats.ttest_ind`) and a
-percentile bootstrap 95% CI of the difference in means (:func:`scipy.stats.bootstrap`,
-runs resampled within each method, a numpy Generator with a fixed seed). A difference is
-*significant* when the CI excludes 0 and the two-sided p-value is below ``alpha`` (when
-the t-test is undefined, e.g. two constant samples, the CI alone decides).
-
-Verdicts (:func:`verdict`) over the comparisons of GDQ with each baseline: ``holds`` when
-GDQ is significantly better than every baseline; ``does not hold`` when it is
-significantly worse than at least one, or better than none; ``mixed`` otherwise.
-
-Milestones use a trailing moving average (pandas ``rolling``) over *full* windows only:
-the value at episode ``e`` is the mean of episodes ``e - w + 1 .. e``, defined from
-episode ``w`` on, so one lucky early episode cannot count as a milestone.
-
-Over many tasks (:func:`iqm_ci`): the interquartile mean of every run's score on every
-task, with a stratified bootstrap CI (runs resampled within each task), as Agarwal et al.
-(2021) recommend for results over many tasks and few runs.
+The unit is the run: one number per run and method, then Welch's t-test
+(:func:`scipy.stats.ttest_ind`) and a percentile bootstrap 95% CI of the difference in
+means (:func:`scipy.stats.bootstrap`, runs resampled within each method, fixed seed). A
+difference is *significant* when the CI excludes 0 and p < ``alpha`` (no t-test, e.g. two
+constant samples: the CI alone decides). :func:`verdict`: ``holds`` when GDQ is
+significantly better than every baseline, ``does not hold`` when worse than one or better
+than none, ``mixed`` otherwise. Milestones use trailing moving averages over full windows
+only (from episode ``w`` on). Over many tasks, :func:`iqm_ci` gives the interquartile
+mean with a stratified bootstrap CI (Agarwal et al. 2021).
 """
 
 from __future__ import annotations
@@ -39,25 +30,21 @@ HOLDS, DOES_NOT_HOLD, MIXED = "holds", "does not hold", "mixed"
 
 
 def run_means(matrix: np.ndarray, start: int = 0, stop: int | None = None) -> np.ndarray:
-    """Per-run mean of ``matrix[runs, episodes]`` over episode columns ``start:stop``
-    (NaN for a run without episodes there)."""
-    if matrix.size == 0:
-        return np.empty(0)
-    return pd.DataFrame(matrix[:, start:stop]).mean(axis=1).to_numpy()
+    """Per-run mean of ``matrix[runs, episodes]`` over episodes ``start:stop`` (NaN-aware)."""
+    return pd.DataFrame(matrix[:, start:stop]).mean(axis=1).to_numpy() if matrix.size \
+        else np.empty(0)
 
 
-def mean_se(x: np.ndarray, axis: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Mean and standard error (ddof=1; 0 with a single sample) along ``axis``, NaN-aware."""
-    frame = pd.DataFrame(np.moveaxis(np.asarray(x, dtype=float), axis, 0).reshape(
-        np.shape(x)[axis], -1))
-    shape = np.delete(np.shape(x), axis)
+def mean_se(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and standard error (ddof=1; 0 with one sample) over axis 0, NaN-aware."""
+    frame = pd.DataFrame(np.asarray(x, dtype=float).reshape(len(x), -1))
     mean, se = frame.mean().to_numpy(), frame.sem().fillna(0.0).to_numpy()
-    return mean.reshape(shape), se.reshape(shape)
+    return (mean[0], se[0]) if np.ndim(x) == 1 else (mean, se)
 
 
 @dataclass(frozen=True)
 class Comparison:
-    """``a`` (GDQ) against ``b`` (a baseline): difference ``mean(a) - mean(b)``;
+    """``a`` (GDQ) against ``b`` (a baseline): ``diff = mean(a) - mean(b)``;
     ``higher_is_better`` says which sign favours ``a``."""
 
     a: str
@@ -76,10 +63,8 @@ class Comparison:
 
     @property
     def significant(self) -> bool:
-        if self.n_a < 2 or self.n_b < 2:
-            return False
-        excludes_zero = self.ci_low > 0 or self.ci_high < 0
-        return excludes_zero and (math.isnan(self.p) or self.p < self.alpha)
+        return (min(self.n_a, self.n_b) >= 2 and (self.ci_low > 0 or self.ci_high < 0)
+                and (math.isnan(self.p) or self.p < self.alpha))
 
     @property
     def outcome(self) -> str:
@@ -104,26 +89,25 @@ def _finite(x: np.ndarray) -> np.ndarray:
 
 def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "baseline",
             higher_is_better: bool = True, seed: int = SEED, alpha: float = ALPHA) -> Comparison:
-    """Welch's t-test (``scipy.stats.ttest_ind(equal_var=False)``) and the percentile
-    bootstrap 95% CI (``scipy.stats.bootstrap``) of ``mean(a) - mean(b)`` over runs, NaN
-    values dropped. Both are NaN with fewer than 2 values a side; two constant samples
+    """Welch's t-test and the percentile bootstrap 95% CI of ``mean(a) - mean(b)`` over
+    runs, NaN dropped: both NaN with fewer than 2 values a side; two constant samples
     have no t-test and their CI is the point difference."""
     a, b = _finite(a), _finite(b)
     ma, mb = (float(x.mean()) if x.size else math.nan for x in (a, b))
-    ci = t = p = math.nan
+    low = high = t = p = math.nan
     if a.size >= 2 and b.size >= 2:
         if np.ptp(a) == 0 and np.ptp(b) == 0:  # nothing to resample: the CI is the point
-            ci = (ma - mb, ma - mb)
+            low = high = ma - mb
         else:
             ci = sps.bootstrap((a, b), lambda x, y, axis=-1: x.mean(axis) - y.mean(axis),
                                n_resamples=N_BOOT, method="percentile",
                                rng=np.random.default_rng(seed)).confidence_interval
-            # nearly constant samples (a method that fails identically in every run) make
-            # scipy warn about precision; the statistic is still the one to report
+            low, high = float(ci.low), float(ci.high)
+            # nearly constant samples (a method failing alike in every run) make scipy
+            # warn about precision; the statistic is still the one to report
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", "Precision loss occurred", RuntimeWarning)
                 t, p = sps.ttest_ind(a, b, equal_var=False)
-    low, high = (math.nan, math.nan) if ci is math.nan else map(float, ci)
     return Comparison(name_a, name_b, ma, mb, ma - mb, low, high, float(t), float(p), a.size,
                       b.size, higher_is_better, alpha)
 
@@ -150,12 +134,12 @@ def verdict_reason(comparisons: Sequence[Comparison]) -> str:
 
 def moving_average(x: np.ndarray, window: int, full_only: bool = True) -> np.ndarray:
     """Trailing moving average along the last axis of a 1-D or 2-D array (pandas
-    ``rolling``). With ``full_only`` the first ``window - 1`` values are NaN; otherwise
-    they average the episodes seen so far (the figures' smoothing)."""
+    ``rolling``); with ``full_only`` the first ``window - 1`` values are NaN, otherwise
+    they average the episodes so far (the figures' smoothing)."""
     x = np.asarray(x, dtype=float)
     window = max(1, int(window))
-    frame = pd.DataFrame(np.atleast_2d(x).T)
-    out = frame.rolling(window, min_periods=window if full_only else 1).mean().to_numpy().T
+    out = pd.DataFrame(np.atleast_2d(x).T).rolling(
+        window, min_periods=window if full_only else 1).mean().to_numpy().T
     return out.reshape(x.shape)
 
 
@@ -167,12 +151,11 @@ def _first(hits: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class Milestone:
-    """When a method's return first turns positive (see :func:`first_positive`)."""
+    """When a method's return first turns positive: per run (NaN: never within the data)
+    and on the mean curve over runs (what the learning curve shows)."""
 
     per_run: tuple[float, ...]
-    """Per run (NaN: never within the data)."""
     on_mean_curve: float
-    """On the mean curve over runs (what the learning curve shows)."""
 
     @property
     def reached(self) -> int:
@@ -185,13 +168,13 @@ class Milestone:
 
 
 def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0) -> Milestone:
-    """First episode whose ``window``-episode moving average of return exceeds ``threshold``,
-    per run and on the mean curve over runs."""
+    """First episode whose ``window``-episode moving average of return exceeds
+    ``threshold``, per run and on the mean curve over runs."""
     if matrix.size == 0:
         return Milestone((), math.nan)
-    per_run = tuple(_first(row) for row in moving_average(matrix, window) > threshold)
     mean_curve = pd.DataFrame(matrix).mean().to_numpy()
-    return Milestone(per_run, _first(moving_average(mean_curve, window) > threshold))
+    return Milestone(tuple(_first(row) for row in moving_average(matrix, window) > threshold),
+                     _first(moving_average(mean_curve, window) > threshold))
 
 
 def settles(indicator: np.ndarray, window: int, share: float) -> float:
@@ -201,29 +184,17 @@ def settles(indicator: np.ndarray, window: int, share: float) -> float:
     if ind.size < window:
         return math.nan
     ok = moving_average(ind, window) >= share - 1e-12
-    if not ok[-1]:
-        return math.nan
     bad = np.flatnonzero(~ok)
-    return float(bad[-1] + 2) if bad.size else 1.0
+    return math.nan if not ok[-1] else float(bad[-1] + 2) if bad.size else 1.0
 
 
 def route_indicator(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
                     areas: Sequence[int]) -> np.ndarray:
-    """Per episode: succeeded and visited exactly the areas of ``route_areas``
+    """Per episode: succeeded visiting exactly the areas of ``route_areas``
     (``visits[..., n_areas]``, areas in the order of ``areas``)."""
-    on = np.array([a in set(route_areas) for a in areas])
+    on = np.isin(areas, route_areas)
     visited = visits > 0
-    exact = np.all(visited[..., on], axis=-1) & ~np.any(visited[..., ~on], axis=-1)
-    return exact & (success > 0)
-
-
-def convergence_episode(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
-                        areas: Sequence[int], window: int = 50,
-                        share: float = 0.5) -> tuple[float, ...]:
-    """Per run: the episode from which at least ``share`` of the last ``window`` episodes
-    follow ``route_areas`` successfully, to the end of the run (NaN: not converged)."""
-    ind = route_indicator(visits, success, route_areas, areas)
-    return tuple(settles(row, window, share) for row in ind)
+    return visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
 
 
 def iqm(x: np.ndarray, axis: int | None = None) -> np.ndarray:
@@ -233,20 +204,17 @@ def iqm(x: np.ndarray, axis: int | None = None) -> np.ndarray:
 
 def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED, level: float = 0.95,
            n_resamples: int = 2000) -> tuple[float, float, float]:
-    """IQM of every run's score on every task (``scores``: one array of run scores per
-    task) and its stratified percentile bootstrap CI: :func:`scipy.stats.bootstrap` with
-    one sample per task resamples runs within each task. The CI is NaN when a task has
-    fewer than 2 runs."""
+    """IQM of every run's score on every task (``scores``: an array of run scores per
+    task) and its stratified percentile bootstrap CI (:func:`scipy.stats.bootstrap`, one
+    sample per task: runs resampled within each task); NaN CI with < 2 runs on a task."""
     samples = [s for s in (_finite(s) for s in scores) if s.size]
     if not samples:
         return math.nan, math.nan, math.nan
     point = float(iqm(np.concatenate(samples)))
     if min(s.size for s in samples) < 2:
         return point, math.nan, math.nan
-
-    def statistic(*xs: np.ndarray, axis: int = -1) -> np.ndarray:
-        return iqm(np.concatenate(xs, axis=axis), axis=axis)
-
-    res = sps.bootstrap(samples, statistic, n_resamples=n_resamples, confidence_level=level,
-                        method="percentile", rng=np.random.default_rng(seed))
+    res = sps.bootstrap(samples, lambda *xs, axis=-1: iqm(np.concatenate(xs, axis=axis),
+                                                          axis=axis),
+                        n_resamples=n_resamples, confidence_level=level, method="percentile",
+                        rng=np.random.default_rng(seed))
     return point, float(res.confidence_interval.low), float(res.confidence_interval.high)

@@ -31,7 +31,7 @@ from gdq_pddl.analysis.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.analysis.routes import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
+from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
 from gdq_pddl.errors import GdqError
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
@@ -59,18 +59,6 @@ class RouteSummary:
         """Runs whose route reaches the goal through exactly ``areas``."""
         return sum(r.reached_goal and r.areas(world) == tuple(areas)
                    for r in self.routes.values())
-
-
-def summarise_routes(world: World, routes: dict[int, Route]) -> RouteSummary | None:
-    """The :class:`RouteSummary` of ``routes`` (None when there are none)."""
-    if not routes:
-        return None
-    runs = sorted(routes.items())
-    (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
-    members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
-    top = Counter(r.positions for r in members).most_common(1)[0][0]
-    example = next(r for r in members if r.positions == top)
-    return RouteSummary(dict(routes), areas, end, count, example)
 
 
 def slug(label: str) -> str:
@@ -292,5 +280,11 @@ class Study:
 
     def route_summary(self, experiment: str, method: str, task: str) -> RouteSummary | None:
         """The most common final greedy route of ``method`` (None: no policies)."""
-        routes = self.routes(experiment, method, task)
-        return summarise_routes(self.world(experiment), routes) if routes else None
+        if not (routes := self.routes(experiment, method, task)):
+            return None
+        world, runs = self.world(experiment), sorted(routes.items())
+        (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
+        members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
+        top = Counter(r.positions for r in members).most_common(1)[0][0]
+        return RouteSummary(routes, areas, end, count,
+                            next(r for r in members if r.positions == top))

@@ -18,10 +18,8 @@ import pandas as pd
 
 from gdq_pddl.analysis.results import TASKS_EXPERIMENT
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.analysis.writer import areas_str
+from gdq_pddl.analysis.writer import TABLE_DIR, areas_str
 from gdq_pddl.outputs import write_text
-
-TABLE_DIR = "tables"
 
 
 @dataclass(frozen=True)

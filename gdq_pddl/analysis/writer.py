@@ -94,59 +94,47 @@ def markdown_rows(frame: pd.DataFrame, align: str = "") -> list[str]:
 
 
 class Verdicts:
-    """Each GDQ variant's verdict per hypothesis case, in the order the sections met
-    them (a DataFrame with one row per case and variant)."""
+    """Each GDQ variant's verdict per hypothesis case, in the order the sections met them;
+    ``gdq_runs``: whether the data hold a GDQ run at all (else: no verdicts, and why)."""
 
-    COLUMNS = ("hypothesis", "case", "basis", "variant", "verdict", "reason")
+    COLUMNS = ["hypothesis", "case", "basis", "variant", "verdict", "reason"]
 
     def __init__(self, gdq_runs: bool = True) -> None:
         self.rows: list[tuple[str, ...]] = []
         self.gdq_runs = gdq_runs
-        """Whether the data hold a GDQ run at all (else: no verdicts, and why)."""
-
-    def record(self, hypothesis: str, case: str, basis: str, variant: str,
-               comps: Sequence[Comparison]) -> tuple[str, str]:
-        """Record ``variant``'s verdict on a case; returns the verdict and its reason."""
-        v, reason = verdict(comps), verdict_reason(comps)
-        self.rows.append((hypothesis, case, basis, variant, v, reason))
-        return v, reason
 
     @property
     def frame(self) -> pd.DataFrame:
-        return pd.DataFrame(self.rows, columns=list(self.COLUMNS))
-
+        return pd.DataFrame(self.rows, columns=self.COLUMNS)
     def counts(self) -> str:
         """``GDQ, ... (`GDQ`): k of n cases hold; ...`` per variant, or why there is no
         verdict."""
         if not self.rows:
             return "No verdicts (no GDQ runs in the data)." if not self.gdq_runs else \
                 "No paper-hypothesis verdicts: no tasks or switch experiment with GDQ runs."
-        held = self.frame.assign(held=lambda f: f["verdict"] == HOLDS).groupby(
-            "variant", sort=False)["held"].agg(["sum", "size"])
+        held = (self.frame["verdict"] == HOLDS).groupby(self.frame["variant"]).agg(
+            ["sum", "size"])
         return "; ".join(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {int(h['sum'])} of "
                          f"{int(h['size'])} cases hold" for v, h in held.loc[
                              order_methods(held.index)].iterrows()) + "."
 
     def section(self, notes: Sequence[str]) -> list[str]:
-        """The ``## Verdicts`` section: the table (when there are cases), the counts and
-        the skipped parts."""
+        """``## Verdicts``: a row per case, a column per variant, then the counts and the
+        skipped parts."""
         summary = ["## Verdicts", ""]
         if self.rows:
-            f = self.frame
-            variants = order_methods(f["variant"].unique())
+            f, variants = self.frame, order_methods(self.frame["variant"].unique())
             table = f.pivot_table(index=["hypothesis", "case"], columns="variant",
-                                  values="verdict", aggfunc="first", sort=False)
-            table = table.reindex(columns=variants).map(
-                lambda v: "–" if pd.isna(v) else f"**{v}**")
+                                  values="verdict", aggfunc="first", sort=False).reindex(
+                columns=variants).map(lambda v: "–" if pd.isna(v) else f"**{v}**")
             table.columns = [f"{v} ({VARIANT_NAMES[v]})" if v in VARIANT_NAMES else v
                              for v in variants]
             why = f.assign(why=f["variant"] + " " + f["reason"]).groupby(
                 ["hypothesis", "case"], sort=False).agg(basis=("basis", "first"),
                                                         why=("why", "; ".join))
             table["Basis"] = why["basis"] + ": " + why["why"]
-            table = table.reset_index().rename(columns={"hypothesis": "Hypothesis",
-                                                        "case": "Case"})
-            summary += [*markdown_rows(table), ""]
+            summary += [*markdown_rows(table.reset_index().rename(columns={
+                "hypothesis": "Hypothesis", "case": "Case"})), ""]
         summary += [self.counts(), ""]
         if notes:
             summary += ["Skipped parts:", "", *[f"- {n}" for n in notes], ""]
@@ -185,8 +173,10 @@ class Writer:
         a = stat(variant)
         comps = [compare(a, b, variant, m, higher_is_better, seed=self.opts.seed)
                  for m in self.study.baselines(experiment) if (b := stat(m)).size]
-        self.verdict_line(hypothesis, case, comps, basis, variant)
-        self.add(*([f"  {note}"] if note else []))
+        v, reason = verdict(comps), verdict_reason(comps)
+        self.verdicts.rows.append((hypothesis, case, basis, variant, v, reason))
+        label = case if variant == "GDQ" else f"{case}, {variant}"
+        self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})", *[f"  {note}"][:bool(note)])
         self.comparisons(comps, unit)
         return comps
 
@@ -194,15 +184,6 @@ class Writer:
         for c in comps:
             self.add(f"  - {c.describe(unit)}")
         self.add("")
-
-    def verdict_line(self, hypothesis: str, case: str, comps: Sequence[Comparison],
-                     basis: str, variant: str = "GDQ") -> str:
-        """Record ``variant``'s verdict on a case and write its bullet (GDQ under the case
-        name, a variant as ``case, variant``)."""
-        v, reason = self.verdicts.record(hypothesis, case, basis, variant, comps)
-        label = case if variant == "GDQ" else f"{case}, {variant}"
-        self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})")
-        return v
 
     def variants(self, experiment: str) -> list[str]:
         """GDQ and its variants present in ``experiment`` (GDQ first)."""
@@ -213,9 +194,6 @@ class Writer:
         note ``what`` as skipped because ``why`` and return False (the section ends)."""
         self.add(f"## {title}", "")
         if not available:
-            self.note(what, why)
+            self.notes.append(f"{what}: skipped, {why}.")
+            self.add(f"_Skipped: {why}._", "")
         return available
-
-    def note(self, what: str, why: str) -> None:
-        self.notes.append(f"{what}: skipped, {why}.")
-        self.add(f"_Skipped: {why}._", "")

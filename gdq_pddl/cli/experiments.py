@@ -164,7 +164,7 @@ def cmd_knowledge(args: argparse.Namespace) -> int:
     command = f"gdq-pddl knowledge --episodes {args.episodes} --runs {args.runs} --seed {args.seed}"
 
     def report(out: Path) -> str:
-        from gdq_pddl.analysis.knowledge_report import make_knowledge_report  # start-up time
+        from gdq_pddl.analysis.knowledge import make_knowledge_report  # start-up time
 
         paths = make_knowledge_report(out, command)
         return f"wrote {len(paths)} figures and reports; read {out / 'REPORT.md'}"
@@ -267,7 +267,7 @@ def cmd_pairs(args: argparse.Namespace) -> int:
 
 def pairs_report(out: Path) -> str:
     """Table, figure and REPORT.md of a pairs folder; returns what was written."""
-    from gdq_pddl.analysis.pairs_report import make_pairs_report  # start-up time
+    from gdq_pddl.analysis.pairs import make_pairs_report  # start-up time
 
     paths = make_pairs_report(out)
     return f"wrote {len(paths) - 1} tables and figures; read {paths[-1]}"

@@ -7,8 +7,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gdq_pddl.analysis.knowledge import convergence_episode, policy_value, route_check
+from gdq_pddl.analysis.knowledge import convergence_episode, route_check
 from gdq_pddl.cli import main
+from gdq_pddl.envs.evaluate import policy_value
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.errors import GdqError

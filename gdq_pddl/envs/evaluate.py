@@ -1,0 +1,180 @@
+"""Policies evaluated on a world's true model: greedy routes, exact values, task facts.
+
+A learner's greedy policy (learner state -> action) is walked along its *intended*
+route: from the task's start with every door closed, take the policy's action, follow
+its most likely outcome (ties: the first listed), and stop at the goal, after
+:data:`MAX_ROUTE_STEPS` actions, on a stuck outcome, at a state without a policy entry,
+or when a full state repeats. In area terms a route drops consecutive repeats:
+``p0 p2 p4 p8 p5 p6 p7 p17`` is areas ``1 3 2 6``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.solve import expected_area_visits, expected_costs, optimal_value, solve_task
+from gdq_pddl.world import Task, World
+
+MAX_ROUTE_STEPS = 30
+RELEVANCE_THRESHOLD = 0.05
+"""Expected visits per episode of the optimal policy above which an area is relevant
+(when ``optimal.json`` gives no ``relevant_areas``: at 0 a slip of a ``goto`` makes
+nearly every area relevant)."""
+
+Policy = Mapping[int, int] | np.ndarray
+"""Learner state -> action (an array: -1 or out of range means no entry)."""
+
+
+def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[int, ...]:
+    """Areas along ``positions``, consecutive repeats dropped (positions in no area skipped)."""
+    areas = [a for p in positions if (a := world.area_of.get(p)) is not None]
+    return tuple(a for i, a in enumerate(areas) if i == 0 or areas[i - 1] != a)
+
+
+@dataclass(frozen=True)
+class Route:
+    """Where a greedy policy takes the robot (positions include the start); ``end`` says
+    why the walk stopped: ``goal``, ``stuck``, ``loop``, ``no-policy`` or ``limit``."""
+
+    positions: tuple[str, ...]
+    reached_goal: bool
+    end: str
+
+    def areas(self, world: World) -> tuple[int, ...]:
+        return area_route(world, self.positions)
+
+
+def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
+    """The full state ``action`` in full state ``fs`` most likely leads to (ties: the
+    first listed outcome); None when that outcome is stuck."""
+    lo, hi = model.ptr[fs * model.n_actions + action: fs * model.n_actions + action + 2]
+    k = lo + int(np.argmax(model.prob[lo:hi]))
+    return None if model.stuck[k] else int(model.next[k])
+
+
+def _follow(world: World, model: ModelArrays, fs: int, goal_pos: int,
+            action_at: Callable[[int, int], int | None], steps: int, stop_on_loop: bool
+            ) -> Route:
+    """Walk from full state ``fs`` along likeliest outcomes, taking ``action_at(step, fs)``
+    (None: no policy there) for at most ``steps`` actions."""
+    positions, seen = [world.positions[model.pos_of[fs]]], {fs}
+    for step in range(steps):
+        action = action_at(step, fs)
+        fs = None if action is None else likeliest_next(model, fs, action)
+        if fs is None:
+            return Route(tuple(positions), False, "no-policy" if action is None else "stuck")
+        positions.append(world.positions[model.pos_of[fs]])
+        if model.pos_of[fs] == goal_pos:
+            return Route(tuple(positions), True, "goal")
+        if stop_on_loop and fs in seen:
+            return Route(tuple(positions), False, "loop")
+        seen.add(fs)
+    return Route(tuple(positions), False, "limit")
+
+
+def walk_policy(world: World, policy: Policy, start: str, goal: str,
+                max_steps: int = MAX_ROUTE_STEPS) -> Route:
+    """The intended route of ``policy`` from ``start`` to ``goal`` (see the module doc)."""
+    model = compile_model(world)
+
+    def action_at(_step: int, fs: int) -> int | None:
+        obs = int(model.obs_of[fs])
+        if isinstance(policy, np.ndarray):
+            return int(policy[obs]) if obs < len(policy) and policy[obs] >= 0 else None
+        return int(policy[obs]) if obs in policy else None
+
+    return _follow(world, model, full_state(world, world.position(start)),
+                   world.index[world.position(goal)], action_at, max_steps, True)
+
+
+def resolve_task_label(world: World, label: str) -> Task:
+    """The task a ``task`` column names: a task of the world (``C``), or an ad-hoc
+    ``start->goal`` / ``start-goal`` pair of positions or landmarks."""
+    if label in world.tasks or label.upper() in world.tasks:
+        return world.task(label)
+    for sep in ("->", "-"):
+        if sep in label:
+            start, goal = label.split(sep, 1)
+            return world.resolve(start=start.strip(), goal=goal.strip())
+    return world.task(label)  # raises, listing the known tasks
+
+
+def optimal_route(world: World, task: Task | str) -> Route:
+    """The likeliest route of the true optimal (time-dependent) policy from the start."""
+    t = resolve_task_label(world, task) if isinstance(task, str) else task
+    model = compile_model(world)
+    solution, fs = solve_task(world, t, model)
+    return _follow(world, model, fs, solution.goal_pos,
+                   lambda step, fs: int(solution.policy[step, fs]), model.step_limit, False)
+
+
+def policy_value(world: World, task: Task, policy: Policy,
+                 model: ModelArrays | None = None) -> float:
+    """Exact expected undiscounted return from the start of a stationary learner policy
+    in ``world``, by backward induction over the step limit (the outcome rewards of
+    :func:`gdq_pddl.envs.solve.solve`)."""
+    model = compile_model(world) if model is None else model
+    n_full, r = model.obs_of.shape[0], model.r_max
+    if isinstance(policy, np.ndarray):
+        pi = np.asarray(policy, dtype=np.int64)
+    else:
+        pi = np.zeros(int(model.obs_of.max()) + 1, dtype=np.int64)
+        pi[list(policy)] = list(policy.values())
+    act = pi[model.obs_of]
+    lo, hi = (model.ptr[np.arange(n_full) * model.n_actions + act + k] for k in (0, 1))
+    owner = np.repeat(np.arange(n_full), hi - lo)
+    k = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi, strict=True)])
+    prob, nxt, stuck = model.prob[k], model.next[k], model.stuck[k]
+    goal_pos = world.index[task.goal]
+    at_goal = model.pos_of[nxt] == goal_pos
+    end_reward = np.where(at_goal & ~stuck, r, -r)
+    cost = expected_costs(model)[act[owner]]
+    v = np.zeros(n_full)
+    for t in range(model.step_limit - 1, -1, -1):
+        value = end_reward if t == model.step_limit - 1 else np.where(
+            stuck | at_goal, end_reward, -cost + v[nxt])
+        v = np.where(model.pos_of == goal_pos, 0.0,
+                     np.bincount(owner, prob * value, minlength=n_full))
+    return float(v[full_state(world, task.start)])
+
+
+@dataclass(frozen=True)
+class TaskTruth:
+    """What the true model says about one task (``irrelevant_areas``: the world's areas
+    not in ``relevant_areas``)."""
+
+    task: str
+    v_star: float
+    relevant_areas: tuple[int, ...]
+    irrelevant_areas: tuple[int, ...]
+    irrelevant_areas_paper: tuple[int, ...]
+    optimal_route_areas: tuple[int, ...]
+
+
+def task_truth(world: World, task: Task | str,
+               given: Mapping[str, Any] | None = None) -> TaskTruth:
+    """Facts of ``task`` from ``optimal.json`` (``given``) where present, computed otherwise."""
+    given = given or {}
+    t = resolve_task_label(world, task) if isinstance(task, str) else task
+
+    def ints(key: str) -> tuple[int, ...] | None:
+        value = given.get(key)
+        return tuple(int(v) for v in value) if isinstance(value, list | tuple) else None
+
+    all_areas = tuple(sorted(a for a, ps in world.areas.items() if ps))
+    v_star = given.get("v_star")
+    relevant = ints("relevant_areas")
+    if relevant is None:
+        visits = expected_area_visits(world, t)
+        relevant = tuple(a for a in all_areas if visits.get(a, 0.0) > RELEVANCE_THRESHOLD)
+    paper, route = ints("irrelevant_areas_paper"), ints("optimal_route_areas")
+    return TaskTruth(
+        t.name, float(v_star) if isinstance(v_star, int | float) else optimal_value(world, t),
+        tuple(sorted(relevant)), tuple(a for a in all_areas if a not in relevant),
+        paper if paper is not None else tuple(t.irrelevant_areas),
+        route if route is not None else optimal_route(world, t).areas(world))
