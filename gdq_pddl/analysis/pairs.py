@@ -30,10 +30,10 @@ from matplotlib.ticker import MaxNLocator
 from scipy import stats as sps
 
 from gdq_pddl.analysis.figures import save_all
-from gdq_pddl.analysis.results import load_config, order_methods
 from gdq_pddl.analysis.stats import iqm_ci
 from gdq_pddl.analysis.writer import markdown_rows, number
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.results import load_config, order_methods
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import builtin_world, load_world
 

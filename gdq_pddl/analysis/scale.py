@@ -20,9 +20,9 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
-from gdq_pddl.analysis.results import order_methods
 from gdq_pddl.analysis.stats import mean_se
 from gdq_pddl.analysis.writer import markdown_rows
+from gdq_pddl.experiments.results import order_methods
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
 from gdq_pddl.outputs import write_text
 

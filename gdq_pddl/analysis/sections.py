@@ -14,12 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import (
-    ROBOT_EXPERIMENT,
-    TASKS_EXPERIMENT,
-    optimal_entry,
-    order_methods,
-)
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
@@ -46,6 +40,12 @@ from gdq_pddl.analysis.writer import (
 )
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
+from gdq_pddl.experiments.results import (
+    ROBOT_EXPERIMENT,
+    TASKS_EXPERIMENT,
+    optimal_entry,
+    order_methods,
+)
 from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners import DarlingConfig, office_task_context
 from gdq_pddl.planning import get_planner

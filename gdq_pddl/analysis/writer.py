@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import is_gdq, order_methods
 from gdq_pddl.analysis.stats import (
     HOLDS,
     Comparison,
@@ -21,6 +20,7 @@ from gdq_pddl.analysis.stats import (
     verdict_reason,
 )
 from gdq_pddl.analysis.study import Study
+from gdq_pddl.experiments.results import is_gdq, order_methods
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,6 @@ import pytest
 from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
 from gdq_pddl.analysis import figures, make_all, write_report
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
-from gdq_pddl.analysis.results import load_config
 from gdq_pddl.analysis.sections import optinit_values
 from gdq_pddl.analysis.stats import compare, first_positive, moving_average, verdict
 from gdq_pddl.analysis.study import Study
@@ -21,6 +20,7 @@ from gdq_pddl.analysis.tables import area_table, make_tables
 from gdq_pddl.envs.evaluate import walk_policy
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import solve
+from gdq_pddl.experiments.results import load_config
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
