@@ -19,13 +19,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from matplotlib.figure import Figure
 
 from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.analysis.writer import markdown_rows
+from gdq_pddl.analysis.writer import render, table_text
 from gdq_pddl.envs.evaluate import likeliest_next, optimal_route, policy_value, walk_policy
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.solve import solve_task
@@ -271,8 +270,8 @@ def _check(steps: list[RouteStep], attr: str) -> str:
     return "no, not at " + "; ".join(missing) if missing else "yes, at every step"
 
 
-def case_lines(case: CaseResult) -> list[str]:
-    """A case's section of ``REPORT.md``."""
+def case_data(case: CaseResult) -> dict:
+    """A case's tables and findings for ``templates/knowledge.md.j2``."""
     rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
              f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
              _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
@@ -281,59 +280,21 @@ def case_lines(case: CaseResult) -> list[str]:
              ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
                        for k, v in Counter(w.routes).most_common()) or "n/a"]
             for m, a, w in case.paired()]
-    excluded = [s.state for s in case.checks[WRONG] if not s.darling_allowed]
-    return [
-        f"## {case.name}", "", case.description + "." if case.description else "", "",
-        f"- real world `{case.real}`, knowledge world `{case.knowledge}`, task "
-        f"{case.task.name} ({case.task.start} -> {case.task.goal})",
-        f"- V* = {case.v_star:.3f}; convergence threshold {threshold(case.v_star):.3f}",
-        f"- optimal route: {' '.join(case.optimal_positions)} (areas "
-        f"{'-'.join(map(str, case.optimal_areas))})", "",
-        *markdown_rows(pd.DataFrame(rows, columns=[
-            "method", "on route (wrong / accurate)", "converged runs",
-            "median convergence episode", "extra episodes", "policy value", "final return",
-            "greedy routes (wrong)"])),
-        "", "(pairs are wrong knowledge / accurate knowledge)", "",
-        "Does the knowledge contain the true optimum? Along the optimal route:", "",
-        *markdown_rows(pd.DataFrame([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
-                                     for kind in (WRONG, ACCURATE)],
-                                    columns=["knowledge", *CHECKS.values()])),
-        "", "Findings:", "",
-        *(f"- **{m}**: greedy policy on the optimal route in {w.on_route}/{w.runs} runs with "
-          f"wrong knowledge, {a.on_route}/{a.runs} with accurate; converged in "
-          f"{w.converged}/{w.runs} vs {a.converged}/{a.runs} runs (median episode "
-          f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)})." for m, a, w in case.paired()),
-        "- DARLING's allowed set (wrong knowledge) excludes every optimal action at "
-        + ", ".join(excluded) + "." if excluded else "- DARLING's allowed set (wrong "
-        "knowledge) contains an optimal action at every step of the optimal route.", ""]
+    return {"case": case, "threshold": threshold(case.v_star), "table": table_text(rows, [
+        "method", "on route (wrong / accurate)", "converged runs", "median convergence episode",
+        "extra episodes", "policy value", "final return", "greedy routes (wrong)"]),
+        "checks": table_text([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
+                              for kind in (WRONG, ACCURATE)], ["knowledge", *CHECKS.values()]),
+        "findings": [(m, a, w, f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}")
+                     for m, a, w in case.paired()],
+        "excluded": [s.state for s in case.checks[WRONG] if not s.darling_allowed]}
 
 
 def make_knowledge_report(out: str | Path, command: str = "gdq-pddl knowledge") -> list[Path]:
     """Analyse ``out`` and write its figures and ``REPORT.md``; returns the paths."""
     out = Path(out)
     cases = analyse(out)
-    lines = [
-        "# Knowledge that disagrees with the world", "",
-        f"Command: `{command}`. The env simulates the *real* world; the learners' knowledge "
-        "(PDDL problem, plans) is built from the *knowledge* world. Each case is run twice on "
-        "the same real world: with wrong knowledge, and with accurate knowledge (built from "
-        "the real world) as the reference. V* and the optimal route come from value "
-        "iteration on the real world.", "",
-        "Definitions (measured, see `gdq_pddl/analysis/knowledge.py`):", "",
-        f"- *converged at episode e*: e is the first episode at which the trailing {WINDOW}"
-        f"-episode mean return of a run reaches V* - {1 - FRACTION:.2f} |V*| (first passage; "
-        "'stays above until the end' measured mostly the last exploration dip). The median "
-        "is over runs, unconverged runs counting as 'never'; *extra* = median with wrong "
-        "knowledge - median with accurate knowledge. The control case's extra episodes "
-        "show the noise of this comparison.",
-        "- *on route*: the final greedy policy, walked along likeliest outcomes in the real "
-        "world, reaches the goal along the optimal policy's area route.",
-        "- *policy value*: the exact expected return of the final greedy policy in the real "
-        "world, as a fraction of V* (the raw value when V* <= 0).",
-        f"- *final return*: mean return of the last {FINAL} episodes over all runs.", "",
-        "Figures: `knowledge_curves.png` (learning curves; solid: wrong knowledge, dashed: "
-        "accurate), `knowledge_convergence.png` (convergence episodes).", "",
-        *(line for case in cases for line in case_lines(case))]
     path = out / "REPORT.md"
-    write_text(path, "\n".join(lines))
+    write_text(path, render("knowledge.md.j2", command=command, window=WINDOW, final=FINAL,
+                            fraction=FRACTION, cases=[case_data(c) for c in cases]))
     return [*write_figures(cases, out), path]
