@@ -8,7 +8,8 @@ episode at which the trailing :data:`WINDOW`-episode mean return reaches
 docs/decisions.md says why first passage and why 85%); **the final greedy policy**,
 walked in the real world, its area route against the optimal one and its exact value;
 and along the optimal route, whether an optimal action is in DARLING's allowed set,
-GDQ's prior, the shortest plans and the 1.3x plans (:func:`route_check`).
+GDQ's prior, the shortest plans and the 1.3x plans
+(:func:`~gdq_pddl.experiments.probes.route_check`).
 """
 
 from __future__ import annotations
@@ -25,15 +26,14 @@ from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.writer import render, table_text
-from gdq_pddl.envs.evaluate import likeliest_next, optimal_route, policy_value, walk_policy
+from gdq_pddl.envs.evaluate import optimal_route, policy_value, walk_policy
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.experiments.knowledge import CASES, knowledge_world
+from gdq_pddl.experiments.probes import CHECKS, RouteStep, route_check
 from gdq_pddl.experiments.work import load_world_named, resolve_task
-from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.outputs import write_text
-from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World
+from gdq_pddl.world import Task
 
 WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100
 """Moving-average windows (episodes) of convergence and of the curves; episodes at the
@@ -60,50 +60,6 @@ def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW)
     >= ``level``; None if it never is."""
     hits = np.flatnonzero(moving_average(returns, window) >= level)
     return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
-
-
-@dataclass(frozen=True)
-class RouteStep:
-    """One step of the true optimal route: its optimal actions (ties within 1e-9) and
-    whether one is allowed by DARLING, starts a shortest / tolerant plan, or is applicable
-    in GDQ's prior model (valued before it is tried)."""
-
-    state: str
-    optimal: tuple[str, ...]
-    darling_allowed: bool
-    in_shortest_plans: bool
-    in_tolerant_plans: bool
-    in_prior: bool = False
-
-
-CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an optimal "
-          "action is applicable in the prior model (GDQ)", "in_shortest_plans": "... starts "
-          "a shortest plan (GDQ-literal)", "in_tolerant_plans": "... a plan within 1.3x "
-          "(GDQ-code)"}
-
-
-def route_check(real: World, knowledge: World, task: Task,
-                darling_tolerance: float = 0.3) -> list[RouteStep]:
-    """:class:`RouteStep` along the likeliest route of the true optimal policy in
-    ``real``, with knowledge from ``knowledge``."""
-    ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
-    tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
-              ctx.darling_plans.first_actions, ctx.prior.applicable)
-    model = compile_model(real)
-    solution, fs = solve_task(real, task, model)
-    spaces = LearnerSpaces(real)
-    out: list[RouteStep] = []
-    for t in range(model.step_limit):
-        obs, q = int(model.obs_of[fs]), solution.Q[t, fs]
-        best = np.flatnonzero(q >= q.max() - 1e-9)
-        out.append(RouteStep(spaces.state_name(obs),
-                             tuple(spaces.action_name(int(a)) for a in best),
-                             *(bool(table[obs, best].any()) for table in tables)))
-        nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
-        if nxt is None or model.pos_of[nxt] == solution.goal_pos:
-            break
-        fs = nxt
-    return out
 
 
 @dataclass

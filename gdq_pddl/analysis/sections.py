@@ -9,7 +9,6 @@ experiments. Every number is computed from the data; nothing is typed in.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -40,15 +39,15 @@ from gdq_pddl.analysis.writer import (
     route_str,
 )
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
+from gdq_pddl.experiments.probes import optinit_values
+from gdq_pddl.experiments.protocol import GDQ_VARIANTS
 from gdq_pddl.experiments.results import (
     ROBOT_EXPERIMENT,
     TASKS_EXPERIMENT,
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.experiments.work import make_learner
-from gdq_pddl.learners import DarlingConfig, office_task_context
+from gdq_pddl.learners import DarlingConfig
 from gdq_pddl.planning import get_planner
 
 
@@ -206,9 +205,7 @@ fraction of V*."""
     if not study.has(exp):
         w.add("_The tasks experiment is missing: skipped._", "")
         return
-    w.add("V* is the optimal expected return per episode from value iteration on the "
-          "true model; relevant areas are those the optimal policy visits "
-          "(`optimal.json` where given, else > 0.05 expected visits per episode).", "")
+    w.add(say("ground_truth"), "")
     pairs = {t: exp for t in study.tasks(exp)}
     for switch in study.switch_experiments:
         pairs |= {t: switch for t in study.tasks(switch) if t not in pairs}
@@ -281,9 +278,7 @@ return first turns positive."""
                       f"{verdict(early)}: {variant} {verdict_reason(early)}):")
                 w.comparisons(early)
     methods = study.methods(exp)
-    w.add(f"Episode at which the {opts.window}-episode moving average of return first turns "
-          "positive: on the mean curve over runs; in brackets the mean over the "
-          "runs that reach it and how many do.", "")
+    w.add(say("milestones", window=opts.window), "")
     w.table([[t, *(milestone_str(first_positive(study.returns(exp, m, t), opts.window))
                    for m in methods)] for t in study.tasks(exp)], ["Task", *methods])
 
@@ -295,12 +290,7 @@ def write_hypothesis_2(w: Writer) -> None:
                      "Hypothesis II", "the tasks experiment (A-D) is missing"):
         return
     table = area_table(study)
-    w.add("Area visits summed over a run, mean (SE) over runs; bold: fewest visits "
-          "among the methods in an area irrelevant by either definition. "
-          f"(Also in `{TABLE_DIR}/area_visits.md`, `.tex`, `.csv`.)", "",
-          area_markdown(table))
-    w.add("Statistic: per run, the visits to the task's irrelevant areas summed over "
-          "the run (fewer is better), for the paper's and for the computed set.", "")
+    w.add(say("areas", table_dir=TABLE_DIR), "", area_markdown(table), say("h2"), "")
     areas = study.areas
     for task in study.tasks(exp):
         variants = [v for v in w.variants(exp) if study.area_totals(exp, v, task).shape[0]]
@@ -437,7 +427,7 @@ def write_why_gdq_fails(w: Writer) -> None:
         return
     tasks = study.tasks(exp)
     task = "C" if "C" in tasks else tasks[0]
-    init = optinit_values(study, exp, task)
+    init = optinit_values(study.config, exp, study.world(exp), study.task(exp, task))
     r_max, gamma = init.r_max, init.gamma
     bound = r_max / (1 - gamma)
     w.add(say("optinit", task=task, r_max=f"{r_max:g}", gamma=f"{gamma:g}", bound=bound,
@@ -461,38 +451,6 @@ def write_why_gdq_fails(w: Writer) -> None:
                   alpha=f"{init.alpha:g}", decay=f"{init.alpha * (1 - gamma):.2%}",
                   literal=pct(timeout), code=pct(shares.get("GDQ-code", math.nan)),
                   gdq=pct(shares.get("GDQ", math.nan))), "")
-
-@dataclass(frozen=True)
-class OptInitValues:
-    """Q at the start state right after OptInit, per GDQ variant (see
-    :func:`optinit_values`)."""
-
-    task: str
-    r_max: float
-    gamma: float
-    alpha: float
-    values: dict[str, tuple[float, float, int]]
-    """Method -> (Q(s0, greedy action), median Q(s0, ·), number of actions)."""
-
-
-def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
-    """Build each GDQ variant for ``task`` with the experiment's hyperparameters and
-    planner (as the runner does) and read Q(s0, ·) before any episode."""
-    entry = next((e for e in study.config.experiments if e.get("name") == experiment
-                  and any(t == task for t, _ in e.get("schedule") or [])),
-                 study.config.experiment(experiment))
-    raw = entry.get("hyper") if isinstance(entry.get("hyper"), dict) else {}
-    hyper = Hyper(**{k: float(v) for k, v in raw.items() if k in ("alpha", "gamma", "epsilon")})
-    planner = entry.get("planner") if isinstance(entry.get("planner"), str) else "graph"
-    ctx = office_task_context(study.world(experiment), study.task(experiment, task), planner)
-    values = {}
-    for method in GDQ_VARIANTS:
-        learner = make_learner(method, ctx, hyper)
-        q = learner.q[ctx.s0]
-        greedy = int(learner.greedy_policy()[ctx.s0])
-        values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
-    return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
-
 
 def write_robot(w: Writer) -> None:
     """The robot protocol (simulated): returns, first successes and routes per trial."""
