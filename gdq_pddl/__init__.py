@@ -22,7 +22,7 @@ __version__ = "0.1.0"
 
 register_envs()  # gymnasium.make("gdq_pddl/Office-v0" or "gdq_pddl/PDDL-v0", ...) after import
 
-_LAZY = {"load_results": "gdq_pddl.analysis.results",
+_LAZY = {"load_results": "gdq_pddl.experiments.results",
          **dict.fromkeys(("GreedyPolicy", "evaluate_policy", "load_generators", "load_learner",
                           "save_learner"), "gdq_pddl.learners")}
 __all__ = ["__version__", *_LAZY, "envs", "learners", "errors", "resources"]
@@ -32,7 +32,7 @@ writes its pages."""
 
 load_results: Callable[..., pandas.DataFrame]
 """An output folder's episodes as a pandas DataFrame, one row per episode
-(:func:`gdq_pddl.analysis.results.load_results`)."""
+(:func:`gdq_pddl.experiments.results.load_results`)."""
 save_learner: Callable[..., None]
 """Save a learner's tables, config and generators to a ``.npz`` file, no pickle
 (:func:`gdq_pddl.learners.saving.save_learner`)."""
@@ -53,7 +53,7 @@ evaluate_policy: Callable[..., episodes.EpisodeRecords]
 def __getattr__(name: str):
     """The names of :data:`_LAZY`, imported on first use (start-up time: an env user needs
     neither the learners' compiled code nor pandas and matplotlib): ``load_results``
-    (:func:`gdq_pddl.analysis.results.load_results`: an output folder's episodes as a
+    (:func:`gdq_pddl.experiments.results.load_results`: an output folder's episodes as a
     pandas DataFrame) and save, load and evaluate (:mod:`gdq_pddl.learners.saving`,
     :func:`gdq_pddl.learners.evaluate_policy`)."""
     if name in _LAZY:

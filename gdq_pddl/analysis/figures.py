@@ -25,10 +25,10 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 from scipy import stats as sps
 
-from gdq_pddl.analysis.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
 from gdq_pddl.analysis.stats import mean_se, moving_average
 from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.envs.render import MapPainter
+from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
 from gdq_pddl.outputs import save_figure
 from gdq_pddl.world import Task, World
 

@@ -8,7 +8,8 @@ episode at which the trailing :data:`WINDOW`-episode mean return reaches
 docs/decisions.md says why first passage and why 85%); **the final greedy policy**,
 walked in the real world, its area route against the optimal one and its exact value;
 and along the optimal route, whether an optimal action is in DARLING's allowed set,
-GDQ's prior, the shortest plans and the 1.3x plans (:func:`route_check`).
+GDQ's prior, the shortest plans and the 1.3x plans
+(:func:`~gdq_pddl.experiments.probes.route_check`).
 """
 
 from __future__ import annotations
@@ -19,22 +20,20 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from matplotlib.figure import Figure
 
 from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.analysis.writer import markdown_rows
-from gdq_pddl.envs.evaluate import likeliest_next, optimal_route, policy_value, walk_policy
+from gdq_pddl.analysis.writer import render, table_text
+from gdq_pddl.envs.evaluate import optimal_route, policy_value, walk_policy
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.experiments.knowledge import CASES, knowledge_world
+from gdq_pddl.experiments.probes import CHECKS, RouteStep, route_check
 from gdq_pddl.experiments.work import load_world_named, resolve_task
-from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.outputs import write_text
-from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World
+from gdq_pddl.world import Task
 
 WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100
 """Moving-average windows (episodes) of convergence and of the curves; episodes at the
@@ -61,50 +60,6 @@ def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW)
     >= ``level``; None if it never is."""
     hits = np.flatnonzero(moving_average(returns, window) >= level)
     return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
-
-
-@dataclass(frozen=True)
-class RouteStep:
-    """One step of the true optimal route: its optimal actions (ties within 1e-9) and
-    whether one is allowed by DARLING, starts a shortest / tolerant plan, or is applicable
-    in GDQ's prior model (valued before it is tried)."""
-
-    state: str
-    optimal: tuple[str, ...]
-    darling_allowed: bool
-    in_shortest_plans: bool
-    in_tolerant_plans: bool
-    in_prior: bool = False
-
-
-CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an optimal "
-          "action is applicable in the prior model (GDQ)", "in_shortest_plans": "... starts "
-          "a shortest plan (GDQ-literal)", "in_tolerant_plans": "... a plan within 1.3x "
-          "(GDQ-code)"}
-
-
-def route_check(real: World, knowledge: World, task: Task,
-                darling_tolerance: float = 0.3) -> list[RouteStep]:
-    """:class:`RouteStep` along the likeliest route of the true optimal policy in
-    ``real``, with knowledge from ``knowledge``."""
-    ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
-    tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
-              ctx.darling_plans.first_actions, ctx.prior.applicable)
-    model = compile_model(real)
-    solution, fs = solve_task(real, task, model)
-    spaces = LearnerSpaces(real)
-    out: list[RouteStep] = []
-    for t in range(model.step_limit):
-        obs, q = int(model.obs_of[fs]), solution.Q[t, fs]
-        best = np.flatnonzero(q >= q.max() - 1e-9)
-        out.append(RouteStep(spaces.state_name(obs),
-                             tuple(spaces.action_name(int(a)) for a in best),
-                             *(bool(table[obs, best].any()) for table in tables)))
-        nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
-        if nxt is None or model.pos_of[nxt] == solution.goal_pos:
-            break
-        fs = nxt
-    return out
 
 
 @dataclass
@@ -271,8 +226,8 @@ def _check(steps: list[RouteStep], attr: str) -> str:
     return "no, not at " + "; ".join(missing) if missing else "yes, at every step"
 
 
-def case_lines(case: CaseResult) -> list[str]:
-    """A case's section of ``REPORT.md``."""
+def case_data(case: CaseResult) -> dict:
+    """A case's tables and findings for ``templates/knowledge.md.j2``."""
     rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
              f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
              _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
@@ -281,59 +236,21 @@ def case_lines(case: CaseResult) -> list[str]:
              ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
                        for k, v in Counter(w.routes).most_common()) or "n/a"]
             for m, a, w in case.paired()]
-    excluded = [s.state for s in case.checks[WRONG] if not s.darling_allowed]
-    return [
-        f"## {case.name}", "", case.description + "." if case.description else "", "",
-        f"- real world `{case.real}`, knowledge world `{case.knowledge}`, task "
-        f"{case.task.name} ({case.task.start} -> {case.task.goal})",
-        f"- V* = {case.v_star:.3f}; convergence threshold {threshold(case.v_star):.3f}",
-        f"- optimal route: {' '.join(case.optimal_positions)} (areas "
-        f"{'-'.join(map(str, case.optimal_areas))})", "",
-        *markdown_rows(pd.DataFrame(rows, columns=[
-            "method", "on route (wrong / accurate)", "converged runs",
-            "median convergence episode", "extra episodes", "policy value", "final return",
-            "greedy routes (wrong)"])),
-        "", "(pairs are wrong knowledge / accurate knowledge)", "",
-        "Does the knowledge contain the true optimum? Along the optimal route:", "",
-        *markdown_rows(pd.DataFrame([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
-                                     for kind in (WRONG, ACCURATE)],
-                                    columns=["knowledge", *CHECKS.values()])),
-        "", "Findings:", "",
-        *(f"- **{m}**: greedy policy on the optimal route in {w.on_route}/{w.runs} runs with "
-          f"wrong knowledge, {a.on_route}/{a.runs} with accurate; converged in "
-          f"{w.converged}/{w.runs} vs {a.converged}/{a.runs} runs (median episode "
-          f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)})." for m, a, w in case.paired()),
-        "- DARLING's allowed set (wrong knowledge) excludes every optimal action at "
-        + ", ".join(excluded) + "." if excluded else "- DARLING's allowed set (wrong "
-        "knowledge) contains an optimal action at every step of the optimal route.", ""]
+    return {"case": case, "threshold": threshold(case.v_star), "table": table_text(rows, [
+        "method", "on route (wrong / accurate)", "converged runs", "median convergence episode",
+        "extra episodes", "policy value", "final return", "greedy routes (wrong)"]),
+        "checks": table_text([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
+                              for kind in (WRONG, ACCURATE)], ["knowledge", *CHECKS.values()]),
+        "findings": [(m, a, w, f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}")
+                     for m, a, w in case.paired()],
+        "excluded": [s.state for s in case.checks[WRONG] if not s.darling_allowed]}
 
 
 def make_knowledge_report(out: str | Path, command: str = "gdq-pddl knowledge") -> list[Path]:
     """Analyse ``out`` and write its figures and ``REPORT.md``; returns the paths."""
     out = Path(out)
     cases = analyse(out)
-    lines = [
-        "# Knowledge that disagrees with the world", "",
-        f"Command: `{command}`. The env simulates the *real* world; the learners' knowledge "
-        "(PDDL problem, plans) is built from the *knowledge* world. Each case is run twice on "
-        "the same real world: with wrong knowledge, and with accurate knowledge (built from "
-        "the real world) as the reference. V* and the optimal route come from value "
-        "iteration on the real world.", "",
-        "Definitions (measured, see `gdq_pddl/analysis/knowledge.py`):", "",
-        f"- *converged at episode e*: e is the first episode at which the trailing {WINDOW}"
-        f"-episode mean return of a run reaches V* - {1 - FRACTION:.2f} |V*| (first passage; "
-        "'stays above until the end' measured mostly the last exploration dip). The median "
-        "is over runs, unconverged runs counting as 'never'; *extra* = median with wrong "
-        "knowledge - median with accurate knowledge. The control case's extra episodes "
-        "show the noise of this comparison.",
-        "- *on route*: the final greedy policy, walked along likeliest outcomes in the real "
-        "world, reaches the goal along the optimal policy's area route.",
-        "- *policy value*: the exact expected return of the final greedy policy in the real "
-        "world, as a fraction of V* (the raw value when V* <= 0).",
-        f"- *final return*: mean return of the last {FINAL} episodes over all runs.", "",
-        "Figures: `knowledge_curves.png` (learning curves; solid: wrong knowledge, dashed: "
-        "accurate), `knowledge_convergence.png` (convergence episodes).", "",
-        *(line for case in cases for line in case_lines(case))]
     path = out / "REPORT.md"
-    write_text(path, "\n".join(lines))
+    write_text(path, render("knowledge.md.j2", command=command, window=WINDOW, final=FINAL,
+                            fraction=FRACTION, cases=[case_data(c) for c in cases]))
     return [*write_figures(cases, out), path]

@@ -30,10 +30,10 @@ from matplotlib.ticker import MaxNLocator
 from scipy import stats as sps
 
 from gdq_pddl.analysis.figures import save_all
-from gdq_pddl.analysis.results import load_config, order_methods
 from gdq_pddl.analysis.stats import iqm_ci
-from gdq_pddl.analysis.writer import markdown_rows, number
+from gdq_pddl.analysis.writer import number, render, table_text
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.results import load_config, order_methods
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import builtin_world, load_world
 
@@ -257,95 +257,30 @@ def command(res: PairRuns) -> str:
     return shlex.join(argv)
 
 
-def report_lines(res: PairRuns, diffs: list[Differences]) -> list[str]:
+def report_text(res: PairRuns, diffs: list[Differences]) -> str:
     """``REPORT.md``: setup, tuning, summary, figure, losses, worst pairs, IQM, the table."""
-    exp, ref, n = res.config["experiments"][0], res.reference, len(res.positions)
-    hyper = ", ".join(f"{k} = {v}" for k, v in exp["hyper"].items())
-    subset = "" if len(res.pairs) == n * (n - 1) else f" (of the {n * (n - 1)})"
-    tuned = ", ".join(res.label(i) for i in np.flatnonzero(res.tuning()))
-    lines = [
-        "# Every ordered start/goal pair", "",
-        f"**Setup.** {len(res.pairs)} ordered (start, goal) pairs{subset} of the world "
-        f"`{exp['world']}`; methods {', '.join(res.methods)}; each learns every pair from "
-        f"scratch {exp['runs']} times for {exp['schedule'][0][1]} episodes, with the paper's "
-        f"hyperparameters ({hyper}), planner `{exp['planner']}`, seed {exp['seed']}. Run r of "
-        "every method on a pair starts from the same seeds, so differences are paired.", "",
-        f"    {command(res)}", "",
-        f"**Tuning.** Every setting of the learners was chosen on tasks A-D only: {tuned}. "
-        "They are bold in the table and boxed in the figure, and the summary is given "
-        "over all pairs and over the others." if tuned else
-        "**Tuning.** Every setting of the learners was chosen on tasks A-D only; "
-        "none of their pairs is among these, so every pair here is untuned.", ""]
-    if not diffs:
-        lines += ["Only one method ran: there is nothing to compare.", ""]
-    else:
-        untuned = ~res.tuning()
-        rows = [summary_row(d, np.ones(len(res.pairs), bool)) for d in diffs]
-        rows += [summary_row(d, untuned, ", excluding A-D") for d in diffs
-                 if untuned.sum() < len(res.pairs)]
-        lost = [i for i in range(len(res.pairs)) if any(d.outcome[i] == LOSS for d in diffs)]
-        lines += [
-            "## Summary", "", *markdown_rows(pd.DataFrame(rows, columns=[
-                f"{ref} minus", "pairs", "mean difference (s.e.)", "wins", "ties", "losses"])),
-            "", f"A win (loss) is a pair whose paired {LEVEL:.0%} interval of {ref} minus the "
-            f"baseline lies above (below) 0. With {len(res.pairs)} pairs, two methods that "
-            f"were equal everywhere would still show about {(1 - LEVEL) * len(res.pairs):.1f} "
-            "wins or losses by chance.", "",
-            f"![{ref} minus each baseline on every pair](figures/pairs.png)", "",
-            f"Left: {ref} minus the baseline, mean return per episode, start by goal (blue: "
-            f"{ref} better; `+` win, `\u2212` loss, faded: tie; boxed: tasks A-D). Right: "
-            f"every pair's difference, sorted, with its {LEVEL:.0%} interval.", "",
-            f"## Where {ref} loses", ""]
-        if not lost:
-            lines += ["Nowhere: no pair's interval lies below 0 against any baseline.", ""]
-        else:
-            worst = min((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
-                        if d.outcome[i] == LOSS)
-            lines += [f"{len(lost)} pairs, where {ref} minus the baseline is significantly "
-                      "negative against at least one baseline (mean difference, its interval); "
-                      f"the largest loss is {number(worst[0], sign=True)} per episode "
-                      f"({worst[2]} against {worst[1]}):", ""]
-            lines += [f"- {res.label(i)}: against " + "; ".join(
-                f"{d.baseline} {number(d.mean[i], sign=True)} {d.interval(i)}"
-                for d in diffs if d.outcome[i] == LOSS) for i in lost] + [""]
-        lines += ["## The worst pairs against each baseline", "",
-                  f"The {WORST} pairs with the lowest mean difference, worst first.", ""]
-        for d in diffs:
-            lines += [f"**{ref} - {d.baseline}:**", "", *(
-                f"{k}. {res.label(i)}: {number(d.mean[i], sign=True)} ({LEVEL:.0%} interval "
-                f"{d.interval(i)}), {d.outcome[i]}" for k, i in enumerate(
-                    np.argsort(d.mean, kind="stable")[:WORST], 1)), ""]
+    exp, n, all_pairs = res.config["experiments"][0], len(res.positions), len(res.pairs)
+    untuned = ~res.tuning()
+    rows = [summary_row(d, np.ones(all_pairs, bool)) for d in diffs]
+    rows += [summary_row(d, untuned, ", excluding A-D") for d in diffs if untuned.sum() < all_pairs]
+    lost = [i for i in range(all_pairs) if any(d.outcome[i] == LOSS for d in diffs)]
     iqms = iqm_table(res)
-    if len(iqms) and iqms["pairs"].iloc[0]:
-        lines += [
-            "## Over all pairs: interquartile mean", "",
-            f"Per method, every run on every pair with V* > 0 ({iqms['pairs'].iloc[0]} "
-            "pairs) gives one score, its mean return per episode / V*; the interquartile "
-            "mean (IQM) of all scores is the mean of their middle 50% (robust to a few "
-            "outlying pairs, less noisy than the median), with a 95% stratified bootstrap "
-            "interval (runs resampled within each pair, 2,000 resamples, "
-            "`scipy.stats.bootstrap`; n/a with a single run).", "",
-            *markdown_rows(pd.DataFrame(
-                [[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"]
-                 for m, r in iqms.iterrows()],
-                columns=["method", "IQM of return / V*", "95% interval"])), ""]
-    return lines + [
-        "## The table", "",
-        "[`tables/pairs.md`](tables/pairs.md) (rounded) and "
-        "[`tables/pairs.csv`](tables/pairs.csv) (every digit), one row per pair:", "",
-        "- `shortest plan`: actions in a shortest plan of the knowledge from start to goal "
-        "(`none`: no plan); `V*`: the optimal expected return of an episode (value "
-        "iteration on the true model, doors closed at the start);",
-        "- per method, the mean return per episode over a run's episodes, then the mean "
-        "over runs (standard error);",
-        f"- per baseline, {ref} minus it: the mean over runs of the paired difference of "
-        f"per-run means (standard error), and the outcome: `win` when the {LEVEL:.0%} "
-        "interval mean +- t(0.975, runs - 1) x s.e. lies above 0, `loss` when below, "
-        "`tie` otherwise (always with one run).", "",
-        "The summary's mean difference is the mean over pairs of the per-pair differences; "
-        "its standard error sqrt(sum of squared per-pair s.e.) / pairs (runs on different "
-        "pairs are independent). The raw data: `runs.csv` (one mean return per pair, "
-        "method and run) and `units/` (every episode's return and success).", ""]
+    return render(
+        "pairs.md.j2", res=res, exp=exp, ref=res.reference, command=command(res), diffs=diffs,
+        lost=lost, level=f"{LEVEL:.0%}", chance=f"{(1 - LEVEL) * all_pairs:.1f}", worst_n=WORST,
+        hyper=", ".join(f"{k} = {v}" for k, v in exp["hyper"].items()),
+        subset="" if all_pairs == n * (n - 1) else f" (of the {n * (n - 1)})",
+        tuned=", ".join(res.label(i) for i in np.flatnonzero(res.tuning())),
+        summary=table_text(rows, [f"{res.reference} minus", "pairs", "mean difference (s.e.)",
+                                  "wins", "ties", "losses"]),
+        worst=min(((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
+                   if d.outcome[i] == LOSS), default=None),
+        order=[np.argsort(d.mean, kind="stable")[:WORST] for d in diffs],
+        iqm_pairs=iqms["pairs"].iloc[0] if len(iqms) else 0,
+        iqms=table_text([[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"]
+                         for m, r in iqms.iterrows()], ["method", "IQM of return / V*",
+                                                        "95% interval"])
+        if len(iqms) and iqms["pairs"].iloc[0] else "")
 
 
 def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
@@ -380,5 +315,5 @@ def make_pairs_report(out: str | Path) -> list[Path]:
             sorted_differences(sx, res, diff)
         paths += save_all(fig, out / "figures", "pairs")
     paths.append(out / "REPORT.md")
-    write_text(paths[-1], "\n".join(report_lines(res, diffs)))
+    write_text(paths[-1], report_text(res, diffs))
     return paths

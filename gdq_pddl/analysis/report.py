@@ -17,12 +17,12 @@ from gdq_pddl.analysis import sections
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
 from gdq_pddl.analysis.knowledge import make_knowledge_report
 from gdq_pddl.analysis.pairs import make_pairs_report
-from gdq_pddl.analysis.results import load_config
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import make_tables
 from gdq_pddl.analysis.writer import ReportOptions, Writer
 from gdq_pddl.errors import ResultsError
 from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
+from gdq_pddl.experiments.results import load_config
 from gdq_pddl.outputs import write_text
 
 SECTIONS = (sections.write_header, sections.write_methods, sections.write_ground_truth,

@@ -14,15 +14,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
-from gdq_pddl.analysis.results import order_methods
 from gdq_pddl.analysis.stats import mean_se
-from gdq_pddl.analysis.writer import markdown_rows
+from gdq_pddl.analysis.writer import render, table_text
+from gdq_pddl.experiments.results import order_methods
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
 from gdq_pddl.outputs import write_text
 
@@ -161,11 +160,9 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
         groups += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
         groups += [(f"**{n} / all {len(group)}**", group)] if len(group) > 1 else []
 
-    def table(columns: list[str], cell: Callable[[list[BuildingResult], str], str]
-              ) -> list[str]:
-        return [*markdown_rows(pd.DataFrame([[label, *(cell(g, c) for c in columns)]
-                                             for label, g in groups],
-                                            columns=["positions / building", *columns])), ""]
+    def table(columns: list[str], cell: Callable[[list[BuildingResult], str], str]) -> str:
+        return table_text([[label, *(cell(g, c) for c in columns)] for label, g in groups],
+                          ["positions / building", *columns])
 
     def conv(group: list[BuildingResult], name: str) -> str:
         med, n, total = convergence(group, name)
@@ -174,46 +171,22 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
     def diff(group: list[BuildingResult], name: str) -> str:
         return "{:+.1f} ± {:.1f}".format(*paired_difference(group, REFERENCE, name))
 
-    lines = [
-        "# Learning against building size", "",
-        f"Generated buildings (`gdq-pddl building --positions N --seed S`, S in "
-        f"{', '.join(map(str, seeds))}), task A, {runs} run(s) x {episodes} episodes per "
-        "method and building, compact model (`gdq_pddl.envs.compact`). Run r of every "
-        "method on a building has the same env and learner seeds (paired runs).", "",
-        f"**Episodes to convergence**: the first episode at which the trailing {WINDOW}-"
-        f"episode moving average of the return reaches R_fail + {FRACTION} (V_ref - R_fail); "
-        "V_ref is the reference value (`gdq_pddl.envs.solve_compact`, a lower "
-        "bound on V*), R_fail = -r_max - (step_limit - 1) the return of a timeout. "
-        "Median over the runs that converged (converged / runs in brackets). Discount "
-        f"gamma = 1 - 1/step_limit; DARLING and GDQ-code use door-route plans within "
-        f"{1 + TOLERANCE:g} x the shortest (`gdq_pddl.abstraction.routes`); see "
-        "`gdq_pddl/experiments/scale.py` for why.", "",
-        "Each table has a row per building and, in bold, a row per size over all its "
-        "buildings (medians over all their converged runs; means over all their runs; "
-        "steps/s of all their runs).", "",
-        "![episodes to convergence, paired differences and steps/s](scale.png)", "",
-        "## Buildings", "",
-        *markdown_rows(pd.DataFrame([[
-            f"{r.positions} / seed {r.seed}", r.doors, f"{r.n_states} x {r.n_actions}",
-            r.plan_length, r.step_limit, f"{r.r_max:g}", f"{r.v_ref:.1f}", f"{r.r_fail:g}",
-            f"{r.threshold:.1f}", f"{r.context_s:.1f}"] for r in results], columns=[
-            "positions / building", "doors", "learner states x actions", "L", "step limit",
-            "r_max", "V_ref", "R_fail", "threshold", "plan tables (s)"])),
-        "", "## Episodes to convergence", "", *table(names, conv),
-        f"## Mean return over the {first}", "", "Mean over runs of each run's mean return.",
-        "", *table(names, lambda g, m: f"{first_means(g, m).mean():.1f}")]
-    if others:
-        lines += [f"## {REFERENCE} minus each method: mean return over the {first}",
-                  "", f"Paired: run r of {REFERENCE} minus run r of the method on the same "
-                  "building; mean ± standard error over those differences (over all the "
-                  "size's runs in the bold rows).", "", *table(others, diff)]
-    lines += [f"## Mean return over all {episodes} episodes", "", *table(
-        names, lambda g, m: f"{np.concatenate([r.returns[m].mean(axis=1) for r in g]).mean():.1f}"),
-        "## Success rate over the last 100 episodes", "", *table(
-        names, lambda g, m: f"{np.mean([r.success[m][:, -100:].mean() for r in g]):.2f}"),
-        "## Env steps/s", "", "Steps of all runs over their wall time (the compiled "
-        "loop of learner and env, one core, the first episode of each method in a "
-        "process untimed).", "", *table(names, lambda g, m: f"{steps_per_s(g, m):,.0f}")]
+    buildings = table_text([[
+        f"{r.positions} / seed {r.seed}", r.doors, f"{r.n_states} x {r.n_actions}",
+        r.plan_length, r.step_limit, f"{r.r_max:g}", f"{r.v_ref:.1f}", f"{r.r_fail:g}",
+        f"{r.threshold:.1f}", f"{r.context_s:.1f}"] for r in results], [
+        "positions / building", "doors", "learner states x actions", "L", "step limit",
+        "r_max", "V_ref", "R_fail", "threshold", "plan tables (s)"])
+    tables = {"conv": table(names, conv), "diff": table(others, diff) if others else "",
+              "first": table(names, lambda g, m: f"{first_means(g, m).mean():.1f}"),
+              "all": table(names, lambda g, m: format(np.concatenate(
+                  [r.returns[m].mean(axis=1) for r in g]).mean(), ".1f")),
+              "success": table(names, lambda g, m: format(np.mean(
+                  [r.success[m][:, -100:].mean() for r in g]), ".2f")),
+              "speed": table(names, lambda g, m: f"{steps_per_s(g, m):,.0f}")}
     path = out / "REPORT.md"
-    write_text(path, "\n".join(lines))
+    write_text(path, render("scale.md.j2", seeds=seeds, runs=runs, episodes=episodes,
+                            window=WINDOW, fraction=FRACTION, tolerance=f"{1 + TOLERANCE:g}",
+                            first=first, reference=REFERENCE, buildings=buildings,
+                            tables=tables))
     return path

@@ -9,17 +9,10 @@ experiments. Every number is computed from the data; nothing is typed in.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import (
-    ROBOT_EXPERIMENT,
-    TASKS_EXPERIMENT,
-    optimal_entry,
-    order_methods,
-)
 from gdq_pddl.analysis.stats import (
     ALPHA,
     compare,
@@ -36,6 +29,7 @@ from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.analysis.tables import area_markdown, area_table
 from gdq_pddl.analysis.writer import (
     TABLE_DIR,
+    TEMPLATES,
     Writer,
     areas_str,
     fmt,
@@ -45,28 +39,21 @@ from gdq_pddl.analysis.writer import (
     route_str,
 )
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
-from gdq_pddl.experiments.work import make_learner
-from gdq_pddl.learners import DarlingConfig, office_task_context
+from gdq_pddl.experiments.probes import optinit_values
+from gdq_pddl.experiments.protocol import GDQ_VARIANTS
+from gdq_pddl.experiments.results import (
+    ROBOT_EXPERIMENT,
+    TASKS_EXPERIMENT,
+    optimal_entry,
+    order_methods,
+)
+from gdq_pddl.learners import DarlingConfig
 from gdq_pddl.planning import get_planner
 
 
-def method_paragraph(w: Writer) -> str:
-    """How comparisons are made and verdicts given (the report's *Method*)."""
-    return (
-        "**Method.** The unit of analysis is the run. For each comparison every run "
-        "contributes one number; each GDQ variant (`GDQ`, the library's: the action "
-        "knowledge as an optimistic prior model; `GDQ-literal`, the paper's Algorithms "
-        "1-3 read literally; `GDQ-code`, the authors' released code) is compared on its "
-        "own with each baseline (every method but GDQ and its variants) by Welch's t-test "
-        "(two-sided) and a percentile bootstrap 95% CI of the difference in means "
-        f"(`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}). "
-        f"A difference counts when the CI excludes 0 and p < {ALPHA} (with fewer than 2 "
-        "runs per method nothing counts). Verdict per case and variant: **holds** = "
-        "the variant significantly better than every baseline; **does not hold** = "
-        "significantly worse than at least one, or better than none; **mixed** = "
-        "otherwise. Milestones use a trailing moving average over full windows of "
-        f"{w.opts.window} episodes (defined from episode {w.opts.window} on).")
+def say(paragraph: str, **data) -> str:
+    """A paragraph of the report: macro ``paragraph`` of ``templates/sections.md.j2``."""
+    return str(getattr(TEMPLATES.get_template("sections.md.j2").module, paragraph)(**data))[:-1]
 
 
 def write_header(w: Writer) -> None:
@@ -87,7 +74,8 @@ def write_header(w: Writer) -> None:
         w.add("Configuration: not recorded (no readable `config.json`).", "")
     if cfg.versions:
         w.add("Versions: " + ", ".join(f"{k} {v}" for k, v in cfg.versions.items()), "")
-    w.add(*planner_lines(study), method_paragraph(w), "")
+    w.add(*planner_lines(study), say("method", seed=w.opts.seed, alpha=ALPHA,
+                                     window=w.opts.window), "")
 
 
 def setup_lines(study: Study) -> list[str]:
@@ -112,29 +100,9 @@ def planner_lines(study: Study) -> list[str]:
         except PlanningError as exc:
             lines.append(f"Planner `{name}`: {exc}; whether it gives every plan is unknown.")
             continue
-        lines.append(f"Planner `{name}` ({'every shortest plan' if every else 'one plan'} per "
-                     f"query); DARLING and GDQ-code use the plans within (1 + {tolerance:g}) x "
-                     "the shortest (the learners' default tolerance).")
-        if not every:
-            lines.append(f"**Warning:** `{name}` returns one plan per query, so GDQ-code's and "
-                         "DARLING's plans within the tolerance are that one plan: their "
-                         "results, and GDQ's differences from them, are not what a planner "
-                         "giving every plan (`graph`) would give.")
+        lines += [say("planner", name=name, every=every, tolerance=f"{tolerance:g}")]
+        lines += [] if every else [say("one_plan", name=name)]
     return [*lines, ""] if lines else []
-
-
-def definitions(window: int) -> str:
-    """What :func:`write_task`'s table and comparisons report (for the text above them)."""
-    return ("Per method: the runs; the mean return per episode over all the task's "
-            "episodes, mean over runs (standard error over runs); the same over each "
-            "run's last 10% of episodes; the success rate (share of all episodes of all "
-            "runs that reach the goal); and the episode of the task (1 = its first) at "
-            f"which the {window}-episode moving average of the mean curve over runs "
-            "first turns positive (in brackets: the mean over the runs that reach it, and "
-            "how many do; n/a: never within the data). Bold: the highest mean return. "
-            "Then each GDQ variant against each baseline (every method but GDQ and its "
-            "variants) on the per-run mean return, over all episodes and over the last "
-            "10%:")
 
 
 def write_methods(w: Writer, full: bool = True) -> None:
@@ -143,13 +111,8 @@ def write_methods(w: Writer, full: bool = True) -> None:
     exps = w.study.uncovered
     if not exps:
         return
-    how = "Welch's t-test and bootstrap CI as in the Method paragraph." if full else (
-        "Welch's t-test (two-sided) and a percentile bootstrap 95% CI of the difference in "
-        f"means over runs (`scipy.stats.bootstrap`, 10,000 resamples, seed {w.opts.seed}); "
-        f"a difference counts when the CI excludes 0 and p < {ALPHA}.")
-    w.add("## Methods compared", "",
-          f"Experiments no paper hypothesis covers ({', '.join(exps)}): each method on "
-          f"each task of the experiment. {definitions(w.opts.window)} {how}", "")
+    w.add("## Methods compared", "", say("methods", exps=exps, window=w.opts.window, full=full,
+                                         seed=w.opts.seed, alpha=ALPHA), "")
     for exp in exps:
         w.figure(curves_stem(exp), f"learning curves, {exp}")
         for task in w.study.tasks(exp):
@@ -242,9 +205,7 @@ fraction of V*."""
     if not study.has(exp):
         w.add("_The tasks experiment is missing: skipped._", "")
         return
-    w.add("V* is the optimal expected return per episode from value iteration on the "
-          "true model; relevant areas are those the optimal policy visits "
-          "(`optimal.json` where given, else > 0.05 expected visits per episode).", "")
+    w.add(say("ground_truth"), "")
     pairs = {t: exp for t in study.tasks(exp)}
     for switch in study.switch_experiments:
         pairs |= {t: switch for t in study.tasks(switch) if t not in pairs}
@@ -281,11 +242,7 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
     slices = [(e, t) for e, t in slices if study.v_star(e, t) > 0]
     if len(slices) < 2:
         return
-    w.add(f"**Over the {len(slices)} tasks** ({', '.join(t for _, t in slices)}): per method, "
-          "the interquartile mean (IQM, the mean of the middle 50%) of every run's mean "
-          "return / V* on every task, with a 95% stratified bootstrap interval (runs "
-          "resampled within each task, 2,000 resamples, `scipy.stats.bootstrap`; n/a with "
-          "fewer than 2 runs per task).", "")
+    w.add(say("iqm", tasks=[t for _, t in slices]), "")
     rows = []
     for m in order_methods({m for e, _ in slices for m in study.methods(e)}):
         scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
@@ -321,9 +278,7 @@ return first turns positive."""
                       f"{verdict(early)}: {variant} {verdict_reason(early)}):")
                 w.comparisons(early)
     methods = study.methods(exp)
-    w.add(f"Episode at which the {opts.window}-episode moving average of return first turns "
-          "positive: on the mean curve over runs; in brackets the mean over the "
-          "runs that reach it and how many do.", "")
+    w.add(say("milestones", window=opts.window), "")
     w.table([[t, *(milestone_str(first_positive(study.returns(exp, m, t), opts.window))
                    for m in methods)] for t in study.tasks(exp)], ["Task", *methods])
 
@@ -335,12 +290,7 @@ def write_hypothesis_2(w: Writer) -> None:
                      "Hypothesis II", "the tasks experiment (A-D) is missing"):
         return
     table = area_table(study)
-    w.add("Area visits summed over a run, mean (SE) over runs; bold: fewest visits "
-          "among the methods in an area irrelevant by either definition. "
-          f"(Also in `{TABLE_DIR}/area_visits.md`, `.tex`, `.csv`.)", "",
-          area_markdown(table))
-    w.add("Statistic: per run, the visits to the task's irrelevant areas summed over "
-          "the run (fewer is better), for the paper's and for the computed set.", "")
+    w.add(say("areas", table_dir=TABLE_DIR), "", area_markdown(table), say("h2"), "")
     areas = study.areas
     for task in study.tasks(exp):
         variants = [v for v in w.variants(exp) if study.area_totals(exp, v, task).shape[0]]
@@ -375,12 +325,7 @@ def write_hypothesis_3(w: Writer) -> None:
         return
     w.figure("switch_curves", "goal change")
     n = opts.switch_window
-    w.add(f"Statistic: per-run mean return over the first {n} episodes after the "
-          "switch (all of them if fewer). "
-          "Recovery: the episode after the switch (1 = first episode of the "
-          f"new task) at which the {opts.window}-episode moving average of the new "
-          "task's returns first turns positive, on the mean curve (in brackets: mean "
-          "over runs that reach it, and how many).", "")
+    w.add(say("h3", n=n, window=opts.window), "")
     for exp in exps:
         tasks = study.tasks(exp)
         if len(tasks) < 2:
@@ -416,13 +361,8 @@ paper's best route."""
         return
     world = study.world(exp)
     best = study.truth(exp, "C").optimal_route_areas
-    w.add(f"The paper's best route is areas {route_str(BEST_ROUTE_C)}; the true "
-          f"optimal policy's likeliest route is {route_str(best)}. A run's final "
-          "greedy policy is walked from the start along each action's likeliest "
-          "outcome (at most 30 steps). Convergence (behavioural, from `episodes.csv`): "
-          f"the episode from which at least {opts.route_share:.0%} of the last "
-          f"{opts.route_window} episodes succeed while visiting exactly the areas of "
-          f"{route_str(BEST_ROUTE_C)}, to the end of the run.", "")
+    w.add(say("route_c", paper=route_str(BEST_ROUTE_C), best=route_str(best),
+              share=f"{opts.route_share:.0%}", window=opts.route_window), "")
     w.figure("routes_C", "Task C greedy routes")
     if study.policies is None:
         w.add("_No `policies.csv`: final greedy routes are not available._", "")
@@ -487,19 +427,15 @@ def write_why_gdq_fails(w: Writer) -> None:
         return
     tasks = study.tasks(exp)
     task = "C" if "C" in tasks else tasks[0]
-    init = optinit_values(study, exp, task)
+    init = optinit_values(study.config, exp, study.world(exp), study.task(exp, task))
     r_max, gamma = init.r_max, init.gamma
     bound = r_max / (1 - gamma)
-    w.add(f"Q values at the start state of Task {task} right after OptInit, measured "
-          "by building each learner as the experiment did (before any episode); "
-          f"R_max = {r_max:g}, gamma = {gamma:g}, so R_max / (1 - gamma) = "
-          f"{bound:.4g} and gamma R_max / (1 - gamma) = {gamma * bound:.4g}.", "")
+    w.add(say("optinit", task=task, r_max=f"{r_max:g}", gamma=f"{gamma:g}", bound=bound,
+              gbound=gamma * bound), "")
     w.table([[m, f"{g:.4g}", f"{med:.4g}", n] for m, (g, med, n) in init.values.items()],
             ["Variant", "Q(s0, greedy action)", "median Q(s0, ·)", "actions at s0"])
     limit = study.world(exp).step_limit
-    w.add(f"How episodes end (tasks {', '.join(tasks)}, all episodes of all runs): the "
-          f"share that run out of the {limit}-step limit without reaching the goal "
-          f"(steps = {limit} and success = 0), and the share that reach the goal.", "")
+    w.add(say("ends", tasks=tasks, limit=limit), "")
     df = study.rows(exp)
     ends = df.assign(timeout=(df["steps"] == limit) & (df["success"] == 0),
                      goal=df["success"] > 0).groupby("method", observed=True)[
@@ -511,57 +447,10 @@ def write_why_gdq_fails(w: Writer) -> None:
     paper = init.values.get("GDQ-literal")
     if paper is not None:
         timeout = shares.get("GDQ-literal", math.nan)
-        w.add(
-            "**Mechanism.** Algorithm 1's optimistic model sends every pair back to s0 "
-            "without ending the episode, so policy iteration values the plan pairs at "
-            f"R_max / (1 - gamma) = {bound:.4g} and every other pair at about gamma times "
-            f"that (measured: greedy {paper[0]:.4g}, median {paper[1]:.4g}), far above any "
-            f"real return (at most R_max = {r_max:g}). Reaching the goal ends the episode "
-            f"with a target of at most {r_max:g}, which *lowers* the value of the pair "
-            "that got there relative to the inflated bootstrap of pairs that keep the "
-            "episode going, so the greedy policy learns to avoid the goal; with "
-            f"alpha = {init.alpha:g} the excess decays by only about "
-            f"{init.alpha * (1 - gamma):.2%} per visit (alpha (1 - gamma)). Measured: "
-            f"{pct(timeout)} of GDQ-literal's episodes end at the step limit without "
-            f"the goal, against {pct(shares.get('GDQ-code', math.nan))} for GDQ-code, "
-            "whose OptInit gives R_max only to the plan pairs (no policy iteration), and "
-            f"{pct(shares.get('GDQ', math.nan))} for GDQ, whose optimistic model is "
-            "the knowledge itself: a plan pair leads where the planner says, reaching "
-            "the goal pays R_max and ends the episode, so its values are what a run "
-            "of the shortest plan would return if every action worked.", "")
-
-
-@dataclass(frozen=True)
-class OptInitValues:
-    """Q at the start state right after OptInit, per GDQ variant (see
-    :func:`optinit_values`)."""
-
-    task: str
-    r_max: float
-    gamma: float
-    alpha: float
-    values: dict[str, tuple[float, float, int]]
-    """Method -> (Q(s0, greedy action), median Q(s0, ·), number of actions)."""
-
-
-def optinit_values(study: Study, experiment: str, task: str) -> OptInitValues:
-    """Build each GDQ variant for ``task`` with the experiment's hyperparameters and
-    planner (as the runner does) and read Q(s0, ·) before any episode."""
-    entry = next((e for e in study.config.experiments if e.get("name") == experiment
-                  and any(t == task for t, _ in e.get("schedule") or [])),
-                 study.config.experiment(experiment))
-    raw = entry.get("hyper") if isinstance(entry.get("hyper"), dict) else {}
-    hyper = Hyper(**{k: float(v) for k, v in raw.items() if k in ("alpha", "gamma", "epsilon")})
-    planner = entry.get("planner") if isinstance(entry.get("planner"), str) else "graph"
-    ctx = office_task_context(study.world(experiment), study.task(experiment, task), planner)
-    values = {}
-    for method in GDQ_VARIANTS:
-        learner = make_learner(method, ctx, hyper)
-        q = learner.q[ctx.s0]
-        greedy = int(learner.greedy_policy()[ctx.s0])
-        values[method] = (float(q[greedy]), float(np.median(q)), int(q.size))
-    return OptInitValues(task, float(ctx.r_max), hyper.gamma, hyper.alpha, values)
-
+        w.add(say("mechanism", bound=bound, greedy=paper[0], median=paper[1], r_max=f"{r_max:g}",
+                  alpha=f"{init.alpha:g}", decay=f"{init.alpha * (1 - gamma):.2%}",
+                  literal=pct(timeout), code=pct(shares.get("GDQ-code", math.nan)),
+                  gdq=pct(shares.get("GDQ", math.nan))), "")
 
 def write_robot(w: Writer) -> None:
     """The robot protocol (simulated): returns, first successes and routes per trial."""
@@ -577,11 +466,9 @@ def write_robot(w: Writer) -> None:
     w.figure("robot_returns", "robot protocol, return per trial")
     w.figure(f"routes_robot_{slug(task)}", "robot greedy routes")
     w.figure(f"heatmap_robot_{slug(task)}", "robot area visits")
-    w.add(f"Task {task} in `{world.name}`; V* = {truth.v_star:.1f}; optimal route "
-          f"(areas) {route_str(truth.optimal_route_areas)}. A trial *follows the "
-          "optimal route* when it succeeds visiting exactly those areas; the route "
-          f"*becomes optimal* at the trial from which at least {opts.robot_share:.0%} "
-          f"of the last {opts.robot_window} trials follow it, to the end.", "")
+    w.add(say("robot", task=task, world=world.name, v_star=truth.v_star,
+              route=route_str(truth.optimal_route_areas), share=f"{opts.robot_share:.0%}",
+              window=opts.robot_window), "")
     rows = []
     for m in study.methods(exp):
         ret, success = study.returns(exp, m, task), study.matrix("success", exp, m, task)

@@ -17,7 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import (
+from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
+from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.results import (
     ROBOT_EXPERIMENT,
     SWITCH_PREFIX,
     TASKS_EXPERIMENT,
@@ -31,8 +33,6 @@ from gdq_pddl.analysis.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
-from gdq_pddl.errors import GdqError
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)

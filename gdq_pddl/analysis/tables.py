@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from gdq_pddl.analysis.results import TASKS_EXPERIMENT
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.writer import TABLE_DIR, areas_str
+from gdq_pddl.experiments.results import TASKS_EXPERIMENT
 from gdq_pddl.outputs import write_text
 
 

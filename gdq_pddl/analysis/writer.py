@@ -8,10 +8,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import jinja2
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.results import is_gdq, order_methods
 from gdq_pddl.analysis.stats import (
     HOLDS,
     Comparison,
@@ -21,6 +21,7 @@ from gdq_pddl.analysis.stats import (
     verdict_reason,
 )
 from gdq_pddl.analysis.study import Study
+from gdq_pddl.experiments.results import is_gdq, order_methods
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,24 @@ def markdown_rows(frame: pd.DataFrame, align: str = "") -> list[str]:
     return ["| " + " | ".join(map(str, frame.columns)) + " |",
             "|" + "".join("--:|" if a == "r" else "---|" for a in align),
             *("| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))]
+
+
+def table_text(rows: Sequence[Sequence], columns: Sequence[str], align: str = "") -> str:
+    """Rows of cells as the lines of a Markdown table (:func:`markdown_rows`), joined."""
+    return "\n".join(markdown_rows(pd.DataFrame(list(rows), columns=list(columns)), align))
+
+
+TEMPLATES = jinja2.Environment(
+    loader=jinja2.FileSystemLoader(Path(__file__).parent / "templates"), autoescape=False,
+    trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True,
+    undefined=jinja2.StrictUndefined)
+"""The report prose: one Markdown template per report (``analysis/templates``)."""
+TEMPLATES.filters["number"] = number
+
+
+def render(template: str, **data) -> str:
+    """The text of ``analysis/templates/<template>`` filled with ``data``."""
+    return TEMPLATES.get_template(template).render(**data)
 
 
 class Verdicts:

@@ -13,14 +13,14 @@ import pytest
 from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
 from gdq_pddl.analysis import figures, make_all, write_report
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
-from gdq_pddl.analysis.results import load_config
-from gdq_pddl.analysis.sections import optinit_values
 from gdq_pddl.analysis.stats import compare, first_positive, moving_average, verdict
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import area_table, make_tables
 from gdq_pddl.envs.evaluate import walk_policy
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import solve
+from gdq_pddl.experiments.probes import optinit_values
+from gdq_pddl.experiments.results import load_config
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
@@ -363,7 +363,8 @@ def test_optinit_values_follow_the_hyperparameters(tmp_path):
     for e in config["experiments"]:
         e["hyper"] = {"alpha": 0.1, "gamma": 0.9, "epsilon": 0.1}
     (out / "config.json").write_text(json.dumps(config))
-    init = optinit_values(Study.open(out), "tasks", "C")
+    study = Study.open(out)
+    init = optinit_values(study.config, "tasks", study.world("tasks"), study.task("tasks", "C"))
     assert init.gamma == 0.9 and init.r_max == 20.0
     greedy, median, _ = init.values["GDQ-literal"]
     assert greedy == pytest.approx(20 / 0.1) and median == pytest.approx(0.9 * 20 / 0.1)

@@ -14,12 +14,12 @@ from scipy import stats as sps
 
 import gdq_pddl
 from gdq_pddl.analysis import make_all
-from gdq_pddl.analysis.results import load_results
 from gdq_pddl.analysis.stats import iqm, iqm_ci
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import area_table
 from gdq_pddl.cli import main
 from gdq_pddl.errors import ResultsError
+from gdq_pddl.experiments.results import load_results
 
 METHODS = ("GDQ", "Q-learning")
 RUNS, EPISODES = 3, 40

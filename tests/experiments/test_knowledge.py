@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gdq_pddl.analysis.knowledge import convergence_episode, route_check
+from gdq_pddl.analysis.knowledge import convergence_episode
 from gdq_pddl.cli import main
 from gdq_pddl.envs.evaluate import policy_value
 from gdq_pddl.envs.model import compile_model, full_state
@@ -20,6 +20,7 @@ from gdq_pddl.experiments.knowledge import (
     knowledge_experiments,
     knowledge_world,
 )
+from gdq_pddl.experiments.probes import route_check
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import load_world_named, make_learner, run_unit
 from gdq_pddl.learners import office_task_context
