@@ -5,7 +5,8 @@ convergence (median over the converged runs, and how many converged), the mean r
 over the first :data:`~gdq_pddl.experiments.scale.FIRST` episodes and over all episodes
 (mean over runs), GDQ minus each other method in the first of those (paired runs: run
 ``r`` of every method on a building has the same seeds; mean and s.e. of the per-run
-differences) and env steps/s (all runs' steps over their wall time).
+differences, a 95% t-interval in the figure) and env steps/s (all runs' steps over their
+wall time).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import scipy.stats as sps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
@@ -63,6 +65,14 @@ def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[floa
     first episodes, run ``r`` against run ``r`` of the same building (same seeds)."""
     mean, se = mean_se(first_means(group, a) - first_means(group, b))
     return float(mean), float(se)
+
+
+def paired_interval(r: BuildingResult, name: str) -> tuple[float, float]:
+    """:func:`paired_difference` of :data:`REFERENCE` minus ``name`` on one building, with
+    the half-width of its 95% t-interval over the runs (0 with one run)."""
+    mean, se = paired_difference([r], REFERENCE, name)
+    n = len(first_means([r], name))
+    return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
 
 
 def _names(results: list[BuildingResult]) -> tuple[list[str], list[str]]:
@@ -122,8 +132,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
         panel(bx, name, i, len(names), lambda r, m=name: (steps_per_s([r], m), None),
               lambda g, m=name: steps_per_s(g, m))
     for j, name in enumerate(others):
-        panel(axes[1], name, j, len(others),
-              lambda r, m=name: paired_difference([r], REFERENCE, m),
+        panel(axes[1], name, j, len(others), lambda r, m=name: paired_interval(r, m),
               lambda g, m=name: paired_difference(g, REFERENCE, m)[0])
     ax.axhline(episodes, color="grey", lw=0.5, ls="--")
     ax.set_ylim(bottom=0, top=episodes * (1.08 + 0.025 * len(names)))
@@ -135,7 +144,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
         cx.axhline(0, color="black", lw=0.6)
         cx.set(xscale="log", xlabel="positions",
                ylabel=f"{REFERENCE} minus method, mean return",
-               title=f"{_first_label(episodes)}, paired runs (mean, s.e.)")
+               title=f"{_first_label(episodes)}, paired runs (mean, 95% t-interval)")
         cx.set_yscale("symlog", linthresh=10)
         cx.legend(fontsize=8, title=f"{REFERENCE} minus", title_fontsize=8)
     handles = [Line2D([], [], color="grey", ls="none", marker=MARKERS[k % len(MARKERS)],
