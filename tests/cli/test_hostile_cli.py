@@ -28,7 +28,7 @@ from gdq_pddl.experiments import runner as runner_module
 from gdq_pddl.experiments.collect import csv_field
 from gdq_pddl.experiments.protocol import Unit, safe_name
 from gdq_pddl.resources import data_file, world_text
-from tests.helpers import BACKGROUND, cli
+from tests.helpers import cli
 
 OFFICE = world_text("office")
 KEYS_DOMAIN = data_file("domains", "keys.pddl").read_text(encoding="utf-8")
@@ -301,71 +301,49 @@ def test_results_are_readable_as_the_umask_says(tmp_path):
         assert stat.S_IMODE(path.stat().st_mode) == 0o644, path
 
 
-STOP_SCRIPT = """
-import json, signal, subprocess, sys, tempfile, time
-from pathlib import Path
-
-def children(pid):
+def _children(pid: int) -> set[int]:
     out = set()
     for task in Path(f"/proc/{pid}/task").glob("*"):
-        if (task / "children").exists():
-            out |= {int(c) for c in (task / "children").read_text().split()}
+        children = task / "children"
+        if children.exists():
+            out |= {int(c) for c in children.read_text().split()}
     return out
 
-def alive(pid):
+
+def _alive(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
     except OSError:
         return False
     return state != "Z"
 
-with tempfile.TemporaryDirectory() as out:
-    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "20000",
-            "--runs", "6", "--method", "Q-learning", "--jobs", "2", "--out", out, "--no-report"]
-    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    units = Path(out, "units")
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and not list(units.glob("*.npz")):
-        time.sleep(0.05)
-    workers = children(proc.pid)
-    proc.send_signal(int(sys.argv[1]))
-    _, err = proc.communicate(timeout=120)
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline and any(alive(w) for w in workers):
-        time.sleep(0.1)
-    outlived = [w for w in workers if alive(w)]
-    resumed = subprocess.run([*argv, "--resume"], capture_output=True, text=True, timeout=600)
-    saved = len(list(units.glob("*.npz")))
-print(json.dumps({"code": proc.returncode, "err": err, "outlived": outlived,
-                  "resume_code": resumed.returncode, "resume_err": resumed.stderr,
-                  "saved": saved}))
-"""
-"""SIGTERM (``sys.argv[1]``) to ``gdq-pddl run --jobs 2`` once its first unit is saved,
-then ``--resume``; prints what came of both."""
-
-
-def start_stop_signal(item):
-    """The stopped run and its resume, queued when collection ends to run beside the other
-    tests (``tests.helpers.Background``): the test process would only wait on them."""
-    return BACKGROUND.run("stop signal", [sys.executable, "-c", STOP_SCRIPT,
-                                          str(int(signal.SIGTERM))], timeout=900)
-
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
-@pytest.mark.background.with_args(start_stop_signal)
-def test_a_stop_signal_ends_the_workers_and_leaves_a_resumable_folder(request):
+def test_a_stop_signal_ends_the_workers_and_leaves_a_resumable_folder(tmp_path, capsys):
     """SIGTERM during --jobs 2 used to kill the driver alone (exit 143) while its workers
     ran on as orphans and then printed BrokenPipeError tracebacks. (SIGHUP takes the same
     path: runner.STOP_SIGNALS.)"""
-    result = start_stop_signal(request.node).result()
-    assert result.returncode == 0, result.stderr[-2000:]
-    got = json.loads(result.stdout)
-    err = got["err"]
-    assert got["code"] == 128 + signal.SIGTERM, err[-2000:]
+    signum = signal.SIGTERM
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "20000",
+            "--runs", "6", "--method", "Q-learning", "--jobs", "2", "--out", str(tmp_path),
+            "--no-report"]
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    units = tmp_path / "units"
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and not list(units.glob("*.npz")):
+        time.sleep(0.05)
+    workers = _children(proc.pid)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 128 + signum, err[-2000:]
     assert "--resume" in err and "Traceback" not in err, err[-2000:]
-    assert not got["outlived"], "workers outlived the driver"
-    assert got["resume_code"] == 0, got["resume_err"][-2000:]
-    assert got["saved"] == 6
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.1)
+    assert not [w for w in workers if _alive(w)], "workers outlived the driver"
+    code, out = cli(capsys, *argv[3:], "--resume")  # here: the kernels are loaded already
+    assert code == 0, out[-2000:]
+    assert len(list(units.glob("*.npz"))) == 6
 
 
 # --- the numba cache ----------------------------------------------------------------------
