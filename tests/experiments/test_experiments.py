@@ -12,7 +12,6 @@ import subprocess
 import sys
 import tempfile
 import time
-from concurrent.futures import Future
 from pathlib import Path
 
 import numpy as np
@@ -114,44 +113,25 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
     assert len(keys) == len(set(keys)) == 3 * 4 * 400
 
 
-INTERRUPT_SCRIPT = """
-import json, signal, subprocess, sys, tempfile, time
-from pathlib import Path
-with tempfile.TemporaryDirectory() as out:
-    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes",
-            "10000", "--runs", "8", "--method", "GDQ", "Dyna-Q", "--jobs", "2", "--out", out,
+def test_interrupt_message_says_how_to_resume(tmp_path):
+    """Ctrl-C while the workers run: one clear line, no traceback, runs already saved."""
+    argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "10000",
+            "--runs", "8", "--method", "GDQ", "Dyna-Q", "--jobs", "2", "--out", str(tmp_path),
             "--no-report"]
     # as from a terminal: a shell starts background jobs with SIGINT ignored, and a
     # child of such a test run would inherit that
     proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    units = Path(out, "units")
+    units = tmp_path / "units"
     deadline = time.monotonic() + 300  # the first unit waits for the kernels to compile
     while time.monotonic() < deadline and not list(units.glob("*.npz")):
         time.sleep(0.05)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     saved = len(list(units.glob("*.npz")))
-print(json.dumps({"code": proc.returncode, "err": err, "saved": saved}))
-"""
-"""Ctrl-C to ``gdq-pddl run --jobs 2`` once its first unit is saved; prints what came of it."""
-
-
-def start_interrupt(item) -> Future:
-    """The interrupted run, queued when collection ends to run beside the other tests
-    (``tests.helpers.Background``): the test process would only wait on it."""
-    return BACKGROUND.run("interrupt", [sys.executable, "-c", INTERRUPT_SCRIPT], timeout=600)
-
-
-@pytest.mark.background.with_args(start_interrupt)
-def test_interrupt_message_says_how_to_resume(request):
-    """Ctrl-C while the workers run: one clear line, no traceback, runs already saved."""
-    result = start_interrupt(request.node).result()
-    assert result.returncode == 0, result.stderr[-2000:]
-    got = json.loads(result.stdout)
-    assert 1 <= got["saved"] < 16, "the interrupt should come while the runs are under way"
-    assert got["code"] == 130
-    assert "--resume" in got["err"] and "Traceback" not in got["err"], got["err"][-2000:]
+    assert 1 <= saved < 16, "the interrupt should come while the runs are under way"
+    assert proc.returncode == 130
+    assert "--resume" in err and "Traceback" not in err, err[-2000:]
 
 
 def test_resume_removes_files_a_killed_write_left(tmp_path):
