@@ -3,13 +3,16 @@ notebook is a conversion of the same source and runs too, with its plots inline.
 
 from __future__ import annotations
 
+import os
 import re
+import sys
+from concurrent.futures import Future
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tests.helpers import REPO_ROOT
+from tests.helpers import BACKGROUND, REPO_ROOT
 
 DOCS = REPO_ROOT / "docs"
 
@@ -103,14 +106,33 @@ def test_notebook_is_a_fresh_conversion_of_the_tutorial():
         "commit the notebook without outputs (regenerate it)"
 
 
-def test_notebook_runs_with_its_plots_inline(tmp_path, monkeypatch):
-    import nbclient
+NOTEBOOK_SCRIPT = """
+import sys, tempfile
+import nbclient, nbformat
+nb = nbformat.read(sys.argv[1], as_version=4)
+with tempfile.TemporaryDirectory() as cwd:
+    nbclient.NotebookClient(nb, timeout=300, kernel_name="python3",
+                            resources={"metadata": {"path": cwd}}).execute()
+sys.stdout.write(nbformat.writes(nb))
+"""
+"""Executes the notebook given in a temporary directory and prints it with its outputs."""
+
+
+def start_notebook(item) -> Future:
+    """The notebook runs in a kernel of its own, queued when collection ends to run beside
+    the other tests (``tests.helpers.Background``); the kernel's inline backend draws."""
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    return BACKGROUND.run("tutorial notebook", [sys.executable, "-c", NOTEBOOK_SCRIPT,
+                                                str(NOTEBOOK)], timeout=600, env=env)
+
+
+@pytest.mark.background.with_args(start_notebook)
+def test_notebook_runs_with_its_plots_inline(request):
     import nbformat
 
-    monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel's inline backend draws
-    nb = nbformat.read(NOTEBOOK, as_version=4)
-    nbclient.NotebookClient(nb, timeout=300, kernel_name="python3",
-                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    result = start_notebook(request.node).result()
+    assert result.returncode == 0, result.stderr[-2000:]
+    nb = nbformat.reads(result.stdout, as_version=4)
     code = [c for c in nb.cells if c.cell_type == "code"]
     plots = [c.source for c in code
              if any("image/png" in o.get("data", {}) for o in c.outputs)]

@@ -40,15 +40,26 @@ def test_there_is_an_example_per_task():
     assert (EXAMPLES / "planner_plugin" / "pyproject.toml").exists()
 
 
-def _maskable_ppo(*argv: str, prelude: str = "") -> subprocess.CompletedProcess:
+def _ppo_argv(*argv: str, prelude: str = "") -> list[str]:
     code = (f"import runpy, sys; {prelude}sys.argv = ['maskable_ppo.py', *{list(argv)}]; "
             f"runpy.run_path({str(EXAMPLES / 'maskable_ppo.py')!r}, run_name='__main__')")
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+    return [sys.executable, "-c", code]
+
+
+def _maskable_ppo(*argv: str, prelude: str = "") -> subprocess.CompletedProcess:
+    return subprocess.run(_ppo_argv(*argv, prelude=prelude), capture_output=True, text=True,
                           timeout=600)
 
 
-def test_maskable_ppo_example_says_what_it_needs():
-    result = _maskable_ppo(prelude="sys.modules['sb3_contrib'] = None; ")
+def start_without_sb3(item) -> Future:
+    """The example without sb3_contrib, in the Background queue (an interpreter start)."""
+    return BACKGROUND.run("maskable_ppo without sb3",
+                          _ppo_argv(prelude="sys.modules['sb3_contrib'] = None; "))
+
+
+@pytest.mark.background.with_args(start_without_sb3)
+def test_maskable_ppo_example_says_what_it_needs(request):
+    result = start_without_sb3(request.node).result()
     assert result.returncode == 1 and "pip install 'gdq_pddl[sb3]'" in result.stderr
 
 
