@@ -203,6 +203,11 @@ class OfficeInstance:
         return full_state(self.world, self.task.start)
 
     @cached_property
+    def start_pos(self) -> int:
+        """The position index where an episode starts."""
+        return self.world.index[self.task.start]
+
+    @cached_property
     def goal_pos(self) -> int:
         """The goal's position index in the world."""
         return self.world.index[self.task.goal]
@@ -337,11 +342,6 @@ class CompactEnv(CompiledEnv):
         self.doors = np.zeros(max(1, len(instance.world.doors)), dtype=np.uint8)
         """``uint8[n_doors]``: 1 for each door now open."""
         super().__init__(instance, instance.compact)
-
-    @property
-    def start_pos(self) -> int:
-        """The position index where an episode starts."""
-        return self.world.index[self.task.start]
 
     def _restart(self) -> None:
         self.doors[:] = 0

@@ -179,7 +179,7 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
     base = env.unwrapped
     own = base._given  # every episode starts as reset() without options starts it
     if isinstance(base, CompactEnv):
-        args = base.model, own.world.index[own.task.start], own.goal_pos, base.doors
+        args = base.model, own.start_pos, own.goal_pos, base.doors
     else:
         args = base.model, int(own.start_state), int(own.goal_pos), _NO_DOORS
     return run_compiled(*args, learner, base.np_random, n_episodes, rng,  # type: ignore
