@@ -1,26 +1,11 @@
-"""A PDDL reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``,
-"PPDDL"): STRIPS with typing, conditions with ``and``/``or``/``not``/``imply``/``forall``/
-``exists``/``=`` and constants, effects with ``when`` and ``forall``, and probabilistic
-effects.
+"""A reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``, "PPDDL").
 
-PPDDL (Younes and Littman, 2004): ``(probabilistic p1 e1 p2 e2 ...)`` effects, nested
-or side by side under ``and`` or ``when``, with rational probabilities (``0.25``,
-``1/4``) that sum to at most 1 (the rest: no effect); action costs as
-``(increase (total-cost) X)`` or ``(decrease (reward) X)``, X a number or a function
-term valued in the problem's ``:init``; ``(:goal-reward N)`` and ``(:metric ...)`` in
-the problem. A 0-ary predicate ``stuck`` marks a failed trial: an outcome that makes
-``(stuck)`` true ends the episode. Each probabilistic action's effect is flattened here
-into its distribution of outcomes (:class:`~gdq_pddl.pddl.model.Outcome`); conditions
-are put in negation normal form (:mod:`gdq_pddl.pddl.normalise`), and a precondition
-that is not a plain conjunction of literals keeps the rest for grounding. One file may
-hold a domain and its problems. Requirement keys are checked for typos only: they never
-decide what is read.
-
-It reads a domain and a problem into the small frozen types of :mod:`gdq_pddl.pddl.model`
-and checks that they fit together. Every error is a :class:`~gdq_pddl.errors.PDDLError`
-naming the file, the line and what was expected. It exists beside unified-planning's
-reader because that one took about 1.2 s on its first call (it builds its grammar) and
-reports pyparsing character offsets; plans are still validated with unified-planning.
+It reads a domain and a problem into the frozen types of :mod:`gdq_pddl.pddl.model`:
+each probabilistic effect flattened into its distribution of outcomes, conditions in
+negation normal form (:mod:`gdq_pddl.pddl.normalise`). One file may hold a domain and
+its problems. Every error is a :class:`~gdq_pddl.errors.PDDLError` naming the file, the
+line and what was expected. (unified-planning's reader took about 1.2 s on its first
+call and reports character offsets; plans are still validated with it.)
 """
 
 from __future__ import annotations
@@ -32,7 +17,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.inputs import read_text
+from gdq_pddl.inputs import BOM, read_text
 from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import (
     Action,
@@ -56,34 +41,25 @@ COST_FLUENTS = ("total-cost", "reward")
 """The numeric fluents an effect may change: the action's cost, in either convention."""
 _COST_TERMS = tuple(f"({f})" for f in COST_FLUENTS)
 MAX_OUTCOMES = 4096
-"""Most outcomes one action's effect may flatten into (independent probabilistic effects
-multiply)."""
+"""Most outcomes one action's effect may flatten into."""
 MAX_LITERAL = 100
-"""Most characters a number may be written in (its exact fraction is built of them)."""
+"""Most characters a number may be written in."""
 MAX_EXPONENT = 400
-"""The largest exponent, in size, of a number written like ``2.5e-3``: past what a float
-holds (``1e400`` is infinite as one, ``1e-400`` is 0), and small enough that its exact
-fraction is built at once (``1e-99999999``'s would take minutes)."""
+"""The largest exponent, in size, of a number like ``2.5e-3``: past what a float holds,
+and small enough that its exact fraction is built at once."""
 _NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
-"""What may be a number (:class:`~fractions.Fraction` reads it or says it is not);
-linear, so a long symbol is rejected at once."""
+"""What may be a number (:class:`~fractions.Fraction` decides); linear in its length."""
 _TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+|\s+")
 _SYMBOL = re.compile(r"[?:]?[A-Za-z0-9_.+/-]+|=")
-"""What a symbol may be written with: a name, a ``?variable``, a ``:keyword``, a number
-(``0.25``, ``1/4``, ``2.5e-3``), ``-`` or ``=``. Any other character is refused where it
-stands, never dropped (``#`` does not start a comment: ``;`` does)."""
+"""A name, ``?variable``, ``:keyword``, number, ``-`` or ``=``; any other character is
+refused where it stands (``#`` does not start a comment: ``;`` does)."""
 _SYMBOL_CHARS = frozenset(string.ascii_letters + string.digits + "_.+/-")
 _NAME = re.compile(r"[a-z][a-z0-9_-]*")
-"""A name (of a domain, type, object, predicate, action...): a letter, then letters,
-digits, ``-`` and ``_`` (PDDL's grammar); a variable is ``?`` and a name."""
+"""PDDL's names: a letter, then letters, digits, ``-`` and ``_``."""
 _PROBLEM_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")
-"""A problem's name may also start with a digit (a world file's name, which a generated
-office problem's starts with, may); it is never a term of a formula."""
+"""A problem's name may also start with a digit (as a world file's name may)."""
 MAX_DEPTH = 200
-"""Deepest nesting of parentheses read. Real domains nest a few dozen levels at most;
-the later stages walk formulas recursively, so a file nested deeper is refused at the
-line where it passes this depth, instead of exhausting Python's stack."""
-BOM = "\ufeff"
+"""Deepest nesting of parentheses read (later stages recurse over formulas)."""
 
 
 @dataclass(frozen=True)
@@ -246,9 +222,10 @@ class _Reader:
         return self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
 
     def typed_list(self, nodes: tuple[Node, ...], variables: bool, what: str,
-                   ) -> list[tuple[str, str, int]]:
+                   types: dict[str, str | None] | None = None) -> list[tuple[str, str, int]]:
         """``a b - t c`` -> [(a, t, line), (b, t, line), (c, object, line)]; a name
-        given twice is refused (``what``: what the names are, for the message)."""
+        given twice (``what``: what the names are) and a type not in ``types`` (if
+        given) are refused."""
         out: list[tuple[str, str, int]] = []
         pending: list[tuple[str, int]] = []
         first: dict[str, int] = {}
@@ -271,7 +248,19 @@ class _Reader:
             first[name] = nodes[i].line
             pending.append((name, nodes[i].line))
             i += 1
-        return out + [(p, "object", line) for p, line in pending]
+        out += [(p, "object", line) for p, line in pending]
+        for _, t, line in out if types is not None else ():
+            if t not in types:
+                raise self.fail(line, f"unknown type {t!r} (declared: "
+                                f"{', '.join(sorted(types))})")
+        return out
+
+    def variables(self, node: Node, types: dict[str, str | None],
+                  ctx: str) -> tuple[tuple[str, str], ...]:
+        """The ``(?x - t ...)`` of a ``forall`` or ``exists``."""
+        typed = self.typed_list(self.lst(node, "a variable list"), True, f"{ctx}: variable",
+                                types)
+        return tuple((v, t) for v, t, _ in typed)
 
     def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
                  kind: str) -> tuple[dict[str, Node], list[Node]]:
@@ -364,23 +353,12 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     types = _types(r, sec[":types"]) if ":types" in sec else {"object": None}
     constants = {}
     if ":constants" in sec:
-        for c, t, line in r.typed_list(sec[":constants"].items[1:], False, "constant"):
-            _check_type(r, types, t, line)
+        for c, t, _ in r.typed_list(sec[":constants"].items[1:], False, "constant", types):
             constants[c] = t
-    predicates: dict[str, tuple[str, ...]] = {}
-    if ":predicates" in sec:
-        first: dict[str, int] = {}
-        for node in sec[":predicates"].items[1:]:
-            pname, signature = _signature(r, node, types, "predicate")
-            if pname in first:
-                raise r.fail(node.line, f"predicate {pname} is declared twice (first at "
-                             f"line {first[pname]})")
-            if pname in _RESERVED:
-                raise r.fail(node.line, f"a predicate cannot be named {pname}: formulas "
-                             "read it as a connective")
-            first[pname] = node.line
-            predicates[pname] = signature
-    functions = _functions(r, sec[":functions"], types) if ":functions" in sec else {}
+    predicates = _declarations(r, sec[":predicates"], types, "predicate") \
+        if ":predicates" in sec else {}
+    functions = _declarations(r, sec[":functions"], types, "function") \
+        if ":functions" in sec else {}
     actions: list[Action] = []
     rewards = False
     for node in action_nodes:
@@ -434,46 +412,37 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
     return types
 
 
-def _functions(r: _Reader, node: Node, types: dict[str, str | None]) -> dict[str, tuple[str, ...]]:
-    """``(:functions (f ?x - t) - number (total-cost))`` -> ``{f: (t,), total-cost: ()}``."""
+def _declarations(r: _Reader, node: Node, types: dict[str, str | None],
+                  what: str) -> dict[str, tuple[str, ...]]:
+    """``(:predicates (p ?x - t) ...)`` or ``(:functions (f ?x - t) - number ...)`` ->
+    ``{p: (t,), ...}`` (``what``: ``"predicate"`` or ``"function"``)."""
     out: dict[str, tuple[str, ...]] = {}
     first: dict[str, int] = {}
     items = node.items[1:]
     i = 0
     while i < len(items):
         item = items[i]
-        if not item.is_list:
+        if what == "function" and not item.is_list:
             if item.symbol != "-" or i + 1 >= len(items) or items[i + 1].symbol != "number":
                 raise r.fail(item.line, "expected a function (name ?x - type ...) or "
                              f"'- number' after one, found {item.text()}")
             i += 2
             continue
-        fname, signature = _signature(r, item, types, "function")
-        if fname in first:
-            raise r.fail(item.line, f"function {fname} is declared twice (first at line "
-                         f"{first[fname]})")
-        first[fname] = item.line
-        out[fname] = signature
+        sig = r.lst(item, f"a {what} (name ?x - type ...)")
+        if not sig:
+            raise r.fail(item.line, f"expected a {what} name")
+        name = r.name(sig[0], f"a {what} name")
+        params = r.typed_list(sig[1:], True, f"{what} {name}: parameter", types)
+        if name in first:
+            raise r.fail(item.line, f"{what} {name} is declared twice (first at line "
+                         f"{first[name]})")
+        if what == "predicate" and name in _RESERVED:
+            raise r.fail(item.line, f"a predicate cannot be named {name}: formulas read it "
+                         "as a connective")
+        first[name] = item.line
+        out[name] = tuple(t for _, t, _ in params)
         i += 1
     return out
-
-
-def _signature(r: _Reader, node: Node, types: dict[str, str | None],
-               what: str) -> tuple[str, tuple[str, ...]]:
-    """``(name ?x - t ?y - u)`` of a predicate or function -> ``(name, (t, u))``."""
-    items = r.lst(node, f"a {what} (name ?x - type ...)")
-    if not items:
-        raise r.fail(node.line, f"expected a {what} name")
-    name = r.name(items[0], f"a {what} name")
-    params = r.typed_list(items[1:], True, f"{what} {name}: parameter")
-    for _, t, line in params:
-        _check_type(r, types, t, line)
-    return name, tuple(t for _, t, _ in params)
-
-
-def _check_type(r: _Reader, types: dict[str, str | None], t: str, line: int) -> None:
-    if t not in types:
-        raise r.fail(line, f"unknown type {t!r} (declared: {', '.join(sorted(types))})")
 
 
 def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
@@ -499,9 +468,7 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
                          f"{fields[k].line})")
         fields[k] = value
     typed = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), True,
-                         f"action {name}: parameter") if ":parameters" in fields else []
-    for _, t, line in typed:
-        _check_type(r, types, t, line)
+                         f"action {name}: parameter", types) if ":parameters" in fields else []
     params = [(p, t) for p, t, _ in typed]
     scope = dict(params) | constants
     ctx = f"action {name}"
@@ -632,12 +599,9 @@ class _Effects:
                                       ctx))
                 self.when = cond if self.when is None else Junction("and", (self.when, cond))
             else:
-                typed = r.typed_list(r.lst(items[1], "a variable list"), True,
-                                     f"{ctx}: variable")
-                for _, t, line in typed:
-                    _check_type(r, self.types, t, line)
-                self.variables += tuple((v, t) for v, t, _ in typed)
-                self.scope = {**self.scope, **{v: t for v, t, _ in typed}}
+                variables = r.variables(items[1], self.types, ctx)
+                self.variables += variables
+                self.scope = {**self.scope, **dict(variables)}
             branches = self.effect(items[2], inside)
         finally:
             self.scope, self.variables, self.when = saved
@@ -696,18 +660,8 @@ class _Effects:
         if fname not in self.functions or fname in COST_FLUENTS:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
-        args = tuple(r.symbol(a, "a term") for a in term[1:])
-        want = self.functions[fname]
-        if len(args) != len(want):
-            raise r.fail(value.line, f"{ctx}: {fname} takes {len(want)} argument(s), got "
-                         f"{len(args)}")
-        for a, t in zip(args, want, strict=True):
-            if a not in self.scope:
-                raise r.fail(value.line, f"{ctx}: unknown term {a!r} in ({fname} ...)")
-            if not is_subtype(self.types, self.scope[a], t):
-                raise r.fail(value.line, f"{ctx}: {a} is a {self.scope[a]}, but {fname} "
-                             f"expects a {t}")
-        return Atom(fname, args), sign
+        return _term(r, value, fname, self.functions[fname], self.types, self.scope,
+                     ctx), sign
 
 
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
@@ -812,11 +766,8 @@ def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     if head in ("forall", "exists"):
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
-        typed = r.typed_list(r.lst(items[1], "a variable list"), True, f"{ctx}: variable")
-        for _, t, line in typed:
-            _check_type(r, types, t, line)
-        return Quantified(head, tuple((v, t) for v, t, _ in typed),
-                          sub(items[2], {v: t for v, t, _ in typed}))
+        variables = r.variables(items[1], types, ctx)
+        return Quantified(head, variables, sub(items[2], dict(variables)))
     if head == "probabilistic":
         raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
                      f"{'precondition' if ctx.startswith('action') else 'goal'}")
@@ -854,8 +805,13 @@ def _atom(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     if name not in predicates:
         raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
                      f"(declared: {', '.join(sorted(predicates)) or 'none'})")
-    args = tuple(r.symbol(a, "a term") for a in items[1:])
-    want = predicates[name]
+    return _term(r, node, name, predicates[name], types, scope, ctx)
+
+
+def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...],
+          types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Atom:
+    """``(name args...)`` whose arguments, known in ``scope``, fit the types ``want``."""
+    args = tuple(r.symbol(a, "a term") for a in node.items[1:])
     if len(args) != len(want):
         raise r.fail(node.line, f"{ctx}: {name} takes {len(want)} argument(s), got {len(args)}")
     for a, t in zip(args, want, strict=True):
@@ -901,8 +857,8 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
                      f"{domain.name!r} ({domain.source})")
     objects = dict(domain.constants)
     if ":objects" in sec:
-        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object"):
-            _check_type(r, domain.types, t, line)
+        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object",
+                                       domain.types):
             if o in objects:
                 raise r.fail(line, f"object {o} is declared twice (as a constant of the "
                              f"domain, {domain.source})")
@@ -998,16 +954,8 @@ def _init_value(r: _Reader, node: Node, domain: Domain,
     if fname not in domain.functions:
         raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
                      f"{', '.join(sorted(domain.functions)) or 'none'})")
-    args = tuple(r.symbol(a, "an object") for a in head[1:])
-    want = domain.functions[fname]
-    if len(args) != len(want):
-        raise r.fail(node.line, f"init: {fname} takes {len(want)} argument(s), got {len(args)}")
-    for a, t in zip(args, want, strict=True):
-        if a not in objects:
-            raise r.fail(node.line, f"init: unknown object {a!r} in ({fname} ...)")
-        if not is_subtype(domain.types, objects[a], t):
-            raise r.fail(node.line, f"init: {a} is a {objects[a]}, but {fname} expects a {t}")
-    term = str(Atom(fname, args))
+    term = str(_term(r, Node(node.line, head), fname, domain.functions[fname], domain.types,
+                     objects, "init"))
     return term, _init_number(r, items[2], term)
 
 
