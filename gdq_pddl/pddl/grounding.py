@@ -120,14 +120,7 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     if any(a.outcomes for a in domain.actions):
         raise ValueError("a PPDDL domain has no single effect per action: ground it with "
                          "gdq_pddl.pddl.ppddl.ground_ppddl")
-    fluent = domain.fluent_predicates()
-    statics = {a for a in problem.init if a.predicate not in fluent}
-    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
-    for a in statics:
-        static_tuples[a.predicate].add(a.args)
-    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
-               for t in domain.types}
-    typed = {t: frozenset(objs) for t, objs in by_type.items()}
+    fluent, static_tuples, by_type, typed = _index(domain, problem)
     raw_ops = []
     for action in domain.actions:
         for binding in _bindings(action, static_tuples, by_type, typed, fluent):
@@ -156,9 +149,24 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
 
     ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
                 for name, pre, neg, add, dele in live)
-    static_strs = {str(a) for a in statics}
+    static_strs = {str(a) for a in problem.init if a.predicate not in fluent}
     return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
                       fact_index=index, **goal_masks(problem, fluent, static_strs, index))
+
+
+def _index(domain: Domain, problem: Problem) -> tuple[
+        frozenset[str], dict[str, set[tuple[str, ...]]], dict[str, list[str]],
+        dict[str, frozenset[str]]]:
+    """The fluent predicates, the static atoms' arguments by predicate, and the objects
+    of each type (sorted, and as a set): what :func:`_bindings` reads."""
+    fluent = domain.fluent_predicates()
+    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
+    for a in problem.init:
+        if a.predicate not in fluent:
+            static_tuples[a.predicate].add(a.args)
+    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
+               for t in domain.types}
+    return fluent, static_tuples, by_type, {t: frozenset(o) for t, o in by_type.items()}
 
 
 def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 
 from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
 
@@ -63,11 +63,6 @@ def conjunction(cond: Condition) -> tuple[Literal, ...] | None:
     return None
 
 
-def uses_quantifier_or_disjunction(cond: Condition) -> bool:
-    """Whether ``cond`` (in NNF) has an ``or``, ``forall`` or ``exists`` anywhere."""
-    return conjunction(cond) is None
-
-
 def ground_dnf(cond: Condition, binding: Mapping[str, str],
                objects: Callable[[str], list[str]], static: Callable[[Atom], bool | None],
                too_many: Callable[[], Exception],
@@ -96,16 +91,23 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
         fact = frozenset((str(atom),))
         return [(fact, frozenset())] if cond.positive else [(frozenset(), fact)]
     if isinstance(cond, Quantified):
-        names = [v for v, _ in cond.variables]
-        domains = [objects(t) for _, t in cond.variables]
-        if math.prod(len(d) for d in domains) > budget[0]:
-            raise too_many()
-        parts = [ground_dnf(cond.body, {**binding, **dict(zip(names, values, strict=True))},
-                            objects, static, too_many, budget)
-                 for values in itertools.product(*domains)]
+        parts = [ground_dnf(cond.body, b, objects, static, too_many, budget)
+                 for b in extend(binding, cond.variables, objects, budget[0], too_many)]
         return _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
     parts = [ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts]
     return _all(parts, too_many) if cond.kind == "and" else _any(parts, too_many)
+
+
+def extend(binding: Mapping[str, str], variables: tuple[tuple[str, str], ...],
+           objects: Callable[[str], list[str]], limit: int,
+           too_many: Callable[[], Exception]) -> Iterator[dict[str, str]]:
+    """``binding`` extended by every assignment of objects to the typed ``variables``;
+    ``too_many()`` is raised up front if there are more than ``limit``."""
+    domains = [objects(t) for _, t in variables]
+    if math.prod(len(d) for d in domains) > limit:
+        raise too_many()
+    for values in itertools.product(*domains):
+        yield {**binding, **dict(zip((v for v, _ in variables), values, strict=True))}
 
 
 def _any(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:

@@ -81,8 +81,18 @@ class Node:
 
 
 class _Reader:
+    """One file's text, and the declarations of the domain being read or read for."""
+
     def __init__(self, text: str, source: str) -> None:
         self.text, self.source = text.removeprefix(BOM), source
+        self.types: dict[str, str | None] = {"object": None}
+        self.predicates: dict[str, tuple[str, ...]] = {}
+        self.functions: dict[str, tuple[str, ...]] = {}
+
+    @property
+    def stuck_domain(self) -> bool:
+        """The domain declares the 0-ary predicate :data:`STUCK`."""
+        return self.predicates.get(STUCK) == ()
 
     def fail(self, line: int | None, message: str) -> PDDLError:
         return PDDLError(self.source, line, message)
@@ -123,11 +133,14 @@ class _Reader:
             raise self.fail(None, "empty file: expected (define ...)")
         return top
 
-    def pick(self, kind: str, name: str | None = None) -> Node:
-        """The ``(define (KIND NAME) ...)`` form of the file: the only one of its kind,
-        or the one named ``name``; the others may be of the other kind."""
+    def pick(self, kind: str, name: str | None = None) -> tuple[Node, str, tuple[Node, ...]]:
+        """The ``(define (KIND NAME) BODY...)`` form of the file (the only one of its kind,
+        or the one named ``name``; the others may be of the other kind), its name and
+        body, once the whole file is checked for constructs outside the language."""
+        forms = self.forms()
+        self.refuse_outside(forms)
         found: list[tuple[str, Node]] = []
-        for node in self.forms():
+        for node in forms:
             items = self.lst(node, "(define ...)")
             head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
             if head is None or not head.is_list or not head.items or \
@@ -146,18 +159,25 @@ class _Reader:
             if not chosen:
                 raise self.fail(None, f"no {kind} named {name!r} in this file (it has "
                                 f"{', '.join(label for label, _ in found)})")
-            return chosen[0]
-        if len(found) > 1:
+            top = chosen[0]
+        elif len(found) > 1:
             labels = ", ".join(label for label, _ in found)
             raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
                             f"({labels}): pick one by name"
                             + (f" ({self.source}:{found[0][0]})" if kind == "problem" else ""))
-        return found[0][1]
+        else:
+            top = found[0][1]
+        items = self.lst(top, "(define ...)")
+        head = self.lst(items[1], f"({kind} NAME)")
+        if len(head) != 2:
+            raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
+        grammar = _PROBLEM_NAME if kind == "problem" else _NAME
+        return top, self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
 
-    def refuse_outside(self) -> None:
+    def refuse_outside(self, forms: list[Node]) -> None:
         """Refuse a file that uses constructs outside the language, naming every one."""
         seen: dict[str, list[int]] = {}
-        todo = list(self.forms())
+        todo = list(forms)
         while todo:
             node = todo.pop()
             if not node.items:
@@ -200,7 +220,6 @@ class _Reader:
                             + ("; a variable is '?' and a name)" if variable else ")"))
         return text
 
-    # --- helpers ---------------------------------------------------------------------
     def symbol(self, node: Node, what: str) -> str:
         if node.is_list:
             raise self.fail(node.line, f"expected {what}, found {node.text()}")
@@ -211,21 +230,11 @@ class _Reader:
             raise self.fail(node.line, f"expected {what}, found {node.symbol!r}")
         return node.items  # type: ignore[return-value]
 
-    def header(self, top: Node, kind: str) -> tuple[str, tuple[Node, ...]]:
-        items = self.lst(top, "(define ...)")
-        if len(items) < 2 or items[0].symbol != "define":
-            raise self.fail(top.line, "expected (define (" + kind + " NAME) ...)")
-        head = self.lst(items[1], f"({kind} NAME)")
-        if len(head) != 2 or head[0].symbol != kind:
-            raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
-        grammar = _PROBLEM_NAME if kind == "problem" else _NAME
-        return self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
-
     def typed_list(self, nodes: tuple[Node, ...], variables: bool, what: str,
-                   types: dict[str, str | None] | None = None) -> list[tuple[str, str, int]]:
+                   check: bool = True) -> list[tuple[str, str, int]]:
         """``a b - t c`` -> [(a, t, line), (b, t, line), (c, object, line)]; a name
-        given twice (``what``: what the names are) and a type not in ``types`` (if
-        given) are refused."""
+        given twice (``what``: what the names are) and, if ``check``, an undeclared type
+        are refused."""
         out: list[tuple[str, str, int]] = []
         pending: list[tuple[str, int]] = []
         first: dict[str, int] = {}
@@ -249,17 +258,15 @@ class _Reader:
             pending.append((name, nodes[i].line))
             i += 1
         out += [(p, "object", line) for p, line in pending]
-        for _, t, line in out if types is not None else ():
-            if t not in types:
+        for _, t, line in out if check else ():
+            if t not in self.types:
                 raise self.fail(line, f"unknown type {t!r} (declared: "
-                                f"{', '.join(sorted(types))})")
+                                f"{', '.join(sorted(self.types))})")
         return out
 
-    def variables(self, node: Node, types: dict[str, str | None],
-                  ctx: str) -> tuple[tuple[str, str], ...]:
+    def variables(self, node: Node, ctx: str) -> tuple[tuple[str, str], ...]:
         """The ``(?x - t ...)`` of a ``forall`` or ``exists``."""
-        typed = self.typed_list(self.lst(node, "a variable list"), True, f"{ctx}: variable",
-                                types)
+        typed = self.typed_list(self.lst(node, "a variable list"), True, f"{ctx}: variable")
         return tuple((v, t) for v, t, _ in typed)
 
     def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
@@ -346,31 +353,29 @@ _RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", 
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
     """Parse a domain; raise :class:`PDDLError` with file and line on any problem."""
     r = _Reader(text, source)
-    r.refuse_outside()
-    name, body = r.header(r.pick("domain"), "domain")
+    _, name, body = r.pick("domain")
     sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
     reqs = _requirements(r, sec[":requirements"]) if ":requirements" in sec else set()
-    types = _types(r, sec[":types"]) if ":types" in sec else {"object": None}
-    constants = {}
-    if ":constants" in sec:
-        for c, t, _ in r.typed_list(sec[":constants"].items[1:], False, "constant", types):
-            constants[c] = t
-    predicates = _declarations(r, sec[":predicates"], types, "predicate") \
-        if ":predicates" in sec else {}
-    functions = _declarations(r, sec[":functions"], types, "function") \
-        if ":functions" in sec else {}
+    if ":types" in sec:
+        r.types = _types(r, sec[":types"])
+    constants = {c: t for c, t, _ in r.typed_list(sec[":constants"].items[1:], False,
+                                                   "constant")} if ":constants" in sec else {}
+    if ":predicates" in sec:
+        r.predicates = _declarations(r, sec[":predicates"], "predicate")
+    if ":functions" in sec:
+        r.functions = _declarations(r, sec[":functions"], "function")
     actions: list[Action] = []
     rewards = False
     for node in action_nodes:
-        action, uses_reward = _action(r, node, predicates, types, constants, functions)
+        action, uses_reward = _action(r, node, constants)
         rewards |= uses_reward
         twin = next((a for a in actions if a.name == action.name), None)
         if twin is not None:
             raise r.fail(node.line, f"action {action.name} is declared twice (first at line "
                          f"{twin.line})")
         actions.append(action)
-    return Domain(name, frozenset(reqs), types, constants, predicates, tuple(actions), source,
-                  functions, rewards)
+    return Domain(name, frozenset(reqs), r.types, constants, r.predicates, tuple(actions),
+                  source, r.functions, rewards)
 
 
 def _requirements(r: _Reader, node: Node) -> set[str]:
@@ -392,7 +397,7 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
     twice, an undeclared parent and a cycle of parents are refused."""
     types: dict[str, str | None] = {"object": None}
     lines: dict[str, int] = {}
-    for t, parent, line in r.typed_list(node.items[1:], False, "type"):
+    for t, parent, line in r.typed_list(node.items[1:], False, "type", check=False):
         if t == "object":
             if parent != "object":
                 raise r.fail(line, f"object is the root type: it cannot be a {parent}")
@@ -412,8 +417,7 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
     return types
 
 
-def _declarations(r: _Reader, node: Node, types: dict[str, str | None],
-                  what: str) -> dict[str, tuple[str, ...]]:
+def _declarations(r: _Reader, node: Node, what: str) -> dict[str, tuple[str, ...]]:
     """``(:predicates (p ?x - t) ...)`` or ``(:functions (f ?x - t) - number ...)`` ->
     ``{p: (t,), ...}`` (``what``: ``"predicate"`` or ``"function"``)."""
     out: dict[str, tuple[str, ...]] = {}
@@ -432,7 +436,7 @@ def _declarations(r: _Reader, node: Node, types: dict[str, str | None],
         if not sig:
             raise r.fail(item.line, f"expected a {what} name")
         name = r.name(sig[0], f"a {what} name")
-        params = r.typed_list(sig[1:], True, f"{what} {name}: parameter", types)
+        params = r.typed_list(sig[1:], True, f"{what} {name}: parameter")
         if name in first:
             raise r.fail(item.line, f"{what} {name} is declared twice (first at line "
                          f"{first[name]})")
@@ -445,9 +449,7 @@ def _declarations(r: _Reader, node: Node, types: dict[str, str | None],
     return out
 
 
-def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-            types: dict[str, str | None], constants: dict[str, str],
-            functions: dict[str, tuple[str, ...]]) -> tuple[Action, bool]:
+def _action(r: _Reader, node: Node, constants: dict[str, str]) -> tuple[Action, bool]:
     """An action, and whether an effect of it changes ``(reward)``."""
     items = node.items
     assert items is not None
@@ -468,29 +470,28 @@ def _action(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
                          f"{fields[k].line})")
         fields[k] = value
     typed = r.typed_list(r.lst(fields[":parameters"], "a parameter list"), True,
-                         f"action {name}: parameter", types) if ":parameters" in fields else []
+                         f"action {name}: parameter") if ":parameters" in fields else []
     params = [(p, t) for p, t, _ in typed]
     scope = dict(params) | constants
     ctx = f"action {name}"
-    pre, rest = _precondition(r, fields.get(":precondition"), predicates, types, scope, ctx)
-    reader = _Effects(r, predicates, types, scope, ctx, functions)
+    pre, rest = _precondition(r, fields.get(":precondition"), scope, ctx)
+    reader = _Effects(r, scope, ctx)
     branches = reader.effect(fields.get(":effect"), inside=False)
     if not reader.probabilistic and not reader.conditional and rest is None:
         return Action(name, tuple(params), pre, branches[0][1], node.line,  # type: ignore
                       cost=tuple(reader.costs)), reader.reward_effects
-    return Action(name, tuple(params), pre, (), node.line, _outcomes(branches, predicates),
+    return Action(name, tuple(params), pre, (), node.line, _outcomes(branches, r.stuck_domain),
                   tuple(reader.costs), rest), reader.reward_effects
 
 
-def _precondition(r: _Reader, node: Node | None, predicates: dict[str, tuple[str, ...]],
-                  types: dict[str, str | None], scope: dict[str, str],
+def _precondition(r: _Reader, node: Node | None, scope: dict[str, str],
                   ctx: str) -> tuple[tuple[Literal, ...], Condition | None]:
     """A precondition as its literals (a conjunction, in order) and the rest (None: it is
     all literals). The rest holds what only grounding can decide: quantifiers and
     disjunctions, in negation normal form."""
     if node is None:
         return (), None
-    cond = nnf(_condition(r, node, predicates, types, scope, ctx))
+    cond = nnf(_condition(r, node, scope, ctx))
     lits = conjunction(cond)
     if lits is not None:
         return lits, None
@@ -509,11 +510,8 @@ effect a literal, a conditional or quantified one, or a reward."""
 class _Effects:
     """Reads one action's effect into :data:`Branches`, and its cost terms."""
 
-    def __init__(self, r: _Reader, predicates: dict[str, tuple[str, ...]],
-                 types: dict[str, str | None], scope: dict[str, str], ctx: str,
-                 functions: dict[str, tuple[str, ...]]) -> None:
-        self.r, self.predicates, self.types, self.scope = r, predicates, types, scope
-        self.ctx, self.functions = ctx, functions
+    def __init__(self, r: _Reader, scope: dict[str, str], ctx: str) -> None:
+        self.r, self.scope, self.ctx = r, scope, ctx
         self.costs: list[CostTerm] = []
         self.probabilistic = False
         self.conditional = False
@@ -555,8 +553,8 @@ class _Effects:
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
                 raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
-            atom = _atom(r, items[1], self.predicates, self.types, self.scope, ctx)
-            if atom.predicate == STUCK and self.predicates[STUCK] == ():
+            atom = _atom(r, items[1], self.scope, ctx)
+            if atom.predicate == STUCK and r.stuck_domain:
                 raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) "
                              "marks a failed trial, which ends the episode")
             return [(Fraction(1), (self.literal(Literal(atom, False), node),))]
@@ -568,14 +566,14 @@ class _Effects:
             raise r.fail(node.line, f"{ctx}: ({head} ...) cannot be an effect{hint} (an "
                          "effect is made of literals, and, when, forall, probabilistic and "
                          "costs)")
-        atom = _atom(r, node, self.predicates, self.types, self.scope, ctx)
+        atom = _atom(r, node, self.scope, ctx)
         return [(Fraction(1), (self.literal(Literal(atom, True), node),))]
 
     def literal(self, lit: Literal, node: Node) -> Literal | CondEffect:
         """``lit`` as an effect of the ``when``/``forall`` effects around it."""
         if self.when is None and not self.variables:
             return lit
-        if lit.atom.predicate == STUCK and self.predicates.get(STUCK) == ():
+        if lit.atom.predicate == STUCK and self.r.stuck_domain:
             raise self.r.fail(node.line, f"{self.ctx}: (stuck) inside (when ...) or (forall "
                               "...) is not supported: a failed trial is an outcome of its "
                               "own; write it in (probabilistic ...)")
@@ -595,11 +593,10 @@ class _Effects:
         saved = self.scope, self.variables, self.when
         try:
             if head == "when":
-                cond = nnf(_condition(r, items[1], self.predicates, self.types, self.scope,
-                                      ctx))
+                cond = nnf(_condition(r, items[1], self.scope, ctx))
                 self.when = cond if self.when is None else Junction("and", (self.when, cond))
             else:
-                variables = r.variables(items[1], self.types, ctx)
+                variables = r.variables(items[1], ctx)
                 self.variables += variables
                 self.scope = {**self.scope, **dict(variables)}
             branches = self.effect(items[2], inside)
@@ -657,11 +654,10 @@ class _Effects:
             return float(number), sign
         term = r.lst(value, "a function term")
         fname = term[0].symbol if term and not term[0].is_list else ""
-        if fname not in self.functions or fname in COST_FLUENTS:
+        if fname not in r.functions or fname in COST_FLUENTS:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
-        return _term(r, value, fname, self.functions[fname], self.types, self.scope,
-                     ctx), sign
+        return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
 
 
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
@@ -673,11 +669,10 @@ def _product(a: Branches, b: Branches) -> Branches:
     return [(p * q, la + lb) for p, la in a for q, lb in b]
 
 
-def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tuple[Outcome, ...]:
+def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
     """Flattened branches as outcomes: equal effects merged (first appearance first), those
     of probability 0 dropped, every outcome that makes (stuck) true one stuck outcome."""
-    stuck = Atom(STUCK, ())
-    is_stuck_domain = predicates.get(STUCK) == ()
+    stuck = Literal(Atom(STUCK, ()), True)
     merged: dict[tuple, Fraction] = {}
     for p, effects in branches:
         if p == 0:
@@ -685,7 +680,7 @@ def _outcomes(branches: Branches, predicates: dict[str, tuple[str, ...]]) -> tup
         lits = tuple(e for e in effects if isinstance(e, Literal))
         conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         rewards = tuple(e for e in effects if isinstance(e, Reward))  # two add up: no merge
-        if is_stuck_domain and Literal(stuck, True) in lits:
+        if stuck_domain and stuck in lits:
             key: tuple = ("stuck", rewards)
         else:
             unique = tuple(dict.fromkeys(lits))
@@ -738,8 +733,7 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
     return value
 
 
-def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-               types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Condition:
+def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condition:
     """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
     :class:`Junction` kinds; :func:`~gdq_pddl.pddl.normalise.nnf` compiles them away)."""
     items = r.lst(node, "a formula")
@@ -748,8 +742,7 @@ def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     head = items[0].symbol
 
     def sub(n: Node, extra: dict[str, str] | None = None) -> Condition:
-        return _condition(r, n, predicates, types, {**scope, **extra} if extra else scope,
-                          ctx)
+        return _condition(r, n, {**scope, **extra} if extra else scope, ctx)
 
     if head in ("and", "or"):
         return Junction(head, tuple(sub(i) for i in items[1:]))
@@ -766,7 +759,7 @@ def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
     if head in ("forall", "exists"):
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
-        variables = r.variables(items[1], types, ctx)
+        variables = r.variables(items[1], ctx)
         return Quantified(head, variables, sub(items[2], dict(variables)))
     if head == "probabilistic":
         raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
@@ -782,34 +775,32 @@ def _condition(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
             if a not in scope:
                 raise r.fail(node.line, f"{ctx}: unknown term {a!r}")
         return Literal(Atom("=", args), True)
-    atom = _atom(r, node, predicates, types, scope, ctx)
-    _not_stuck(r, atom, predicates, node.line, ctx)
+    atom = _atom(r, node, scope, ctx)
+    _not_stuck(r, atom, node.line, ctx)
     return Literal(atom, True)
 
 
-def _not_stuck(r: _Reader, atom: Atom, predicates: dict[str, tuple[str, ...]], line: int,
-               ctx: str) -> None:
+def _not_stuck(r: _Reader, atom: Atom, line: int, ctx: str) -> None:
     """(stuck) only in effects: it marks a failed trial, never part of a state."""
-    if atom.predicate == STUCK and predicates.get(STUCK) == ():
+    if atom.predicate == STUCK and r.stuck_domain:
         raise r.fail(line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes it "
                      "true ends the episode), so it cannot be a precondition, a goal or "
                      "initially true; rename the predicate if it is an ordinary fluent")
 
 
-def _atom(r: _Reader, node: Node, predicates: dict[str, tuple[str, ...]],
-          types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Atom:
+def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Atom:
     items = r.lst(node, "an atom")
     if not items:
         raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
     name = r.symbol(items[0], "a predicate name")
-    if name not in predicates:
+    if name not in r.predicates:
         raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
-                     f"(declared: {', '.join(sorted(predicates)) or 'none'})")
-    return _term(r, node, name, predicates[name], types, scope, ctx)
+                     f"(declared: {', '.join(sorted(r.predicates)) or 'none'})")
+    return _term(r, node, name, r.predicates[name], scope, ctx)
 
 
-def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...],
-          types: dict[str, str | None], scope: dict[str, str], ctx: str) -> Atom:
+def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...], scope: dict[str, str],
+          ctx: str) -> Atom:
     """``(name args...)`` whose arguments, known in ``scope``, fit the types ``want``."""
     args = tuple(r.symbol(a, "a term") for a in node.items[1:])
     if len(args) != len(want):
@@ -818,7 +809,7 @@ def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...],
         if a not in scope:
             raise r.fail(node.line, f"{ctx}: unknown {'variable' if a[0] == '?' else 'object'}"
                          f" {a!r} in ({name} ...)")
-        if not is_subtype(types, scope[a], t):
+        if not is_subtype(r.types, scope[a], t):
             raise r.fail(node.line, f"{ctx}: {a} is a {scope[a]}, but {name} expects a {t}")
     return Atom(name, args)
 
@@ -842,9 +833,9 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
     ``text`` may hold the domain too, and several problems: ``name`` picks one (needed
     when there are several)."""
     r = _Reader(text, source)
-    r.refuse_outside()
-    top = r.pick("problem", name)
-    name, body = r.header(top, "problem")
+    top, name, body = r.pick("problem", name)
+    r.types, r.predicates = dict(domain.types), dict(domain.predicates)
+    r.functions = dict(domain.functions)
     sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
     if ":requirements" in sec:
         _requirements(r, sec[":requirements"])
@@ -857,8 +848,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
                      f"{domain.name!r} ({domain.source})")
     objects = dict(domain.constants)
     if ":objects" in sec:
-        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object",
-                                       domain.types):
+        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object"):
             if o in objects:
                 raise r.fail(line, f"object {o} is declared twice (as a constant of the "
                              f"domain, {domain.source})")
@@ -870,7 +860,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
     for node in sec[":init"].items[1:]:
         head = node.items[0].symbol if node.is_list and node.items else ""
         if head == "=":
-            term, value = _init_value(r, node, domain, objects)
+            term, value = _init_value(r, node, objects)
             first, where = given.setdefault(term, (value, node))
             if first != value:  # the same value twice is the same fact twice: allowed
                 raise r.fail(node.line, f"init: {term} is given two values, "
@@ -881,8 +871,8 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
         if head == "probabilistic":
             raise r.fail(node.line, "init: a probabilistic initial state is not supported "
                          "(the learner starts in one state)")
-        atom = _atom(r, node, domain.predicates, domain.types, objects, "init")
-        _not_stuck(r, atom, domain.predicates, node.line, "init")
+        atom = _atom(r, node, objects, "init")
+        _not_stuck(r, atom, node.line, "init")
         init.append(atom)
     goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
     metric = _metric(r, sec[":metric"]) if ":metric" in sec else None
@@ -902,7 +892,7 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init:
     """The goal as the literals every alternative has, and its alternatives (none: it is
     a conjunction). Quantifiers are expanded over the problem's objects (the goal has no
     free variable), and the atoms no action changes are decided."""
-    cond = nnf(_condition(r, node, domain.predicates, domain.types, objects, "goal"))
+    cond = nnf(_condition(r, node, objects, "goal"))
     lits = conjunction(cond)
     if lits is not None:
         return lits, ()
@@ -938,8 +928,7 @@ def _fact_atom(fact: str) -> Atom:
     return Atom(name, tuple(args))
 
 
-def _init_value(r: _Reader, node: Node, domain: Domain,
-                objects: dict[str, str]) -> tuple[str, float]:
+def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
     """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
     items = node.items
     assert items is not None
@@ -951,11 +940,10 @@ def _init_value(r: _Reader, node: Node, domain: Domain,
     fname = head[0].symbol
     if fname in COST_FLUENTS:  # (= (total-cost) 0): where the sum starts; not needed
         return f"({fname})", _init_number(r, items[2], f"({fname})")
-    if fname not in domain.functions:
+    if fname not in r.functions:
         raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
-                     f"{', '.join(sorted(domain.functions)) or 'none'})")
-    term = str(_term(r, Node(node.line, head), fname, domain.functions[fname], domain.types,
-                     objects, "init"))
+                     f"{', '.join(sorted(r.functions)) or 'none'})")
+    term = str(_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
     return term, _init_number(r, items[2], term)
 
 

@@ -1,30 +1,12 @@
-"""A PPDDL problem grounded once into two tasks over one set of facts: reality and the
-planner's view.
-
-Reality is the probabilistic model: every ground action of the domain with all its
-outcomes (:class:`ProbabilisticTask`, the learner's actions). The planner's knowledge is
-a *determinisation* (:data:`DETERMINISATIONS`), a STRIPS task whose actions are
-outcomes of those ground actions:
-
-- ``all-outcomes`` (the default): every outcome that changes something is an action the
-  planner may use. Optimistic, as GDQ's knowledge is meant to be: whatever reality can
-  do, the plans know of, so no reachable goal is left without a plan.
-- ``most-likely``: each action's single most probable outcome (the first one on ties;
-  none if that is "no effect" or a failed trial), as FF-Replan plans. Plans that work
-  more often, but a goal reached only through an unlikely outcome gets no plan.
-
-Outcomes that change nothing, and failed trials (``(stuck)``), are never planner actions.
-A planner action keeps its ground action's name when it is that action's only outcome
-in the determinisation, and is named ``<schema>_o<k>`` (k-th outcome) otherwise;
-:attr:`ProbabilisticTask.origin` maps every planner action back to its ground action,
-which is what the abstraction O does with the plans.
+"""A PPDDL problem grounded once into two tasks over one set of facts: reality (every
+ground action with all its outcomes, :class:`ProbabilisticTask`) and the planner's view,
+a STRIPS *determinisation* (:data:`DETERMINISATIONS`, ``docs/domains.md``) whose actions
+are outcomes of those ground actions, named ``<schema>_o<k>`` where an action keeps more
+than one; :attr:`ProbabilisticTask.origin` maps each back to its ground action.
 """
 
 from __future__ import annotations
 
-import itertools
-import math
-from collections import defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
@@ -34,12 +16,12 @@ from gdq_pddl.pddl.grounding import (
     GroundTask,
     _bindings,
     _bits,
+    _index,
     goal_masks,
     ground,
 )
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
-from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, ground_dnf
-from gdq_pddl.pddl.parser import is_subtype
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, extend, ground_dnf
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
@@ -143,19 +125,16 @@ class ProbabilisticTask(GroundTask):
 
 
 def kept_outcomes(action: Action, determinisation: str) -> tuple[int, ...]:
-    """Indices of ``action``'s outcomes that are planner actions (a STRIPS action: 0)."""
+    """Indices of ``action``'s outcomes that are planner actions (a STRIPS action: 0);
+    ``determinisation`` is checked by :func:`planner_names`."""
     if not action.outcomes:
         return (0,)
     useful = [k for k, o in enumerate(action.outcomes)
               if o.probability > 0 and not o.stuck and (o.effect or o.conditional)]
     if determinisation == "all-outcomes":
         return tuple(useful)
-    if determinisation == "most-likely":
-        best = max(range(len(action.outcomes)), key=lambda k: (action.outcomes[k].probability,
-                                                               -k))
-        return (best,) if best in useful else ()
-    raise ValueError(f"unknown determinisation {determinisation!r} (known: "
-                     f"{', '.join(DETERMINISATIONS)})")
+    best = max(range(len(action.outcomes)), key=lambda k: (action.outcomes[k].probability, -k))
+    return (best,) if best in useful else ()
 
 
 def planner_names(domain: Domain, determinisation: str) -> dict[tuple[str, int], str]:
@@ -293,15 +272,8 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     (:mod:`gdq_pddl.pddl.normalise`). Reality's ops keep them (a disjunctive
     precondition as alternatives, conditional effects evaluated in the state); the
     planner's ops are STRIPS: one per alternative and way the conditional effects fire."""
-    fluent = domain.fluent_predicates()
+    fluent, static_tuples, by_type, typed = _index(domain, problem)
     statics = frozenset(str(a) for a in problem.init if a.predicate not in fluent)
-    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
-    for a in problem.init:
-        if a.predicate not in fluent:
-            static_tuples[a.predicate].add(a.args)
-    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
-               for t in domain.types}
-    typed = {t: frozenset(objs) for t, objs in by_type.items()}
 
     def objects(t: str) -> list[str]:
         return by_type.get(t, [])
@@ -401,12 +373,7 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
     dele = {fact(lit, b) for lit in o.effect if not lit.positive and lit.atom.predicate in fluent}
     conds: list[tuple] = []
     for ce in o.conditional:
-        names = [v for v, _ in ce.variables]
-        domains = [objects(t) for _, t in ce.variables]
-        if math.prod(len(d) for d in domains) > MAX_ATOMS:
-            raise too_many()
-        for values in itertools.product(*domains):
-            bb = {**b, **dict(zip(names, values, strict=True))}
+        for bb in extend(b, ce.variables, objects, MAX_ATOMS, too_many):
             when = TRUE if ce.condition is None else \
                 ground_dnf(ce.condition, bb, objects, static, too_many)
             f = {fact(ce.literal, bb)}
@@ -415,11 +382,7 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
                               set() if ce.literal.positive else f))
     reward, rewards = 0.0, []
     for rw in o.rewards:
-        domains = [objects(t) for _, t in rw.variables]
-        if math.prod(len(d) for d in domains) > MAX_ATOMS:
-            raise too_many()
-        for values in itertools.product(*domains):
-            bb = {**b, **dict(zip((v for v, _ in rw.variables), values, strict=True))}
+        for bb in extend(b, rw.variables, objects, MAX_ATOMS, too_many):
             when = TRUE if rw.condition is None else \
                 ground_dnf(rw.condition, bb, objects, static, too_many)
             amount = rw.sign * value(rw.amount, bb)
