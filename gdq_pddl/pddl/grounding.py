@@ -1,17 +1,12 @@
-"""Ground a typed STRIPS problem into bitmask operators.
-
-Parameters are bound by joining the action's *static* preconditions (predicates no
-action changes) against the initial state, most-constrained first, with an index per
-(predicate, bound argument positions); only parameters no static atom mentions are
-enumerated by type. Operators whose fluent preconditions are unreachable even when
-delete effects are ignored are dropped. The result is a :class:`GroundTask` whose
-states are Python ``int`` bitmasks over the fluent facts.
-"""
+"""Ground a typed STRIPS problem into bitmask operators (states: ``int`` bitmasks over
+the fluent facts). Parameters are bound by joining the static preconditions against the
+initial state, most constrained first; operators unreachable with deletes ignored are
+dropped."""
 
 from __future__ import annotations
 
 import itertools
-from collections import defaultdict
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -56,10 +51,7 @@ class GroundTask:
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
         """Operators keyed by one positive precondition bit (or -1 for none)."""
         out: dict[int, list[GroundOp]] = defaultdict(list)
-        counts = defaultdict(int)
-        for op in self.ops:
-            for bit in _bits(op.pre):
-                counts[bit] += 1
+        counts = Counter(bit for op in self.ops for bit in _bits(op.pre))
         for op in self.ops:
             bits = list(_bits(op.pre))
             key = min(bits, key=counts.__getitem__) if bits else -1
@@ -68,13 +60,9 @@ class GroundTask:
 
     def applicable(self, state: int) -> list[GroundOp]:
         """Every operator whose precondition holds in ``state``."""
-        out = []
         table = self.ops_by_fact
-        for key in (-1, *_bits(state)):
-            for op in table.get(key, ()):
-                if state & op.pre == op.pre and not state & op.neg:
-                    out.append(op)
-        return out
+        return [op for key in (-1, *_bits(state)) for op in table.get(key, ())
+                if state & op.pre == op.pre and not state & op.neg]
 
     def successors(self, state: int) -> list[tuple[GroundOp, int]]:
         """``(op, next state)`` for every operator applicable in ``state``."""
@@ -102,10 +90,7 @@ class GroundTask:
 
     def mask(self, atoms: frozenset[str] | set[str]) -> int:
         """Bitmask of fluent atoms; raises KeyError naming an unknown atom."""
-        m = 0
-        for a in atoms:
-            m |= 1 << self.fact_index[a]
-        return m
+        return sum(1 << self.fact_index[a] for a in set(atoms))
 
 
 def _bits(mask: int):
@@ -121,13 +106,10 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
         raise ValueError("a PPDDL domain has no single effect per action: ground it with "
                          "gdq_pddl.pddl.ppddl.ground_ppddl")
     fluent, static_tuples, by_type, typed = _index(domain, problem)
-    raw_ops = []
-    for action in domain.actions:
-        for binding in _bindings(action, static_tuples, by_type, typed, fluent):
-            raw_ops.append(_instantiate(action, binding, fluent))
+    pending = [_instantiate(action, binding, fluent) for action in domain.actions
+               for binding in _bindings(action, static_tuples, by_type, typed, fluent)]
     init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
     reached = set(init_fluents)
-    pending = [op for op in raw_ops if op is not None]
     live = []
     changed = True
     while changed:
@@ -174,12 +156,10 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
               fluent: frozenset[str]):
     """Yield every parameter binding that satisfies the static preconditions."""
     params = dict(action.parameters)
-    statics = [lit.atom for lit in action.precondition
-               if lit.positive and lit.atom.predicate not in fluent and lit.atom.predicate != "="]
-    neg_statics = [lit.atom for lit in action.precondition
-                   if not lit.positive and lit.atom.predicate not in fluent
-                   and lit.atom.predicate != "="]
-    equalities = [lit for lit in action.precondition if lit.atom.predicate == "="]
+    fixed = [lit for lit in action.precondition if lit.atom.predicate not in fluent]
+    equalities = [lit for lit in fixed if lit.atom.predicate == "="]
+    statics = [lit.atom for lit in fixed if lit.positive and lit.atom.predicate != "="]
+    neg_statics = [lit.atom for lit in fixed if not lit.positive and lit.atom.predicate != "="]
     indexes: dict[tuple[str, tuple[int, ...]], dict[tuple[str, ...], list[tuple[str, ...]]]] = {}
 
     def lookup(pred: str, positions: tuple[int, ...], key: tuple[str, ...]):
@@ -206,12 +186,8 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
             key = tuple(b.get(atom.args[i], atom.args[i]) for i in known)
             for tup in lookup(atom.predicate, known, key):
                 nb = dict(b)
-                ok = True
-                for x, v in zip(atom.args, tup, strict=True):
-                    if x[0] == "?" and nb.setdefault(x, v) != v:
-                        ok = False
-                        break
-                if ok:
+                if all(x[0] != "?" or nb.setdefault(x, v) == v
+                       for x, v in zip(atom.args, tup, strict=True)):
                     nxt.append(nb)
         bindings = nxt
     for b in bindings:
@@ -242,11 +218,8 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
 
 
 def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:
-    """The goal fields of a :class:`GroundTask` (``goal_pos``, ``goal_neg``,
-    ``goal_possible``, ``goal_alternatives``). Equalities and static atoms (``statics``,
-    their strings) are decided here and a positive fluent atom outside ``index`` never
-    holds; the alternatives that can never hold are dropped, and the goal can never
-    hold if all are."""
+    """The goal fields of a :class:`GroundTask`, equalities and static atoms (``statics``)
+    decided; alternatives that can never hold are dropped."""
     def masks(lits) -> tuple[int, int, bool]:
         pos = neg = 0
         possible = True

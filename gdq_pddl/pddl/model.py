@@ -28,7 +28,8 @@ class Literal:
 
 @dataclass(frozen=True)
 class Junction:
-    """``(and ...)`` or ``(or ...)`` of conditions (``kind``: ``"and"`` or ``"or"``)."""
+    """``(and ...)`` or ``(or ...)`` of conditions (``kind``; the parser's ``"not"`` and
+    ``"imply"`` never leave :func:`~gdq_pddl.pddl.normalise.nnf`)."""
 
     kind: str
     parts: tuple[Condition, ...]
@@ -50,9 +51,8 @@ negation only on atoms, no ``imply``. Equality is the atom ``(= a b)``."""
 
 @dataclass(frozen=True)
 class CondEffect:
-    """One literal an outcome makes true or false for every binding of ``variables``
-    (a ``forall`` effect) under which ``condition`` (a ``when``; None: always) holds in
-    the state the action is taken in."""
+    """A literal an outcome sets for every binding of ``variables`` (``forall``) under
+    which ``condition`` (``when``; None: always) holds where the action is taken."""
 
     variables: tuple[tuple[str, str], ...]
     condition: Condition | None
@@ -65,9 +65,8 @@ CostTerm = float | Atom
 
 @dataclass(frozen=True)
 class Reward:
-    """``sign * amount`` added to the reward of an outcome (``(increase (reward) X)``: +1;
-    a cost: -1), for every binding of ``variables`` under which ``condition`` (None:
-    always) holds in the state the action is taken in."""
+    """``sign * amount`` added to an outcome's reward (a reward: +1, a cost: -1), for every
+    binding of ``variables`` under which ``condition`` (None: always) holds."""
 
     amount: CostTerm
     sign: float = 1.0
@@ -77,29 +76,22 @@ class Reward:
 
 @dataclass(frozen=True)
 class Outcome:
-    """One outcome of a probabilistic action: its probability and the literals it makes
-    true or false. ``stuck``: the outcome makes ``(stuck)`` true, a failed trial.
-    ``conditional``: the effects that depend on the state or are quantified."""
+    """One outcome of a probabilistic action: its probability, the literals it sets, and
+    whether it is a failed trial (``stuck``) and its ``conditional`` or quantified effects."""
 
     probability: float
     effect: tuple[Literal, ...]
     stuck: bool = False
     conditional: tuple[CondEffect, ...] = ()
     rewards: tuple[Reward, ...] = ()
-    """Rewards that depend on the outcome or the state, or that an action earns
-    (``(increase (reward) X)``); a plain cost is the action's :attr:`Action.cost`."""
+    """Rewards of the outcome or the state; a plain cost is the action's :attr:`Action.cost`."""
 
 
 @dataclass(frozen=True)
 class Action:
-    """An action schema: typed parameters, a conjunctive precondition and effect.
-
-    A PPDDL action has ``outcomes`` (its effect flattened into a distribution that sums
-    to 1, the leftover probability as an outcome with no effect; ``effect`` is then
-    empty); a STRIPS action has none. ``cost`` lists the terms its
-    ``(increase (total-cost) X)`` / ``(decrease (reward) X)`` effects add up, or is
-    empty when the domain states no cost.
-    """
+    """An action schema: typed parameters, a conjunctive precondition and effect. A PPDDL
+    action has ``outcomes`` summing to 1 instead of an ``effect``. ``cost``: the terms its
+    cost effects add up (empty: the domain states no cost)."""
 
     name: str
     parameters: tuple[tuple[str, str], ...]
@@ -109,9 +101,8 @@ class Action:
     outcomes: tuple[Outcome, ...] = ()
     cost: tuple[CostTerm, ...] = ()
     condition: Condition | None = None
-    """The rest of the precondition, where it is more than a conjunction of literals
-    (quantifiers, disjunction): it must hold too. Such an action, or one with
-    conditional effects, has ``outcomes`` even if it is deterministic."""
+    """The rest of the precondition beyond its literals (quantifiers, disjunction); such an
+    action, or one with conditional effects, has ``outcomes`` even if deterministic."""
 
 
 @dataclass(frozen=True)
@@ -162,5 +153,5 @@ class Problem:
     metric: str | None = None
     """``"maximize (reward)"`` or ``"minimize (total-cost)"``, if given."""
     goal_alternatives: tuple[tuple[Literal, ...], ...] = ()
-    """A goal with alternatives (``or``, ``exists``, ``imply``) once grounded: it holds
-    where one of them does (``goal``: the literals all share). Empty: ``goal`` alone."""
+    """A goal's alternatives once grounded, one of which must hold besides ``goal`` (the
+    literals all share). Empty: ``goal`` alone."""

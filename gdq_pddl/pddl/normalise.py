@@ -1,13 +1,6 @@
-"""Normalisation of conditions, done once so that grounding never sees PDDL syntax.
-
-As Fast Downward's translator does, the language's connectives are compiled away in one
-place: :func:`nnf` pushes every negation down to the atoms and turns ``imply`` into
-``or``; :func:`conjunction` says whether a condition is a plain conjunction of literals
-(what STRIPS grounding reads, unchanged); :func:`ground_dnf` instantiates a condition for
-one binding of an action's parameters, expanding ``forall`` and ``exists`` over the
-problem's objects and deciding equality and static atoms, into a disjunction of
-conjunctions of fluent atoms (must hold, must not hold).
-"""
+"""Conditions normalised in one place, so that grounding never sees PDDL syntax: negation
+normal form (:func:`nnf`), plain conjunctions (:func:`conjunction`), and ground
+disjunctive normal form for one binding (:func:`ground_dnf`)."""
 
 from __future__ import annotations
 
@@ -18,11 +11,9 @@ from collections.abc import Callable, Iterator, Mapping
 from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
 
 MAX_DISJUNCTS = 4096
-"""Most alternatives one ground condition may expand into (a disjunction of
-disjunctions multiplies); past it the condition is refused, naming its action."""
+"""Most alternatives one ground condition may expand into."""
 MAX_ATOMS = 1_000_000
-"""Most atoms one ground condition may expand into (nested quantifiers multiply: eight
-variables over 50 objects are 4e13); past it the condition is refused up front."""
+"""Most atoms one ground condition may expand into (nested quantifiers multiply)."""
 
 Disjunct = tuple[frozenset[str], frozenset[str]]
 """A conjunction of ground fluent literals: the atoms that must hold, those that must not."""
@@ -31,9 +22,7 @@ FALSE: list[Disjunct] = []
 
 
 def nnf(cond: Condition, positive: bool = True) -> Condition:
-    """``cond`` (or its negation) with negations on atoms only and no ``imply``: the
-    parser's ``Junction("not", (c,))`` and ``Junction("imply", (a, b))`` are compiled
-    away (De Morgan; ``not forall`` is ``exists not``)."""
+    """``cond`` (or its negation) with negations on atoms only and no ``imply``."""
     if isinstance(cond, Literal):
         return cond if positive else Literal(cond.atom, not cond.positive)
     if isinstance(cond, Quantified):
@@ -67,14 +56,10 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
                objects: Callable[[str], list[str]], static: Callable[[Atom], bool | None],
                too_many: Callable[[], Exception],
                budget: list[int] | None = None) -> list[Disjunct]:
-    """``cond`` (NNF) under ``binding`` as alternatives of fluent literals.
-
-    ``objects(type)`` lists the problem's objects of a type (for quantifiers);
-    ``static(atom)`` is the truth of a ground atom no action changes (None: a fluent);
-    ``too_many()`` is the error raised past :data:`MAX_DISJUNCTS` alternatives or
-    :data:`MAX_ATOMS` atoms (``budget``: the atoms left). An empty list is a condition
-    that never holds; ``[(∅, ∅)]`` one that always does.
-    """
+    """``cond`` (NNF) under ``binding`` as alternatives of fluent literals (``[]``: never
+    holds; :data:`TRUE`: always). ``objects(type)``: the objects of a type; ``static(atom)``:
+    the truth of an atom no action changes (None: a fluent); ``too_many()``: the error past
+    :data:`MAX_DISJUNCTS` alternatives or ``budget`` (:data:`MAX_ATOMS`) atoms."""
     if budget is None:
         budget = [MAX_ATOMS]
     if isinstance(cond, Literal):

@@ -98,10 +98,11 @@ class _Reader:
         return PDDLError(self.source, line, message)
 
     def forms(self) -> list[Node]:
-        """The file's top-level forms (one ``(define ...)`` each; IPPC files hold a
-        domain and its problems in one file)."""
+        """The file's top-level forms (one ``(define ...)`` each); a file using constructs
+        outside the language is refused, naming every use."""
         stack: list[tuple[int, list[Node]]] = []
         line, top = 1, []
+        outside: dict[str, list[int]] = {}
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
@@ -115,6 +116,8 @@ class _Reader:
                     raise self.fail(line, "unexpected ')' with no '(' open")
                 start, items = stack.pop()
                 node = Node(start, tuple(items))
+                if items and items[0].symbol in _OUTSIDE:
+                    outside.setdefault(items[0].symbol, []).append(start)
                 if stack:
                     stack[-1][1].append(node)
                 else:
@@ -131,16 +134,21 @@ class _Reader:
             raise self.fail(line, "expected ')': this '(' is never closed")
         if not top:
             raise self.fail(None, "empty file: expected (define ...)")
+        if outside:
+            order = sorted(outside, key=lambda h: min(outside[h]))
+            listed = "; ".join(f"({h} ...){_OUTSIDE[h]} at line"
+                               f"{'s' if len(outside[h]) > 1 else ''} "
+                               f"{', '.join(map(str, sorted(outside[h])))}" for h in order)
+            raise self.fail(min(outside[order[0]]), f"not supported (gdq_pddl reads "
+                            f"{_LANGUAGE}): {listed}")
         return top
 
     def pick(self, kind: str, name: str | None = None) -> tuple[Node, str, tuple[Node, ...]]:
         """The ``(define (KIND NAME) BODY...)`` form of the file (the only one of its kind,
         or the one named ``name``; the others may be of the other kind), its name and
-        body, once the whole file is checked for constructs outside the language."""
-        forms = self.forms()
-        self.refuse_outside(forms)
+        body."""
         found: list[tuple[str, Node]] = []
-        for node in forms:
+        for node in self.forms():
             items = self.lst(node, "(define ...)")
             head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
             if head is None or not head.is_list or not head.items or \
@@ -173,26 +181,6 @@ class _Reader:
             raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
         grammar = _PROBLEM_NAME if kind == "problem" else _NAME
         return top, self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
-
-    def refuse_outside(self, forms: list[Node]) -> None:
-        """Refuse a file that uses constructs outside the language, naming every one."""
-        seen: dict[str, list[int]] = {}
-        todo = list(forms)
-        while todo:
-            node = todo.pop()
-            if not node.items:
-                continue
-            head = node.items[0].symbol
-            if head in _OUTSIDE or (head in _UNSUPPORTED_SECTIONS):
-                seen.setdefault(head, []).append(node.line)
-            todo.extend(i for i in node.items if i.is_list)
-        if seen:
-            order = sorted(seen, key=lambda h: min(seen[h]))
-            listed = "; ".join(f"({h} ...){_OUTSIDE.get(h, '')} at line"
-                               f"{'s' if len(seen[h]) > 1 else ''} "
-                               f"{', '.join(map(str, sorted(seen[h])))}" for h in order)
-            raise self.fail(min(seen[order[0]]), f"not supported (gdq_pddl reads "
-                            f"{_LANGUAGE}): {listed}")
 
     def checked(self, tok: str, line: int) -> str:
         """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that
@@ -272,8 +260,7 @@ class _Reader:
     def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
                  kind: str) -> tuple[dict[str, Node], list[Node]]:
         """The sections of a domain or problem by keyword, and its ``(:action ...)``
-        forms in order; a keyword not in ``known`` (nor ``:action`` in a domain) is
-        refused, as is a section given twice."""
+        forms in order; a keyword not in ``known`` and a section given twice are refused."""
         out: dict[str, Node] = {}
         actions: list[Node] = []
         for node in body:
@@ -282,13 +269,12 @@ class _Reader:
                 raise self.fail(node.line,
                                 f"expected a section (:keyword ...), found {node.text()}")
             key = items[0].symbol
-            if key == ":action" and kind == "domain":
+            if key not in known:
+                raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
+                                f"one of {', '.join(known)})")
+            if key == ":action":
                 actions.append(node)
                 continue
-            if key not in known:
-                expected = (*known, ":action") if kind == "domain" else known
-                raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
-                                f"one of {', '.join(expected)})")
             if key in out:
                 raise self.fail(node.line, f"duplicate section {key} (first at line "
                                 f"{out[key].line})")
@@ -303,11 +289,8 @@ def _short(node: Node) -> str:
 
 
 def _suspect_unclosed(text: str) -> int | None:
-    """The line of the '(' most likely missing its ')', judged by indentation.
-
-    A form still open when a later line starts at its own indentation or further left
-    (not counting lines that start with ')') has most probably lost its ')'.
-    """
+    """The line of the '(' most likely missing its ')': the last one still open when a
+    later line (not starting with ')') starts at its indentation or further left."""
     open_at: list[tuple[int, int]] = []  # (line, indentation of that line)
     for number, raw in enumerate(text.splitlines(), 1):
         code = raw.split(";", 1)[0]
@@ -325,11 +308,10 @@ def _suspect_unclosed(text: str) -> int | None:
     return None
 
 
-_DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions")
+_DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions",
+                    ":action")
 _PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
                      ":metric")
-_UNSUPPORTED_SECTIONS = (":durative-action", ":derived", ":process", ":event", ":axiom",
-                         ":constraints", ":timed-initial-literals")
 _LANGUAGE = "the PPDDL of the IPPC probabilistic tracks, docs/domains.md"
 KNOWN_REQUIREMENTS = frozenset({
     ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
@@ -342,11 +324,13 @@ KNOWN_REQUIREMENTS = frozenset({
 """Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
 _OUTSIDE = {"oneof": " (FOND: give probabilities with (probabilistic ...))",
             "assign": " (numeric fluents)", "scale-up": " (numeric fluents)",
-            "scale-down": " (numeric fluents)", "either": " (either-types)"}
-"""Connectives outside the language read, each with a hint: a file using any is refused
-with every use listed (:meth:`_Reader.refuse_outside`)."""
-_RESERVED = frozenset({"and", "or", "not", "imply", "forall", "exists", "when", "either",
-                       "probabilistic", "oneof", "increase", "decrease", "assign"})
+            "scale-down": " (numeric fluents)", "either": " (either-types)",
+            **dict.fromkeys((":durative-action", ":derived", ":process", ":event", ":axiom",
+                             ":constraints", ":timed-initial-literals"), "")}
+"""Connectives and sections outside the language read, each with a hint."""
+_CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
+                "increase", "decrease", "and", "not", "=")
+_RESERVED = frozenset(_CONNECTIVES) - {"="} | {"either", "assign"}
 """Words a formula reads as connectives: no predicate may be named so."""
 
 
@@ -379,9 +363,8 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
 
 
 def _requirements(r: _Reader, node: Node) -> set[str]:
-    """The keys of ``(:requirements ...)``, each a requirement of PDDL or PPDDL (a typo
-    is refused). They declare, and never decide: what the file uses is read, or refused
-    for what it is (:data:`_OUTSIDE`), whatever it declares."""
+    """The keys of ``(:requirements ...)``; one that is not a requirement of PDDL or PPDDL
+    (a typo) is refused. They never decide what is read."""
     out = set()
     for n in node.items[1:]:
         req = r.symbol(n, "a requirement")
@@ -451,8 +434,7 @@ def _declarations(r: _Reader, node: Node, what: str) -> dict[str, tuple[str, ...
 
 def _action(r: _Reader, node: Node, constants: dict[str, str]) -> tuple[Action, bool]:
     """An action, and whether an effect of it changes ``(reward)``."""
-    items = node.items
-    assert items is not None
+    items = r.lst(node, "an action")
     if len(items) < 2:
         raise r.fail(node.line, "expected (:action NAME :parameters (...) ...)")
     name = r.name(items[1], "an action name")
@@ -486,9 +468,8 @@ def _action(r: _Reader, node: Node, constants: dict[str, str]) -> tuple[Action, 
 
 def _precondition(r: _Reader, node: Node | None, scope: dict[str, str],
                   ctx: str) -> tuple[tuple[Literal, ...], Condition | None]:
-    """A precondition as its literals (a conjunction, in order) and the rest (None: it is
-    all literals). The rest holds what only grounding can decide: quantifiers and
-    disjunctions, in negation normal form."""
+    """A precondition as its literals (in order) and the rest, in negation normal form,
+    that only grounding can decide (quantifiers, disjunctions; None: there is none)."""
     if node is None:
         return (), None
     cond = nnf(_condition(r, node, scope, ctx))
@@ -583,9 +564,8 @@ class _Effects:
     def scoped(self, node: Node, items: tuple[Node, ...], inside: bool) -> Branches:
         """``(when CONDITION EFFECT)`` or ``(forall (?x - t ...) EFFECT)``: the effect's
         literals hold under the condition, for every binding of the variables. A
-        probabilistic effect inside a ``when`` keeps its probabilities (the condition is
-        read in the state the action is taken in, whatever the outcome); inside a
-        ``forall`` it would be a choice per object, which is not read."""
+        probabilistic effect may be inside a ``when``, not a ``forall`` (a choice per
+        object)."""
         r, ctx, head = self.r, self.ctx, items[0].symbol
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected ({head} "
@@ -660,10 +640,6 @@ class _Effects:
         return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
 
 
-_CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
-                "increase", "decrease", "and", "not", "=")
-
-
 def _product(a: Branches, b: Branches) -> Branches:
     """Two independent effects together: every pair of their outcomes."""
     return [(p * q, la + lb) for p, la in a for q, lb in b]
@@ -696,11 +672,9 @@ def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
 
 
 def _number(r: _Reader, node: Node, ctx: str) -> Fraction | None:
-    """``0.25``, ``.5``, ``1/4``, ``3`` or ``2.5e-3`` as an exact fraction (None: ``node``
-    is not a number). Raises :class:`PDDLError` at its line for a number larger than
-    :data:`~gdq_pddl.limits.MAX_NUMBER` in size, and, before the fraction is built, for
-    one written in more than :data:`MAX_LITERAL` characters or with an exponent past
-    :data:`MAX_EXPONENT`."""
+    """``0.25``, ``.5``, ``1/4``, ``3`` or ``2.5e-3`` as an exact fraction (None: not a
+    number); refused past :data:`~gdq_pddl.limits.MAX_NUMBER`, :data:`MAX_LITERAL`
+    characters or an exponent of :data:`MAX_EXPONENT`."""
     text = node.symbol
     match = None if node.is_list else _NUMERIC.fullmatch(text)
     if match is None or not any(ch.isdigit() for ch in text):
@@ -768,13 +742,7 @@ def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condi
         raise r.fail(node.line, f"{ctx}: ({head} ...) can only be an effect, not part of a "
                      "condition")
     if head == "=":
-        args = tuple(r.symbol(a, "a term") for a in items[1:])
-        if len(args) != 2:
-            raise r.fail(node.line, f"{ctx}: (= a b) takes two terms")
-        for a in args:
-            if a not in scope:
-                raise r.fail(node.line, f"{ctx}: unknown term {a!r}")
-        return Literal(Atom("=", args), True)
+        return Literal(_term(r, node, "=", ("object", "object"), scope, ctx), True)
     atom = _atom(r, node, scope, ctx)
     _not_stuck(r, atom, node.line, ctx)
     return Literal(atom, True)
@@ -829,9 +797,7 @@ def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
 def parse_problem(text: str, domain: Domain, source: str = "<problem>",
                   name: str | None = None) -> Problem:
     """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit.
-
-    ``text`` may hold the domain too, and several problems: ``name`` picks one (needed
-    when there are several)."""
+    ``name`` picks one of several problems in ``text`` (which may hold the domain too)."""
     r = _Reader(text, source)
     top, name, body = r.pick("problem", name)
     r.types, r.predicates = dict(domain.types), dict(domain.predicates)
@@ -889,9 +855,8 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
 
 def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init: list[Atom],
           ) -> tuple[tuple[Literal, ...], tuple[tuple[Literal, ...], ...]]:
-    """The goal as the literals every alternative has, and its alternatives (none: it is
-    a conjunction). Quantifiers are expanded over the problem's objects (the goal has no
-    free variable), and the atoms no action changes are decided."""
+    """The goal as the literals all its alternatives share, and the alternatives (none:
+    a conjunction), quantifiers expanded and atoms no action changes decided."""
     cond = nnf(_condition(r, node, objects, "goal"))
     lits = conjunction(cond)
     if lits is not None:
@@ -930,8 +895,7 @@ def _fact_atom(fact: str) -> Atom:
 
 def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
     """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
-    items = node.items
-    assert items is not None
+    items = r.lst(node, "(= TERM NUMBER)")
     term = items[1] if len(items) == 3 else None
     head = term.items if term is not None and term.is_list else None
     if not head or head[0].is_list:
@@ -955,8 +919,7 @@ def _init_number(r: _Reader, node: Node, term: str) -> float:
 
 
 def _goal_reward(r: _Reader, node: Node) -> float:
-    items = node.items
-    assert items is not None
+    items = r.lst(node, "(:goal-reward N)")
     value = _number(r, items[1], ":goal-reward") if len(items) == 2 else None
     if value is None or value <= 0:
         raise r.fail(node.line, f"expected (:goal-reward N) with N > 0, found {node.text()}")

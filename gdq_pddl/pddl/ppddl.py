@@ -27,9 +27,7 @@ DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
 
 _SEP = "#"
-"""Joins a schema and an outcome index in the grounding of every outcome. The reader
-refuses '#' in a name, and :func:`ground_ppddl` refuses a domain built otherwise with
-one, so it cannot clash with a name of the domain."""
+"""Joins a schema and an outcome index while grounding (no name of a domain has it)."""
 
 
 @dataclass(frozen=True)
@@ -41,14 +39,11 @@ class GroundOutcome:
     dele: int
     stuck: bool = False
     conditional: tuple[tuple[int, int, int, int], ...] = ()
-    """Conditional effects ``(must hold, must not hold, add, delete)``: each adds and
-    deletes when its condition holds in the state the action is taken in (adds win)."""
+    """Conditional effects ``(must hold, must not hold, add, delete)`` (adds win)."""
     reward: float = 0.0
-    """The reward the outcome's effects state (:class:`~gdq_pddl.pddl.model.Reward`),
-    besides the action's cost; those under a condition are in ``rewards``."""
+    """The reward the outcome always earns besides the action's cost."""
     rewards: tuple[tuple[tuple[tuple[int, int], ...], float], ...] = ()
-    """``(alternatives (must hold, must not hold), amount)``: the amount is earned when
-    one alternative holds in the state the action is taken in."""
+    """``(alternatives (must hold, must not hold), amount)``: earned where one holds."""
 
     def gain(self, state: int) -> float:
         """The outcome's reward when the action is taken in ``state``."""
@@ -72,14 +67,12 @@ class ProbabilisticOp(GroundOp):
     known: tuple[int, ...] = ()
     alternatives: tuple[tuple[int, int], ...] = ()
     """A disjunctive precondition: ``(must hold, must not hold)`` pairs, one of which must
-    be met (``pre``/``neg`` are then what all of them share); empty: ``pre``/``neg``."""
+    be met besides ``pre``/``neg`` (what all share); empty: ``pre``/``neg`` alone."""
 
     def holds(self, state: int) -> bool:
         """Whether the precondition holds in ``state``."""
-        if not (state & self.pre == self.pre and not state & self.neg):
-            return False
-        return not self.alternatives or any(state & p == p and not state & n
-                                            for p, n in self.alternatives)
+        return self.applicable(state) and (not self.alternatives or any(
+            state & p == p and not state & n for p, n in self.alternatives))
 
     def apply(self, state: int) -> int:
         raise TypeError(f"{self.name} is probabilistic: it has no single effect "
@@ -88,12 +81,8 @@ class ProbabilisticOp(GroundOp):
 
 @dataclass(frozen=True)
 class ProbabilisticTask(GroundTask):
-    """The learner's task of a PPDDL problem: its ops are the domain's ground actions.
-
-    :meth:`successors` are the planner's knowledge (one edge per applicable action and
-    outcome the determinisation keeps, as a :class:`GroundTask` has one per applicable
-    operator); :meth:`outcome_states` is everywhere reality can go.
-    """
+    """The learner's task of a PPDDL problem (its ops: the ground actions). :meth:`successors`
+    are the planner's knowledge (the outcomes kept); :meth:`outcome_states`, reality's."""
 
     origin: Mapping[str, str] = field(default_factory=dict)
     """Planner action (ground, e.g. ``"(move_o2 a b)"``) -> ground action ``"(move a b)"``."""
@@ -204,10 +193,8 @@ def ground_ppddl(domain: Domain, problem: Problem,
     for name, by_outcome in groups.items():
         action = schema_of[name]
         ops = [by_outcome[k] for k in range(len(by_outcome))]  # all share a precondition
-        probs = [o.probability for o in action.outcomes] or [1.0]
-        stuck = [o.stuck for o in action.outcomes] or [False]
-        outcomes = tuple(GroundOutcome(p, op.add, op.dele, s)
-                         for p, op, s in zip(probs, ops, stuck, strict=True))
+        outcomes = tuple(GroundOutcome(o.probability, op.add, op.dele, o.stuck)
+                         for o, op in zip(_outcomes_of(action), ops, strict=True))
         known = kept_outcomes(action, determinisation)
         learner_ops.append(ProbabilisticOp(name, ops[0].pre, ops[0].neg, 0, 0, outcomes, known))
         args = name.strip("()").split()[1:]
@@ -232,13 +219,9 @@ def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[flo
     for name in names:
         schema, *args = name.strip("()").split()
         action = by_name[schema]
-        if not action.cost:
-            out.append(None)
-            continue
         binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
-        total = sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
-                    for term in action.cost)
-        out.append(total)
+        out.append(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
+                       for term in action.cost) if action.cost else None)
     return out
 
 
@@ -260,18 +243,15 @@ def term_value(term, binding: Mapping[str, str], domain: Domain, problem: Proble
 
 
 MAX_VARIANTS = 4096
-"""Most planner actions one ground action's kept outcome may compile into (conditional
-effects: one per way its conditions can hold or fail); past it, an error names it."""
+"""Most planner actions one ground action's kept outcome may compile into."""
 
 
 def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                        names: dict[tuple[str, int], str]) -> tuple[ProbabilisticTask,
                                                                    GroundTask]:
-    """:func:`ground_ppddl` of a domain whose conditions have quantifiers or
-    disjunctions, or whose effects are conditional or quantified
-    (:mod:`gdq_pddl.pddl.normalise`). Reality's ops keep them (a disjunctive
-    precondition as alternatives, conditional effects evaluated in the state); the
-    planner's ops are STRIPS: one per alternative and way the conditional effects fire."""
+    """:func:`ground_ppddl` of a domain with quantified or disjunctive conditions, or
+    conditional or quantified effects: reality's ops keep them; the planner's are STRIPS,
+    one per alternative and way the conditional effects fire."""
     fluent, static_tuples, by_type, typed = _index(domain, problem)
     statics = frozenset(str(a) for a in problem.init if a.predicate not in fluent)
 
@@ -361,11 +341,9 @@ def _outcomes_of(action: Action) -> tuple[Outcome, ...]:
 
 def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: frozenset[str],
                     too_many, value) -> tuple[set[str], set[str], list[tuple], float, list]:
-    """An outcome under binding ``b``: its adds, deletes and conditional effects
-    ``(must hold, must not hold, adds, deletes)`` (fact sets; one per alternative of a
-    condition and binding of a ``forall``), the reward it always earns and its
-    conditional rewards ``(alternatives, amount)`` (``value(term, binding)``: a term's
-    amount)."""
+    """An outcome under binding ``b`` as fact sets: its adds, deletes, conditional effects
+    ``(must hold, must not hold, adds, deletes)``, the reward it always earns and its
+    conditional rewards ``(alternatives, amount)`` (``value(term, binding)``: an amount)."""
     def fact(lit: Literal, binding: Mapping[str, str]) -> str:
         return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
 
@@ -419,10 +397,8 @@ def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
 def _variants(alts: list[tuple[int, int]], outcome: GroundOutcome, name: str, domain: Domain,
               action: Action) -> list[tuple[int, int, int, int]]:
     """The STRIPS ops ``(pre, neg, add, delete)`` of one outcome of a ground action: one
-    per alternative of its precondition and way each conditional effect fires (its
-    condition holds) or not (one of its literals fails). In any state where the action
-    applies, some variant applies, and every variant that applies has the effect the
-    outcome has there."""
+    per alternative of its precondition and way each conditional effect fires or not
+    (one of its literals fails), so that those that apply have the outcome's effect."""
     variants = {(p, n, outcome.add, outcome.dele): None for p, n in alts}
     for cp, cn, a, d in outcome.conditional:
         nxt: dict[tuple[int, int, int, int], None] = {}
