@@ -653,22 +653,13 @@ def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
     for p, effects in branches:
         if p == 0:
             continue
-        lits = tuple(e for e in effects if isinstance(e, Literal))
+        lits = tuple(dict.fromkeys(e for e in effects if isinstance(e, Literal)))
         conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         rewards = tuple(e for e in effects if isinstance(e, Reward))  # two add up: no merge
-        if stuck_domain and stuck in lits:
-            key: tuple = ("stuck", rewards)
-        else:
-            unique = tuple(dict.fromkeys(lits))
-            key = ("effect", frozenset(unique), unique, frozenset(conds), conds, rewards)
+        key = ((), True, (), rewards) if stuck_domain and stuck in lits else \
+            (lits, False, conds, rewards)  # Outcome's fields after its probability
         merged[key] = merged.get(key, Fraction(0)) + p
-    out = []
-    for key, p in merged.items():
-        if key[0] == "stuck":
-            out.append(Outcome(float(p), (), True, rewards=key[1]))
-        else:
-            out.append(Outcome(float(p), key[2], conditional=key[4], rewards=key[5]))
-    return tuple(out)
+    return tuple(Outcome(float(p), *key) for key, p in merged.items())
 
 
 def _number(r: _Reader, node: Node, ctx: str) -> Fraction | None:
@@ -709,7 +700,7 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
 
 def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condition:
     """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
-    :class:`Junction` kinds; :func:`~gdq_pddl.pddl.normalise.nnf` compiles them away)."""
+    :class:`Junction` kinds, for :func:`~gdq_pddl.pddl.normalise.nnf`)."""
     items = r.lst(node, "a formula")
     if not items:
         return Junction("and", ())
@@ -723,9 +714,7 @@ def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condi
     if head == "not":
         if len(items) != 2:
             raise r.fail(node.line, f"{ctx}: expected (not FORMULA)")
-        inner = sub(items[1])
-        return Literal(inner.atom, not inner.positive) if isinstance(inner, Literal) else \
-            Junction("not", (inner,))
+        return Junction("not", (sub(items[1]),))
     if head == "imply":
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected (imply FORMULA FORMULA)")

@@ -181,23 +181,19 @@ def ground_ppddl(domain: Domain, problem: Problem,
                                  outcomes=(), cost=()))
     task = ground(replace(domain, actions=tuple(every)), problem)
     by_name = {a.name: a for a in domain.actions}
-    groups: dict[str, dict[int, GroundOp]] = {}  # ground action -> outcome index -> op
-    schema_of: dict[str, Action] = {}
+    groups: dict[tuple[str, ...], dict[int, GroundOp]] = {}  # (schema, *args) -> outcome -> op
     for op in task.ops:
         schema, *args = op.name.strip("()").split()
         base, _, k = schema.partition(_SEP)
-        name = "(" + " ".join((base, *args)) + ")"
-        groups.setdefault(name, {})[int(k or 0)] = op
-        schema_of[name] = by_name[base]
+        groups.setdefault((base, *args), {})[int(k or 0)] = op
     learner_ops, planner_ops, origin = [], [], {}
-    for name, by_outcome in groups.items():
-        action = schema_of[name]
+    for (base, *args), by_outcome in groups.items():
+        action, name = by_name[base], "(" + " ".join((base, *args)) + ")"
         ops = [by_outcome[k] for k in range(len(by_outcome))]  # all share a precondition
         outcomes = tuple(GroundOutcome(o.probability, op.add, op.dele, o.stuck)
                          for o, op in zip(_outcomes_of(action), ops, strict=True))
         known = kept_outcomes(action, determinisation)
         learner_ops.append(ProbabilisticOp(name, ops[0].pre, ops[0].neg, 0, 0, outcomes, known))
-        args = name.strip("()").split()[1:]
         for k in known:
             pname = "(" + " ".join((names[(action.name, k)], *args)) + ")"
             planner_ops.append(GroundOp(pname, ops[0].pre, ops[0].neg, outcomes[k].add,
