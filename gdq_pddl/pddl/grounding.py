@@ -117,8 +117,7 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
         for op in pending:
             if op[1] <= reached:
                 live.append(op)
-                if not op[3] <= reached:
-                    reached |= op[3]
+                reached |= op[3]
                 changed = True
             else:
                 rest.append(op)

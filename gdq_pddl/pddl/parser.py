@@ -83,11 +83,11 @@ class Node:
 class _Reader:
     """One file's text, and the declarations of the domain being read or read for."""
 
-    def __init__(self, text: str, source: str) -> None:
+    def __init__(self, text: str, source: str, domain: Domain | None = None) -> None:
         self.text, self.source = text.removeprefix(BOM), source
-        self.types: dict[str, str | None] = {"object": None}
-        self.predicates: dict[str, tuple[str, ...]] = {}
-        self.functions: dict[str, tuple[str, ...]] = {}
+        self.types: dict[str, str | None] = dict(domain.types) if domain else {"object": None}
+        self.predicates = dict(domain.predicates) if domain else {}
+        self.functions = dict(domain.functions) if domain else {}
 
     @property
     def stuck_domain(self) -> bool:
@@ -505,9 +505,7 @@ class _Effects:
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
         r, ctx = self.r, self.ctx
-        if node is None:
-            return [(Fraction(1), ())]
-        items = r.lst(node, "an effect")
+        items = r.lst(node, "an effect") if node is not None else ()
         if not items:
             return [(Fraction(1), ())]
         head = items[0].symbol
@@ -534,32 +532,27 @@ class _Effects:
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
                 raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
-            atom = _atom(r, items[1], self.scope, ctx)
-            if atom.predicate == STUCK and r.stuck_domain:
-                raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) "
-                             "marks a failed trial, which ends the episode")
-            return [(Fraction(1), (self.literal(Literal(atom, False), node),))]
-        if head == "=":
+        elif head == "=":
             raise r.fail(node.line, f"{ctx}: equality cannot be an effect")
-        if head in _CONNECTIVES:
+        elif head in _CONNECTIVES:
             hint = " (FOND); give probabilities with (probabilistic ...)" \
                 if head == "oneof" else ""
             raise r.fail(node.line, f"{ctx}: ({head} ...) cannot be an effect{hint} (an "
                          "effect is made of literals, and, when, forall, probabilistic and "
                          "costs)")
-        atom = _atom(r, node, self.scope, ctx)
-        return [(Fraction(1), (self.literal(Literal(atom, True), node),))]
-
-    def literal(self, lit: Literal, node: Node) -> Literal | CondEffect:
-        """``lit`` as an effect of the ``when``/``forall`` effects around it."""
+        positive = head != "not"
+        atom = _atom(r, node if positive else items[1], self.scope, ctx)
+        if not positive and atom.predicate == STUCK and r.stuck_domain:
+            raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) marks "
+                         "a failed trial, which ends the episode")
         if self.when is None and not self.variables:
-            return lit
-        if lit.atom.predicate == STUCK and self.r.stuck_domain:
-            raise self.r.fail(node.line, f"{self.ctx}: (stuck) inside (when ...) or (forall "
-                              "...) is not supported: a failed trial is an outcome of its "
-                              "own; write it in (probabilistic ...)")
-        self.conditional = True
-        return CondEffect(self.variables, self.when, lit)
+            return [(Fraction(1), (Literal(atom, positive),))]
+        if atom.predicate == STUCK and r.stuck_domain:
+            raise r.fail(node.line, f"{ctx}: (stuck) inside (when ...) or (forall ...) is not "
+                         "supported: a failed trial is an outcome of its own; write it in "
+                         "(probabilistic ...)")
+        self.conditional = True  # the literal of the when/forall effects around it
+        return [(Fraction(1), (CondEffect(self.variables, self.when, Literal(atom, positive)),))]
 
     def scoped(self, node: Node, items: tuple[Node, ...], inside: bool) -> Branches:
         """``(when CONDITION EFFECT)`` or ``(forall (?x - t ...) EFFECT)``: the effect's
@@ -570,18 +563,16 @@ class _Effects:
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected ({head} "
                          f"{'CONDITION' if head == 'when' else '(?x - TYPE ...)'} EFFECT)")
-        saved = self.scope, self.variables, self.when
-        try:
-            if head == "when":
-                cond = nnf(_condition(r, items[1], self.scope, ctx))
-                self.when = cond if self.when is None else Junction("and", (self.when, cond))
-            else:
-                variables = r.variables(items[1], ctx)
-                self.variables += variables
-                self.scope = {**self.scope, **dict(variables)}
-            branches = self.effect(items[2], inside)
-        finally:
-            self.scope, self.variables, self.when = saved
+        saved = self.scope, self.variables, self.when  # an error ends the reading
+        if head == "when":
+            cond = nnf(_condition(r, items[1], self.scope, ctx))
+            self.when = cond if self.when is None else Junction("and", (self.when, cond))
+        else:
+            variables = r.variables(items[1], ctx)
+            self.variables += variables
+            self.scope = {**self.scope, **dict(variables)}
+        branches = self.effect(items[2], inside)
+        self.scope, self.variables, self.when = saved
         if head == "forall" and len(branches) > 1:
             raise r.fail(node.line, f"{ctx}: (probabilistic ...) inside (forall ...) is not "
                          "supported (a choice per object)")
@@ -787,10 +778,8 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
                   name: str | None = None) -> Problem:
     """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit.
     ``name`` picks one of several problems in ``text`` (which may hold the domain too)."""
-    r = _Reader(text, source)
+    r = _Reader(text, source, domain)
     top, name, body = r.pick("problem", name)
-    r.types, r.predicates = dict(domain.types), dict(domain.predicates)
-    r.functions = dict(domain.functions)
     sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
     if ":requirements" in sec:
         _requirements(r, sec[":requirements"])
@@ -892,19 +881,17 @@ def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, f
                      f"{node.text()}")
     fname = head[0].symbol
     if fname in COST_FLUENTS:  # (= (total-cost) 0): where the sum starts; not needed
-        return f"({fname})", _init_number(r, items[2], f"({fname})")
-    if fname not in r.functions:
+        term = f"({fname})"
+    elif fname not in r.functions:
         raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
                      f"{', '.join(sorted(r.functions)) or 'none'})")
-    term = str(_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
-    return term, _init_number(r, items[2], term)
-
-
-def _init_number(r: _Reader, node: Node, term: str) -> float:
-    value = _number(r, node, f"init: {term}")
+    else:
+        term = str(_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
+    value = _number(r, items[2], f"init: {term}")
     if value is None:
-        raise r.fail(node.line, f"init: expected a number for {term}, found {node.text()}")
-    return float(value)
+        raise r.fail(items[2].line, f"init: expected a number for {term}, found "
+                     f"{items[2].text()}")
+    return term, float(value)
 
 
 def _goal_reward(r: _Reader, node: Node) -> float:
