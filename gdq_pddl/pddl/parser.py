@@ -153,23 +153,24 @@ class _Reader:
             head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
             if head is None or not head.is_list or not head.items or \
                     head.items[0].symbol not in ("domain", "problem"):
+                text = node.text()
                 raise self.fail(node.line, "expected (define (domain NAME) ...) or (define "
-                                f"(problem NAME) ...), found {_short(node)}")
+                                "(problem NAME) ...), found "
+                                + (text if len(text) <= 60 else text[:57] + "..."))
             if head.items[0].symbol == kind:
                 label = head.items[1].symbol if len(head.items) == 2 else ""
                 found.append((label, node))
-        other = "problem" if kind == "domain" else "domain"
         if not found:
             raise self.fail(None, f"expected a (define ({kind} NAME) ...) form; this file "
-                            f"has only {other}s")
+                            f"has only {'problem' if kind == 'domain' else 'domain'}s")
+        labels = ", ".join(label for label, _ in found)
         if name is not None:
             chosen = [node for label, node in found if label == name.lower()]
             if not chosen:
                 raise self.fail(None, f"no {kind} named {name!r} in this file (it has "
-                                f"{', '.join(label for label, _ in found)})")
+                                f"{labels})")
             top = chosen[0]
         elif len(found) > 1:
-            labels = ", ".join(label for label, _ in found)
             raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
                             f"({labels}): pick one by name"
                             + (f" ({self.source}:{found[0][0]})" if kind == "problem" else ""))
@@ -280,12 +281,6 @@ class _Reader:
                                 f"{out[key].line})")
             out[key] = node
         return out, actions
-
-
-def _short(node: Node) -> str:
-    """The start of ``node``'s text, for a message."""
-    text = node.text()
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _suspect_unclosed(text: str) -> int | None:

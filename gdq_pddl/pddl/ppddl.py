@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from itertools import compress
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl.grounding import (
@@ -92,20 +93,12 @@ class ProbabilisticTask(GroundTask):
 
     def applicable(self, state: int) -> list[GroundOp]:
         ops = super().applicable(state)
-        if not self.disjunctive:
-            return ops
-        return [op for op in ops if op.holds(state)]  # type: ignore[attr-defined]
+        return [op for op in ops if op.holds(state)] if self.disjunctive else ops  # type: ignore
 
     def successors(self, state: int) -> list[tuple[GroundOp, int]]:
-        out: list[tuple[GroundOp, int]] = []
-        for op in self.applicable(state):
-            seen: set[int] = set()
-            for k in op.known:  # type: ignore[attr-defined]
-                t = op.outcomes[k].apply(state)  # type: ignore[attr-defined]
-                if t not in seen:
-                    seen.add(t)
-                    out.append((op, t))
-        return out
+        return [(op, t) for op in self.applicable(state)  # each distinct state once per op
+                for t in dict.fromkeys(op.outcomes[k].apply(state)  # type: ignore[attr-defined]
+                                       for k in op.known)]  # type: ignore[attr-defined]
 
     def outcome_states(self, state: int) -> list[int]:
         """Every state an applicable action can lead to (failed trials aside)."""
@@ -284,11 +277,11 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     def m(atoms) -> int:
         return sum(1 << index[a] for a in atoms if a in index)
 
+    raw = list(compress(raw, live))
+    learner_names = {str(Atom(action.name, args)) for action, args, _, _ in raw}
     learner_ops, planner_ops, origin, taken = [], [], {}, set()
-    for (action, args, pre, outs), ok in zip(raw, live, strict=True):
-        if not ok:
-            continue
-        name = "(" + " ".join((action.name, *args)) + ")"
+    for action, args, pre, outs in raw:
+        name = str(Atom(action.name, args))
         alts = [(m(p), m(n)) for p, n in pre if p <= reached]
         common_pos = common_neg = -1
         for p, n in alts:
@@ -307,19 +300,14 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
             for j, (p, n, a, d) in enumerate(_variants(alts, outcomes[k], name, domain,
                                                        action)):
                 schema = names[(action.name, k)] + (f"_v{j + 1}" if j else "")
-                pname = "(" + " ".join((schema, *args)) + ")"
-                if pname in taken:
+                pname = str(Atom(schema, args))
+                if pname in taken or (pname != name and pname in learner_names):
                     raise PDDLError(domain.source, action.line or None, f"action "
                                     f"{action.name}: its planner action {pname} has the name "
                                     "of another ground action; rename one of them")
                 taken.add(pname)
                 planner_ops.append(GroundOp(pname, p, n, a, d & ~a))
                 origin[pname] = name
-    learner_names = {op.name for op in learner_ops}
-    clash = next((p for p, o in origin.items() if p != o and p in learner_names), None)
-    if clash is not None:
-        raise PDDLError(domain.source, None, f"the planner action {clash} (an outcome of "
-                        f"{origin[clash]}) has the name of a ground action; rename one")
     goal = goal_masks(problem, fluent, statics, index)
     learner = ProbabilisticTask(facts, tuple(learner_ops), m(init), statics=statics,
                                 fact_index=index, origin=origin,
