@@ -159,19 +159,6 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
     equalities = [lit for lit in fixed if lit.atom.predicate == "="]
     statics = [lit.atom for lit in fixed if lit.positive and lit.atom.predicate != "="]
     neg_statics = [lit.atom for lit in fixed if not lit.positive and lit.atom.predicate != "="]
-    indexes: dict[tuple[str, tuple[int, ...]], dict[tuple[str, ...], list[tuple[str, ...]]]] = {}
-
-    def lookup(pred: str, positions: tuple[int, ...], key: tuple[str, ...]):
-        idx = indexes.get((pred, positions))
-        if idx is None:
-            idx = defaultdict(list)
-            # sorted: set order follows Python's per-process string hashing, and the
-            # order of ground actions (a PDDL env's action indices) must not
-            for tup in sorted(static_tuples.get(pred, ())):
-                idx[tuple(tup[i] for i in positions)].append(tup)
-            indexes[(pred, positions)] = idx
-        return idx.get(key, ())
-
     bindings: list[dict[str, str]] = [{}]
     todo = list(statics)
     while todo and bindings:
@@ -180,10 +167,14 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
                                         -len(static_tuples.get(a.predicate, ()))))
         todo.remove(atom)
         known = tuple(i for i, x in enumerate(atom.args) if x in bound or x[0] != "?")
+        index: dict[tuple[str, ...], list[tuple[str, ...]]] = defaultdict(list)
+        # sorted: set order follows Python's per-process string hashing, and the order of
+        # ground actions (a PDDL env's action indices) must not
+        for tup in sorted(static_tuples.get(atom.predicate, ())):
+            index[tuple(tup[i] for i in known)].append(tup)
         nxt = []
         for b in bindings:
-            key = tuple(b.get(atom.args[i], atom.args[i]) for i in known)
-            for tup in lookup(atom.predicate, known, key):
+            for tup in index.get(tuple(b.get(atom.args[i], atom.args[i]) for i in known), ()):
                 nb = dict(b)
                 if all(x[0] != "?" or nb.setdefault(x, v) == v
                        for x, v in zip(atom.args, tup, strict=True)):
@@ -193,13 +184,12 @@ def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
         free = [p for p in params if p not in b]
         for values in itertools.product(*(by_type.get(params[p], ()) for p in free)):
             full = dict(b, **dict(zip(free, values, strict=True)))
-            if not all(full[p] in typed.get(t, ()) for p, t in params.items()):
-                continue
-            if any(tuple(full.get(x, x) for x in a.args) in static_tuples.get(a.predicate, ())
-                   for a in neg_statics):
-                continue
-            if all((full.get(e.atom.args[0], e.atom.args[0]) == full.get(e.atom.args[1],
-                    e.atom.args[1])) == e.positive for e in equalities):
+            if (all(full[p] in typed.get(t, ()) for p, t in params.items())
+                    and not any(tuple(full.get(x, x) for x in a.args)
+                                in static_tuples.get(a.predicate, ()) for a in neg_statics)
+                    and all((full.get(e.atom.args[0], e.atom.args[0])
+                             == full.get(e.atom.args[1], e.atom.args[1])) == e.positive
+                            for e in equalities)):
                 yield full
 
 
