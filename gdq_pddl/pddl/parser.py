@@ -100,36 +100,32 @@ class _Reader:
     def forms(self) -> list[Node]:
         """The file's top-level forms (one ``(define ...)`` each); a file using constructs
         outside the language is refused, naming every use."""
-        stack: list[tuple[int, list[Node]]] = []
-        line, top = 1, []
-        outside: dict[str, list[int]] = {}
+        top: list[Node] = []
+        stack: list[tuple[int, list[Node]]] = [(0, top)]  # the file, then the open forms
+        line, outside = 1, {}
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
-                if len(stack) >= MAX_DEPTH:
+                if len(stack) > MAX_DEPTH:
                     raise self.fail(line, f"parentheses nested more than {MAX_DEPTH} levels "
                                     "deep; no domain or problem needs that many (is a ')' "
                                     "missing?)")
                 stack.append((line, []))
             elif tok == ")":
-                if not stack:
+                if len(stack) == 1:
                     raise self.fail(line, "unexpected ')' with no '(' open")
                 start, items = stack.pop()
-                node = Node(start, tuple(items))
                 if items and items[0].symbol in _OUTSIDE:
                     outside.setdefault(items[0].symbol, []).append(start)
-                if stack:
-                    stack[-1][1].append(node)
-                else:
-                    top.append(node)
+                stack[-1][1].append(Node(start, tuple(items)))
             elif tok[0].isspace() or tok[0] == ";":
                 pass
-            elif not stack:
+            elif len(stack) == 1:
                 raise self.fail(line, f"expected '(' but found {tok!r}")
             else:
                 stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
             line += tok.count("\n")
-        if stack:
+        if len(stack) > 1:
             line = _suspect_unclosed(self.text) or stack[-1][0]
             raise self.fail(line, "expected ')': this '(' is never closed")
         if not top:
@@ -618,8 +614,7 @@ class _Effects:
                 raise r.fail(value.line, f"{ctx}: expected an amount >= 0 (a number or a "
                              f"function term), found {value.symbol!r}")
             return float(number), sign
-        term = r.lst(value, "a function term")
-        fname = term[0].symbol if term and not term[0].is_list else ""
+        fname = value.items[0].symbol if value.items and not value.items[0].is_list else ""
         if fname not in r.functions or fname in COST_FLUENTS:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
@@ -898,8 +893,7 @@ def _goal_reward(r: _Reader, node: Node) -> float:
 
 
 def _metric(r: _Reader, node: Node) -> str:
-    """The metrics that keep the task: maximise the reward the file defines, or minimise
-    the action costs; the others (e.g. a probability or a time) would change it."""
+    """The metric, one of those that keep the task (maximise the reward, minimise costs)."""
     text = node.text()
     if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
         raise r.fail(node.line, f"{text} is not supported: the metrics read are (:metric "
@@ -914,8 +908,7 @@ def read_domain(path: str | Path) -> Domain:
 
 
 def read_problem(path: str | Path, domain: Domain, name: str | None = None) -> Problem:
-    """Read and parse a problem file for ``domain`` (``name``: which problem of a file
-    that holds several)."""
+    """Read and parse a problem file for ``domain`` (``name``: which one of several)."""
     return parse_problem(_read(path), domain, str(path), name)
 
 

@@ -9,15 +9,13 @@ from gdq_pddl.pddl.model import Domain, Literal, Problem
 
 def write_domain(domain: Domain) -> str:
     """PDDL text of a STRIPS domain (the planner's determinisation of a PPDDL domain)."""
-    reqs = set(domain.requirements) | {":strips"}
-    if any(not lit.positive and lit.atom.predicate != "=" for a in domain.actions
-           for lit in a.precondition):
-        reqs.add(":negative-preconditions")
-    if any(lit.atom.predicate == "=" for a in domain.actions for lit in a.precondition):
-        reqs.add(":equality")
+    pre = [lit for a in domain.actions for lit in a.precondition]
     types = [t for t in domain.types if t != "object"]
-    if types:
-        reqs.add(":typing")
+    reqs = set(domain.requirements) | {":strips"} | {req for req, used in (
+        (":negative-preconditions", any(not lit.positive and lit.atom.predicate != "="
+                                        for lit in pre)),
+        (":equality", any(lit.atom.predicate == "=" for lit in pre)),
+        (":typing", bool(types))) if used}
     lines = [f"(define (domain {domain.name})", f"  (:requirements {' '.join(sorted(reqs))})"]
     if types:
         lines.append("  (:types " + " ".join(f"{t} - {domain.types[t]}" for t in types) + ")")
