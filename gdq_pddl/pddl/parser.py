@@ -1,12 +1,8 @@
-"""A reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``, "PPDDL").
-
-It reads a domain and a problem into the frozen types of :mod:`gdq_pddl.pddl.model`:
-each probabilistic effect flattened into its distribution of outcomes, conditions in
-negation normal form (:mod:`gdq_pddl.pddl.normalise`). One file may hold a domain and
-its problems. Every error is a :class:`~gdq_pddl.errors.PDDLError` naming the file, the
-line and what was expected. (unified-planning's reader took about 1.2 s on its first
-call and reports character offsets; plans are still validated with it.)
-"""
+"""A reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``, "PPDDL";
+why not unified-planning's: ``docs/decisions.md``) into the frozen types of
+:mod:`gdq_pddl.pddl.model`: probabilistic effects flattened into outcomes, conditions in
+negation normal form. One file may hold a domain and its problems. Every error is a
+:class:`~gdq_pddl.errors.PDDLError` naming the file, the line and what was expected."""
 
 from __future__ import annotations
 
@@ -485,13 +481,9 @@ class _Effects:
     def __init__(self, r: _Reader, scope: dict[str, str], ctx: str) -> None:
         self.r, self.scope, self.ctx = r, scope, ctx
         self.costs: list[CostTerm] = []
-        self.probabilistic = False
-        self.conditional = False
-        self.reward_effects = False
-        self.variables: tuple[tuple[str, str], ...] = ()
-        """The variables of the ``forall`` effects around the effect being read."""
-        self.when: Condition | None = None
-        """The conditions of the ``when`` effects around it, joined (None: none)."""
+        self.probabilistic = self.conditional = self.reward_effects = False
+        self.variables: tuple[tuple[str, str], ...] = ()  # of the forall effects around
+        self.when: Condition | None = None  # the when effects' conditions around, joined
 
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
@@ -532,7 +524,7 @@ class _Effects:
                          "effect is made of literals, and, when, forall, probabilistic and "
                          "costs)")
         positive = head != "not"
-        atom = _atom(r, node if positive else items[1], self.scope, ctx)
+        atom = _atom(r, node if positive else items[1], self.scope, ctx, effect=True)
         if not positive and atom.predicate == STUCK and r.stuck_domain:
             raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) marks "
                          "a failed trial, which ends the episode")
@@ -713,20 +705,13 @@ def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condi
                      "condition")
     if head == "=":
         return Literal(_term(r, node, "=", ("object", "object"), scope, ctx), True)
-    atom = _atom(r, node, scope, ctx)
-    _not_stuck(r, atom, node.line, ctx)
-    return Literal(atom, True)
+    return Literal(_atom(r, node, scope, ctx), True)
 
 
-def _not_stuck(r: _Reader, atom: Atom, line: int, ctx: str) -> None:
-    """(stuck) only in effects: it marks a failed trial, never part of a state."""
-    if atom.predicate == STUCK and r.stuck_domain:
-        raise r.fail(line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes it "
-                     "true ends the episode), so it cannot be a precondition, a goal or "
-                     "initially true; rename the predicate if it is an ordinary fluent")
-
-
-def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Atom:
+def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str,
+          effect: bool = False) -> Atom:
+    """An atom of a declared predicate; (stuck) only in an ``effect``: it marks a failed
+    trial, never part of a state."""
     items = r.lst(node, "an atom")
     if not items:
         raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
@@ -734,7 +719,12 @@ def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Atom:
     if name not in r.predicates:
         raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
                      f"(declared: {', '.join(sorted(r.predicates)) or 'none'})")
-    return _term(r, node, name, r.predicates[name], scope, ctx)
+    atom = _term(r, node, name, r.predicates[name], scope, ctx)
+    if atom.predicate == STUCK and r.stuck_domain and not effect:
+        raise r.fail(node.line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes "
+                     "it true ends the episode), so it cannot be a precondition, a goal or "
+                     "initially true; rename the predicate if it is an ordinary fluent")
+    return atom
 
 
 def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...], scope: dict[str, str],
@@ -805,9 +795,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
         if head == "probabilistic":
             raise r.fail(node.line, "init: a probabilistic initial state is not supported "
                          "(the learner starts in one state)")
-        atom = _atom(r, node, objects, "init")
-        _not_stuck(r, atom, node.line, "init")
-        init.append(atom)
+        init.append(_atom(r, node, objects, "init"))
     goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
     metric = _metric(r, sec[":metric"]) if ":metric" in sec else None
     if ":goal" not in sec:

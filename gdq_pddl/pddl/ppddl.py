@@ -147,8 +147,7 @@ def determinise(domain: Domain, determinisation: str = DETERMINISATIONS[0]) -> D
             effect = action.outcomes[k].effect if action.outcomes else action.effect
             actions.append(replace(action, name=names[(action.name, k)], effect=effect,
                                    outcomes=(), cost=()))
-    reqs = frozenset(domain.requirements - {":probabilistic-effects", ":action-costs",
-                                            ":rewards"})
+    reqs = domain.requirements - {":probabilistic-effects", ":action-costs", ":rewards"}
     return replace(domain, requirements=reqs, actions=tuple(actions), functions={})
 
 
@@ -165,13 +164,11 @@ def ground_ppddl(domain: Domain, problem: Problem,
     if any(a.condition is not None or any(o.conditional or o.rewards for o in a.outcomes)
            for a in domain.actions):
         return _ground_normalised(domain, problem, determinisation, names)
-    every = []  # one deterministic schema per outcome: the grounder's relaxed reachability
-    for action in domain.actions:  # then gives every fact some outcome can make true
-        if not action.outcomes:
-            every.append(action)
-        for k, o in enumerate(action.outcomes):
-            every.append(replace(action, name=f"{action.name}{_SEP}{k}", effect=o.effect,
-                                 outcomes=(), cost=()))
+    # one deterministic schema per outcome: the grounder's relaxed reachability then gives
+    # every fact some outcome can make true
+    every = [replace(action, name=f"{action.name}{_SEP}{k}", effect=o.effect, outcomes=(),
+                     cost=()) if action.outcomes else action
+             for action in domain.actions for k, o in enumerate(_outcomes_of(action))]
     task = ground(replace(domain, actions=tuple(every)), problem)
     by_name = {a.name: a for a in domain.actions}
     groups: dict[tuple[str, ...], dict[int, GroundOp]] = {}  # (schema, *args) -> outcome -> op
