@@ -69,20 +69,17 @@ class GroundTask:
         return [(op, (state & ~op.dele) | op.add) for op in self.applicable(state)]
 
     def outcome_states(self, state: int) -> list[int]:
-        """States reality can reach from ``state`` besides :meth:`successors`' (none here;
-        a PPDDL task's actions have outcomes the planner does not know of)."""
+        """States reality can reach from ``state`` besides :meth:`successors`' (none here)."""
         return []
 
     def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
         """Whether ``goal`` (default: the problem's) holds in ``state``; never, for a
         problem goal that can never hold (:attr:`goal_possible`)."""
-        if goal is None and not self.goal_possible:
-            return False
-        pos, neg = goal if goal is not None else (self.goal_pos, self.goal_neg)
-        if goal is None and self.goal_alternatives and not any(
-                state & p == p and not state & n for p, n in self.goal_alternatives):
-            return False
-        return state & pos == pos and not state & neg
+        if goal is not None:
+            return state & goal[0] == goal[0] and not state & goal[1]
+        return self.goal_possible and state & self.goal_pos == self.goal_pos \
+            and not state & self.goal_neg and (not self.goal_alternatives or any(
+                state & p == p and not state & n for p, n in self.goal_alternatives))
 
     def atoms(self, state: int) -> frozenset[str]:
         """The fluent atoms true in ``state``."""

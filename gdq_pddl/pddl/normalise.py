@@ -67,10 +67,7 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
         if budget[0] < 0:
             raise too_many()
         atom = Atom(cond.atom.predicate, tuple(binding.get(a, a) for a in cond.atom.args))
-        if atom.predicate == "=":
-            truth: bool | None = atom.args[0] == atom.args[1]
-        else:
-            truth = static(atom)
+        truth = atom.args[0] == atom.args[1] if atom.predicate == "=" else static(atom)
         if truth is not None:
             return TRUE if truth == cond.positive else FALSE
         fact = frozenset((str(atom),))

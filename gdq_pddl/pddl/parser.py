@@ -131,8 +131,8 @@ class _Reader:
             listed = "; ".join(f"({h} ...){_OUTSIDE[h]} at line"
                                f"{'s' if len(outside[h]) > 1 else ''} "
                                f"{', '.join(map(str, sorted(outside[h])))}" for h in order)
-            raise self.fail(min(outside[order[0]]), f"not supported (gdq_pddl reads "
-                            f"{_LANGUAGE}): {listed}")
+            raise self.fail(min(outside[order[0]]), "not supported (gdq_pddl reads the PPDDL of "
+                            f"the IPPC probabilistic tracks, docs/domains.md): {listed}")
         return top
 
     def pick(self, kind: str, name: str | None = None) -> tuple[Node, str, tuple[Node, ...]]:
@@ -299,7 +299,6 @@ _DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":fu
                     ":action")
 _PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
                      ":metric")
-_LANGUAGE = "the PPDDL of the IPPC probabilistic tracks, docs/domains.md"
 KNOWN_REQUIREMENTS = frozenset({
     ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
     ":equality", ":existential-preconditions", ":universal-preconditions",
@@ -326,15 +325,13 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     r = _Reader(text, source)
     _, name, body = r.pick("domain")
     sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
-    reqs = _requirements(r, sec[":requirements"]) if ":requirements" in sec else set()
+    reqs = _requirements(r, sec.get(":requirements"))
     if ":types" in sec:
         r.types = _types(r, sec[":types"])
     constants = {c: t for c, t, _ in r.typed_list(sec[":constants"].items[1:], False,
                                                    "constant")} if ":constants" in sec else {}
-    if ":predicates" in sec:
-        r.predicates = _declarations(r, sec[":predicates"], "predicate")
-    if ":functions" in sec:
-        r.functions = _declarations(r, sec[":functions"], "function")
+    r.predicates = _declarations(r, sec.get(":predicates"), "predicate")
+    r.functions = _declarations(r, sec.get(":functions"), "function")
     actions: list[Action] = []
     rewards = False
     for node in action_nodes:
@@ -349,11 +346,11 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
                   source, r.functions, rewards)
 
 
-def _requirements(r: _Reader, node: Node) -> set[str]:
+def _requirements(r: _Reader, node: Node | None) -> set[str]:
     """The keys of ``(:requirements ...)``; one that is not a requirement of PDDL or PPDDL
     (a typo) is refused. They never decide what is read."""
     out = set()
-    for n in node.items[1:]:
+    for n in node.items[1:] if node is not None else ():  # type: ignore[index]
         req = r.symbol(n, "a requirement")
         if req not in KNOWN_REQUIREMENTS:
             raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
@@ -373,12 +370,12 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
                 raise r.fail(line, f"object is the root type: it cannot be a {parent}")
             continue
         types[t], lines[t] = parent, line
-    for t, parent in types.items():
-        if parent is not None and parent not in types:
-            raise r.fail(lines[t], f"type {t} has unknown parent type {parent}")
     for t in lines:
         chain = [t]
         while (parent := types[chain[-1]]) is not None:
+            if parent not in types:
+                raise r.fail(lines[chain[-1]], f"type {chain[-1]} has unknown parent type "
+                             f"{parent}")
             if parent in chain:
                 cycle = " - ".join(chain[chain.index(parent):] + [parent])
                 raise r.fail(lines[t], f"the types form a cycle ({cycle}): every type must "
@@ -387,12 +384,12 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
     return types
 
 
-def _declarations(r: _Reader, node: Node, what: str) -> dict[str, tuple[str, ...]]:
+def _declarations(r: _Reader, node: Node | None, what: str) -> dict[str, tuple[str, ...]]:
     """``(:predicates (p ?x - t) ...)`` or ``(:functions (f ?x - t) - number ...)`` ->
     ``{p: (t,), ...}`` (``what``: ``"predicate"`` or ``"function"``)."""
     out: dict[str, tuple[str, ...]] = {}
     first: dict[str, int] = {}
-    items = node.items[1:]
+    items = node.items[1:] if node is not None else ()  # type: ignore[index]
     i = 0
     while i < len(items):
         item = items[i]
@@ -471,8 +468,7 @@ def _precondition(r: _Reader, node: Node | None, scope: dict[str, str],
 
 
 Branches = list[tuple[Fraction, tuple[Literal | CondEffect | Reward, ...]]]
-"""An effect as a distribution: ``(probability, effects)`` pairs summing to 1; each
-effect a literal, a conditional or quantified one, or a reward."""
+"""An effect as a distribution: ``(probability, effects)`` pairs summing to 1."""
 
 
 class _Effects:
@@ -761,8 +757,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
     r = _Reader(text, source, domain)
     top, name, body = r.pick("problem", name)
     sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
-    if ":requirements" in sec:
-        _requirements(r, sec[":requirements"])
+    _requirements(r, sec.get(":requirements"))
     if ":domain" not in sec:
         raise r.fail(top.line, "expected (:domain NAME)")
     dnode = sec[":domain"]

@@ -8,7 +8,7 @@ than one; :attr:`ProbabilisticTask.origin` maps each back to its ground action.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from itertools import compress
 
 from gdq_pddl.errors import PDDLError
@@ -189,12 +189,9 @@ def ground_ppddl(domain: Domain, problem: Problem,
             planner_ops.append(GroundOp(pname, ops[0].pre, ops[0].neg, outcomes[k].add,
                                         outcomes[k].dele))
             origin[pname] = name
-    learner = ProbabilisticTask(task.facts, tuple(learner_ops), task.init, task.goal_pos,
-                                task.goal_neg, task.goal_possible, task.statics,
-                                task.fact_index, task.goal_alternatives, origin,
-                                determinisation)
-    planner = replace(task, ops=tuple(planner_ops))
-    return learner, planner
+    same = {f.name: getattr(task, f.name) for f in fields(task)} | {"ops": tuple(learner_ops)}
+    learner = ProbabilisticTask(**same, origin=origin, determinisation=determinisation)
+    return learner, replace(task, ops=tuple(planner_ops))
 
 
 def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[float | None]:
@@ -365,10 +362,7 @@ def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
                     continue
                 live[i] = changed = True
             for add, _, conds, *_ in outs:
-                new = add - reached
-                for cp, _, a, _ in conds:
-                    if cp <= reached:
-                        new |= a - reached
+                new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
                 if new:
                     reached |= new
                     changed = True

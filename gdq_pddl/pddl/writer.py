@@ -47,10 +47,8 @@ def write_parsed_problem(problem: Problem, domain: Domain) -> str:
 
 
 def untold(domain: Domain, problem: Problem) -> str:
-    """Why the STRIPS text of ``domain``'s determinisation cannot carry it (conditional or
-    quantified effects, a precondition beyond a conjunction, a goal with alternatives):
-    the backends that read text (pyperplan, unified-planning's validator) cannot be
-    used; "" if it can."""
+    """Why the STRIPS text of ``domain``'s determinisation cannot carry it, so that the
+    backends that read text cannot be used; "" if it can."""
     found = {"conditional or quantified effects": [a.name for a in domain.actions if any(
                  o.conditional for o in a.outcomes)],
              "a disjunctive or quantified precondition": [a.name for a in domain.actions
