@@ -53,9 +53,7 @@ class GroundTask:
         out: dict[int, list[GroundOp]] = defaultdict(list)
         counts = Counter(bit for op in self.ops for bit in _bits(op.pre))
         for op in self.ops:
-            bits = list(_bits(op.pre))
-            key = min(bits, key=counts.__getitem__) if bits else -1
-            out[key].append(op)
+            out[min(_bits(op.pre), key=counts.__getitem__, default=-1)].append(op)
         return {k: tuple(v) for k, v in out.items()}
 
     def applicable(self, state: int) -> list[GroundOp]:

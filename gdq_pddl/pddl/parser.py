@@ -98,7 +98,7 @@ class _Reader:
         outside the language is refused, naming every use."""
         top: list[Node] = []
         stack: list[tuple[int, list[Node]]] = [(0, top)]  # the file, then the open forms
-        line, outside = 1, {}
+        line, outside = 1, {}  # outside: construct -> the lines it is used at
         for match in _TOKEN.finditer(self.text):
             tok = match.group()
             if tok == "(":
