@@ -1,51 +1,15 @@
 """A reference value for worlds too large for V*: value iteration that forgets doors.
 
-:func:`gdq_pddl.envs.solve.solve` needs the full state (position, set of open doors):
-``2**n_doors`` door masks, out of reach for a generated building with 100+ doors. The
-:class:`~gdq_pddl.envs.compact.CompactModel` lists outcomes per *learner* state
-(position, is the door at this position open), which is all an action's outcomes depend
-on; what it cannot say is whether the door at the position an outcome leads to is open,
-since that depends on which doors the episode opened before. :func:`solve_compact`
-forgets them and assumes the worst. After an outcome the next learner state is
-
-- where the robot stayed (a failed action, a no-op): the same door state, except that a
-  successful ``opendoor`` leaves its door open;
-- after a successful ``gothrough`` (only possible through an open door): the other side
-  of that door, open;
-- anywhere else (``goto``, ``approach``, a navigation slip): whichever of "door closed"
-  and "door open" is worth less at the next step. On the office and the generated
-  buildings (unit costs) that is always "closed" (:func:`open_door_deficit` is 0, tested),
-  so there this is the model of a robot whose doors close behind it.
-
-On it runs the finite-horizon value iteration of :func:`~gdq_pddl.envs.solve.solve` over
-``(t, learner state)`` with the same conventions: undiscounted by default,
-``V[step_limit, :] = 0``, states at the goal worth 0, a stuck outcome -r_max, reaching
-the goal +r_max, any other outcome of the last allowed action -r_max (timeout),
-otherwise minus the mean cost of the action (:func:`~gdq_pddl.envs.solve.expected_costs`);
-greedy actions, ties to the lowest index. A pair that lists no outcome (most of the
-``5 * n_positions`` actions) leaves the robot where it is at the action's cost, so they
-are handled once per state: only the cheapest matters. Time is linear in ``step_limit``
-x (learner states + listed outcomes): 0.3 s for a 1000-position building.
-
-Why ``value`` (``V[0]`` at the start, door closed, as every episode starts) is a lower
-bound on V*: follow ``policy[t, observed learner state]`` in reality, a policy of the
-full model, so worth at most V*. From any full state at step ``t`` it expects at least
-``V[t, observed learner state]``, by induction down from ``t = step_limit`` (both 0):
-the action's outcome probabilities and rewards depend only on the observed learner
-state, so they are the same in both models; after an outcome, the real next learner
-state is the one above where that is known (stayed, went through) and one of the two
-door states otherwise, worth at least the smaller of their values. Where the smaller
-is always "closed", the value is that of doors closing behind the robot, exact for
-policies that never come back to a door side they opened. The office's optimal policies
-never do (a robot that opened a door goes through it at once, and a failed
-``gothrough`` leaves it at the open door): the value equals V* to 1e-9 on its five
-tasks, and on the small generated buildings whose V* can be computed (tested).
-
-Why not simply "closed": a door side is not always worth more open. When time has run
-out, getting stuck (-r_max, nothing more to pay) beats waiting for the timeout, and if
-``opendoor`` costs less than ``gothrough`` a closed door is the cheaper way to try; then
-"always closed" can over-estimate V* (by 0.036 on a three-door corridor with opendoor
-cost 0.97 and gothrough cost 1.78, task ``z0 -> z2``, step limit 9).
+:func:`gdq_pddl.envs.solve.solve` needs every door mask (``2**n_doors`` full states).
+The :class:`~gdq_pddl.envs.compact.CompactModel` lists outcomes per learner state, but
+cannot say whether the door at an outcome's next position is open (that depends on the
+doors the episode opened before): :func:`solve_compact` assumes the worse of the two
+(:func:`next_states`) and otherwise runs the finite-horizon value iteration of
+:func:`~gdq_pddl.envs.solve.solve`, with its conventions, over ``(t, learner state)``; a
+pair that lists no outcome leaves the robot where it is, at the action's cost. Its
+``value`` is a lower bound on V*, equal to it on the office's tasks and on the small
+buildings whose V* can be computed (tested; why: docs/decisions.md, "Generated
+buildings"). Time is linear in ``step_limit`` x (learner states + listed outcomes).
 """
 
 from __future__ import annotations
@@ -76,13 +40,9 @@ class CompactSolution:
 
 def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
     """The pessimistic next learner states of every outcome: ``(closed, other)``, both
-    ``int64[n_outcomes]``, the value of an outcome being the smaller of theirs.
-
-    The door state at the next position is known if it is the door of the position the
-    action was taken at (the robot stayed there, or went through it): open if that door
-    was open or the action opened it, and then ``other == closed``; otherwise ``closed``
-    is the next position with its door closed and ``other`` with it open (the same state
-    where there is no door).
+    ``int64[n_outcomes]``; an outcome is worth the smaller of their values. Where the
+    robot stayed at or went through the door it acted at, the door state is known and
+    ``other == closed``; elsewhere they are the next position's closed and open states.
     """
     n_states = model.pos_of_state.shape[0]
     counts = np.diff(model.ptr)
@@ -97,12 +57,10 @@ def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 def successor_capacity(model: ModelArrays | CompactModel) -> int:
-    """The most distinct next learner states of one (learner state, action) pair in a
-    true model, at least 1: a :class:`~gdq_pddl.envs.model.ModelArrays` (exact: the
-    union over the full states a learner state stands for) or a :class:`CompactModel`
-    (an upper bound: an outcome whose next position has a door other than the one acted
-    at may show it open or closed, :func:`next_states`; a pair with no outcome stays
-    put). What the learners size their successor slots by; cached per model."""
+    """The most distinct next learner states of one (learner state, action) pair, at
+    least 1: exact for :class:`~gdq_pddl.envs.model.ModelArrays`, an upper bound for a
+    :class:`CompactModel` (:func:`next_states`). What the learners size their successor
+    slots by; cached per model."""
     return per_object(model.ptr, "capacity", lambda: _capacity(model))
 
 
@@ -129,15 +87,11 @@ def _stay_actions(model: CompactModel, cost: np.ndarray) -> tuple[np.ndarray, ..
     lowest-index one of least mean cost (``cheapest``) and that cost; -1 / inf where
     every action lists outcomes."""
     n_states, n_actions = model.pos_of_state.shape[0], model.n_actions
-    listed = (np.diff(model.ptr) > 0).reshape(n_states, n_actions)
+    free = (np.diff(model.ptr) == 0).reshape(n_states, n_actions)
     by_cost = np.lexsort((np.arange(n_actions), cost))  # cost, then index
-    first = np.full(n_states, -1, dtype=np.int64)
-    cheapest = np.full(n_states, -1, dtype=np.int64)
-    for s in range(n_states):
-        free = np.flatnonzero(~listed[s])
-        if free.size:
-            first[s] = free[0]
-            cheapest[s] = by_cost[np.argmax(~listed[s][by_cost])]
+    some = free.any(axis=1)
+    first = np.where(some, free.argmax(axis=1), -1)
+    cheapest = np.where(some, by_cost[free[:, by_cost].argmax(axis=1)], -1)
     stay_cost = np.where(cheapest >= 0, cost[np.maximum(cheapest, 0)], np.inf)
     return first, cheapest, stay_cost
 
@@ -216,20 +170,6 @@ def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
     return CompactSolution(V=V, policy=policy, value=float(V[0, start]),
                            start_pos=int(start_pos), goal_pos=int(goal_pos),
                            gamma=float(gamma))
-
-
-def open_door_deficit(model: CompactModel, solution: CompactSolution) -> float:
-    """How much more any door side is ever worth closed than open:
-    ``max(V[t, (p, closed)] - V[t, (p, open)])`` over steps and door sides, or 0.
-
-    At most 0 (or ``TIE_TOLERANCE``, for rounding): "the smaller of the two" was always
-    "closed", so ``solution`` is that of the doors-close-behind model (module docstring).
-    """
-    sides = np.flatnonzero(model.door_of_pos >= 0)
-    if sides.size == 0:
-        return 0.0
-    closed, opened = model.state_of[sides, 0], model.state_of[sides, 1]
-    return float(np.max(solution.V[:, closed] - solution.V[:, opened]))
 
 
 def solve_compact_task(world: World, task: Task | str,
