@@ -1,11 +1,9 @@
 """Policies evaluated on a world's true model: greedy routes, exact values, task facts.
 
-A learner's greedy policy (learner state -> action) is walked along its *intended*
-route: from the task's start with every door closed, take the policy's action, follow
-its most likely outcome (ties: the first listed), and stop at the goal, after
-:data:`MAX_ROUTE_STEPS` actions, on a stuck outcome, at a state without a policy entry,
-or when a full state repeats. In area terms a route drops consecutive repeats:
-``p0 p2 p4 p8 p5 p6 p7 p17`` is areas ``1 3 2 6``.
+A policy's *intended* route starts at the task's start, doors closed, and follows the
+most likely outcome (ties: the first listed) of each action until the goal, a stuck
+outcome, a state without a policy entry, a repeated full state or
+:data:`MAX_ROUTE_STEPS` actions.
 """
 
 from __future__ import annotations
@@ -30,12 +28,6 @@ Policy = Mapping[int, int] | np.ndarray
 """Learner state -> action (an array: -1 or out of range means no entry)."""
 
 
-def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[int, ...]:
-    """Areas along ``positions``, consecutive repeats dropped (positions in no area skipped)."""
-    areas = [a for p in positions if (a := world.area_of.get(p)) is not None]
-    return tuple(a for i, a in enumerate(areas) if i == 0 or areas[i - 1] != a)
-
-
 @dataclass(frozen=True)
 class Route:
     """Where a greedy policy takes the robot (positions include the start); ``end`` says
@@ -46,7 +38,9 @@ class Route:
     end: str
 
     def areas(self, world: World) -> tuple[int, ...]:
-        return area_route(world, self.positions)
+        """Areas along the route, consecutive repeats dropped (positions in no area skipped)."""
+        areas = [a for p in self.positions if (a := world.area_of.get(p)) is not None]
+        return tuple(a for i, a in enumerate(areas) if i == 0 or areas[i - 1] != a)
 
 
 def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:

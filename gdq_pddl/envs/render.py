@@ -1,11 +1,7 @@
-"""Pictures of an office world: a text map (``ansi``), an image (``rgb_array``) and a
-learner's Q table on the map (:meth:`MapPainter.draw_q`); and any text as an image
-(:func:`text_image`, a PDDL state's ``rgb_array``).
-
-The first two take a :class:`Frame` (what to show) and know nothing about the env, so
-they can draw any world a user loads. The image layout is a Kamada-Kawai layout of the
-position graph (deterministic: no random seed involved), computed once per
-:class:`MapPainter`.
+"""Pictures of a world: a text map (``ansi``) and an image (``rgb_array``) of a
+:class:`Frame`, a learner's Q table on the map (:meth:`MapPainter.draw_q`), and any text
+as an image (:func:`text_image`, a PDDL state's ``rgb_array``). The map is a
+(deterministic) Kamada-Kawai layout of the position graph.
 """
 
 from __future__ import annotations
@@ -51,10 +47,8 @@ def _label(frame: Frame, p: str) -> str:
 
 
 def ansi(frame: Frame) -> str:
-    """A text map: one line per area listing its positions, then the doors.
-
-    ``@`` marks the robot, ``*`` the goal; each door-side position shows its door.
-    """
+    """A text map: one line per area listing its positions (``@`` the robot, ``*`` the
+    goal, a door side with its door), then the doors."""
     w = frame.world
     status = f", {frame.cause}" if frame.cause else ""
     lines = [f"{w.name} task {frame.task_name}: robot {frame.robot}, goal {frame.goal}, "
@@ -76,9 +70,8 @@ def ansi(frame: Frame) -> str:
 
 
 def text_image(text: str, size: tuple[int, int] = (640, 480)) -> np.ndarray:
-    """``text`` in monospace on white, wrapped at spaces (not at non-breaking ones) and cut
-    with ``...`` where it overflows, as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)``
-    in pixels (as a video needs)."""
+    """``text`` in monospace on white, wrapped at (breaking) spaces and cut with ``...``,
+    as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)`` in pixels (as a video needs)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time: matplotlib
     from matplotlib.figure import Figure  # start-up time, as above
 
@@ -152,14 +145,10 @@ class MapPainter:
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
-        """Draw a learner's Q table (``float[n_states, n_actions]`` of this world) on ``ax``.
-
-        Each position is coloured by its best ``max_a Q`` over its learner states, and
-        an arrow points to where its greedy action leads (:func:`greedy_target`). With
-        ``masks`` (an env's ``mask_table``), a greedy action the knowledge says does
-        nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
-        range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
-        """
+        """Draw a learner's Q table (``float[n_states, n_actions]``) on ``ax``: each
+        position coloured by its best ``max_a Q``, an arrow to where its greedy action
+        leads (:func:`greedy_target`; a red cross where it does nothing). ``norm``
+        defaults to the values' range. Returns the colour mapping, for ``fig.colorbar``."""
         from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 
@@ -198,15 +187,10 @@ class MapPainter:
 
 def greedy_target(spaces: LearnerSpaces, q: np.ndarray, position: str,
                   masks: np.ndarray | None = None) -> str | None:
-    """Where the greedy action of ``q`` takes the robot from ``position``.
-
-    The state with the door closed first; when its actions all tie, or its greedy
-    action opens the door, the open-door state's (the robot arrives through a door with
-    it open, and goes on through it after opening it). Returns the position moved to;
-    ``""`` when the greedy action does nothing (``stay``, or, with ``masks``, an action
-    the knowledge says does nothing there); None when every action ties, or the greedy
-    action opens the door and the open-door state has no preference.
-    """
+    """Where the greedy action of ``q`` takes the robot from ``position``: that of the
+    door-closed state, or the door-open state's where the former ties or opens the
+    door. ``""`` when it does nothing (``stay``, or masked out by ``masks``); None when
+    no action is preferred."""
     state = spaces.state(position)
     a = _greedy(q[state])
     opens = a is not None and spaces.action_parts(a)[0] == "opendoor"
