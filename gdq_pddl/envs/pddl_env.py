@@ -175,12 +175,9 @@ class PDDLInstance:
         names = [op.name for op in self.graph.task.ops]
         stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
-        out = []
-        for name, domain_cost in zip(names, stated, strict=True):
-            given = self.overlay.outcomes(*split_action(name)).cost if self.overlay else None
-            out.append(given or (CostDist("const", domain_cost) if domain_cost is not None
-                                 else unstated))
-        return out
+        return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
+                or (unstated if cost is None else CostDist("const", cost))
+                for name, cost in zip(names, stated, strict=True)]
 
     @cached_property
     def model(self) -> ModelArrays:
@@ -401,13 +398,11 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
         raise PlanningError(f"{source}: the goal already holds in the initial state: every "
                             "episode would be over before it begins")
     if not graph.is_goal.any():
-        never = never_true(problem)
-        ppddl = problem.source_domain.probabilistic
-        actions = f"no outcome of positive probability of {problem.source_domain.source}" \
-            if ppddl else "no action"
-        reached = f"that the outcomes of {problem.source_domain.source} reach" if ppddl \
-            else "reachable"
-        both = contradiction(problem.problem)
+        domain = problem.source_domain
+        never, both = never_true(problem), contradiction(problem.problem)
+        actions, reached = (f"no outcome of positive probability of {domain.source}",
+                            f"that the outcomes of {domain.source} reach") \
+            if domain.probabilistic else ("no action", "reachable")
         why = (f"it asks for {both}, which can never both hold" if both else
                f"{never} can never hold ({actions} makes it true, and the initial state "
                "does not have it)" if never else

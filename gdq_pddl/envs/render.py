@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
 
 MOVES = ("goto", "approach", "gothrough")
 """The verbs whose position is where the robot goes."""
@@ -72,14 +73,20 @@ def ansi(frame: Frame) -> str:
 def text_image(text: str, size: tuple[int, int] = (640, 480)) -> np.ndarray:
     """``text`` in monospace on white, wrapped at (breaking) spaces and cut with ``...``,
     as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)`` in pixels (as a video needs)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time: matplotlib
-    from matplotlib.figure import Figure  # start-up time, as above
+    from matplotlib.figure import Figure  # start-up time: matplotlib loads when drawing
 
     lines = [part for line in text.splitlines() for part in textwrap.wrap(line, 76) or [""]]
     rows = size[1] // 12 - 1
     fig = Figure(figsize=(size[0] / 80, size[1] / 80), dpi=80)
     fig.text(0.01, 0.99, "\n".join(lines[:rows - 1] + ["..."] if len(lines) > rows else lines),
              family="monospace", fontsize=9, va="top")
+    return _pixels(fig)
+
+
+def _pixels(fig: Figure) -> np.ndarray:
+    """``fig`` drawn (Agg) as a fresh ``uint8[H, W, 3]`` array."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time, as above
+
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
@@ -106,13 +113,10 @@ class MapPainter:
 
     def __call__(self, frame: Frame) -> np.ndarray:
         """Render ``frame``; returns a fresh ``uint8[H, W, 3]`` array."""
-        # start-up time: matplotlib loads only when a frame is drawn
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure  # start-up time, as above
 
         w, xy = self.world, self.xy
         fig = Figure(figsize=self.size, dpi=self.dpi)
-        canvas = FigureCanvasAgg(fig)
         ax = fig.add_axes((0.02, 0.05, 0.96, 0.87))
         ax.set_axis_off()
         door_edges = {frozenset(d.sides): d for d in w.doors}
@@ -140,8 +144,7 @@ class MapPainter:
         fig.suptitle(f"task {frame.task_name}: {frame.robot} -> {frame.goal}, "
                      f"step {frame.step}/{w.step_limit}{status}", fontsize=10)
         ax.margins(0.08)
-        canvas.draw()
-        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+        return _pixels(fig)
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
