@@ -57,14 +57,8 @@ class CompiledEnv(gym.Env[int, int]):
             raise AttributeError(name)
         return getattr(instance, name)
 
-    @property
-    def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
-        can do something in the learner state; row ``obs`` is ``info["action_mask"]``."""
-        return self.instance.mask_table
-
     def action_masks(self) -> np.ndarray:
-        """``bool[n_actions]``: the current row of :attr:`mask_table` (for ``MaskablePPO``)."""
+        """``bool[n_actions]``: the current state's row of ``mask_table`` (for ``MaskablePPO``)."""
         return self.mask_table[self._observe()].astype(bool)
 
     @property

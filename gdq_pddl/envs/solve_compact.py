@@ -33,9 +33,7 @@ class CompactSolution:
     V: np.ndarray  # float64[step_limit + 1, n_states]
     policy: np.ndarray  # int64[step_limit, n_states]
     value: float  # V[0, learner state of the start with its door closed]
-    start_pos: int
     goal_pos: int
-    gamma: float
 
 
 def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
@@ -101,7 +99,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                      other: np.ndarray, ending: np.ndarray, end_reward: np.ndarray,
                      app_ptr: np.ndarray, app_action: np.ndarray, cost: np.ndarray,
                      first_stay: np.ndarray, cheapest_stay: np.ndarray, stay_cost: np.ndarray,
-                     at_goal: np.ndarray, r_max: float, gamma: float, tol: float, V: np.ndarray,
+                     at_goal: np.ndarray, r_max: float, tol: float, V: np.ndarray,
                      policy: np.ndarray) -> None:
     """Fill ``V[:-1]`` and ``policy`` backwards in time (``V[-1]`` is 0)."""
     limit, n_states = policy.shape
@@ -117,7 +115,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                     stay_a, stay_q = first_stay[s], r_max if at_goal[s] else -r_max
                 else:
                     stay_a = cheapest_stay[s]
-                    stay_q = -stay_cost[s] + gamma * V[t + 1, s]
+                    stay_q = -stay_cost[s] + V[t + 1, s]
             best = stay_q
             lo, hi = app_ptr[s], app_ptr[s + 1]
             for j in range(lo, hi):
@@ -129,7 +127,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                         total += prob[k] * end_reward[k]
                     else:
                         after = min(V[t + 1, closed[k]], V[t + 1, other[k]])
-                        total += prob[k] * (-cost[a] + gamma * after)
+                        total += prob[k] * (-cost[a] + after)
                 q[j - lo] = total
                 best = max(best, total)
             choice = stay_a if stay_a >= 0 and stay_q >= best - tol else n_actions
@@ -140,14 +138,10 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
             V[t, s] = 0.0 if at_goal[s] else best
 
 
-def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
-                  gamma: float = 1.0) -> CompactSolution:
-    """Pessimistic values and time-dependent greedy policy for reaching ``goal_pos``.
-
-    ``policy[t, s]`` is the action to take in learner state ``s`` after ``t`` actions;
-    ``value`` is ``V[0]`` at ``start_pos`` with its door closed. Time is linear in
-    ``step_limit`` x (learner states + listed outcomes); see the module docstring.
-    """
+def solve_compact(model: CompactModel, start_pos: int, goal_pos: int) -> CompactSolution:
+    """Pessimistic undiscounted values and time-dependent greedy policy (``policy[t, s]``:
+    the action in learner state ``s`` after ``t`` actions) for reaching ``goal_pos``;
+    ``value`` is ``V[0]`` at ``start_pos`` with its door closed."""
     n_states, n_actions, limit = model.pos_of_state.shape[0], model.n_actions, model.step_limit
     check_memory((limit + 1) * n_states * 16,
                  f"step_limit = {limit}: the reference value ({n_states} states at each of "
@@ -164,12 +158,11 @@ def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
     policy = np.empty((limit, n_states), dtype=np.int64)
     _value_iteration(model.ptr, model.prob, *next_states(model), ending, end_reward, app_ptr,
                      (pairs % n_actions).astype(np.int64), cost, first_stay, cheapest_stay,
-                     stay_cost, model.pos_of_state == goal_pos, float(r), float(gamma),
-                     TIE_TOLERANCE, V, policy)
+                     stay_cost, model.pos_of_state == goal_pos, float(r), TIE_TOLERANCE,
+                     V, policy)
     start = int(model.state_of[start_pos, 0])
     return CompactSolution(V=V, policy=policy, value=float(V[0, start]),
-                           start_pos=int(start_pos), goal_pos=int(goal_pos),
-                           gamma=float(gamma))
+                           goal_pos=int(goal_pos))
 
 
 def solve_compact_task(world: World, task: Task | str,
@@ -181,6 +174,6 @@ def solve_compact_task(world: World, task: Task | str,
 
 
 def reference_value(world: World, task: Task | str) -> float:
-    """The pessimistic value of ``task`` from its start, doors closed, step 0: a lower
-    bound on V* (see the module docstring) for worlds of any number of doors."""
+    """The pessimistic value of ``task`` from its start: a lower bound on V* for worlds of
+    any number of doors."""
     return solve_compact_task(world, task).value
