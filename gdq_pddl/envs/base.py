@@ -31,7 +31,7 @@ class CompiledEnv(gym.Env[int, int]):
     :meth:`_observe` and :meth:`_position`; the instance's attributes are the env's."""
 
     model: tuple
-    """The compiled model (``ModelArrays`` or ``CompactModel``, named tuples of arrays)."""
+    """The compiled true model (``ModelArrays``, for ``envs.solve.solve``, or ``CompactModel``)."""
 
     def __init__(self, instance: Any, model: tuple, render_mode: str | None = None) -> None:
         self.check_render_mode(render_mode)

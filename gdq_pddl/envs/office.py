@@ -61,13 +61,6 @@ def _knowledge(world: World, task: Task | str) -> PlanningProblem:
     return PlanningProblem.from_texts(domain_text(), office_problem(world, task))
 
 
-def office_action_masks(world: World, task: Task) -> np.ndarray:
-    """``int8[n_states, n_actions]``, read-only: the actions the office's knowledge for
-    ``task`` says can do something in each learner state; cached per (world, start)."""
-    return per_object(world, ("masks", task.start), lambda: knowledge_action_mask(
-        OfficeAbstraction(world), _knowledge(world, task).task))
-
-
 def _knowledge_key(world: World) -> tuple:
     """What the planner's knowledge depends on (not the dynamics' probabilities, only
     whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
@@ -119,8 +112,7 @@ class OfficeInstance:
     @classmethod
     def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
            world: str | Path | World | None = None) -> OfficeInstance:
-        """The instance of a task by name, or of a start and goal, in a world (default
-        the office)."""
+        """The instance of a task by name, or of a start and goal, in a world (or the office)."""
         chosen = as_world(world)
         return cls(chosen, pick_task(chosen, task, start, goal))
 
@@ -171,12 +163,13 @@ class OfficeInstance:
 
     @cached_property
     def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``: 1 where the knowledge says the action can act."""
-        return office_action_masks(self.world, self.task)
+        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
+        can act; cached per (world, start)."""
+        return per_object(self.world, ("masks", self.task.start), lambda: knowledge_action_mask(
+            OfficeAbstraction(self.world), _knowledge(self.world, self.task).task))
 
     def restarted(self, start: str | None = None, goal: str | None = None) -> OfficeInstance:
-        """The instance from ``start`` to ``goal`` (position or landmark names; None:
-        the task's) in the same world."""
+        """The instance from ``start`` to ``goal`` (names; None: the task's), same world."""
         try:
             return OfficeInstance(self.world, pick_task(
                 self.world, None, self.task.start if start is None else start,

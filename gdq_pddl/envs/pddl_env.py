@@ -6,11 +6,8 @@ costs, r_max and the step limit) for a STRIPS domain, or a PPDDL domain's own
 probabilistic effects (:mod:`gdq_pddl.pddl.ppddl`; the planner knows their
 ``determinisation``), with an optional overlay for r_max, the step limit and costs.
 The true model compiles into the office's :class:`~gdq_pddl.envs.model.ModelArrays`, so
-the same step, fast episode runner and value iteration serve it::
-
-    gymnasium.make("gdq_pddl/PDDL-v0", domain="my.pddl", problem="p1.pddl",
-                   dynamics="my.toml")
-    gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")  # shipped names
+the same step, fast episode runner and value iteration serve it. Files may be given by
+shipped name (``domain="keys", problem="keys-2"``).
 
 - Actions: ``Discrete(n_ops)``, the ground actions in the grounder's order; one whose
   precondition does not hold costs its cost and changes nothing.
@@ -161,8 +158,7 @@ class PDDLInstance:
 
     @cached_property
     def graph(self) -> StateGraph:
-        """Reachable states and their successors; raises past ``max_states`` and
-        :func:`check_goal`'s errors."""
+        """Reachable states and successors (refused past ``max_states``, :func:`check_goal`)."""
         graph = reachable_graph(self.problem.learner_task, self.max_states,
                                 self.problem.problem.source)
         check_goal(self.problem, graph)
@@ -181,8 +177,7 @@ class PDDLInstance:
 
     @cached_property
     def model(self) -> ModelArrays:
-        """The true model (read-only arrays); refused past the memory it would need and
-        by :func:`check_reality`."""
+        """The true model (read-only); refused past its memory and by :func:`check_reality`."""
         check_memory(self.n_states * self.n_actions * PAIR_BYTES,
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
                      f"of {self.n_states} states x {self.n_actions} ground actions",
@@ -198,8 +193,7 @@ class PDDLInstance:
 
     @cached_property
     def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
-        applicable in the state."""
+        """``int8[n_states, n_actions]``, read-only: 1 where the ground action is applicable."""
         return graph_action_mask(self.graph)
 
     @property
@@ -329,8 +323,7 @@ class PDDLInstance:
         return {}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
-        """The state's fluent atoms after ``step`` actions, as text (``ansi``) or drawn
-        (``rgb_array``, 640 x 480)."""
+        """The state's fluent atoms as text (``ansi``) or drawn (``rgb_array``, 640 x 480)."""
         why = f" ({cause})" if cause else ""
         text = f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
         if mode == "ansi":
@@ -371,19 +364,16 @@ def _checked(determinisation: str) -> str:
 def default_step_limit(graph: StateGraph) -> int:
     """``max(20, ceil(2.5 L))``, L the fewest actions from the initial state to the goal in
     reality (breadth first over every outcome; 20 if no outcome ever reaches it)."""
-    task = graph.task
-    depth = {graph.states[0]: 0}
-    frontier = [graph.states[0]]
+    task, frontier = graph.task, [graph.states[0]]
+    seen, depth = set(frontier), 0
     while frontier:
-        nxt = []
-        for s in frontier:
-            if task.is_goal(s):
-                return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth[s]))
-            for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)):
-                if t not in depth:
-                    depth[t] = depth[s] + 1
-                    nxt.append(t)
-        frontier = nxt
+        if any(map(task.is_goal, frontier)):
+            return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth))
+        nxt = (t for s in frontier
+               for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)))
+        frontier = [t for t in dict.fromkeys(nxt) if t not in seen]
+        seen.update(frontier)
+        depth += 1
     return MIN_STEP_LIMIT
 
 
@@ -413,8 +403,7 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
 
 
 def limit_key(problem: PlanningProblem, dynamics: Dynamics) -> tuple[str, str]:
-    """The file and key that give the step limit (the problem file and the default's
-    rule where no dynamics file states it)."""
+    """The file and key that give the step limit (or the problem file and the default)."""
     if dynamics.source and (not problem.source_domain.probabilistic
                             or "step_limit" in dynamics.stated):
         return dynamics.source, "dynamics.step_limit"
@@ -457,8 +446,7 @@ def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamic
 
 
 def never_working(dynamics: Dynamics) -> list[str]:
-    """The dynamics file's ``success = 0`` keys (an object's only where its schema's
-    differs)."""
+    """The dynamics file's ``success = 0`` keys (an object's where its schema's differs)."""
     out = [f"actions.{s}" for s, o in dynamics.actions.items() if o.success == 0]
     out += [f"actions.{s}.objects.{obj}" for s, per in dynamics.objects.items()
             for obj, o in per.items()
@@ -493,8 +481,7 @@ def contradiction(problem: Problem) -> str:
 
 
 def graph_space(graph: StateGraph) -> StateSpace:
-    """A PDDL problem's :class:`~gdq_pddl.envs.model.StateSpace`: its reachable states and
-    ground actions, seen as they are."""
+    """A PDDL problem's reachable states and ground actions as a ``StateSpace``."""
     n = graph.n_states
     return StateSpace(
         task=graph.task, n_states=n, edges=graph.edges, n_actions=len(graph.task.ops),
@@ -549,11 +536,6 @@ class PDDLEnv(CompiledEnv):
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
         super().__init__(instance, instance.model, render_mode)
-
-    def transition_arrays(self) -> ModelArrays:
-        """The true model (shared: do not modify) for value iteration:
-        ``gdq_pddl.envs.solve.solve(env.transition_arrays(), env.goal_pos)``."""
-        return self.model
 
     def render(self) -> str | np.ndarray | None:
         if self.render_mode is None:
