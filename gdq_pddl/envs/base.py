@@ -63,8 +63,7 @@ class CompiledEnv(gym.Env[int, int]):
 
     @property
     def spec(self) -> EnvSpec | None:
-        """The spec ``gymnasium.make`` gave (None if built directly), with
-        ``max_episode_steps`` the env's own step limit (it truncates itself)."""
+        """``gymnasium.make``'s spec (or None), ``max_episode_steps`` the env's step limit."""
         spec = self.__dict__.get("_spec")
         return None if spec is None else replace(spec, max_episode_steps=int(self.model.step_limit))
 
@@ -74,8 +73,7 @@ class CompiledEnv(gym.Env[int, int]):
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
-        """Start an episode; ``options`` may give its ``start`` and ``goal`` (as the
-        instance's ``restarted`` takes them; other keys: :class:`ConfigError`)."""
+        """Start an episode, at ``options``' ``start``/``goal`` if given (see ``restarted``)."""
         super().reset(seed=seed)
         unknown = [k for k in options or {} if k not in RESET_OPTIONS]
         if unknown:

@@ -1,19 +1,13 @@
 """The true dynamics of a large world per learner state, without enumerating door masks.
 
-The full model (:func:`gdq_pddl.envs.model.compile_model`) has ``n_positions *
-2**n_doors`` states, out of reach for 100+ doors; but an action's outcomes depend only
-on the position and on whether the door there is open: the learner state. So this
-model lists outcomes per (learner state, action) pair in CSR form (pair ``i = state *
-n_actions + action`` owns ``ptr[i]:ptr[i+1]``), each a ``next_pos``, whether it
-``opens`` the door it was taken at, and whether it is ``stuck``; the episode keeps the
-open doors in a ``uint8`` array. A pair without outcomes is inapplicable: the robot
-stays.
-
-The outcomes come from the full model's rule (:func:`~gdq_pddl.envs.model.slip_outcomes`
-on the same grounded building), merged and ordered the same way, and
-:func:`compact_step` draws the random numbers of :func:`~gdq_pddl.envs.model.env_step`
-in the same order, so an office episode is bit-identical to one of ``OfficeEnv``
-(tested). Why two step functions: docs/decisions.md, "One pipeline".
+The full model has ``n_positions * 2**n_doors`` states, but an action's outcomes depend
+only on the learner state (position, is its door open). So this model lists outcomes per
+(learner state, action) pair in CSR form (pair ``i = state * n_actions + action`` owns
+``ptr[i]:ptr[i+1]``; none: the robot stays), each a ``next_pos``, whether it ``opens``
+the door it was taken at, and whether it is ``stuck``; an episode keeps the open doors
+in a ``uint8`` array. Outcomes and random draws are the full model's (same rule, order
+and draws), so an office episode is bit-identical to one of ``OfficeEnv`` (tested). Why
+two step functions: docs/decisions.md, "One pipeline".
 """
 
 from __future__ import annotations

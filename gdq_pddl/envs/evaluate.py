@@ -20,9 +20,8 @@ from gdq_pddl.world import Task, World
 
 MAX_ROUTE_STEPS = 30
 RELEVANCE_THRESHOLD = 0.05
-"""Expected visits per episode of the optimal policy above which an area is relevant
-(when ``optimal.json`` gives no ``relevant_areas``: at 0 a slip of a ``goto`` makes
-nearly every area relevant)."""
+"""Expected visits per episode of the optimal policy above which an area is relevant (at
+0 a slip of a ``goto`` makes nearly every area relevant)."""
 
 Policy = Mapping[int, int] | np.ndarray
 """Learner state -> action (an array: -1 or out of range means no entry)."""
@@ -44,8 +43,7 @@ class Route:
 
 
 def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
-    """The full state ``action`` in full state ``fs`` most likely leads to (ties: the
-    first listed outcome); None when that outcome is stuck."""
+    """The likeliest next full state of ``action`` in ``fs`` (ties: the first; None: stuck)."""
     lo, hi = model.ptr[fs * model.n_actions + action: fs * model.n_actions + action + 2]
     k = lo + int(np.argmax(model.prob[lo:hi]))
     return None if model.stuck[k] else int(model.next[k])
@@ -54,8 +52,7 @@ def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
 def _follow(world: World, model: ModelArrays, fs: int, goal_pos: int,
             action_at: Callable[[int, int], int | None], steps: int, stop_on_loop: bool
             ) -> Route:
-    """Walk from full state ``fs`` along likeliest outcomes, taking ``action_at(step, fs)``
-    (None: no policy there) for at most ``steps`` actions."""
+    """Walk from ``fs`` along likeliest outcomes of ``action_at(step, fs)`` (None: none)."""
     positions, seen = [world.positions[model.pos_of[fs]]], {fs}
     for step in range(steps):
         action = action_at(step, fs)
@@ -110,8 +107,7 @@ def optimal_route(world: World, task: Task | str) -> Route:
 def policy_value(world: World, task: Task, policy: Policy,
                  model: ModelArrays | None = None) -> float:
     """Exact expected undiscounted return from the start of a stationary learner policy
-    in ``world``, by backward induction over the step limit (the outcome rewards of
-    :func:`gdq_pddl.envs.solve.solve`)."""
+    (backward induction with the rewards of :func:`gdq_pddl.envs.solve.solve`)."""
     model = compile_model(world) if model is None else model
     n_full, r = model.obs_of.shape[0], model.r_max
     if isinstance(policy, np.ndarray):
@@ -139,8 +135,7 @@ def policy_value(world: World, task: Task, policy: Policy,
 
 @dataclass(frozen=True)
 class TaskTruth:
-    """What the true model says about one task (``irrelevant_areas``: the world's areas
-    not in ``relevant_areas``)."""
+    """What the true model says about one task (``irrelevant_areas``: all but relevant)."""
 
     task: str
     v_star: float

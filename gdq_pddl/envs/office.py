@@ -1,29 +1,22 @@
 """The office world of the GDQ paper: one PDDL instance seen through the office's map.
 
-A robot moves between named positions; some pairs of positions are the two sides of a
-door, which a person opens on request and the robot then crosses. The building, doors
-and dynamics come from a world file (default: the shipped ``office.toml``). An
-:class:`OfficeInstance` is a task of a world as an instance of the one pipeline:
-knowledge ``domains/office.pddl``, reality :meth:`~gdq_pddl.world.World.dynamics` and
-the observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`).
-``gdq_pddl/Office-v0`` (:func:`OfficeEnv`) is :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` on
-one; :class:`CompactEnv` steps it on its compact model, for large buildings.
+A robot moves between named positions, some pairs of them the two sides of a door that
+a person opens on request (building and dynamics: a world file, default ``office.toml``).
+An :class:`OfficeInstance` is a task of a world as an instance of the one pipeline:
+knowledge ``domains/office.pddl``, reality :meth:`~gdq_pddl.world.World.dynamics` and the
+observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v0``
+(:func:`OfficeEnv`) is ``PDDLEnv`` on one; :class:`CompactEnv` suits large buildings.
 
-- Actions: ``Discrete(5 * n_positions)`` (95), verb-major: ``verb * n_positions +
-  position``, verbs ``goto, approach, opendoor, gothrough, stay``; an inapplicable
-  action costs a step and changes nothing (names: ``env.unwrapped.action_name(a)``).
-- Observations: ``Discrete(n_states)`` (31), the learner state (position, is the door
-  there open); the full state (which doors are open anywhere) is ``info["full_state"]``.
-- Start: the task's start, every door closed; ``reset(options={"start": "p3", "goal":
-  "p13"})`` gives one episode another start and goal.
-- Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck at a door or taking the
-  last allowed action (truncated after ``step_limit``, 20), else minus the action's cost.
-- ``info``: ``action_mask`` (``int8``; 1 where the knowledge says the action can do
-  something, never for ``stay``), ``position``, ``area`` (0: none), ``cause`` (``""``,
-  ``"goal"``, ``"stuck"``, ``"timeout"``), ``full_state`` and ``step``.
-- Arguments: ``task`` (default ``"C"``) or ``start`` and ``goal`` (position or landmark
-  names); ``world`` (a :class:`World`, a world file or a built-in name); ``render_mode``
-  (``"ansi"`` or ``"rgb_array"``).
+- Actions: ``Discrete(5 * n_positions)`` (95), ``verb * n_positions + position`` for the
+  verbs ``goto, approach, opendoor, gothrough, stay``; most do nothing but cost a step.
+- Observations: ``Discrete(n_states)`` (31): the position, and whether its door is open.
+- Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck or on the last allowed
+  action (truncated after ``step_limit``), else minus the action's cost.
+- ``info``: ``action_mask``, ``position``, ``area`` (0: none), ``cause`` (``""``,
+  ``"goal"``, ``"stuck"``, ``"timeout"``), ``full_state`` (every door) and ``step``.
+- Arguments: ``task`` (default ``"C"``) or ``start`` and ``goal``; ``world`` (a
+  :class:`World`, a file or a built-in name); ``render_mode`` (``"ansi"``, ``"rgb_array"``).
+  ``reset(options={"start": "p3", "goal": "p13"})`` moves one episode.
 """
 
 from __future__ import annotations
@@ -62,8 +55,7 @@ def _knowledge(world: World, task: Task | str) -> PlanningProblem:
 
 
 def _knowledge_key(world: World) -> tuple:
-    """What the planner's knowledge depends on (not the dynamics' probabilities, only
-    whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
+    """What the planner's knowledge depends on (of the dynamics: which doors can open)."""
     return (world.positions, world.edges,
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 

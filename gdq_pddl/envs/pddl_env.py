@@ -232,9 +232,8 @@ class PDDLInstance:
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
-        """Plans from every reachable state, cached per (planner, tolerance): the state
-        graph's distance layers for ``graph``, else one query per state. ``kind`` is
-        the office's (a PDDL problem has one)."""
+        """Plans from every reachable state, cached per (planner, tolerance): the graph's
+        distance layers for ``graph``, else one query per state (``kind``: the office's)."""
         key = (planner, float(tolerance))
         if key not in self._tables:
             if planner == "graph":

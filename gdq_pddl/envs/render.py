@@ -41,10 +41,8 @@ class Frame:
 def _label(frame: Frame, p: str) -> str:
     marks = ("@" if p == frame.robot else "") + ("*" if p == frame.goal else "")
     door = frame.world.door_at.get(p)
-    text = marks + p
-    if door is not None:
-        text += f"[{door.name} {'open' if door.name in frame.open_doors else 'closed'}]"
-    return text
+    return marks + p + ("" if door is None else
+                        f"[{door.name} {'open' if door.name in frame.open_doors else 'closed'}]")
 
 
 def ansi(frame: Frame) -> str:
@@ -148,10 +146,9 @@ class MapPainter:
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
-        """Draw a learner's Q table (``float[n_states, n_actions]``) on ``ax``: each
-        position coloured by its best ``max_a Q``, an arrow to where its greedy action
-        leads (:func:`greedy_target`; a red cross where it does nothing). ``norm``
-        defaults to the values' range. Returns the colour mapping, for ``fig.colorbar``."""
+        """Draw a Q table (``float[n_states, n_actions]``) on ``ax``: positions coloured by
+        ``max_a Q`` (``norm``: default their range), an arrow to where the greedy action
+        leads (:func:`greedy_target`; a cross: nowhere). Returns the mapping for a colorbar."""
         from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 

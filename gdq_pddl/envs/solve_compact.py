@@ -1,15 +1,11 @@
 """A reference value for worlds too large for V*: value iteration that forgets doors.
 
-:func:`gdq_pddl.envs.solve.solve` needs every door mask (``2**n_doors`` full states).
-The :class:`~gdq_pddl.envs.compact.CompactModel` lists outcomes per learner state, but
-cannot say whether the door at an outcome's next position is open (that depends on the
-doors the episode opened before): :func:`solve_compact` assumes the worse of the two
-(:func:`next_states`) and otherwise runs the finite-horizon value iteration of
-:func:`~gdq_pddl.envs.solve.solve`, with its conventions, over ``(t, learner state)``; a
-pair that lists no outcome leaves the robot where it is, at the action's cost. Its
-``value`` is a lower bound on V*, equal to it on the office's tasks and on the small
-buildings whose V* can be computed (tested; why: docs/decisions.md, "Generated
-buildings"). Time is linear in ``step_limit`` x (learner states + listed outcomes).
+The :class:`~gdq_pddl.envs.compact.CompactModel` cannot say whether the door at an
+outcome's next position is open: :func:`solve_compact` assumes the worse of the two
+(:func:`next_states`) and otherwise runs :func:`~gdq_pddl.envs.solve.solve`'s
+finite-horizon value iteration over ``(t, learner state)``. Its ``value`` is a lower
+bound on V*, equal to it on the office and the small buildings (tested; why:
+docs/decisions.md, "Generated buildings"), in time linear in the model's size.
 """
 
 from __future__ import annotations
@@ -40,8 +36,7 @@ def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
     """The pessimistic next learner states of every outcome: ``(closed, other)``, both
     ``int64[n_outcomes]``; an outcome is worth the smaller of their values. Where the
     robot stayed at or went through the door it acted at, the door state is known and
-    ``other == closed``; elsewhere they are the next position's closed and open states.
-    """
+    ``other == closed``; elsewhere they are the next position's closed and open states."""
     n_states = model.pos_of_state.shape[0]
     counts = np.diff(model.ptr)
     state = np.repeat(np.arange(n_states * model.n_actions) // model.n_actions, counts)
@@ -55,10 +50,8 @@ def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 def successor_capacity(model: ModelArrays | CompactModel) -> int:
-    """The most distinct next learner states of one (learner state, action) pair, at
-    least 1: exact for :class:`~gdq_pddl.envs.model.ModelArrays`, an upper bound for a
-    :class:`CompactModel` (:func:`next_states`). What the learners size their successor
-    slots by; cached per model."""
+    """The most distinct next learner states of one (learner state, action) pair, at least
+    1 (a bound for a :class:`CompactModel`): what the learners size successor slots by."""
     return per_object(model.ptr, "capacity", lambda: _capacity(model))
 
 
@@ -81,9 +74,8 @@ def _capacity(model: ModelArrays | CompactModel) -> int:
 
 
 def _stay_actions(model: CompactModel, cost: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Per learner state: the lowest-index pair without outcomes (``first``), the
-    lowest-index one of least mean cost (``cheapest``) and that cost; -1 / inf where
-    every action lists outcomes."""
+    """Per learner state: the first pair without outcomes, the first of least mean cost
+    among them and that cost (-1, -1, inf where every action lists outcomes)."""
     n_states, n_actions = model.pos_of_state.shape[0], model.n_actions
     free = (np.diff(model.ptr) == 0).reshape(n_states, n_actions)
     by_cost = np.lexsort((np.arange(n_actions), cost))  # cost, then index
