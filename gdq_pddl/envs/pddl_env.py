@@ -1,22 +1,16 @@
 """Any PDDL problem as a Gymnasium environment (``gdq_pddl/PDDL-v0``; docs/domains.md).
 
-The domain and problem are the robot's knowledge. Reality is a dynamics file
-(:mod:`gdq_pddl.dynamics`: how often each ground action works, what a failure does,
-costs, r_max and the step limit) for a STRIPS domain, or a PPDDL domain's own
-probabilistic effects (:mod:`gdq_pddl.pddl.ppddl`; the planner knows their
-``determinisation``), with an optional overlay for r_max, the step limit and costs.
-The true model compiles into the office's :class:`~gdq_pddl.envs.model.ModelArrays`, so
-the same step, fast episode runner and value iteration serve it. Files may be given by
-shipped name (``domain="keys", problem="keys-2"``).
+The domain and problem (files or shipped names) are the robot's knowledge. Reality is a
+dynamics file (:mod:`gdq_pddl.dynamics`) for a STRIPS domain, or a PPDDL domain's own
+probabilistic effects (the planner knows their ``determinisation``) with an optional
+overlay. The true model is a :class:`~gdq_pddl.envs.model.ModelArrays`, as the office's.
 
 - Actions: ``Discrete(n_ops)``, the ground actions in the grounder's order; one whose
   precondition does not hold costs its cost and changes nothing.
 - Observations: ``Discrete(n_states)``, the states reachable from the initial state (goal
   states not expanded), breadth first, 0 the initial state (``env.unwrapped.atoms(s)``);
   ``reset(options={"start": "(at c12) (open c11) ..."})`` starts elsewhere.
-- Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck or on the last allowed
-  action, else minus the action's cost (:attr:`PDDLInstance.reward_scale`: or the
-  problem's own).
+- Rewards: as the office's, or the problem's own (:attr:`PDDLInstance.reward_scale`).
 - ``info``: ``action_mask`` (1 where the precondition holds), ``area`` (0), ``cause``,
   ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
   ``"rgb_array"`` shows the state's atoms.

@@ -120,10 +120,8 @@ class MapPainter:
         door_edges = {frozenset(d.sides): d for d in w.doors}
         for a, b in w.edges:
             door = door_edges.get(frozenset((a, b)))
-            colour, width, style = "#888888", 1.5, "-"
-            if door is not None:
-                is_open = door.name in frame.open_doors
-                colour, width, style = (OPEN, 4.0, "-") if is_open else (CLOSED, 4.0, ":")
+            colour, width, style = ("#888888", 1.5, "-") if door is None else \
+                (OPEN, 4.0, "-") if door.name in frame.open_doors else (CLOSED, 4.0, ":")
             ax.plot(*zip(xy[a], xy[b], strict=True), color=colour, lw=width, ls=style,
                     zorder=1)
             if door is not None:
