@@ -4,8 +4,7 @@
 ``gdq_pddl/Office-v0`` (:mod:`gdq_pddl.envs.office`) and ``gdq_pddl/PDDL-v0``, any PDDL
 problem under its reality (:mod:`gdq_pddl.envs.pddl_env`)::
 
-    env = gymnasium.make("gdq_pddl/Office-v0", task="C")  # or start="p0", goal="p17"
-    env = gymnasium.make("gdq_pddl/Office-v0", world="my_building.toml", task="A")
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C")  # or start="p0", goal="p17", world=...
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
     env = gymnasium.make("gdq_pddl/PDDL-v0", domain="d.pddl", problem="p.pddl",
                          dynamics="d.toml", determinisation="most-likely")

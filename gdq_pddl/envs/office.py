@@ -256,9 +256,8 @@ class OfficeInstance:
 def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (an env id's
               goal: str | None = None, world: str | Path | World | None = None,  # class name)
               render_mode: str | None = None) -> PDDLEnv:
-    """``gdq_pddl/Office-v0``: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` on the
-    :class:`OfficeInstance` of a task. A function, not a class: to test for the office,
-    ask ``isinstance(env.unwrapped.instance, OfficeInstance)``."""
+    """``gdq_pddl/Office-v0``: ``PDDLEnv`` on the :class:`OfficeInstance` of a task (a
+    function: test ``isinstance(env.unwrapped.instance, OfficeInstance)``)."""
     return PDDLEnv(instance=OfficeInstance.of(task, start, goal, world),
                    render_mode=render_mode)
 

@@ -128,9 +128,8 @@ class PDDLInstance:
 
     @cached_property
     def reward_scale(self) -> str:
-        """``"problem"``: the file's own rewards, as the IPPC scores them (its metric
-        maximises ``(reward)``, or it declares ``:rewards`` or changes ``(reward)``);
-        ``"goal"``: +r_max at the goal, -r_max on a failed or late end, minus the costs."""
+        """``"problem"``: the file's own rewards, as the IPPC scores them (metric ``maximize
+        (reward)``, ``:rewards`` or effects on ``(reward)``); ``"goal"``: +-r_max and costs."""
         domain, metric = self.problem.source_domain, self.problem.problem.metric
         own = metric == "maximize (reward)" if metric is not None else \
             domain.reward_effects or ":rewards" in domain.requirements
@@ -451,16 +450,15 @@ def never_true(problem: PlanningProblem) -> str:
     """The first goal literal of ``problem`` that can never hold ("" if none)."""
     task, domain = problem.learner_task, problem.source_domain
     for lit in problem.problem.goal:
-        atom = str(lit.atom)
-        text = atom if lit.positive else f"(not {atom})"
+        atom, args = str(lit.atom), lit.atom.args
         if lit.atom.predicate == "=":
-            if (lit.atom.args[0] == lit.atom.args[1]) != lit.positive:
-                return text
+            never = (args[0] == args[1]) != lit.positive
         elif lit.atom.predicate not in domain.fluent_predicates():
-            if (atom in task.statics) != lit.positive:
-                return text
-        elif lit.positive and atom not in task.fact_index:
-            return atom
+            never = (atom in task.statics) != lit.positive
+        else:
+            never = lit.positive and atom not in task.fact_index
+        if never:
+            return atom if lit.positive else f"(not {atom})"
     return ""
 
 
@@ -490,12 +488,11 @@ def ppddl_outcomes(graph: StateGraph, gains: bool = False):
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
-    index = graph.index
     for s, state in enumerate(graph.states):
         here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
         for k in sorted(here):
             yield s * n_ops + k, merge_outcomes(
-                (((s, True) if o.stuck else (index[o.apply(state)], False))
+                (((s, True) if o.stuck else (graph.index[o.apply(state)], False))
                  + ((o.gain(state),) if gains else ()), o.probability)
                 for o in here[k].outcomes)
 
@@ -514,9 +511,8 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
 
 
 class PDDLEnv(CompiledEnv):
-    """The env of an instance over its full true model: a PDDL problem, or a world's task
-    through the office's map (``gdq_pddl/Office-v0``). The instance's attributes are the
-    env's too (``env.unwrapped.atoms(s)``, ``.action_name(a)``, ``.goal_pos``...)."""
+    """The env of an instance over its full true model (a PDDL problem, or a world's task:
+    ``Office-v0``); the instance's attributes are the env's (``env.unwrapped.atoms(s)``)."""
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
     """Both kinds of instance draw both modes (their ``render``)."""

@@ -56,8 +56,7 @@ def successor_capacity(model: ModelArrays | CompactModel) -> int:
 
 
 def _capacity(model: ModelArrays | CompactModel) -> int:
-    n_pairs = len(model.ptr) - 1
-    pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
+    pair = np.repeat(np.arange(len(model.ptr) - 1, dtype=np.int64), np.diff(model.ptr))
     if isinstance(model, CompactModel):
         n_states = len(model.pos_of_state)
         first, second = next_states(model)  # the two door states an outcome may show
