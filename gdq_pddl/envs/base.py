@@ -116,8 +116,7 @@ class CompiledEnv(gym.Env[int, int]):
         raise NotImplementedError
 
     def _info(self) -> dict[str, Any]:
-        """The instance's ``info`` at the position, ``action_mask`` (a copy: infos share
-        no data), ``area`` (0: none), ``cause`` and ``step``."""
+        """The instance's ``info``, ``action_mask`` (a copy), ``area``, ``cause``, ``step``."""
         pos = self._position()
         return {**self.instance.info(pos),
                 "action_mask": self.mask_table[self._observe()].copy(),

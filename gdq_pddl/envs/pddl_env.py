@@ -415,9 +415,8 @@ def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dyna
 
 def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics,
                   model: ModelArrays) -> None:
-    """Refuse a true model in which no episode can reach the goal, though the knowledge
-    has plans: not with positive probability (a :class:`PlanningError` naming the
-    ``success = 0`` keys), or not within the step limit (a :class:`WorldError`)."""
+    """Refuse a true model in which no episode can reach the goal: never (a
+    :class:`PlanningError`) or not within the step limit (a :class:`WorldError`)."""
     fewest = reality_distances(model)[graph.is_goal].min(initial=math.inf)
     if fewest <= dynamics.step_limit:
         return

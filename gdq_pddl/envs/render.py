@@ -185,10 +185,9 @@ class MapPainter:
 
 def greedy_target(spaces: LearnerSpaces, q: np.ndarray, position: str,
                   masks: np.ndarray | None = None) -> str | None:
-    """Where the greedy action of ``q`` takes the robot from ``position``: that of the
-    door-closed state, or the door-open state's where the former ties or opens the
-    door. ``""`` when it does nothing (``stay``, or masked out by ``masks``); None when
-    no action is preferred."""
+    """Where the greedy action of ``q`` (door closed; or open, if that ties or opens it)
+    takes the robot from ``position``: ``""`` if nowhere (``stay``, or out of ``masks``),
+    None if no action is preferred."""
     state = spaces.state(position)
     a = _greedy(q[state])
     opens = a is not None and spaces.action_parts(a)[0] == "opendoor"

@@ -33,10 +33,9 @@ class CompactSolution:
 
 
 def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
-    """The pessimistic next learner states of every outcome: ``(closed, other)``, both
-    ``int64[n_outcomes]``; an outcome is worth the smaller of their values. Where the
-    robot stayed at or went through the door it acted at, the door state is known and
-    ``other == closed``; elsewhere they are the next position's closed and open states."""
+    """The pessimistic next learner states of every outcome, ``(closed, other)``: the next
+    position's closed and open states, or twice the known one where the robot stayed at,
+    or went through, the door it acted at (an outcome is worth the smaller value)."""
     n_states = model.pos_of_state.shape[0]
     counts = np.diff(model.ptr)
     state = np.repeat(np.arange(n_states * model.n_actions) // model.n_actions, counts)
