@@ -1,16 +1,10 @@
-"""What every env of this package shares: an instance's episodes stepped through one
-compiled model.
+"""The one env base: an instance's episodes stepped through one compiled model.
 
-:class:`CompiledEnv` is the one base: it holds the instance (whose attributes are the
-env's too), the spaces, the action masks and the episode bookkeeping (step count, end
-cause, the reset-before-step and action-range checks), and implements ``reset`` (with
-its ``start``/``goal`` options), ``step``, ``action_masks()``, ``spec`` and the common
-``info`` once over four hooks: restart the hidden state, advance
-it by one compiled step, observe it, and say where it is. Its two subclasses are the two
-representations of an instance's true model: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`
-over the full states (:class:`~gdq_pddl.envs.model.ModelArrays`; every instance, both
-env ids) and :class:`~gdq_pddl.envs.office.CompactEnv` over the learner states of an
-office instance (:mod:`gdq_pddl.envs.compact`; buildings too large for the full one).
+:class:`CompiledEnv` implements ``reset`` (with its ``start``/``goal`` options),
+``step``, ``action_masks()``, ``spec`` and the common ``info`` over four hooks. Its two
+subclasses are the two representations of an instance's true model:
+:class:`~gdq_pddl.envs.pddl_env.PDDLEnv` over full states (both env ids) and
+:class:`~gdq_pddl.envs.office.CompactEnv` over an office instance's learner states.
 """
 
 from __future__ import annotations
@@ -33,13 +27,11 @@ RESET_OPTIONS = ("start", "goal")
 
 
 class CompiledEnv(gym.Env[int, int]):
-    """Base class: subclasses call ``__init__`` with the instance and the compiled model
-    and implement :meth:`_restart`, :meth:`_advance`, :meth:`_observe` and
-    :meth:`_position`; they may extend :meth:`_info`."""
+    """Base class: subclasses implement :meth:`_restart`, :meth:`_advance`,
+    :meth:`_observe` and :meth:`_position`; the instance's attributes are the env's."""
 
     model: tuple
-    """The compiled model: :class:`ModelArrays`, or the compact model of
-    :mod:`gdq_pddl.envs.compact` (both are named tuples of arrays)."""
+    """The compiled true model (``ModelArrays``, for ``envs.solve.solve``, or ``CompactModel``)."""
 
     def __init__(self, instance: Any, model: tuple, render_mode: str | None = None) -> None:
         self.check_render_mode(render_mode)
@@ -65,23 +57,13 @@ class CompiledEnv(gym.Env[int, int]):
             raise AttributeError(name)
         return getattr(instance, name)
 
-    @property
-    def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
-        can do something in the learner state (:mod:`gdq_pddl.abstraction.masks`); row
-        ``obs`` is ``info["action_mask"]``."""
-        return self.instance.mask_table
-
     def action_masks(self) -> np.ndarray:
-        """``bool[n_actions]``: the current state's row of :attr:`mask_table` (what
-        sb3-contrib's ``MaskablePPO`` asks an env for)."""
+        """``bool[n_actions]``: the current state's row of ``mask_table`` (for ``MaskablePPO``)."""
         return self.mask_table[self._observe()].astype(bool)
 
     @property
     def spec(self) -> EnvSpec | None:
-        """The spec ``gymnasium.make`` gave (None if built directly), with
-        ``max_episode_steps`` the env's own step limit (no ``TimeLimit`` is registered:
-        the env truncates itself, with reward ``-r_max``)."""
+        """``gymnasium.make``'s spec (or None), ``max_episode_steps`` the env's step limit."""
         spec = self.__dict__.get("_spec")
         return None if spec is None else replace(spec, max_episode_steps=int(self.model.step_limit))
 
@@ -91,9 +73,7 @@ class CompiledEnv(gym.Env[int, int]):
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
-        """Start an episode; ``options`` may give this episode's ``start`` and ``goal``
-        (the instance's :meth:`restarted` says in what form); a later reset without them
-        goes back to the env's own. Other keys: :class:`ConfigError`."""
+        """Start an episode, at ``options``' ``start``/``goal`` if given (see ``restarted``)."""
         super().reset(seed=seed)
         unknown = [k for k in options or {} if k not in RESET_OPTIONS]
         if unknown:
@@ -124,8 +104,7 @@ class CompiledEnv(gym.Env[int, int]):
         raise NotImplementedError
 
     def _advance(self, a: int) -> tuple[float, bool, bool, int]:
-        """Take action ``a`` at step ``self._t`` with the compiled step, move the hidden
-        state on and return ``(reward, terminated, truncated, cause code)``."""
+        """Take action ``a``; return ``(reward, terminated, truncated, cause code)``."""
         raise NotImplementedError
 
     def _observe(self) -> int:
@@ -133,13 +112,11 @@ class CompiledEnv(gym.Env[int, int]):
         raise NotImplementedError
 
     def _position(self) -> int:
-        """The position index of the hidden state (what ``area_of_pos`` is indexed by)."""
+        """The position index of the hidden state (into ``area_of_pos``)."""
         raise NotImplementedError
 
     def _info(self) -> dict[str, Any]:
-        """What the instance says at the position (the office: ``position``),
-        ``action_mask`` (a copy of the state's row of :attr:`mask_table`: info must be
-        new data on every call), ``area`` (0: none), ``cause`` and ``step``."""
+        """The instance's ``info``, ``action_mask`` (a copy), ``area``, ``cause``, ``step``."""
         pos = self._position()
         return {**self.instance.info(pos),
                 "action_mask": self.mask_table[self._observe()].copy(),

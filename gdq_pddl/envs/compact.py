@@ -1,39 +1,13 @@
-"""The true dynamics of a large world without enumerating door masks.
+"""The true dynamics of a large world per learner state, without enumerating door masks.
 
-:func:`gdq_pddl.envs.model.compile_model` lists outcomes for every *full* state
-``(position, set of open doors)``: ``n_positions * 2**n_doors`` states, impossible for
-a building of 100+ doors. But an action's outcomes depend only on the position and on
-whether the door *at that position* is open, i.e. on the learner state. So this model
-lists outcomes per (learner state, action) pair, in CSR form (outcomes of pair
-``i = state * n_actions + action`` are ``ptr[i]:ptr[i+1]``), each as
-
-- ``next_pos``: the position after the action,
-- ``opens``: whether the action opened the door at the position it was taken at,
-- ``stuck``: whether the trial failed;
-
-and the episode keeps the set of open doors as a ``uint8`` array. A pair without
-outcomes is inapplicable: the robot stays (most of the ``5 * n_positions`` actions).
-
-The outcomes come from the same rule as the full model
-(:func:`gdq_pddl.envs.model.slip_outcomes` on the same grounded building and dynamics),
-merged and ordered the same way, and :func:`compact_step` draws the same random numbers
-as :func:`gdq_pddl.envs.model.env_step` (one uniform for the outcome, then the cost
-draw), so on the office an episode is bit-identical to one of ``OfficeEnv`` (tested).
-It is a second representation of the same instance (an
-:class:`~gdq_pddl.envs.office.OfficeInstance`), for worlds too large for the full one;
-value iteration (V*) still needs the full model and so small worlds.
-
-Why :func:`compact_step` is not :func:`gdq_pddl.envs.model.env_step`: the two models
-index outcomes by different states. ``env_step`` looks up the pair of a *full* state (an
-int whose next value is read from ``next``, every pair listing at least a no-op), which
-is what a PDDL model (:mod:`gdq_pddl.envs.pddl_env`, no positions or doors) and value
-iteration need; ``compact_step`` looks up the pair of a *learner* state derived from the
-position and a mutable open-door array, and a pair may list nothing. Folding either into
-the other would make the office and PDDL path carry the door array and the extra
-lookups of every step, or make the compact one enumerate ``2**n_doors`` states. What the
-rule is, they share: the outcome draw (:func:`gdq_pddl.envs.model.draw_outcome`) and the
-cost, reward and episode end (:func:`gdq_pddl.envs.model.finish_step`), and one compiled
-episode loop (:mod:`gdq_pddl.learners.episodes`) serves both.
+The full model has ``n_positions * 2**n_doors`` states, but an action's outcomes depend
+only on the learner state (position, is its door open). So this model lists outcomes per
+(learner state, action) pair in CSR form (pair ``i = state * n_actions + action`` owns
+``ptr[i]:ptr[i+1]``; none: the robot stays), each a ``next_pos``, whether it ``opens``
+the door it was taken at, and whether it is ``stuck``; an episode keeps the open doors
+in a ``uint8`` array. Outcomes and random draws are the full model's (same rule, order
+and draws), so an office episode is bit-identical to one of ``OfficeEnv`` (tested). Why
+two step functions: docs/decisions.md, "One pipeline".
 """
 
 from __future__ import annotations
@@ -82,11 +56,8 @@ class CompactModel(NamedTuple):
 
 
 def compile_compact(world: World) -> CompactModel:
-    """The world's dynamics as a :class:`CompactModel` (time and memory linear in the
-    number of learner states x actions): the rule of
-    :func:`~gdq_pddl.envs.model.compile_true_model` on the same grounded building and
-    dynamics, from each learner state's planner state (every other door closed).
-    Compiled once per world."""
+    """The world's :class:`CompactModel`, from each learner state's planner state (every
+    other door closed); linear in learner states x actions, compiled once per world."""
     return per_object(world, "compact", lambda: _compile_compact(world))
 
 
@@ -151,11 +122,8 @@ def observe_state(m: CompactModel, pos: int, doors: np.ndarray) -> int:
 @numba.njit(cache=True, inline="always")
 def compact_step(m: CompactModel, pos: int, doors: np.ndarray, action: int, t: int,
                  goal_pos: int, rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
-    """Take ``action`` at ``pos`` (``doors[d]``: door ``d`` open; updated in place).
-
-    Returns ``(next position, reward, terminated, truncated, cause)``; draws what
-    :func:`gdq_pddl.envs.model.env_step` draws, in the same order.
-    """
+    """Take ``action`` at ``pos`` (``doors[d]``: door ``d`` open; updated in place);
+    returns ``(next position, reward, terminated, truncated, cause)``."""
     k = draw_outcome(m.ptr, m.prob, observe_state(m, pos, doors) * m.n_actions + action, rng)
     nxt, stuck = pos, False
     if k >= 0:

@@ -1,11 +1,9 @@
 """Policies evaluated on a world's true model: greedy routes, exact values, task facts.
 
-A learner's greedy policy (learner state -> action) is walked along its *intended*
-route: from the task's start with every door closed, take the policy's action, follow
-its most likely outcome (ties: the first listed), and stop at the goal, after
-:data:`MAX_ROUTE_STEPS` actions, on a stuck outcome, at a state without a policy entry,
-or when a full state repeats. In area terms a route drops consecutive repeats:
-``p0 p2 p4 p8 p5 p6 p7 p17`` is areas ``1 3 2 6``.
+A policy's *intended* route starts at the task's start, doors closed, and follows the
+most likely outcome (ties: the first listed) of each action until the goal, a stuck
+outcome, a state without a policy entry, a repeated full state or
+:data:`MAX_ROUTE_STEPS` actions.
 """
 
 from __future__ import annotations
@@ -22,18 +20,11 @@ from gdq_pddl.world import Task, World
 
 MAX_ROUTE_STEPS = 30
 RELEVANCE_THRESHOLD = 0.05
-"""Expected visits per episode of the optimal policy above which an area is relevant
-(when ``optimal.json`` gives no ``relevant_areas``: at 0 a slip of a ``goto`` makes
-nearly every area relevant)."""
+"""Expected visits per episode of the optimal policy above which an area is relevant (at
+0 a slip of a ``goto`` makes nearly every area relevant)."""
 
 Policy = Mapping[int, int] | np.ndarray
 """Learner state -> action (an array: -1 or out of range means no entry)."""
-
-
-def area_route(world: World, positions: tuple[str, ...] | list[str]) -> tuple[int, ...]:
-    """Areas along ``positions``, consecutive repeats dropped (positions in no area skipped)."""
-    areas = [a for p in positions if (a := world.area_of.get(p)) is not None]
-    return tuple(a for i, a in enumerate(areas) if i == 0 or areas[i - 1] != a)
 
 
 @dataclass(frozen=True)
@@ -46,12 +37,13 @@ class Route:
     end: str
 
     def areas(self, world: World) -> tuple[int, ...]:
-        return area_route(world, self.positions)
+        """Areas along the route, consecutive repeats dropped (positions in no area skipped)."""
+        areas = [a for p in self.positions if (a := world.area_of.get(p)) is not None]
+        return tuple(a for i, a in enumerate(areas) if i == 0 or areas[i - 1] != a)
 
 
 def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
-    """The full state ``action`` in full state ``fs`` most likely leads to (ties: the
-    first listed outcome); None when that outcome is stuck."""
+    """The likeliest next full state of ``action`` in ``fs`` (ties: the first; None: stuck)."""
     lo, hi = model.ptr[fs * model.n_actions + action: fs * model.n_actions + action + 2]
     k = lo + int(np.argmax(model.prob[lo:hi]))
     return None if model.stuck[k] else int(model.next[k])
@@ -60,8 +52,7 @@ def likeliest_next(model: ModelArrays, fs: int, action: int) -> int | None:
 def _follow(world: World, model: ModelArrays, fs: int, goal_pos: int,
             action_at: Callable[[int, int], int | None], steps: int, stop_on_loop: bool
             ) -> Route:
-    """Walk from full state ``fs`` along likeliest outcomes, taking ``action_at(step, fs)``
-    (None: no policy there) for at most ``steps`` actions."""
+    """Walk from ``fs`` along likeliest outcomes of ``action_at(step, fs)`` (None: none)."""
     positions, seen = [world.positions[model.pos_of[fs]]], {fs}
     for step in range(steps):
         action = action_at(step, fs)
@@ -116,8 +107,7 @@ def optimal_route(world: World, task: Task | str) -> Route:
 def policy_value(world: World, task: Task, policy: Policy,
                  model: ModelArrays | None = None) -> float:
     """Exact expected undiscounted return from the start of a stationary learner policy
-    in ``world``, by backward induction over the step limit (the outcome rewards of
-    :func:`gdq_pddl.envs.solve.solve`)."""
+    (backward induction with the rewards of :func:`gdq_pddl.envs.solve.solve`)."""
     model = compile_model(world) if model is None else model
     n_full, r = model.obs_of.shape[0], model.r_max
     if isinstance(policy, np.ndarray):
@@ -145,8 +135,7 @@ def policy_value(world: World, task: Task, policy: Policy,
 
 @dataclass(frozen=True)
 class TaskTruth:
-    """What the true model says about one task (``irrelevant_areas``: the world's areas
-    not in ``relevant_areas``)."""
+    """What the true model says about one task (``irrelevant_areas``: all but relevant)."""
 
     task: str
     v_star: float

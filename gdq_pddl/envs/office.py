@@ -1,67 +1,22 @@
 """The office world of the GDQ paper: one PDDL instance seen through the office's map.
 
-A robot moves between named positions of an office; some pairs of positions are the two
-sides of a door, which a person opens on request and which the robot then crosses. The
-building, its doors and their dynamics come from a world file (by default the shipped
-``office.toml``); nothing here is specific to the office.
+A robot moves between named positions, some pairs of them the two sides of a door that
+a person opens on request (building and dynamics: a world file, default ``office.toml``).
+An :class:`OfficeInstance` is a task of a world as an instance of the one pipeline:
+knowledge ``domains/office.pddl``, reality :meth:`~gdq_pddl.world.World.dynamics` and the
+observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v0``
+(:func:`OfficeEnv`) is ``PDDLEnv`` on one; :class:`CompactEnv` suits large buildings.
 
-An :class:`OfficeInstance` is the instance a world file produces: the knowledge
-``domains/office.pddl`` with the world's problem, the world's reality
-(:meth:`~gdq_pddl.world.World.dynamics`, compiled through the same
-:func:`~gdq_pddl.envs.model.compile_true_model` as any PDDL problem) and the office's
-observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`); like a
-:class:`~gdq_pddl.envs.pddl_env.PDDLInstance` it tells
-:func:`~gdq_pddl.learners.context.task_context` its learner start and goal, plans,
-prior and successor bound. ``OfficeEnv(...)`` (``gdq_pddl/Office-v0``) is a function
-returning the env class of every instance, :class:`~gdq_pddl.envs.pddl_env.PDDLEnv`, on
-such an instance: there is no office env class, so test
-``isinstance(env.unwrapped.instance, OfficeInstance)``, not ``isinstance(env,
-OfficeEnv)``. :class:`CompactEnv` steps the same instance on its compact model
-(:mod:`gdq_pddl.envs.compact`), for buildings too large for the full one.
-
-## Action space
-``Discrete(5 * n_positions)`` (95 for the office), verb-major: action
-``verb * n_positions + position`` with verbs ``goto, approach, opendoor, gothrough,
-stay``. Most actions are inapplicable in a given state: they cost a step and change
-nothing. See :mod:`gdq_pddl.spaces` for names (``env.unwrapped.spaces.action_name(a)``).
-
-## Observation space
-``Discrete(n_states)`` (31 for the office): the learner's state (position, is the door
-at this position open); one state per open-floor position, two per door-side position.
-The full simulator state (which doors are open anywhere) is in ``info["full_state"]``.
-
-## Starting state
-The task's start position, every door closed; ``reset(options={"start": "p3", "goal":
-"p13"})`` gives one episode another start and goal (:meth:`OfficeInstance.restarted`).
-
-## Rewards
-``+r_max`` on reaching the goal, ``-r_max`` on failure (stuck at a door, or the last
-allowed action taken without reaching the goal), otherwise minus the action's cost
-(1 per action in the office; a world file may give cost distributions).
-
-## Episode end
-Terminated on reaching the goal or getting stuck. Truncated after ``step_limit``
-actions (20 for the office) with reward ``-r_max``: the env counts its own steps, so no
-``TimeLimit`` wrapper is needed (or registered); ``spec.max_episode_steps`` says the limit.
-
-## Information
-``info`` holds ``action_mask``, ``position`` (name), ``area`` (int, 0 if none),
-``cause`` (``""``, ``"goal"``, ``"stuck"`` or ``"timeout"``), ``full_state`` (int) and
-``step`` (actions taken so far). ``action_mask`` (``int8[n_actions]``, as in
-Gymnasium's Taxi; ``env.action_masks()`` gives it as booleans) is 1 for the actions the
-robot's PDDL knowledge says can do something in the observed state: a ground action
-applicable there maps to it. ``stay`` is never 1 (the knowledge has no such action).
-Use it as ``env.action_space.sample(mask=info["action_mask"])``.
-
-## Arguments
-``task`` (a task name of the world, default ``"C"``) or ``start`` and ``goal``
-(position or landmark names); ``world`` (a :class:`World`, a world file path or a
-built-in world name; default the office); ``render_mode`` (``"ansi"`` or
-``"rgb_array"``).
-
-Every step goes through :func:`gdq_pddl.envs.model.env_step`, the one definition of a
-step, with randomness from ``self.np_random`` only. ``env.unwrapped.world``, ``.task``,
-``.spaces`` and ``.decode(full_state)`` are the instance's.
+- Actions: ``Discrete(5 * n_positions)`` (95), ``verb * n_positions + position`` for the
+  verbs ``goto, approach, opendoor, gothrough, stay``; most do nothing but cost a step.
+- Observations: ``Discrete(n_states)`` (31): the position, and whether its door is open.
+- Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck or on the last allowed
+  action (truncated after ``step_limit``), else minus the action's cost.
+- ``info``: ``action_mask``, ``position``, ``area`` (0: none), ``cause`` (``""``,
+  ``"goal"``, ``"stuck"``, ``"timeout"``), ``full_state`` (every door) and ``step``.
+- Arguments: ``task`` (default ``"C"``) or ``start`` and ``goal``; ``world`` (a
+  :class:`World`, a file or a built-in name); ``render_mode`` (``"ansi"``, ``"rgb_array"``).
+  ``reset(options={"start": "p3", "goal": "p13"})`` moves one episode.
 """
 
 from __future__ import annotations
@@ -99,28 +54,15 @@ def _knowledge(world: World, task: Task | str) -> PlanningProblem:
     return PlanningProblem.from_texts(domain_text(), office_problem(world, task))
 
 
-def office_action_masks(world: World, task: Task) -> np.ndarray:
-    """``int8[n_states, n_actions]``, read-only: the actions the office's knowledge
-    (``domains/office.pddl`` on ``world``'s problem for ``task``) says can do something
-    in each learner state, through O (:mod:`gdq_pddl.abstraction.masks`). Cached per
-    (world object, start): an experiment makes an env per run, and grounding the
-    knowledge costs milliseconds."""
-    return per_object(world, ("masks", task.start), lambda: knowledge_action_mask(
-        OfficeAbstraction(world), _knowledge(world, task).task))
-
-
 def _knowledge_key(world: World) -> tuple:
-    """What the planner's knowledge depends on (not the dynamics' probabilities, only
-    whether a door can open at all: see :func:`gdq_pddl.world.office_problem`)."""
+    """What the planner's knowledge depends on (of the dynamics: which doors can open)."""
     return (world.positions, world.edges,
             tuple((d.name, d.sides, d.success > 0) for d in world.doors))
 
 
 TOLERANT_KINDS = ("all", "routes")
-"""How a tolerant plan table is built: ``"all"``, every loop-free plan within the
-tolerance (the planner's); ``"routes"``, every shortest plan plus one plan per door
-route within the tolerance (:func:`gdq_pddl.abstraction.routes.route_plan_table`, for
-buildings, where every plan is too many)."""
+"""How a tolerant plan table is built: every loop-free plan within the tolerance, or
+every shortest plan plus one per door route (:mod:`gdq_pddl.abstraction.routes`)."""
 
 _TABLES: dict[tuple, PlanTable] = {}
 _PRIORS: dict[tuple, PriorModel] = {}
@@ -162,8 +104,7 @@ class OfficeInstance:
     @classmethod
     def of(cls, task: str | None = None, start: str | None = None, goal: str | None = None,
            world: str | Path | World | None = None) -> OfficeInstance:
-        """The instance of a task by name, or of a start and goal, in a world (a
-        :class:`World`, a world file, a built-in name; default the office)."""
+        """The instance of a task by name, or of a start and goal, in a world (or the office)."""
         chosen = as_world(world)
         return cls(chosen, pick_task(chosen, task, start, goal))
 
@@ -214,12 +155,13 @@ class OfficeInstance:
 
     @cached_property
     def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``: 1 where the knowledge says the action can act."""
-        return office_action_masks(self.world, self.task)
+        """``int8[n_states, n_actions]``, read-only: 1 where the knowledge says the action
+        can act; cached per (world, start)."""
+        return per_object(self.world, ("masks", self.task.start), lambda: knowledge_action_mask(
+            OfficeAbstraction(self.world), _knowledge(self.world, self.task).task))
 
     def restarted(self, start: str | None = None, goal: str | None = None) -> OfficeInstance:
-        """The instance from ``start`` to ``goal`` (position or landmark names, as
-        ``gdq-pddl run --start p3 --goal p13``; None: the task's) in the same world."""
+        """The instance from ``start`` to ``goal`` (names; None: the task's), same world."""
         try:
             return OfficeInstance(self.world, pick_task(
                 self.world, None, self.task.start if start is None else start,
@@ -254,14 +196,12 @@ class OfficeInstance:
 
     @property
     def max_successors(self) -> int:
-        """:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the compact model
-        (an upper bound; learner-level, so any size of world)."""
+        """:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the compact model."""
         return successor_capacity(self.compact)
 
     @property
     def prior(self) -> PriorModel:
-        """The prior model of the world's knowledge (goal-independent), cached per
-        knowledge for the life of the process."""
+        """The prior model of the world's knowledge (goal-independent; cached)."""
         key = _knowledge_key(self.world)
         if key not in _PRIORS:
             task = _knowledge(self.world, self.world.positions[-1]).task
@@ -275,9 +215,8 @@ class OfficeInstance:
         return office_plan_table(self.world, self.task.goal, planner, tolerance, kind)
 
     def optimal(self) -> dict[str, Any]:
-        """The ground truth of the task: start, goal, V*, the relevant areas (visited
-        with probability >= 0.05 by the optimal policy), the paper's irrelevant ones
-        and the expected visits to each area."""
+        """The task's ground truth: V*, the relevant areas (visited with probability
+        >= 0.05 by the optimal policy), the paper's irrelevant ones, expected visits."""
         visits = expected_area_visits(self.world, self.task)
         return {"start": self.task.start, "goal": self.task.goal,
                 "v_star": optimal_value(self.world, self.task),
@@ -317,12 +256,8 @@ class OfficeInstance:
 def OfficeEnv(task: str | None = None, start: str | None = None,  # noqa: N802 (an env id's
               goal: str | None = None, world: str | Path | World | None = None,  # class name)
               render_mode: str | None = None) -> PDDLEnv:
-    """``gdq_pddl/Office-v0``: :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` on the
-    :class:`OfficeInstance` of a task (see the module docstring for the arguments).
-
-    A function, not a class: the office has no env class of its own, so
-    ``isinstance(env.unwrapped, OfficeEnv)`` is not a test; ask
-    ``isinstance(env.unwrapped.instance, OfficeInstance)``."""
+    """``gdq_pddl/Office-v0``: ``PDDLEnv`` on the :class:`OfficeInstance` of a task (a
+    function: test ``isinstance(env.unwrapped.instance, OfficeInstance)``)."""
     return PDDLEnv(instance=OfficeInstance.of(task, start, goal, world),
                    render_mode=render_mode)
 
@@ -331,10 +266,8 @@ OfficeEnv.metadata = PDDLEnv.metadata  # what gymnasium.make reads of an entry p
 
 
 class CompactEnv(CompiledEnv):
-    """The env of an office instance over its compact model (:mod:`.compact`; large
-    buildings): same arguments (no rendering), spaces, rewards, episode ends and random
-    draws as ``OfficeEnv``; ``info`` has ``open_doors`` (door indices) instead of
-    ``full_state``."""
+    """``OfficeEnv`` over the compact model (:mod:`.compact`; large buildings): no
+    rendering; ``info`` has ``open_doors`` (door indices) instead of ``full_state``."""
 
     def __init__(self, task: str | None = None, start: str | None = None,
                  goal: str | None = None, world: str | Path | World | None = None) -> None:

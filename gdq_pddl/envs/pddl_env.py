@@ -1,65 +1,19 @@
-"""Any PDDL domain as a Gymnasium environment: a STRIPS domain with a dynamics file, or
-a PPDDL domain (its probabilistic effects are reality), with an optional overlay.
+"""Any PDDL problem as a Gymnasium environment (``gdq_pddl/PDDL-v0``; docs/domains.md).
 
-For a STRIPS domain, the domain and problem are the robot's knowledge and the dynamics
-file (:mod:`gdq_pddl.dynamics`) is reality: how often each ground action works, what a
-failure does, what it costs, the rewards and the step limit. For a PPDDL domain, reality
-is the domain's probabilistic model (:mod:`gdq_pddl.pddl.ppddl`), the knowledge its
-determinisation, and the overlay (the dynamics file without outcomes) gives r_max, the
-step limit and costs where the domain does not. The env's true model is
-compiled once into the same :class:`~gdq_pddl.envs.model.ModelArrays` as the office's,
-so it steps through the same :func:`~gdq_pddl.envs.model.env_step`, the fast episode
-runner works on it and :func:`gdq_pddl.envs.solve.solve` gives its V*.
+The domain and problem (files or shipped names) are the robot's knowledge. Reality is a
+dynamics file (:mod:`gdq_pddl.dynamics`) for a STRIPS domain, or a PPDDL domain's own
+probabilistic effects (the planner knows their ``determinisation``) with an optional
+overlay. The true model is a :class:`~gdq_pddl.envs.model.ModelArrays`, as the office's.
 
-Registered as ``gdq_pddl/PDDL-v0``::
-
-    gymnasium.make("gdq_pddl/PDDL-v0", domain="my.pddl", problem="p1.pddl",
-                   dynamics="my.toml")
-    gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
-
-``domain``, ``problem`` and ``dynamics`` are file paths, or names of the shipped files
-(:func:`gdq_pddl.resources.resolve`; ``gdq-pddl list`` shows them); a shipped domain
-given without ``dynamics`` gets the shipped dynamics of the same name if there is one.
-``determinisation`` (``"all-outcomes"``, the default, or ``"most-likely"``; the CLI's
-``--determinisation``) is what the planner knows of a PPDDL domain
-(:mod:`gdq_pddl.pddl.ppddl`); a STRIPS domain's knowledge is the domain itself.
-
-## Action space
-``Discrete(n_ops)``: the ground actions of the problem, in the grounder's order
-(``env.unwrapped.action_name(a)``). An action whose precondition does not hold costs its
-cost and changes nothing.
-
-## Observation space
-``Discrete(n_states)``: the states reachable from the problem's initial state (goal
-states are not expanded), numbered breadth first; 0 is the initial state
-(``env.unwrapped.atoms(s)`` lists a state's fluent atoms; ``render_mode="ansi"`` too, and
-``"rgb_array"`` draws that text). The learner sees the full planner state: nothing is hidden.
-``reset(options={"start": "(at c12) (open c11) ..."})`` starts one episode in another
-reachable state (:meth:`PDDLInstance.restarted`).
-
-## Rewards and episode end
-As in the office: ``+r_max`` on reaching a state where the problem's goal holds
-(terminated), ``-r_max`` when an action leaves the robot stuck (terminated) or on the
-last allowed action (truncated, after ``step_limit`` actions), otherwise minus the
-action's cost.
-
-## Outcomes of an applicable ground action
-With a dynamics file: with probability ``success`` its PDDL effect; with ``stuck`` the
-trial fails; the rest does nothing, or (a slip) the effect of a uniformly random
-applicable ground action of the schemas the dynamics file lists. PPDDL: each outcome of
-its probabilistic effect with its probability (the leftover: nothing; an outcome that
-makes ``(stuck)`` true: the trial fails).
-
-## Costs, r_max and the step limit
-A ground action's cost: the dynamics file's (or overlay's), else the domain's
-``(increase (total-cost) X)``, else 1. A PPDDL problem's ``r_max``: the overlay's, else
-its ``(:goal-reward N)``, else 20; its step limit: the overlay's, else
-``max(20, ceil(2.5 L))``, L the fewest actions that can reach the goal.
-
-## Information
-``info`` holds ``action_mask``, ``area`` (always 0), ``cause``, ``full_state`` (= the
-observation) and ``step``. ``action_mask`` (``int8[n_actions]``, as in Gymnasium's
-Taxi) is 1 for the ground actions whose precondition holds in the state.
+- Actions: ``Discrete(n_ops)``, the ground actions in the grounder's order; one whose
+  precondition does not hold costs its cost and changes nothing.
+- Observations: ``Discrete(n_states)``, the states reachable from the initial state (goal
+  states not expanded), breadth first, 0 the initial state (``env.unwrapped.atoms(s)``);
+  ``reset(options={"start": "(at c12) (open c11) ..."})`` starts elsewhere.
+- Rewards: as the office's, or the problem's own (:attr:`PDDLInstance.reward_scale`).
+- ``info``: ``action_mask`` (1 where the precondition holds), ``area`` (0), ``cause``,
+  ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
+  ``"rgb_array"`` shows the state's atoms.
 """
 
 from __future__ import annotations
@@ -114,17 +68,12 @@ DEFAULT_R_MAX, MIN_STEP_LIMIT, STEP_LIMIT_FACTOR = 20.0, 20, 2.5
 
 @dataclass(frozen=True, eq=False)
 class PDDLInstance:
-    """A domain, a problem and their dynamics: grounded, explored and compiled once.
-
-    ``overlay`` is the dynamics file as given (None: none; allowed for a PPDDL domain
-    only); :attr:`dynamics` is reality's r_max and step limit resolved from it and the
-    domain.
-    """
+    """A domain, a problem and their dynamics: grounded, explored and compiled once."""
 
     problem: PlanningProblem
     """The domain and problem as read, with the planner's determinisation."""
     overlay: Dynamics | None
-    """The dynamics file as given (None: none)."""
+    """The dynamics file as given (None: none, for a PPDDL domain only)."""
     max_states: int = MAX_STATES
     """The most reachable states explored before the problem is refused as too large."""
     start_state: int = 0
@@ -134,8 +83,7 @@ class PDDLInstance:
     def from_files(cls, domain: str | Path, problem: str | Path,
                    dynamics: str | Path | None = None, max_states: int = MAX_STATES,
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
-        """Read and check the files (errors name the file and line or key). A PPDDL
-        domain needs no dynamics file; its planner knows its ``determinisation``."""
+        """Read and check the files (errors name the file and line or key)."""
         planning = PlanningProblem.from_files(domain, problem, _checked(determinisation))
         overlay = None if dynamics is None else parse_reality(
             read_text(dynamics, lambda src, msg: WorldError(src, "", msg)), planning,
@@ -180,10 +128,8 @@ class PDDLInstance:
 
     @cached_property
     def reward_scale(self) -> str:
-        """``"problem"``: the file's own rewards, as the IPPC scores them (its metric
-        maximises ``(reward)``, or, with no metric, it declares ``:rewards`` or changes
-        ``(reward)``); ``"goal"``: +r_max at the goal, -r_max on a failed or late end,
-        minus the costs (docs/decisions.md, "Rewards of a PDDL problem")."""
+        """``"problem"``: the file's own rewards, as the IPPC scores them (metric ``maximize
+        (reward)``, ``:rewards`` or effects on ``(reward)``); ``"goal"``: +-r_max and costs."""
         domain, metric = self.problem.source_domain, self.problem.problem.metric
         own = metric == "maximize (reward)" if metric is not None else \
             domain.reward_effects or ":rewards" in domain.requirements
@@ -205,8 +151,7 @@ class PDDLInstance:
 
     @cached_property
     def graph(self) -> StateGraph:
-        """Reachable states and their successors; raises past ``max_states``, and for a
-        task nothing can be learnt on (:func:`check_goal`)."""
+        """Reachable states and successors (refused past ``max_states``, :func:`check_goal`)."""
         graph = reachable_graph(self.problem.learner_task, self.max_states,
                                 self.problem.problem.source)
         check_goal(self.problem, graph)
@@ -214,22 +159,18 @@ class PDDLInstance:
 
     @cached_property
     def costs(self) -> list[CostDist]:
-        """The cost of every ground action (see the module docstring; on the problem's
-        own scale, an action that states none costs 0)."""
+        """Every ground action's cost: the dynamics file's, else the domain's, else 1 (0 on
+        the problem's own reward scale)."""
         names = [op.name for op in self.graph.task.ops]
         stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
-        out = []
-        for name, domain_cost in zip(names, stated, strict=True):
-            given = self.overlay.outcomes(*split_action(name)).cost if self.overlay else None
-            out.append(given or (CostDist("const", domain_cost) if domain_cost is not None
-                                 else unstated))
-        return out
+        return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
+                or (unstated if cost is None else CostDist("const", cost))
+                for name, cost in zip(names, stated, strict=True)]
 
     @cached_property
     def model(self) -> ModelArrays:
-        """The true model (read-only arrays); refused up front past the memory it would
-        need, and when no episode could reach the goal in it (:func:`check_reality`)."""
+        """The true model (read-only); refused past its memory and by :func:`check_reality`."""
         check_memory(self.n_states * self.n_actions * PAIR_BYTES,
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
                      f"of {self.n_states} states x {self.n_actions} ground actions",
@@ -245,8 +186,7 @@ class PDDLInstance:
 
     @cached_property
     def mask_table(self) -> np.ndarray:
-        """``int8[n_states, n_actions]``, read-only: 1 where the ground action is
-        applicable in the state (:func:`~gdq_pddl.abstraction.masks.graph_action_mask`)."""
+        """``int8[n_states, n_actions]``, read-only: 1 where the ground action is applicable."""
         return graph_action_mask(self.graph)
 
     @property
@@ -285,11 +225,8 @@ class PDDLInstance:
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
-        """Plans from every reachable state, cached per (planner, tolerance). The ``graph``
-        planner's are the state graph's distance layers, enumerated only if a learner
-        walks plans (:func:`~gdq_pddl.abstraction.pddl.graph_plan_table`); any other
-        backend is asked once per state, capped at its own plan limit (it warns).
-        ``kind`` is the office's (a PDDL problem has one kind)."""
+        """Plans from every reachable state, cached per (planner, tolerance): the graph's
+        distance layers for ``graph``, else one query per state (``kind``: the office's)."""
         key = (planner, float(tolerance))
         if key not in self._tables:
             if planner == "graph":
@@ -324,9 +261,8 @@ class PDDLInstance:
         return self.graph.task.atoms(self.graph.states[s])
 
     def optimal(self) -> dict[str, Any]:
-        """The ground truth: V* (value iteration on the true model, within
-        :data:`~gdq_pddl.envs.solve.VSTAR_BUDGET`, else a bound and why), the shortest
-        plan, the sizes (a PDDL problem has no areas)."""
+        """The ground truth: V* (within :data:`~gdq_pddl.envs.solve.VSTAR_BUDGET`, else a
+        bound and why), the shortest plan, the sizes."""
         s0 = self.start_state
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "reward_scale": self.reward_scale,
@@ -351,9 +287,8 @@ class PDDLInstance:
     def restarted(self, start: str | Iterable[str] | None = None,
                   goal: None = None) -> PDDLInstance:
         """The instance whose episodes start in the reachable state where exactly the
-        fluent facts ``start`` hold (``"(at c12) (open c11) ..."`` or a list of facts, as
-        ``render()`` lists them; static facts may be left out). The goal is the problem's:
-        a ``goal`` is refused (:class:`ConfigError`; write another problem file)."""
+        fluent facts ``start`` hold (a string as ``render()`` lists them, or a list;
+        statics may be left out). A ``goal`` is refused: :class:`ConfigError`."""
         if goal is not None:
             raise ConfigError(f"reset options: goal {goal!r}: a PDDL env's goal is its "
                               f"problem's ({self.source}); write another problem file")
@@ -380,8 +315,7 @@ class PDDLInstance:
         return {}
 
     def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
-        """The state's fluent atoms after ``step`` actions (and why the episode ended):
-        the text (``ansi``), or that text drawn (``rgb_array``, 640 x 480)."""
+        """The state's fluent atoms as text (``ansi``) or drawn (``rgb_array``, 640 x 480)."""
         why = f" ({cause})" if cause else ""
         text = f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
         if mode == "ansi":
@@ -391,8 +325,7 @@ class PDDLInstance:
 
 def parse_reality(text: str, planning: PlanningProblem, source: str = "<string>") -> Dynamics:
     """The dynamics of ``planning`` from the TOML ``text`` of a dynamics file (an overlay
-    for a PPDDL domain), or of a world file (a ``[world]`` table): reality for
-    ``domains/office.pddl`` (:meth:`~gdq_pddl.world.World.dynamics`)."""
+    for a PPDDL domain) or of a world file (reality for ``domains/office.pddl``)."""
     domain, problem = planning.source_domain, planning.problem
     try:
         is_world = "world" in tomllib.loads(text)
@@ -423,27 +356,22 @@ def _checked(determinisation: str) -> str:
 def default_step_limit(graph: StateGraph) -> int:
     """``max(20, ceil(2.5 L))``, L the fewest actions from the initial state to the goal in
     reality (breadth first over every outcome; 20 if no outcome ever reaches it)."""
-    task = graph.task
-    depth = {graph.states[0]: 0}
-    frontier = [graph.states[0]]
+    task, frontier = graph.task, [graph.states[0]]
+    seen, depth = set(frontier), 0
     while frontier:
-        nxt = []
-        for s in frontier:
-            if task.is_goal(s):
-                return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth[s]))
-            for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)):
-                if t not in depth:
-                    depth[t] = depth[s] + 1
-                    nxt.append(t)
-        frontier = nxt
+        if any(map(task.is_goal, frontier)):
+            return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth))
+        nxt = (t for s in frontier
+               for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)))
+        frontier = [t for t in dict.fromkeys(nxt) if t not in seen]
+        seen.update(frontier)
+        depth += 1
     return MIN_STEP_LIMIT
 
 
 def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
-    """Refuse a problem whose goal is empty, holds in the initial state or cannot be
-    reached: in each, no episode could teach the learner anything, and the results would
-    look like a success (or a certain failure). Raises :class:`PlanningError` naming the
-    problem file (and a PPDDL domain, whose outcomes are reality)."""
+    """Refuse (:class:`PlanningError`) a goal that is empty, holds in the initial state or
+    cannot be reached: no episode could teach the learner anything."""
     source = problem.problem.source
     if not problem.problem.goal and not problem.problem.goal_alternatives:
         raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
@@ -452,13 +380,11 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
         raise PlanningError(f"{source}: the goal already holds in the initial state: every "
                             "episode would be over before it begins")
     if not graph.is_goal.any():
-        never = never_true(problem)
-        ppddl = problem.source_domain.probabilistic
-        actions = f"no outcome of positive probability of {problem.source_domain.source}" \
-            if ppddl else "no action"
-        reached = f"that the outcomes of {problem.source_domain.source} reach" if ppddl \
-            else "reachable"
-        both = contradiction(problem.problem)
+        domain = problem.source_domain
+        never, both = never_true(problem), contradiction(problem.problem)
+        actions, reached = (f"no outcome of positive probability of {domain.source}",
+                            f"that the outcomes of {domain.source} reach") \
+            if domain.probabilistic else ("no action", "reachable")
         why = (f"it asks for {both}, which can never both hold" if both else
                f"{never} can never hold ({actions} makes it true, and the initial state "
                "does not have it)" if never else
@@ -469,8 +395,7 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
 
 
 def limit_key(problem: PlanningProblem, dynamics: Dynamics) -> tuple[str, str]:
-    """The file and key that give the step limit: the dynamics file's ``step_limit``, or,
-    where no file the user gave states it, the problem file and the default's rule."""
+    """The file and key that give the step limit (or the problem file and the default)."""
     if dynamics.source and (not problem.source_domain.probabilistic
                             or "step_limit" in dynamics.stated):
         return dynamics.source, "dynamics.step_limit"
@@ -479,9 +404,7 @@ def limit_key(problem: PlanningProblem, dynamics: Dynamics) -> tuple[str, str]:
 
 
 def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics) -> None:
-    """Refuse a step limit below the shortest plan (no episode could reach the goal),
-    with a :class:`~gdq_pddl.errors.WorldError` naming the dynamics file's
-    ``step_limit``."""
+    """Refuse a step limit below the shortest plan (a :class:`WorldError`)."""
     shortest = int(graph.distances[0])
     if shortest > dynamics.step_limit:
         raise WorldError(*limit_key(problem, dynamics),
@@ -492,13 +415,8 @@ def check_step_limit(problem: PlanningProblem, graph: StateGraph, dynamics: Dyna
 
 def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamics,
                   model: ModelArrays) -> None:
-    """Refuse a true model in which no episode can reach the goal: the goal cannot be
-    reached from the initial state with positive probability (a :class:`PlanningError`
-    naming the dynamics file, the knowledge's plans and the ``success = 0`` keys), or
-    only in more actions than the step limit allows (a :class:`WorldError` naming
-    ``dynamics.step_limit``). The knowledge's plans say nothing of it: an action the
-    planner uses may never work. (A PPDDL domain's states are those reality reaches, so
-    :func:`check_goal` has refused the first case there.)"""
+    """Refuse a true model in which no episode can reach the goal: never (a
+    :class:`PlanningError`) or not within the step limit (a :class:`WorldError`)."""
     fewest = reality_distances(model)[graph.is_goal].min(initial=math.inf)
     if fewest <= dynamics.step_limit:
         return
@@ -519,8 +437,7 @@ def check_reality(problem: PlanningProblem, graph: StateGraph, dynamics: Dynamic
 
 
 def never_working(dynamics: Dynamics) -> list[str]:
-    """The keys of the dynamics file whose actions never have their effect
-    (``success = 0``; an object override only where its schema's table differs)."""
+    """The dynamics file's ``success = 0`` keys (an object's where its schema's differs)."""
     out = [f"actions.{s}" for s, o in dynamics.actions.items() if o.success == 0]
     out += [f"actions.{s}.objects.{obj}" for s, per in dynamics.objects.items()
             for obj, o in per.items()
@@ -529,26 +446,23 @@ def never_working(dynamics: Dynamics) -> list[str]:
 
 
 def never_true(problem: PlanningProblem) -> str:
-    """The first goal literal of ``problem`` that can never hold in reality ("" if none
-    is)."""
+    """The first goal literal of ``problem`` that can never hold ("" if none)."""
     task, domain = problem.learner_task, problem.source_domain
     for lit in problem.problem.goal:
-        atom = str(lit.atom)
-        text = atom if lit.positive else f"(not {atom})"
+        atom, args = str(lit.atom), lit.atom.args
         if lit.atom.predicate == "=":
-            if (lit.atom.args[0] == lit.atom.args[1]) != lit.positive:
-                return text
+            never = (args[0] == args[1]) != lit.positive
         elif lit.atom.predicate not in domain.fluent_predicates():
-            if (atom in task.statics) != lit.positive:
-                return text
-        elif lit.positive and atom not in task.fact_index:
-            return atom
+            never = (atom in task.statics) != lit.positive
+        else:
+            never = lit.positive and atom not in task.fact_index
+        if never:
+            return atom if lit.positive else f"(not {atom})"
     return ""
 
 
 def contradiction(problem: Problem) -> str:
-    """``"(at a) and (not (at a))"``: the first atom the goal asks for with its negation
-    ("" if none)."""
+    """The first atom the goal asks for with its negation, as ``"A and (not A)"``."""
     goal = set(problem.goal)
     for lit in problem.goal:
         if lit.positive and replace(lit, positive=False) in goal:
@@ -557,8 +471,7 @@ def contradiction(problem: Problem) -> str:
 
 
 def graph_space(graph: StateGraph) -> StateSpace:
-    """A PDDL problem's :class:`~gdq_pddl.envs.model.StateSpace`: its reachable states
-    (goal states not expanded) and ground actions, seen as they are."""
+    """A PDDL problem's reachable states and ground actions as a ``StateSpace``."""
     n = graph.n_states
     return StateSpace(
         task=graph.task, n_states=n, edges=graph.edges, n_actions=len(graph.task.ops),
@@ -569,19 +482,16 @@ def graph_space(graph: StateGraph) -> StateSpace:
 
 
 def ppddl_outcomes(graph: StateGraph, gains: bool = False):
-    """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
-    every applicable ground action (``graph.task`` is a
-    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`); the other pairs are no-ops;
-    ``gains``: the keys are ``(next, stuck, the outcome's reward)``."""
+    """``(pair, {(next, stuck): probability})`` for every applicable ground action of a
+    PPDDL problem (other pairs: no-ops); ``gains`` adds the outcome's reward to keys."""
     task = graph.task
     n_ops = len(task.ops)
     op_pos = {id(op): k for k, op in enumerate(task.ops)}
-    index = graph.index
     for s, state in enumerate(graph.states):
         here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
         for k in sorted(here):
             yield s * n_ops + k, merge_outcomes(
-                (((s, True) if o.stuck else (index[o.apply(state)], False))
+                (((s, True) if o.stuck else (graph.index[o.apply(state)], False))
                  + ((o.gain(state),) if gains else ()), o.probability)
                 for o in here[k].outcomes)
 
@@ -589,10 +499,8 @@ def ppddl_outcomes(graph: StateGraph, gains: bool = False):
 def load_instance(domain: str | Path | None, problem: str | Path | None,
                   dynamics: str | Path | None = None,
                   determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
-    """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``,
-    ``problem="keys-2"``; :func:`gdq_pddl.resources.resolve`). A shipped domain without
-    ``dynamics`` gets its shipped dynamics file if there is one; a PPDDL domain's planner
-    knows its ``determinisation``."""
+    """The :class:`PDDLInstance` of three files, or of shipped names (``domain="keys"``;
+    a shipped domain without ``dynamics`` gets its shipped dynamics file if any)."""
     if domain is None or problem is None:
         raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
                             f"domains {', '.join(shipped_names('domain'))}; problems "
@@ -602,16 +510,11 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
 
 
 class PDDLEnv(CompiledEnv):
-    """The env of an instance of the one pipeline over its full true model: a PDDL
-    problem under its dynamics (see the module docstring), or a world's task through the
-    office's map (:class:`~gdq_pddl.envs.office.OfficeInstance`, ``gdq_pddl/Office-v0``).
-
-    The instance's own attributes are the env's too (``env.unwrapped.world``,
-    ``.atoms(s)``, ``.action_name(a)``, ``.start_state``, ``.goal_pos``...)."""
+    """The env of an instance over its full true model (a PDDL problem, or a world's task:
+    ``Office-v0``); the instance's attributes are the env's (``env.unwrapped.atoms(s)``)."""
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
-    """Both kinds of instance draw both modes (:meth:`PDDLInstance.render`,
-    :meth:`~gdq_pddl.envs.office.OfficeInstance.render`)."""
+    """Both kinds of instance draw both modes (their ``render``)."""
 
     def __init__(self, domain: str | Path | None = None, problem: str | Path | None = None,
                  dynamics: str | Path | None = None, instance: Any = None,
@@ -621,14 +524,6 @@ class PDDLEnv(CompiledEnv):
         if instance is None:
             instance = load_instance(domain, problem, dynamics, determinisation)
         super().__init__(instance, instance.model, render_mode)
-
-    def transition_arrays(self) -> ModelArrays:
-        """The true model (CSR outcomes over full states) for value iteration.
-
-        Pair with ``goal_pos``: ``gdq_pddl.envs.solve.solve(env.transition_arrays(),
-        env.goal_pos)``. The arrays are shared with the env: do not modify them.
-        """
-        return self.model
 
     def render(self) -> str | np.ndarray | None:
         if self.render_mode is None:

@@ -1,11 +1,7 @@
-"""Pictures of an office world: a text map (``ansi``), an image (``rgb_array``) and a
-learner's Q table on the map (:meth:`MapPainter.draw_q`); and any text as an image
-(:func:`text_image`, a PDDL state's ``rgb_array``).
-
-The first two take a :class:`Frame` (what to show) and know nothing about the env, so
-they can draw any world a user loads. The image layout is a Kamada-Kawai layout of the
-position graph (deterministic: no random seed involved), computed once per
-:class:`MapPainter`.
+"""Pictures of a world: a text map (``ansi``) and an image (``rgb_array``) of a
+:class:`Frame`, a learner's Q table on the map (:meth:`MapPainter.draw_q`), and any text
+as an image (:func:`text_image`, a PDDL state's ``rgb_array``). The map is a
+(deterministic) Kamada-Kawai layout of the position graph.
 """
 
 from __future__ import annotations
@@ -23,6 +19,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
+    from matplotlib.figure import Figure
 
 MOVES = ("goto", "approach", "gothrough")
 """The verbs whose position is where the robot goes."""
@@ -44,17 +41,13 @@ class Frame:
 def _label(frame: Frame, p: str) -> str:
     marks = ("@" if p == frame.robot else "") + ("*" if p == frame.goal else "")
     door = frame.world.door_at.get(p)
-    text = marks + p
-    if door is not None:
-        text += f"[{door.name} {'open' if door.name in frame.open_doors else 'closed'}]"
-    return text
+    return marks + p + ("" if door is None else
+                        f"[{door.name} {'open' if door.name in frame.open_doors else 'closed'}]")
 
 
 def ansi(frame: Frame) -> str:
-    """A text map: one line per area listing its positions, then the doors.
-
-    ``@`` marks the robot, ``*`` the goal; each door-side position shows its door.
-    """
+    """A text map: one line per area listing its positions (``@`` the robot, ``*`` the
+    goal, a door side with its door), then the doors."""
     w = frame.world
     status = f", {frame.cause}" if frame.cause else ""
     lines = [f"{w.name} task {frame.task_name}: robot {frame.robot}, goal {frame.goal}, "
@@ -76,17 +69,22 @@ def ansi(frame: Frame) -> str:
 
 
 def text_image(text: str, size: tuple[int, int] = (640, 480)) -> np.ndarray:
-    """``text`` in monospace on white, wrapped at spaces (not at non-breaking ones) and cut
-    with ``...`` where it overflows, as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)``
-    in pixels (as a video needs)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time: matplotlib
-    from matplotlib.figure import Figure  # start-up time, as above
+    """``text`` in monospace on white, wrapped at (breaking) spaces and cut with ``...``,
+    as a ``uint8[H, W, 3]`` image of a fixed ``(W, H)`` in pixels (as a video needs)."""
+    from matplotlib.figure import Figure  # start-up time: matplotlib loads when drawing
 
     lines = [part for line in text.splitlines() for part in textwrap.wrap(line, 76) or [""]]
     rows = size[1] // 12 - 1
     fig = Figure(figsize=(size[0] / 80, size[1] / 80), dpi=80)
     fig.text(0.01, 0.99, "\n".join(lines[:rows - 1] + ["..."] if len(lines) > rows else lines),
              family="monospace", fontsize=9, va="top")
+    return _pixels(fig)
+
+
+def _pixels(fig: Figure) -> np.ndarray:
+    """``fig`` drawn (Agg) as a fresh ``uint8[H, W, 3]`` array."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg  # start-up time, as above
+
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
     return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
@@ -113,22 +111,17 @@ class MapPainter:
 
     def __call__(self, frame: Frame) -> np.ndarray:
         """Render ``frame``; returns a fresh ``uint8[H, W, 3]`` array."""
-        # start-up time: matplotlib loads only when a frame is drawn
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure  # start-up time, as above
 
         w, xy = self.world, self.xy
         fig = Figure(figsize=self.size, dpi=self.dpi)
-        canvas = FigureCanvasAgg(fig)
         ax = fig.add_axes((0.02, 0.05, 0.96, 0.87))
         ax.set_axis_off()
         door_edges = {frozenset(d.sides): d for d in w.doors}
         for a, b in w.edges:
             door = door_edges.get(frozenset((a, b)))
-            colour, width, style = "#888888", 1.5, "-"
-            if door is not None:
-                is_open = door.name in frame.open_doors
-                colour, width, style = (OPEN, 4.0, "-") if is_open else (CLOSED, 4.0, ":")
+            colour, width, style = ("#888888", 1.5, "-") if door is None else \
+                (OPEN, 4.0, "-") if door.name in frame.open_doors else (CLOSED, 4.0, ":")
             ax.plot(*zip(xy[a], xy[b], strict=True), color=colour, lw=width, ls=style,
                     zorder=1)
             if door is not None:
@@ -147,19 +140,13 @@ class MapPainter:
         fig.suptitle(f"task {frame.task_name}: {frame.robot} -> {frame.goal}, "
                      f"step {frame.step}/{w.step_limit}{status}", fontsize=10)
         ax.margins(0.08)
-        canvas.draw()
-        return np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
+        return _pixels(fig)
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
-        """Draw a learner's Q table (``float[n_states, n_actions]`` of this world) on ``ax``.
-
-        Each position is coloured by its best ``max_a Q`` over its learner states, and
-        an arrow points to where its greedy action leads (:func:`greedy_target`). With
-        ``masks`` (an env's ``mask_table``), a greedy action the knowledge says does
-        nothing there gets a red cross instead of an arrow. ``norm`` defaults to the
-        range of the drawn values. Returns the colour mapping, for ``fig.colorbar``.
-        """
+        """Draw a Q table (``float[n_states, n_actions]``) on ``ax``: positions coloured by
+        ``max_a Q`` (``norm``: default their range), an arrow to where the greedy action
+        leads (:func:`greedy_target`; a cross: nowhere). Returns the mapping for a colorbar."""
         from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 
@@ -198,15 +185,9 @@ class MapPainter:
 
 def greedy_target(spaces: LearnerSpaces, q: np.ndarray, position: str,
                   masks: np.ndarray | None = None) -> str | None:
-    """Where the greedy action of ``q`` takes the robot from ``position``.
-
-    The state with the door closed first; when its actions all tie, or its greedy
-    action opens the door, the open-door state's (the robot arrives through a door with
-    it open, and goes on through it after opening it). Returns the position moved to;
-    ``""`` when the greedy action does nothing (``stay``, or, with ``masks``, an action
-    the knowledge says does nothing there); None when every action ties, or the greedy
-    action opens the door and the open-door state has no preference.
-    """
+    """Where the greedy action of ``q`` (door closed; or open, if that ties or opens it)
+    takes the robot from ``position``: ``""`` if nowhere (``stay``, or out of ``masks``),
+    None if no action is preferred."""
     state = spaces.state(position)
     a = _greedy(q[state])
     opens = a is not None and spaces.action_parts(a)[0] == "opendoor"

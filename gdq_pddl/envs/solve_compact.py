@@ -1,51 +1,11 @@
 """A reference value for worlds too large for V*: value iteration that forgets doors.
 
-:func:`gdq_pddl.envs.solve.solve` needs the full state (position, set of open doors):
-``2**n_doors`` door masks, out of reach for a generated building with 100+ doors. The
-:class:`~gdq_pddl.envs.compact.CompactModel` lists outcomes per *learner* state
-(position, is the door at this position open), which is all an action's outcomes depend
-on; what it cannot say is whether the door at the position an outcome leads to is open,
-since that depends on which doors the episode opened before. :func:`solve_compact`
-forgets them and assumes the worst. After an outcome the next learner state is
-
-- where the robot stayed (a failed action, a no-op): the same door state, except that a
-  successful ``opendoor`` leaves its door open;
-- after a successful ``gothrough`` (only possible through an open door): the other side
-  of that door, open;
-- anywhere else (``goto``, ``approach``, a navigation slip): whichever of "door closed"
-  and "door open" is worth less at the next step. On the office and the generated
-  buildings (unit costs) that is always "closed" (:func:`open_door_deficit` is 0, tested),
-  so there this is the model of a robot whose doors close behind it.
-
-On it runs the finite-horizon value iteration of :func:`~gdq_pddl.envs.solve.solve` over
-``(t, learner state)`` with the same conventions: undiscounted by default,
-``V[step_limit, :] = 0``, states at the goal worth 0, a stuck outcome -r_max, reaching
-the goal +r_max, any other outcome of the last allowed action -r_max (timeout),
-otherwise minus the mean cost of the action (:func:`~gdq_pddl.envs.solve.expected_costs`);
-greedy actions, ties to the lowest index. A pair that lists no outcome (most of the
-``5 * n_positions`` actions) leaves the robot where it is at the action's cost, so they
-are handled once per state: only the cheapest matters. Time is linear in ``step_limit``
-x (learner states + listed outcomes): 0.3 s for a 1000-position building.
-
-Why ``value`` (``V[0]`` at the start, door closed, as every episode starts) is a lower
-bound on V*: follow ``policy[t, observed learner state]`` in reality, a policy of the
-full model, so worth at most V*. From any full state at step ``t`` it expects at least
-``V[t, observed learner state]``, by induction down from ``t = step_limit`` (both 0):
-the action's outcome probabilities and rewards depend only on the observed learner
-state, so they are the same in both models; after an outcome, the real next learner
-state is the one above where that is known (stayed, went through) and one of the two
-door states otherwise, worth at least the smaller of their values. Where the smaller
-is always "closed", the value is that of doors closing behind the robot, exact for
-policies that never come back to a door side they opened. The office's optimal policies
-never do (a robot that opened a door goes through it at once, and a failed
-``gothrough`` leaves it at the open door): the value equals V* to 1e-9 on its five
-tasks, and on the small generated buildings whose V* can be computed (tested).
-
-Why not simply "closed": a door side is not always worth more open. When time has run
-out, getting stuck (-r_max, nothing more to pay) beats waiting for the timeout, and if
-``opendoor`` costs less than ``gothrough`` a closed door is the cheaper way to try; then
-"always closed" can over-estimate V* (by 0.036 on a three-door corridor with opendoor
-cost 0.97 and gothrough cost 1.78, task ``z0 -> z2``, step limit 9).
+The :class:`~gdq_pddl.envs.compact.CompactModel` cannot say whether the door at an
+outcome's next position is open: :func:`solve_compact` assumes the worse of the two
+(:func:`next_states`) and otherwise runs :func:`~gdq_pddl.envs.solve.solve`'s
+finite-horizon value iteration over ``(t, learner state)``. Its ``value`` is a lower
+bound on V*, equal to it on the office and the small buildings (tested; why:
+docs/decisions.md, "Generated buildings"), in time linear in the model's size.
 """
 
 from __future__ import annotations
@@ -69,21 +29,13 @@ class CompactSolution:
     V: np.ndarray  # float64[step_limit + 1, n_states]
     policy: np.ndarray  # int64[step_limit, n_states]
     value: float  # V[0, learner state of the start with its door closed]
-    start_pos: int
     goal_pos: int
-    gamma: float
 
 
 def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
-    """The pessimistic next learner states of every outcome: ``(closed, other)``, both
-    ``int64[n_outcomes]``, the value of an outcome being the smaller of theirs.
-
-    The door state at the next position is known if it is the door of the position the
-    action was taken at (the robot stayed there, or went through it): open if that door
-    was open or the action opened it, and then ``other == closed``; otherwise ``closed``
-    is the next position with its door closed and ``other`` with it open (the same state
-    where there is no door).
-    """
+    """The pessimistic next learner states of every outcome, ``(closed, other)``: the next
+    position's closed and open states, or twice the known one where the robot stayed at,
+    or went through, the door it acted at (an outcome is worth the smaller value)."""
     n_states = model.pos_of_state.shape[0]
     counts = np.diff(model.ptr)
     state = np.repeat(np.arange(n_states * model.n_actions) // model.n_actions, counts)
@@ -97,18 +49,13 @@ def next_states(model: CompactModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 def successor_capacity(model: ModelArrays | CompactModel) -> int:
-    """The most distinct next learner states of one (learner state, action) pair in a
-    true model, at least 1: a :class:`~gdq_pddl.envs.model.ModelArrays` (exact: the
-    union over the full states a learner state stands for) or a :class:`CompactModel`
-    (an upper bound: an outcome whose next position has a door other than the one acted
-    at may show it open or closed, :func:`next_states`; a pair with no outcome stays
-    put). What the learners size their successor slots by; cached per model."""
+    """The most distinct next learner states of one (learner state, action) pair, at least
+    1 (a bound for a :class:`CompactModel`): what the learners size successor slots by."""
     return per_object(model.ptr, "capacity", lambda: _capacity(model))
 
 
 def _capacity(model: ModelArrays | CompactModel) -> int:
-    n_pairs = len(model.ptr) - 1
-    pair = np.repeat(np.arange(n_pairs, dtype=np.int64), np.diff(model.ptr))
+    pair = np.repeat(np.arange(len(model.ptr) - 1, dtype=np.int64), np.diff(model.ptr))
     if isinstance(model, CompactModel):
         n_states = len(model.pos_of_state)
         first, second = next_states(model)  # the two door states an outcome may show
@@ -125,19 +72,14 @@ def _capacity(model: ModelArrays | CompactModel) -> int:
 
 
 def _stay_actions(model: CompactModel, cost: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Per learner state: the lowest-index pair without outcomes (``first``), the
-    lowest-index one of least mean cost (``cheapest``) and that cost; -1 / inf where
-    every action lists outcomes."""
+    """Per learner state: the first pair without outcomes, the first of least mean cost
+    among them and that cost (-1, -1, inf where every action lists outcomes)."""
     n_states, n_actions = model.pos_of_state.shape[0], model.n_actions
-    listed = (np.diff(model.ptr) > 0).reshape(n_states, n_actions)
+    free = (np.diff(model.ptr) == 0).reshape(n_states, n_actions)
     by_cost = np.lexsort((np.arange(n_actions), cost))  # cost, then index
-    first = np.full(n_states, -1, dtype=np.int64)
-    cheapest = np.full(n_states, -1, dtype=np.int64)
-    for s in range(n_states):
-        free = np.flatnonzero(~listed[s])
-        if free.size:
-            first[s] = free[0]
-            cheapest[s] = by_cost[np.argmax(~listed[s][by_cost])]
+    some = free.any(axis=1)
+    first = np.where(some, free.argmax(axis=1), -1)
+    cheapest = np.where(some, by_cost[free[:, by_cost].argmax(axis=1)], -1)
     stay_cost = np.where(cheapest >= 0, cost[np.maximum(cheapest, 0)], np.inf)
     return first, cheapest, stay_cost
 
@@ -147,7 +89,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                      other: np.ndarray, ending: np.ndarray, end_reward: np.ndarray,
                      app_ptr: np.ndarray, app_action: np.ndarray, cost: np.ndarray,
                      first_stay: np.ndarray, cheapest_stay: np.ndarray, stay_cost: np.ndarray,
-                     at_goal: np.ndarray, r_max: float, gamma: float, tol: float, V: np.ndarray,
+                     at_goal: np.ndarray, r_max: float, tol: float, V: np.ndarray,
                      policy: np.ndarray) -> None:
     """Fill ``V[:-1]`` and ``policy`` backwards in time (``V[-1]`` is 0)."""
     limit, n_states = policy.shape
@@ -163,7 +105,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                     stay_a, stay_q = first_stay[s], r_max if at_goal[s] else -r_max
                 else:
                     stay_a = cheapest_stay[s]
-                    stay_q = -stay_cost[s] + gamma * V[t + 1, s]
+                    stay_q = -stay_cost[s] + V[t + 1, s]
             best = stay_q
             lo, hi = app_ptr[s], app_ptr[s + 1]
             for j in range(lo, hi):
@@ -175,7 +117,7 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
                         total += prob[k] * end_reward[k]
                     else:
                         after = min(V[t + 1, closed[k]], V[t + 1, other[k]])
-                        total += prob[k] * (-cost[a] + gamma * after)
+                        total += prob[k] * (-cost[a] + after)
                 q[j - lo] = total
                 best = max(best, total)
             choice = stay_a if stay_a >= 0 and stay_q >= best - tol else n_actions
@@ -186,14 +128,10 @@ def _value_iteration(ptr: np.ndarray, prob: np.ndarray, closed: np.ndarray,
             V[t, s] = 0.0 if at_goal[s] else best
 
 
-def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
-                  gamma: float = 1.0) -> CompactSolution:
-    """Pessimistic values and time-dependent greedy policy for reaching ``goal_pos``.
-
-    ``policy[t, s]`` is the action to take in learner state ``s`` after ``t`` actions;
-    ``value`` is ``V[0]`` at ``start_pos`` with its door closed. Time is linear in
-    ``step_limit`` x (learner states + listed outcomes); see the module docstring.
-    """
+def solve_compact(model: CompactModel, start_pos: int, goal_pos: int) -> CompactSolution:
+    """Pessimistic undiscounted values and time-dependent greedy policy (``policy[t, s]``:
+    the action in learner state ``s`` after ``t`` actions) for reaching ``goal_pos``;
+    ``value`` is ``V[0]`` at ``start_pos`` with its door closed."""
     n_states, n_actions, limit = model.pos_of_state.shape[0], model.n_actions, model.step_limit
     check_memory((limit + 1) * n_states * 16,
                  f"step_limit = {limit}: the reference value ({n_states} states at each of "
@@ -210,26 +148,11 @@ def solve_compact(model: CompactModel, start_pos: int, goal_pos: int,
     policy = np.empty((limit, n_states), dtype=np.int64)
     _value_iteration(model.ptr, model.prob, *next_states(model), ending, end_reward, app_ptr,
                      (pairs % n_actions).astype(np.int64), cost, first_stay, cheapest_stay,
-                     stay_cost, model.pos_of_state == goal_pos, float(r), float(gamma),
-                     TIE_TOLERANCE, V, policy)
+                     stay_cost, model.pos_of_state == goal_pos, float(r), TIE_TOLERANCE,
+                     V, policy)
     start = int(model.state_of[start_pos, 0])
     return CompactSolution(V=V, policy=policy, value=float(V[0, start]),
-                           start_pos=int(start_pos), goal_pos=int(goal_pos),
-                           gamma=float(gamma))
-
-
-def open_door_deficit(model: CompactModel, solution: CompactSolution) -> float:
-    """How much more any door side is ever worth closed than open:
-    ``max(V[t, (p, closed)] - V[t, (p, open)])`` over steps and door sides, or 0.
-
-    At most 0 (or ``TIE_TOLERANCE``, for rounding): "the smaller of the two" was always
-    "closed", so ``solution`` is that of the doors-close-behind model (module docstring).
-    """
-    sides = np.flatnonzero(model.door_of_pos >= 0)
-    if sides.size == 0:
-        return 0.0
-    closed, opened = model.state_of[sides, 0], model.state_of[sides, 1]
-    return float(np.max(solution.V[:, closed] - solution.V[:, opened]))
+                           goal_pos=int(goal_pos))
 
 
 def solve_compact_task(world: World, task: Task | str,
@@ -241,6 +164,6 @@ def solve_compact_task(world: World, task: Task | str,
 
 
 def reference_value(world: World, task: Task | str) -> float:
-    """The pessimistic value of ``task`` from its start, doors closed, step 0: a lower
-    bound on V* (see the module docstring) for worlds of any number of doors."""
+    """The pessimistic value of ``task`` from its start: a lower bound on V* for worlds of
+    any number of doors."""
     return solve_compact_task(world, task).value

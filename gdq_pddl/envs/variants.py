@@ -1,9 +1,5 @@
-"""Derived worlds: the same building with different dynamics.
-
-Useful for tests and for experiments on inaccurate knowledge (the PDDL domain stays the
-same while reality changes). Every function returns a new :class:`World`; the input is
-never modified.
-"""
+"""Derived worlds: the same building (and knowledge) with different dynamics, as new
+:class:`World` objects (for tests and experiments on inaccurate knowledge)."""
 
 from __future__ import annotations
 

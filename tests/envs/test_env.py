@@ -202,7 +202,6 @@ def test_doors_closed_at_reset(office) -> None:
 
 def test_exposed_model() -> None:
     env = gymnasium.make(ENV_ID, task="C").unwrapped
-    assert env.transition_arrays() is env.model
     assert env.world.step_limit == env.model.step_limit == 20
     assert env.spaces.n_states == 31
 

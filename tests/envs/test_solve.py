@@ -132,7 +132,7 @@ def monte_carlo(episodes: int, seed: int, **make_kwargs) -> tuple[float, float, 
     """V*[0, s0], and the mean return and its standard error of the optimal policy."""
     env = gymnasium.make(ENV_ID, **make_kwargs)
     u = env.unwrapped
-    solution = solve(u.transition_arrays(), u.goal_pos)
+    solution = solve(u.model, u.goal_pos)
     returns = np.empty(episodes)
     _, info = env.reset(seed=seed)
     for e in range(episodes):

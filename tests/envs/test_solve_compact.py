@@ -12,7 +12,6 @@ from gdq_pddl.envs.compact import CompactModel, compile_compact
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.solve import TIE_TOLERANCE, expected_costs, optimal_value
 from gdq_pddl.envs.solve_compact import (
-    open_door_deficit,
     reference_value,
     solve_compact,
     solve_compact_task,
@@ -21,6 +20,15 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import Task, World, parse_world
 from tests.helpers import corridor_text
 
+
+def open_door_deficit(model: CompactModel, solution) -> float:
+    """How much more any door side is ever worth closed than open (0 without doors): at
+    most ``TIE_TOLERANCE`` means "the worse of the two" was always "closed"."""
+    sides = np.flatnonzero(model.door_of_pos >= 0)
+    if sides.size == 0:
+        return 0.0
+    closed, opened = model.state_of[sides, 0], model.state_of[sides, 1]
+    return float(np.max(solution.V[:, closed] - solution.V[:, opened]))
 
 def dense_values(world: World, goal: str, always_closed: bool = False):
     """The same model solved the slow way: every (state, action) pair with its outcomes
