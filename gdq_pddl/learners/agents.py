@@ -94,23 +94,22 @@ class Learner(Protocol):
 
 class TabularLearner:
     """Shared implementation: arrays in :class:`~gdq_pddl.learners.tables.Tables`, rules in
-    the compiled modules (:mod:`gdq_pddl.learners.rules`)."""
+    the compiled modules (:mod:`gdq_pddl.learners.rules`). ``config`` None: the defaults of
+    :attr:`config_type`."""
 
     kind: int = KIND_QLEARNING
     """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
     name: str = "tabular"
     """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
-    """The config class the constructor takes."""
     config: LearnerConfig
-    """The learner's settings (frozen)."""
     context: TaskContext
     """The current task (:meth:`start_task` replaces it)."""
     q: np.ndarray
-    """The Q table, float64[n_states, n_actions], in the env's reward units (the world's
-    or problem's reward scale)."""
+    """The Q table, float64[n_states, n_actions], in the env's reward units."""
 
-    def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
+    def __init__(self, context: TaskContext, config: LearnerConfig | None = None) -> None:
+        config = self.config_type() if config is None else config
         if not isinstance(config, self.config_type):
             raise ConfigError(f"{type(self).__name__} takes a {self.config_type.__name__}, "
                               f"got {type(config).__name__}")
@@ -141,25 +140,13 @@ class TabularLearner:
     def _init_task(self) -> None:
         """What happens when a task starts (after the tables are rebuilt)."""
 
-    def _n_backups(self) -> int:
-        return 0
-
-    def _m(self) -> int:
-        return 0
-
-    def _backup_mode(self) -> int:
-        return BACKUP_EXPECTED
-
-    def _opt_continue(self) -> float:
-        return 1.0
-
     def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
         """The :class:`Tables` groups only the default GDQ uses (empty here)."""
         return _NO_PRIOR
 
     def _extra_params(self) -> dict[str, float]:
         """:class:`Params` fields beyond the shared ones (their defaults here)."""
-        return {}
+        return {"backup": BACKUP_EXPECTED}
 
     # -- interface ---------------------------------------------------------------------
     def _build(self, context: TaskContext) -> tuple[Tables, Params]:
@@ -181,9 +168,8 @@ class TabularLearner:
         params = Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
-            n_backups=int(self._n_backups()), m=int(self._m()),
-            backup=int(self._backup_mode()), s0=int(context.s0),
-            opt_continue=float(self._opt_continue()), **self._extra_params())
+            n_backups=int(getattr(c, "n_backups", 0)), m=int(getattr(c, "m", 0)),
+            s0=int(context.s0), **self._extra_params())
         guards.check_tables(tables, params)
         return tables, params
 
@@ -293,9 +279,6 @@ class QLearning(TabularLearner):
     name = "Q-learning"
     config_type = QLearningConfig
 
-    def __init__(self, context: TaskContext, config: QLearningConfig | None = None) -> None:
-        super().__init__(context, QLearningConfig() if config is None else config)
-
 
 class DynaQ(TabularLearner):
     """Q-learning + the learned model + N expected backups per real step on uniformly
@@ -303,18 +286,7 @@ class DynaQ(TabularLearner):
 
     kind = KIND_DYNAQ
     name = "Dyna-Q"
-    config: DynaQConfig
-    """The learner's settings (frozen)."""
     config_type = DynaQConfig
-
-    def __init__(self, context: TaskContext, config: DynaQConfig | None = None) -> None:
-        super().__init__(context, DynaQConfig() if config is None else config)
-
-    def _n_backups(self) -> int:
-        return self.config.n_backups
-
-    def _m(self) -> int:
-        return self.config.m
 
 
 class Darling(TabularLearner):
@@ -328,9 +300,6 @@ class Darling(TabularLearner):
     name = "DARLING"
     config: DarlingConfig
     config_type = DarlingConfig
-
-    def __init__(self, context: TaskContext, config: DarlingConfig | None = None) -> None:
-        super().__init__(context, DarlingConfig() if config is None else config)
 
     def _plan_actions(self, context: TaskContext) -> np.ndarray:
         """Per state, the actions that start a plan within the tolerance (all actions
@@ -390,13 +359,11 @@ class GDQ(TabularLearner):
     kind = KIND_GDQ
     name = "GDQ"
     config: GDQConfig
-    """The learner's settings (frozen)."""
     config_type = GDQConfig
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        config = GDQConfig() if config is None else config
-        if isinstance(config, GDQConfig):
-            self.kind = KIND_GDQ if config.variant == "prior" else KIND_GDQ_PLANS
+        if isinstance(config, GDQConfig) and config.variant != "prior":
+            self.kind = KIND_GDQ_PLANS
         self._rev_capacity = 0
         super().__init__(context, config)
 
@@ -414,28 +381,18 @@ class GDQ(TabularLearner):
     def q(self, value: np.ndarray) -> None:
         self._q = value
 
-    def _n_backups(self) -> int:
-        return self.config.n_backups
-
-    def _m(self) -> int:
-        return self.config.m
-
-    def _backup_mode(self) -> int:
-        return BACKUP_SAMPLE if self.config.variant == "code" else BACKUP_EXPECTED
-
     def _plans(self, context: TaskContext) -> PlanTable:
         if self.config.variant == "prior":
             return context.plans
         return _tolerant_plans(context, self.config.plan_tolerance)
 
-    def _opt_continue(self) -> float:
-        return 1.0 if self.config.optimistic_successor == "start" else 0.0
-
     def _extra_params(self) -> dict[str, float]:
-        if self.kind != KIND_GDQ:
-            return {}
         c = self.config
-        return {"explore_all": float(c.explore_all),
+        shared = {"backup": BACKUP_SAMPLE if c.variant == "code" else BACKUP_EXPECTED,
+                  "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
+        if self.kind != KIND_GDQ:
+            return shared
+        return {**shared, "explore_all": float(c.explore_all),
                 "explore_all_last": float(c.explore_all_last_step),
                 "prior_cost": float(c.prior_cost),
                 "sweep_threshold": float(c.sweep_threshold),
@@ -541,13 +498,6 @@ class GDQ(TabularLearner):
         """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model of the
         ``literal`` variant; Q = R_max in the ``code`` variant's OptInit)."""
         return self.tables.plans.opt_r
-
-    @property
-    def applicable(self) -> np.ndarray:
-        """bool[S, A]: what the knowledge says can do something (``prior``; the max ranges
-        over it and the known pairs, exploration draws from it with ``explore=
-        "applicable"``), a view of the prior."""
-        return self._prior(self.context).applicable
 
 
 METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig], str | None]] = {
