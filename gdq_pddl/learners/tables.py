@@ -1,42 +1,17 @@
 """A learner's arrays, its Q table, and how it acts: the part every learner shares.
 
-Every learner (Q-learning, Dyna-Q, DARLING, the GDQs) is the same data, :class:`Tables`,
-plus scalar :class:`Params` whose ``kind`` says which rules run after a real step
-(:func:`gdq_pddl.learners.rules.observe`). ``Tables`` holds five small groups, one per
-concern: :class:`QTable` (Q and acting, this module), :class:`Model` (the learned model),
-:class:`Plans` (the paper's GDQs), :class:`Prior` and :class:`Queue` (the default GDQ's
-prior and sweep). A compiled function takes the groups it touches, so its signature says
-what it reads and writes. This module holds:
-
-- the Q table and its maximum: :func:`set_q` (the only writer of single Q entries, so
-  ``v[s]`` stays the max of ``q[s, a]`` over the allowed actions) and :func:`td_update`,
-  the temporal-difference update, the one definition every learner's real step (and
-  GDQ-code's sample backups) uses;
-- acting: :func:`act`, epsilon-greedy with random tie-breaking, and :func:`greedy`.
+Every learner is the same data, :class:`Tables` (five groups, one per concern), plus
+scalar :class:`Params` whose ``kind`` says which rules run after a real step
+(:func:`gdq_pddl.learners.rules.observe`). A compiled function takes the groups it touches.
 
 ``allowed`` is what the max ranges over (the update's target and the greedy choice);
-``guide`` is what exploration draws uniformly from. They are the same array for every
-learner but two. DARLING-code (DARLING as the GDQ authors' code runs it): its max ranges
-over all actions while it may only execute plan actions, so a greedy action outside
-``guide`` is replaced by a draw from it. The default GDQ: ``allowed`` holds the
-knowledge-applicable and the known pairs, ``guide`` the first actions of the plans
-(:mod:`gdq_pddl.learners.gdq`); its greedy action is never replaced.
+``guide`` is what exploration draws from. They are the same array but for DARLING-code
+(its max ranges over all actions, a greedy action outside ``guide`` is replaced by a draw
+from it) and the default GDQ (:mod:`gdq_pddl.learners.gdq`).
 
-Randomness comes only from the ``np.random.Generator`` passed in.
-
-The compiled functions here and in the other rule modules trust their arguments (no
-bounds checks in compiled code): the learners' methods and the episode loops check what
-they are given before calling them (:mod:`gdq_pddl.learners.guards`).
-
-Speed. A call of a compiled function that is not inlined costs a reference-count update
-per array of every tuple it takes; the small rules called in inner loops (``set_q``,
-``td_update``, ``record``, the backups' value functions) are therefore
-``inline="always"`` (Task C, env steps/s: Q-learning 531k -> 1.05M, Dyna-Q 165k -> 260k,
-GDQ 182k -> 215k, ``benchmarks/learners.py speed``), and the loops read a group's arrays
-into locals once (a field read in a loop can cost a count update each time), while
-``act`` and ``observe`` stay calls: inlining ``observe`` into the episode loop made numba
-0.68 compile a loop whose results differ from the Python path's (caught by the fast ==
-Python tests), and inlining more tripled the compile time.
+The compiled functions trust their arguments: :mod:`gdq_pddl.learners.guards` checks
+what reaches them. Why the small rules are ``inline="always"`` and the loops read a
+group's arrays into locals: ``docs/learners.md``, "Speed".
 """
 
 from __future__ import annotations
@@ -192,8 +167,8 @@ def set_q(table: QTable, s: int, a: int, value: float) -> None:
 @numba.njit(cache=True, inline="always")
 def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
                  value: float) -> None:
-    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (its inner loop
-    would pay a reference count per read of a group's field: module doc)."""
+    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (reading a
+    group's field in its inner loop would cost a reference count each time)."""
     old = q[s, a]
     q[s, a] = value
     if not allowed[s, a]:
