@@ -1,32 +1,16 @@
 """Run a learner for a number of episodes and record what happened.
 
-Two paths with identical results for the same seeds:
-
-- a Python loop over any gymnasium env of this package (``env.reset``, ``env.step``,
-  ``learner.act`` / ``learner.observe``);
-- a compiled loop (:func:`_episodes`) over the true dynamics under the env, used only
-  where it gives exactly what stepping the env gives (:func:`why_not_compiled`: a
-  :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` or :class:`~gdq_pddl.envs.office.CompactEnv`,
-  bare or in ``gymnasium.make``'s own wrappers, and a learner of this package): it calls
-  :func:`gdq_pddl.envs.model.env_step` (or :func:`gdq_pddl.envs.compact.compact_step`)
-  and the same rules (:func:`gdq_pddl.learners.tables.act`,
-  :func:`gdq_pddl.learners.rules.observe`). Any other wrapper (``TransformReward``, a
-  shorter ``TimeLimit``, ``RecordEpisodeStatistics``, an ``ObservationWrapper``...) gets
-  the Python loop, which steps the env through it.
-
-Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
-its learned model needs in this env (``learner.reserve_successors`` with
-:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the env's true dynamics): the task
-context's capacity comes from the world the learner was told about, which may differ
-from the one it runs in (a knowledge experiment).
-
-Before the compiled loop runs, what it indexes with is checked
-(:mod:`gdq_pddl.learners.guards`): a learner built for another env, or a generator that
-is not one, is refused with :class:`~gdq_pddl.errors.ConfigError`.
+Two paths with identical results for the same seeds: a Python loop over any gymnasium
+env of this package, through its wrappers, and a compiled loop (:func:`_episodes`) over
+the env's true dynamics, used only where it gives exactly what stepping the env gives
+(:func:`why_not_compiled`). Both call the same compiled rules
+(:func:`gdq_pddl.learners.tables.act`, :func:`gdq_pddl.learners.rules.observe`) and first
+give the learner the successor slots its learned model needs in this env, which may
+differ from the one it was told about (a knowledge experiment).
 
 Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
-``env.reset(seed=...)`` before calling), learner randomness from ``rng``. Neither path
-draws anything else, so for the same generators both consume the same numbers.
+``env.reset(seed=...)``), learner randomness from ``rng``; neither path draws anything
+else.
 """
 
 from __future__ import annotations
@@ -83,6 +67,12 @@ class EpisodeRecords:
     def success_rate(self) -> float:
         """The share of episodes that reached the goal, in [0, 1]."""
         return float(self.success.mean())
+
+
+def _empty_records(n_episodes: int, n_areas: int) -> tuple[np.ndarray, ...]:
+    """The zeroed arrays of :class:`EpisodeRecords`, filled in by the loops."""
+    return (np.zeros(n_episodes), np.zeros(n_episodes, dtype=np.int64),
+            np.zeros(n_episodes, dtype=np.bool_), np.zeros((n_episodes, n_areas), dtype=np.int64))
 
 
 def _n_areas(env: gym.Env) -> int:
@@ -190,10 +180,7 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     if isinstance(learner, TabularLearner):
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
-    returns = np.zeros(n_episodes)
-    steps = np.zeros(n_episodes, dtype=np.int64)
-    success = np.zeros(n_episodes, dtype=np.bool_)
-    areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
+    returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     for ep in range(n_episodes):
         s, _ = env.reset()
         done = False
@@ -232,10 +219,7 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     if n_areas < most:
         raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")
     learner.reserve_successors(successor_capacity(dynamics))
-    returns = np.zeros(n_episodes)
-    steps = np.zeros(n_episodes, dtype=np.int64)
-    success = np.zeros(n_episodes, dtype=np.bool_)
-    areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
+    returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     # GDQ's reverse index grows between episodes: the loop stops before an episode that
     # might not fit (one episode adds at most `room` entries) and is called again.
     room = reverse_room(learner.max_successors, int(dynamics.step_limit))
@@ -252,11 +236,9 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     return EpisodeRecords(returns, steps, success, areas)
 
 
-# What the loop needs of a kind of dynamics, one implementation per kind, picked by numba
-# from the dynamics' type when the loop is compiled: the hidden state an episode starts
-# in, the learner state it shows, one step (env_step / compact_step) and the area of a
-# state. inline="always" (here and on the step functions) keeps the loop as fast as one
-# written per kind; as plain calls it lost 10-20 % steps/s (benchmarks/learners.py speed).
+# What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
+# the dynamics' type (inlined for speed: docs/learners.md): the hidden state an episode
+# starts in, the learner state it shows, one step, the area of a state.
 def _restart(m, start, doors):
     raise NotImplementedError  # compiled code only (see the overloads below)
 

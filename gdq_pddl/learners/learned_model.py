@@ -1,42 +1,26 @@
 """The learned model (what "model" means in the learners) and Dyna-Q's backups on it.
 
-The model is what a learner has counted of the real steps it took. It is
-goal-independent, so it survives a task switch. Per pair ``(s, a)``: ``visits[s, a]``
-all trials; ``stuck[s, a]`` trials that failed by getting stuck; ``cost_sum / cost_n`` the
-mean step cost over steps with no goal, stuck or timeout event (pairs never seen in such
-a step use the mean over all pairs, or 0 before any); and the transitions to learner
-states ``s'`` (goal, timeout and ordinary steps alike), sparse:
+The model counts the real steps a learner took; it is goal-independent, so it survives a
+task switch. Per pair ``(s, a)``: ``visits`` (all trials), ``stuck`` (trials that got
+stuck), ``cost_sum / cost_n`` (the mean step cost over steps with no goal, stuck or
+timeout event; else the mean over all pairs, or 0: :func:`mean_cost`), and the
+transitions to learner states ``s'``, sparse: ``slots[s, a, j]`` is ``s' << 32 | count``
+(0: empty), the occupied slots first and sorted by successor, so every loop meets the
+successors in increasing ``s'`` as a loop over dense counts would. ``K``, the slots per
+pair, is a capacity (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`; the
+model-free learners get 0); a transition finding no free slot is not recorded and its
+callers raise ValueError(:data:`OVERFLOW`).
 
-- ``slots[s, a, j]``, ``j < K``: ``s' << 32 | count`` (int64, one load per slot;
-  :func:`slot_successor`, :func:`slot_count`); 0 is an empty slot. The occupied slots
-  come first, sorted by successor (:func:`record` inserts in order), so every loop over
-  them meets the successors in increasing ``s'`` exactly as a loop over a dense
-  ``counts[s, a, :]`` did: the same sums in the same order, the same sampled outcomes.
-- ``K`` is a capacity, the most distinct successors any pair can have
-  (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`, from the world's true
-  dynamics; the episode loops raise it to what the env they run in needs). Memory is
-  ``S x A x K`` slots instead of ``S x A x S`` counts, and ``np.zeros`` leaves the pages
-  of untried pairs unwritten. The model-free learners get ``K = 0``: they never record.
-- A transition that finds no free slot is not recorded at all: :func:`record` returns
-  False and its callers raise ValueError(:data:`OVERFLOW`). Not a raise in here: see
-  :func:`add_successor`.
-
-The expected backup of a pair under the model, for the current goal states G, is::
+The expected backup of a pair, for the current goal states G (:func:`learned_value`)::
 
     Q(s,a) = sum_s' T(s,a,s') * (R_max if s' in G else -cost(s,a) + gamma * V(s'))
              + P_stuck(s,a) * (-R_max)
 
-with ``T(s,a,s') = count / visits`` over the slots of ``(s, a)`` and
-``P_stuck = stuck / visits`` (:func:`learned_value`). A step-limit timeout is not part of
-this Markov model (its transition is counted, its -R_max is not). No backup bootstraps
-through a terminal transition: reaching G or getting stuck ends the sum.
-
-A pair is *known* when ``visits > m``. Dyna-Q's planning (:func:`backup_known`) backs up
-known pairs only. GDQ-literal's expected backups give an unknown pair the optimistic
-backup of OptInit instead (:func:`expected_value`): ``T(s,a,s0) = 1`` and ``R = R_max``
-on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
-Sample-based backups (GDQ-code) only replay recorded outcomes of pairs tried at least
-once and leave untried pairs alone (:func:`sample_outcome`).
+with ``T = count / visits`` and ``P_stuck = stuck / visits``; a step-limit timeout is
+counted as a transition, its -R_max is not. A pair is *known* when ``visits > m``:
+Dyna-Q backs up known pairs only (:func:`backup_known`); GDQ-literal gives an unknown pair
+OptInit's optimism (:func:`expected_value`); GDQ-code replays recorded outcomes of tried
+pairs (:func:`sample_outcome`).
 """
 
 from __future__ import annotations
@@ -115,13 +99,7 @@ def slot_count(slot: int) -> int:
 def add_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
     """Count one transition ``(s, a) -> s2`` in the slots of ``(s, a)``, keeping them
     sorted by successor. False (nothing changed) when ``s2`` is new and every slot is
-    taken.
-
-    Takes the slot array, not :class:`Tables`, and returns a status instead of raising
-    (both measured): reading tuple fields inside a loop cost a reference count update
-    per read (the loop 4 x slower), and a callee that can raise makes every caller that
-    holds the tuple update the counts of all its arrays on each call.
-    """
+    taken. (The slot array and a status, not the tuple and a raise: docs/learners.md.)"""
     key = np.int64(s2) << SLOT_SHIFT
     n_slots = slots.shape[2]
     for j in range(n_slots):
