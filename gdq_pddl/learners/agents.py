@@ -102,7 +102,9 @@ class TabularLearner:
     name: str = "tabular"
     """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
+    """The config class the constructor takes."""
     config: LearnerConfig
+    """The learner's settings (frozen)."""
     context: TaskContext
     """The current task (:meth:`start_task` replaces it)."""
     q: np.ndarray
