@@ -2,14 +2,10 @@
 public function of the learners can make a compiled rule read or write outside an array.
 Bad input raises :class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument.
 
-A learner's construction and ``start_task`` check the task context (:func:`check_context`)
-and the tables built from it (:func:`check_tables`); ``act`` and ``observe`` their
-arguments; :func:`gdq_pddl.learners.episodes.run_compiled` the generators, the env's
-dynamics (:func:`check_dynamics`) and, before each call of the loop, the tables again
-(they may have been replaced). Every array is checked against one table, :data:`TABLES`
-(:data:`DYNAMICS` for the env's): dtype, shape in the learner's sizes, the range of an
-index array's values. Not checked: what the compiled rules write themselves (the model's
-slots, the queue), in range by construction while every index that reaches them is.
+Every array is checked against one table, :data:`TABLES` (:data:`DYNAMICS` for the
+env's): dtype, shape in the learner's sizes, the range of an index array's values. What
+the compiled rules write themselves (the model's slots, the queue) is in range by
+construction.
 """
 
 from __future__ import annotations
