@@ -121,10 +121,7 @@ class TabularLearner:
         self._model = learned_model.new_model(n_s, n_a, _capacity(context),
                                               transitions=self.kind in MODEL_BASED)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
-        self.context = context
-        self.tables, self.params = self._build(context)
-        recompute_all_v(self.tables.table)
-        self._init_task()
+        self._set_task(context)
 
     # -- per-learner hooks -------------------------------------------------------------
     def _allowed(self, context: TaskContext) -> np.ndarray:
@@ -179,8 +176,13 @@ class TabularLearner:
         """Switch to a new task, keeping what the learner has learned (``docs/learners.md``:
         the baselines keep their Q table, every GDQ reruns OptInit on its learned model)."""
         guards.check_context(context, *self.q.shape)
+        if self.kind in MODEL_BASED:
+            self._model = learned_model.with_successor_slots(self._model, _capacity(context))
+        self._set_task(context)
+
+    def _set_task(self, context: TaskContext) -> None:
+        """Build the tables for ``context``, then start the task (OptInit for the GDQs)."""
         self.context = context
-        self._model = self._slots(_capacity(context))
         self.tables, self.params = self._build(context)
         recompute_all_v(self.tables.table)
         self._init_task()
@@ -262,13 +264,8 @@ class TabularLearner:
         check_count("k", k)
         k = min(int(k), len(self.q))
         if self.kind in MODEL_BASED and k > self.max_successors:
-            self._model = self._slots(k)
+            self._model = learned_model.with_successor_slots(self._model, k)
             self.tables = self.tables._replace(model=self._model)
-
-    def _slots(self, k: int) -> learned_model.Model:
-        if self.kind not in MODEL_BASED:
-            return self._model
-        return learned_model.with_successor_slots(self._model, k)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"
@@ -458,14 +455,11 @@ class GDQ(TabularLearner):
         used = int(prior.rev_n[0])
         if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
             return
-        capacity = max(2 * len(prior.rev_pair), used + entries)
-        rev_next = np.full(capacity, -1, dtype=np.int64)
-        rev_pair = np.zeros(capacity, dtype=np.int64)
-        rev_next[:len(prior.rev_next)] = prior.rev_next
-        rev_pair[:len(prior.rev_pair)] = prior.rev_pair
-        self._rev_capacity = capacity
-        self.tables = self.tables._replace(
-            prior=prior._replace(rev_next=rev_next, rev_pair=rev_pair))
+        self._rev_capacity = max(2 * len(prior.rev_pair), used + entries)
+        grow = (0, self._rev_capacity - len(prior.rev_pair))
+        self.tables = self.tables._replace(prior=prior._replace(
+            rev_next=np.pad(prior.rev_next, grow, constant_values=-1),
+            rev_pair=np.pad(prior.rev_pair, grow)))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:

@@ -1,17 +1,10 @@
 """The paper's two readings of GDQ: GDQ-literal (Algorithms 1-3 read literally) and
-GDQ-code (the authors' released code). Both are Q-learning plus the learned model
-(:mod:`gdq_pddl.learners.learned_model`) plus N backups per real step along the plans H
-from the current state (:func:`backup_plans`); they differ in OptInit and in the kind of
-backup:
-
-- GDQ-literal: OptInit is :func:`policy_iteration` on an optimistic model (an unknown pair
-  leads to s0 with R_max on the plan pairs from s0); backups assign the expected value
-  (:func:`gdq_pddl.learners.learned_model.expected_value`).
-- GDQ-code: OptInit is :func:`seed_plan_pairs` (Q <- R_max on the plan pairs); backups are
-  TD updates on outcomes replayed from experience
-  (:func:`gdq_pddl.learners.learned_model.sample_outcome`).
-
-``docs/learners.md`` sets them side by side and says where each decision comes from.
+GDQ-code (the authors' released code). Both are Q-learning plus the learned model plus N
+backups per real step along the plans H from the current state (:func:`backup_plans`).
+GDQ-literal's OptInit is :func:`policy_iteration` on an optimistic model, its backups
+assign the expected value; GDQ-code's OptInit is :func:`seed_plan_pairs`, its backups are
+TD updates on replayed outcomes (:mod:`gdq_pddl.learners.learned_model`).
+``docs/learners.md`` sets them side by side.
 """
 
 from __future__ import annotations
