@@ -127,15 +127,12 @@ class Tables(NamedTuple):
     queue: Queue
 
 
-def table_bytes(n_states: int, n_actions: int, max_successors: int,
-                transitions: bool = True, prior: bool = True) -> int:
-    """Bytes of a learner's per-pair arrays at most: Q, the allowed, guide and optimistic
-    masks, the model's visits, stuck, costs and known list, (``transitions``) the slots,
-    and (``prior``, the default GDQ) the prior's successors and reverse edges and, when
-    every pair is known, the reverse index (an entry of two int64 per successor)."""
-    per_pair = 8 * 6 + 3 + (8 * max_successors if transitions else 0)  # int64 slots
-    if prior:
-        per_pair += 8 + 8 + 16 * (max_successors if transitions else 1)
+def table_bytes(n_states: int, n_actions: int, max_successors: int) -> int:
+    """Bytes of a learner's per-pair arrays at most (the default GDQ's): Q, the allowed,
+    guide and optimistic masks, the model's visits, stuck, costs, known list and int64
+    slots, the prior's successors and reverse edges and, when every pair is known, the
+    reverse index (an entry of two int64 per successor)."""
+    per_pair = 8 * 6 + 3 + 8 * max_successors + 8 + 8 + 16 * max_successors
     return n_states * n_actions * per_pair
 
 
