@@ -1,13 +1,7 @@
-"""The learners behind one small interface: :class:`QLearning`, :class:`DynaQ`,
-:class:`Darling` and :class:`GDQ`, and :func:`make_learner` by the names the command line
-takes.
-
-Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state, rng)``,
-``observe(s, a, r, s2, terminated, truncated, rng)``, ``start_task(context)`` and
-``greedy_policy()``. The methods check their arguments (:mod:`gdq_pddl.learners.guards`)
-and call the compiled rules (:mod:`gdq_pddl.learners.rules` says which), which the fast
-episode loop calls too. How the variants compare, and why each decision where the paper
-is silent was taken: ``docs/learners.md``.
+"""The learners behind one small interface (:class:`Learner`): :class:`QLearning`,
+:class:`DynaQ`, :class:`Darling` and :class:`GDQ`, and :func:`make_learner` by the names
+the command line takes. The methods check their arguments (:mod:`gdq_pddl.learners.guards`)
+and call the compiled rules (:mod:`gdq_pddl.learners.rules` says which).
 """
 
 from __future__ import annotations
@@ -48,15 +42,13 @@ from gdq_pddl.learners.tables import (
 from gdq_pddl.limits import check_count
 
 MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
-"""The learner kinds that record transitions in a learned model (the others get no
-successor slots)."""
+"""The learner kinds that record transitions in a learned model."""
 
 _I0 = np.zeros(0, dtype=np.int64)
 _NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
                    np.zeros(1, dtype=np.int64)),
              Queue(_I0, _I0, np.zeros(0), np.zeros(1, dtype=np.int64)))
-"""The default GDQ's prior and queue, for the other learners (never read by them; the
-two counters are never written either)."""
+"""The default GDQ's prior and queue, for the other learners (never read or written)."""
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
@@ -118,8 +110,8 @@ class TabularLearner:
         guards.check_context(context)
         self.config = config
         n_s, n_a = context.n_states, context.n_actions
-        self._model = learned_model.new_model(n_s, n_a, _capacity(context),
-                                              transitions=self.kind in MODEL_BASED)
+        k = _capacity(context)  # checked for every learner; the model-free never record
+        self._model = learned_model.new_model(n_s, n_a, k if self.kind in MODEL_BASED else 0)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
         self._set_task(context)
 
@@ -176,8 +168,9 @@ class TabularLearner:
         """Switch to a new task, keeping what the learner has learned (``docs/learners.md``:
         the baselines keep their Q table, every GDQ reruns OptInit on its learned model)."""
         guards.check_context(context, *self.q.shape)
+        k = _capacity(context)
         if self.kind in MODEL_BASED:
-            self._model = learned_model.with_successor_slots(self._model, _capacity(context))
+            self._model = learned_model.with_successor_slots(self._model, k)
         self._set_task(context)
 
     def _set_task(self, context: TaskContext) -> None:
@@ -314,14 +307,11 @@ class Darling(TabularLearner):
         return table.allowed_actions()
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
-        if self.config.variant == "code":  # the max ranges over every action
-            return super()._allowed(context)
-        return self._plan_actions(context)
+        code = self.config.variant == "code"  # the max ranges over every action
+        return super()._allowed(context) if code else self._plan_actions(context)
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
-        if self.config.variant == "code":
-            return self._plan_actions(context)
-        return allowed
+        return self._plan_actions(context) if self.config.variant == "code" else allowed
 
 
 def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
@@ -513,12 +503,9 @@ _BY_KEY = {name.lower().replace("-", ""): name for name in METHODS}
 
 def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:
     """A fresh learner by name for ``context``, with config overrides, e.g.
-    ``make_learner("GDQ-code", ctx, alpha=0.2)``.
-
-    ``method`` is a name of :data:`METHODS` (what ``--method`` takes), in any case and with
-    or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``); a name
-    without a variant takes ``variant=...`` among the overrides.
-    """
+    ``make_learner("GDQ-code", ctx, alpha=0.2)``. ``method``: a name of :data:`METHODS`, in
+    any case, with or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``);
+    a name without a variant takes ``variant=...`` among the overrides."""
     key = method.lower().replace("-", "").replace("_", "") if isinstance(method, str) else ""
     if key not in _BY_KEY:
         raise ConfigError(f"unknown method {method!r} (known: {', '.join(METHODS)})")

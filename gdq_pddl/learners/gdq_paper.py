@@ -19,10 +19,8 @@ from gdq_pddl.learners.tables import Model, Params, Plans, QTable, recompute_all
 @numba.njit(cache=True)
 def backup_plans(table: QTable, model: Model, plans: Plans, p: Params, s: int,
                  rng: np.random.Generator) -> bool:
-    """N backups of a random transition of a random plan from ``s``.
-
-    Returns False (and does nothing) when ``s`` has no plan.
-    """
+    """N backups of a random transition of a random plan from ``s``; False (nothing
+    done) when ``s`` has no plan."""
     lo, hi = plans.plan_ptr[s], plans.plan_ptr[s + 1]
     if hi <= lo:
         return False
@@ -39,13 +37,9 @@ def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
                      eval_tol: float = 1e-10, improve_tol: float = 1e-6,
                      max_iter: int = 10_000) -> np.ndarray:
     """GDQ-literal's OptInit: policy iteration on the model (learned for known pairs,
-    optimistic otherwise).
-
-    Starts from the policy "action 0 everywhere", evaluates V^pi (in-place sweeps to
-    ``eval_tol``), computes Q(s, a) for every action and improves, keeping the current
-    action on ties (within ``improve_tol``) and else taking the lowest index, until the
-    policy is stable. Writes that final Q into the Q table (goal rows 0) and returns pi.
-    """
+    optimistic otherwise) from "action 0 everywhere", keeping the current action on ties
+    (within ``improve_tol``), else the lowest index, until pi is stable. Writes the final
+    Q into the Q table (goal rows 0) and returns pi."""
     goal = table.goal
     n_states, n_actions = table.q.shape
     pi = np.zeros(n_states, dtype=np.int64)

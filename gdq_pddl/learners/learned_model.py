@@ -48,16 +48,10 @@ OVERFLOW = ("a (state, action) pair has more distinct successors than the learne
 by their callers)."""
 
 
-def new_model(n_states: int, n_actions: int, max_successors: int,
-              transitions: bool = True) -> Model:
-    """A fresh (empty) learned model.
-
-    ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
-    ``transitions`` is False (the model-free learners never record one).
-    """
-    k = int(max_successors) if transitions else 0
+def new_model(n_states: int, n_actions: int, max_successors: int) -> Model:
+    """A fresh (empty) learned model, ``max_successors`` slots per pair."""
     pair = (n_states, n_actions)
-    return Model(slots=np.zeros((*pair, k), dtype=np.int64),
+    return Model(slots=np.zeros((*pair, int(max_successors)), dtype=np.int64),
                  stuck=np.zeros(pair, dtype=np.int64), visits=np.zeros(pair, dtype=np.int64),
                  cost_sum=np.zeros(pair), cost_n=np.zeros(pair, dtype=np.int64),
                  cost_all=np.zeros(2), known=np.zeros(n_states * n_actions, dtype=np.int64),
@@ -206,11 +200,8 @@ def expected_value(model: Model, goal: np.ndarray, opt_r: np.ndarray, p: Params,
 @numba.njit(cache=True, inline="always")
 def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
                    rng: np.random.Generator) -> tuple[float, int, bool]:
-    """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
-
-    The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
-    (stuck, goal, or an ordinary step at the pair's mean cost), never the optimism.
-    """
+    """One ``(reward, next state, terminal)`` replayed from the recorded outcomes of a
+    tried pair ``(s, a)`` (stuck, goal, or an ordinary step at the pair's mean cost)."""
     k = rng.integers(0, model.visits[s, a])
     if k < model.stuck[s, a]:
         return -p.r_max, s, True
@@ -231,12 +222,9 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
 @numba.njit(cache=True)
 def model_backup(table: QTable, model: Model, opt_r: np.ndarray, p: Params, s: int, a: int,
                  rng: np.random.Generator) -> None:
-    """One simulated update of ``(s, a)``.
-
-    ``BACKUP_EXPECTED``: assign the expected backup (:func:`expected_value`).
-    ``BACKUP_SAMPLE`` (GDQ-code): a TD update on an outcome replayed from experience; a
-    pair never tried is left alone.
-    """
+    """One simulated update of ``(s, a)``: assign :func:`expected_value`
+    (``BACKUP_EXPECTED``), or a TD update on a :func:`sample_outcome` (``BACKUP_SAMPLE``,
+    GDQ-code; a pair never tried is left alone)."""
     if p.backup == BACKUP_EXPECTED:
         set_q(table, s, a, expected_value(model, table.goal, opt_r, p, s, a, table.v))
     elif model.visits[s, a] > 0:

@@ -21,10 +21,8 @@ from gdq_pddl.world import builtin_world
 
 
 def compile_loop() -> None:
-    """Run one episode of a Q-learner on the office through the fast path: the loop's
-    signature is the same for every learner kind (one
-    :class:`~gdq_pddl.learners.tables.Tables` type) on any
-    :class:`~gdq_pddl.envs.model.ModelArrays` env."""
+    """Run one episode of a Q-learner on the office through the compiled loop (its
+    signature is the same for every learner kind on any ``ModelArrays`` env)."""
     world = builtin_world("office")
     env = OfficeEnv(world=world, task="C")
     env.reset(seed=0)

@@ -229,17 +229,11 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 @numba.njit(cache=True)
 def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
         rng: np.random.Generator) -> int:
-    """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
-
-    With probability epsilon a uniform action of ``guide[s]`` (or, for a share
-    ``explore_all`` of those steps, of every action, unless ``explore_all_last`` is 0 and
-    the knowledge reaches the goal from ``s`` in one action); else a uniformly chosen maximiser
-    of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
-    if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
-    when exploring with ``explore_all > 0``, then one integer when exploring or when
-    several actions tie, and one more for a replacement. (``visits`` and ``prior_next``
-    only for those draws of every action.)
-    """
+    """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
+    uniform action of ``guide[s]`` (for a share ``explore_all`` of those steps an untried
+    one, unless ``explore_all_last`` is 0 and the knowledge reaches the goal from ``s`` in
+    one action); else a uniform maximiser of Q over ``allowed[s]``, which DARLING replaces
+    by a uniform action of ``guide[s]`` if it is not in it."""
     q, allowed = table.q, table.allowed
     n_actions = q.shape[1]
     if rng.random() < p.epsilon:
