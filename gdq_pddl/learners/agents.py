@@ -86,8 +86,7 @@ class Learner(Protocol):
 
 class TabularLearner:
     """Shared implementation: arrays in :class:`~gdq_pddl.learners.tables.Tables`, rules in
-    the compiled modules (:mod:`gdq_pddl.learners.rules`). ``config`` None: the defaults of
-    :attr:`config_type`."""
+    :mod:`gdq_pddl.learners.rules`; ``config`` None means :attr:`config_type`'s defaults."""
 
     kind: int = KIND_QLEARNING
     """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
@@ -181,9 +180,8 @@ class TabularLearner:
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """The action index (in ``[0, n_actions)``) to take in learner state ``state``:
-        epsilon-greedy with random tie-breaking, drawing from ``rng``
-        (:func:`~gdq_pddl.learners.tables.act`)."""
+        """The epsilon-greedy action index to take in learner state ``state``, drawing from
+        ``rng`` (:func:`~gdq_pddl.learners.tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
@@ -251,9 +249,8 @@ class TabularLearner:
         return int(self.tables.model.slots.shape[2])
 
     def reserve_successors(self, k: int) -> None:
-        """Make room for ``k`` distinct successors per pair (model-based learners; the
-        recorded transitions are kept; never more than the learner's states). The episode
-        loops call it with what their env needs."""
+        """Make room for ``k`` distinct successors per pair (model-based learners; at most
+        the learner's states), keeping the recorded transitions."""
         check_count("k", k)
         k = min(int(k), len(self.q))
         if self.kind in MODEL_BASED and k > self.max_successors:
@@ -353,7 +350,6 @@ class GDQ(TabularLearner):
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
         if isinstance(config, GDQConfig) and config.variant != "prior":
             self.kind = KIND_GDQ_PLANS
-        self._rev_capacity = 0
         super().__init__(context, config)
 
     @property
@@ -419,9 +415,13 @@ class GDQ(TabularLearner):
         prior = self._prior(context)
         n_s = context.n_states
         pp_ptr, pp_pair = prior.predecessors()
-        capacity = max(self._rev_capacity,
-                       self._rev_needed() + gdq.reverse_room(self._model.slots.shape[2], 64))
-        self._rev_capacity = capacity
+        # the reverse index: room for the known pairs (the recorded successors of every pair
+        # tried, and a prior successor each) and 64 steps more; a task switch keeps its room
+        tried = self._model.visits > 0
+        capacity = int(np.count_nonzero(self._model.slots[tried])) + int(
+            np.count_nonzero(tried)) + gdq.reverse_room(self._model.slots.shape[2], 64)
+        if hasattr(self, "tables"):
+            capacity = max(capacity, len(self.tables.prior.rev_pair))
         return (Prior(np.ascontiguousarray(prior.next_state, dtype=np.int64), pp_ptr, pp_pair,
                       rev_head=np.full(n_s, -1, dtype=np.int64),
                       rev_next=np.full(capacity, -1, dtype=np.int64),
@@ -429,13 +429,6 @@ class GDQ(TabularLearner):
                       rev_n=np.zeros(1, dtype=np.int64)),
                 Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
-
-    def _rev_needed(self) -> int:
-        """At least the reverse-index entries the known pairs need: the recorded successors
-        of every pair tried, and one prior successor each."""
-        slots, visits = self._model.slots, self._model.visits
-        tried = visits > 0
-        return int(np.count_nonzero(slots[tried])) + int(np.count_nonzero(tried))
 
     def reserve_reverse(self, entries: int) -> None:
         """Make room for ``entries`` more reverse-index entries (the default GDQ; the
@@ -445,8 +438,7 @@ class GDQ(TabularLearner):
         used = int(prior.rev_n[0])
         if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
             return
-        self._rev_capacity = max(2 * len(prior.rev_pair), used + entries)
-        grow = (0, self._rev_capacity - len(prior.rev_pair))
+        grow = (0, max(len(prior.rev_pair), used + entries - len(prior.rev_pair)))
         self.tables = self.tables._replace(prior=prior._replace(
             rev_next=np.pad(prior.rev_next, grow, constant_values=-1),
             rev_pair=np.pad(prior.rev_pair, grow)))

@@ -95,9 +95,8 @@ class DynaQConfig(LearnerConfig):
     """N: model backups per real step, each on a uniformly random previously observed
     (state, action) pair (the authors' code used 3 for Dyna-Q)."""
     m: int = 0
-    """A pair is used for backups once it has been tried more than ``m`` times. Dyna-Q
-    has no optimistic model to fall back on, so the default 0 means "observed at least
-    once", which is classic Dyna-Q; a larger m only delays planning."""
+    """A pair is used for backups once it has been tried more than ``m`` times (0, "tried
+    at least once", is classic Dyna-Q; a larger m only delays planning)."""
 
     def __post_init__(self) -> None:
         super().__post_init__()

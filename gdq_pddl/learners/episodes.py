@@ -51,9 +51,8 @@ class EpisodeRecords:
     success: np.ndarray
     """bool[n]: whether the episode reached the goal."""
     area_visits: np.ndarray
-    """int64[n, n_areas]: column ``k - 1`` counts the steps of the episode whose resulting
-    position lies in area ``k`` (the start position is not counted; a step that leaves the
-    robot where it was counts again for that area)."""
+    """int64[n, n_areas]: column ``k - 1`` counts the steps of the episode that end in
+    area ``k`` (the start position is not counted, a step that stays counts again)."""
 
     def __len__(self) -> int:
         return len(self.returns)
@@ -128,8 +127,7 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
 def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
                 rng: np.random.Generator) -> EpisodeRecords:
     """:func:`run_episodes` in a :class:`~gdq_pddl.envs.office.CompactEnv` (seed ``env``
-    with ``reset`` first), with at least one column of area visits: the same draws and
-    records as :func:`run_episodes` on the office (tested)."""
+    with ``reset`` first), with at least one column of area visits."""
     if not isinstance(env.unwrapped, CompactEnv):
         raise ConfigError(f"run_compact needs a CompactEnv, got {type(env.unwrapped).__name__}")
     return _run(learner, env, n_episodes, rng, None, max(1, _n_areas(env)))

@@ -67,8 +67,7 @@ def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Param
 def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray, p: Params, s: int,
                   a: int) -> float:
     """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
-    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known
-    (computed by :func:`_hybrid`, on the arrays)."""
+    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
     return _hybrid(table.v, table.goal, prior_next, model.slots, model.stuck, model.visits,
                    model.cost_sum, model.cost_n, model.cost_all, p, s, a)
 
@@ -295,9 +294,8 @@ def fill_untried(table: QTable, p: Params) -> None:
 # --- the reverse index: which known pairs read a state -----------------------------------------
 
 def reverse_room(max_successors: int, steps: int = 1) -> int:
-    """Reverse-index entries ``steps`` real steps can add at most (a pair becoming known
-    adds one per recorded successor and one for its prior successor, a known pair
-    reaching a new state one)."""
+    """Reverse-index entries ``steps`` real steps can add at most: per step, one per recorded
+    successor and one prior successor for a pair becoming known, else one."""
     return steps * (max_successors + 1)
 
 

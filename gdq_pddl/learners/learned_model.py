@@ -166,8 +166,7 @@ def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
                   cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
                   goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
     """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
-    with state values ``v``. (The model's arrays one by one: the default GDQ's sweep calls
-    it in its inner loop, where a read of a group's field would cost a reference count.)"""
+    with state values ``v`` (on the arrays: the default GDQ's sweep calls it)."""
     r_max, gamma = p.r_max, p.gamma
     c = mean_cost(cost_sum, cost_n, cost_all, s, a)
     total = stuck[s, a] * -r_max

@@ -21,7 +21,7 @@ import numpy as np
 
 from gdq_pddl.errors import ConfigError, ResultsError
 from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import GDQ, METHODS, TabularLearner
+from gdq_pddl.learners.agents import METHODS, TabularLearner
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.tables import Params, Tables
 
@@ -129,8 +129,6 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
                            ) from None
     learner.tables, learner.params, learner._model = tables, params, tables.model
     learner.q = tables.table.q
-    if isinstance(learner, GDQ):
-        learner._rev_capacity = len(tables.prior.rev_pair)
     return learner
 
 
@@ -192,7 +190,6 @@ class GreedyPolicy:
         """The policy saved in ``file`` (:meth:`save`)."""
         header, arrays = _read(file, "policy")
         try:
-            policy = cls(arrays["actions"], int(header["n_actions"]))
+            return cls(arrays["actions"], int(header["n_actions"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise ResultsError(f"{_name(file)}: damaged policy file ({exc})") from None
-        return policy

@@ -264,9 +264,8 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
 
 @numba.njit(cache=True)
 def greedy(table: QTable, p: Params) -> np.ndarray:
-    """The greedy policy: per state, the lowest-index action of maximal Q among those it
-    may execute: the allowed ones (DARLING: ``guide``, which is ``allowed`` but for
-    DARLING-code)."""
+    """The greedy policy: per state, the lowest-index action of maximal Q among the allowed
+    ones (DARLING: ``guide``, which differs from ``allowed`` for DARLING-code)."""
     q = table.q
     n_states, n_actions = q.shape
     mask = table.guide if p.kind == KIND_DARLING else table.allowed
