@@ -2,8 +2,7 @@
 
 Defaults are the paper's simulation settings (alpha 0.1, gamma 0.95, epsilon 0.1) and,
 where the paper is silent, the authors' released code (N, m, the 1.3 plan-length
-tolerance). ``R_max`` is not a learner parameter: it belongs to the world (its world
-file), and every learner reads it from the task context.
+tolerance). ``R_max`` belongs to the task: every learner reads it from the task context.
 """
 
 from __future__ import annotations
