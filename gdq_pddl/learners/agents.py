@@ -424,8 +424,7 @@ class GDQ(TabularLearner):
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 
     def reserve_reverse(self, entries: int) -> None:
-        """Make room for ``entries`` more reverse-index entries (the default GDQ; the
-        episode loops call it with what the coming steps can add)."""
+        """Make room for ``entries`` more reverse-index entries (the default GDQ)."""
         check_count("entries", entries)
         prior = self.tables.prior
         used = int(prior.rev_n[0])

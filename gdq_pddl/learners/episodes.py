@@ -2,15 +2,11 @@
 
 Two paths with identical results for the same seeds: a Python loop over any gymnasium
 env of this package, through its wrappers, and a compiled loop (:func:`_episodes`) over
-the env's true dynamics, used only where it gives exactly what stepping the env gives
-(:func:`why_not_compiled`). Both call the same compiled rules
-(:func:`gdq_pddl.learners.tables.act`, :func:`gdq_pddl.learners.rules.observe`) and first
-give the learner the successor slots its learned model needs in this env, which may
-differ from the one it was told about (a knowledge experiment).
-
-Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
-``env.reset(seed=...)``), learner randomness from ``rng``; neither path draws anything
-else.
+the env's true dynamics where it gives exactly what stepping the env gives
+(:func:`why_not_compiled`). Both call the same compiled rules and first give the learner
+the successor slots its learned model needs in this env. Environment randomness comes
+from ``env.unwrapped.np_random`` (seed it with ``env.reset(seed=...)``), the learner's
+from ``rng``; neither path draws anything else.
 """
 
 from __future__ import annotations

@@ -19,8 +19,7 @@ from gdq_pddl.learners.tables import Model, Params, Plans, QTable, recompute_all
 @numba.njit(cache=True)
 def backup_plans(table: QTable, model: Model, plans: Plans, p: Params, s: int,
                  rng: np.random.Generator) -> bool:
-    """N backups of a random transition of a random plan from ``s``; False (nothing
-    done) when ``s`` has no plan."""
+    """N backups of a random transition of a random plan from ``s``; False if it has none."""
     lo, hi = plans.plan_ptr[s], plans.plan_ptr[s + 1]
     if hi <= lo:
         return False
@@ -79,8 +78,7 @@ def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
 
 @numba.njit(cache=True)
 def seed_plan_pairs(table: QTable, opt_r: np.ndarray, value: float) -> None:
-    """GDQ-code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's plan pairs
-    ``opt_r``."""
+    """GDQ-code's OptInit: Q <- 0, then Q <- ``value`` on OptInit's plan pairs ``opt_r``."""
     q = table.q
     q[:, :] = 0.0
     for s in range(q.shape[0]):

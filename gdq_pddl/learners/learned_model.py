@@ -44,8 +44,7 @@ COUNT_MASK = (1 << SLOT_SHIFT) - 1
 
 OVERFLOW = ("a (state, action) pair has more distinct successors than the learner's model "
             "has slots (TaskContext.max_successors); give it more with reserve_successors")
-"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False (raised
-by their callers)."""
+"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False."""
 
 
 def new_model(n_states: int, n_actions: int, max_successors: int) -> Model:
@@ -59,8 +58,7 @@ def new_model(n_states: int, n_actions: int, max_successors: int) -> Model:
 
 
 def with_successor_slots(model: Model, max_successors: int) -> Model:
-    """``model`` with at least ``max_successors`` slots per pair (a copy of the slot
-    array when it had fewer, the recorded transitions kept; else ``model`` itself)."""
+    """``model`` with at least ``max_successors`` slots per pair, the transitions kept."""
     n_states, n_actions, k = model.slots.shape
     if max_successors <= k:
         return model
@@ -129,8 +127,7 @@ def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
 @numba.njit(cache=True, inline="always")
 def record(model: Model, goal: np.ndarray, p: Params, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool) -> bool:
-    """Count one real transition in the model; False, and nothing recorded, when its
-    successor finds no free slot (:data:`OVERFLOW`)."""
+    """Count one real transition in the model; False (nothing recorded) if no slot is free."""
     if terminated and not goal[s2]:
         model.stuck[s, a] += 1
     elif not add_successor(model.slots, s, a, s2):
@@ -165,8 +162,7 @@ def mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s:
 def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
                   cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
                   goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
-    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
-    with state values ``v`` (on the arrays: the default GDQ's sweep calls it)."""
+    """The expected Bellman backup of a tried ``(s, a)`` under the learned model, with ``v``."""
     r_max, gamma = p.r_max, p.gamma
     c = mean_cost(cost_sum, cost_n, cost_all, s, a)
     total = stuck[s, a] * -r_max

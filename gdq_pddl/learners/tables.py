@@ -1,17 +1,15 @@
 """A learner's arrays, its Q table, and how it acts: the part every learner shares.
 
-Every learner is the same data, :class:`Tables` (five groups, one per concern), plus
-scalar :class:`Params` whose ``kind`` says which rules run after a real step
-(:func:`gdq_pddl.learners.rules.observe`). A compiled function takes the groups it touches.
+Every learner is the same data, :class:`Tables` (five groups, one per concern; a compiled
+function takes the groups it touches), plus scalar :class:`Params` whose ``kind`` says
+which rules run after a real step (:func:`gdq_pddl.learners.rules.observe`).
 
 ``allowed`` is what the max ranges over (the update's target and the greedy choice);
-``guide`` is what exploration draws from. They are the same array but for DARLING-code
-(its max ranges over all actions, a greedy action outside ``guide`` is replaced by a draw
-from it) and the default GDQ (:mod:`gdq_pddl.learners.gdq`).
+``guide`` is what exploration draws from. They differ for DARLING-code (a greedy action
+outside ``guide`` is replaced by a draw from it) and the default GDQ.
 
-The compiled functions trust their arguments: :mod:`gdq_pddl.learners.guards` checks
-what reaches them. Why the small rules are ``inline="always"`` and the loops read a
-group's arrays into locals: ``docs/learners.md``, "Speed".
+The compiled functions trust their arguments (:mod:`gdq_pddl.learners.guards` checks
+them); why the small ones are ``inline="always"``: ``docs/learners.md``, "Speed".
 """
 
 from __future__ import annotations
@@ -117,8 +115,7 @@ class Queue(NamedTuple):
 
 
 class Tables(NamedTuple):
-    """All arrays of a learner, S states x A actions, by concern. A compiled function
-    takes the groups it touches (or the whole, when it touches most of them)."""
+    """All arrays of a learner, S states x A actions, by concern."""
 
     table: QTable
     model: Model
@@ -164,8 +161,7 @@ def set_q(table: QTable, s: int, a: int, value: float) -> None:
 @numba.njit(cache=True, inline="always")
 def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
                  value: float) -> None:
-    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (reading a
-    group's field in its inner loop would cost a reference count each time)."""
+    """:func:`set_q` on the arrays, for the sweep's inner loop (no tuple field reads)."""
     old = q[s, a]
     q[s, a] = value
     if not allowed[s, a]:
