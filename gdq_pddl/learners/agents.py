@@ -189,10 +189,8 @@ class TabularLearner:
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        """Learn from one real step: action ``a`` in state ``s`` gave reward ``r`` (the
-        env's units) and led to ``s2``; ``terminated``/``truncated`` as Gymnasium's step
-        says; planning backups draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`).
-        """
+        """Learn from one real step ``(s, a, r, s2)`` as Gymnasium's step gave it; backups
+        draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`)."""
         n_s, n_a = self.q.shape
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a, r = guards.check_action("a", a, n_a), guards.check_reward(r)

@@ -3,9 +3,7 @@ public function of the learners can make a compiled rule read or write outside a
 Bad input raises :class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument.
 
 Every array is checked against one table, :data:`TABLES` (:data:`DYNAMICS` for the
-env's): dtype, shape in the learner's sizes, the range of an index array's values. What
-the compiled rules write themselves (the model's slots, the queue) is in range by
-construction.
+env's): dtype, shape, the range of an index array's values.
 """
 
 from __future__ import annotations
