@@ -3,7 +3,8 @@ public function of the learners can make a compiled rule read or write outside a
 Bad input raises :class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument.
 
 Every array is checked against one table, :data:`TABLES` (:data:`DYNAMICS` for the
-env's): dtype, shape, the range of an index array's values.
+env's): dtype, shape, the range of an index array's values (what the compiled rules write
+themselves, the model's slots and the queue, is in range by construction).
 """
 
 from __future__ import annotations
