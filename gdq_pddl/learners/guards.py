@@ -20,7 +20,6 @@ from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
     BACKUP_SAMPLE,
     KIND_GDQ,
-    KIND_NAMES,
     Params,
     Plans,
     Tables,
@@ -133,7 +132,7 @@ def check_tables(t: Tables, p: Params) -> None:
         raise ConfigError("learner tables: every state must let exploration draw some "
                           "action (guide), and n_guide count them")
     where = "learner params"
-    if not 0 <= p.kind < len(KIND_NAMES) or p.backup not in (BACKUP_EXPECTED, BACKUP_SAMPLE) \
+    if not 0 <= p.kind <= KIND_GDQ or p.backup not in (BACKUP_EXPECTED, BACKUP_SAMPLE) \
             or p.n_backups < 0 or p.m < 0:
         raise ConfigError(f"{where}: kind, backup, n_backups or m out of range: {p}")
     check_state("s0", p.s0, q.shape[0])

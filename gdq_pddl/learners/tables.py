@@ -23,7 +23,6 @@ KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ_PLANS, KIND_GDQ = 0, 1, 2, 3,
 """Which rules run after a real step. ``KIND_GDQ``: the default GDQ (the knowledge as a
 prior, :mod:`gdq_pddl.learners.gdq`); ``KIND_GDQ_PLANS``: the paper's readings,
 GDQ-literal and GDQ-code (backups along plans, :mod:`gdq_pddl.learners.gdq_paper`)."""
-KIND_NAMES = ("Q-learning", "Dyna-Q", "DARLING", "GDQ-literal/GDQ-code", "GDQ")
 BACKUP_EXPECTED, BACKUP_SAMPLE = 0, 1
 
 
@@ -46,8 +45,7 @@ class Params(NamedTuple):
     explore_all: float = 0.0
     """Share of exploring steps that draw from every action instead of ``guide``."""
     explore_all_last: float = 1.0
-    """0: no such draw in a state from which the knowledge reaches the goal in one action
-    (``KIND_GDQ``)."""
+    """0: no such draw where the knowledge reaches the goal in one action (``KIND_GDQ``)."""
     prior_cost: float = 1.0
     """Step cost of a pair still on the prior (``KIND_GDQ``)."""
     sweep_threshold: float = 0.0
