@@ -106,18 +106,11 @@ class DynaQConfig(LearnerConfig):
 @documented
 @dataclass(frozen=True)
 class GDQConfig(LearnerConfig):
-    """Guided Dyna-Q. Three variants (``docs/learners.md`` compares them):
-
-    - ``"prior"`` (the default): the action knowledge is an optimistic *prior* over every
-      (state, action) pair, replaced pair by pair by the learned model; prioritised
-      sweeping plans on the mix of the two (:mod:`gdq_pddl.learners.gdq`).
-    - ``"literal"``: the paper's Algorithms 1-3 read literally (its values inflate to
-      R_max / (1 - gamma)).
-    - ``"code"``: as the authors' released code (Q <- R_max on plan pairs, N sample
-      backups along plans).
-
-    The ``prior`` defaults were chosen on tasks A-D only (``docs/decisions.md``).
-    """
+    """Guided Dyna-Q: ``"prior"`` (the default: the action knowledge as an optimistic prior
+    over every pair, :mod:`gdq_pddl.learners.gdq`), ``"literal"`` (the paper's Algorithms
+    1-3 read literally) or ``"code"`` (as the authors' released code); ``docs/learners.md``
+    compares them. The ``prior`` defaults were chosen on tasks A-D only
+    (``docs/decisions.md``)."""
 
     variant: GDQVariant = "prior"
     """Which GDQ (above)."""
