@@ -445,21 +445,16 @@ class GDQ(TabularLearner):
         """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
         literally (``literal``) or the authors' code's shortcut (``code``)."""
         self.q[:, :] = 0.0
+        t = self.tables
         if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
-            t = self.tables
             if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
                                    1_000_000) < 0:
                 raise AssertionError("reverse index sized too small")  # _prior_arrays
         elif self.config.variant == "literal":
-            t = self.tables
-            self.policy = gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r,
-                                                     self.params)
-            return
+            gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r, self.params)
         else:
-            gdq_paper.seed_plan_pairs(self.tables.table, self.tables.plans.opt_r,
-                                      self.params.r_max)
-        self.policy = greedy(self.tables.table, self.params)
+            gdq_paper.seed_plan_pairs(t.table, t.plans.opt_r, self.params.r_max)
 
     @property
     def optimistic_pairs(self) -> np.ndarray:
