@@ -235,9 +235,8 @@ class TabularLearner:
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the learner's arrays (allocated; the pages of pairs never tried are
-        never written, so the memory actually used can be much less)."""
-        # guide is usually the allowed array itself: count each array once
+        """Bytes of the learner's arrays as allocated (each once: ``guide`` is usually
+        ``allowed``), more than it uses where the pages of untried pairs are never written."""
         arrays = {id(x): x for group in self.tables for x in group}
         return sum(x.nbytes for x in arrays.values())
 
@@ -278,10 +277,8 @@ class DynaQ(TabularLearner):
 
 class Darling(TabularLearner):
     """Q-learning restricted, at every state, to the actions that start a plan within the
-    length tolerance (1.3 x shortest) from that state, both when acting (exploration
-    included) and in the max of the update; all actions where no plan exists.
-    ``variant="code"`` is DARLING as the GDQ authors' released agent runs it
-    (``docs/learners.md``)."""
+    length tolerance from it (every action where none does), when acting and in the max
+    of the update. ``variant="code"``: as the GDQ authors' agent runs it (``docs/learners.md``)."""
 
     kind = KIND_DARLING
     name = "DARLING"

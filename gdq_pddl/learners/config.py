@@ -24,8 +24,7 @@ default's former name ``model`` is still accepted)."""
 DarlingVariant = Literal["paper", "code"]
 
 MAX_BACKUPS = 1_000_000
-"""The most model backups per real step a config accepts (each costs about a
-microsecond; the paper's settings are 3-5)."""
+"""The most model backups per real step a config accepts (the paper's settings are 3-5)."""
 
 
 def check_choice(name: str, value: object, choices: tuple) -> None:

@@ -170,8 +170,7 @@ class GreedyPolicy:
 
     @classmethod
     def of(cls, learner: TabularLearner) -> GreedyPolicy:
-        """``learner``'s greedy policy now (:meth:`~gdq_pddl.learners.agents.TabularLearner.
-        greedy_policy`)."""
+        """``learner``'s greedy policy now."""
         return cls(np.asarray(learner.greedy_policy(), dtype=np.int64), learner.q.shape[1])
 
     def act(self, state: int, rng: np.random.Generator | None = None) -> int:
