@@ -10,22 +10,9 @@
     env.reset(seed=0)
     records = run_episodes(learner, env, 300, np.random.default_rng(1))
 
-Where things are:
-
-- :mod:`~gdq_pddl.learners.agents`: the learner classes and :func:`make_learner`;
-- :mod:`~gdq_pddl.learners.config`: their settings, one frozen dataclass each;
-- :mod:`~gdq_pddl.learners.context`: what a learner is told about a task;
-- :mod:`~gdq_pddl.learners.episodes`: :func:`run_episodes`, the Python and compiled loops,
-  and :func:`evaluate_policy`;
-- :mod:`~gdq_pddl.learners.saving`: save and load a learner or a :class:`GreedyPolicy`;
-- the rules, each compiled once: :mod:`~gdq_pddl.learners.rules` (which rule runs after
-  a real step, per learner), :mod:`~gdq_pddl.learners.tables` (the arrays, the Q table,
-  the TD update, acting), :mod:`~gdq_pddl.learners.learned_model` (the learned model and
-  Dyna-Q's backups), :mod:`~gdq_pddl.learners.gdq` (the default GDQ: prior, hybrid
-  backup, sweep), :mod:`~gdq_pddl.learners.gdq_paper` (GDQ-literal and GDQ-code);
-- :mod:`~gdq_pddl.learners.guards`: the checks that keep compiled code within its arrays.
-
-``docs/learners.md`` compares the variants and records the decisions behind them.
+The classes and :func:`make_learner` are in :mod:`~gdq_pddl.learners.agents`, the
+default GDQ's rule in :mod:`~gdq_pddl.learners.gdq`; ``docs/learners.md`` says where
+everything else is, compares the variants and records the decisions behind them.
 """
 
 from gdq_pddl.learners.agents import (

@@ -1,13 +1,7 @@
-"""The learners behind one small interface: :class:`QLearning`, :class:`DynaQ`,
-:class:`Darling` and :class:`GDQ`, and :func:`make_learner` by the names the command line
-takes.
-
-Every learner has ``q`` (the Q table, float64[n_states, n_actions]), ``act(state, rng)``,
-``observe(s, a, r, s2, terminated, truncated, rng)``, ``start_task(context)`` and
-``greedy_policy()``. The methods check their arguments (:mod:`gdq_pddl.learners.guards`)
-and call the compiled rules (:mod:`gdq_pddl.learners.rules` says which), which the fast
-episode loop calls too. How the variants compare, and why each decision where the paper
-is silent was taken: ``docs/learners.md``.
+"""The learners behind one small interface (:class:`Learner`): :class:`QLearning`,
+:class:`DynaQ`, :class:`Darling` and :class:`GDQ`, and :func:`make_learner` by the names
+the command line takes. The methods check their arguments (:mod:`gdq_pddl.learners.guards`)
+and call the compiled rules (:mod:`gdq_pddl.learners.rules` says which).
 """
 
 from __future__ import annotations
@@ -48,15 +42,13 @@ from gdq_pddl.learners.tables import (
 from gdq_pddl.limits import check_count
 
 MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
-"""The learner kinds that record transitions in a learned model (the others get no
-successor slots)."""
+"""The learner kinds that record transitions in a learned model."""
 
 _I0 = np.zeros(0, dtype=np.int64)
 _NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
                    np.zeros(1, dtype=np.int64)),
              Queue(_I0, _I0, np.zeros(0), np.zeros(1, dtype=np.int64)))
-"""The default GDQ's prior and queue, for the other learners (never read by them; the
-two counters are never written either)."""
+"""The default GDQ's prior and queue, for the other learners (never read or written)."""
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
@@ -94,7 +86,7 @@ class Learner(Protocol):
 
 class TabularLearner:
     """Shared implementation: arrays in :class:`~gdq_pddl.learners.tables.Tables`, rules in
-    the compiled modules (:mod:`gdq_pddl.learners.rules`)."""
+    :mod:`gdq_pddl.learners.rules`; ``config`` None means :attr:`config_type`'s defaults."""
 
     kind: int = KIND_QLEARNING
     """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
@@ -107,23 +99,20 @@ class TabularLearner:
     context: TaskContext
     """The current task (:meth:`start_task` replaces it)."""
     q: np.ndarray
-    """The Q table, float64[n_states, n_actions], in the env's reward units (the world's
-    or problem's reward scale)."""
+    """The Q table, float64[n_states, n_actions], in the env's reward units."""
 
-    def __init__(self, context: TaskContext, config: LearnerConfig) -> None:
+    def __init__(self, context: TaskContext, config: LearnerConfig | None = None) -> None:
+        config = self.config_type() if config is None else config
         if not isinstance(config, self.config_type):
             raise ConfigError(f"{type(self).__name__} takes a {self.config_type.__name__}, "
                               f"got {type(config).__name__}")
         guards.check_context(context)
         self.config = config
         n_s, n_a = context.n_states, context.n_actions
-        self._model = learned_model.new_model(n_s, n_a, _capacity(context),
-                                              transitions=self.kind in MODEL_BASED)
+        k = _capacity(context)  # checked for every learner; the model-free never record
+        self._model = learned_model.new_model(n_s, n_a, k if self.kind in MODEL_BASED else 0)
         self.q = np.zeros((n_s, n_a), dtype=np.float64)
-        self.context = context
-        self.tables, self.params = self._build(context)
-        recompute_all_v(self.tables.table)
-        self._init_task()
+        self._set_task(context)
 
     # -- per-learner hooks -------------------------------------------------------------
     def _allowed(self, context: TaskContext) -> np.ndarray:
@@ -141,25 +130,13 @@ class TabularLearner:
     def _init_task(self) -> None:
         """What happens when a task starts (after the tables are rebuilt)."""
 
-    def _n_backups(self) -> int:
-        return 0
-
-    def _m(self) -> int:
-        return 0
-
-    def _backup_mode(self) -> int:
-        return BACKUP_EXPECTED
-
-    def _opt_continue(self) -> float:
-        return 1.0
-
     def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
         """The :class:`Tables` groups only the default GDQ uses (empty here)."""
         return _NO_PRIOR
 
     def _extra_params(self) -> dict[str, float]:
         """:class:`Params` fields beyond the shared ones (their defaults here)."""
-        return {}
+        return {"backup": BACKUP_EXPECTED}
 
     # -- interface ---------------------------------------------------------------------
     def _build(self, context: TaskContext) -> tuple[Tables, Params]:
@@ -181,9 +158,8 @@ class TabularLearner:
         params = Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
-            n_backups=int(self._n_backups()), m=int(self._m()),
-            backup=int(self._backup_mode()), s0=int(context.s0),
-            opt_continue=float(self._opt_continue()), **self._extra_params())
+            n_backups=int(getattr(c, "n_backups", 0)), m=int(getattr(c, "m", 0)),
+            s0=int(context.s0), **self._extra_params())
         guards.check_tables(tables, params)
         return tables, params
 
@@ -191,16 +167,21 @@ class TabularLearner:
         """Switch to a new task, keeping what the learner has learned (``docs/learners.md``:
         the baselines keep their Q table, every GDQ reruns OptInit on its learned model)."""
         guards.check_context(context, *self.q.shape)
+        k = _capacity(context)
+        if self.kind in MODEL_BASED:
+            self._model = learned_model.with_successor_slots(self._model, k)
+        self._set_task(context)
+
+    def _set_task(self, context: TaskContext) -> None:
+        """Build the tables for ``context``, then start the task (OptInit for the GDQs)."""
         self.context = context
-        self._model = self._slots(_capacity(context))
         self.tables, self.params = self._build(context)
         recompute_all_v(self.tables.table)
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """The action index (in ``[0, n_actions)``) to take in learner state ``state``:
-        epsilon-greedy with random tie-breaking, drawing from ``rng``
-        (:func:`~gdq_pddl.learners.tables.act`)."""
+        """The epsilon-greedy action index to take in learner state ``state``, drawing from
+        ``rng`` (:func:`~gdq_pddl.learners.tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
@@ -208,10 +189,8 @@ class TabularLearner:
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        """Learn from one real step: action ``a`` in state ``s`` gave reward ``r`` (the
-        env's units) and led to ``s2``; ``terminated``/``truncated`` as Gymnasium's step
-        says; planning backups draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`).
-        """
+        """Learn from one real step ``(s, a, r, s2)`` as Gymnasium's step gave it; backups
+        draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`)."""
         n_s, n_a = self.q.shape
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
@@ -256,9 +235,8 @@ class TabularLearner:
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the learner's arrays (allocated; the pages of pairs never tried are
-        never written, so the memory actually used can be much less)."""
-        # guide is usually the allowed array itself: count each array once
+        """Bytes of the learner's arrays as allocated (each once: ``guide`` is usually
+        ``allowed``), more than it uses where the pages of untried pairs are never written."""
         arrays = {id(x): x for group in self.tables for x in group}
         return sum(x.nbytes for x in arrays.values())
 
@@ -268,19 +246,13 @@ class TabularLearner:
         return int(self.tables.model.slots.shape[2])
 
     def reserve_successors(self, k: int) -> None:
-        """Make room for ``k`` distinct successors per pair (model-based learners; the
-        recorded transitions are kept; never more than the learner's states). The episode
-        loops call it with what their env needs."""
+        """Make room for ``k`` distinct successors per pair (model-based learners; at most
+        the learner's states), keeping the recorded transitions."""
         check_count("k", k)
         k = min(int(k), len(self.q))
         if self.kind in MODEL_BASED and k > self.max_successors:
-            self._model = self._slots(k)
+            self._model = learned_model.with_successor_slots(self._model, k)
             self.tables = self.tables._replace(model=self._model)
-
-    def _slots(self, k: int) -> learned_model.Model:
-        if self.kind not in MODEL_BASED:
-            return self._model
-        return learned_model.with_successor_slots(self._model, k)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.config})"
@@ -293,9 +265,6 @@ class QLearning(TabularLearner):
     name = "Q-learning"
     config_type = QLearningConfig
 
-    def __init__(self, context: TaskContext, config: QLearningConfig | None = None) -> None:
-        super().__init__(context, QLearningConfig() if config is None else config)
-
 
 class DynaQ(TabularLearner):
     """Q-learning + the learned model + N expected backups per real step on uniformly
@@ -303,34 +272,18 @@ class DynaQ(TabularLearner):
 
     kind = KIND_DYNAQ
     name = "Dyna-Q"
-    config: DynaQConfig
-    """The learner's settings (frozen)."""
     config_type = DynaQConfig
-
-    def __init__(self, context: TaskContext, config: DynaQConfig | None = None) -> None:
-        super().__init__(context, DynaQConfig() if config is None else config)
-
-    def _n_backups(self) -> int:
-        return self.config.n_backups
-
-    def _m(self) -> int:
-        return self.config.m
 
 
 class Darling(TabularLearner):
     """Q-learning restricted, at every state, to the actions that start a plan within the
-    length tolerance (1.3 x shortest) from that state, both when acting (exploration
-    included) and in the max of the update; all actions where no plan exists.
-    ``variant="code"`` is DARLING as the GDQ authors' released agent runs it
-    (``docs/learners.md``)."""
+    length tolerance from it (every action where none does), when acting and in the max
+    of the update. ``variant="code"``: as the GDQ authors' agent runs it (``docs/learners.md``)."""
 
     kind = KIND_DARLING
     name = "DARLING"
     config: DarlingConfig
     config_type = DarlingConfig
-
-    def __init__(self, context: TaskContext, config: DarlingConfig | None = None) -> None:
-        super().__init__(context, DarlingConfig() if config is None else config)
 
     def _plan_actions(self, context: TaskContext) -> np.ndarray:
         """Per state, the actions that start a plan within the tolerance (all actions
@@ -346,14 +299,11 @@ class Darling(TabularLearner):
         return table.allowed_actions()
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
-        if self.config.variant == "code":  # the max ranges over every action
-            return super()._allowed(context)
-        return self._plan_actions(context)
+        code = self.config.variant == "code"  # the max ranges over every action
+        return super()._allowed(context) if code else self._plan_actions(context)
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
-        if self.config.variant == "code":
-            return self._plan_actions(context)
-        return allowed
+        return self._plan_actions(context) if self.config.variant == "code" else allowed
 
 
 def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
@@ -376,12 +326,9 @@ class GDQ(TabularLearner):
     :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned model and
     calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets each
     pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
-    :func:`~gdq_pddl.learners.gdq.prior_backup` (``-prior_cost + gamma * v[where the
-    knowledge says it leads]``) until tried more than ``m`` times, then the learned model's
-    backup with the prior as ``prior_weight`` pseudo-trials. OptInit is
-    :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model. The prior
-    comes from :mod:`gdq_pddl.abstraction.prior`; the settings from
-    :class:`~gdq_pddl.learners.config.GDQConfig`.
+    :func:`~gdq_pddl.learners.gdq.prior_backup` until tried more than ``m`` times, then
+    the learned model's backup with the prior as ``prior_weight`` pseudo-trials. OptInit
+    is :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model.
 
     ``variant="literal"`` (GDQ-literal) and ``"code"`` (GDQ-code) are the paper's two
     readings, in :mod:`gdq_pddl.learners.gdq_paper`; ``docs/learners.md`` compares them.
@@ -390,14 +337,11 @@ class GDQ(TabularLearner):
     kind = KIND_GDQ
     name = "GDQ"
     config: GDQConfig
-    """The learner's settings (frozen)."""
     config_type = GDQConfig
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        config = GDQConfig() if config is None else config
-        if isinstance(config, GDQConfig):
-            self.kind = KIND_GDQ if config.variant == "prior" else KIND_GDQ_PLANS
-        self._rev_capacity = 0
+        if isinstance(config, GDQConfig) and config.variant != "prior":
+            self.kind = KIND_GDQ_PLANS
         super().__init__(context, config)
 
     @property
@@ -414,28 +358,18 @@ class GDQ(TabularLearner):
     def q(self, value: np.ndarray) -> None:
         self._q = value
 
-    def _n_backups(self) -> int:
-        return self.config.n_backups
-
-    def _m(self) -> int:
-        return self.config.m
-
-    def _backup_mode(self) -> int:
-        return BACKUP_SAMPLE if self.config.variant == "code" else BACKUP_EXPECTED
-
     def _plans(self, context: TaskContext) -> PlanTable:
         if self.config.variant == "prior":
             return context.plans
         return _tolerant_plans(context, self.config.plan_tolerance)
 
-    def _opt_continue(self) -> float:
-        return 1.0 if self.config.optimistic_successor == "start" else 0.0
-
     def _extra_params(self) -> dict[str, float]:
-        if self.kind != KIND_GDQ:
-            return {}
         c = self.config
-        return {"explore_all": float(c.explore_all),
+        shared = {"backup": BACKUP_SAMPLE if c.variant == "code" else BACKUP_EXPECTED,
+                  "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
+        if self.kind != KIND_GDQ:
+            return shared
+        return {**shared, "explore_all": float(c.explore_all),
                 "explore_all_last": float(c.explore_all_last_step),
                 "prior_cost": float(c.prior_cost),
                 "sweep_threshold": float(c.sweep_threshold),
@@ -461,11 +395,7 @@ class GDQ(TabularLearner):
             raise ConfigError("the default GDQ plans on the knowledge's prior, and this task "
                               "context has none (build it with office_task_context or "
                               "pddl_task_context, or pass prior=...)")
-        if context.prior.next_state.shape != (context.n_states, context.n_actions):
-            raise ConfigError(f"the context's prior is {context.prior.next_state.shape}"
-                              f", its task {context.n_states} states x {context.n_actions} "
-                              "actions")
-        return context.prior
+        return context.prior  # its shape and values: guards.check_context
 
     def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
         if self.kind != KIND_GDQ:
@@ -473,9 +403,13 @@ class GDQ(TabularLearner):
         prior = self._prior(context)
         n_s = context.n_states
         pp_ptr, pp_pair = prior.predecessors()
-        capacity = max(self._rev_capacity,
-                       self._rev_needed() + gdq.reverse_room(self._model.slots.shape[2], 64))
-        self._rev_capacity = capacity
+        # the reverse index: room for the known pairs (the recorded successors of every pair
+        # tried, and a prior successor each) and 64 steps more; a task switch keeps its room
+        tried = self._model.visits > 0
+        capacity = int(np.count_nonzero(self._model.slots[tried])) + int(
+            np.count_nonzero(tried)) + gdq.reverse_room(self._model.slots.shape[2], 64)
+        if hasattr(self, "tables"):
+            capacity = max(capacity, len(self.tables.prior.rev_pair))
         return (Prior(np.ascontiguousarray(prior.next_state, dtype=np.int64), pp_ptr, pp_pair,
                       rev_head=np.full(n_s, -1, dtype=np.int64),
                       rev_next=np.full(capacity, -1, dtype=np.int64),
@@ -484,29 +418,17 @@ class GDQ(TabularLearner):
                 Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 
-    def _rev_needed(self) -> int:
-        """At least the reverse-index entries the known pairs need: the recorded successors
-        of every pair tried, and one prior successor each."""
-        slots, visits = self._model.slots, self._model.visits
-        tried = visits > 0
-        return int(np.count_nonzero(slots[tried])) + int(np.count_nonzero(tried))
-
     def reserve_reverse(self, entries: int) -> None:
-        """Make room for ``entries`` more reverse-index entries (the default GDQ; the
-        episode loops call it with what the coming steps can add)."""
+        """Make room for ``entries`` more reverse-index entries (the default GDQ)."""
         check_count("entries", entries)
         prior = self.tables.prior
         used = int(prior.rev_n[0])
         if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
             return
-        capacity = max(2 * len(prior.rev_pair), used + entries)
-        rev_next = np.full(capacity, -1, dtype=np.int64)
-        rev_pair = np.zeros(capacity, dtype=np.int64)
-        rev_next[:len(prior.rev_next)] = prior.rev_next
-        rev_pair[:len(prior.rev_pair)] = prior.rev_pair
-        self._rev_capacity = capacity
-        self.tables = self.tables._replace(
-            prior=prior._replace(rev_next=rev_next, rev_pair=rev_pair))
+        grow = (0, max(len(prior.rev_pair), used + entries - len(prior.rev_pair)))
+        self.tables = self.tables._replace(prior=prior._replace(
+            rev_next=np.pad(prior.rev_next, grow, constant_values=-1),
+            rev_pair=np.pad(prior.rev_pair, grow)))
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
@@ -520,34 +442,22 @@ class GDQ(TabularLearner):
         """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
         literally (``literal``) or the authors' code's shortcut (``code``)."""
         self.q[:, :] = 0.0
+        t = self.tables
         if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
-            t = self.tables
             if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
                                    1_000_000) < 0:
                 raise AssertionError("reverse index sized too small")  # _prior_arrays
         elif self.config.variant == "literal":
-            t = self.tables
-            self.policy = gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r,
-                                                     self.params)
-            return
+            gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r, self.params)
         else:
-            gdq_paper.seed_plan_pairs(self.tables.table, self.tables.plans.opt_r,
-                                      self.params.r_max)
-        self.policy = greedy(self.tables.table, self.params)
+            gdq_paper.seed_plan_pairs(t.table, t.plans.opt_r, self.params.r_max)
 
     @property
     def optimistic_pairs(self) -> np.ndarray:
         """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model of the
         ``literal`` variant; Q = R_max in the ``code`` variant's OptInit)."""
         return self.tables.plans.opt_r
-
-    @property
-    def applicable(self) -> np.ndarray:
-        """bool[S, A]: what the knowledge says can do something (``prior``; the max ranges
-        over it and the known pairs, exploration draws from it with ``explore=
-        "applicable"``), a view of the prior."""
-        return self._prior(self.context).applicable
 
 
 METHODS: dict[str, tuple[type[TabularLearner], type[LearnerConfig], str | None]] = {
@@ -567,12 +477,9 @@ _BY_KEY = {name.lower().replace("-", ""): name for name in METHODS}
 
 def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:
     """A fresh learner by name for ``context``, with config overrides, e.g.
-    ``make_learner("GDQ-code", ctx, alpha=0.2)``.
-
-    ``method`` is a name of :data:`METHODS` (what ``--method`` takes), in any case and with
-    or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``); a name
-    without a variant takes ``variant=...`` among the overrides.
-    """
+    ``make_learner("GDQ-code", ctx, alpha=0.2)``. ``method``: a name of :data:`METHODS`, in
+    any case, with or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``);
+    a name without a variant takes ``variant=...`` among the overrides."""
     key = method.lower().replace("-", "").replace("_", "") if isinstance(method, str) else ""
     if key not in _BY_KEY:
         raise ConfigError(f"unknown method {method!r} (known: {', '.join(METHODS)})")

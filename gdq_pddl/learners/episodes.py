@@ -1,32 +1,12 @@
 """Run a learner for a number of episodes and record what happened.
 
-Two paths with identical results for the same seeds:
-
-- a Python loop over any gymnasium env of this package (``env.reset``, ``env.step``,
-  ``learner.act`` / ``learner.observe``);
-- a compiled loop (:func:`_episodes`) over the true dynamics under the env, used only
-  where it gives exactly what stepping the env gives (:func:`why_not_compiled`: a
-  :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` or :class:`~gdq_pddl.envs.office.CompactEnv`,
-  bare or in ``gymnasium.make``'s own wrappers, and a learner of this package): it calls
-  :func:`gdq_pddl.envs.model.env_step` (or :func:`gdq_pddl.envs.compact.compact_step`)
-  and the same rules (:func:`gdq_pddl.learners.tables.act`,
-  :func:`gdq_pddl.learners.rules.observe`). Any other wrapper (``TransformReward``, a
-  shorter ``TimeLimit``, ``RecordEpisodeStatistics``, an ``ObservationWrapper``...) gets
-  the Python loop, which steps the env through it.
-
-Both first give a :class:`~gdq_pddl.learners.agents.TabularLearner` the successor slots
-its learned model needs in this env (``learner.reserve_successors`` with
-:func:`~gdq_pddl.envs.solve_compact.successor_capacity` of the env's true dynamics): the task
-context's capacity comes from the world the learner was told about, which may differ
-from the one it runs in (a knowledge experiment).
-
-Before the compiled loop runs, what it indexes with is checked
-(:mod:`gdq_pddl.learners.guards`): a learner built for another env, or a generator that
-is not one, is refused with :class:`~gdq_pddl.errors.ConfigError`.
-
-Environment randomness comes from ``env.unwrapped.np_random`` (seed it with
-``env.reset(seed=...)`` before calling), learner randomness from ``rng``. Neither path
-draws anything else, so for the same generators both consume the same numbers.
+Two paths with identical results for the same seeds: a Python loop over any gymnasium
+env of this package, through its wrappers, and a compiled loop (:func:`_episodes`) over
+the env's true dynamics where it gives exactly what stepping the env gives
+(:func:`why_not_compiled`). Both call the same compiled rules and first give the learner
+the successor slots its learned model needs in this env. Environment randomness comes
+from ``env.unwrapped.np_random`` (seed it with ``env.reset(seed=...)``), the learner's
+from ``rng``; neither path draws anything else.
 """
 
 from __future__ import annotations
@@ -67,9 +47,8 @@ class EpisodeRecords:
     success: np.ndarray
     """bool[n]: whether the episode reached the goal."""
     area_visits: np.ndarray
-    """int64[n, n_areas]: column ``k - 1`` counts the steps of the episode whose resulting
-    position lies in area ``k`` (the start position is not counted; a step that leaves the
-    robot where it was counts again for that area)."""
+    """int64[n, n_areas]: column ``k - 1`` counts the steps of the episode that end in
+    area ``k`` (the start position is not counted, a step that stays counts again)."""
 
     def __len__(self) -> int:
         return len(self.returns)
@@ -83,6 +62,12 @@ class EpisodeRecords:
     def success_rate(self) -> float:
         """The share of episodes that reached the goal, in [0, 1]."""
         return float(self.success.mean())
+
+
+def _empty_records(n_episodes: int, n_areas: int) -> tuple[np.ndarray, ...]:
+    """The zeroed arrays of :class:`EpisodeRecords`, filled in by the loops."""
+    return (np.zeros(n_episodes), np.zeros(n_episodes, dtype=np.int64),
+            np.zeros(n_episodes, dtype=np.bool_), np.zeros((n_episodes, n_areas), dtype=np.int64))
 
 
 def _n_areas(env: gym.Env) -> int:
@@ -138,8 +123,7 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
 def run_compact(learner: TabularLearner, env: CompactEnv, n_episodes: int,
                 rng: np.random.Generator) -> EpisodeRecords:
     """:func:`run_episodes` in a :class:`~gdq_pddl.envs.office.CompactEnv` (seed ``env``
-    with ``reset`` first), with at least one column of area visits: the same draws and
-    records as :func:`run_episodes` on the office (tested)."""
+    with ``reset`` first), with at least one column of area visits."""
     if not isinstance(env.unwrapped, CompactEnv):
         raise ConfigError(f"run_compact needs a CompactEnv, got {type(env.unwrapped).__name__}")
     return _run(learner, env, n_episodes, rng, None, max(1, _n_areas(env)))
@@ -190,10 +174,7 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     if isinstance(learner, TabularLearner):
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
-    returns = np.zeros(n_episodes)
-    steps = np.zeros(n_episodes, dtype=np.int64)
-    success = np.zeros(n_episodes, dtype=np.bool_)
-    areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
+    returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     for ep in range(n_episodes):
         s, _ = env.reset()
         done = False
@@ -232,10 +213,7 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     if n_areas < most:
         raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")
     learner.reserve_successors(successor_capacity(dynamics))
-    returns = np.zeros(n_episodes)
-    steps = np.zeros(n_episodes, dtype=np.int64)
-    success = np.zeros(n_episodes, dtype=np.bool_)
-    areas = np.zeros((n_episodes, n_areas), dtype=np.int64)
+    returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     # GDQ's reverse index grows between episodes: the loop stops before an episode that
     # might not fit (one episode adds at most `room` entries) and is called again.
     room = reverse_room(learner.max_successors, int(dynamics.step_limit))
@@ -252,11 +230,9 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     return EpisodeRecords(returns, steps, success, areas)
 
 
-# What the loop needs of a kind of dynamics, one implementation per kind, picked by numba
-# from the dynamics' type when the loop is compiled: the hidden state an episode starts
-# in, the learner state it shows, one step (env_step / compact_step) and the area of a
-# state. inline="always" (here and on the step functions) keeps the loop as fast as one
-# written per kind; as plain calls it lost 10-20 % steps/s (benchmarks/learners.py speed).
+# What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
+# the dynamics' type (inlined for speed: docs/learners.md): the hidden state an episode
+# starts in, the learner state it shows, one step, the area of a state.
 def _restart(m, start, doors):
     raise NotImplementedError  # compiled code only (see the overloads below)
 

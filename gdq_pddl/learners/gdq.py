@@ -4,46 +4,24 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 :func:`hybrid_backup` (what a pair is worth), :func:`sweep` (which pairs are recomputed),
 :func:`value_iteration` (OptInit, at the start of each task).
 
-**The prior.** The knowledge (the planner's actions, :mod:`gdq_pddl.abstraction.prior`)
-says where each pair leads: ``prior_next[s, a]``, or -1 where the action's preconditions
-fail ("no change"). Under the prior a pair succeeds deterministically at cost
-``prior_cost``; reaching a goal pays R_max and ends the episode. Its value is
-:func:`prior_backup`: ``R_max`` if the prior successor is a goal, else
-``-prior_cost + gamma * v[prior successor]``.
+- **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
+  change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``;
+  reaching a goal pays R_max (:func:`prior_backup`).
+- **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
+  the knowledge says does nothing after its first.
+- **The hybrid backup**: an unknown pair is worth its prior backup, a known one
+  ``(n * learned + w * prior) / (n + w)`` after n trials (``w = prior_weight``, learned:
+  :func:`gdq_pddl.learners.learned_model.learned_value`). There is no TD update.
+- **The sweep**: states whose value changed wait in a max-heap by the size of the change;
+  popping one recomputes the pairs that can lead to it (unknown pairs by their prior
+  successor, ``pp_*``; known pairs through the reverse index ``rev_*``) until
+  ``n_backups`` are done; the heap carries the rest to the next step.
+- ``allowed`` (what v and the greedy choice range over) holds the applicable and the
+  known pairs (every action where nothing is applicable); ``guide`` (what exploration
+  draws from) the plans' first actions, a share ``explore_all`` of exploring steps
+  drawing an untried action instead (:func:`gdq_pddl.learners.tables.act`).
 
-**Known pairs.** A knowledge-applicable pair is *known* after more than m trials (the
-prior's optimism lasts that long), a knowledge-inapplicable one after its first trial (its
-prior, "no change", is no optimism worth keeping, and a single trial that does something
-is news the learner should plan with at once): :func:`is_known`.
-
-**The hybrid backup.** An unknown pair is worth its prior backup. A known pair's model is
-the posterior mean with the prior as ``prior_weight`` pseudo-observations: after n trials
-its backup is ``(n * learned + w * prior) / (n + w)``, ``learned`` being the expected
-backup under the learned model
-(:func:`gdq_pddl.learners.learned_model.learned_value`). There is no TD update: a pair's
-value is always its hybrid backup.
-
-**The sweep.** After a real step the learner records it, recomputes the stepped pair if it
-is known, and runs prioritised sweeping: states whose value changed wait in a max-heap by
-the size of the change; popping one recomputes every pair that can lead to it, i.e. the
-unknown applicable pairs whose prior successor it is (``pp_ptr``/``pp_pair``, static) and
-the known pairs that have reached it (the reverse index ``rev_*``, grown as pairs become
-known), until ``n_backups`` pairs have been recomputed. The heap carries what is left to
-the next step.
-
-**What it may choose.** ``allowed`` (what v and the greedy choice range over) holds the
-knowledge-applicable pairs and the known ones, so an action the knowledge says does
-nothing is never valued above an applicable one before it has been tried; a state where
-nothing is applicable allows every action. ``guide`` (what exploration draws from) holds
-the first actions of the plans from each state (or the applicable ones); a share
-``explore_all`` of the exploring steps draws an action never tried in the state instead
-(:func:`gdq_pddl.learners.tables.act`).
-
-**OptInit** is value iteration on the hybrid model (:func:`value_iteration`), started from
-the prior's own values (:func:`prior_values`).
-
-The measurements behind the settings are in ``docs/decisions.md``; the comparison with
-the paper's readings in ``docs/learners.md``.
+``docs/learners.md`` explains the rule, ``docs/decisions.md`` measures its settings.
 """
 
 from __future__ import annotations
@@ -89,8 +67,7 @@ def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Param
 def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray, p: Params, s: int,
                   a: int) -> float:
     """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
-    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known
-    (computed by :func:`_hybrid`, on the arrays)."""
+    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
     return _hybrid(table.v, table.goal, prior_next, model.slots, model.stuck, model.visits,
                    model.cost_sum, model.cost_n, model.cost_all, p, s, a)
 
@@ -317,9 +294,8 @@ def fill_untried(table: QTable, p: Params) -> None:
 # --- the reverse index: which known pairs read a state -----------------------------------------
 
 def reverse_room(max_successors: int, steps: int = 1) -> int:
-    """Reverse-index entries ``steps`` real steps can add at most (a pair becoming known
-    adds one per recorded successor and one for its prior successor, a known pair
-    reaching a new state one)."""
+    """Reverse-index entries ``steps`` real steps can add at most: per step, one per recorded
+    successor and one prior successor for a pair becoming known, else one."""
     return steps * (max_successors + 1)
 
 

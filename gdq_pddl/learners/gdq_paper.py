@@ -1,17 +1,10 @@
 """The paper's two readings of GDQ: GDQ-literal (Algorithms 1-3 read literally) and
-GDQ-code (the authors' released code). Both are Q-learning plus the learned model
-(:mod:`gdq_pddl.learners.learned_model`) plus N backups per real step along the plans H
-from the current state (:func:`backup_plans`); they differ in OptInit and in the kind of
-backup:
-
-- GDQ-literal: OptInit is :func:`policy_iteration` on an optimistic model (an unknown pair
-  leads to s0 with R_max on the plan pairs from s0); backups assign the expected value
-  (:func:`gdq_pddl.learners.learned_model.expected_value`).
-- GDQ-code: OptInit is :func:`seed_plan_pairs` (Q <- R_max on the plan pairs); backups are
-  TD updates on outcomes replayed from experience
-  (:func:`gdq_pddl.learners.learned_model.sample_outcome`).
-
-``docs/learners.md`` sets them side by side and says where each decision comes from.
+GDQ-code (the authors' released code). Both are Q-learning plus the learned model plus N
+backups per real step along the plans H from the current state (:func:`backup_plans`).
+GDQ-literal's OptInit is :func:`policy_iteration` on an optimistic model, its backups
+assign the expected value; GDQ-code's OptInit is :func:`seed_plan_pairs`, its backups are
+TD updates on replayed outcomes (:mod:`gdq_pddl.learners.learned_model`).
+``docs/learners.md`` sets them side by side.
 """
 
 from __future__ import annotations
@@ -26,10 +19,7 @@ from gdq_pddl.learners.tables import Model, Params, Plans, QTable, recompute_all
 @numba.njit(cache=True)
 def backup_plans(table: QTable, model: Model, plans: Plans, p: Params, s: int,
                  rng: np.random.Generator) -> bool:
-    """N backups of a random transition of a random plan from ``s``.
-
-    Returns False (and does nothing) when ``s`` has no plan.
-    """
+    """N backups of a random transition of a random plan from ``s``; False if it has none."""
     lo, hi = plans.plan_ptr[s], plans.plan_ptr[s + 1]
     if hi <= lo:
         return False
@@ -46,13 +36,9 @@ def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
                      eval_tol: float = 1e-10, improve_tol: float = 1e-6,
                      max_iter: int = 10_000) -> np.ndarray:
     """GDQ-literal's OptInit: policy iteration on the model (learned for known pairs,
-    optimistic otherwise).
-
-    Starts from the policy "action 0 everywhere", evaluates V^pi (in-place sweeps to
-    ``eval_tol``), computes Q(s, a) for every action and improves, keeping the current
-    action on ties (within ``improve_tol``) and else taking the lowest index, until the
-    policy is stable. Writes that final Q into the Q table (goal rows 0) and returns pi.
-    """
+    optimistic otherwise) from "action 0 everywhere", keeping the current action on ties
+    (within ``improve_tol``), else the lowest index, until pi is stable. Writes the final
+    Q into the Q table (goal rows 0) and returns pi."""
     goal = table.goal
     n_states, n_actions = table.q.shape
     pi = np.zeros(n_states, dtype=np.int64)
@@ -92,8 +78,7 @@ def policy_iteration(table: QTable, model: Model, opt_r: np.ndarray, p: Params,
 
 @numba.njit(cache=True)
 def seed_plan_pairs(table: QTable, opt_r: np.ndarray, value: float) -> None:
-    """GDQ-code's OptInit: Q <- 0, then Q(s, a) <- ``value`` on OptInit's plan pairs
-    ``opt_r``."""
+    """GDQ-code's OptInit: Q <- 0, then Q <- ``value`` on OptInit's plan pairs ``opt_r``."""
     q = table.q
     q[:, :] = 0.0
     for s in range(q.shape[0]):

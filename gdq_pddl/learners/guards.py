@@ -2,14 +2,9 @@
 public function of the learners can make a compiled rule read or write outside an array.
 Bad input raises :class:`~gdq_pddl.errors.ConfigError` (a ValueError) naming the argument.
 
-A learner's construction and ``start_task`` check the task context (:func:`check_context`)
-and the tables built from it (:func:`check_tables`); ``act`` and ``observe`` their
-arguments; :func:`gdq_pddl.learners.episodes.run_compiled` the generators, the env's
-dynamics (:func:`check_dynamics`) and, before each call of the loop, the tables again
-(they may have been replaced). Every array is checked against one table, :data:`TABLES`
-(:data:`DYNAMICS` for the env's): dtype, shape in the learner's sizes, the range of an
-index array's values. Not checked: what the compiled rules write themselves (the model's
-slots, the queue), in range by construction while every index that reaches them is.
+Every array is checked against one table, :data:`TABLES` (:data:`DYNAMICS` for the
+env's): dtype, shape, the range of an index array's values (what the compiled rules write
+themselves, the model's slots and the queue, is in range by construction).
 """
 
 from __future__ import annotations
@@ -25,7 +20,6 @@ from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
     BACKUP_SAMPLE,
     KIND_GDQ,
-    KIND_NAMES,
     Params,
     Plans,
     Tables,
@@ -138,7 +132,7 @@ def check_tables(t: Tables, p: Params) -> None:
         raise ConfigError("learner tables: every state must let exploration draw some "
                           "action (guide), and n_guide count them")
     where = "learner params"
-    if not 0 <= p.kind < len(KIND_NAMES) or p.backup not in (BACKUP_EXPECTED, BACKUP_SAMPLE) \
+    if not 0 <= p.kind <= KIND_GDQ or p.backup not in (BACKUP_EXPECTED, BACKUP_SAMPLE) \
             or p.n_backups < 0 or p.m < 0:
         raise ConfigError(f"{where}: kind, backup, n_backups or m out of range: {p}")
     check_state("s0", p.s0, q.shape[0])

@@ -1,42 +1,26 @@
 """The learned model (what "model" means in the learners) and Dyna-Q's backups on it.
 
-The model is what a learner has counted of the real steps it took. It is
-goal-independent, so it survives a task switch. Per pair ``(s, a)``: ``visits[s, a]``
-all trials; ``stuck[s, a]`` trials that failed by getting stuck; ``cost_sum / cost_n`` the
-mean step cost over steps with no goal, stuck or timeout event (pairs never seen in such
-a step use the mean over all pairs, or 0 before any); and the transitions to learner
-states ``s'`` (goal, timeout and ordinary steps alike), sparse:
+The model counts the real steps a learner took; it is goal-independent, so it survives a
+task switch. Per pair ``(s, a)``: ``visits`` (all trials), ``stuck`` (trials that got
+stuck), ``cost_sum / cost_n`` (the mean step cost over steps with no goal, stuck or
+timeout event; else the mean over all pairs, or 0: :func:`mean_cost`), and the
+transitions to learner states ``s'``, sparse: ``slots[s, a, j]`` is ``s' << 32 | count``
+(0: empty), the occupied slots first and sorted by successor, so every loop meets the
+successors in increasing ``s'`` as a loop over dense counts would. ``K``, the slots per
+pair, is a capacity (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`; the
+model-free learners get 0); a transition finding no free slot is not recorded and its
+callers raise ValueError(:data:`OVERFLOW`).
 
-- ``slots[s, a, j]``, ``j < K``: ``s' << 32 | count`` (int64, one load per slot;
-  :func:`slot_successor`, :func:`slot_count`); 0 is an empty slot. The occupied slots
-  come first, sorted by successor (:func:`record` inserts in order), so every loop over
-  them meets the successors in increasing ``s'`` exactly as a loop over a dense
-  ``counts[s, a, :]`` did: the same sums in the same order, the same sampled outcomes.
-- ``K`` is a capacity, the most distinct successors any pair can have
-  (:attr:`gdq_pddl.learners.context.TaskContext.max_successors`, from the world's true
-  dynamics; the episode loops raise it to what the env they run in needs). Memory is
-  ``S x A x K`` slots instead of ``S x A x S`` counts, and ``np.zeros`` leaves the pages
-  of untried pairs unwritten. The model-free learners get ``K = 0``: they never record.
-- A transition that finds no free slot is not recorded at all: :func:`record` returns
-  False and its callers raise ValueError(:data:`OVERFLOW`). Not a raise in here: see
-  :func:`add_successor`.
-
-The expected backup of a pair under the model, for the current goal states G, is::
+The expected backup of a pair, for the current goal states G (:func:`learned_value`)::
 
     Q(s,a) = sum_s' T(s,a,s') * (R_max if s' in G else -cost(s,a) + gamma * V(s'))
              + P_stuck(s,a) * (-R_max)
 
-with ``T(s,a,s') = count / visits`` over the slots of ``(s, a)`` and
-``P_stuck = stuck / visits`` (:func:`learned_value`). A step-limit timeout is not part of
-this Markov model (its transition is counted, its -R_max is not). No backup bootstraps
-through a terminal transition: reaching G or getting stuck ends the sum.
-
-A pair is *known* when ``visits > m``. Dyna-Q's planning (:func:`backup_known`) backs up
-known pairs only. GDQ-literal's expected backups give an unknown pair the optimistic
-backup of OptInit instead (:func:`expected_value`): ``T(s,a,s0) = 1`` and ``R = R_max``
-on OptInit's plan pairs (``opt_r``), 0 elsewhere, i.e. ``Q(s,a) = R + gamma * V(s0)``.
-Sample-based backups (GDQ-code) only replay recorded outcomes of pairs tried at least
-once and leave untried pairs alone (:func:`sample_outcome`).
+with ``T = count / visits`` and ``P_stuck = stuck / visits``; a step-limit timeout is
+counted as a transition, its -R_max is not. A pair is *known* when ``visits > m``:
+Dyna-Q backs up known pairs only (:func:`backup_known`); GDQ-literal gives an unknown pair
+OptInit's optimism (:func:`expected_value`); GDQ-code replays recorded outcomes of tried
+pairs (:func:`sample_outcome`).
 """
 
 from __future__ import annotations
@@ -60,20 +44,13 @@ COUNT_MASK = (1 << SLOT_SHIFT) - 1
 
 OVERFLOW = ("a (state, action) pair has more distinct successors than the learner's model "
             "has slots (TaskContext.max_successors); give it more with reserve_successors")
-"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False (raised
-by their callers)."""
+"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False."""
 
 
-def new_model(n_states: int, n_actions: int, max_successors: int,
-              transitions: bool = True) -> Model:
-    """A fresh (empty) learned model.
-
-    ``max_successors`` slots per pair for the transitions, none (``K = 0``) when
-    ``transitions`` is False (the model-free learners never record one).
-    """
-    k = int(max_successors) if transitions else 0
+def new_model(n_states: int, n_actions: int, max_successors: int) -> Model:
+    """A fresh (empty) learned model, ``max_successors`` slots per pair."""
     pair = (n_states, n_actions)
-    return Model(slots=np.zeros((*pair, k), dtype=np.int64),
+    return Model(slots=np.zeros((*pair, int(max_successors)), dtype=np.int64),
                  stuck=np.zeros(pair, dtype=np.int64), visits=np.zeros(pair, dtype=np.int64),
                  cost_sum=np.zeros(pair), cost_n=np.zeros(pair, dtype=np.int64),
                  cost_all=np.zeros(2), known=np.zeros(n_states * n_actions, dtype=np.int64),
@@ -81,8 +58,7 @@ def new_model(n_states: int, n_actions: int, max_successors: int,
 
 
 def with_successor_slots(model: Model, max_successors: int) -> Model:
-    """``model`` with at least ``max_successors`` slots per pair (a copy of the slot
-    array when it had fewer, the recorded transitions kept; else ``model`` itself)."""
+    """``model`` with at least ``max_successors`` slots per pair, the transitions kept."""
     n_states, n_actions, k = model.slots.shape
     if max_successors <= k:
         return model
@@ -115,13 +91,7 @@ def slot_count(slot: int) -> int:
 def add_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
     """Count one transition ``(s, a) -> s2`` in the slots of ``(s, a)``, keeping them
     sorted by successor. False (nothing changed) when ``s2`` is new and every slot is
-    taken.
-
-    Takes the slot array, not :class:`Tables`, and returns a status instead of raising
-    (both measured): reading tuple fields inside a loop cost a reference count update
-    per read (the loop 4 x slower), and a callee that can raise makes every caller that
-    holds the tuple update the counts of all its arrays on each call.
-    """
+    taken. (The slot array and a status, not the tuple and a raise: docs/learners.md.)"""
     key = np.int64(s2) << SLOT_SHIFT
     n_slots = slots.shape[2]
     for j in range(n_slots):
@@ -157,8 +127,7 @@ def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
 @numba.njit(cache=True, inline="always")
 def record(model: Model, goal: np.ndarray, p: Params, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool) -> bool:
-    """Count one real transition in the model; False, and nothing recorded, when its
-    successor finds no free slot (:data:`OVERFLOW`)."""
+    """Count one real transition in the model; False (nothing recorded) if no slot is free."""
     if terminated and not goal[s2]:
         model.stuck[s, a] += 1
     elif not add_successor(model.slots, s, a, s2):
@@ -193,9 +162,7 @@ def mean_cost(cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray, s:
 def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
                   cost_sum: np.ndarray, cost_n: np.ndarray, cost_all: np.ndarray,
                   goal: np.ndarray, v: np.ndarray, p: Params, s: int, a: int) -> float:
-    """The expected Bellman backup of ``(s, a)`` under the learned model (``visits > 0``),
-    with state values ``v``. (The model's arrays one by one: the default GDQ's sweep calls
-    it in its inner loop, where a read of a group's field would cost a reference count.)"""
+    """The expected Bellman backup of a tried ``(s, a)`` under the learned model, with ``v``."""
     r_max, gamma = p.r_max, p.gamma
     c = mean_cost(cost_sum, cost_n, cost_all, s, a)
     total = stuck[s, a] * -r_max
@@ -228,11 +195,8 @@ def expected_value(model: Model, goal: np.ndarray, opt_r: np.ndarray, p: Params,
 @numba.njit(cache=True, inline="always")
 def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
                    rng: np.random.Generator) -> tuple[float, int, bool]:
-    """One ``(reward, next state, terminal)`` drawn from the experience of ``(s, a)``.
-
-    The pair must have been tried (``visits > 0``): the draw replays a recorded outcome
-    (stuck, goal, or an ordinary step at the pair's mean cost), never the optimism.
-    """
+    """One ``(reward, next state, terminal)`` replayed from the recorded outcomes of a
+    tried pair ``(s, a)`` (stuck, goal, or an ordinary step at the pair's mean cost)."""
     k = rng.integers(0, model.visits[s, a])
     if k < model.stuck[s, a]:
         return -p.r_max, s, True
@@ -253,12 +217,9 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
 @numba.njit(cache=True)
 def model_backup(table: QTable, model: Model, opt_r: np.ndarray, p: Params, s: int, a: int,
                  rng: np.random.Generator) -> None:
-    """One simulated update of ``(s, a)``.
-
-    ``BACKUP_EXPECTED``: assign the expected backup (:func:`expected_value`).
-    ``BACKUP_SAMPLE`` (GDQ-code): a TD update on an outcome replayed from experience; a
-    pair never tried is left alone.
-    """
+    """One simulated update of ``(s, a)``: assign :func:`expected_value`
+    (``BACKUP_EXPECTED``), or a TD update on a :func:`sample_outcome` (``BACKUP_SAMPLE``,
+    GDQ-code; a pair never tried is left alone)."""
     if p.backup == BACKUP_EXPECTED:
         set_q(table, s, a, expected_value(model, table.goal, opt_r, p, s, a, table.v))
     elif model.visits[s, a] > 0:

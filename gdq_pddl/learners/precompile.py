@@ -1,11 +1,9 @@
 """Compile the episode loop in a process of its own: ``python -m gdq_pddl.learners.precompile``.
 
-The compiled episode loop (:func:`gdq_pddl.learners.episodes._episodes`) is the largest
-kernel of the package, and numba compiles it on first use. The experiment runner starts
-this module in a second process before its own warm-up (:func:`start`) and compiles the
-learners' other kernels meanwhile; numba's on-disk cache hands the loop over. On two
-cores a first run then waits for the longer of the two compiles, not their sum. With a
-warm cache this only loads it and exits.
+The compiled episode loop is the package's largest kernel. The experiment runner starts
+this module in a second process (:func:`start`) while it compiles the other kernels;
+numba's on-disk cache hands the loop over, so on two cores a first run waits for the
+longer of the two compiles, not their sum.
 """
 
 from __future__ import annotations
@@ -23,10 +21,8 @@ from gdq_pddl.world import builtin_world
 
 
 def compile_loop() -> None:
-    """Run one episode of a Q-learner on the office through the fast path: the loop's
-    signature is the same for every learner kind (one
-    :class:`~gdq_pddl.learners.tables.Tables` type) on any
-    :class:`~gdq_pddl.envs.model.ModelArrays` env."""
+    """Run one episode of a Q-learner on the office through the compiled loop (its
+    signature is the same for every learner kind on any ``ModelArrays`` env)."""
     world = builtin_world("office")
     env = OfficeEnv(world=world, task="C")
     env.reset(seed=0)

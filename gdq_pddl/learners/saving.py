@@ -1,20 +1,11 @@
 """Save a learner, or its greedy policy, to one ``.npz`` file and load it back (no pickle).
 
-A file is ``numpy.savez_compressed`` output read back with ``allow_pickle=False``:
-
-- ``header``: a JSON string: ``format`` (``"gdq_pddl learner"`` or ``"gdq_pddl policy"``),
-  ``format_version`` (:data:`FORMAT_VERSION`), ``versions`` (gdq_pddl, numpy),
-  ``n_states``, ``n_actions``; a learner's also ``class`` (``GDQ``, ``DynaQ``...),
-  ``config`` (its config's fields), ``params`` (:class:`~gdq_pddl.learners.tables.Params`),
-  ``aliases`` (an array stored once under another key: ``guide`` is usually ``allowed``)
-  and ``generators`` (``bit_generator.state`` of the generators saved with it);
-- a learner's arrays: every array of its :class:`~gdq_pddl.learners.tables.Tables`, keyed
-  ``group.field`` (``table.q``, ``model.slots``, ``prior.rev_pair``...); a policy's:
-  ``actions`` (int64[n_states]).
-
-A loaded learner continues bit-identically (with the generators saved beside it).
-Loading refuses, with a :class:`~gdq_pddl.errors.ResultsError` naming the file, a file of
-another format or format version, a damaged one, or one of another task size.
+A file holds a JSON ``header`` (format and version, sizes; a learner's class, config,
+params and generator states) and the arrays, a learner's keyed ``group.field`` of its
+:class:`~gdq_pddl.learners.tables.Tables` (layout: ``docs/learners.md``). A loaded learner
+continues bit-identically (with the generators saved beside it). Loading refuses, with a
+:class:`~gdq_pddl.errors.ResultsError` naming the file, a file of another format or
+format version, a damaged one, or one of another task size.
 """
 
 from __future__ import annotations
@@ -30,12 +21,12 @@ import numpy as np
 
 from gdq_pddl.errors import ConfigError, ResultsError
 from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import GDQ, METHODS, TabularLearner
+from gdq_pddl.learners.agents import METHODS, TabularLearner
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.tables import Params, Tables
 
 FORMAT_VERSION = 1
-"""The version of the file layout (module doc); another version is refused on load."""
+"""The version of the file layout (``docs/learners.md``); another is refused on load."""
 _CLASSES = {cls.__name__: cls for cls, _, _ in METHODS.values()}
 _BIT_GENERATORS = ("PCG64", "PCG64DXSM", "Philox", "SFC64", "MT19937")
 
@@ -138,8 +129,6 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
                            ) from None
     learner.tables, learner.params, learner._model = tables, params, tables.model
     learner.q = tables.table.q
-    if isinstance(learner, GDQ):
-        learner._rev_capacity = len(tables.prior.rev_pair)
     return learner
 
 
@@ -181,8 +170,7 @@ class GreedyPolicy:
 
     @classmethod
     def of(cls, learner: TabularLearner) -> GreedyPolicy:
-        """``learner``'s greedy policy now (:meth:`~gdq_pddl.learners.agents.TabularLearner.
-        greedy_policy`)."""
+        """``learner``'s greedy policy now."""
         return cls(np.asarray(learner.greedy_policy(), dtype=np.int64), learner.q.shape[1])
 
     def act(self, state: int, rng: np.random.Generator | None = None) -> int:
@@ -201,7 +189,6 @@ class GreedyPolicy:
         """The policy saved in ``file`` (:meth:`save`)."""
         header, arrays = _read(file, "policy")
         try:
-            policy = cls(arrays["actions"], int(header["n_actions"]))
+            return cls(arrays["actions"], int(header["n_actions"]))
         except (KeyError, TypeError, ValueError) as exc:
             raise ResultsError(f"{_name(file)}: damaged policy file ({exc})") from None
-        return policy

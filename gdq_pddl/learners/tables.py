@@ -1,42 +1,15 @@
 """A learner's arrays, its Q table, and how it acts: the part every learner shares.
 
-Every learner (Q-learning, Dyna-Q, DARLING, the GDQs) is the same data, :class:`Tables`,
-plus scalar :class:`Params` whose ``kind`` says which rules run after a real step
-(:func:`gdq_pddl.learners.rules.observe`). ``Tables`` holds five small groups, one per
-concern: :class:`QTable` (Q and acting, this module), :class:`Model` (the learned model),
-:class:`Plans` (the paper's GDQs), :class:`Prior` and :class:`Queue` (the default GDQ's
-prior and sweep). A compiled function takes the groups it touches, so its signature says
-what it reads and writes. This module holds:
-
-- the Q table and its maximum: :func:`set_q` (the only writer of single Q entries, so
-  ``v[s]`` stays the max of ``q[s, a]`` over the allowed actions) and :func:`td_update`,
-  the temporal-difference update, the one definition every learner's real step (and
-  GDQ-code's sample backups) uses;
-- acting: :func:`act`, epsilon-greedy with random tie-breaking, and :func:`greedy`.
+Every learner is the same data, :class:`Tables` (five groups, one per concern; a compiled
+function takes the groups it touches), plus scalar :class:`Params` whose ``kind`` says
+which rules run after a real step (:func:`gdq_pddl.learners.rules.observe`).
 
 ``allowed`` is what the max ranges over (the update's target and the greedy choice);
-``guide`` is what exploration draws uniformly from. They are the same array for every
-learner but two. DARLING-code (DARLING as the GDQ authors' code runs it): its max ranges
-over all actions while it may only execute plan actions, so a greedy action outside
-``guide`` is replaced by a draw from it. The default GDQ: ``allowed`` holds the
-knowledge-applicable and the known pairs, ``guide`` the first actions of the plans
-(:mod:`gdq_pddl.learners.gdq`); its greedy action is never replaced.
+``guide`` is what exploration draws from. They differ for DARLING-code (a greedy action
+outside ``guide`` is replaced by a draw from it) and the default GDQ.
 
-Randomness comes only from the ``np.random.Generator`` passed in.
-
-The compiled functions here and in the other rule modules trust their arguments (no
-bounds checks in compiled code): the learners' methods and the episode loops check what
-they are given before calling them (:mod:`gdq_pddl.learners.guards`).
-
-Speed. A call of a compiled function that is not inlined costs a reference-count update
-per array of every tuple it takes; the small rules called in inner loops (``set_q``,
-``td_update``, ``record``, the backups' value functions) are therefore
-``inline="always"`` (Task C, env steps/s: Q-learning 531k -> 1.05M, Dyna-Q 165k -> 260k,
-GDQ 182k -> 215k, ``benchmarks/learners.py speed``), and the loops read a group's arrays
-into locals once (a field read in a loop can cost a count update each time), while
-``act`` and ``observe`` stay calls: inlining ``observe`` into the episode loop made numba
-0.68 compile a loop whose results differ from the Python path's (caught by the fast ==
-Python tests), and inlining more tripled the compile time.
+The compiled functions trust their arguments (:mod:`gdq_pddl.learners.guards` checks
+them); why the small ones are ``inline="always"``: ``docs/learners.md``, "Speed".
 """
 
 from __future__ import annotations
@@ -50,7 +23,6 @@ KIND_QLEARNING, KIND_DYNAQ, KIND_DARLING, KIND_GDQ_PLANS, KIND_GDQ = 0, 1, 2, 3,
 """Which rules run after a real step. ``KIND_GDQ``: the default GDQ (the knowledge as a
 prior, :mod:`gdq_pddl.learners.gdq`); ``KIND_GDQ_PLANS``: the paper's readings,
 GDQ-literal and GDQ-code (backups along plans, :mod:`gdq_pddl.learners.gdq_paper`)."""
-KIND_NAMES = ("Q-learning", "Dyna-Q", "DARLING", "GDQ-literal/GDQ-code", "GDQ")
 BACKUP_EXPECTED, BACKUP_SAMPLE = 0, 1
 
 
@@ -73,8 +45,7 @@ class Params(NamedTuple):
     explore_all: float = 0.0
     """Share of exploring steps that draw from every action instead of ``guide``."""
     explore_all_last: float = 1.0
-    """0: no such draw in a state from which the knowledge reaches the goal in one action
-    (``KIND_GDQ``)."""
+    """0: no such draw where the knowledge reaches the goal in one action (``KIND_GDQ``)."""
     prior_cost: float = 1.0
     """Step cost of a pair still on the prior (``KIND_GDQ``)."""
     sweep_threshold: float = 0.0
@@ -142,8 +113,7 @@ class Queue(NamedTuple):
 
 
 class Tables(NamedTuple):
-    """All arrays of a learner, S states x A actions, by concern. A compiled function
-    takes the groups it touches (or the whole, when it touches most of them)."""
+    """All arrays of a learner, S states x A actions, by concern."""
 
     table: QTable
     model: Model
@@ -152,15 +122,12 @@ class Tables(NamedTuple):
     queue: Queue
 
 
-def table_bytes(n_states: int, n_actions: int, max_successors: int,
-                transitions: bool = True, prior: bool = True) -> int:
-    """Bytes of a learner's per-pair arrays at most: Q, the allowed, guide and optimistic
-    masks, the model's visits, stuck, costs and known list, (``transitions``) the slots,
-    and (``prior``, the default GDQ) the prior's successors and reverse edges and, when
-    every pair is known, the reverse index (an entry of two int64 per successor)."""
-    per_pair = 8 * 6 + 3 + (8 * max_successors if transitions else 0)  # int64 slots
-    if prior:
-        per_pair += 8 + 8 + 16 * (max_successors if transitions else 1)
+def table_bytes(n_states: int, n_actions: int, max_successors: int) -> int:
+    """Bytes of a learner's per-pair arrays at most (the default GDQ's): Q, the allowed,
+    guide and optimistic masks, the model's visits, stuck, costs, known list and int64
+    slots, the prior's successors and reverse edges and, when every pair is known, the
+    reverse index (an entry of two int64 per successor)."""
+    per_pair = 8 * 6 + 3 + 8 * max_successors + 8 + 8 + 16 * max_successors
     return n_states * n_actions * per_pair
 
 
@@ -192,8 +159,7 @@ def set_q(table: QTable, s: int, a: int, value: float) -> None:
 @numba.njit(cache=True, inline="always")
 def set_q_arrays(q: np.ndarray, v: np.ndarray, allowed: np.ndarray, s: int, a: int,
                  value: float) -> None:
-    """:func:`set_q` on the arrays it touches, for the default GDQ's sweep (its inner loop
-    would pay a reference count per read of a group's field: module doc)."""
+    """:func:`set_q` on the arrays, for the sweep's inner loop (no tuple field reads)."""
     old = q[s, a]
     q[s, a] = value
     if not allowed[s, a]:
@@ -257,17 +223,11 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 @numba.njit(cache=True)
 def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
         rng: np.random.Generator) -> int:
-    """Epsilon-greedy, ties broken uniformly at random (module doc: allowed and guide).
-
-    With probability epsilon a uniform action of ``guide[s]`` (or, for a share
-    ``explore_all`` of those steps, of every action, unless ``explore_all_last`` is 0 and
-    the knowledge reaches the goal from ``s`` in one action); else a uniformly chosen maximiser
-    of Q over ``allowed[s]``, which DARLING replaces by a uniform action of ``guide[s]``
-    if it is not in it (never, when ``guide`` is ``allowed``). Draws one uniform, one more
-    when exploring with ``explore_all > 0``, then one integer when exploring or when
-    several actions tie, and one more for a replacement. (``visits`` and ``prior_next``
-    only for those draws of every action.)
-    """
+    """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
+    uniform action of ``guide[s]`` (for a share ``explore_all`` of those steps an untried
+    one, unless ``explore_all_last`` is 0 and the knowledge reaches the goal from ``s`` in
+    one action); else a uniform maximiser of Q over ``allowed[s]``, which DARLING replaces
+    by a uniform action of ``guide[s]`` if it is not in it."""
     q, allowed = table.q, table.allowed
     n_actions = q.shape[1]
     if rng.random() < p.epsilon:
@@ -298,9 +258,8 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
 
 @numba.njit(cache=True)
 def greedy(table: QTable, p: Params) -> np.ndarray:
-    """The greedy policy: per state, the lowest-index action of maximal Q among those it
-    may execute: the allowed ones (DARLING: ``guide``, which is ``allowed`` but for
-    DARLING-code)."""
+    """The greedy policy: per state, the lowest-index action of maximal Q among the allowed
+    ones (DARLING: ``guide``, which differs from ``allowed`` for DARLING-code)."""
     q = table.q
     n_states, n_actions = q.shape
     mask = table.guide if p.kind == KIND_DARLING else table.allowed
