@@ -207,18 +207,6 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
     return out
 
 
-def run_building(positions: int, seed: int, runs: int, episodes: int,
-                 methods: list[str] | None = None, log=print) -> BuildingResult:
-    """Run every method on one building in memory (see the module docstring; nothing
-    saved: :func:`run_scale` saves each run as it finishes)."""
-    methods = list(methods or DEFAULT_METHODS)
-    header, setting = building_context(positions, seed)
-    log(describe(header))
-    units = {(name, run): run_one(setting, name, (seed, positions, run), episodes)
-             for name in methods for run in range(runs)}
-    return assemble(header, units, methods, runs, log)
-
-
 def save_building(result: BuildingResult, path) -> None:
     """The raw returns and successes of every method on one building, with the building's
     figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``).
