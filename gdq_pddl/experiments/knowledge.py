@@ -1,16 +1,11 @@
 """What a world name of an experiment means, and the experiments where the robot's
 knowledge (the PDDL) disagrees with reality (the world).
 
-A world name is told apart by its form alone, never by the files in the working
-directory: ``office`` or ``office_robot`` (shipped with the package); ``office:<variant>``
-(derived from the office in memory, :data:`WORLDS`); anything else is the path of a world
-file (the command line records ``--world`` by its absolute path, :func:`world_name`).
-
-An :class:`~gdq_pddl.experiments.protocol.Experiment` names the real world the env
-simulates in ``world`` and the world the knowledge is built from in ``knowledge`` (None:
-the real world itself). Both have the same positions and doors, so the learner spaces are
-the same and only the knowledge differs. The :data:`CASES` all use Task C, each also run
-with accurate knowledge as its reference (``docs/decisions.md``).
+A world name is told apart by its form alone: ``office`` or ``office_robot`` (shipped);
+``office:<variant>`` (derived from the office in memory, :data:`WORLDS`); anything else
+is the path of a world file (:func:`world_name`). An experiment's ``knowledge`` world has
+the real world's positions and doors, so only the knowledge differs
+(``docs/decisions.md``).
 """
 
 from __future__ import annotations
@@ -66,30 +61,17 @@ def with_edge(world: World, a: str, b: str) -> World:
     return replace(world, edges=(*world.edges, (a, b)))
 
 
-def _office() -> World:
-    return builtin_world("office")
-
-
-def _locked(door: str) -> Callable[[], World]:
-    def build() -> World:
-        return replace(with_door(_office(), door, success=0.0, stuck=0.0),
-                       name=f"office-locked-{door}")
-    return build
-
-
-def _passage() -> World:
-    return replace(with_edge(_office(), *PASSAGE), name="office-passage")
-
-
-def _deterministic() -> World:
-    return deterministic_world(_office())
+def _locked(door: str) -> World:
+    return replace(with_door(builtin_world("office"), door, success=0.0, stuck=0.0),
+                   name=f"office-locked-{door}")
 
 
 WORLDS: dict[str, Callable[[], World]] = {
-    "office:locked-d1": _locked("d1"),
-    "office:locked-d3": _locked("d3"),
-    "office:passage": _passage,
-    "office:deterministic": _deterministic,
+    "office:locked-d1": lambda: _locked("d1"),
+    "office:locked-d3": lambda: _locked("d3"),
+    "office:passage": lambda: replace(with_edge(builtin_world("office"), *PASSAGE),
+                                      name="office-passage"),
+    "office:deterministic": lambda: deterministic_world(builtin_world("office")),
 }
 """In-memory derived worlds by name (resolved by :func:`load_world_named`)."""
 

@@ -1,16 +1,13 @@
 """Every ordered (start, goal) pair of a world: ``gdq-pddl pairs``.
 
 Each pair is one :class:`~gdq_pddl.experiments.protocol.Experiment` named ``pairs`` with
-schedule ``(("p3->p13", episodes),)``, run by the office runner (parallel, resumable,
-seeds from the pair and the run only). A unit keeps only its returns and successes
-(:func:`run_pair_unit`), and the folder collects one row per run (:func:`collect_pairs`)::
+schedule ``(("p3->p13", episodes),)``, run by the runner with its own ``work`` and
+``collect``::
 
     config.json   the experiments (one per pair), seeds and package versions
     units/*.npz   one (pair, method, run): ``returns`` (float64), ``success`` (bool)
     runs.csv      :data:`RUN_COLUMNS`: each run's mean return and success rate (``repr``)
     optimal.json  per pair: start, goal, shortest plan length, V*, its tuning task (A-D)
-
-:mod:`gdq_pddl.analysis.pairs` reports them; why so little is kept: ``docs/decisions.md``.
 """
 
 from __future__ import annotations
@@ -32,8 +29,7 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World, WorldError
 
 PAIRS_EXPERIMENT = "pairs"
-"""The name of every experiment of a pairs folder (not ``run``: its seeds and reports
-are its own)."""
+"""The name of every experiment of a pairs folder."""
 TUNING_TASKS = ("A", "B", "C", "D")
 """The tasks every setting was chosen on; their pairs are marked in the table."""
 RUN_COLUMNS = ("pair", "start", "goal", "method", "run", "episodes", "mean_return",

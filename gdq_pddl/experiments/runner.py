@@ -8,12 +8,9 @@ Layout of an output folder::
     policies.csv     each run's final greedy policy, by index and by name
     optimal.json     V* and area relevance of each task, from the true model
     learners/*.npz   with keep_learners: each run's final learner, named as its unit
-                     (:func:`gdq_pddl.learners.load_learner` reads it)
 
 An interrupted run loses at most the units in flight; ``resume=True`` checks that the
-configuration and every input file are the same and runs only what is missing. What a
-unit returns and what is collected can be swapped (``work`` and ``collect`` of
-:func:`run_experiments`; :mod:`gdq_pddl.experiments.pairs` does).
+configuration and every input file are the same and runs only what is missing.
 """
 
 from __future__ import annotations
@@ -171,9 +168,7 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
                                "differs from what config.json records): resuming would mix "
                                "results of both versions; restore it, or start again in "
                                "another --out")
-    # a run killed in the middle of a write leaves its temporary file (never a result: those
-    # appear only by an atomic rename); remove them before going on
-    remove_temporary(out)
+    remove_temporary(out)  # what a write killed midway left
     remove_temporary(out / "units")
     remove_temporary(out / "learners")
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
@@ -218,7 +213,7 @@ def check_jobs(jobs: int | None) -> int:
 
 
 def run_unit_keeping_learner(unit: Unit) -> dict[str, np.ndarray]:
-    """:func:`run_unit` returning the final learner's file too (``keep_learners``)."""
+    """:func:`run_unit` returning the final learner's file too (Ray takes no partial)."""
     return run_unit(unit, keep_learner=True)
 
 
@@ -234,14 +229,13 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                     unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False
                     ) -> Path:
     """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
-    :func:`run_unit`), then collect the results with ``collect`` (default:
+    :func:`run_unit`), then ``collect`` the results (default:
     :func:`gdq_pddl.experiments.collect.collect`).
 
-    ``log`` (if given) is told how many runs are left and on how many processes;
-    ``unit_arrays`` are the arrays ``work`` saves (what ``--resume`` checks saved units
-    for); ``keep_learners`` (with the default ``work``) saves each run's final learner in
-    ``learners/`` (runs saved before a resume keep none). Ctrl-C, SIGTERM and SIGHUP end
-    the workers and raise :class:`RunInterrupted`, saying what is saved and how to go on.
+    ``log`` is told how many runs are left; ``unit_arrays`` are what ``work`` saves (what
+    ``--resume`` checks); ``keep_learners`` saves each run's final learner in
+    ``learners/``. Ctrl-C, SIGTERM and SIGHUP end the workers and raise
+    :class:`RunInterrupted`, saying what is saved and how to go on.
     """
     # read at call time: tests replace run_unit
     work = work or (run_unit_keeping_learner if keep_learners else run_unit)
@@ -277,9 +271,8 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
 
 
 def _check_unchanged(out: Path, experiments: list[Experiment]) -> None:
-    """Refuse to collect runs whose input files changed while they ran (each worker reads
-    the files by the name the driver resolved; their content must be what the driver
-    checked and config.json records)."""
+    """Refuse to collect runs whose input files changed while they ran (their content must
+    be what config.json records)."""
     recorded = read_config(out / "config.json").get("inputs")
     changed = changed_input(recorded if isinstance(recorded, dict) else {},
                             input_hashes(input_files(experiments)))
@@ -358,9 +351,8 @@ PR_SET_PDEATHSIG = 1
 
 
 def _die_with_parent() -> None:
-    """Have the kernel send this worker SIGTERM when the driver dies, however it dies
-    (SIGKILL included), so no worker runs on as an orphan (Linux only; elsewhere the
-    driver's signal handlers and the pool's ``terminate`` do it)."""
+    """Have the kernel send this worker SIGTERM when the driver dies, SIGKILL included, so
+    no worker runs on as an orphan (Linux only)."""
     if not sys.platform.startswith("linux"):
         return
     try:

@@ -1,22 +1,17 @@
 """Learning against building size (``gdq-pddl scale``): every method on generated buildings.
 
-For each size N and each of ``buildings`` building seeds ``S = seed, seed + 1, ...``, the
-building of ``gdq-pddl building --positions N --seed S`` and its task A: each method runs
-``runs`` times for ``episodes`` episodes over the compact model
-(:mod:`gdq_pddl.envs.compact`). Run ``r`` is seeded by ``(S, N, r)`` only, so run ``r`` of
-every method starts from the same seeds (paired runs) and gives the same returns whether
-or not it was interrupted and resumed. :func:`run_scale` writes::
+For each size N and each building seed ``S = seed, seed + 1, ...``, task A of the building
+of ``gdq-pddl building --positions N --seed S``: each method runs ``runs`` times for
+``episodes`` episodes over the compact model (:mod:`gdq_pddl.envs.compact`), run ``r``
+seeded by ``(S, N, r)`` only (paired runs, the same whether or not resumed).
+:func:`run_scale` writes::
 
     config.json           sizes, buildings, runs, episodes, seed, methods, package versions
     units/building-N-sS/building.json     the building, learner tables, plan-table time
-    units/building-N-sS/<method>-<run>.npz
-                          one finished run, written atomically: returns, success (per
-                          episode), steps, wall_s, table_mb
+    units/building-N-sS/<method>-<run>.npz   one finished run, written atomically
     building-N-sS.npz     every run on that building (:func:`save_building`)
 
-``--resume`` checks that the configuration is the same and runs only the missing units.
-The measures (early learning, episodes to convergence, ``V_ref``, the discount, door-route
-plans, memory) and why: ``docs/decisions.md``, "Generated buildings".
+The measures and why: ``docs/decisions.md``, "Generated buildings".
 """
 
 from __future__ import annotations
@@ -85,12 +80,9 @@ class BuildingResult:
     context_s: float
     returns: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes
     success: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes, bool
-    steps: dict[str, int] = field(default_factory=dict)
-    """Env steps of all runs of a method."""
-    wall_s: dict[str, float] = field(default_factory=dict)
-    """Wall time of all runs of a method (the compiled loop only)."""
-    table_mb: dict[str, float] = field(default_factory=dict)
-    """Memory one learner allocates (``TabularLearner.nbytes``), in MB."""
+    steps: dict[str, int] = field(default_factory=dict)  # of all runs of a method
+    wall_s: dict[str, float] = field(default_factory=dict)  # of their compiled loops
+    table_mb: dict[str, float] = field(default_factory=dict)  # one learner's tables
 
     @property
     def name(self) -> str:
@@ -137,9 +129,8 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
 
 
 def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
-    """The building of ``positions`` positions and seed ``seed``, its task context and env
-    (what a run needs), and its description: the first fields of :class:`BuildingResult`,
-    JSON-able."""
+    """The building's description (the first fields of :class:`BuildingResult`) and what
+    a run needs: ``(world, task context, env)``."""
     world = building_world(positions, seed)
     t0 = time.perf_counter()
     ctx = task_context(OfficeInstance.of("A", world=world), darling_tolerance=TOLERANCE,
@@ -227,9 +218,8 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
               buildings: int = 2, methods: list[str] | None = None, resume: bool = False,
               progress: bool = True, log: Callable[[str], None] | None = None,
               command: str | None = None) -> list[BuildingResult]:
-    """Run every building of every size into ``out`` (see the module docstring) and return
-    their results, by size then seed. On Ctrl-C raises :class:`RunInterrupted`, whose
-    message says how to continue (``command``: the command line with ``--resume``)."""
+    """Run every building of every size into ``out`` and return their results, by size then
+    seed; Ctrl-C raises :class:`RunInterrupted` naming ``command`` (with ``--resume``)."""
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
     _check_buildings(seed, buildings)  # before the list of seeds is made
@@ -278,8 +268,7 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
-    # every building's returns and successes of every run of every method are held until
-    # the report
+    # every run's returns and successes are held until the report
     n_buildings = len(sizes) * len(seeds)
     check_memory(n_buildings * len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES),
                  f"--runs {runs:,} x --episodes {episodes:,} x {len(methods)} methods x "
@@ -313,8 +302,7 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
             raise ResultsError(f"{out} holds results of a different configuration "
                                f"({'; '.join(differ)}): --resume needs the same command "
                                f"line{hint}")
-    # a run killed in the middle of a write leaves its temporary file (never a unit file:
-    # those appear only by an atomic rename)
+    # what a write killed midway left (never a unit file: those appear by atomic rename)
     for stale in out.glob("**/.*.tmp"):
         stale.unlink(missing_ok=True)
     if old is not None:  # keep the record of the run being continued (its versions, start)
