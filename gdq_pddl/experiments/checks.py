@@ -33,9 +33,7 @@ def preflight(experiments: list[Experiment], jobs: int = 1) -> None:
 
 def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
     """Refuse an office task whose V* would not fit in memory, or an instance on which no
-    episode can reach the goal: no plan from the start, or a shortest plan longer than
-    the step limit (a :class:`~gdq_pddl.errors.WorldError` naming the file and key). Building a
-    PDDL problem's model checks the same (:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`)."""
+    episode can reach the goal (a WorldError naming the file and key)."""
     model = instance.model
     source, key = instance.step_limit_key
     if not isinstance(instance, PDDLInstance):  # a PDDL problem's V* is within a budget

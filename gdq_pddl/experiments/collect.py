@@ -1,11 +1,7 @@
-"""Turn the per-unit files of an output folder into its CSV and JSON results.
-
-``episodes.csv``: :data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` when an office
-experiment is among them (the steps of the episode that end in each area; none for a PDDL
-domain). ``policies.csv``: :data:`POLICY_COLUMNS`, each run's final greedy action per
-learner state, by index and by name. Text fields are quoted as the ``csv`` module quotes
-them, so a name with a comma stays one field.
-"""
+"""Turn the per-unit files of an output folder into its CSV and JSON results:
+``episodes.csv`` (:data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` for a problem with
+areas) and ``policies.csv`` (each run's final greedy action per learner state), text
+quoted as the ``csv`` module quotes it."""
 
 from __future__ import annotations
 
@@ -83,8 +79,7 @@ pieces of bounded memory."""
 
 def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
     """CSV rows of one unit with ``n_areas`` area columns, in pieces of at most
-    :data:`CHUNK` rows (a full protocol has ~1M rows: plain string formatting of Python
-    numbers, which measured 7 times faster than numpy's character functions)."""
+    :data:`CHUNK` rows (plain string formatting: 7 times faster than numpy's)."""
     n = len(data["returns"])
     tasks = np.repeat([csv_field(str(t)) for t in data["tasks"].tolist()], data["counts"])
     k = min(n_areas, data["areas"].shape[1])

@@ -35,12 +35,8 @@ _HELD: set[int] = set()
 
 
 class FolderLock:
-    """An exclusive, non-blocking ``flock`` on ``folder/.lock`` for the ``with`` block.
-
-    It ends with the process, however it ends. Entering raises :class:`ResultsError`
-    naming the process that holds it. Leaving removes the lock file while still holding
-    the lock; a process waiting on the removed file then locks a new one.
-    """
+    """An exclusive, non-blocking ``flock`` on ``folder/.lock`` for the ``with`` block
+    (it ends with the process); entering raises :class:`ResultsError` naming the holder."""
 
     def __init__(self, folder: Path) -> None:
         self.path = Path(folder) / LOCK_NAME
@@ -90,8 +86,8 @@ class FolderLock:
 
 
 def close_inherited_locks() -> None:
-    """In a forked worker: close the parent's lock descriptors (the lock stays the
-    parent's, and a worker outliving a killed parent does not keep the folder locked)."""
+    """In a forked worker: close the parent's lock descriptors (a worker outliving a
+    killed parent must not keep the folder locked)."""
     for fd in list(_HELD):
         with contextlib.suppress(OSError):
             os.close(fd)
@@ -115,11 +111,9 @@ def read_config(path: Path) -> dict:
 
 
 def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | None:
-    """The ``config.json`` of the run ``resume`` continues (None when not resuming).
-
-    Refuses a folder that holds results (``held``; ``results`` names them) without
-    ``resume``, and, with it, a folder without results or without ``config.json``.
-    """
+    """The ``config.json`` of the run ``resume`` continues (None when not resuming);
+    refuses a folder that holds results (``held``; ``results`` names them) without
+    ``resume``, and with it, one without ``config.json``."""
     cfg_path = out / "config.json"
     if held and not resume:
         if cfg_path.exists():
@@ -151,11 +145,8 @@ def changed_input(old: Mapping, new: Mapping[str, str]) -> str | None:
 
 def load_unit(path: Path, what: str, expect: Mapping[str, int],
               rerun: str = "the same command with --resume") -> dict[str, np.ndarray]:
-    """The arrays of the unit file ``path``; :class:`ResultsError` if it is damaged.
-
-    ``expect`` maps each array the unit must hold to its length along the first axis
-    (-1: any length); ``what`` names the unit (method and run) in the message.
-    """
+    """The arrays of the unit file ``path``; :class:`ResultsError` naming ``what`` if it
+    is damaged. ``expect``: each array the unit must hold -> its length (-1: any)."""
     try:
         with np.load(path) as saved:
             data = {k: saved[k] for k in saved.files}

@@ -1,9 +1,8 @@
 """What an experiment is: a world, a schedule of tasks, methods, runs and hyperparameters.
 
-An :class:`Experiment` expands into :class:`Unit` s, one per (method, run). A unit is the
-thing that runs on one core, is written to disk when it finishes, and is skipped by
-``--resume``. Its seed is derived from the experiment's seed and the unit's identity
-only, so results are identical whatever the number of jobs or the order they finish in.
+An :class:`Experiment` expands into :class:`Unit` s, one per (method, run): what runs on
+one core, is saved when it finishes and is skipped by ``--resume``. Its seeds come from
+the experiment's seed and the unit's identity only, whatever the jobs or their order.
 """
 
 from __future__ import annotations
@@ -19,11 +18,9 @@ from gdq_pddl.limits import check_count
 
 METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
            "Q-learning")
-"""Learning methods by name. ``GDQ`` is the library's GDQ (the knowledge as an optimistic
-prior model, SPEC section 4); ``GDQ-literal`` the paper's Algorithms 1-3 read literally;
-``GDQ-code`` GDQ as in the authors' released code; ``DARLING-code`` DARLING as the GDQ
-authors' released code runs it (a weaker baseline, kept to explain their published
-curves; not part of the paper protocol)."""
+"""Learning methods by name: ``GDQ`` the library's (SPEC section 4), ``GDQ-literal`` the
+paper's Algorithms 1-3 read literally, ``GDQ-code`` and ``DARLING-code`` as the GDQ
+authors' released code runs them (``docs/learners.md``)."""
 
 PAPER_METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
 """The paper's four methods (its GDQ being the library's)."""
@@ -68,15 +65,12 @@ class Experiment:
     ``world`` (also ``office:<variant>``, see :mod:`gdq_pddl.experiments.knowledge`);
     None: ``world`` itself, accurate knowledge. Not part of unit keys or seeds."""
     pddl: tuple[str, ...] | None = None
-    """``(domain, problem, dynamics)`` file paths, optionally with a fourth entry, the
-    determinisation of a PPDDL domain (default ``all-outcomes``; dynamics ``""``: none,
-    for a PPDDL domain): learn on that PDDL problem through the generic env
-    (:mod:`gdq_pddl.envs.pddl_env`) instead of an office world; ``world`` and
-    ``knowledge`` are then unused and each schedule entry names the problem."""
+    """``(domain, problem, dynamics[, determinisation])`` file paths (dynamics ``""``:
+    none): learn on that PDDL problem instead of an office world (``world`` and
+    ``knowledge`` are then unused; each schedule entry names the problem)."""
 
     def __post_init__(self) -> None:
-        """Refuse what no run can be made of (a :class:`~gdq_pddl.errors.ConfigError`,
-        naming the field), before any unit runs."""
+        """Refuse what no run can be made of (a ConfigError naming the field)."""
         check_count("runs", self.runs)
         check_count("seed", self.seed)
         if self.runs < 1:
@@ -132,14 +126,10 @@ MAX_NAME = 150
 
 
 def safe_name(name: str) -> str:
-    """``name`` as one file name inside a folder: itself when it is made of
-    :data:`SAFE` characters only, does not start with a dot and is at most
-    :data:`MAX_NAME` long; otherwise every other character replaced by ``_``, cut to
-    length and followed by a hash of the whole name, so two names never meet.
-
-    A problem named ``../../x`` (a name from an input file) gives ``_._.._x-<hash>``:
-    never a path out of the folder, never a hidden file.
-    """
+    """``name`` as one file name inside a folder: itself when made of :data:`SAFE`
+    characters, not starting with a dot and at most :data:`MAX_NAME` long; otherwise
+    every other character replaced by ``_``, cut and followed by a hash of the whole name
+    (``../../x`` gives ``_._.._x-<hash>``: never a path out of the folder)."""
     if SAFE.fullmatch(name) and not name.startswith(".") and len(name) <= MAX_NAME:
         return name
     digest = f"{zlib.crc32(name.encode('utf-8', 'surrogatepass')):08x}"

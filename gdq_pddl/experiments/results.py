@@ -1,11 +1,5 @@
-"""An output folder's files as pandas tables, checked against the folder's ``config.json``.
-
-The runner writes ``episodes.csv`` (one row per episode), ``config.json`` (what was run),
-``policies.csv`` (each run's final greedy policy) and ``optimal.json`` (facts per task).
-:func:`load_results` is the one reader of ``episodes.csv``; it refuses a file that
-contradicts ``config.json`` (missing or extra episodes, repeated rows, a method or task
-that was never run) with a :class:`~gdq_pddl.errors.ResultsError` naming the file.
-"""
+"""An output folder's files as pandas tables: ``episodes.csv`` (:func:`load_results`,
+checked against ``config.json``), ``policies.csv`` and ``optimal.json``."""
 
 from __future__ import annotations
 
@@ -118,10 +112,9 @@ def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
     ``return`` and the areas float64 (an empty area cell is NaN), the text columns
     ``category``.
 
-    With ``check`` (default), a file that contradicts the folder's ``config.json`` is
-    refused: too few or too many episodes for an (experiment, method), a row that
-    repeats an episode, a method the config never ran, a run number beyond its runs. Raises
-    :class:`~gdq_pddl.errors.ResultsError` naming the file and what is wrong.
+    With ``check`` (default), a file that contradicts the folder's ``config.json`` (too
+    few or too many episodes, a repeated episode, a method never run, a run beyond its
+    runs) is refused. Raises :class:`~gdq_pddl.errors.ResultsError` naming the file.
     """
     path = Path(folder)
     path = path / "episodes.csv" if path.is_dir() else path
@@ -158,10 +151,8 @@ def _line(bad: pd.Series) -> int:
 
 
 def _numbers(path: Path, df: pd.DataFrame, name: str) -> pd.Series:
-    """Column ``name`` as float64, refusing what the runner never writes: text, a value
-    that is not finite (an empty area cell is allowed), a run, episode or step count that
-    is not a whole number at least its least value, a success other than 0 or 1, a
-    negative visit count."""
+    """Column ``name`` as float64 (int64 for whole numbers), refusing what the runner
+    never writes: text, non-finite values, bad counts, successes or visit counts."""
     raw = df[name]
     col = raw.astype("float64") if pd.api.types.is_numeric_dtype(raw) else \
         pd.to_numeric(raw, errors="coerce").astype("float64")

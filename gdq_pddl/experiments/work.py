@@ -1,9 +1,6 @@
-"""One unit of work: a method learning along a schedule of tasks, in one process.
-
-:func:`run_unit` is what the local process pool and Ray workers execute; it depends only
-on the :class:`~gdq_pddl.experiments.protocol.Unit`, so where it runs never changes what
-it returns.
-"""
+"""One unit of work: a method learning along a schedule of tasks, in one process
+(:func:`run_unit`, what the process pool and Ray workers run: it depends only on the
+:class:`~gdq_pddl.experiments.protocol.Unit`)."""
 
 from __future__ import annotations
 
@@ -41,9 +38,8 @@ def make_learner(method: str, context, hyper: Hyper):
 
 
 def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
-    """The instance schedule entry ``spec`` of ``exp`` runs on: the experiment's PDDL
-    problem (``exp.pddl``: the files; each entry names it), or the task ``spec`` of its
-    world (a task name or ``start->goal``)."""
+    """The instance schedule entry ``spec`` of ``exp`` runs on: its PDDL problem
+    (``exp.pddl``), or the task ``spec`` of its world (a name or ``start->goal``)."""
     if exp.pddl is not None:
         return load_pddl_instance(tuple(exp.pddl))
     world = load_world_named(exp.world)
@@ -60,8 +56,7 @@ def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> Task
 
 def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy
-    (``keep_learner``: and under ``learner`` the bytes of the final learner's file, with
-    its generators ``rng`` and ``env``: :func:`~gdq_pddl.learners.saving.save_learner`)."""
+    (``keep_learner``: and under ``learner`` the bytes of the learner's saved file)."""
     exp = unit.experiment
     rng, env_seed = unit.seeds()
     learner, parts, names = None, [], []
@@ -108,8 +103,7 @@ def load_pddl_instance(files: tuple[str, ...]):
 
 
 def warm_up(units: list[Unit]) -> None:
-    """Compile every kernel once in this process, so forked workers need not (the episode
-    loop compiles meanwhile in a second process, :mod:`gdq_pddl.learners.precompile`)."""
+    """Compile every kernel once in this process, so forked workers need not."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
         if (u.experiment.world, u.method) not in tiny:
