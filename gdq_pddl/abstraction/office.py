@@ -67,11 +67,8 @@ class OfficeAbstraction:
         return self.spaces.action(verb, parts[arg + 1])
 
     def planner_state(self, state: int) -> State:
-        """The robot at the state's position; its door as observed, every other door closed.
-
-        The learner does not observe other doors, so the planner assumes them closed:
-        plans then include every opendoor they might need (optimistic, never wrong).
-        """
+        """The robot at the state's position; its door as observed, every other door
+        closed (plans then include every opendoor they might need)."""
         p, is_open = self.spaces.states[state]
         door = self.world.door_at.get(p)
         opened = door.name if door is not None and is_open else None

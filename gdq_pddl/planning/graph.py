@@ -1,11 +1,9 @@
 """The default planner: all shortest plans (or all loop-free plans within a length
-tolerance) from the grounded state graph, for any STRIPS + typing problem.
+tolerance) of any STRIPS + typing problem.
 
-Per query, A* with h_max (:mod:`gdq_pddl.planning.heuristic`) finds the shortest length
-``L``; a breadth-first search then keeps only the states with ``depth + h_max <=
-floor((1 + t) L)`` (h_max is admissible, so no plan within the bound is lost, and the
-rest of the state space is never generated), as a :class:`networkx.DiGraph`. Goal states
-are not expanded: a plan ends where the goal first holds.
+A* with h_max finds the shortest length ``L``; a breadth-first search then keeps the
+states with ``depth + h_max <= floor((1 + t) L)`` (h_max is admissible: no plan is lost)
+as a :class:`networkx.DiGraph`; a plan ends where the goal first holds.
 """
 
 from __future__ import annotations

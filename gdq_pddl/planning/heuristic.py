@@ -1,10 +1,5 @@
 """h_max, the admissible and consistent delete-relaxation heuristic (Bonet & Geffner 2001),
-compiled for a grounded task.
-
-With unit costs h_max is a breadth-first search over facts (a fact first reached in
-layer ``k`` costs ``k``; an operator fires once all its positive preconditions are
-reached); :func:`_hmax` runs it over CSR arrays and stops when every goal fact is reached.
-"""
+compiled for a grounded task: with unit costs, a breadth-first search over facts."""
 
 from __future__ import annotations
 
