@@ -1,8 +1,5 @@
-"""Where results go: one check of an output folder or file before anything is computed
-(:func:`output_folder`, :func:`output_file`), and writes that name their file when they
-fail (:func:`writing`, :func:`write_text`, :func:`save_figure`, :func:`atomic_write`),
-each an :class:`~gdq_pddl.errors.OutputError`.
-"""
+"""Where results go: output folders and files checked before anything is computed, and
+writes whose failures name their file (an :class:`~gdq_pddl.errors.OutputError`)."""
 
 from __future__ import annotations
 
@@ -20,10 +17,8 @@ if TYPE_CHECKING:
 
 
 def output_folder(path: str | Path, option: str = "--out") -> Path:
-    """Create the folder ``path`` if needed and check that files can be written in it.
-
-    ``option`` names where the path came from in the message. Returns the path.
-    """
+    """Create the folder ``path`` if needed, check that files can be written in it and
+    return it (``option`` names it in the message)."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{option} {path}: is not a folder (a file or a device); "
@@ -38,11 +33,8 @@ def output_folder(path: str | Path, option: str = "--out") -> Path:
 
 
 def output_file(path: str | Path, option: str = "--out") -> Path:
-    """Check that the file ``path`` can be written (its folder is created if needed).
-
-    A folder is refused; a device such as ``/dev/null`` is accepted (writing to it
-    works). Nothing is left behind if ``path`` did not exist. Returns the path.
-    """
+    """Check that the file ``path`` can be written (a device such as ``/dev/null`` can,
+    a folder cannot; its folder is created) and return it."""
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"{option} {path}: is a folder; give a file name")
@@ -63,9 +55,8 @@ def output_file(path: str | Path, option: str = "--out") -> Path:
 
 @contextmanager
 def writing(path: str | Path) -> Iterator[None]:
-    """Name ``path`` in an OSError raised while writing it: a full disk (ENOSPC) or an I/O
-    error names no file, and the command line printed a bare "No space left on device".
-    An OSError that names its own file passes through, and so does a closed pipe."""
+    """Name ``path`` in an OSError that names no file (a full disk) raised while writing
+    it; a closed pipe passes through."""
     try:
         yield
     except OSError as exc:
@@ -75,22 +66,16 @@ def writing(path: str | Path) -> Iterator[None]:
 
 
 def file_mode() -> int:
-    """The permissions a new file gets under the process's umask (``0o644`` under the usual
-    ``022``): what :func:`atomic_write` gives its file, since a temporary file is made
-    ``0o600`` whatever the umask says."""
+    """The permissions a new file gets under the process's umask (a temporary file is
+    made ``0o600`` whatever it says)."""
     mask = os.umask(0o22)  # reading the umask means setting it: put it straight back
     os.umask(mask)
     return 0o666 & ~mask
 
 
 def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file
-    (an OSError that names no file, a full disk, names ``path``). The file gets the
-    permissions the umask gives a new file (:func:`file_mode`), as a plain ``open`` would.
-
-    A process killed in the middle leaves ``.<name>.*.tmp`` next to ``path``
-    (:data:`TEMPORARY`), which the next writer of that folder may remove.
-    """
+    """Call ``write(tmp)`` then rename ``tmp`` over ``path`` (with :func:`file_mode`):
+    readers never see half a file; a process killed midway leaves :data:`TEMPORARY`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with writing(path):
@@ -110,9 +95,7 @@ TEMPORARY = ".*.tmp"
 
 
 def remove_temporary(folder: Path) -> None:
-    """Remove what a killed :func:`atomic_write` left in ``folder`` (nothing if it is not a
-    folder); a file only appears under its own name by an atomic rename, so these are
-    never results."""
+    """Remove what a killed :func:`atomic_write` left in ``folder`` (never results)."""
     if folder.is_dir():
         for stale in folder.glob(TEMPORARY):
             stale.unlink(missing_ok=True)

@@ -1,10 +1,7 @@
-"""The world file: an office building as data (reality for the simulator).
-
-A world file is TOML (``gdq_pddl/data/office.toml`` is the annotated original): positions,
-their adjacency, doors (two sides, success and stuck probabilities, optional costs),
-per-verb costs, areas, landmarks and tasks. :func:`load_world` validates it and names the
-file and key of every error. Its knowledge is ``domains/office.pddl`` with the problem
-:func:`office_problem` writes, its reality :meth:`World.dynamics`.
+"""The world file (TOML, ``gdq_pddl/data/office.toml`` annotated): an office building as
+data. :func:`load_world` validates it, naming the file and key of every error; its
+knowledge is ``domains/office.pddl`` with :func:`office_problem`, its reality
+:meth:`World.dynamics`.
 """
 
 from __future__ import annotations
@@ -123,12 +120,10 @@ class World:
         return self.costs[verb]
 
     def dynamics(self) -> Dynamics:
-        """The world's reality for ``domains/office.pddl`` (the one place the doors'
-        probabilities live): ``goto`` and ``approach`` reach their target with
-        ``navigation_success``, else a random walking neighbour (a slip over the
-        applicable ``goto`` and ``approach`` actions, the target included); ``opendoor``
-        and ``gothrough`` work with their door's ``success``, get stuck with its
-        ``stuck``, else do nothing; costs per verb, door overrides first."""
+        """The world's reality for ``domains/office.pddl``: ``goto`` and ``approach``
+        succeed with ``navigation_success``, else slip to a random applicable one;
+        ``opendoor`` and ``gothrough`` work with their door's ``success``, get stuck with
+        its ``stuck``, else do nothing; costs per verb, door overrides first."""
         nav = Outcomes(self.navigation_success, 0.0, ("goto", "approach"))
         actions = {v: replace(nav, cost=self.costs[v]) for v in ("goto", "approach")}
         actions |= {v: Outcomes(cost=self.costs[v]) for v in DOOR_VERBS}
@@ -164,7 +159,7 @@ class World:
     def resolve(self, task: str | None = None, start: str | None = None,
                 goal: str | None = None) -> Task:
         """A task by name, or an ad-hoc one from ``start``/``goal`` names (refused when
-        they are the same position, or the goal cannot be reached from the start)."""
+        they are the same position or the goal is out of reach)."""
         if task is not None:
             if start is not None or goal is not None:
                 raise WorldError(self.source, "", "give a task or a start and goal, not both")
@@ -184,8 +179,7 @@ class World:
         return Task(name=f"{s}-{g}", start=s, goal=g)
 
     def reachable(self, start: str) -> set[str]:
-        """The positions the robot can get to from ``start`` (walking, and through doors
-        that can open: ``success > 0``)."""
+        """The positions reachable from ``start`` (through doors with ``success > 0``)."""
         links: dict[str, list[str]] = {p: list(ns) for p, ns in self.walk_neighbours.items()}
         for d in self.doors:
             if d.success > 0:
@@ -204,12 +198,9 @@ class World:
 
 
 def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
-    """The world's knowledge as a PDDL problem of ``domains/office.pddl``: reach
-    ``task.goal`` from ``task.start`` with every door closed (``problems/`` holds its
-    output for the office's tasks).
-
-    A locked door (success 0) gets no ``connects`` facts: knowing that a door never opens
-    is knowing that it is a wall. ``locked_is_wall=False`` keeps them."""
+    """The world's knowledge as a problem of ``domains/office.pddl``: reach ``task.goal``
+    from ``task.start``, every door closed; a locked door (success 0) is a wall (no
+    ``connects`` facts) unless ``locked_is_wall`` is False."""
     door_sides = {p for d in world.doors for p in d.sides}
     walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
                   ((p, n) for n in ns))
@@ -252,10 +243,8 @@ def _component(start: str, links: Mapping[str, Iterable[str]]) -> set[str]:
 
 
 def load_world(path: str | Path | None = None) -> World:
-    """Load and validate a world file; ``None`` loads the shipped office.
-
-    Raises :class:`WorldError` naming the file and key of the first problem found.
-    """
+    """Load and validate a world file (``None``: the shipped office); WorldError naming
+    the file and key of the first problem found."""
     if path is None:
         return builtin_world("office")
     path = Path(path)
@@ -272,11 +261,8 @@ DEFAULT_TASK = "C"
 
 
 def as_world(world: str | Path | World | None) -> World:
-    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
-
-    A name is read as :func:`gdq_pddl.resources.resolve` says (``"office"``: a built-in
-    world; an unknown name: an error listing them).
-    """
+    """A :class:`World` from a world, a file path, a built-in name (as
+    :func:`gdq_pddl.resources.resolve` reads it), or ``None`` (the office)."""
     if world is None:
         return load_world(None)
     if isinstance(world, World):
@@ -304,8 +290,7 @@ def parse_world(text: str, source: str = "<string>") -> World:
 
 
 class _WorldChecks(Checks):
-    """The world file's own checks on top of the TOML checks of
-    :class:`~gdq_pddl.dynamics.Checks`."""
+    """The world file's own checks on top of :class:`~gdq_pddl.dynamics.Checks`."""
 
     def pos(self, name: Any, path: str) -> str:
         if not isinstance(name, str) or name not in self.position_set:
