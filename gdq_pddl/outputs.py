@@ -28,7 +28,13 @@ def output_folder(path: str | Path, option: str = "--out") -> Path:
     except OSError as exc:
         raise OutputError(f"{option} {path}: cannot create the folder: "
                           f"{exc.strerror or exc}") from None
-    _probe(path, option)
+    try:  # /proc and read-only file systems look writable by their permissions
+        fd, name = tempfile.mkstemp(prefix=".write-test-", dir=path)
+        os.close(fd)
+        os.unlink(name)
+    except OSError as exc:
+        raise OutputError(f"{option} {path}: cannot write in this folder: "
+                          f"{exc.strerror or exc}") from None
     return path
 
 
@@ -65,17 +71,10 @@ def writing(path: str | Path) -> Iterator[None]:
         raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
-def file_mode() -> int:
-    """The permissions a new file gets under the process's umask (a temporary file is
-    made ``0o600`` whatever it says)."""
-    mask = os.umask(0o22)  # reading the umask means setting it: put it straight back
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` then rename ``tmp`` over ``path`` (with :func:`file_mode`):
-    readers never see half a file; a process killed midway leaves :data:`TEMPORARY`."""
+    """Call ``write(tmp)`` then rename ``tmp`` over ``path`` with the permissions the
+    umask gives a new file: readers never see half a file; a process killed midway
+    leaves :data:`TEMPORARY`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with writing(path):
@@ -83,7 +82,9 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
         os.close(fd)
         try:
             write(Path(tmp))
-            os.chmod(tmp, file_mode())
+            umask = os.umask(0o22)  # reading the umask means setting it: put it straight back
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it 0o600
             os.replace(tmp, path)
         finally:
             if os.path.exists(tmp):
@@ -112,14 +113,3 @@ def save_figure(fig: Figure, path: str | Path, **kwargs: object) -> None:
     with writing(path):
         fig.savefig(path, **kwargs)
 
-
-def _probe(folder: Path, option: str) -> None:
-    """Write and remove a temporary file in ``folder`` (``/proc`` and read-only file
-    systems look writable by their permissions, but are not)."""
-    try:
-        fd, name = tempfile.mkstemp(prefix=".write-test-", dir=folder)
-        os.close(fd)
-        os.unlink(name)
-    except OSError as exc:
-        raise OutputError(f"{option} {folder}: cannot write in this folder: "
-                          f"{exc.strerror or exc}") from None

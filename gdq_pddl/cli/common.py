@@ -80,14 +80,6 @@ def world_arg(p: argparse.ArgumentParser) -> None:
                    f"({', '.join(shipped_names('world'))}; default: office)")
 
 
-def determinisation_arg(p: argparse.ArgumentParser) -> None:
-    """--determinisation, default None (:func:`determinisation` gives its value)."""
-    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=None,
-                   help="what the planner knows of a PPDDL domain: every outcome of an "
-                        "action is a planner action (all-outcomes, the default), or only its "
-                        "most likely one (most-likely)")
-
-
 def determinisation(args: argparse.Namespace) -> str:
     """The --determinisation given, or the default one."""
     return args.determinisation or DETERMINISATIONS[0]
@@ -95,7 +87,7 @@ def determinisation(args: argparse.Namespace) -> str:
 
 def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> None:
     """--domain, --problem (``what`` the command does with it), --dynamics if
-    ``dynamics``, and --determinisation."""
+    ``dynamics``, and --determinisation (default None: :func:`determinisation`)."""
     named = "a file, or a shipped name (`gdq-pddl list` shows them)"
     p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
                    "--problem names")
@@ -106,7 +98,10 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
                        "success, failure and costs of a STRIPS domain's actions, an optional "
                        "overlay (r_max, step_limit, costs) for a PPDDL domain; default: the "
                        "shipped dynamics of a shipped --domain, if there is one")
-    determinisation_arg(p)
+    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=None,
+                   help="what the planner knows of a PPDDL domain: every outcome of an "
+                        "action is a planner action (all-outcomes, the default), or only its "
+                        "most likely one (most-likely)")
 
 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None
@@ -229,19 +224,14 @@ def office_report(out: Path) -> str:
         (f"; read {report}" if report else "")
 
 
-def check_executor(args: argparse.Namespace) -> None:
-    """Refuse Ray's options where Ray does not run."""
-    if args.address is not None and args.executor != "ray":
-        raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
-                          f"(the executor is {args.executor})")
-
-
 def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
             report: Callable[[Path], str] = office_report, results: str = "episodes.csv",
             **run_kw) -> int:
     """Run ``experiments`` into --out (default results/<safe name>), then ``report`` on it;
     ``results`` names the collected file, ``run_kw`` goes to ``run_experiments``."""
-    check_executor(args)
+    if args.address is not None and args.executor != "ray":
+        raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
+                          f"(the executor is {args.executor})")
     out = args.out or Path("results") / safe_name(name)
     check_sizes(experiments, args.jobs or 1)  # the runs first: their message names options
     if not args.no_report:

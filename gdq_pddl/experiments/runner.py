@@ -305,7 +305,8 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
     total = sum(e.runs * len(e.methods) for e in experiments)
     # the longest units first, so the last ones to finish are short
     pending.sort(key=lambda u: -u.experiment.episodes)
-    bar = _progress(total, total - len(pending), progress)
+    bar = tqdm(total=total, initial=total - len(pending), unit="run", desc="runs",
+               dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
     units_dir = out / "units"
     try:
         for unit, result in _execute(pending, jobs, executor, address, work):
@@ -317,11 +318,6 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
             bar.update(1)
     finally:
         bar.close()
-
-
-def _progress(total: int, initial: int, enabled: bool):
-    return tqdm(total=total, initial=initial, unit="run", desc="runs", dynamic_ncols=True,
-                disable=not enabled or not sys.stderr.isatty())
 
 
 def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | None,

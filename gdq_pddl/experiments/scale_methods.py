@@ -1,6 +1,4 @@
-"""The methods of ``gdq-pddl scale`` by name, and the learner each one is (what the CLI
-reads when it starts, without loading the learners; :mod:`gdq_pddl.experiments.scale`
-runs them)."""
+"""The methods of ``gdq-pddl scale`` by name (read by the CLI without loading learners)."""
 
 from __future__ import annotations
 
@@ -12,9 +10,7 @@ METHODS: dict[str, tuple[str, dict]] = {
     "Dyna-Q": ("dynaq", {}),
     "Q-learning": ("qlearning", {}),
 }
-"""Name -> (``make_learner`` name, its keyword arguments); GDQ-code and DARLING with
-door-route plans within 1.3 x the shortest (see :mod:`gdq_pddl.experiments.scale`)."""
+"""Name -> (``make_learner`` name, its keyword arguments)."""
 
 DEFAULT_METHODS = tuple(m for m in METHODS if m != "GDQ-literal")
-"""What ``gdq-pddl scale`` runs unless ``--method`` says otherwise: every method but
-GDQ-literal, which never learns (``docs/decisions.md``)."""
+"""Every method but GDQ-literal, which never learns (``docs/decisions.md``)."""
