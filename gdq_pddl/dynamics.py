@@ -150,8 +150,7 @@ class Outcomes:
     failure: str | tuple[str, ...] = "nothing"
     """What the remaining ``1 - success - stuck`` does: ``"nothing"``, or a slip to a
     random applicable action of these schemas (``"stuck"``: ``stuck = 1 - success``)."""
-    cost: CostDist | None = None
-    """None: not given; the cost the domain states, else 1."""
+    cost: CostDist | None = None  # None: the cost the domain states, else 1
 
 
 @dataclass(frozen=True)
@@ -161,14 +160,11 @@ class Dynamics:
     source: str
     r_max: float = 20.0
     step_limit: int = 20
-    actions: Mapping[str, Outcomes] = field(default_factory=dict)
-    """Per schema; schemas not listed always succeed at cost 1."""
-    objects: Mapping[str, Mapping[str, Outcomes]] = field(default_factory=dict)
-    """Per schema, per object: overrides."""
+    actions: Mapping[str, Outcomes] = field(default_factory=dict)  # others: cost 1, no failure
+    objects: Mapping[str, Mapping[str, Outcomes]] = field(default_factory=dict)  # overrides
     name: str = ""
     description: str = ""
-    stated: frozenset[str] = frozenset()
-    """The ``[dynamics]`` keys the file gives (the others are defaults)."""
+    stated: frozenset[str] = frozenset()  # the [dynamics] keys the file gives
 
     def outcomes(self, schema: str, args: tuple[str, ...]) -> Outcomes:
         """The outcomes of the ground action ``(schema *args)``."""

@@ -32,12 +32,10 @@ KEYS: dict[str, tuple[str, ...]] = {
 """The keys each table of a world file may have."""
 
 PDDL_NAME = re.compile(r"[a-z][a-z0-9_-]*")
-"""What a position or door name must look like: it becomes a PDDL object, and PDDL
-reads names case-insensitively (``P1`` and ``p1`` would be one object)."""
+"""A position or door name: a PDDL object, lower case (PDDL ignores case)."""
 
 LABEL = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
-"""What a world or task name must look like: it goes into PDDL problem names, file names
-and CSV columns."""
+"""A world or task name (it goes into PDDL problem names, file names and CSV columns)."""
 
 
 @dataclass(frozen=True)
@@ -49,8 +47,7 @@ class Door:
     success: float
     stuck: float
     label: str = ""
-    costs: Mapping[str, CostDist] = field(default_factory=dict)
-    """Per-verb cost overrides for the door's own actions (opendoor, gothrough)."""
+    costs: Mapping[str, CostDist] = field(default_factory=dict)  # opendoor, gothrough
 
 
 @dataclass(frozen=True)
@@ -60,8 +57,7 @@ class Task:
     name: str
     start: str
     goal: str
-    irrelevant_areas: tuple[int, ...] = ()
-    """Areas the paper calls irrelevant to this task (empty where it says nothing)."""
+    irrelevant_areas: tuple[int, ...] = ()  # as the paper calls them
 
 
 @dataclass(frozen=True)
@@ -274,8 +270,7 @@ def as_world(world: str | Path | World | None) -> World:
 
 
 def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
-    """The task to run (see :meth:`World.resolve`): by name, from start/goal, or the
-    default, task ``C`` when the world has one, else the world's first task."""
+    """The task to run (:meth:`World.resolve`), by default ``C`` or the world's first."""
     if task is None and start is None and goal is None:
         if DEFAULT_TASK not in world.tasks and world.tasks:
             task = next(iter(world.tasks))

@@ -37,12 +37,9 @@ baselines (``GDQ-literal``, which never learns, only where asked and in ``reprod
 class Hyper:
     """Learning hyperparameters shared by every method (SPEC sections 5 and 6)."""
 
-    alpha: float = 0.1
-    """Step size of the TD update."""
-    gamma: float = 0.95
-    """Discount factor."""
-    epsilon: float = 0.1
-    """Probability of a uniformly random (allowed) action."""
+    alpha: float = 0.1  # step size of the TD update
+    gamma: float = 0.95  # discount factor
+    epsilon: float = 0.1  # probability of a uniformly random (allowed) action
 
 
 @dataclass(frozen=True)
@@ -61,9 +58,8 @@ class Experiment:
     planner: str = "graph"
     seed: int = 0
     knowledge: str | None = None
-    """The world the learners' knowledge (PDDL problem, plans) is built from, named like
-    ``world`` (also ``office:<variant>``, see :mod:`gdq_pddl.experiments.knowledge`);
-    None: ``world`` itself, accurate knowledge. Not part of unit keys or seeds."""
+    """The world the knowledge is built from, named like ``world`` (also
+    ``office:<variant>``); None: ``world`` itself. Not part of unit keys or seeds."""
     pddl: tuple[str, ...] | None = None
     """``(domain, problem, dynamics[, determinisation])`` file paths (dynamics ``""``:
     none): learn on that PDDL problem instead of an office world (``world`` and
@@ -104,15 +100,13 @@ class Unit:
 
     @property
     def key(self) -> str:
-        """A file-name-safe identity, unique within an output folder (see
-        :func:`safe_name`: names from input files never become paths)."""
+        """A file-name-safe identity, unique within an output folder (:func:`safe_name`)."""
         tasks = "-".join(t.replace("->", "_to_") for t, _ in self.experiment.schedule)
         return safe_name(f"{self.experiment.name}__{tasks}__{self.method}__run{self.run}")
 
     def seeds(self) -> tuple[np.random.Generator, int]:
         """The learner's Generator and the env's integer seed, from the experiment and the
-        run only: run ``r`` of every method starts from the same seeds (paired, common
-        random numbers), so a difference between methods is less noisy."""
+        run only: run ``r`` of every method starts from the same seeds (paired runs)."""
         ident = zlib.crc32(f"{self.experiment.name}|{self.experiment.schedule}".encode())
         seq = np.random.SeedSequence([self.experiment.seed, ident, self.run])
         learner, env = seq.spawn(2)
@@ -152,8 +146,7 @@ def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Ex
 
 
 def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
-    """SPEC section 6: the real-robot protocol, simulated with durations as costs (GDQ,
-    the two readings of the paper's GDQ, and Dyna-Q, which the paper compared it with)."""
+    """SPEC section 6: the real-robot protocol, simulated with durations as costs."""
     kw.setdefault("methods", ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"))
     return Experiment("robot", (("X", trials),), runs=runs, world="office_robot",
                       hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)

@@ -70,8 +70,8 @@ class RunConfig:
         return "office_robot" if experiment == ROBOT_EXPERIMENT else "office"
 
     def planned(self) -> dict[tuple[str, str], tuple[int, int]]:
-        """``(experiment, method) -> (runs, episodes per run)`` over every entry that says
-        its schedule, methods and runs (the paper's ``tasks`` is one entry per task)."""
+        """``(experiment, method) -> (runs, episodes per run)`` over the entries that say
+        their schedule, methods and runs."""
         out: dict[tuple[str, str], tuple[int, int]] = {}
         for e in self.experiments:
             sched, methods, runs = e.get("schedule"), e.get("methods"), e.get("runs")
@@ -102,15 +102,11 @@ def load_config(folder: str | Path) -> RunConfig:
 def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
     """The episodes of an output folder (or an ``episodes.csv``), one row per episode.
 
-    Columns: ``experiment``, ``method``, ``task`` (text: the experiment's name, e.g.
-    ``tasks``, ``switch-C-D``, ``run``; the learner; the task label, e.g. ``C`` or a PDDL
-    problem's name), ``run`` (0-based), ``episode`` (1-based, counted over the whole run,
-    so a switch's second task goes on from the first), ``return`` (cumulative reward of
-    the episode), ``steps``, ``success`` (1: the goal was reached), then ``area_1`` ..
-    ``area_K`` for a problem with areas (visits per area in the episode; none for a PDDL
-    problem without areas). ``run``, ``episode``, ``steps`` and ``success`` are int64,
-    ``return`` and the areas float64 (an empty area cell is NaN), the text columns
-    ``category``.
+    Columns: ``experiment``, ``method``, ``task`` (category: e.g. ``switch-C-D``,
+    ``GDQ``, ``C``), ``run`` (0-based), ``episode`` (1-based over the whole run),
+    ``return``, ``steps``, ``success`` (1: goal reached), then ``area_1`` .. ``area_K``
+    for a problem with areas (visits per area). ``return`` and the areas are float64 (an
+    empty area cell is NaN), the other numbers int64.
 
     With ``check`` (default), a file that contradicts the folder's ``config.json`` (too
     few or too many episodes, a repeated episode, a method never run, a run beyond its

@@ -55,11 +55,9 @@ FRACTION = 0.9
 TOLERANCE = 0.3
 """Plan-length tolerance of DARLING's and GDQ-code's door-route plans."""
 FIRST = 300
-"""Episodes of the early-learning measure: the mean return over the first ``FIRST``
-episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
+"""Episodes of the early-learning measure (the mean return over a run's first ones)."""
 MAX_BUILDINGS = 1000
-"""The most ``--buildings`` per size (each is a marker of ``scale.png`` and a row of every
-table of ``REPORT.md``)."""
+"""The most ``--buildings`` per size."""
 
 
 @dataclass
@@ -67,16 +65,14 @@ class BuildingResult:
     """Everything measured on one building."""
 
     positions: int
-    seed: int
-    """The building seed (``gdq-pddl building --seed``)."""
+    seed: int  # gdq-pddl building --seed
     doors: int
     n_states: int
     n_actions: int
     plan_length: int
     step_limit: int
     r_max: float
-    v_ref: float
-    """The task's reference value (a lower bound on V*)."""
+    v_ref: float  # the task's reference value (a lower bound on V*)
     context_s: float
     returns: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes
     success: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes, bool
@@ -159,9 +155,8 @@ _WARMED: set[str] = set()
 
 def run_one(setting: tuple, name: str, key: tuple[int, int, int],
             episodes: int) -> dict[str, np.ndarray]:
-    """One run of method ``name`` in ``setting`` (from :func:`building_context`), seeded by
-    ``key = (building seed, positions, run)`` only, the same for every method (paired
-    runs): the arrays of a unit file."""
+    """The arrays of one run of method ``name`` in ``setting`` (:func:`building_context`),
+    seeded by ``key = (building seed, positions, run)`` only (paired runs)."""
     world, ctx, env = setting
     method, config = METHODS[name]
     env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
@@ -199,9 +194,8 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
 
 
 def save_building(result: BuildingResult, path) -> None:
-    """The raw returns and successes of every method on one building, with the building's
-    figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``).
-    Written atomically."""
+    """Write the returns and successes of every method on one building (keys
+    ``returns/<method>``, ``success/<method>``) and the building's figures."""
     arrays = {f"returns/{k}": v for k, v in result.returns.items()}
     arrays |= {f"success/{k}": v for k, v in result.success.items()}
 
@@ -324,8 +318,7 @@ def _read_header(path: Path, rerun: str) -> dict:
 
 def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, methods: list[str],
                    progress: bool, log: Callable[[str], None], rerun: str) -> BuildingResult:
-    """Run the units of building ``(n, seed)`` missing in ``out/units/building-N-sS/``,
-    then read them all."""
+    """Run the missing units of building ``(n, seed)``, then read them all."""
     name = building_name(n, seed)
     folder = out / "units" / name
     paths = {(m, run): folder / f"{m}-{run}.npz" for m in methods for run in range(runs)}

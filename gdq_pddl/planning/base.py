@@ -24,8 +24,7 @@ State = frozenset[str]
 
 
 def length_bound(shortest: int, tolerance: float) -> int:
-    """The most actions a plan within ``tolerance`` may have: ``floor((1 + tolerance) x
-    shortest)``, with the rounding every backend and plan table shares."""
+    """The most actions a plan within ``tolerance`` may have (every backend's rounding)."""
     return math.floor((1 + tolerance) * shortest + 1e-9)
 
 
@@ -205,9 +204,8 @@ class PlanningProblem:
 
 
 def replay(task: GroundTask, state: int, actions: tuple[str, ...]) -> Plan:
-    """The plan of ``actions`` from the bitmask ``state``, with the states they lead
-    through on the grounded task; :class:`PlanningError` naming the first step that does
-    not apply."""
+    """The plan of ``actions`` from the bitmask ``state`` on the grounded task;
+    :class:`PlanningError` naming the first step that does not apply."""
     ops = {op.name: op for op in task.ops}
     states = [state]
     for i, action in enumerate(actions):
@@ -231,16 +229,11 @@ def check_size(problem: Problem, source: str) -> None:
 class Query(NamedTuple):
     """One planning query, resolved by :meth:`PlanningProblem.query` (a tuple: cheap)."""
 
-    key: tuple
-    """The cache key: planner, start, goal, tolerance and the planner's options."""
-    start: int
-    """The start state as a bitmask of the grounded task (-1 when ``hit`` answers it)."""
-    goal: tuple[int, int] | None
-    """(must hold, must not hold) bitmasks, or None when the goal can never hold."""
-    hit: PlanResult | None
-    """The cached answer to this very query, if any."""
-    started: float
-    """``time.perf_counter()`` when the query was made (for the time_s metric)."""
+    key: tuple  # planner, start, goal, tolerance and the planner's options
+    start: int  # bitmask of the grounded task (-1 when ``hit`` answers the query)
+    goal: tuple[int, int] | None  # (must hold, must not hold) bitmasks; None: never holds
+    hit: PlanResult | None  # the cached answer, if any
+    started: float  # time.perf_counter() when the query was made
 
 
 @runtime_checkable
