@@ -1,7 +1,5 @@
-"""An output folder as both runners use it: locked (:class:`FolderLock`), its
-``config.json`` read back (:func:`read_config`), its input files fingerprinted
-(:func:`input_hashes`) and its unit files read back or named as damaged (:func:`load_unit`).
-"""
+"""An output folder as both runners use it: locked, its ``config.json`` read back, its
+input files fingerprinted and its unit files read back or named as damaged."""
 
 from __future__ import annotations
 
@@ -24,10 +22,6 @@ except ImportError:  # pragma: no cover (not POSIX: no lock, as before)
     fcntl = None
 
 LOCK_NAME = ".lock"
-
-__all__ = ["FolderLock", "ResultsError", "changed_input", "close_inherited_locks",
-           "input_hashes", "load_unit", "read_config", "read_unit", "resume_config",
-           "unit_path"]
 
 
 _HELD: set[int] = set()

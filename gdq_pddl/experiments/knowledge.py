@@ -89,12 +89,9 @@ def derived_world(name: str) -> World:
 class Case:
     """One knowledge/reality disagreement."""
 
-    name: str
-    """Short label, also the experiment name prefix."""
-    real: str
-    """The world the env simulates."""
-    knowledge: str
-    """The world the knowledge (PDDL problem, plans) is built from."""
+    name: str  # also the experiment name prefix
+    real: str  # the world the env simulates
+    knowledge: str  # the world the knowledge (PDDL problem, plans) is built from
     task: str
     description: str
 
