@@ -35,8 +35,7 @@ from gdq_pddl.experiments import (
     switch_experiment,
 )
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
-from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS as SCALE_DEFAULT_METHODS
-from gdq_pddl.experiments.scale_methods import METHODS as SCALE_METHODS
+from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
 

@@ -32,6 +32,19 @@ DEFAULT_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
 """What the commands compare unless told otherwise: GDQ, the authors'-code GDQ and the
 baselines (``GDQ-literal``, which never learns, only where asked and in ``reproduce``)."""
 
+SCALE_METHODS: dict[str, tuple[str, dict]] = {
+    "GDQ": ("gdq", {}),
+    "GDQ-literal": ("gdq", {"variant": "literal"}),
+    "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.3}),
+    "DARLING": ("darling", {"tolerance": 0.3}),
+    "Dyna-Q": ("dynaq", {}),
+    "Q-learning": ("qlearning", {}),
+}
+"""The methods of ``gdq-pddl scale``: name -> (``make_learner`` name, its arguments)."""
+
+SCALE_DEFAULT_METHODS = tuple(m for m in SCALE_METHODS if m != "GDQ-literal")
+"""Every method but GDQ-literal, which never learns (``docs/decisions.md``)."""
+
 
 @dataclass(frozen=True)
 class Hyper:

@@ -13,6 +13,7 @@ import itertools
 import math
 import time
 import warnings
+from functools import cache
 
 import networkx as nx
 
@@ -78,14 +79,7 @@ class GraphPlanner:
         module docstring), its goal states and the shortest length."""
         task = problem.task
         hmax = hmax_for(task)
-        h_cache: dict[int, int] = {}
-
-        def h(s: int) -> int:
-            v = h_cache.get(s)
-            if v is None:
-                v = h_cache[s] = hmax(s, goal[0])
-            return v
-
+        h = cache(lambda s: hmax(s, goal[0]))
         graph = nx.DiGraph()
         graph.add_node(s0)
         shortest = shortest_length(task, s0, goal, h)
@@ -121,7 +115,7 @@ class GraphPlanner:
             layer, depth = nxt, depth + 1
         for g in goals:
             graph.add_edge(g, _SINK, actions=[])
-        self._generated = len(h_cache)
+        self._generated = h.cache_info().currsize
         return graph, goals, shortest
 
     def _expand(self, task, graph: nx.DiGraph, paths) -> tuple[list[Plan], bool]:
