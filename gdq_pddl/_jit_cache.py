@@ -46,8 +46,7 @@ def cache_files(root: Path = PACKAGE) -> list[Path]:
 
 
 def refresh(root: Path = PACKAGE) -> bool:
-    """Delete stale and damaged numba cache files under ``root``; True when the sources
-    changed and the cache was cleared."""
+    """Delete stale and damaged numba cache files; True when the sources changed."""
     digest, stamp = sources_digest(root), root / STAMP
     try:
         fresh = stamp.read_text() == digest

@@ -65,8 +65,7 @@ class Building:
 
 
 def generate(positions: int, seed: int = 0, doors: int | None = None) -> Building:
-    """A building of exactly ``positions`` positions; WorldError when the numbers cannot
-    make one."""
+    """A building of exactly ``positions`` positions (WorldError: the numbers cannot)."""
     if positions < MIN_POSITIONS:
         raise WorldError("building", "positions", f"need at least {MIN_POSITIONS}, got {positions}")
     check_memory(positions * POSITION_BYTES, f"positions = {positions:,}: generating the "
@@ -104,8 +103,7 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
 
 def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int,
                doors: int) -> list[list[str]]:
-    """Corridor rows and links of ``n`` positions in all (fire doors' stubs come on top);
-    ``doors`` is the building's number of doors, for the message when they do not fit."""
+    """Corridor rows and links of ``n`` positions (``doors``: for the message)."""
     n_rows = max(2, round(math.sqrt(n / 4)))
     n_links = sum(int(rng.integers(2, 4)) for _ in range(n_rows - 1))
     link_len = rng.integers(1, 4, size=n_links)

@@ -45,8 +45,7 @@ def _too_large(size: int, limit: int) -> str:
 
 
 def read_text(path: str | Path, fail: Callable[[str, str], GdqError]) -> str:
-    """The UTF-8 text of ``path`` (see :func:`read_bytes`), without a leading byte-order
-    mark; on any failure raise ``fail(file name, message)``."""
+    """The UTF-8 text of ``path`` without a byte-order mark (see :func:`read_bytes`)."""
     data = read_bytes(path, fail)
     try:
         return data.decode("utf-8").removeprefix(BOM)

@@ -22,8 +22,7 @@ MAX_COUNT = 2**62
 """The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""
 
 MAX_TOLERANCE = 100.0
-"""The largest plan-length tolerance: plans of up to 101 x the shortest (the paper uses
-0.3)."""
+"""The largest plan-length tolerance: plans of up to 101 x the shortest."""
 
 MAX_INPUT_BYTES = 16 * 1000**2
 """The largest input file (world, domain, problem, dynamics) read: 16 MB."""
@@ -66,8 +65,7 @@ def _address_space_cap() -> float:
 
 
 def address_space_refusal(minimum: int = MIN_ADDRESS_SPACE) -> str | None:
-    """Why the command line cannot start under this process's ``ulimit -v`` (below
-    ``minimum`` bytes), or None when it can."""
+    """Why the command line cannot start under this ``ulimit -v``, or None."""
     cap = _address_space_cap()
     if cap >= minimum:
         return None
@@ -110,8 +108,7 @@ def check_real(name: str, value: object, low: float, high: float = math.inf,
 
 
 def check_count(name: str, value: object, high: int = MAX_COUNT) -> None:
-    """Raise :class:`~gdq_pddl.errors.ConfigError` unless ``value`` is an integer (not a
-    bool, not ``2.0``) in ``[0, high]``."""
+    """Raise a ConfigError unless ``value`` is an integer (not a bool) in ``[0, high]``."""
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or \
             not 0 <= value <= high:
         raise ConfigError(f"{name} must be a whole number in [0, {high:_}], got {value!r}")

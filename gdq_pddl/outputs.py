@@ -17,8 +17,7 @@ if TYPE_CHECKING:
 
 
 def output_folder(path: str | Path, option: str = "--out") -> Path:
-    """Create the folder ``path`` if needed, check that files can be written in it and
-    return it (``option`` names it in the message)."""
+    """Create the folder ``path`` if needed and check that files can be written in it."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{option} {path}: is not a folder (a file or a device); "
@@ -39,8 +38,7 @@ def output_folder(path: str | Path, option: str = "--out") -> Path:
 
 
 def output_file(path: str | Path, option: str = "--out") -> Path:
-    """Check that the file ``path`` can be written (a device such as ``/dev/null`` can,
-    a folder cannot; its folder is created) and return it."""
+    """Check that the file ``path`` can be written (a device can, a folder cannot)."""
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"{option} {path}: is a folder; give a file name")
@@ -61,8 +59,7 @@ def output_file(path: str | Path, option: str = "--out") -> Path:
 
 @contextmanager
 def writing(path: str | Path) -> Iterator[None]:
-    """Name ``path`` in an OSError that names no file (a full disk) raised while writing
-    it; a closed pipe passes through."""
+    """Name ``path`` in an OSError naming no file (a full disk) raised while writing it."""
     try:
         yield
     except OSError as exc:

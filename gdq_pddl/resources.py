@@ -52,8 +52,7 @@ def _shipped_files(kind: str) -> dict[str, Traversable]:
 
 
 def shipped_names(kind: str) -> list[str]:
-    """The sorted names of the shipped files of ``kind`` (``domain``, ``problem``,
-    ``dynamics`` or ``world``)."""
+    """The sorted names of the shipped files of ``kind`` (a key of :data:`SHIPPED`)."""
     return sorted(_shipped_files(kind))
 
 
@@ -65,8 +64,7 @@ def is_shipped_name(value: str | Path) -> bool:
 
 
 def resolve(kind: str, value: str | Path) -> Path:
-    """The file that ``value`` means for ``kind``: the path as given, or the shipped file
-    it names. Raises :class:`~gdq_pddl.errors.PlanningError` for an unknown name."""
+    """The file ``value`` means for ``kind`` (PlanningError for an unknown name)."""
     if not is_shipped_name(value):
         return Path(value)
     found = _shipped_files(kind).get(str(value))

@@ -29,8 +29,7 @@ def knowledge_action_mask(abstraction: Abstraction, task: GroundTask) -> np.ndar
 
 
 def graph_action_mask(graph: StateGraph) -> np.ndarray:
-    """``int8[n_states, n_ops]``: 1 where the ground action is applicable in the
-    reachable state (read-only)."""
+    """``int8[n_states, n_ops]``: 1 where the ground action applies (read-only)."""
     n_ops = len(graph.task.ops)
     mask = np.zeros((graph.n_states, n_ops), dtype=np.int8)
     source = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))

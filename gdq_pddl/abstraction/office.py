@@ -33,9 +33,7 @@ class OfficeAbstraction:
         return self.spaces.state(p, door is not None and f"(open {door.name})" in state)
 
     def mask_reader(self, task) -> Callable[[int], int]:
-        """:meth:`learner_state` of a grounded state bitmask of ``task`` (a
-        :class:`~gdq_pddl.pddl.grounding.GroundTask` of this world), without building its
-        atoms: for code that maps many planner states."""
+        """:meth:`learner_state` of a state bitmask of ``task``, without building atoms."""
         at = {task.fact_index[f"(at {p})"]: p for p in self.world.positions
               if f"(at {p})" in task.fact_index}
         opened = {p: task.fact_index.get(f"(open {d.name})")

@@ -25,8 +25,7 @@ POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "sta
 
 
 def csv_field(text: str) -> str:
-    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only when it holds a
-    comma, a quote or a line break: a plain name is written as it is)."""
+    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only where needed)."""
     buffer = io.StringIO()  # "\n" as the terminator, so that a line break gets quoted too
     csv.writer(buffer, lineterminator="\n").writerow([text])
     return buffer.getvalue().removesuffix("\n")
@@ -73,8 +72,7 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
 
 
 CHUNK = 50_000
-"""Episodes formatted at once, so that a unit of millions of episodes is written in
-pieces of bounded memory."""
+"""Episodes formatted at once (a unit's CSV is written in pieces of bounded memory)."""
 
 
 def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
@@ -100,9 +98,8 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
-    """The ground truth of each task the experiments use (its instance's
-    :meth:`optimal`), keyed ``<task>`` (the office), ``<task>@<world>`` or
-    ``<task>@<problem file>``."""
+    """Each task's ground truth (its instance's ``optimal()``), keyed ``<task>`` (the
+    office), ``<task>@<world>`` or ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
         files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))

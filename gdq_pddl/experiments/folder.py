@@ -80,8 +80,7 @@ class FolderLock:
 
 
 def close_inherited_locks() -> None:
-    """In a forked worker: close the parent's lock descriptors (a worker outliving a
-    killed parent must not keep the folder locked)."""
+    """In a forked worker: close the parent's lock descriptors."""
     for fd in list(_HELD):
         with contextlib.suppress(OSError):
             os.close(fd)
@@ -132,8 +131,7 @@ def input_hashes(files: Iterable[str]) -> dict[str, str]:
 
 
 def changed_input(old: Mapping, new: Mapping[str, str]) -> str | None:
-    """The first input file whose hash differs between ``old`` (from a config.json; a
-    config from before hashes were recorded has none) and ``new``; None if none."""
+    """The first input file whose hash differs between ``old`` and ``new``, or None."""
     return next((f for f, h in new.items() if f in old and old[f] != h), None)
 
 
@@ -176,8 +174,7 @@ def unit_path(out: Path, unit: Unit) -> Path:
 
 def read_unit(out: Path, unit: Unit, arrays: tuple[str, ...] = UNIT_ARRAYS
               ) -> dict[str, np.ndarray]:
-    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming its file if damaged
-    (an array missing, or one per episode of the wrong length)."""
+    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming it if damaged."""
     n = unit.experiment.episodes
     return load_unit(unit_path(out, unit), f"{unit.method}, run {unit.run} of "
                      f"{unit.experiment.name}",

@@ -37,8 +37,7 @@ def is_file_name(name: str) -> bool:
 
 
 def world_name(path: Path | None) -> str:
-    """The name an experiment records for the ``--world`` option ``path``: ``office`` for
-    none, else the file's absolute path (which no built-in name can be mistaken for)."""
+    """The name an experiment records for ``--world``: ``office``, or the absolute path."""
     return "office" if path is None else str(Path(path).absolute())
 
 

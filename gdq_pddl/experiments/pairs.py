@@ -113,8 +113,7 @@ def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
 
 
 def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
-    """Per pair of ``experiments`` (all in one world): start, goal, the shortest plan's
-    length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
+    """Per pair (all in one world): start, goal, shortest plan length, V*, tuning task."""
     # start-up time: the model, solver and plan tables import numba and networkx
     from gdq_pddl.envs.model import compile_model, full_state
     from gdq_pddl.envs.office import office_plan_table  # start-up time, as above

@@ -41,8 +41,7 @@ CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an
 
 def route_check(real: World, knowledge: World, task: Task,
                 darling_tolerance: float = 0.3) -> list[RouteStep]:
-    """:class:`RouteStep` along the likeliest route of the true optimal policy in
-    ``real``, with knowledge from ``knowledge``."""
+    """:class:`RouteStep` s along the likeliest optimal route in ``real``."""
     ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
     tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
               ctx.darling_plans.first_actions, ctx.prior.applicable)
@@ -65,8 +64,7 @@ def route_check(real: World, knowledge: World, task: Task,
 
 @dataclass(frozen=True)
 class OptInitValues:
-    """Q at the start state right after OptInit, per GDQ variant (see
-    :func:`optinit_values`)."""
+    """Q at the start state right after OptInit, per GDQ variant."""
 
     task: str
     r_max: float

@@ -83,8 +83,7 @@ STOP_SIGNALS = (signal.SIGTERM, getattr(signal, "SIGHUP", signal.SIGTERM))
 
 @contextmanager
 def _stop_on_signals() -> Iterator[None]:
-    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (outside the main
-    thread, where Python cannot handle signals, nothing changes)."""
+    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (main thread only)."""
     def stop(signum: int, _frame: object) -> None:
         raise _Stopped(signum)
 
@@ -120,8 +119,7 @@ def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
 
 
 def input_files(experiments: list[Experiment]) -> list[str]:
-    """The files the experiments name: PDDL domain, problem and dynamics, world files (not
-    the built-in worlds, an absent dynamics file or a PPDDL determinisation)."""
+    """The input files the experiments name (PDDL files, world files)."""
     named = [f for e in experiments for f in (*(e.pddl or ())[:3], e.world, e.knowledge)]
     return [f for f in named if f and is_file_name(f)]
 

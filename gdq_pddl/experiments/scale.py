@@ -126,8 +126,7 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
 
 
 def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
-    """The building's description (the first fields of :class:`BuildingResult`) and what
-    a run needs: ``(world, task context, env)``."""
+    """The building's description and what a run needs: ``(world, context, env)``."""
     world = building_world(positions, seed)
     t0 = time.perf_counter()
     ctx = task_context(OfficeInstance.of("A", world=world), darling_tolerance=TOLERANCE,
@@ -179,8 +178,7 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int],
 
 def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
              runs: int, log: Callable[[str], None]) -> BuildingResult:
-    """A building's :class:`BuildingResult` from its description and its (method, run)
-    units; ``log`` is told each method's env steps/s, table size and convergence."""
+    """A building's :class:`BuildingResult` from its description and its units."""
     out = BuildingResult(**header)
     for name in methods:
         done = [units[name, run] for run in range(runs)]

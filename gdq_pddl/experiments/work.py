@@ -31,8 +31,7 @@ def resolve_task(world: World, spec: str) -> Task:
 
 
 def make_learner(method: str, context, hyper: Hyper):
-    """A fresh learner of ``method`` (a name of ``protocol.METHODS``) for ``context``, with
-    the experiment's shared settings (:func:`gdq_pddl.learners.make_learner`)."""
+    """A fresh learner of ``method`` for ``context`` with the experiment's ``hyper``."""
     return learner_by_name(method, context, alpha=hyper.alpha, gamma=hyper.gamma,
                            epsilon=hyper.epsilon)
 
@@ -47,8 +46,7 @@ def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
 
 
 def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
-    """The learners' :class:`~gdq_pddl.learners.context.TaskContext` of ``instance``,
-    planned with ``exp.planner`` on ``exp.knowledge`` (None: the instance's own)."""
+    """The learners' task context of ``instance``, planned on ``exp.knowledge``."""
     if exp.knowledge is not None:  # the same task, planned on another world's building
         instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
     return task_context(instance, exp.planner)
@@ -94,8 +92,7 @@ def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.nd
 
 @cache
 def load_pddl_instance(files: tuple[str, ...]):
-    """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``
-    or ``(domain, problem, dynamics, determinisation)`` (dynamics ``""``: none)."""
+    """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``."""
     domain, problem, dynamics, *determinisation = files
     return PDDLInstance.from_files(domain, problem, dynamics or None,
                                    determinisation=determinisation[0] if determinisation

@@ -116,8 +116,7 @@ class PlanningProblem:
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,
                    determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Read and parse a domain and problem file (see :meth:`from_texts`);
-        ``problem_path`` may be ``FILE:NAME``, one problem of a file that holds several."""
+        """Read and parse a domain and problem file (``problem_path`` may be ``FILE:NAME``)."""
         path, name = problem_file(problem_path)
         return cls.from_texts(_read(domain_path), _read(path), str(domain_path),
                               str(path), determinisation, name)
@@ -218,8 +217,7 @@ def replay(task: GroundTask, state: int, actions: tuple[str, ...]) -> Plan:
 
 
 def check_size(problem: Problem, source: str) -> None:
-    """Refuse, naming ``source``, a problem whose initial state has more than
-    :data:`~gdq_pddl.limits.MAX_INIT_ATOMS` atoms (too large to ground)."""
+    """Refuse, naming ``source``, a problem too large to ground (:data:`MAX_INIT_ATOMS`)."""
     if len(problem.init) > MAX_INIT_ATOMS:
         raise SizeError(f"{source}: the initial state has {len(problem.init):,} atoms, more "
                         f"than the {MAX_INIT_ATOMS:,} a problem may have to be planned over "
