@@ -35,11 +35,6 @@ class CostDist:
     a: float = 1.0
     b: float = 0.0
 
-    @property
-    def mean(self) -> float:
-        """Expected cost (for the normal, of the unclipped distribution)."""
-        return (self.a + self.b) / 2 if self.kind == "uniform" else self.a
-
 
 def read_toml(text: str, source: str) -> dict[str, Any]:
     """The tables of a TOML text; :class:`WorldError` naming ``source`` if it is not TOML."""
