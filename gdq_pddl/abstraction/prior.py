@@ -51,9 +51,8 @@ class PriorModel:
 
 def prior_from_edges(n_states: int, n_actions: int,
                      edges: Iterable[tuple[int, str, int, int]]) -> PriorModel:
-    """The prior of ``(learner state, ground action name, learner action, learner next
-    state)`` edges; raises :class:`AbstractionError` when O maps two ground actions
-    applicable in one state to one learner action with different successors."""
+    """The prior of ``(state, ground action name, action, next state)`` edges;
+    AbstractionError where two of one state and action lead to different states."""
     nxt = np.full((n_states, n_actions), NO_CHANGE, dtype=np.int64)
     names: dict[tuple[int, int], str] = {}
     for s, name, a, s2 in edges:

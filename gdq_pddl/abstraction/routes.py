@@ -52,10 +52,9 @@ def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem,
 def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
                      shortest: PlanTable, tolerance: float,
                      branch: Callable[[int], bool], max_routes: int = 1000) -> PlanTable:
-    """Every shortest plan plus one plan per branch route within the tolerance, from
-    every learner state. ``shortest``: the tolerance-0 table of the same goal;
-    ``branch(a)``: whether routes differ at learner action ``a``; past ``max_routes``
-    routes from a state, the table is marked capped."""
+    """Every shortest plan (``shortest``: the tolerance-0 table) plus one plan per route
+    within the tolerance, from every learner state; ``branch(a)``: whether routes differ
+    at learner action ``a``; past ``max_routes`` routes from a state, marked capped."""
     check_real("tolerance", tolerance, 0.0, MAX_TOLERANCE)
     n = abstraction.n_states
     read = _reader(abstraction, problem.task)

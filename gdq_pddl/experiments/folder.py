@@ -104,9 +104,8 @@ def read_config(path: Path) -> dict:
 
 
 def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | None:
-    """The ``config.json`` of the run ``resume`` continues (None when not resuming);
-    refuses a folder that holds results (``held``; ``results`` names them) without
-    ``resume``, and with it, one without ``config.json``."""
+    """The ``config.json`` of the run ``resume`` continues (None when not resuming); refuses
+    a folder that holds ``results`` without ``resume``, and with it, one without config."""
     cfg_path = out / "config.json"
     if held and not resume:
         if cfg_path.exists():

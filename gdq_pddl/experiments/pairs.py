@@ -46,9 +46,8 @@ def all_pairs(world: World) -> list[str]:
 
 
 def parse_pairs(world: World, items: Sequence[str]) -> list[str]:
-    """``--pairs`` (each item one or more ``START->GOAL`` separated by spaces or commas;
-    landmarks allowed) as canonical specs, without repeats, in :func:`all_pairs`'s order.
-    Raises :class:`GdqError` naming the bad item."""
+    """``--pairs`` items (``START->GOAL`` separated by spaces or commas) as canonical specs
+    in :func:`all_pairs`'s order; GdqError naming a bad item."""
     found = set()
     for item in (w for text in items for w in re.split(r"[\s,]+", text) if w):
         start, sep, goal = item.partition("->")

@@ -21,9 +21,8 @@ from gdq_pddl.world import Task, World
 
 @dataclass(frozen=True)
 class RouteStep:
-    """One step of the true optimal route: its optimal actions (ties within 1e-9) and
-    whether one is allowed by DARLING, starts a shortest / tolerant plan, or is applicable
-    in GDQ's prior model (valued before it is tried)."""
+    """One step of the true optimal route: its optimal actions and whether one is allowed
+    by DARLING, starts a shortest / tolerant plan, or applies in GDQ's prior model."""
 
     state: str
     optimal: tuple[str, ...]

@@ -29,8 +29,7 @@ GDQ_VARIANTS = ("GDQ", "GDQ-literal", "GDQ-code")
 """The library's GDQ and the two readings of the paper it is compared with."""
 
 DEFAULT_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
-"""What the commands compare unless told otherwise: GDQ, the authors'-code GDQ and the
-baselines (``GDQ-literal``, which never learns, only where asked and in ``reproduce``)."""
+"""What the commands compare unless told otherwise (not GDQ-literal: it never learns)."""
 
 SCALE_METHODS: dict[str, tuple[str, dict]] = {
     "GDQ": ("gdq", {}),

@@ -168,8 +168,7 @@ def _numbers(path: Path, df: pd.DataFrame, name: str) -> pd.Series:
 
 
 def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
-    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg`` (see
-    :func:`load_results`); nothing to check without a config that says what ran."""
+    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg``."""
     planned = cfg.planned()
     if not planned:
         return

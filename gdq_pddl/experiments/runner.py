@@ -57,8 +57,7 @@ __all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_e
 
 
 class RunInterrupted(ResultsError):
-    """The run was interrupted (Ctrl-C, or SIGTERM / SIGHUP); what finished is saved and
-    ``--resume`` goes on. ``signal`` is the number of the signal that stopped it."""
+    """The run was stopped (Ctrl-C, SIGTERM or SIGHUP: ``signal``); what finished is saved."""
 
     def __init__(self, message: str, signum: int = signal.SIGINT) -> None:
         super().__init__(message)
@@ -69,8 +68,7 @@ class RunInterrupted(ResultsError):
 
 
 class _Stopped(KeyboardInterrupt):
-    """SIGTERM or SIGHUP in the driver, raised where Ctrl-C's KeyboardInterrupt would be,
-    so that both end the workers and save what finished the same way."""
+    """SIGTERM or SIGHUP in the driver, raised as Ctrl-C's KeyboardInterrupt would be."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(signal.Signals(signum).name)
@@ -145,9 +143,8 @@ def _difference(old: object, new: list) -> str:
 
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
             arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
-    """Check or create ``out``; return the units still to run. Saved results are reused
-    only on ``resume``, when ``config.json`` says they are of the same experiments and
-    inputs (each saved unit is read first: one without ``arrays`` is named as damaged)."""
+    """Check or create ``out``; return the units still to run (saved ones are reused on
+    ``resume`` when ``config.json`` says they are of the same experiments and inputs)."""
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
     config = {"experiments": [asdict(e) for e in experiments],  # what --resume compares

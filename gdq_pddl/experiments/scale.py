@@ -280,8 +280,7 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
 
 
 def _prepare(out: Path, config: dict, resume: bool) -> None:
-    """Refuse a folder that holds results (without --resume) or other results (with it);
-    remove what a killed write left; write ``config.json``."""
+    """Check ``out`` against ``config`` (see :func:`resume_config`); write ``config.json``."""
     cfg_path = out / "config.json"
     held = cfg_path.exists() or (out / "units").exists() or any(out.glob("building-*.npz"))
     old = resume_config(out, held, resume, "units/ or building-*.npz")

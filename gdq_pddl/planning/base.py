@@ -96,9 +96,8 @@ class PlanningProblem:
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
                    problem_source: str = "<problem>", determinisation: str = "all-outcomes",
                    problem_name: str | None = None) -> PlanningProblem:
-        """Parse a domain and problem (``problem_name``: which one of a text that holds
-        several). A PPDDL domain is grounded with all its outcomes and planned on
-        through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
+        """Parse a domain and problem (``problem_name``: one of several in the text); a
+        PPDDL domain is planned on through ``determinisation``."""
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
