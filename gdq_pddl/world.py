@@ -116,10 +116,9 @@ class World:
         return self.costs[verb]
 
     def dynamics(self) -> Dynamics:
-        """The world's reality for ``domains/office.pddl``: ``goto`` and ``approach``
-        succeed with ``navigation_success``, else slip to a random applicable one;
-        ``opendoor`` and ``gothrough`` work with their door's ``success``, get stuck with
-        its ``stuck``, else do nothing; costs per verb, door overrides first."""
+        """The world's reality for ``domains/office.pddl``: ``goto`` and ``approach`` work
+        with ``navigation_success``, else slip; ``opendoor`` and ``gothrough`` work with
+        their door's ``success``, get stuck with its ``stuck``, else do nothing."""
         nav = Outcomes(self.navigation_success, 0.0, ("goto", "approach"))
         actions = {v: replace(nav, cost=self.costs[v]) for v in ("goto", "approach")}
         actions |= {v: Outcomes(cost=self.costs[v]) for v in DOOR_VERBS}
@@ -239,8 +238,7 @@ def _component(start: str, links: Mapping[str, Iterable[str]]) -> set[str]:
 
 
 def load_world(path: str | Path | None = None) -> World:
-    """Load and validate a world file (``None``: the shipped office); WorldError naming
-    the file and key of the first problem found."""
+    """Load and validate a world file (``None``: the shipped office)."""
     if path is None:
         return builtin_world("office")
     path = Path(path)
@@ -257,8 +255,7 @@ DEFAULT_TASK = "C"
 
 
 def as_world(world: str | Path | World | None) -> World:
-    """A :class:`World` from a world, a file path, a built-in name (as
-    :func:`gdq_pddl.resources.resolve` reads it), or ``None`` (the office)."""
+    """A :class:`World` from a world, a file path, a shipped name, or ``None`` (office)."""
     if world is None:
         return load_world(None)
     if isinstance(world, World):

@@ -125,8 +125,7 @@ def refuse_given(args: argparse.Namespace, options: Sequence[str], why: str) -> 
 
 
 def load_world_checked(path: Path | None) -> World:
-    """The world of ``--world`` (None: the office), refused when it has more positions
-    than can be planned over."""
+    """The world of ``--world`` (None: the office), refused if too large to plan over."""
     world = load_world(path)
     if len(world.positions) > MAX_WORLD_POSITIONS:
         raise SizeError(f"{world.source}: {len(world.positions):,} positions, more than the "
@@ -140,10 +139,7 @@ def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
     world = load_world_checked(args.world)
     if args.task is None and args.start is None and args.goal is None:
         raise GdqError("give --task, or --start and --goal")
-    task = world.resolve(args.task, args.start, args.goal)
-    if task.start == task.goal:
-        raise GdqError(f"start and goal are the same position ({task.start})")
-    return world, task
+    return world, world.resolve(args.task, args.start, args.goal)
 
 
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,

@@ -141,14 +141,6 @@ def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
     return header, (world, ctx, env)
 
 
-def describe(header: dict) -> str:
-    """One line about a building (its learner tables and plans)."""
-    return (f"{building_name(header['positions'], header['seed'])}: {header['doors']} doors, "
-            f"{header['n_states']} states x {header['n_actions']} actions, "
-            f"L = {header['plan_length']}, V_ref = {header['v_ref']:.1f}, plans for every "
-            f"state in {header['context_s']:.1f} s")
-
-
 _WARMED: set[str] = set()
 """Methods whose compiled episode loop this process has already run once."""
 
@@ -331,7 +323,9 @@ def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, metho
             if header is None:  # the first measurement stays, so a resumed report is the same
                 header = built
                 atomic_write(header_path, lambda tmp: tmp.write_text(json.dumps(header)))
-        log(describe(header))
+        log(f"{name}: {header['doors']} doors, {header['n_states']} states x "
+            f"{header['n_actions']} actions, L = {header['plan_length']}, V_ref = "
+            f"{header['v_ref']:.1f}, plans for every state in {header['context_s']:.1f} s")
         for m, run in missing:
             save_unit(paths[m, run], run_one(setting, m, (seed, n, run), episodes))
             bar.update(1)

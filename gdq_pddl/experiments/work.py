@@ -69,25 +69,20 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
         names.append(instance.name)
-    result = _unit_result(parts, names, exp, learner)
+    result = {
+        "returns": np.concatenate([p.returns for p in parts]),
+        "steps": np.concatenate([p.steps for p in parts]),
+        "success": np.concatenate([p.success for p in parts]),
+        "areas": np.concatenate([p.area_visits for p in parts]),
+        "tasks": np.array(names),
+        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
+        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
+    }
     if keep_learner:
         buf = io.BytesIO()
         save_learner(buf, learner, rng=rng, env=env.np_random)
         result["learner"] = np.frombuffer(buf.getvalue(), dtype=np.uint8)
     return result
-
-
-def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.ndarray]:
-    """What a unit returns: its episodes' records, the tasks in force and the final policy."""
-    return {
-        "returns": np.concatenate([p.returns for p in parts]),
-        "steps": np.concatenate([p.steps for p in parts]),
-        "success": np.concatenate([p.success for p in parts]),
-        "areas": np.concatenate([p.area_visits for p in parts]),
-        "tasks": np.array(tasks),
-        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
-        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
-    }
 
 
 @cache

@@ -49,8 +49,7 @@ class HMax:
         self._goals: dict[int, np.ndarray] = {}
 
     def __call__(self, state: int, goal: int) -> int:
-        """h_max of ``state`` (a bitmask) to the positive goal facts ``goal`` (a bitmask);
-        :data:`INFINITE` if no relaxed plan reaches them."""
+        """h_max of the bitmask ``state`` to the goal facts ``goal`` (:data:`INFINITE`: none)."""
         g = self._goals.get(goal)
         if g is None:
             g = self._goals[goal] = _bit_list(goal, self.n_facts)
