@@ -1,5 +1,5 @@
-"""Reading the files a user gives, each failure the caller's own error naming the file,
-and fingerprinting them (:func:`file_hash`, what ``--resume`` compares)."""
+"""Reading the files a user gives (failures: the caller's error naming the file), and
+their fingerprints (:func:`file_hash`, what ``--resume`` compares)."""
 
 from __future__ import annotations
 

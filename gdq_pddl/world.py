@@ -193,9 +193,8 @@ class World:
 
 
 def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
-    """The world's knowledge as a problem of ``domains/office.pddl``: reach ``task.goal``
-    from ``task.start``, every door closed; a locked door (success 0) is a wall (no
-    ``connects`` facts) unless ``locked_is_wall`` is False."""
+    """The world's knowledge as a problem of ``domains/office.pddl``, every door closed; a
+    locked door (success 0) is a wall (no ``connects``) unless ``locked_is_wall`` is False."""
     door_sides = {p for d in world.doors for p in d.sides}
     walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
                   ((p, n) for n in ns))

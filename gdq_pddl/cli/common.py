@@ -106,8 +106,7 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None
                ) -> tuple[Path | None, Path | None, Path | None]:
-    """--domain, --problem and --dynamics as files; no --domain: the shipped domain the
-    problem names, else ``default_domain``."""
+    """--domain, --problem and --dynamics as files (--domain: by default the problem's)."""
     domain = args.domain
     if domain is None and args.problem is not None:
         named = problem_domain(resolve("problem", args.problem))

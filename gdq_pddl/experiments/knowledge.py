@@ -131,8 +131,7 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
 
 
 def knowledge_world(real: World, knowledge: str | None) -> World:
-    """The world to build the knowledge from: ``real`` when ``knowledge`` is None, else the
-    named world, which must give the learner the same states and actions as ``real``."""
+    """The world to build the knowledge from: ``real``, or the named one (same spaces)."""
     if knowledge is None:
         return real
     world = load_world_named(knowledge)

@@ -235,9 +235,8 @@ class Query(NamedTuple):
 
 @runtime_checkable
 class Planner(Protocol):
-    """A planner backend, as registered under the ``gdq_pddl.planners`` entry points:
-    ``all_plans`` says whether :meth:`solve` returns every shortest plan or one;
-    ``unusable_reason`` why it cannot run here (None: it can)."""
+    """A planner backend of the ``gdq_pddl.planners`` entry points: ``all_plans`` says
+    whether it returns every shortest plan, ``unusable_reason`` why it cannot run here."""
 
     name: str
     all_plans: bool

@@ -102,8 +102,7 @@ class ClingoPlanner:
 
     def _search(self, task, s0: int, goal: tuple[int, int], distance: int,
                 tolerance: float) -> tuple[list[tuple[int, ...]], int, int, bool]:
-        """Grow the horizon to the shortest length ``L``, then collect plans up to the
-        bound: the plans (operator indices), ``L``, the horizons solved, whether capped."""
+        """Plans (operator indices) up to the bound, ``L``, the horizons solved, capped."""
         clingo = _clingo()
         ctl = clingo.Control(["--models=0", "--warn=none"], logger=lambda code, msg: None)
         ctl.add("base", [], _facts(task, s0, goal))
