@@ -51,11 +51,7 @@ evaluate_policy: Callable[..., episodes.EpisodeRecords]
 
 
 def __getattr__(name: str):
-    """The names of :data:`_LAZY`, imported on first use (start-up time: an env user needs
-    neither the learners' compiled code nor pandas and matplotlib): ``load_results``
-    (:func:`gdq_pddl.experiments.results.load_results`: an output folder's episodes as a
-    pandas DataFrame) and save, load and evaluate (:mod:`gdq_pddl.learners.saving`,
-    :func:`gdq_pddl.learners.evaluate_policy`)."""
+    """The names of :data:`_LAZY`, imported on first use (start-up time)."""
     if name in _LAZY:
         return getattr(importlib.import_module(_LAZY[name]), name)
     raise AttributeError(f"module 'gdq_pddl' has no attribute {name!r}")

@@ -1,12 +1,7 @@
-"""Keep numba's on-disk cache of this package's compiled functions in step with the source,
-and never let a damaged cache file stop a run.
-
-numba reuses a cached function while its *own* file is unchanged, with the code it calls
-from other files baked in: edit a learning rule and the compiled episode loop would run
-the old one. So on import the sources of :data:`JIT_FOLDERS` are hashed and, when the
-hash changed, the package's cache files are deleted. Each cache file is also read once as
-a pickle stream (no object built); a damaged one is deleted, or where it cannot be,
-numba gets a cache folder of its own (``NUMBA_CACHE_DIR``).
+"""Keep numba's on-disk cache of this package's compiled functions in step with the source
+(numba bakes in the code a function calls from other files): when the sources of
+:data:`JIT_FOLDERS` change, the cache files are deleted; a damaged one (not whole
+pickles) is deleted too, or numba gets a cache folder of its own.
 """
 
 from __future__ import annotations
@@ -29,11 +24,9 @@ JIT_FOLDERS = ("envs", "learners", "planning")
 STAMP = Path("learners", "__pycache__", "jit-sources.sha256")
 """Where, under the package, the digest the cache was built with is kept."""
 CHECKED = Path("learners", "__pycache__", "jit-checked.json")
-"""Where, under the package, the cache files already read whole are listed (name, size,
-modification time), so each is read once."""
+"""Where, under the package, the cache files already read whole are listed."""
 PICKLES = {".nbi": 2, ".nbc": 1}
-"""How many pickles numba writes one after the other in each kind of cache file (an
-index: numba's version, then the index itself; a data file: one)."""
+"""How many pickles numba writes one after the other in each kind of cache file."""
 
 
 def sources_digest(root: Path = PACKAGE) -> str:
@@ -53,8 +46,7 @@ def cache_files(root: Path = PACKAGE) -> list[Path]:
 
 
 def refresh(root: Path = PACKAGE) -> bool:
-    """Delete stale numba cache files under ``root`` (see the module docstring), and
-    damaged ones; True when the sources changed and the cache was cleared."""
+    """Delete stale and damaged numba cache files; True when the sources changed."""
     digest, stamp = sources_digest(root), root / STAMP
     try:
         fresh = stamp.read_text() == digest
@@ -87,8 +79,7 @@ def is_whole(data: bytes, pickles: int) -> bool:
 
 
 def remove_damaged(root: Path = PACKAGE) -> list[Path]:
-    """Delete the cache files under ``root`` that are not whole pickles (each file read
-    once, see :data:`CHECKED`); returns the damaged ones found."""
+    """Delete the cache files under ``root`` that are not whole pickles; returns them."""
     record_path = root / CHECKED
     try:
         record = json.loads(record_path.read_text())
@@ -126,7 +117,6 @@ def remove_damaged(root: Path = PACKAGE) -> list[Path]:
 
 
 def _write_record(path: Path, checked: dict[str, list[int]]) -> None:
-    """Save the list of files read whole (nothing if the folder is read-only: the files
-    are then read again by the next process)."""
+    """Save the list of files read whole (nothing if the folder is read-only)."""
     with contextlib.suppress(OSError, GdqError):
         atomic_write(path, lambda tmp: tmp.write_text(json.dumps(checked)))

@@ -1,14 +1,11 @@
 """Generated office-like buildings of any size, as world files (``gdq-pddl building``).
 
-From a seed (``numpy.random.default_rng(seed)``, the only randomness): rows of corridor
-joined by short vertical corridors, rooms of 3-8 positions off the corridors behind doors,
-some with a second door (a shortcut), and fire doors inside corridors; ``--doors K``
-(default ``positions // 8``) doors in all, of the office's kinds (:data:`DOOR_KINDS`).
-One area per room and per corridor segment. Tasks A, B, C join rooms far apart; where a
-task's shortest route crosses a door an alternative route avoids, that door is made "most
-difficult", so the best route is not a shortest one (as the office's Task C).
-``step_limit = ceil(2.5 L)`` (``L`` the longest shortest plan of the tasks) and
-``r_max = step_limit``.
+From ``numpy.random.default_rng(seed)``: corridor rows joined by short corridors, rooms
+of 3-8 positions behind doors (some with a second door), fire doors in corridors; ``K``
+doors in all (default ``positions // 8``), one area per room and corridor segment. Tasks
+A, B, C join far rooms; a door on a task's shortest route that another route avoids is
+made "most difficult" (as the office's Task C). ``step_limit = r_max = ceil(2.5 L)``,
+``L`` the tasks' longest shortest plan.
 """
 
 from __future__ import annotations
@@ -68,10 +65,7 @@ class Building:
 
 
 def generate(positions: int, seed: int = 0, doors: int | None = None) -> Building:
-    """A building of exactly ``positions`` positions (see the module docstring).
-
-    Raises :class:`WorldError` when the numbers cannot make a building.
-    """
+    """A building of exactly ``positions`` positions (WorldError: the numbers cannot)."""
     if positions < MIN_POSITIONS:
         raise WorldError("building", "positions", f"need at least {MIN_POSITIONS}, got {positions}")
     check_memory(positions * POSITION_BYTES, f"positions = {positions:,}: generating the "
@@ -109,8 +103,7 @@ def generate(positions: int, seed: int = 0, doors: int | None = None) -> Buildin
 
 def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int,
                doors: int) -> list[list[str]]:
-    """Corridor rows and links of ``n`` positions in all (fire doors' stubs come on top);
-    ``doors`` is the building's number of doors, for the message when they do not fit."""
+    """Corridor rows and links of ``n`` positions (``doors``: for the message)."""
     n_rows = max(2, round(math.sqrt(n / 4)))
     n_links = sum(int(rng.integers(2, 4)) for _ in range(n_rows - 1))
     link_len = rng.integers(1, 4, size=n_links)
@@ -346,11 +339,8 @@ def building_world(positions: int, seed: int = 0, doors: int | None = None) -> W
 
 def write_building(out: str | Path, positions: int, seed: int = 0,
                    doors: int | None = None) -> tuple[Path, list[Path]]:
-    """Write ``<name>.toml``, ``domain.pddl`` and ``problems/<name>-<task>.pddl`` to ``out``.
-
-    Returns the world file and the problem files. The world file is validated by
-    :func:`gdq_pddl.world.load_world` before anything is written.
-    """
+    """Write ``<name>.toml`` (validated first), ``domain.pddl`` and
+    ``problems/<name>-<task>.pddl`` to ``out``; returns the world and problem files."""
     b = generate(positions, seed, doors)
     text = to_toml(b)
     world = parse_world(text, source=f"{b.name}.toml (generated)")

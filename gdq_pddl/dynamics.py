@@ -1,12 +1,7 @@
-"""The dynamics file: reality for a PDDL domain (what its actions really do, and cost).
-
-A PDDL domain says what an action does when it works; a dynamics file (TOML, annotated in
-``docs/domains.md``) says per action schema, optionally per object, how often it works
-(``success``), how often the trial fails (``stuck``), what the rest does (``failure``:
-nothing, or a slip to a random applicable action of some schemas) and what it costs.
-:func:`parse_dynamics` checks it against the domain and problem and names the file and
-key of every error. For a PPDDL domain the file is an *overlay* (``overlay=True``): the
-domain gives the outcomes, the file only ``r_max``, ``step_limit`` and costs.
+"""The dynamics file (TOML, ``docs/domains.md``): reality for a PDDL domain, per action
+schema and optionally per object, how often it works (``success``), gets stuck
+(``stuck``), what the rest does (``failure``) and what it costs. For a PPDDL domain the
+file is an *overlay*: only ``r_max``, ``step_limit`` and costs.
 """
 
 from __future__ import annotations
@@ -40,11 +35,6 @@ class CostDist:
     a: float = 1.0
     b: float = 0.0
 
-    @property
-    def mean(self) -> float:
-        """Expected cost (for the normal, of the unclipped distribution)."""
-        return (self.a + self.b) / 2 if self.kind == "uniform" else self.a
-
 
 def read_toml(text: str, source: str) -> dict[str, Any]:
     """The tables of a TOML text; :class:`WorldError` naming ``source`` if it is not TOML."""
@@ -55,9 +45,8 @@ def read_toml(text: str, source: str) -> dict[str, Any]:
 
 
 class Checks:
-    """The checks every data file of reality shares (world and dynamics files): strict
-    keys, typed values, finite numbers of at most :data:`MAX_NUMBER` in size,
-    probabilities and costs; each error names the file and the key at fault."""
+    """The checks world and dynamics files share (strict keys, typed and finite values,
+    probabilities, costs); each error names the file and the key at fault."""
 
     def __init__(self, source: str, raw: dict[str, Any]) -> None:
         self.source, self.raw = source, raw
@@ -154,29 +143,23 @@ class Outcomes:
     success: float = 1.0
     stuck: float = 0.0
     failure: str | tuple[str, ...] = "nothing"
-    """What the remaining ``1 - success - stuck`` does: ``"nothing"``, or the schemas
-    whose applicable ground actions it picks one of at random (a slip). ``"stuck"``
-    means ``stuck = 1 - success`` (nothing remains)."""
-    cost: CostDist | None = None
-    """None: not given; the cost the domain states, else 1."""
+    """What the remaining ``1 - success - stuck`` does: ``"nothing"``, or a slip to a
+    random applicable action of these schemas (``"stuck"``: ``stuck = 1 - success``)."""
+    cost: CostDist | None = None  # None: the cost the domain states, else 1
 
 
 @dataclass(frozen=True)
 class Dynamics:
-    """A validated dynamics file. Build one with :func:`parse_dynamics` (or a world's
-    :meth:`~gdq_pddl.world.World.dynamics`)."""
+    """A validated dynamics file (:func:`parse_dynamics`, or ``World.dynamics``)."""
 
     source: str
     r_max: float = 20.0
     step_limit: int = 20
-    actions: Mapping[str, Outcomes] = field(default_factory=dict)
-    """Per schema; schemas not listed always succeed at cost 1."""
-    objects: Mapping[str, Mapping[str, Outcomes]] = field(default_factory=dict)
-    """Per schema, per object: overrides."""
+    actions: Mapping[str, Outcomes] = field(default_factory=dict)  # others: cost 1, no failure
+    objects: Mapping[str, Mapping[str, Outcomes]] = field(default_factory=dict)  # overrides
     name: str = ""
     description: str = ""
-    stated: frozenset[str] = frozenset()
-    """The ``[dynamics]`` keys the file gives (the others are defaults)."""
+    stated: frozenset[str] = frozenset()  # the [dynamics] keys the file gives
 
     def outcomes(self, schema: str, args: tuple[str, ...]) -> Outcomes:
         """The outcomes of the ground action ``(schema *args)``."""

@@ -1,8 +1,4 @@
-"""Errors a user can act on. Each says which file, where in it, and what was expected.
-
-The command line prints these as one message and exits non-zero; they never carry a
-traceback from inside a dependency.
-"""
+"""Errors a user can act on: each says which file, where in it, and what was expected."""
 
 from __future__ import annotations
 
@@ -44,10 +40,7 @@ class AbstractionError(GdqError):
 
 
 class ConfigError(GdqError, ValueError):
-    """A parameter (a command-line option, an argument of the API) is out of range.
-
-    Also a :class:`ValueError`, so code that checks arguments the usual way catches it.
-    """
+    """A parameter (a command-line option, an argument of the API) is out of range."""
 
 
 class ResultsError(GdqError):

@@ -1,7 +1,5 @@
-"""Reading the files a user gives (world, domain, problem, dynamics), and fingerprinting
-them (:func:`file_hash`, what ``--resume`` compares). :func:`read_text` turns every way a
-file can fail to be text into the caller's own error, naming the file.
-"""
+"""Reading the files a user gives (failures: the caller's error naming the file), and
+their fingerprints (:func:`file_hash`, what ``--resume`` compares)."""
 
 from __future__ import annotations
 
@@ -21,12 +19,7 @@ BOM = "\ufeff"
 def read_bytes(path: str | Path, fail: Callable[[str, str], GdqError],
                limit: int = MAX_INPUT_BYTES) -> bytes:
     """The bytes of the regular file ``path``, at most ``limit`` of them; on any failure
-    raise ``fail(file name, message)``.
-
-    A device (``/dev/zero``), a FIFO (whose ``open`` waits for a writer) or a folder is
-    refused from its ``stat``, before it is opened; a file that grows past ``limit`` while
-    it is read is refused after reading ``limit + 1`` bytes.
-    """
+    (a device, FIFO or folder is refused before it is opened) ``fail(file name, message)``."""
     name = str(path)
     try:
         info = os.stat(path)
@@ -52,8 +45,7 @@ def _too_large(size: int, limit: int) -> str:
 
 
 def read_text(path: str | Path, fail: Callable[[str, str], GdqError]) -> str:
-    """The UTF-8 text of ``path`` (see :func:`read_bytes`), without a leading byte-order
-    mark; on any failure raise ``fail(file name, message)``."""
+    """The UTF-8 text of ``path`` without a byte-order mark (see :func:`read_bytes`)."""
     data = read_bytes(path, fail)
     try:
         return data.decode("utf-8").removeprefix(BOM)
@@ -63,8 +55,7 @@ def read_text(path: str | Path, fail: Callable[[str, str], GdqError]) -> str:
 
 
 def file_hash(path: str | Path) -> str:
-    """``sha256:<hex>`` of the file's bytes (``missing`` when it cannot be read: not a
-    regular file, too large, or unreadable; :func:`read_text` then says why)."""
+    """``sha256:<hex>`` of the file's bytes (``missing`` when it cannot be read)."""
     try:
         return "sha256:" + hashlib.sha256(read_bytes(path, GdqError)).hexdigest()
     except GdqError:

@@ -1,10 +1,5 @@
-"""Sizes checked before anything is allocated, and numbers checked before they are used.
-
-:func:`check_memory` estimates the bytes a setting asks for and raises
-:class:`~gdq_pddl.errors.SizeError` naming it instead of letting the process be killed;
-:func:`check_real` and :func:`check_count` are the range checks of every option and
-configuration dataclass.
-"""
+"""Sizes checked before anything is allocated (:func:`check_memory`), and numbers checked
+before they are used (:func:`check_real`, :func:`check_count`)."""
 
 from __future__ import annotations
 
@@ -27,8 +22,7 @@ MAX_COUNT = 2**62
 """The largest count (``m``, a seed) int64 arithmetic holds with room to spare."""
 
 MAX_TOLERANCE = 100.0
-"""The largest plan-length tolerance: plans of up to 101 x the shortest (the paper uses
-0.3)."""
+"""The largest plan-length tolerance: plans of up to 101 x the shortest."""
 
 MAX_INPUT_BYTES = 16 * 1000**2
 """The largest input file (world, domain, problem, dynamics) read: 16 MB."""
@@ -50,11 +44,8 @@ FALLBACK_MEMORY = 16 * 1024**3
 
 
 def physical_memory() -> int:
-    """Bytes of physical memory of this machine (``FALLBACK_MEMORY`` if unknown), or the
-    process's address-space limit if lower.
-
-    ``GDQ_PDDL_MEMORY`` (bytes) overrides it, for tests and for sharing a machine.
-    """
+    """Bytes of physical memory (``FALLBACK_MEMORY`` if unknown), or the address-space
+    limit if lower; ``GDQ_PDDL_MEMORY`` (bytes) overrides it."""
     override = os.environ.get("GDQ_PDDL_MEMORY")
     if override and override.isdigit():
         return int(override)
@@ -74,8 +65,7 @@ def _address_space_cap() -> float:
 
 
 def address_space_refusal(minimum: int = MIN_ADDRESS_SPACE) -> str | None:
-    """Why the command line cannot start under this process's ``ulimit -v`` (below
-    ``minimum`` bytes), or None when it can."""
+    """Why the command line cannot start under this ``ulimit -v``, or None."""
     cap = _address_space_cap()
     if cap >= minimum:
         return None
@@ -94,11 +84,8 @@ def human_bytes(n: float) -> str:
 
 
 def check_memory(need: float, what: str, fix: str) -> None:
-    """Raise :class:`SizeError` if ``need`` bytes exceed the machine's memory.
-
-    ``what`` says what needs them (``"world.step_limit = 2000000000: V* ..."``, naming the
-    setting at fault) and ``fix`` what to change.
-    """
+    """Raise :class:`SizeError` if ``need`` bytes exceed the machine's memory; ``what``
+    names the setting that needs them, ``fix`` what to change."""
     have = physical_memory()
     if need > have:
         raise SizeError(f"{what} would need {human_bytes(need)} of memory, more than this "
@@ -107,9 +94,8 @@ def check_memory(need: float, what: str, fix: str) -> None:
 
 def check_real(name: str, value: object, low: float, high: float = math.inf,
                low_open: bool = False, high_open: bool = False) -> None:
-    """Raise :class:`~gdq_pddl.errors.ConfigError` (a ValueError) unless ``value`` is a
-    finite real number (not a bool) in the interval from ``low`` to ``high``, open at
-    the ends ``low_open`` / ``high_open`` say."""
+    """Raise :class:`~gdq_pddl.errors.ConfigError` unless ``value`` is a finite real (not
+    a bool) from ``low`` to ``high``, open at the ends ``low_open`` / ``high_open`` say."""
     ok = isinstance(value, numbers.Real) and not isinstance(value, bool) \
         and math.isfinite(value)
     if ok:
@@ -122,8 +108,7 @@ def check_real(name: str, value: object, low: float, high: float = math.inf,
 
 
 def check_count(name: str, value: object, high: int = MAX_COUNT) -> None:
-    """Raise :class:`~gdq_pddl.errors.ConfigError` (a ValueError) unless ``value`` is an
-    integer (``int`` or a numpy integer, not a bool and not ``2.0``) in ``[0, high]``."""
+    """Raise a ConfigError unless ``value`` is an integer (not a bool) in ``[0, high]``."""
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or \
             not 0 <= value <= high:
         raise ConfigError(f"{name} must be a whole number in [0, {high:_}], got {value!r}")

@@ -1,8 +1,5 @@
-"""Where results go: one check of an output folder or file before anything is computed
-(:func:`output_folder`, :func:`output_file`), and writes that name their file when they
-fail (:func:`writing`, :func:`write_text`, :func:`save_figure`, :func:`atomic_write`),
-each an :class:`~gdq_pddl.errors.OutputError`.
-"""
+"""Where results go: output folders and files checked before anything is computed, and
+writes whose failures name their file (an :class:`~gdq_pddl.errors.OutputError`)."""
 
 from __future__ import annotations
 
@@ -20,10 +17,7 @@ if TYPE_CHECKING:
 
 
 def output_folder(path: str | Path, option: str = "--out") -> Path:
-    """Create the folder ``path`` if needed and check that files can be written in it.
-
-    ``option`` names where the path came from in the message. Returns the path.
-    """
+    """Create the folder ``path`` if needed and check that files can be written in it."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{option} {path}: is not a folder (a file or a device); "
@@ -33,16 +27,18 @@ def output_folder(path: str | Path, option: str = "--out") -> Path:
     except OSError as exc:
         raise OutputError(f"{option} {path}: cannot create the folder: "
                           f"{exc.strerror or exc}") from None
-    _probe(path, option)
+    try:  # /proc and read-only file systems look writable by their permissions
+        fd, name = tempfile.mkstemp(prefix=".write-test-", dir=path)
+        os.close(fd)
+        os.unlink(name)
+    except OSError as exc:
+        raise OutputError(f"{option} {path}: cannot write in this folder: "
+                          f"{exc.strerror or exc}") from None
     return path
 
 
 def output_file(path: str | Path, option: str = "--out") -> Path:
-    """Check that the file ``path`` can be written (its folder is created if needed).
-
-    A folder is refused; a device such as ``/dev/null`` is accepted (writing to it
-    works). Nothing is left behind if ``path`` did not exist. Returns the path.
-    """
+    """Check that the file ``path`` can be written (a device can, a folder cannot)."""
     path = Path(path)
     if path.is_dir():
         raise OutputError(f"{option} {path}: is a folder; give a file name")
@@ -63,9 +59,7 @@ def output_file(path: str | Path, option: str = "--out") -> Path:
 
 @contextmanager
 def writing(path: str | Path) -> Iterator[None]:
-    """Name ``path`` in an OSError raised while writing it: a full disk (ENOSPC) or an I/O
-    error names no file, and the command line printed a bare "No space left on device".
-    An OSError that names its own file passes through, and so does a closed pipe."""
+    """Name ``path`` in an OSError naming no file (a full disk) raised while writing it."""
     try:
         yield
     except OSError as exc:
@@ -74,23 +68,10 @@ def writing(path: str | Path) -> Iterator[None]:
         raise OutputError(f"{path}: cannot write: {exc.strerror or exc}") from None
 
 
-def file_mode() -> int:
-    """The permissions a new file gets under the process's umask (``0o644`` under the usual
-    ``022``): what :func:`atomic_write` gives its file, since a temporary file is made
-    ``0o600`` whatever the umask says."""
-    mask = os.umask(0o22)  # reading the umask means setting it: put it straight back
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` then rename ``tmp`` over ``path``: readers never see half a file
-    (an OSError that names no file, a full disk, names ``path``). The file gets the
-    permissions the umask gives a new file (:func:`file_mode`), as a plain ``open`` would.
-
-    A process killed in the middle leaves ``.<name>.*.tmp`` next to ``path``
-    (:data:`TEMPORARY`), which the next writer of that folder may remove.
-    """
+    """Call ``write(tmp)`` then rename ``tmp`` over ``path`` with the permissions the
+    umask gives a new file: readers never see half a file; a process killed midway
+    leaves :data:`TEMPORARY`."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with writing(path):
@@ -98,7 +79,9 @@ def atomic_write(path: str | Path, write: Callable[[Path], None]) -> None:
         os.close(fd)
         try:
             write(Path(tmp))
-            os.chmod(tmp, file_mode())
+            umask = os.umask(0o22)  # reading the umask means setting it: put it straight back
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)  # mkstemp made it 0o600
             os.replace(tmp, path)
         finally:
             if os.path.exists(tmp):
@@ -110,9 +93,7 @@ TEMPORARY = ".*.tmp"
 
 
 def remove_temporary(folder: Path) -> None:
-    """Remove what a killed :func:`atomic_write` left in ``folder`` (nothing if it is not a
-    folder); a file only appears under its own name by an atomic rename, so these are
-    never results."""
+    """Remove what a killed :func:`atomic_write` left in ``folder`` (never results)."""
     if folder.is_dir():
         for stale in folder.glob(TEMPORARY):
             stale.unlink(missing_ok=True)
@@ -129,14 +110,3 @@ def save_figure(fig: Figure, path: str | Path, **kwargs: object) -> None:
     with writing(path):
         fig.savefig(path, **kwargs)
 
-
-def _probe(folder: Path, option: str) -> None:
-    """Write and remove a temporary file in ``folder`` (``/proc`` and read-only file
-    systems look writable by their permissions, but are not)."""
-    try:
-        fd, name = tempfile.mkstemp(prefix=".write-test-", dir=folder)
-        os.close(fd)
-        os.unlink(name)
-    except OSError as exc:
-        raise OutputError(f"{option} {folder}: cannot write in this folder: "
-                          f"{exc.strerror or exc}") from None

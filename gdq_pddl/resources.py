@@ -1,17 +1,8 @@
-"""Files that ship inside the package (PDDL domains and problems, dynamics and world
-files) and the names that find them.
-
-Everything is found with :mod:`importlib.resources`, so the package works the same from
-a wheel or a source install, whatever the working directory.
-
-A shipped file is named by its file name without folder or suffix (:func:`shipped_names`
-lists them): domain ``keys`` is ``domains/keys.pddl``, problem ``keys-2`` is
-``problems/keys-2.pddl``, dynamics ``keys`` is ``dynamics/keys.toml`` (a world name is
-a dynamics name too: the office's reality), world ``office_robot`` is
-``office_robot.toml``. :func:`resolve` is the one rule, for the envs and the command line
-alike: a value with a folder or a suffix, or one that names an existing file, is a path
-(so a file of yours always wins over a shipped name); any other value is a shipped name,
-and an unknown one is an error listing the shipped names.
+"""Files that ship inside the package (found with :mod:`importlib.resources`) and the
+names that find them: a file's name without folder or suffix (domain ``keys`` is
+``domains/keys.pddl``; a world name is a dynamics name too). :func:`resolve` is the one
+rule: a value with a folder or a suffix, or naming an existing file, is a path (a file of
+yours wins); any other is a shipped name, an unknown one an error listing them.
 """
 
 from __future__ import annotations
@@ -50,8 +41,7 @@ def world_text(name: str = "office") -> str:
 
 SHIPPED = {"domain": (("domains",), ".pddl"), "problem": (("problems",), ".pddl"),
            "dynamics": (("dynamics", ""), ".toml"), "world": (("",), ".toml")}
-"""Per kind of file: the folders under ``gdq_pddl/data/`` that hold the shipped ones (the
-built-in worlds are dynamics too), and their suffix."""
+"""Per kind of file: the folders under ``gdq_pddl/data/`` that hold it, and its suffix."""
 
 
 def _shipped_files(kind: str) -> dict[str, Traversable]:
@@ -62,8 +52,7 @@ def _shipped_files(kind: str) -> dict[str, Traversable]:
 
 
 def shipped_names(kind: str) -> list[str]:
-    """The sorted names of the shipped files of ``kind`` (``domain``, ``problem``,
-    ``dynamics`` or ``world``)."""
+    """The sorted names of the shipped files of ``kind`` (a key of :data:`SHIPPED`)."""
     return sorted(_shipped_files(kind))
 
 
@@ -75,8 +64,7 @@ def is_shipped_name(value: str | Path) -> bool:
 
 
 def resolve(kind: str, value: str | Path) -> Path:
-    """The file that ``value`` means for ``kind``: the path as given, or the shipped file
-    it names. Raises :class:`~gdq_pddl.errors.PlanningError` for an unknown name."""
+    """The file ``value`` means for ``kind`` (PlanningError for an unknown name)."""
     if not is_shipped_name(value):
         return Path(value)
     found = _shipped_files(kind).get(str(value))

@@ -1,13 +1,9 @@
 """The learner's vocabulary for an office world: state and action indices.
 
-The learner sees a state ``(position, is the door at this position open)``: one state
-per open-floor position and two per door-side position, in position order (for the
-office, 7 + 12 x 2 = 31). Its actions are every verb paired with every position,
-verb-major: index ``verb * n_positions + position`` (for the office, 5 x 19 = 95).
-Which position a verb names:
-
-- ``goto p``, ``approach p``, ``gothrough p``: the position the robot moves to;
-- ``opendoor p``, ``stay p``: the position the robot stands at.
+A state is ``(position, is the door here open)``: one per open-floor position, two per
+door side, in position order (office: 31). An action is a verb and a position,
+verb-major (office: 5 x 19 = 95): the position moved to (``goto``, ``approach``,
+``gothrough``) or stood at (``opendoor``, ``stay``).
 """
 
 from __future__ import annotations
@@ -22,9 +18,7 @@ VERBS: tuple[str, ...] = ("goto", "approach", "opendoor", "gothrough", "stay")
 
 
 class Building(Protocol):
-    """What the learner's vocabulary reads of a building (a
-    :class:`~gdq_pddl.world.World` has it): its positions in order, their indices, and
-    the door at each door-side position (``name`` and ``sides``)."""
+    """What the learner's vocabulary reads of a building (a World has it)."""
 
     @property
     def positions(self) -> tuple[str, ...]: ...

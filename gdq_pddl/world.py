@@ -1,10 +1,7 @@
-"""The world file: an office building as data (reality for the simulator).
-
-A world file is TOML (``gdq_pddl/data/office.toml`` is the annotated original): positions,
-their adjacency, doors (two sides, success and stuck probabilities, optional costs),
-per-verb costs, areas, landmarks and tasks. :func:`load_world` validates it and names the
-file and key of every error. Its knowledge is ``domains/office.pddl`` with the problem
-:func:`office_problem` writes, its reality :meth:`World.dynamics`.
+"""The world file (TOML, ``gdq_pddl/data/office.toml`` annotated): an office building as
+data. :func:`load_world` validates it, naming the file and key of every error; its
+knowledge is ``domains/office.pddl`` with :func:`office_problem`, its reality
+:meth:`World.dynamics`.
 """
 
 from __future__ import annotations
@@ -35,12 +32,10 @@ KEYS: dict[str, tuple[str, ...]] = {
 """The keys each table of a world file may have."""
 
 PDDL_NAME = re.compile(r"[a-z][a-z0-9_-]*")
-"""What a position or door name must look like: it becomes a PDDL object, and PDDL
-reads names case-insensitively (``P1`` and ``p1`` would be one object)."""
+"""A position or door name: a PDDL object, lower case (PDDL ignores case)."""
 
 LABEL = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]*")
-"""What a world or task name must look like: it goes into PDDL problem names, file names
-and CSV columns."""
+"""A world or task name (it goes into PDDL problem names, file names and CSV columns)."""
 
 
 @dataclass(frozen=True)
@@ -52,8 +47,7 @@ class Door:
     success: float
     stuck: float
     label: str = ""
-    costs: Mapping[str, CostDist] = field(default_factory=dict)
-    """Per-verb cost overrides for the door's own actions (opendoor, gothrough)."""
+    costs: Mapping[str, CostDist] = field(default_factory=dict)  # opendoor, gothrough
 
 
 @dataclass(frozen=True)
@@ -63,8 +57,7 @@ class Task:
     name: str
     start: str
     goal: str
-    irrelevant_areas: tuple[int, ...] = ()
-    """Areas the paper calls irrelevant to this task (empty where it says nothing)."""
+    irrelevant_areas: tuple[int, ...] = ()  # as the paper calls them
 
 
 @dataclass(frozen=True)
@@ -123,12 +116,9 @@ class World:
         return self.costs[verb]
 
     def dynamics(self) -> Dynamics:
-        """The world's reality for ``domains/office.pddl`` (the one place the doors'
-        probabilities live): ``goto`` and ``approach`` reach their target with
-        ``navigation_success``, else a random walking neighbour (a slip over the
-        applicable ``goto`` and ``approach`` actions, the target included); ``opendoor``
-        and ``gothrough`` work with their door's ``success``, get stuck with its
-        ``stuck``, else do nothing; costs per verb, door overrides first."""
+        """The world's reality for ``domains/office.pddl``: ``goto`` and ``approach`` work
+        with ``navigation_success``, else slip; ``opendoor`` and ``gothrough`` work with
+        their door's ``success``, get stuck with its ``stuck``, else do nothing."""
         nav = Outcomes(self.navigation_success, 0.0, ("goto", "approach"))
         actions = {v: replace(nav, cost=self.costs[v]) for v in ("goto", "approach")}
         actions |= {v: Outcomes(cost=self.costs[v]) for v in DOOR_VERBS}
@@ -164,7 +154,7 @@ class World:
     def resolve(self, task: str | None = None, start: str | None = None,
                 goal: str | None = None) -> Task:
         """A task by name, or an ad-hoc one from ``start``/``goal`` names (refused when
-        they are the same position, or the goal cannot be reached from the start)."""
+        they are the same position or the goal is out of reach)."""
         if task is not None:
             if start is not None or goal is not None:
                 raise WorldError(self.source, "", "give a task or a start and goal, not both")
@@ -184,8 +174,7 @@ class World:
         return Task(name=f"{s}-{g}", start=s, goal=g)
 
     def reachable(self, start: str) -> set[str]:
-        """The positions the robot can get to from ``start`` (walking, and through doors
-        that can open: ``success > 0``)."""
+        """The positions reachable from ``start`` (through doors with ``success > 0``)."""
         links: dict[str, list[str]] = {p: list(ns) for p, ns in self.walk_neighbours.items()}
         for d in self.doors:
             if d.success > 0:
@@ -204,12 +193,8 @@ class World:
 
 
 def office_problem(world: World, task: Task, locked_is_wall: bool = True) -> str:
-    """The world's knowledge as a PDDL problem of ``domains/office.pddl``: reach
-    ``task.goal`` from ``task.start`` with every door closed (``problems/`` holds its
-    output for the office's tasks).
-
-    A locked door (success 0) gets no ``connects`` facts: knowing that a door never opens
-    is knowing that it is a wall. ``locked_is_wall=False`` keeps them."""
+    """The world's knowledge as a problem of ``domains/office.pddl``, every door closed; a
+    locked door (success 0) is a wall (no ``connects``) unless ``locked_is_wall`` is False."""
     door_sides = {p for d in world.doors for p in d.sides}
     walk = sorted((a, b) for p, ns in world.walk_neighbours.items() for a, b in
                   ((p, n) for n in ns))
@@ -252,10 +237,7 @@ def _component(start: str, links: Mapping[str, Iterable[str]]) -> set[str]:
 
 
 def load_world(path: str | Path | None = None) -> World:
-    """Load and validate a world file; ``None`` loads the shipped office.
-
-    Raises :class:`WorldError` naming the file and key of the first problem found.
-    """
+    """Load and validate a world file (``None``: the shipped office)."""
     if path is None:
         return builtin_world("office")
     path = Path(path)
@@ -272,11 +254,7 @@ DEFAULT_TASK = "C"
 
 
 def as_world(world: str | Path | World | None) -> World:
-    """A :class:`World` from a world, a file path, a built-in name, or ``None`` (office).
-
-    A name is read as :func:`gdq_pddl.resources.resolve` says (``"office"``: a built-in
-    world; an unknown name: an error listing them).
-    """
+    """A :class:`World` from a world, a file path, a shipped name, or ``None`` (office)."""
     if world is None:
         return load_world(None)
     if isinstance(world, World):
@@ -288,8 +266,7 @@ def as_world(world: str | Path | World | None) -> World:
 
 
 def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
-    """The task to run (see :meth:`World.resolve`): by name, from start/goal, or the
-    default, task ``C`` when the world has one, else the world's first task."""
+    """The task to run (:meth:`World.resolve`), by default ``C`` or the world's first."""
     if task is None and start is None and goal is None:
         if DEFAULT_TASK not in world.tasks and world.tasks:
             task = next(iter(world.tasks))
@@ -304,8 +281,7 @@ def parse_world(text: str, source: str = "<string>") -> World:
 
 
 class _WorldChecks(Checks):
-    """The world file's own checks on top of the TOML checks of
-    :class:`~gdq_pddl.dynamics.Checks`."""
+    """The world file's own checks on top of :class:`~gdq_pddl.dynamics.Checks`."""
 
     def pos(self, name: Any, path: str) -> str:
         if not isinstance(name, str) or name not in self.position_set:

@@ -15,13 +15,8 @@ from gdq_pddl.pddl.reachable import StateGraph
 
 def knowledge_action_mask(abstraction: Abstraction, task: GroundTask) -> np.ndarray:
     """``int8[n_states, n_actions]``: 1 where a ground action of ``task`` applicable in
-    ``abstraction.planner_state(s)`` maps to the learner action (read-only).
-
-    Atoms of a planner state that ``task`` does not have (no action can make them true
-    from its initial state) are left out, so such a state gets only what applies without
-    them; raises :class:`~gdq_pddl.errors.AbstractionError` for a ground action with no
-    learner counterpart.
-    """
+    ``abstraction.planner_state(s)`` (atoms ``task`` lacks left out) maps to the learner
+    action (read-only); AbstractionError for one with no learner counterpart."""
     index = task.fact_index
     learner_action = {op.name: abstraction.learner_action(op.name) for op in task.ops}
     mask = np.zeros((abstraction.n_states, abstraction.n_actions), dtype=np.int8)
@@ -34,8 +29,7 @@ def knowledge_action_mask(abstraction: Abstraction, task: GroundTask) -> np.ndar
 
 
 def graph_action_mask(graph: StateGraph) -> np.ndarray:
-    """``int8[n_states, n_ops]``: 1 where the ground action is applicable in the
-    reachable state (read-only)."""
+    """``int8[n_states, n_ops]``: 1 where the ground action applies (read-only)."""
     n_ops = len(graph.task.ops)
     mask = np.zeros((graph.n_states, n_ops), dtype=np.int8)
     source = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))

@@ -33,9 +33,7 @@ class OfficeAbstraction:
         return self.spaces.state(p, door is not None and f"(open {door.name})" in state)
 
     def mask_reader(self, task) -> Callable[[int], int]:
-        """:meth:`learner_state` of a grounded state bitmask of ``task`` (a
-        :class:`~gdq_pddl.pddl.grounding.GroundTask` of this world), without building its
-        atoms: for code that maps many planner states."""
+        """:meth:`learner_state` of a state bitmask of ``task``, without building atoms."""
         at = {task.fact_index[f"(at {p})"]: p for p in self.world.positions
               if f"(at {p})" in task.fact_index}
         opened = {p: task.fact_index.get(f"(open {d.name})")
@@ -67,11 +65,8 @@ class OfficeAbstraction:
         return self.spaces.action(verb, parts[arg + 1])
 
     def planner_state(self, state: int) -> State:
-        """The robot at the state's position; its door as observed, every other door closed.
-
-        The learner does not observe other doors, so the planner assumes them closed:
-        plans then include every opendoor they might need (optimistic, never wrong).
-        """
+        """The robot at the state's position; its door as observed, every other door
+        closed (plans then include every opendoor they might need)."""
         p, is_open = self.spaces.states[state]
         door = self.world.door_at.get(p)
         opened = door.name if door is not None and is_open else None

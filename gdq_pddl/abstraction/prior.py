@@ -1,11 +1,7 @@
-"""The action knowledge as a deterministic model over learner (state, action) pairs.
-
-GDQ's default variant plans on this *prior model* before it has experience: where each
-learner action leads from each learner state if the knowledge is right (through O^-1,
-the applicable ground actions, and O), or "no change" where the knowledge says it does
-nothing (*knowledge-inapplicable*). It is goal-independent and holds no probabilities or
-costs (PDDL has none), which is what makes it optimistic.
-"""
+"""The action knowledge as a deterministic model over learner (state, action) pairs:
+GDQ's *prior model*, where each learner action leads if the knowledge is right, or "no
+change" where the knowledge says it does nothing (optimistic: PDDL has no failures or
+costs)."""
 
 from __future__ import annotations
 
@@ -55,9 +51,8 @@ class PriorModel:
 
 def prior_from_edges(n_states: int, n_actions: int,
                      edges: Iterable[tuple[int, str, int, int]]) -> PriorModel:
-    """The prior of ``(learner state, ground action name, learner action, learner next
-    state)`` edges; raises :class:`AbstractionError` when O maps two ground actions
-    applicable in one state to one learner action with different successors."""
+    """The prior of ``(state, ground action name, action, next state)`` edges;
+    AbstractionError where two of one state and action lead to different states."""
     nxt = np.full((n_states, n_actions), NO_CHANGE, dtype=np.int64)
     names: dict[tuple[int, int], str] = {}
     for s, name, a, s2 in edges:
@@ -74,11 +69,9 @@ def prior_from_edges(n_states: int, n_actions: int,
 
 def prior_from_task(abstraction, task, read_state: Callable[[int], int] | None = None
                     ) -> PriorModel:
-    """The prior of an abstraction over a grounded task (any
-    :class:`~gdq_pddl.abstraction.Abstraction`): every ground action applicable in each
-    learner state's planner state, mapped through O. Atoms of ``O^-1(s)`` the task cannot
-    reach (an open door the knowledge says never opens) are left out of its mask.
-    ``read_state`` maps a state bitmask to a learner state (default: through its atoms)."""
+    """The prior of an abstraction over a grounded task: every ground action applicable
+    in each learner state's planner state (atoms the task cannot reach left out), mapped
+    through O; ``read_state`` maps a state bitmask to a learner state."""
     if read_state is None:
         def read_state(mask: int) -> int:
             return abstraction.learner_state(task.atoms(mask))
@@ -95,10 +88,8 @@ def prior_from_task(abstraction, task, read_state: Callable[[int], int] | None =
 
 def prior_from_graph(graph) -> PriorModel:
     """The prior of a PDDL problem whose learner states are the reachable planner states
-    (:class:`~gdq_pddl.pddl.reachable.StateGraph`; O is the identity): its edges. Goal
-    states have none (they end the episode). Where the knowledge gives one action several
-    outcomes (a PPDDL domain's all-outcomes determinisation) the prior takes the one
-    closest to the goal, the optimistic choice (ties: the lowest state index)."""
+    (O the identity): the graph's edges; of several outcomes of one action (a PPDDL
+    determinisation), the one closest to the goal (ties: the lowest state index)."""
     n_actions = len(graph.task.ops)
     nxt = np.full((graph.n_states, n_actions), NO_CHANGE, dtype=np.int64)
     src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))

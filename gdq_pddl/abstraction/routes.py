@@ -1,20 +1,12 @@
-"""Tolerant plans for large worlds: one plan per door route instead of every plan.
+"""Tolerant plans for large worlds: one plan per door route instead of every plan
+(``docs/decisions.md``, "Generated buildings").
 
-DARLING and GDQ-code use every loop-free plan within ``(1 + tolerance)`` x the shortest;
-on a generated building those number in the thousands per state (about 100 s per state
-at 1000 positions), and almost all cross the doors of a shortest plan. What tolerance
-buys a learner is the *other door routes*. :func:`route_plan_table` keeps, from each
-learner state ``x`` (bound ``B = floor((1 + tolerance) * L(x))``), every shortest plan
-and, per *route* (a sequence of *branch* pairs, for the office every ``gothrough``, that
-no state repeats), one plan: shortest *legs* (paths taking no branch pair) between the
-branch pairs and to the goal, if it has at most ``B`` actions, never revisits a learner
-state, ends at the first goal state and replays in the planner's semantics. So the table
-is a subset of the full tolerant set; a route is lost only where its shortest legs cross
-where longer ones would not (never on the office tasks A-E and a 100-position building:
-tested). At 1000 positions: 10 plans per state on average, built in 3.5 s.
-
-The knowledge graph is built once (the successors of each ``O^-1(s)``, mapped by O); leg
-lengths come from one all-pairs breadth-first search of its non-branch edges.
+:func:`route_plan_table` keeps, from each learner state ``x`` (bound ``B = floor((1 +
+tolerance) * L(x))``), every shortest plan and, per *route* (a sequence of *branch*
+pairs, for the office every ``gothrough``, that no state repeats), one plan: shortest
+*legs* (paths taking no branch pair) between the branch pairs and to the goal, if it has
+at most ``B`` actions, never revisits a learner state, ends at the first goal state and
+replays in the planner's semantics: a subset of the full tolerant set.
 """
 
 from __future__ import annotations
@@ -36,11 +28,8 @@ Edge = tuple[int, int, int, str]
 
 def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem,
                     read: Callable[[int], int] | None = None) -> list[Edge]:
-    """Every learner ``(s, a, s')`` the planner's knowledge allows, with its ground action.
-
-    A ground action maps to one learner action, so each pair has at most one next state;
-    if two ground actions map to the same pair, the first (ground order) is kept.
-    """
+    """Every learner ``(s, a, s')`` the planner's knowledge allows, with its ground action
+    (the first, in ground order, where two map to one pair)."""
     task = problem.task
     read = read or _reader(abstraction, task)
     edges: list[Edge] = []
@@ -63,13 +52,9 @@ def knowledge_edges(abstraction: Abstraction, problem: PlanningProblem,
 def route_plan_table(abstraction: Abstraction, problem: PlanningProblem,
                      shortest: PlanTable, tolerance: float,
                      branch: Callable[[int], bool], max_routes: int = 1000) -> PlanTable:
-    """Every shortest plan plus one plan per branch route within the tolerance, from
-    every learner state (see the module docstring).
-
-    ``shortest`` is the tolerance-0 table of the same goal; ``branch(a)`` says whether
-    learner action ``a`` is one at which routes differ (the office: ``gothrough``). At
-    most ``max_routes`` routes are kept per state, the table is then marked capped.
-    """
+    """Every shortest plan (``shortest``: the tolerance-0 table) plus one plan per route
+    within the tolerance, from every learner state; ``branch(a)``: whether routes differ
+    at learner action ``a``; past ``max_routes`` routes from a state, marked capped."""
     check_real("tolerance", tolerance, 0.0, MAX_TOLERANCE)
     n = abstraction.n_states
     read = _reader(abstraction, problem.task)
@@ -141,9 +126,8 @@ class _Legs:
 
 def _routes(x: int, bound: int, legs: _Legs, branches: list[tuple[int, int, int]],
             b_s: np.ndarray, b_rest: np.ndarray):
-    """Plans from ``x``: one per sequence of branch pairs (each reached by a shortest leg,
-    the last leg a shortest one to the goal) of at most ``bound`` actions, depth first.
-    The states a plan crosses are not checked here (the replay does)."""
+    """Plans from ``x``, depth first: one per sequence of branch pairs joined by shortest
+    legs, of at most ``bound`` actions (the replay checks the states they cross)."""
     route: list[tuple[int, int, int]] = []
 
     def plan() -> list[tuple[int, int]]:
@@ -169,8 +153,7 @@ def _routes(x: int, bound: int, legs: _Legs, branches: list[tuple[int, int, int]
 
 
 def _reader(abstraction: Abstraction, task) -> Callable[[int], int]:
-    """Learner state of a grounded state bitmask: the abstraction's fast reader if it
-    has one (:meth:`~gdq_pddl.abstraction.office.OfficeAbstraction.mask_reader`)."""
+    """Learner state of a grounded state bitmask (the abstraction's fast reader if any)."""
     fast = getattr(abstraction, "mask_reader", None)
     if fast is not None:
         return fast(task)

@@ -1,10 +1,5 @@
-"""The ``gdq-pddl`` command line.
-
-Every subcommand turns bad input (a malformed file, an unknown position, task or
-planner, an unusable output folder, sizes past memory) into one clear message on stderr
-naming the file, key or option at fault, and a non-zero exit, never a traceback.
-Subcommands live in :mod:`gdq_pddl.cli.planning` and :mod:`gdq_pddl.cli.experiments`.
-"""
+"""The ``gdq-pddl`` command line: bad input gives one message on stderr naming the file,
+key or option at fault, and a non-zero exit, never a traceback."""
 
 from __future__ import annotations
 
@@ -79,8 +74,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 class _NamedOutput:
-    """``sys.stdout`` whose write errors name it (``> /dev/full`` or a full disk raise an
-    OSError naming no file); a closed pipe stays a BrokenPipeError."""
+    """``sys.stdout`` whose write errors (a full disk) name it."""
 
     def __init__(self, stream: TextIO) -> None:
         self.stream = stream

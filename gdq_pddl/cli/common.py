@@ -1,9 +1,4 @@
-"""What the subcommands share: task and run options, validation, running and reporting.
-
-Imports of what draws figures (:mod:`gdq_pddl.analysis`: matplotlib and numba) stay
-inside the functions that use them, for start-up time: ``gdq-pddl --help`` and a bad
-option answer at once.
-"""
+"""What the subcommands share: task and run options, validation, running and reporting."""
 
 from __future__ import annotations
 
@@ -45,8 +40,7 @@ def whole(low: int) -> Callable[[str], int]:
 
 
 def tolerance_arg(text: str) -> float:
-    """An argparse type: a plan-length tolerance, a finite number in ``[0, MAX_TOLERANCE]``
-    (not nan, not inf, not one whose length bound is past every plan)."""
+    """An argparse type: a plan-length tolerance, a finite number in ``[0, MAX_TOLERANCE]``."""
     try:
         value = float(text)
     except ValueError:
@@ -86,23 +80,14 @@ def world_arg(p: argparse.ArgumentParser) -> None:
                    f"({', '.join(shipped_names('world'))}; default: office)")
 
 
-def determinisation_arg(p: argparse.ArgumentParser) -> None:
-    """--determinisation, default None (``determinisation`` gives its value), so that a
-    command can tell it was given where it means nothing (an office task)."""
-    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=None,
-                   help="what the planner knows of a PPDDL domain: every outcome of an "
-                        "action is a planner action (all-outcomes, the default), or only its "
-                        "most likely one (most-likely)")
-
-
 def determinisation(args: argparse.Namespace) -> str:
     """The --determinisation given, or the default one."""
     return args.determinisation or DETERMINISATIONS[0]
 
 
 def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> None:
-    """--domain, --problem (instead of an office task; ``what`` the command does with
-    it), --dynamics if ``dynamics``, and --determinisation."""
+    """--domain, --problem (``what`` the command does with it), --dynamics if
+    ``dynamics``, and --determinisation (default None: :func:`determinisation`)."""
     named = "a file, or a shipped name (`gdq-pddl list` shows them)"
     p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
                    "--problem names")
@@ -113,14 +98,15 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
                        "success, failure and costs of a STRIPS domain's actions, an optional "
                        "overlay (r_max, step_limit, costs) for a PPDDL domain; default: the "
                        "shipped dynamics of a shipped --domain, if there is one")
-    determinisation_arg(p)
+    p.add_argument("--determinisation", choices=DETERMINISATIONS, default=None,
+                   help="what the planner knows of a PPDDL domain: every outcome of an "
+                        "action is a planner action (all-outcomes, the default), or only its "
+                        "most likely one (most-likely)")
 
 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None
                ) -> tuple[Path | None, Path | None, Path | None]:
-    """--domain, --problem and --dynamics (each a file or a shipped name) as files. With
-    no --domain: the domain the problem names if it ships, else ``default_domain``; a
-    shipped domain without --dynamics gets its shipped dynamics if there is one."""
+    """--domain, --problem and --dynamics as files (--domain: by default the problem's)."""
     domain = args.domain
     if domain is None and args.problem is not None:
         named = problem_domain(resolve("problem", args.problem))
@@ -131,16 +117,14 @@ def pddl_files(args: argparse.Namespace, default_domain: str | None = None
 
 
 def refuse_given(args: argparse.Namespace, options: Sequence[str], why: str) -> None:
-    """Refuse the first of ``options`` (``--task``...) given on the command line: an
-    option that would be ignored is an error, not a silent no-op."""
+    """Refuse the first of ``options`` given on the command line (it would be ignored)."""
     for option in options:
         if getattr(args, option.removeprefix("--").replace("-", "_"), None) is not None:
             raise ConfigError(f"{option} {why}")
 
 
 def load_world_checked(path: Path | None) -> World:
-    """The world of ``--world`` (None: the built-in office), refused up front, naming its
-    file, when it has more positions than can be planned over."""
+    """The world of ``--world`` (None: the office), refused if too large to plan over."""
     world = load_world(path)
     if len(world.positions) > MAX_WORLD_POSITIONS:
         raise SizeError(f"{world.source}: {len(world.positions):,} positions, more than the "
@@ -154,10 +138,7 @@ def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
     world = load_world_checked(args.world)
     if args.task is None and args.start is None and args.goal is None:
         raise GdqError("give --task, or --start and --goal")
-    task = world.resolve(args.task, args.start, args.goal)
-    if task.start == task.goal:
-        raise GdqError(f"start and goal are the same position ({task.start})")
-    return world, task
+    return world, world.resolve(args.task, args.start, args.goal)
 
 
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
@@ -206,8 +187,7 @@ def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def experiment_kw(args: argparse.Namespace) -> dict:
-    """Experiment fields from the run options (methods, runs, seed, planner), the planner
-    checked (:func:`check_planner`)."""
+    """Experiment fields from the run options, the planner checked."""
     methods = checked_methods(args)
     check_planner(args.planner, methods)
     return {"methods": methods, "runs": args.runs, "seed": args.seed,
@@ -219,9 +199,8 @@ PLAN_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code")
 
 
 def check_planner(name: str, methods: Sequence[str] = ()) -> None:
-    """Fail now, with the list of known planners, not inside a worker; say so when a
-    backend that returns one plan per query is given to methods that learn from every
-    shortest plan (and DARLING from every plan within a tolerance)."""
+    """Fail now, not inside a worker, on an unknown planner; warn when one that returns
+    one plan per query is given to methods that learn from every plan."""
     planner = get_planner(name)
     users = [m for m in methods if m in PLAN_METHODS]
     if users and not getattr(planner, "all_plans", True):
@@ -240,21 +219,14 @@ def office_report(out: Path) -> str:
         (f"; read {report}" if report else "")
 
 
-def check_executor(args: argparse.Namespace) -> None:
-    """Refuse Ray's options where Ray does not run."""
-    if args.address is not None and args.executor != "ray":
-        raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
-                          f"(the executor is {args.executor})")
-
-
 def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
             report: Callable[[Path], str] = office_report, results: str = "episodes.csv",
             **run_kw) -> int:
-    """Run ``experiments`` into --out (default results/<name>, ``name`` made a safe file
-    name: it may come from an input file), then ``report`` on it; ``results`` names the
-    collected file, ``run_kw`` goes to ``run_experiments`` (its ``work`` and
-    ``collect``)."""
-    check_executor(args)
+    """Run ``experiments`` into --out (default results/<safe name>), then ``report`` on it;
+    ``results`` names the collected file, ``run_kw`` goes to ``run_experiments``."""
+    if args.address is not None and args.executor != "ray":
+        raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
+                          f"(the executor is {args.executor})")
     out = args.out or Path("results") / safe_name(name)
     check_sizes(experiments, args.jobs or 1)  # the runs first: their message names options
     if not args.no_report:

@@ -1,9 +1,5 @@
 """Subcommands that run experiments: run, switch, robot, reproduce, knowledge, scale, pairs,
-report.
-
-The reports (:mod:`gdq_pddl.analysis`) and ``scale`` (which loads the learners) are
-imported inside the functions that use them, for start-up time (matplotlib and numba).
-"""
+report."""
 
 from __future__ import annotations
 
@@ -39,8 +35,7 @@ from gdq_pddl.experiments import (
     switch_experiment,
 )
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
-from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS as SCALE_DEFAULT_METHODS
-from gdq_pddl.experiments.scale_methods import METHODS as SCALE_METHODS
+from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
 
@@ -83,13 +78,13 @@ def _run_pddl(args: argparse.Namespace) -> int:
     files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
              determinisation(args))
     try:  # check the files (and size) before any worker
-        load_pddl_instance(files).model  # noqa: B018
+        instance = load_pddl_instance(files)
+        instance.model  # noqa: B018
     except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
         if isinstance(exc, SizeError):
             raise
         raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
                         "smaller problem") from None
-    instance = load_pddl_instance(files)
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)

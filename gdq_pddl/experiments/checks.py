@@ -1,7 +1,6 @@
-"""What is checked before an experiment runs (:func:`preflight`, in the driver, before the
-output folder is touched): its tasks can be learnt and it fits in memory. It also builds
-each world's model and each task's plans once, which forked workers then share.
-"""
+"""What is checked before an experiment runs (:func:`preflight`, before the output folder
+is touched): its tasks can be learnt and it fits in memory (the models and plans it builds
+are then shared by forked workers)."""
 
 from __future__ import annotations
 
@@ -14,17 +13,16 @@ from gdq_pddl.experiments.work import instance_of
 from gdq_pddl.limits import check_memory
 
 EPISODE_BYTES = 400
-"""Memory per episode while a unit runs and is saved (returns, steps, success and area
-counts, copied when joined, pickled back from a worker and written)."""
+"""Memory per episode while a unit runs and is saved (copies included)."""
 UNIT_BYTES = 2000
-"""Memory per unit in the driver (its description, key, file name and bookkeeping)."""
+"""Memory per unit in the driver."""
 ROW_BYTES = 500
 """Memory per episode of ``episodes.csv`` when the report reads it back."""
 
 
 def preflight(experiments: list[Experiment], jobs: int = 1) -> None:
     """Raise a :class:`~gdq_pddl.errors.GdqError` for anything that would make the
-    experiments fail or give meaningless results (see the module docstring)."""
+    experiments fail or give meaningless results."""
     check_sizes(experiments, jobs)
     for exp in experiments:
         for spec, _ in exp.schedule:
@@ -33,9 +31,7 @@ def preflight(experiments: list[Experiment], jobs: int = 1) -> None:
 
 def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
     """Refuse an office task whose V* would not fit in memory, or an instance on which no
-    episode can reach the goal: no plan from the start, or a shortest plan longer than
-    the step limit (a :class:`~gdq_pddl.errors.WorldError` naming the file and key). Building a
-    PDDL problem's model checks the same (:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`)."""
+    episode can reach the goal (a WorldError naming the file and key)."""
     model = instance.model
     source, key = instance.step_limit_key
     if not isinstance(instance, PDDLInstance):  # a PDDL problem's V* is within a budget

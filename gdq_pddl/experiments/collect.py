@@ -1,11 +1,7 @@
-"""Turn the per-unit files of an output folder into its CSV and JSON results.
-
-``episodes.csv``: :data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` when an office
-experiment is among them (the steps of the episode that end in each area; none for a PDDL
-domain). ``policies.csv``: :data:`POLICY_COLUMNS`, each run's final greedy action per
-learner state, by index and by name. Text fields are quoted as the ``csv`` module quotes
-them, so a name with a comma stays one field.
-"""
+"""Turn the per-unit files of an output folder into its CSV and JSON results:
+``episodes.csv`` (:data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` for a problem with
+areas) and ``policies.csv`` (each run's final greedy action per learner state), text
+quoted as the ``csv`` module quotes it."""
 
 from __future__ import annotations
 
@@ -29,8 +25,7 @@ POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "sta
 
 
 def csv_field(text: str) -> str:
-    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only when it holds a
-    comma, a quote or a line break: a plain name is written as it is)."""
+    """``text`` as one CSV field, quoted as :mod:`csv` quotes it (only where needed)."""
     buffer = io.StringIO()  # "\n" as the terminator, so that a line break gets quoted too
     csv.writer(buffer, lineterminator="\n").writerow([text])
     return buffer.getvalue().removesuffix("\n")
@@ -77,14 +72,12 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
 
 
 CHUNK = 50_000
-"""Episodes formatted at once, so that a unit of millions of episodes is written in
-pieces of bounded memory."""
+"""Episodes formatted at once (a unit's CSV is written in pieces of bounded memory)."""
 
 
 def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
     """CSV rows of one unit with ``n_areas`` area columns, in pieces of at most
-    :data:`CHUNK` rows (a full protocol has ~1M rows: plain string formatting of Python
-    numbers, which measured 7 times faster than numpy's character functions)."""
+    :data:`CHUNK` rows (plain string formatting: 7 times faster than numpy's)."""
     n = len(data["returns"])
     tasks = np.repeat([csv_field(str(t)) for t in data["tasks"].tolist()], data["counts"])
     k = min(n_areas, data["areas"].shape[1])
@@ -105,9 +98,8 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
 
 
 def optimal_summary(experiments: list[Experiment]) -> dict:
-    """The ground truth of each task the experiments use (its instance's
-    :meth:`optimal`), keyed ``<task>`` (the office), ``<task>@<world>`` or
-    ``<task>@<problem file>``."""
+    """Each task's ground truth (its instance's ``optimal()``), keyed ``<task>`` (the
+    office), ``<task>@<world>`` or ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
         files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))

@@ -1,7 +1,5 @@
-"""An output folder as both runners use it: locked (:class:`FolderLock`), its
-``config.json`` read back (:func:`read_config`), its input files fingerprinted
-(:func:`input_hashes`) and its unit files read back or named as damaged (:func:`load_unit`).
-"""
+"""An output folder as both runners use it: locked, its ``config.json`` read back, its
+input files fingerprinted and its unit files read back or named as damaged."""
 
 from __future__ import annotations
 
@@ -25,22 +23,14 @@ except ImportError:  # pragma: no cover (not POSIX: no lock, as before)
 
 LOCK_NAME = ".lock"
 
-__all__ = ["FolderLock", "ResultsError", "changed_input", "close_inherited_locks",
-           "input_hashes", "load_unit", "read_config", "read_unit", "resume_config",
-           "unit_path"]
-
 
 _HELD: set[int] = set()
 """File descriptors of the locks this process holds (forked workers close them)."""
 
 
 class FolderLock:
-    """An exclusive, non-blocking ``flock`` on ``folder/.lock`` for the ``with`` block.
-
-    It ends with the process, however it ends. Entering raises :class:`ResultsError`
-    naming the process that holds it. Leaving removes the lock file while still holding
-    the lock; a process waiting on the removed file then locks a new one.
-    """
+    """An exclusive, non-blocking ``flock`` on ``folder/.lock`` for the ``with`` block
+    (it ends with the process); entering raises :class:`ResultsError` naming the holder."""
 
     def __init__(self, folder: Path) -> None:
         self.path = Path(folder) / LOCK_NAME
@@ -90,8 +80,7 @@ class FolderLock:
 
 
 def close_inherited_locks() -> None:
-    """In a forked worker: close the parent's lock descriptors (the lock stays the
-    parent's, and a worker outliving a killed parent does not keep the folder locked)."""
+    """In a forked worker: close the parent's lock descriptors."""
     for fd in list(_HELD):
         with contextlib.suppress(OSError):
             os.close(fd)
@@ -115,11 +104,8 @@ def read_config(path: Path) -> dict:
 
 
 def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | None:
-    """The ``config.json`` of the run ``resume`` continues (None when not resuming).
-
-    Refuses a folder that holds results (``held``; ``results`` names them) without
-    ``resume``, and, with it, a folder without results or without ``config.json``.
-    """
+    """The ``config.json`` of the run ``resume`` continues (None when not resuming); refuses
+    a folder that holds ``results`` without ``resume``, and with it, one without config."""
     cfg_path = out / "config.json"
     if held and not resume:
         if cfg_path.exists():
@@ -144,18 +130,14 @@ def input_hashes(files: Iterable[str]) -> dict[str, str]:
 
 
 def changed_input(old: Mapping, new: Mapping[str, str]) -> str | None:
-    """The first input file whose hash differs between ``old`` (from a config.json; a
-    config from before hashes were recorded has none) and ``new``; None if none."""
+    """The first input file whose hash differs between ``old`` and ``new``, or None."""
     return next((f for f, h in new.items() if f in old and old[f] != h), None)
 
 
 def load_unit(path: Path, what: str, expect: Mapping[str, int],
               rerun: str = "the same command with --resume") -> dict[str, np.ndarray]:
-    """The arrays of the unit file ``path``; :class:`ResultsError` if it is damaged.
-
-    ``expect`` maps each array the unit must hold to its length along the first axis
-    (-1: any length); ``what`` names the unit (method and run) in the message.
-    """
+    """The arrays of the unit file ``path``; :class:`ResultsError` naming ``what`` if it
+    is damaged. ``expect``: each array the unit must hold -> its length (-1: any)."""
     try:
         with np.load(path) as saved:
             data = {k: saved[k] for k in saved.files}
@@ -191,8 +173,7 @@ def unit_path(out: Path, unit: Unit) -> Path:
 
 def read_unit(out: Path, unit: Unit, arrays: tuple[str, ...] = UNIT_ARRAYS
               ) -> dict[str, np.ndarray]:
-    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming its file if damaged
-    (an array missing, or one per episode of the wrong length)."""
+    """The saved ``arrays`` of ``unit``; :class:`ResultsError` naming it if damaged."""
     n = unit.experiment.episodes
     return load_unit(unit_path(out, unit), f"{unit.method}, run {unit.run} of "
                      f"{unit.experiment.name}",

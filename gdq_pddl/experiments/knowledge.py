@@ -1,16 +1,11 @@
 """What a world name of an experiment means, and the experiments where the robot's
 knowledge (the PDDL) disagrees with reality (the world).
 
-A world name is told apart by its form alone, never by the files in the working
-directory: ``office`` or ``office_robot`` (shipped with the package); ``office:<variant>``
-(derived from the office in memory, :data:`WORLDS`); anything else is the path of a world
-file (the command line records ``--world`` by its absolute path, :func:`world_name`).
-
-An :class:`~gdq_pddl.experiments.protocol.Experiment` names the real world the env
-simulates in ``world`` and the world the knowledge is built from in ``knowledge`` (None:
-the real world itself). Both have the same positions and doors, so the learner spaces are
-the same and only the knowledge differs. The :data:`CASES` all use Task C, each also run
-with accurate knowledge as its reference (``docs/decisions.md``).
+A world name is told apart by its form alone: ``office`` or ``office_robot`` (shipped);
+``office:<variant>`` (derived from the office in memory, :data:`WORLDS`); anything else
+is the path of a world file (:func:`world_name`). An experiment's ``knowledge`` world has
+the real world's positions and doors, so only the knowledge differs
+(``docs/decisions.md``).
 """
 
 from __future__ import annotations
@@ -42,8 +37,7 @@ def is_file_name(name: str) -> bool:
 
 
 def world_name(path: Path | None) -> str:
-    """The name an experiment records for the ``--world`` option ``path``: ``office`` for
-    none, else the file's absolute path (which no built-in name can be mistaken for)."""
+    """The name an experiment records for ``--world``: ``office``, or the absolute path."""
     return "office" if path is None else str(Path(path).absolute())
 
 
@@ -66,30 +60,17 @@ def with_edge(world: World, a: str, b: str) -> World:
     return replace(world, edges=(*world.edges, (a, b)))
 
 
-def _office() -> World:
-    return builtin_world("office")
-
-
-def _locked(door: str) -> Callable[[], World]:
-    def build() -> World:
-        return replace(with_door(_office(), door, success=0.0, stuck=0.0),
-                       name=f"office-locked-{door}")
-    return build
-
-
-def _passage() -> World:
-    return replace(with_edge(_office(), *PASSAGE), name="office-passage")
-
-
-def _deterministic() -> World:
-    return deterministic_world(_office())
+def _locked(door: str) -> World:
+    return replace(with_door(builtin_world("office"), door, success=0.0, stuck=0.0),
+                   name=f"office-locked-{door}")
 
 
 WORLDS: dict[str, Callable[[], World]] = {
-    "office:locked-d1": _locked("d1"),
-    "office:locked-d3": _locked("d3"),
-    "office:passage": _passage,
-    "office:deterministic": _deterministic,
+    "office:locked-d1": lambda: _locked("d1"),
+    "office:locked-d3": lambda: _locked("d3"),
+    "office:passage": lambda: replace(with_edge(builtin_world("office"), *PASSAGE),
+                                      name="office-passage"),
+    "office:deterministic": lambda: deterministic_world(builtin_world("office")),
 }
 """In-memory derived worlds by name (resolved by :func:`load_world_named`)."""
 
@@ -107,12 +88,9 @@ def derived_world(name: str) -> World:
 class Case:
     """One knowledge/reality disagreement."""
 
-    name: str
-    """Short label, also the experiment name prefix."""
-    real: str
-    """The world the env simulates."""
-    knowledge: str
-    """The world the knowledge (PDDL problem, plans) is built from."""
+    name: str  # also the experiment name prefix
+    real: str  # the world the env simulates
+    knowledge: str  # the world the knowledge (PDDL problem, plans) is built from
     task: str
     description: str
 
@@ -153,8 +131,7 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
 
 
 def knowledge_world(real: World, knowledge: str | None) -> World:
-    """The world to build the knowledge from: ``real`` when ``knowledge`` is None, else the
-    named world, which must give the learner the same states and actions as ``real``."""
+    """The world to build the knowledge from: ``real``, or the named one (same spaces)."""
     if knowledge is None:
         return real
     world = load_world_named(knowledge)

@@ -1,16 +1,13 @@
 """Every ordered (start, goal) pair of a world: ``gdq-pddl pairs``.
 
 Each pair is one :class:`~gdq_pddl.experiments.protocol.Experiment` named ``pairs`` with
-schedule ``(("p3->p13", episodes),)``, run by the office runner (parallel, resumable,
-seeds from the pair and the run only). A unit keeps only its returns and successes
-(:func:`run_pair_unit`), and the folder collects one row per run (:func:`collect_pairs`)::
+schedule ``(("p3->p13", episodes),)``, run by the runner with its own ``work`` and
+``collect``::
 
     config.json   the experiments (one per pair), seeds and package versions
     units/*.npz   one (pair, method, run): ``returns`` (float64), ``success`` (bool)
     runs.csv      :data:`RUN_COLUMNS`: each run's mean return and success rate (``repr``)
     optimal.json  per pair: start, goal, shortest plan length, V*, its tuning task (A-D)
-
-:mod:`gdq_pddl.analysis.pairs` reports them; why so little is kept: ``docs/decisions.md``.
 """
 
 from __future__ import annotations
@@ -32,8 +29,7 @@ from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World, WorldError
 
 PAIRS_EXPERIMENT = "pairs"
-"""The name of every experiment of a pairs folder (not ``run``: its seeds and reports
-are its own)."""
+"""The name of every experiment of a pairs folder."""
 TUNING_TASKS = ("A", "B", "C", "D")
 """The tasks every setting was chosen on; their pairs are marked in the table."""
 RUN_COLUMNS = ("pair", "start", "goal", "method", "run", "episodes", "mean_return",
@@ -50,9 +46,8 @@ def all_pairs(world: World) -> list[str]:
 
 
 def parse_pairs(world: World, items: Sequence[str]) -> list[str]:
-    """``--pairs`` (each item one or more ``START->GOAL`` separated by spaces or commas;
-    landmarks allowed) as canonical specs, without repeats, in :func:`all_pairs`'s order.
-    Raises :class:`GdqError` naming the bad item."""
+    """``--pairs`` items (``START->GOAL`` separated by spaces or commas) as canonical specs
+    in :func:`all_pairs`'s order; GdqError naming a bad item."""
     found = set()
     for item in (w for text in items for w in re.split(r"[\s,]+", text) if w):
         start, sep, goal = item.partition("->")
@@ -117,8 +112,7 @@ def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
 
 
 def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:
-    """Per pair of ``experiments`` (all in one world): start, goal, the shortest plan's
-    length in the knowledge (-1: none), V* and the tuning task it is (None: not one)."""
+    """Per pair (all in one world): start, goal, shortest plan length, V*, tuning task."""
     # start-up time: the model, solver and plan tables import numba and networkx
     from gdq_pddl.envs.model import compile_model, full_state
     from gdq_pddl.envs.office import office_plan_table  # start-up time, as above

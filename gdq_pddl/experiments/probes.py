@@ -21,9 +21,8 @@ from gdq_pddl.world import Task, World
 
 @dataclass(frozen=True)
 class RouteStep:
-    """One step of the true optimal route: its optimal actions (ties within 1e-9) and
-    whether one is allowed by DARLING, starts a shortest / tolerant plan, or is applicable
-    in GDQ's prior model (valued before it is tried)."""
+    """One step of the true optimal route: its optimal actions and whether one is allowed
+    by DARLING, starts a shortest / tolerant plan, or applies in GDQ's prior model."""
 
     state: str
     optimal: tuple[str, ...]
@@ -41,8 +40,7 @@ CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an
 
 def route_check(real: World, knowledge: World, task: Task,
                 darling_tolerance: float = 0.3) -> list[RouteStep]:
-    """:class:`RouteStep` along the likeliest route of the true optimal policy in
-    ``real``, with knowledge from ``knowledge``."""
+    """:class:`RouteStep` s along the likeliest optimal route in ``real``."""
     ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
     tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
               ctx.darling_plans.first_actions, ctx.prior.applicable)
@@ -65,8 +63,7 @@ def route_check(real: World, knowledge: World, task: Task,
 
 @dataclass(frozen=True)
 class OptInitValues:
-    """Q at the start state right after OptInit, per GDQ variant (see
-    :func:`optinit_values`)."""
+    """Q at the start state right after OptInit, per GDQ variant."""
 
     task: str
     r_max: float

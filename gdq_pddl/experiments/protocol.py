@@ -1,9 +1,8 @@
 """What an experiment is: a world, a schedule of tasks, methods, runs and hyperparameters.
 
-An :class:`Experiment` expands into :class:`Unit` s, one per (method, run). A unit is the
-thing that runs on one core, is written to disk when it finishes, and is skipped by
-``--resume``. Its seed is derived from the experiment's seed and the unit's identity
-only, so results are identical whatever the number of jobs or the order they finish in.
+An :class:`Experiment` expands into :class:`Unit` s, one per (method, run): what runs on
+one core, is saved when it finishes and is skipped by ``--resume``. Its seeds come from
+the experiment's seed and the unit's identity only, whatever the jobs or their order.
 """
 
 from __future__ import annotations
@@ -19,11 +18,9 @@ from gdq_pddl.limits import check_count
 
 METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
            "Q-learning")
-"""Learning methods by name. ``GDQ`` is the library's GDQ (the knowledge as an optimistic
-prior model, SPEC section 4); ``GDQ-literal`` the paper's Algorithms 1-3 read literally;
-``GDQ-code`` GDQ as in the authors' released code; ``DARLING-code`` DARLING as the GDQ
-authors' released code runs it (a weaker baseline, kept to explain their published
-curves; not part of the paper protocol)."""
+"""Learning methods by name: ``GDQ`` the library's (SPEC section 4), ``GDQ-literal`` the
+paper's Algorithms 1-3 read literally, ``GDQ-code`` and ``DARLING-code`` as the GDQ
+authors' released code runs them (``docs/learners.md``)."""
 
 PAPER_METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
 """The paper's four methods (its GDQ being the library's)."""
@@ -32,20 +29,29 @@ GDQ_VARIANTS = ("GDQ", "GDQ-literal", "GDQ-code")
 """The library's GDQ and the two readings of the paper it is compared with."""
 
 DEFAULT_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
-"""What the commands compare unless told otherwise: GDQ, the authors'-code GDQ and the
-baselines (``GDQ-literal``, which never learns, only where asked and in ``reproduce``)."""
+"""What the commands compare unless told otherwise (not GDQ-literal: it never learns)."""
+
+SCALE_METHODS: dict[str, tuple[str, dict]] = {
+    "GDQ": ("gdq", {}),
+    "GDQ-literal": ("gdq", {"variant": "literal"}),
+    "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.3}),
+    "DARLING": ("darling", {"tolerance": 0.3}),
+    "Dyna-Q": ("dynaq", {}),
+    "Q-learning": ("qlearning", {}),
+}
+"""The methods of ``gdq-pddl scale``: name -> (``make_learner`` name, its arguments)."""
+
+SCALE_DEFAULT_METHODS = tuple(m for m in SCALE_METHODS if m != "GDQ-literal")
+"""Every method but GDQ-literal, which never learns (``docs/decisions.md``)."""
 
 
 @dataclass(frozen=True)
 class Hyper:
     """Learning hyperparameters shared by every method (SPEC sections 5 and 6)."""
 
-    alpha: float = 0.1
-    """Step size of the TD update."""
-    gamma: float = 0.95
-    """Discount factor."""
-    epsilon: float = 0.1
-    """Probability of a uniformly random (allowed) action."""
+    alpha: float = 0.1  # step size of the TD update
+    gamma: float = 0.95  # discount factor
+    epsilon: float = 0.1  # probability of a uniformly random (allowed) action
 
 
 @dataclass(frozen=True)
@@ -64,19 +70,15 @@ class Experiment:
     planner: str = "graph"
     seed: int = 0
     knowledge: str | None = None
-    """The world the learners' knowledge (PDDL problem, plans) is built from, named like
-    ``world`` (also ``office:<variant>``, see :mod:`gdq_pddl.experiments.knowledge`);
-    None: ``world`` itself, accurate knowledge. Not part of unit keys or seeds."""
+    """The world the knowledge is built from, named like ``world`` (also
+    ``office:<variant>``); None: ``world`` itself. Not part of unit keys or seeds."""
     pddl: tuple[str, ...] | None = None
-    """``(domain, problem, dynamics)`` file paths, optionally with a fourth entry, the
-    determinisation of a PPDDL domain (default ``all-outcomes``; dynamics ``""``: none,
-    for a PPDDL domain): learn on that PDDL problem through the generic env
-    (:mod:`gdq_pddl.envs.pddl_env`) instead of an office world; ``world`` and
-    ``knowledge`` are then unused and each schedule entry names the problem."""
+    """``(domain, problem, dynamics[, determinisation])`` file paths (dynamics ``""``:
+    none): learn on that PDDL problem instead of an office world (``world`` and
+    ``knowledge`` are then unused; each schedule entry names the problem)."""
 
     def __post_init__(self) -> None:
-        """Refuse what no run can be made of (a :class:`~gdq_pddl.errors.ConfigError`,
-        naming the field), before any unit runs."""
+        """Refuse what no run can be made of (a ConfigError naming the field)."""
         check_count("runs", self.runs)
         check_count("seed", self.seed)
         if self.runs < 1:
@@ -110,15 +112,13 @@ class Unit:
 
     @property
     def key(self) -> str:
-        """A file-name-safe identity, unique within an output folder (see
-        :func:`safe_name`: names from input files never become paths)."""
+        """A file-name-safe identity, unique within an output folder (:func:`safe_name`)."""
         tasks = "-".join(t.replace("->", "_to_") for t, _ in self.experiment.schedule)
         return safe_name(f"{self.experiment.name}__{tasks}__{self.method}__run{self.run}")
 
     def seeds(self) -> tuple[np.random.Generator, int]:
         """The learner's Generator and the env's integer seed, from the experiment and the
-        run only: run ``r`` of every method starts from the same seeds (paired, common
-        random numbers), so a difference between methods is less noisy."""
+        run only: run ``r`` of every method starts from the same seeds (paired runs)."""
         ident = zlib.crc32(f"{self.experiment.name}|{self.experiment.schedule}".encode())
         seq = np.random.SeedSequence([self.experiment.seed, ident, self.run])
         learner, env = seq.spawn(2)
@@ -132,14 +132,10 @@ MAX_NAME = 150
 
 
 def safe_name(name: str) -> str:
-    """``name`` as one file name inside a folder: itself when it is made of
-    :data:`SAFE` characters only, does not start with a dot and is at most
-    :data:`MAX_NAME` long; otherwise every other character replaced by ``_``, cut to
-    length and followed by a hash of the whole name, so two names never meet.
-
-    A problem named ``../../x`` (a name from an input file) gives ``_._.._x-<hash>``:
-    never a path out of the folder, never a hidden file.
-    """
+    """``name`` as one file name inside a folder: itself when made of :data:`SAFE`
+    characters, not starting with a dot and at most :data:`MAX_NAME` long; otherwise
+    every other character replaced by ``_``, cut and followed by a hash of the whole name
+    (``../../x`` gives ``_._.._x-<hash>``: never a path out of the folder)."""
     if SAFE.fullmatch(name) and not name.startswith(".") and len(name) <= MAX_NAME:
         return name
     digest = f"{zlib.crc32(name.encode('utf-8', 'surrogatepass')):08x}"
@@ -162,8 +158,7 @@ def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Ex
 
 
 def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
-    """SPEC section 6: the real-robot protocol, simulated with durations as costs (GDQ,
-    the two readings of the paper's GDQ, and Dyna-Q, which the paper compared it with)."""
+    """SPEC section 6: the real-robot protocol, simulated with durations as costs."""
     kw.setdefault("methods", ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"))
     return Experiment("robot", (("X", trials),), runs=runs, world="office_robot",
                       hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)

@@ -1,11 +1,5 @@
-"""An output folder's files as pandas tables, checked against the folder's ``config.json``.
-
-The runner writes ``episodes.csv`` (one row per episode), ``config.json`` (what was run),
-``policies.csv`` (each run's final greedy policy) and ``optimal.json`` (facts per task).
-:func:`load_results` is the one reader of ``episodes.csv``; it refuses a file that
-contradicts ``config.json`` (missing or extra episodes, repeated rows, a method or task
-that was never run) with a :class:`~gdq_pddl.errors.ResultsError` naming the file.
-"""
+"""An output folder's files as pandas tables: ``episodes.csv`` (:func:`load_results`,
+checked against ``config.json``), ``policies.csv`` and ``optimal.json``."""
 
 from __future__ import annotations
 
@@ -76,8 +70,8 @@ class RunConfig:
         return "office_robot" if experiment == ROBOT_EXPERIMENT else "office"
 
     def planned(self) -> dict[tuple[str, str], tuple[int, int]]:
-        """``(experiment, method) -> (runs, episodes per run)`` over every entry that says
-        its schedule, methods and runs (the paper's ``tasks`` is one entry per task)."""
+        """``(experiment, method) -> (runs, episodes per run)`` over the entries that say
+        their schedule, methods and runs."""
         out: dict[tuple[str, str], tuple[int, int]] = {}
         for e in self.experiments:
             sched, methods, runs = e.get("schedule"), e.get("methods"), e.get("runs")
@@ -108,20 +102,15 @@ def load_config(folder: str | Path) -> RunConfig:
 def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
     """The episodes of an output folder (or an ``episodes.csv``), one row per episode.
 
-    Columns: ``experiment``, ``method``, ``task`` (text: the experiment's name, e.g.
-    ``tasks``, ``switch-C-D``, ``run``; the learner; the task label, e.g. ``C`` or a PDDL
-    problem's name), ``run`` (0-based), ``episode`` (1-based, counted over the whole run,
-    so a switch's second task goes on from the first), ``return`` (cumulative reward of
-    the episode), ``steps``, ``success`` (1: the goal was reached), then ``area_1`` ..
-    ``area_K`` for a problem with areas (visits per area in the episode; none for a PDDL
-    problem without areas). ``run``, ``episode``, ``steps`` and ``success`` are int64,
-    ``return`` and the areas float64 (an empty area cell is NaN), the text columns
-    ``category``.
+    Columns: ``experiment``, ``method``, ``task`` (category: e.g. ``switch-C-D``,
+    ``GDQ``, ``C``), ``run`` (0-based), ``episode`` (1-based over the whole run),
+    ``return``, ``steps``, ``success`` (1: goal reached), then ``area_1`` .. ``area_K``
+    for a problem with areas (visits per area). ``return`` and the areas are float64 (an
+    empty area cell is NaN), the other numbers int64.
 
-    With ``check`` (default), a file that contradicts the folder's ``config.json`` is
-    refused: too few or too many episodes for an (experiment, method), a row that
-    repeats an episode, a method the config never ran, a run number beyond its runs. Raises
-    :class:`~gdq_pddl.errors.ResultsError` naming the file and what is wrong.
+    With ``check`` (default), a file that contradicts the folder's ``config.json`` (too
+    few or too many episodes, a repeated episode, a method never run, a run beyond its
+    runs) is refused. Raises :class:`~gdq_pddl.errors.ResultsError` naming the file.
     """
     path = Path(folder)
     path = path / "episodes.csv" if path.is_dir() else path
@@ -158,10 +147,8 @@ def _line(bad: pd.Series) -> int:
 
 
 def _numbers(path: Path, df: pd.DataFrame, name: str) -> pd.Series:
-    """Column ``name`` as float64, refusing what the runner never writes: text, a value
-    that is not finite (an empty area cell is allowed), a run, episode or step count that
-    is not a whole number at least its least value, a success other than 0 or 1, a
-    negative visit count."""
+    """Column ``name`` as float64 (int64 for whole numbers), refusing what the runner
+    never writes: text, non-finite values, bad counts, successes or visit counts."""
     raw = df[name]
     col = raw.astype("float64") if pd.api.types.is_numeric_dtype(raw) else \
         pd.to_numeric(raw, errors="coerce").astype("float64")
@@ -181,8 +168,7 @@ def _numbers(path: Path, df: pd.DataFrame, name: str) -> pd.Series:
 
 
 def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
-    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg`` (see
-    :func:`load_results`); nothing to check without a config that says what ran."""
+    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg``."""
     planned = cfg.planned()
     if not planned:
         return

@@ -8,12 +8,9 @@ Layout of an output folder::
     policies.csv     each run's final greedy policy, by index and by name
     optimal.json     V* and area relevance of each task, from the true model
     learners/*.npz   with keep_learners: each run's final learner, named as its unit
-                     (:func:`gdq_pddl.learners.load_learner` reads it)
 
 An interrupted run loses at most the units in flight; ``resume=True`` checks that the
-configuration and every input file are the same and runs only what is missing. What a
-unit returns and what is collected can be swapped (``work`` and ``collect`` of
-:func:`run_experiments`; :mod:`gdq_pddl.experiments.pairs` does).
+configuration and every input file are the same and runs only what is missing.
 """
 
 from __future__ import annotations
@@ -60,8 +57,7 @@ __all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_e
 
 
 class RunInterrupted(ResultsError):
-    """The run was interrupted (Ctrl-C, or SIGTERM / SIGHUP); what finished is saved and
-    ``--resume`` goes on. ``signal`` is the number of the signal that stopped it."""
+    """The run was stopped (Ctrl-C, SIGTERM or SIGHUP: ``signal``); what finished is saved."""
 
     def __init__(self, message: str, signum: int = signal.SIGINT) -> None:
         super().__init__(message)
@@ -72,8 +68,7 @@ class RunInterrupted(ResultsError):
 
 
 class _Stopped(KeyboardInterrupt):
-    """SIGTERM or SIGHUP in the driver, raised where Ctrl-C's KeyboardInterrupt would be,
-    so that both end the workers and save what finished the same way."""
+    """SIGTERM or SIGHUP in the driver, raised as Ctrl-C's KeyboardInterrupt would be."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(signal.Signals(signum).name)
@@ -86,8 +81,7 @@ STOP_SIGNALS = (signal.SIGTERM, getattr(signal, "SIGHUP", signal.SIGTERM))
 
 @contextmanager
 def _stop_on_signals() -> Iterator[None]:
-    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (outside the main
-    thread, where Python cannot handle signals, nothing changes)."""
+    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (main thread only)."""
     def stop(signum: int, _frame: object) -> None:
         raise _Stopped(signum)
 
@@ -123,8 +117,7 @@ def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
 
 
 def input_files(experiments: list[Experiment]) -> list[str]:
-    """The files the experiments name: PDDL domain, problem and dynamics, world files (not
-    the built-in worlds, an absent dynamics file or a PPDDL determinisation)."""
+    """The input files the experiments name (PDDL files, world files)."""
     named = [f for e in experiments for f in (*(e.pddl or ())[:3], e.world, e.knowledge)]
     return [f for f in named if f and is_file_name(f)]
 
@@ -150,9 +143,8 @@ def _difference(old: object, new: list) -> str:
 
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
             arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
-    """Check or create ``out``; return the units still to run. Saved results are reused
-    only on ``resume``, when ``config.json`` says they are of the same experiments and
-    inputs (each saved unit is read first: one without ``arrays`` is named as damaged)."""
+    """Check or create ``out``; return the units still to run (saved ones are reused on
+    ``resume`` when ``config.json`` says they are of the same experiments and inputs)."""
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
     config = {"experiments": [asdict(e) for e in experiments],  # what --resume compares
@@ -171,9 +163,7 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
                                "differs from what config.json records): resuming would mix "
                                "results of both versions; restore it, or start again in "
                                "another --out")
-    # a run killed in the middle of a write leaves its temporary file (never a result: those
-    # appear only by an atomic rename); remove them before going on
-    remove_temporary(out)
+    remove_temporary(out)  # what a write killed midway left
     remove_temporary(out / "units")
     remove_temporary(out / "learners")
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
@@ -218,7 +208,7 @@ def check_jobs(jobs: int | None) -> int:
 
 
 def run_unit_keeping_learner(unit: Unit) -> dict[str, np.ndarray]:
-    """:func:`run_unit` returning the final learner's file too (``keep_learners``)."""
+    """:func:`run_unit` returning the final learner's file too (Ray takes no partial)."""
     return run_unit(unit, keep_learner=True)
 
 
@@ -234,14 +224,13 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                     unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False
                     ) -> Path:
     """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
-    :func:`run_unit`), then collect the results with ``collect`` (default:
+    :func:`run_unit`), then ``collect`` the results (default:
     :func:`gdq_pddl.experiments.collect.collect`).
 
-    ``log`` (if given) is told how many runs are left and on how many processes;
-    ``unit_arrays`` are the arrays ``work`` saves (what ``--resume`` checks saved units
-    for); ``keep_learners`` (with the default ``work``) saves each run's final learner in
-    ``learners/`` (runs saved before a resume keep none). Ctrl-C, SIGTERM and SIGHUP end
-    the workers and raise :class:`RunInterrupted`, saying what is saved and how to go on.
+    ``log`` is told how many runs are left; ``unit_arrays`` are what ``work`` saves (what
+    ``--resume`` checks); ``keep_learners`` saves each run's final learner in
+    ``learners/``. Ctrl-C, SIGTERM and SIGHUP end the workers and raise
+    :class:`RunInterrupted`, saying what is saved and how to go on.
     """
     # read at call time: tests replace run_unit
     work = work or (run_unit_keeping_learner if keep_learners else run_unit)
@@ -277,9 +266,8 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
 
 
 def _check_unchanged(out: Path, experiments: list[Experiment]) -> None:
-    """Refuse to collect runs whose input files changed while they ran (each worker reads
-    the files by the name the driver resolved; their content must be what the driver
-    checked and config.json records)."""
+    """Refuse to collect runs whose input files changed while they ran (their content must
+    be what config.json records)."""
     recorded = read_config(out / "config.json").get("inputs")
     changed = changed_input(recorded if isinstance(recorded, dict) else {},
                             input_hashes(input_files(experiments)))
@@ -312,7 +300,8 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
     total = sum(e.runs * len(e.methods) for e in experiments)
     # the longest units first, so the last ones to finish are short
     pending.sort(key=lambda u: -u.experiment.episodes)
-    bar = _progress(total, total - len(pending), progress)
+    bar = tqdm(total=total, initial=total - len(pending), unit="run", desc="runs",
+               dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
     units_dir = out / "units"
     try:
         for unit, result in _execute(pending, jobs, executor, address, work):
@@ -324,11 +313,6 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
             bar.update(1)
     finally:
         bar.close()
-
-
-def _progress(total: int, initial: int, enabled: bool):
-    return tqdm(total=total, initial=initial, unit="run", desc="runs", dynamic_ncols=True,
-                disable=not enabled or not sys.stderr.isatty())
 
 
 def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | None,
@@ -358,9 +342,8 @@ PR_SET_PDEATHSIG = 1
 
 
 def _die_with_parent() -> None:
-    """Have the kernel send this worker SIGTERM when the driver dies, however it dies
-    (SIGKILL included), so no worker runs on as an orphan (Linux only; elsewhere the
-    driver's signal handlers and the pool's ``terminate`` do it)."""
+    """Have the kernel send this worker SIGTERM when the driver dies, SIGKILL included, so
+    no worker runs on as an orphan (Linux only)."""
     if not sys.platform.startswith("linux"):
         return
     try:

@@ -1,22 +1,17 @@
 """Learning against building size (``gdq-pddl scale``): every method on generated buildings.
 
-For each size N and each of ``buildings`` building seeds ``S = seed, seed + 1, ...``, the
-building of ``gdq-pddl building --positions N --seed S`` and its task A: each method runs
-``runs`` times for ``episodes`` episodes over the compact model
-(:mod:`gdq_pddl.envs.compact`). Run ``r`` is seeded by ``(S, N, r)`` only, so run ``r`` of
-every method starts from the same seeds (paired runs) and gives the same returns whether
-or not it was interrupted and resumed. :func:`run_scale` writes::
+For each size N and each building seed ``S = seed, seed + 1, ...``, task A of the building
+of ``gdq-pddl building --positions N --seed S``: each method runs ``runs`` times for
+``episodes`` episodes over the compact model (:mod:`gdq_pddl.envs.compact`), run ``r``
+seeded by ``(S, N, r)`` only (paired runs, the same whether or not resumed).
+:func:`run_scale` writes::
 
     config.json           sizes, buildings, runs, episodes, seed, methods, package versions
     units/building-N-sS/building.json     the building, learner tables, plan-table time
-    units/building-N-sS/<method>-<run>.npz
-                          one finished run, written atomically: returns, success (per
-                          episode), steps, wall_s, table_mb
+    units/building-N-sS/<method>-<run>.npz   one finished run, written atomically
     building-N-sS.npz     every run on that building (:func:`save_building`)
 
-``--resume`` checks that the configuration is the same and runs only the missing units.
-The measures (early learning, episodes to convergence, ``V_ref``, the discount, door-route
-plans, memory) and why: ``docs/decisions.md``, "Generated buildings".
+The measures and why: ``docs/decisions.md``, "Generated buildings".
 """
 
 from __future__ import annotations
@@ -44,8 +39,9 @@ from gdq_pddl.experiments.folder import (
     read_config,
     resume_config,
 )
+from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
+from gdq_pddl.experiments.protocol import SCALE_METHODS as METHODS
 from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
-from gdq_pddl.experiments.scale_methods import DEFAULT_METHODS, METHODS
 from gdq_pddl.learners import make_learner
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
@@ -60,11 +56,9 @@ FRACTION = 0.9
 TOLERANCE = 0.3
 """Plan-length tolerance of DARLING's and GDQ-code's door-route plans."""
 FIRST = 300
-"""Episodes of the early-learning measure: the mean return over the first ``FIRST``
-episodes of a run (issue 11's criterion), or over all of them in a shorter run."""
+"""Episodes of the early-learning measure (the mean return over a run's first ones)."""
 MAX_BUILDINGS = 1000
-"""The most ``--buildings`` per size (each is a marker of ``scale.png`` and a row of every
-table of ``REPORT.md``)."""
+"""The most ``--buildings`` per size."""
 
 
 @dataclass
@@ -72,25 +66,20 @@ class BuildingResult:
     """Everything measured on one building."""
 
     positions: int
-    seed: int
-    """The building seed (``gdq-pddl building --seed``)."""
+    seed: int  # gdq-pddl building --seed
     doors: int
     n_states: int
     n_actions: int
     plan_length: int
     step_limit: int
     r_max: float
-    v_ref: float
-    """The task's reference value (a lower bound on V*)."""
+    v_ref: float  # the task's reference value (a lower bound on V*)
     context_s: float
     returns: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes
     success: dict[str, np.ndarray] = field(default_factory=dict)  # runs x episodes, bool
-    steps: dict[str, int] = field(default_factory=dict)
-    """Env steps of all runs of a method."""
-    wall_s: dict[str, float] = field(default_factory=dict)
-    """Wall time of all runs of a method (the compiled loop only)."""
-    table_mb: dict[str, float] = field(default_factory=dict)
-    """Memory one learner allocates (``TabularLearner.nbytes``), in MB."""
+    steps: dict[str, int] = field(default_factory=dict)  # of all runs of a method
+    wall_s: dict[str, float] = field(default_factory=dict)  # of their compiled loops
+    table_mb: dict[str, float] = field(default_factory=dict)  # one learner's tables
 
     @property
     def name(self) -> str:
@@ -137,9 +126,7 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
 
 
 def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
-    """The building of ``positions`` positions and seed ``seed``, its task context and env
-    (what a run needs), and its description: the first fields of :class:`BuildingResult`,
-    JSON-able."""
+    """The building's description and what a run needs: ``(world, context, env)``."""
     world = building_world(positions, seed)
     t0 = time.perf_counter()
     ctx = task_context(OfficeInstance.of("A", world=world), darling_tolerance=TOLERANCE,
@@ -154,23 +141,14 @@ def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
     return header, (world, ctx, env)
 
 
-def describe(header: dict) -> str:
-    """One line about a building (its learner tables and plans)."""
-    return (f"{building_name(header['positions'], header['seed'])}: {header['doors']} doors, "
-            f"{header['n_states']} states x {header['n_actions']} actions, "
-            f"L = {header['plan_length']}, V_ref = {header['v_ref']:.1f}, plans for every "
-            f"state in {header['context_s']:.1f} s")
-
-
 _WARMED: set[str] = set()
 """Methods whose compiled episode loop this process has already run once."""
 
 
 def run_one(setting: tuple, name: str, key: tuple[int, int, int],
             episodes: int) -> dict[str, np.ndarray]:
-    """One run of method ``name`` in ``setting`` (from :func:`building_context`), seeded by
-    ``key = (building seed, positions, run)`` only, the same for every method (paired
-    runs): the arrays of a unit file."""
+    """The arrays of one run of method ``name`` in ``setting`` (:func:`building_context`),
+    seeded by ``key = (building seed, positions, run)`` only (paired runs)."""
     world, ctx, env = setting
     method, config = METHODS[name]
     env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
@@ -192,8 +170,7 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int],
 
 def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
              runs: int, log: Callable[[str], None]) -> BuildingResult:
-    """A building's :class:`BuildingResult` from its description and its (method, run)
-    units; ``log`` is told each method's env steps/s, table size and convergence."""
+    """A building's :class:`BuildingResult` from its description and its units."""
     out = BuildingResult(**header)
     for name in methods:
         done = [units[name, run] for run in range(runs)]
@@ -207,22 +184,9 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
     return out
 
 
-def run_building(positions: int, seed: int, runs: int, episodes: int,
-                 methods: list[str] | None = None, log=print) -> BuildingResult:
-    """Run every method on one building in memory (see the module docstring; nothing
-    saved: :func:`run_scale` saves each run as it finishes)."""
-    methods = list(methods or DEFAULT_METHODS)
-    header, setting = building_context(positions, seed)
-    log(describe(header))
-    units = {(name, run): run_one(setting, name, (seed, positions, run), episodes)
-             for name in methods for run in range(runs)}
-    return assemble(header, units, methods, runs, log)
-
-
 def save_building(result: BuildingResult, path) -> None:
-    """The raw returns and successes of every method on one building, with the building's
-    figures (``numpy.load`` reads it; keys ``returns/<method>``, ``success/<method>``).
-    Written atomically."""
+    """Write the returns and successes of every method on one building (keys
+    ``returns/<method>``, ``success/<method>``) and the building's figures."""
     arrays = {f"returns/{k}": v for k, v in result.returns.items()}
     arrays |= {f"success/{k}": v for k, v in result.success.items()}
 
@@ -239,9 +203,8 @@ def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int =
               buildings: int = 2, methods: list[str] | None = None, resume: bool = False,
               progress: bool = True, log: Callable[[str], None] | None = None,
               command: str | None = None) -> list[BuildingResult]:
-    """Run every building of every size into ``out`` (see the module docstring) and return
-    their results, by size then seed. On Ctrl-C raises :class:`RunInterrupted`, whose
-    message says how to continue (``command``: the command line with ``--resume``)."""
+    """Run every building of every size into ``out`` and return their results, by size then
+    seed; Ctrl-C raises :class:`RunInterrupted` naming ``command`` (with ``--resume``)."""
     log = log or tqdm.write  # clears the progress bar, writes, draws it again
     methods = list(methods or DEFAULT_METHODS)
     _check_buildings(seed, buildings)  # before the list of seeds is made
@@ -290,8 +253,7 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
     if runs < 1 or episodes < 1:
         raise GdqError("--runs and --episodes must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
-    # every building's returns and successes of every run of every method are held until
-    # the report
+    # every run's returns and successes are held until the report
     n_buildings = len(sizes) * len(seeds)
     check_memory(n_buildings * len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES),
                  f"--runs {runs:,} x --episodes {episodes:,} x {len(methods)} methods x "
@@ -310,8 +272,7 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
 
 
 def _prepare(out: Path, config: dict, resume: bool) -> None:
-    """Refuse a folder that holds results (without --resume) or other results (with it);
-    remove what a killed write left; write ``config.json``."""
+    """Check ``out`` against ``config`` (see :func:`resume_config`); write ``config.json``."""
     cfg_path = out / "config.json"
     held = cfg_path.exists() or (out / "units").exists() or any(out.glob("building-*.npz"))
     old = resume_config(out, held, resume, "units/ or building-*.npz")
@@ -325,8 +286,7 @@ def _prepare(out: Path, config: dict, resume: bool) -> None:
             raise ResultsError(f"{out} holds results of a different configuration "
                                f"({'; '.join(differ)}): --resume needs the same command "
                                f"line{hint}")
-    # a run killed in the middle of a write leaves its temporary file (never a unit file:
-    # those appear only by an atomic rename)
+    # what a write killed midway left (never a unit file: those appear by atomic rename)
     for stale in out.glob("**/.*.tmp"):
         stale.unlink(missing_ok=True)
     if old is not None:  # keep the record of the run being continued (its versions, start)
@@ -348,8 +308,7 @@ def _read_header(path: Path, rerun: str) -> dict:
 
 def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, methods: list[str],
                    progress: bool, log: Callable[[str], None], rerun: str) -> BuildingResult:
-    """Run the units of building ``(n, seed)`` missing in ``out/units/building-N-sS/``,
-    then read them all."""
+    """Run the missing units of building ``(n, seed)``, then read them all."""
     name = building_name(n, seed)
     folder = out / "units" / name
     paths = {(m, run): folder / f"{m}-{run}.npz" for m in methods for run in range(runs)}
@@ -364,7 +323,9 @@ def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, metho
             if header is None:  # the first measurement stays, so a resumed report is the same
                 header = built
                 atomic_write(header_path, lambda tmp: tmp.write_text(json.dumps(header)))
-        log(describe(header))
+        log(f"{name}: {header['doors']} doors, {header['n_states']} states x "
+            f"{header['n_actions']} actions, L = {header['plan_length']}, V_ref = "
+            f"{header['v_ref']:.1f}, plans for every state in {header['context_s']:.1f} s")
         for m, run in missing:
             save_unit(paths[m, run], run_one(setting, m, (seed, n, run), episodes))
             bar.update(1)

@@ -1,9 +1,6 @@
-"""One unit of work: a method learning along a schedule of tasks, in one process.
-
-:func:`run_unit` is what the local process pool and Ray workers execute; it depends only
-on the :class:`~gdq_pddl.experiments.protocol.Unit`, so where it runs never changes what
-it returns.
-"""
+"""One unit of work: a method learning along a schedule of tasks, in one process
+(:func:`run_unit`, what the process pool and Ray workers run: it depends only on the
+:class:`~gdq_pddl.experiments.protocol.Unit`)."""
 
 from __future__ import annotations
 
@@ -34,16 +31,14 @@ def resolve_task(world: World, spec: str) -> Task:
 
 
 def make_learner(method: str, context, hyper: Hyper):
-    """A fresh learner of ``method`` (a name of ``protocol.METHODS``) for ``context``, with
-    the experiment's shared settings (:func:`gdq_pddl.learners.make_learner`)."""
+    """A fresh learner of ``method`` for ``context`` with the experiment's ``hyper``."""
     return learner_by_name(method, context, alpha=hyper.alpha, gamma=hyper.gamma,
                            epsilon=hyper.epsilon)
 
 
 def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
-    """The instance schedule entry ``spec`` of ``exp`` runs on: the experiment's PDDL
-    problem (``exp.pddl``: the files; each entry names it), or the task ``spec`` of its
-    world (a task name or ``start->goal``)."""
+    """The instance schedule entry ``spec`` of ``exp`` runs on: its PDDL problem
+    (``exp.pddl``), or the task ``spec`` of its world (a name or ``start->goal``)."""
     if exp.pddl is not None:
         return load_pddl_instance(tuple(exp.pddl))
     world = load_world_named(exp.world)
@@ -51,8 +46,7 @@ def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
 
 
 def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
-    """The learners' :class:`~gdq_pddl.learners.context.TaskContext` of ``instance``,
-    planned with ``exp.planner`` on ``exp.knowledge`` (None: the instance's own)."""
+    """The learners' task context of ``instance``, planned on ``exp.knowledge``."""
     if exp.knowledge is not None:  # the same task, planned on another world's building
         instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
     return task_context(instance, exp.planner)
@@ -60,8 +54,7 @@ def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> Task
 
 def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
     """Run one unit; returns per-episode arrays, the tasks in force and the final policy
-    (``keep_learner``: and under ``learner`` the bytes of the final learner's file, with
-    its generators ``rng`` and ``env``: :func:`~gdq_pddl.learners.saving.save_learner`)."""
+    (``keep_learner``: and under ``learner`` the bytes of the learner's saved file)."""
     exp = unit.experiment
     rng, env_seed = unit.seeds()
     learner, parts, names = None, [], []
@@ -76,7 +69,15 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
         names.append(instance.name)
-    result = _unit_result(parts, names, exp, learner)
+    result = {
+        "returns": np.concatenate([p.returns for p in parts]),
+        "steps": np.concatenate([p.steps for p in parts]),
+        "success": np.concatenate([p.success for p in parts]),
+        "areas": np.concatenate([p.area_visits for p in parts]),
+        "tasks": np.array(names),
+        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
+        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
+    }
     if keep_learner:
         buf = io.BytesIO()
         save_learner(buf, learner, rng=rng, env=env.np_random)
@@ -84,23 +85,9 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
     return result
 
 
-def _unit_result(parts: list, tasks: list[str], exp, learner) -> dict[str, np.ndarray]:
-    """What a unit returns: its episodes' records, the tasks in force and the final policy."""
-    return {
-        "returns": np.concatenate([p.returns for p in parts]),
-        "steps": np.concatenate([p.steps for p in parts]),
-        "success": np.concatenate([p.success for p in parts]),
-        "areas": np.concatenate([p.area_visits for p in parts]),
-        "tasks": np.array(tasks),
-        "counts": np.array([n for _, n in exp.schedule], dtype=np.int64),
-        "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
-    }
-
-
 @cache
 def load_pddl_instance(files: tuple[str, ...]):
-    """The :class:`~gdq_pddl.envs.pddl_env.PDDLInstance` of ``(domain, problem, dynamics)``
-    or ``(domain, problem, dynamics, determinisation)`` (dynamics ``""``: none)."""
+    """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``."""
     domain, problem, dynamics, *determinisation = files
     return PDDLInstance.from_files(domain, problem, dynamics or None,
                                    determinisation=determinisation[0] if determinisation
@@ -108,8 +95,7 @@ def load_pddl_instance(files: tuple[str, ...]):
 
 
 def warm_up(units: list[Unit]) -> None:
-    """Compile every kernel once in this process, so forked workers need not (the episode
-    loop compiles meanwhile in a second process, :mod:`gdq_pddl.learners.precompile`)."""
+    """Compile every kernel once in this process, so forked workers need not."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
         if (u.experiment.world, u.method) not in tiny:

@@ -1,9 +1,6 @@
-"""Planners: one result type, backends found through the ``gdq_pddl.planners`` entry points.
-
-A backend is any class with the :class:`~gdq_pddl.planning.base.Planner` interface,
-declared by any installed distribution under that group (``mine =
-"my_package.planner:MyPlanner"``); each is imported only when asked for.
-"""
+"""Planners: one result type, backends found through the ``gdq_pddl.planners`` entry points
+(any class with the :class:`~gdq_pddl.planning.base.Planner` interface, imported only when
+asked for)."""
 
 from __future__ import annotations
 

@@ -24,8 +24,7 @@ State = frozenset[str]
 
 
 def length_bound(shortest: int, tolerance: float) -> int:
-    """The most actions a plan within ``tolerance`` may have: ``floor((1 + tolerance) x
-    shortest)``, with the rounding every backend and plan table shares."""
+    """The most actions a plan within ``tolerance`` may have (every backend's rounding)."""
     return math.floor((1 + tolerance) * shortest + 1e-9)
 
 
@@ -77,10 +76,9 @@ def no_plan(planner: str, started: float, **metrics: float) -> PlanResult:
 class PlanningProblem:
     """A parsed domain and problem; grounded on first use, then shared by all queries.
 
-    For a PPDDL domain (:meth:`from_texts` tells), ``domain``, ``domain_text`` and
-    ``task`` are its determinisation, what every planner reads; ``source_domain`` is the
-    PPDDL domain and ``learner_task`` reality's :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`
-    (for a STRIPS domain both are the same as ``domain`` and ``task``).
+    For a PPDDL domain, ``domain``, ``domain_text`` and ``task`` are its determinisation
+    (what planners read), ``source_domain`` and ``learner_task`` the PPDDL domain and
+    reality's task (for a STRIPS domain, the same as ``domain`` and ``task``).
     """
 
     def __init__(self, domain: Domain, problem: Problem, domain_text: str = "",
@@ -92,17 +90,14 @@ class PlanningProblem:
         if tasks is not None:  # (learner's, planner's): a PPDDL problem, grounded already
             self.__dict__["learner_task"], self.__dict__["task"] = tasks
         self._results: dict[tuple, PlanResult] = {}
-        self.text_gap = ""
-        """Why ``domain_text`` is empty: the text cannot carry the domain (pyperplan and
-        unified-planning cannot be used; :func:`~gdq_pddl.pddl.writer.untold`)."""
+        self.text_gap = ""  # why the text cannot carry the domain (writer.untold)
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
                    problem_source: str = "<problem>", determinisation: str = "all-outcomes",
                    problem_name: str | None = None) -> PlanningProblem:
-        """Parse a domain and problem (``problem_name``: which one of a text that holds
-        several). A PPDDL domain is grounded with all its outcomes and planned on
-        through ``determinisation`` (:mod:`gdq_pddl.pddl.ppddl`)."""
+        """Parse a domain and problem (``problem_name``: one of several in the text); a
+        PPDDL domain is planned on through ``determinisation``."""
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
@@ -120,9 +115,7 @@ class PlanningProblem:
     @classmethod
     def from_files(cls, domain_path: str | Path, problem_path: str | Path,
                    determinisation: str = "all-outcomes") -> PlanningProblem:
-        """Read and parse a domain and problem file (see :meth:`from_texts`);
-        ``problem_path`` may be ``FILE:NAME``, one problem of a file that holds several
-        (:func:`~gdq_pddl.pddl.parser.problem_file`)."""
+        """Read and parse a domain and problem file (``problem_path`` may be ``FILE:NAME``)."""
         path, name = problem_file(problem_path)
         return cls.from_texts(_read(domain_path), _read(path), str(domain_path),
                               str(path), determinisation, name)
@@ -134,8 +127,7 @@ class PlanningProblem:
 
     @cached_property
     def learner_task(self) -> GroundTask:
-        """The grounded problem whose ops are the learner's actions (a STRIPS domain's:
-        :attr:`task`)."""
+        """The grounded problem whose ops are the learner's actions."""
         return self.task
 
     @property
@@ -152,10 +144,9 @@ class PlanningProblem:
               *options: object) -> Query:
         """Resolve a query against the grounded task (every backend starts here).
 
-        Raises :class:`~gdq_pddl.errors.PlanningError` for a tolerance that is not a
-        finite number in ``[0, MAX_TOLERANCE]`` or a start atom the problem does not have;
-        a goal no action can ever make true gives a query whose ``goal`` is None (a "no
-        plan" answer, not an error).
+        Raises :class:`~gdq_pddl.errors.PlanningError` for a tolerance out of
+        ``[0, MAX_TOLERANCE]`` or an unknown start atom; a goal no action can make true
+        gives ``goal`` None (a "no plan" answer).
         """
         if not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool) or \
                 not math.isfinite(tolerance) or not 0 <= tolerance <= MAX_TOLERANCE:
@@ -193,9 +184,8 @@ class PlanningProblem:
         return result
 
     def problem_pddl(self, start: State | None = None, goal: State | None = None) -> str:
-        """PDDL text of this problem with another start state and/or goal (what backends
-        that run an external planner, and the plan validator, read for each query): its
-        objects, its static facts and the query's fluent atoms."""
+        """PDDL text of this problem with another start state and/or goal: its objects,
+        its static facts and the query's fluent atoms."""
         start = start if start is not None else self.init
         goal = goal if goal is not None else self.goal
         by_type: dict[str, list[str]] = {}
@@ -212,9 +202,8 @@ class PlanningProblem:
 
 
 def replay(task: GroundTask, state: int, actions: tuple[str, ...]) -> Plan:
-    """The plan of ``actions`` from the bitmask ``state``, with the states they lead
-    through on the grounded task; :class:`PlanningError` naming the first step that does
-    not apply."""
+    """The plan of ``actions`` from the bitmask ``state`` on the grounded task;
+    :class:`PlanningError` naming the first step that does not apply."""
     ops = {op.name: op for op in task.ops}
     states = [state]
     for i, action in enumerate(actions):
@@ -227,9 +216,7 @@ def replay(task: GroundTask, state: int, actions: tuple[str, ...]) -> Plan:
 
 
 def check_size(problem: Problem, source: str) -> None:
-    """Refuse, naming ``source``, a problem too large to plan over: one whose initial state
-    has more than :data:`~gdq_pddl.limits.MAX_INIT_ATOMS` atoms (grounding keeps a
-    bitmask over every fact per action, so it would take minutes and gigabytes)."""
+    """Refuse, naming ``source``, a problem too large to ground (:data:`MAX_INIT_ATOMS`)."""
     if len(problem.init) > MAX_INIT_ATOMS:
         raise SizeError(f"{source}: the initial state has {len(problem.init):,} atoms, more "
                         f"than the {MAX_INIT_ATOMS:,} a problem may have to be planned over "
@@ -237,29 +224,19 @@ def check_size(problem: Problem, source: str) -> None:
 
 
 class Query(NamedTuple):
-    """One planning query, resolved by :meth:`PlanningProblem.query` (a tuple: cheap to
-    build, since a cache hit should cost about a microsecond)."""
+    """One planning query, resolved by :meth:`PlanningProblem.query` (a tuple: cheap)."""
 
-    key: tuple
-    """The cache key: planner, start, goal, tolerance and the planner's options."""
-    start: int
-    """The start state as a bitmask of the grounded task (-1 when ``hit`` answers it)."""
-    goal: tuple[int, int] | None
-    """(must hold, must not hold) bitmasks, or None when the goal can never hold."""
-    hit: PlanResult | None
-    """The cached answer to this very query, if any."""
-    started: float
-    """``time.perf_counter()`` when the query was made (for the time_s metric)."""
+    key: tuple  # planner, start, goal, tolerance and the planner's options
+    start: int  # bitmask of the grounded task (-1 when ``hit`` answers the query)
+    goal: tuple[int, int] | None  # (must hold, must not hold) bitmasks; None: never holds
+    hit: PlanResult | None  # the cached answer, if any
+    started: float  # time.perf_counter() when the query was made
 
 
 @runtime_checkable
 class Planner(Protocol):
-    """A planner backend, as registered under the ``gdq_pddl.planners`` entry points.
-
-    ``all_plans`` says whether :meth:`solve` returns every shortest plan (``graph``,
-    ``clingo``) or one (``pyperplan``). ``unusable_reason`` returns why the backend
-    cannot run here (a missing optional package), or None when it can.
-    """
+    """A planner backend of the ``gdq_pddl.planners`` entry points: ``all_plans`` says
+    whether it returns every shortest plan, ``unusable_reason`` why it cannot run here."""
 
     name: str
     all_plans: bool

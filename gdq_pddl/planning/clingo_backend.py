@@ -1,12 +1,9 @@
-"""All shortest plans by answer-set programming (clingo), over the grounded task.
+"""All shortest plans by answer-set programming (clingo, optional), over the grounded task.
 
-The grounded task becomes ASP facts (``pre/neg/add/del`` of each operator over numbered
-facts, the start and the goal); the :data:`ENCODING` takes one action per step, forbids
-repeated states and a goal before the last step. Multi-shot solving grows the horizon
-until the goal is reached at ``L``, then enumerates every answer set (one per plan) up to
-``floor((1 + t) L)``. Whether the goal is reachable at all is settled first by a
-breadth-first pass (a horizon search cannot prove that no plan exists). clingo is an
-optional dependency (``pip install gdq_pddl[clingo]``).
+The grounded task becomes ASP facts; the :data:`ENCODING` takes one action per step and
+forbids repeated states and an early goal. Multi-shot solving grows the horizon to the
+shortest length ``L``, then enumerates every answer set (one per plan) up to
+``floor((1 + t) L)``; a breadth-first pass first settles whether any plan exists.
 """
 
 from __future__ import annotations
@@ -105,11 +102,7 @@ class ClingoPlanner:
 
     def _search(self, task, s0: int, goal: tuple[int, int], distance: int,
                 tolerance: float) -> tuple[list[tuple[int, ...]], int, int, bool]:
-        """Grow the horizon to the shortest length ``L``, then collect plans up to the bound.
-
-        Returns the plans as operator-index sequences, ``L``, the number of horizons
-        solved, and whether the plan cap cut the enumeration short.
-        """
+        """Plans (operator indices) up to the bound, ``L``, the horizons solved, capped."""
         clingo = _clingo()
         ctl = clingo.Control(["--models=0", "--warn=none"], logger=lambda code, msg: None)
         ctl.add("base", [], _facts(task, s0, goal))

@@ -1,11 +1,9 @@
 """The default planner: all shortest plans (or all loop-free plans within a length
-tolerance) from the grounded state graph, for any STRIPS + typing problem.
+tolerance) of any STRIPS + typing problem.
 
-Per query, A* with h_max (:mod:`gdq_pddl.planning.heuristic`) finds the shortest length
-``L``; a breadth-first search then keeps only the states with ``depth + h_max <=
-floor((1 + t) L)`` (h_max is admissible, so no plan within the bound is lost, and the
-rest of the state space is never generated), as a :class:`networkx.DiGraph`. Goal states
-are not expanded: a plan ends where the goal first holds.
+A* with h_max finds the shortest length ``L``; a breadth-first search then keeps the
+states with ``depth + h_max <= floor((1 + t) L)`` (h_max is admissible: no plan is lost)
+as a :class:`networkx.DiGraph`; a plan ends where the goal first holds.
 """
 
 from __future__ import annotations
@@ -15,6 +13,7 @@ import itertools
 import math
 import time
 import warnings
+from functools import cache
 
 import networkx as nx
 
@@ -80,14 +79,7 @@ class GraphPlanner:
         module docstring), its goal states and the shortest length."""
         task = problem.task
         hmax = hmax_for(task)
-        h_cache: dict[int, int] = {}
-
-        def h(s: int) -> int:
-            v = h_cache.get(s)
-            if v is None:
-                v = h_cache[s] = hmax(s, goal[0])
-            return v
-
+        h = cache(lambda s: hmax(s, goal[0]))
         graph = nx.DiGraph()
         graph.add_node(s0)
         shortest = shortest_length(task, s0, goal, h)
@@ -123,7 +115,7 @@ class GraphPlanner:
             layer, depth = nxt, depth + 1
         for g in goals:
             graph.add_edge(g, _SINK, actions=[])
-        self._generated = len(h_cache)
+        self._generated = h.cache_info().currsize
         return graph, goals, shortest
 
     def _expand(self, task, graph: nx.DiGraph, paths) -> tuple[list[Plan], bool]:

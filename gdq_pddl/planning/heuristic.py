@@ -1,10 +1,5 @@
 """h_max, the admissible and consistent delete-relaxation heuristic (Bonet & Geffner 2001),
-compiled for a grounded task.
-
-With unit costs h_max is a breadth-first search over facts (a fact first reached in
-layer ``k`` costs ``k``; an operator fires once all its positive preconditions are
-reached); :func:`_hmax` runs it over CSR arrays and stops when every goal fact is reached.
-"""
+compiled for a grounded task: with unit costs, a breadth-first search over facts."""
 
 from __future__ import annotations
 
@@ -54,8 +49,7 @@ class HMax:
         self._goals: dict[int, np.ndarray] = {}
 
     def __call__(self, state: int, goal: int) -> int:
-        """h_max of ``state`` (a bitmask) to the positive goal facts ``goal`` (a bitmask);
-        :data:`INFINITE` if no relaxed plan reaches them."""
+        """h_max of the bitmask ``state`` to the goal facts ``goal`` (:data:`INFINITE`: none)."""
         g = self._goals.get(goal)
         if g is None:
             g = self._goals[goal] = _bit_list(goal, self.n_facts)

@@ -1,10 +1,5 @@
-"""One optimal plan from pyperplan, run through unified-planning.
-
-The query goes to unified-planning's ``pyperplan`` engine with A* and h_max (admissible,
-so the plan is a shortest one; the engine's default search is not optimal). The plan's
-states are replayed on the grounded task, which also checks that pyperplan and our
-grounder agree. With ``tolerance > 0`` the result is still the one optimal plan.
-"""
+"""One optimal plan from pyperplan (A* with h_max) through unified-planning, its states
+replayed on the grounded task; with ``tolerance > 0`` still the one optimal plan."""
 
 from __future__ import annotations
 

@@ -1,11 +1,6 @@
-"""Check plans with unified-planning's plan validator, and the bridge to unified-planning.
-
-:func:`validate_plan` replays a plan with unified-planning's sequential plan validator,
-independently of our own grounder, and checks its recorded states. The bridge
-(:func:`up_problem`, :func:`up_action_name`), shared with the pyperplan backend, parses
-the domain and problem once per :class:`~gdq_pddl.planning.base.PlanningProblem` and
-clones it per query with another initial state and goal.
-"""
+"""Check plans with unified-planning's plan validator (:func:`validate_plan`), and the
+bridge to unified-planning the pyperplan backend shares (:func:`up_problem`: parsed once
+per problem, cloned per query)."""
 
 from __future__ import annotations
 
@@ -113,12 +108,9 @@ def _up_plan(up: UPProblem, actions: tuple[str, ...]) -> Any:
 
 def validate_plan(problem: PlanningProblem, plan: Plan, start: State | None = None,
                   goal: State | None = None) -> None:
-    """Raise :class:`PlanningError` unless ``plan`` leads from ``start`` to ``goal``.
-
-    ``start`` defaults to the plan's first state, ``goal`` to the problem's goal. The
-    actions are checked by unified-planning's sequential plan validator; the plan's
-    states must also be the states its actions lead through. Returns None when valid.
-    """
+    """Raise :class:`PlanningError` unless unified-planning's validator accepts ``plan``
+    from ``start`` (default: its first state) to ``goal`` (default: the problem's) and
+    its states are the ones its actions lead through."""
     if len(plan.states) != len(plan.actions) + 1:
         raise PlanningError(f"a plan of {len(plan.actions)} actions must have "
                             f"{len(plan.actions) + 1} states, not {len(plan.states)}")

@@ -198,9 +198,10 @@ def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
 
 def test_learning_smoke_on_100_positions(tmp_path):
     from gdq_pddl.analysis.scale import figure, report
-    from gdq_pddl.experiments.scale import converged_at, run_building, save_building
+    from gdq_pddl.experiments.scale import converged_at, run_scale, save_building
 
-    result = run_building(100, 0, 1, 60, methods=["DARLING", "Q-learning"], log=lambda *a: None)
+    [result] = run_scale(tmp_path / "scale", [100], 1, 60, buildings=1,
+                         methods=["DARLING", "Q-learning"], progress=False, log=lambda *a: None)
     assert set(result.returns) == {"DARLING", "Q-learning"}
     assert all(result.steps_per_s(m) > 0 for m in result.returns)
     assert result.returns["DARLING"].shape == (1, 60)
