@@ -1,9 +1,7 @@
-"""Figures of an experiment output folder (matplotlib Figure objects, no pyplot: the
-caller's backend is left alone; PNG and PDF each).
+"""Figures of an output folder, PNG and PDF (matplotlib ``Figure`` objects, no pyplot).
 
-Every function takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and
-returns the paths it wrote (empty when its experiment is missing). A method has the same
-colour in every figure (:func:`method_colour`).
+Each takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and returns the
+paths it wrote (none when its experiment is missing); a method has one colour everywhere.
 """
 
 from __future__ import annotations
@@ -121,19 +119,28 @@ def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3
     return fig, axes, cax
 
 
-def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
-          scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Each run's curve smoothed by a trailing average, then their mean over runs with
-    its 95% t-interval (:data:`INTERVAL`); returns the interval's bounds."""
-    n = matrix.shape[0]
-    smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
-        matrix / scale
-    mean, se = mean_se(smooth)
-    se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
-    colour = method_colour(method)
-    ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
-    ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
-    return mean - se, mean + se
+def _bands(ax: Axes, study: Study, exp: str, window: int, task: str | None = None,
+           scale: float = 1.0, markers: bool = False
+           ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per method: each run's return curve smoothed by a trailing average, then their mean
+    over runs with its 95% t-interval (:data:`INTERVAL`; ``markers``: also a dot per
+    episode); returns (x, low, high) per method."""
+    out = []
+    for method in study.methods(exp):
+        matrix = study.matrix("return", exp, method, task) / scale
+        if not matrix.size:
+            continue
+        n, x = matrix.shape[0], study.episode_numbers(exp, method, task)
+        smooth = moving_average(matrix, window, full_only=False) if window > 1 else matrix
+        mean, se = mean_se(smooth)
+        se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
+        colour = method_colour(method)
+        ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
+        ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
+        if markers:
+            ax.plot(x, mean, "o", ms=2.5, color=colour)
+        out.append((x, mean - se, mean + se))
+    return out
 
 
 def _task_title(study: Study, experiment: str, task: str) -> str:
@@ -154,19 +161,14 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
-        scale = v_star if fraction_of_vstar else 1.0
-        for method in study.methods(exp):
-            m = study.matrix("return", exp, method, task)
-            if m.size:
-                _band(ax, study.episode_numbers(exp, method, task), m, method, opts.window,
-                      scale)
+        _bands(ax, study, exp, opts.window, task, v_star if fraction_of_vstar else 1.0)
         ref = 1.0 if fraction_of_vstar else v_star
         if not math.isnan(ref):
             ax.axhline(ref, color="black", ls="--", lw=0.8,
                        label="V*" if not fraction_of_vstar else "V* (= 1)")
         ax.set_title(_task_title(study, exp, task), fontsize=10)
-        ax.set_xlabel("episode")
-        ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
+        ax.set(xlabel="episode",
+               ylabel="return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ax.grid(alpha=0.3)
         if fraction_of_vstar:
             ax.set_ylim(-0.1, 1.1)
@@ -195,14 +197,10 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
         switch = study.switch_episode(exp)
         for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):
             seen = []
-            for method in study.methods(exp):
-                m = study.matrix("return", exp, method)
-                if m.size:
-                    x = study.episode_numbers(exp, method)
-                    low, high = _band(ax, x, m, method, opts.window)
-                    if zoom and switch is not None:
-                        near = (x >= switch - 50) & (x <= switch + opts.after_switch)
-                        seen += [np.nanmin(low[near]), np.nanmax(high[near])]
+            for x, low, high in _bands(ax, study, exp, opts.window):
+                if zoom and switch is not None:
+                    near = (x >= switch - 50) & (x <= switch + opts.after_switch)
+                    seen += [np.nanmin(low[near]), np.nanmax(high[near])]
             if switch is not None:
                 ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
                 if zoom:
@@ -212,8 +210,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
             what = f"first {opts.after_switch} episodes after the switch" if zoom else \
                 f"task {' -> '.join(study.tasks(exp))}"
             ax.set_title(f"{exp}: {what}", fontsize=10)
-            ax.set_xlabel("episode")
-            ax.set_ylabel("return (cumulative reward)")
+            ax.set(xlabel="episode", ylabel="return (cumulative reward)")
             ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
@@ -366,17 +363,11 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
     tasks = study.tasks(exp)
-    for method in study.methods(exp):
-        m = study.matrix("return", exp, method)
-        if m.size:
-            x = study.episode_numbers(exp, method)
-            _band(ax, x, m, method, window=1)
-            ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
+    _bands(ax, study, exp, window=1, markers=True)
     if len(tasks) == 1:
         ax.axhline(study.v_star(exp, tasks[0]), color="black", ls="--", lw=0.8,
                    label="V*")
-    ax.set_xlabel("trial")
-    ax.set_ylabel("return (cumulative reward) per trial")
+    ax.set(xlabel="trial", ylabel="return (cumulative reward) per trial")
     ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
                  "(unsmoothed)", fontsize=10)
     ax.grid(alpha=0.3)

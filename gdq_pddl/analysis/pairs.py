@@ -1,14 +1,7 @@
-"""Tables, figure and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``).
-
-From ``runs.csv`` (one mean return per pair, method and run) and ``optimal.json``: per
-pair and method the mean over runs and its standard error; per pair and baseline the
-paired difference of the reference (GDQ when it ran) minus the baseline, its Student's t
-95% interval and win / tie / loss; summaries over sets of pairs; the IQM over pairs.
-docs/decisions.md ("Every start/goal pair") defines each. The figure has a row per
-baseline: a start-by-goal heatmap of the mean difference (diverging colours centred at
-0, ``+`` on wins and ``-`` on losses, the tuning tasks boxed) and every pair's
-difference sorted, with its 95% interval.
-"""
+"""Tables, figure and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``): per pair the
+reference (GDQ when it ran) minus each baseline, paired over runs, with its t-interval
+and win / tie / loss, summaries and the IQM over pairs (docs/decisions.md, "Every
+start/goal pair", defines each)."""
 
 from __future__ import annotations
 
@@ -40,12 +33,9 @@ from gdq_pddl.world import builtin_world, load_world
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
 OUTCOME_COLOURS = {WIN: "#2166ac", TIE: "#999999", LOSS: "#b2182b"}
-WORST = 10
-"""How many of the worst pairs the report lists per baseline."""
-TIE_STRENGTH = 0.3
-"""A tie's colour in the heatmap, as a share of its full strength (the rest white)."""
-LABELLED, LISTED_PAIRS = 30, 12
-"""Up to this many pairs the sorted plot names each one / the command line lists them."""
+WORST = 10  # pairs listed per baseline
+TIE_STRENGTH = 0.3  # a tie's colour in the heatmap, as a share of its full strength
+LABELLED, LISTED_PAIRS = 30, 12  # up to so many pairs the plot / the command names each
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,6 @@
-"""The sections of ``REPORT.md``, each a ``write_<name>(w)`` on a :class:`Writer`.
-
-:func:`write_methods` and :func:`write_task` make the *Methods compared* report of any
-experiment no paper section covers (``gdq-pddl run`` on the office or a PDDL problem);
-the others test the paper's hypotheses on its ``tasks``, ``switch-*`` and ``robot``
-experiments. Every number is computed from the data; nothing is typed in.
-"""
+"""The sections of ``REPORT.md``, each a ``write_<name>(w)`` on a :class:`Writer`: the
+paper's hypotheses on its ``tasks``, ``switch-*`` and ``robot`` experiments, and
+*Methods compared* (:func:`write_methods`) for any other experiment."""
 
 from __future__ import annotations
 

@@ -1,9 +1,5 @@
-"""One experiment output folder, read lazily: what figures, tables and reports share.
-
-What a problem is comes from its data: it has areas when its rows carry area visits,
-a map (positions, routes, a world task) when it has areas, and its V* from
-``optimal.json`` (computed from the world when the file lacks it and there is a map).
-"""
+"""One output folder, read lazily: what figures, tables and reports share. A problem
+has a map (areas, positions, routes) when its rows carry area visits."""
 
 from __future__ import annotations
 
@@ -35,8 +31,7 @@ from gdq_pddl.experiments.results import (
 )
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
-PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)
-"""With every ``switch-*``, the experiments a paper section covers."""
+PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
 
 
 @dataclass(frozen=True)
@@ -80,8 +75,7 @@ class Study:
 
     @classmethod
     def open(cls, out_dir: str | Path) -> Study:
-        out = Path(out_dir)
-        study = cls(out)
+        study = cls(Path(out_dir))
         study.results  # noqa: B018  (read and check episodes.csv now: errors name the file)
         return study
 

@@ -1,12 +1,7 @@
-"""The area-visit table in the paper's layout (its Table "explore"), by pandas.
-
-Rows are task x method, columns Area 1..k; a cell is ``mean (SE)`` over runs of the
-visits to that area summed over a run's episodes (``groupby`` sums per run, then mean
-and ``sem`` per method). The task cell lists the paper's irrelevant areas and the
-computed ones (areas the true optimal policy does not visit). In every column that is
-irrelevant to the task by either definition, the fewest visits among all methods (after
-rounding, so ties are all bold) are bold. Written by the DataFrame's own writers:
-Markdown (``to_markdown``), LaTeX (``to_latex``, booktabs) and CSV (every digit).
+"""The area-visit table in the paper's layout (its Table "explore"): a row per task and
+method, a ``mean (SE)`` cell per area of the visits summed over a run; bold, in the
+areas irrelevant by either definition, the fewest visits after rounding. Markdown,
+LaTeX (booktabs) and CSV (every digit) by the DataFrame's own writers.
 """
 
 from __future__ import annotations
