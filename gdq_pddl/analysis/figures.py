@@ -79,44 +79,26 @@ def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = Figure
     return paths
 
 
-def grid(n: int, width: float = 5.0, height: float = 3.6,
-         max_cols: int = 2) -> tuple[Figure, list[Axes]]:
-    """``n`` panels of ``width`` x ``height`` inches, at most ``max_cols`` a row (constrained
-    layout; the unused cells of the last row hidden)."""
+def grid(n: int, width: float = 5.0, height: float = 3.6, max_cols: int = 2,
+         maps: bool = False, right: float = 0.0) -> tuple[Figure, list[Axes]]:
+    """``n`` panels of ``width`` x ``height`` inches, at most ``max_cols`` a row, the unused
+    cells of the last row hidden; constrained layout, or for ``maps`` a fixed one (map
+    panels have no ticks, and solving the layout over hundreds of position labels is
+    slow): 0.45 in for the title, 0.3 in above and below each panel for its texts and
+    ``right`` inches on the right for a colorbar."""
     cols = max(1, min(n, max_cols))
     rows = math.ceil(n / cols)
-    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
+    wide, high = width * cols + right, height * rows + 0.45 * maps
+    fig = Figure(figsize=(wide, high), layout=None if maps else "constrained")
     axes = fig.subplots(rows, cols, squeeze=False)
+    if maps:
+        fig.subplots_adjust(0.05 / wide, 0.3 / high, 1 - (0.05 + right) / wide,
+                            1 - 0.75 / high, wspace=0.1 / (width - 0.1),
+                            hspace=0.6 / (height - 0.6))
     flat = list(axes.ravel())
     for ax in flat[n:]:
         ax.set_visible(False)
     return fig, flat[:n]
-
-
-def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3,
-              colorbar: bool = False) -> tuple[Figure, list[Axes], Axes | None]:
-    """Map panels on a fixed layout (inches), plus a colorbar axes on the right.
-
-    Map panels have no ticks, so a fixed layout loses nothing, and it saves solving the
-    constrained layout over hundreds of position labels.
-    """
-    cols = max(1, min(n, max_cols))
-    rows = math.ceil(n / cols)
-    head, title, foot, side, bar = 0.45, 0.3, 0.3, 0.05, (1.3 if colorbar else 0.0)
-    fig_w, fig_h = width * cols + bar, height * rows + head
-    fig = Figure(figsize=(fig_w, fig_h))
-    axes = []
-    for i in range(n):
-        r, c = divmod(i, cols)
-        left = c * width + side
-        bottom = fig_h - head - (r + 1) * height + foot
-        axes.append(fig.add_axes((left / fig_w, bottom / fig_h, (width - 2 * side) / fig_w,
-                                  (height - title - foot) / fig_h)))
-    cax = None
-    if colorbar:
-        cax = fig.add_axes(((fig_w - bar + 0.15) / fig_w, 0.2, 0.15 / fig_w,
-                            0.6 * (fig_h - head) / fig_h))
-    return fig, axes, cax
 
 
 def _bands(ax: Axes, study: Study, exp: str, window: int, task: str | None = None,
@@ -295,7 +277,8 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
             top = max(float(np.max(m)) for m in means.values()) or 1.0
             norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=top)  # keep small counts visible
             cmap = colormaps["magma_r"]
-            fig, axes, cax = _map_grid(len(means), colorbar=True)
+            fig, axes = grid(len(means), 3.6, 3.6, 3, maps=True, right=1.3)
+            wide = fig.get_figwidth()
             for ax, (method, mean) in zip(axes, means.items(), strict=True):
                 by_area = dict(zip(study.areas, mean, strict=True))
                 values = np.array([by_area.get(world.area_of.get(p, -1), 0.0)
@@ -305,8 +288,9 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                            ["white" if v > 0.3 * top else "black" for v in values])
                 _outline_areas(ax, world, xy)
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
-            fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=cax,
-                         label="area visits per run (mean; square-root colour scale)")
+            fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=fig.add_axes(
+                (1 - 1.15 / wide, 0.2, 0.15 / wide, 0.55)),
+                label="area visits per run (mean; square-root colour scale)")
             robot = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{robot}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
@@ -337,7 +321,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
               if (s := study.route_summary(experiment, m, task)) is not None]
     if not panels:
         return []
-    fig, axes, _ = _map_grid(len(panels), width=3.6, height=3.8)
+    fig, axes = grid(len(panels), 3.6, 3.8, 3, maps=True)
     for ax, (method, summary) in zip(axes, panels, strict=True):
         _map_panel(ax, world, xy, study.task(experiment, task), 0.5, "#eeeeee", 80,
                    ["black"] * len(world.positions))
@@ -376,11 +360,11 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
 
 
 def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
-                 study: Study | None = None, fig_dir: str | Path | None = None) -> list[Path]:
-    """Every figure of an output folder into ``fig_dir`` (default ``out_dir/figures``),
-    drawn by two processes when the machine has two cores (:func:`_draw`)."""
+                 study: Study | None = None) -> list[Path]:
+    """Every figure of an output folder into ``out_dir/figures``, drawn by two processes
+    when the machine has two cores (:func:`_draw`)."""
     study = study or Study.open(out_dir)
-    target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
+    target = Path(out_dir) / "figures"
     jobs: list[tuple[Callable[..., list[Path]], dict]] = [
         (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
     jobs += [(learning_curves, {"experiment": exp}) for exp in study.uncovered]

@@ -53,12 +53,11 @@ def write_report(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
     return path
 
 
-def make_all(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
-             figure_opts: FigureOptions | None = None) -> list[Path]:
+def make_all(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS) -> list[Path]:
     """Figures, tables and ``REPORT.md`` of an episodes folder; returns every written path."""
     out = Path(out_dir)
     study = Study.open(out)
-    paths = make_figures(out, figure_opts or FigureOptions(window=opts.window), study)
+    paths = make_figures(out, FigureOptions(window=opts.window), study)
     paths += make_tables(out, study)
     paths.append(write_report(out, opts, study))
     return paths

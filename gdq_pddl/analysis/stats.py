@@ -49,12 +49,11 @@ class Comparison:
     n_a: int
     n_b: int
     higher_is_better: bool = True
-    alpha: float = ALPHA
 
     @property
     def significant(self) -> bool:
         return (min(self.n_a, self.n_b) >= 2 and (self.ci_low > 0 or self.ci_high < 0)
-                and (math.isnan(self.p) or self.p < self.alpha))
+                and (math.isnan(self.p) or self.p < ALPHA))
 
     @property
     def outcome(self) -> str:
@@ -77,7 +76,7 @@ def _finite(x: np.ndarray) -> np.ndarray:
 
 
 def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "baseline",
-            higher_is_better: bool = True, seed: int = SEED, alpha: float = ALPHA) -> Comparison:
+            higher_is_better: bool = True, seed: int = SEED) -> Comparison:
     """Welch's t-test and the percentile bootstrap 95% CI of ``mean(a) - mean(b)`` over
     runs, NaN dropped: both NaN with fewer than 2 values a side; two constant samples
     have no t-test and their CI is the point difference."""
@@ -98,7 +97,7 @@ def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "ba
                 warnings.filterwarnings("ignore", "Precision loss occurred", RuntimeWarning)
                 t, p = sps.ttest_ind(a, b, equal_var=False)
     return Comparison(name_a, name_b, ma - mb, low, high, float(t), float(p), a.size,
-                      b.size, higher_is_better, alpha)
+                      b.size, higher_is_better)
 
 
 def verdict(comparisons: Sequence[Comparison]) -> str:
@@ -182,20 +181,20 @@ def route_indicator(visits: np.ndarray, success: np.ndarray, route_areas: Sequen
     return visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
 
 
-def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED, level: float = 0.95,
-           n_resamples: int = 2000) -> tuple[float, float, float]:
+def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED) -> tuple[float, float, float]:
     """IQM of every run's score on every task (``scores``: an array of run scores per
     task) and its stratified percentile bootstrap CI (:func:`scipy.stats.bootstrap`, one
     sample per task: runs resampled within each task); NaN CI with < 2 runs on a task."""
     samples = [s for s in (_finite(s) for s in scores) if s.size]
     if not samples:
         return math.nan, math.nan, math.nan
+
     def iqm(*xs: np.ndarray, axis: int = -1) -> np.ndarray:  # the mean of the middle 50%
         return sps.trim_mean(np.concatenate(xs, axis=axis), 0.25, axis=axis)
 
     point = float(iqm(*samples))
     if min(s.size for s in samples) < 2:
         return point, math.nan, math.nan
-    res = sps.bootstrap(samples, iqm, n_resamples=n_resamples, confidence_level=level,
-                        method="percentile", rng=np.random.default_rng(seed))
+    res = sps.bootstrap(samples, iqm, n_resamples=2000, method="percentile",
+                        rng=np.random.default_rng(seed))
     return point, float(res.confidence_interval.low), float(res.confidence_interval.high)
