@@ -8,7 +8,6 @@ definitions, ``templates/knowledge.md.j2``; docs/decisions.md says why).
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,10 +104,8 @@ class CaseResult:
 
 def analyse(out: str | Path) -> list[CaseResult]:
     """Measure every case of an output folder of ``gdq-pddl knowledge``."""
-    out = Path(out)
-    cfg = json.loads((out / "config.json").read_text(encoding="utf-8"))
-    exps = {e["name"]: e for e in cfg.get("experiments", [])}
     study = Study.open(out)
+    exps = {e["name"]: e for e in study.config.experiments}
     described = {c.name: c.description for c in CASES}
     names = sorted({n.rsplit("--", 1)[0] for n in exps if n.endswith(("--accurate", "--wrong"))},
                    key=lambda n: (list(described).index(n) if n in described else 99, n))

@@ -289,7 +289,7 @@ def write_hypothesis_2(w: Writer) -> None:
     w.add(say("areas", table_dir=TABLE_DIR), "", area_markdown(table), say("h2"), "")
     areas = study.areas
     for task in study.tasks(exp):
-        variants = [v for v in w.variants(exp) if study.area_totals(exp, v, task).shape[0]]
+        variants = [v for v in w.variants(exp) if study.area_visits(exp, v, task).size]
         if "GDQ" not in variants:
             w.add(f"- {task}: no GDQ runs; skipped.")
         for label, irr in (("paper", table.irrelevant_paper[task]),
@@ -304,10 +304,10 @@ def write_hypothesis_2(w: Writer) -> None:
                 fewest = sum(bool(table.frame.loc[(task, variant), f"area_{a}_bold"])
                              for a in irr if a in areas)
                 w.test("II", case, "Welch + bootstrap on per-run visits to those areas",
-                       variant, exp, lambda m, t=task, c=cols: study.area_totals(
-                           exp, m, t)[:, c].sum(axis=1), higher_is_better=False, unit=" visits",
-                       note=f"{variant} has the fewest visits in {fewest} of {len(cols)} "
-                       "of these areas.")
+                       variant, exp, lambda m, t=task, c=cols: np.nansum(
+                           study.area_visits(exp, m, t)[..., c], axis=(1, 2)),
+                       higher_is_better=False, unit=" visits", note=f"{variant} has the "
+                       f"fewest visits in {fewest} of {len(cols)} of these areas.")
     for task in study.tasks(exp):
         w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 

@@ -191,16 +191,12 @@ class Study:
 
     def area_visits(self, experiment: str, method: str, task: str | None = None
                     ) -> np.ndarray:
-        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`)."""
+        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`;
+        NaN where a run lacks an episode)."""
         mats = [self.matrix(c, experiment, method, task) for c in self.area_columns]
         if not mats or mats[0].size == 0:
             return np.empty((0, 0, len(mats)))
         return np.stack(mats, axis=-1)
-
-    def area_totals(self, experiment: str, method: str, task: str) -> np.ndarray:
-        """``[runs, n_areas]``: visits per area summed over each run's episodes of ``task``."""
-        rows = self.rows(experiment, method, task)
-        return rows.groupby("run")[self.area_columns].sum().to_numpy(dtype=float)
 
     def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
         """The world ``experiment`` ran in (one object per world, so models compile once)."""
