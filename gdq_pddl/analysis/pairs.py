@@ -174,22 +174,19 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     its own extreme (small losses against large wins still show in full red); ties faded;
     grey: the diagonal and pairs not run."""
     names = res.positions
-    at = [(names.index(res.facts[p]["start"]), names.index(res.facts[p]["goal"]))
-          for p in res.pairs]
+    rows, cols = ([names.index(res.facts[p][end]) for p in res.pairs] for end in ("start", "goal"))
     grid = np.full((len(names), len(names)), np.nan)
-    for (r, c), value in zip(at, diff.mean, strict=True):
-        grid[r, c] = value
+    grid[rows, cols] = diff.mean
     finite = np.isfinite(grid).any()
     norm = TwoSlopeNorm(0.0, min(float(np.nanmin(grid)) if finite else -1.0, -1e-9),
                         max(float(np.nanmax(grid)) if finite else 1.0, 1e-9))
     cmap = colormaps["RdBu"].with_extremes(bad="#b0b0b0")
     rgba = cmap(norm(np.ma.masked_invalid(grid)))
-    for (r, c), outcome in zip(at, diff.outcome, strict=True):
-        if outcome == TIE:  # faded: a tie's small mean must not look like a loss
-            rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
+    tie = diff.outcome == TIE  # faded: a tie's small mean must not look like a loss
+    r, c = np.array(rows)[tie], np.array(cols)[tie]
+    rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
     ax.imshow(rgba)
-    for i, p in enumerate(res.pairs):
-        r, c = at[i]
+    for i, (p, r, c) in enumerate(zip(res.pairs, rows, cols, strict=True)):
         if mark := {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), ""):
             ax.text(c, r, mark, ha="center", va="center", fontsize=7,
                     color="white" if abs(norm(diff.mean[i]) - 0.5) > 0.3 else "black")

@@ -56,7 +56,7 @@ def write_header(w: Writer) -> None:
     """Output folder, configuration, versions and the method paragraph."""
     cfg, study = w.study.config, w.study
     w.add("# Experiment report", "",
-          f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
+          f"Output folder: `{w.out_dir}`; {len(study.results)} episodes in `episodes.csv`; "
           f"experiments: {', '.join(study.experiments) or 'none'}.", "")
     if cfg.experiments:
         w.table([[e.get("name", "?"), e.get("world", "?"), ", ".join(

@@ -114,9 +114,6 @@ class Study:
             self._cache[("rows", experiment)] = df[df["experiment"] == experiment]
         return self._cache[("rows", experiment)]
 
-    def __len__(self) -> int:
-        return len(self.results)
-
     @cached_property
     def experiments(self) -> list[str]:
         return sorted(self.results["experiment"].unique())
@@ -125,12 +122,11 @@ class Study:
         df = self.results if experiment is None else self.rows(experiment)
         return order_methods(df["method"].unique())
 
-    def tasks(self, experiment: str, method: str | None = None) -> list[str]:
+    def tasks(self, experiment: str) -> list[str]:
         """Task labels in order of first appearance (a switch's old task first)."""
-        key = ("tasks", experiment, method)
+        key = ("tasks", experiment)
         if key not in self._cache:
-            df = self.rows(experiment) if method is None else self.rows(experiment, method)
-            first = df.groupby("task", observed=True)["episode"].min()
+            first = self.rows(experiment).groupby("task", observed=True)["episode"].min()
             self._cache[key] = sorted(first.index, key=lambda t: (first[t], t))
         return list(self._cache[key])
 
@@ -258,21 +254,18 @@ class Study:
         """Learner state -> greedy action of one run's final policy (empty: none stored)."""
         return self._policy_map.get((experiment, method, task, run), {})
 
-    def routes(self, experiment: str, method: str, task: str) -> dict[int, Route]:
-        """Run -> the intended route of its final greedy policy (runs with a policy)."""
-        t = self.task(experiment, task)
-        if t is None:
-            return {}
-        world = self.world(experiment)
-        return {r: walk_policy(world, policy, t.start, t.goal)
-                for (e, m, k, r), policy in sorted(self._policy_map.items())
-                if (e, m, k) == (experiment, method, task) and policy}
-
     def route_summary(self, experiment: str, method: str, task: str) -> RouteSummary | None:
-        """The most common final greedy route of ``method`` (None: no policies)."""
-        if not (routes := self.routes(experiment, method, task)):
+        """The intended routes of ``method``'s final greedy policies, walked per run, and
+        the most common one (None: no policies or no map)."""
+        if (t := self.task(experiment, task)) is None:
             return None
-        world, runs = self.world(experiment), sorted(routes.items())
+        world = self.world(experiment)
+        routes = {r: walk_policy(world, policy, t.start, t.goal)
+                  for (e, m, k, r), policy in sorted(self._policy_map.items())
+                  if (e, m, k) == (experiment, method, task) and policy}
+        if not routes:
+            return None
+        runs = sorted(routes.items())
         (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
         members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
         top = Counter(r.positions for r in members).most_common(1)[0][0]
