@@ -15,9 +15,8 @@ from gdq_pddl.analysis.stats import (
     first_positive,
     iqm_ci,
     mean_se,
-    route_indicator,
+    route_settles,
     run_means,
-    settles,
     verdict,
     verdict_reason,
 )
@@ -370,9 +369,9 @@ paper's best route."""
             on, k = summary.on_route(world, BEST_ROUTE_C), summary.count
             share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
             common = f"{route_str(summary.areas)} ({summary.end}, {k} run{'s' * (k != 1)})"
-        conv[m] = [settles(row, opts.route_window, opts.route_share) for row in route_indicator(
-            study.area_visits(exp, m, "C"), study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-            study.areas)]
+        conv[m] = route_settles(study.area_visits(exp, m, "C"), study.matrix(
+            "success", exp, m, "C"), BEST_ROUTE_C, study.areas, opts.route_window,
+            opts.route_share)
         reached = [c for c in conv[m] if not math.isnan(c)]
         rows.append([m, share, common, f"{len(reached)}/{len(conv[m])}",
                      fmt(float(np.mean(reached)), 5) if reached else "never"])
@@ -471,9 +470,9 @@ def write_robot(w: Writer) -> None:
         if ret.size == 0:
             continue
         n, firsts = ret.shape[0], [np.argmax(row > 0) + 1.0 for row in success if any(row > 0)]
-        ind = route_indicator(study.area_visits(exp, m, task), success,
-                              truth.optimal_route_areas, study.areas)
-        conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
+        conv = route_settles(study.area_visits(exp, m, task), success,
+                             truth.optimal_route_areas, study.areas, opts.robot_window,
+                             opts.robot_share)
         summary = study.route_summary(exp, m, task)
         rows.append([m, n, f"{np.nanmean(ret):.1f}", f"{len(firsts)}/{n}",
                      fmt(float(np.mean(firsts)), 3) if firsts else "none",

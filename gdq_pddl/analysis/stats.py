@@ -139,15 +139,6 @@ class Milestone:
     per_run: tuple[float, ...]
     on_mean_curve: float
 
-    @property
-    def reached(self) -> int:
-        return int(sum(not math.isnan(v) for v in self.per_run))
-
-    @property
-    def mean_of_reached(self) -> float:
-        vals = [v for v in self.per_run if not math.isnan(v)]
-        return float(np.mean(vals)) if vals else math.nan
-
 
 def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0) -> Milestone:
     """First episode whose ``window``-episode moving average of return exceeds
@@ -161,24 +152,21 @@ def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0)
     return Milestone(tuple(first[:-1]), first[-1])
 
 
-def settles(indicator: np.ndarray, window: int, share: float) -> float:
-    """1-based episode from which the trailing ``window``-episode share of ``indicator``
-    stays at or above ``share`` to the end of the data (NaN if it never does)."""
-    ind = np.asarray(indicator, dtype=float)
-    if ind.size < window:
-        return math.nan
-    ok = moving_average(ind, window) >= share - 1e-12
-    bad = np.flatnonzero(~ok)
-    return math.nan if not ok[-1] else float(bad[-1] + 2) if bad.size else 1.0
-
-
-def route_indicator(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
-                    areas: Sequence[int]) -> np.ndarray:
-    """Per episode: succeeded visiting exactly the areas of ``route_areas``
-    (``visits[..., n_areas]``, areas in the order of ``areas``)."""
+def route_settles(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
+                  areas: Sequence[int], window: int, share: float) -> list[float]:
+    """Per run of ``visits[runs, episodes, n_areas]`` (areas in the order of ``areas``):
+    the 1-based episode from which at least ``share`` of the trailing ``window`` episodes
+    succeed visiting exactly the areas of ``route_areas``, to the end (NaN: never)."""
     on = np.isin(areas, route_areas)
     visited = visits > 0
-    return visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
+    follows = visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
+    if follows.shape[-1] < window:
+        return [math.nan] * len(follows)
+    out = []
+    for ok in moving_average(follows.astype(float), window) >= share - 1e-12:
+        bad = np.flatnonzero(~ok)
+        out.append(math.nan if not ok[-1] else float(bad[-1] + 2) if bad.size else 1.0)
+    return out
 
 
 def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED) -> tuple[float, float, float]:

@@ -63,8 +63,9 @@ def fmt(x: float, digits: int = 3) -> str:
 def milestone_str(ms: Milestone) -> str:
     """A milestone on the mean curve, then in brackets the mean over the runs that reach
     it and how many do: ``55 (61.5; 4/5)``."""
-    return (f"{fmt(ms.on_mean_curve, 5)} ({fmt(ms.mean_of_reached, 4)}; "
-            f"{ms.reached}/{len(ms.per_run)})")
+    reached = [v for v in ms.per_run if not math.isnan(v)]
+    mean = float(np.mean(reached)) if reached else math.nan
+    return f"{fmt(ms.on_mean_curve, 5)} ({fmt(mean, 4)}; {len(reached)}/{len(ms.per_run)})"
 
 
 def route_str(areas: Sequence[int]) -> str:
