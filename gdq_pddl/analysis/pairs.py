@@ -251,7 +251,7 @@ def report_text(res: PairRuns, diffs: list[Differences]) -> str:
     rows = [summary_row(d, np.ones(all_pairs, bool)) for d in diffs]
     rows += [summary_row(d, untuned, ", excluding A-D") for d in diffs if untuned.sum() < all_pairs]
     lost = [i for i in range(all_pairs) if any(d.outcome[i] == LOSS for d in diffs)]
-    iqms = iqm_table(res)
+    iqm_pairs, iqms = iqm_rows(res)
     return render(
         "pairs.md.j2", res=res, exp=exp, ref=res.reference, command=command(res), diffs=diffs,
         lost=lost, level=f"{LEVEL:.0%}", chance=f"{(1 - LEVEL) * all_pairs:.1f}", worst_n=WORST,
@@ -263,22 +263,20 @@ def report_text(res: PairRuns, diffs: list[Differences]) -> str:
         worst=min(((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
                    if d.outcome[i] == LOSS), default=None),
         order=[np.argsort(d.mean, kind="stable")[:WORST] for d in diffs],
-        iqm_pairs=iqms["pairs"].iloc[0] if len(iqms) else 0,
-        iqms=table_text([[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"]
-                         for m, r in iqms.iterrows()], ["method", "IQM of return / V*",
-                                                        "95% interval"])
-        if len(iqms) and iqms["pairs"].iloc[0] else "")
+        iqm_pairs=iqm_pairs, iqms=table_text(iqms, [
+            "method", "IQM of return / V*", "95% interval"]) if iqm_pairs else "")
 
 
-def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
-    """Per method over the pairs with V* > 0: the IQM of every run's mean return / V*
-    and its stratified bootstrap 95% CI (:func:`~gdq_pddl.analysis.stats.iqm_ci`)."""
+def iqm_rows(res: PairRuns) -> tuple[int, list[list[str]]]:
+    """How many pairs have V* > 0 and, per method over them, the IQM of every run's mean
+    return / V* with its stratified bootstrap 95% CI (:func:`.stats.iqm_ci`)."""
     v_star = np.array([float(res.facts[p].get("v_star") or math.nan) for p in res.pairs])
     keep = np.flatnonzero(v_star > 0)
-    rows = {m: iqm_ci([res.means[i, j] / v_star[i] for i in keep], seed)
-            for j, m in enumerate(res.methods)}
-    return pd.DataFrame.from_dict(rows, orient="index", columns=["iqm", "low", "high"]).assign(
-        pairs=len(keep))
+    rows = []
+    for j, m in enumerate(res.methods):
+        point, low, high = iqm_ci([res.means[i, j] / v_star[i] for i in keep])
+        rows.append([m, number(point), f"[{number(low)}, {number(high)}]"])
+    return len(keep), rows
 
 
 def make_pairs_report(out: str | Path) -> list[Path]:
