@@ -1,9 +1,7 @@
-"""Figures of an experiment output folder (matplotlib Figure objects, no pyplot: the
-caller's backend is left alone; PNG and PDF each).
+"""Figures of an output folder, PNG and PDF (matplotlib ``Figure`` objects, no pyplot).
 
-Every function takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and
-returns the paths it wrote (empty when its experiment is missing). A method has the same
-colour in every figure (:func:`method_colour`).
+Each takes a :class:`~gdq_pddl.analysis.study.Study` and a target folder and returns the
+paths it wrote (none when its experiment is missing); a method has one colour everywhere.
 """
 
 from __future__ import annotations
@@ -81,59 +79,50 @@ def save_all(fig: Figure, out_dir: Path, stem: str, opts: FigureOptions = Figure
     return paths
 
 
-def grid(n: int, width: float = 5.0, height: float = 3.6,
-         max_cols: int = 2) -> tuple[Figure, list[Axes]]:
-    """``n`` panels of ``width`` x ``height`` inches, at most ``max_cols`` a row (constrained
-    layout; the unused cells of the last row hidden)."""
+def grid(n: int, width: float = 5.0, height: float = 3.6, max_cols: int = 2,
+         maps: bool = False, right: float = 0.0) -> tuple[Figure, list[Axes]]:
+    """``n`` panels of ``width`` x ``height`` inches, at most ``max_cols`` a row, the unused
+    cells of the last row hidden; constrained layout, or for ``maps`` a fixed one (map
+    panels have no ticks, and solving the layout over hundreds of position labels is
+    slow): 0.45 in for the title, 0.3 in above and below each panel for its texts and
+    ``right`` inches on the right for a colorbar."""
     cols = max(1, min(n, max_cols))
     rows = math.ceil(n / cols)
-    fig = Figure(figsize=(width * cols, height * rows), layout="constrained")
+    wide, high = width * cols + right, height * rows + 0.45 * maps
+    fig = Figure(figsize=(wide, high), layout=None if maps else "constrained")
     axes = fig.subplots(rows, cols, squeeze=False)
+    if maps:
+        fig.subplots_adjust(0.05 / wide, 0.3 / high, 1 - (0.05 + right) / wide,
+                            1 - 0.75 / high, wspace=0.1 / (width - 0.1),
+                            hspace=0.6 / (height - 0.6))
     flat = list(axes.ravel())
     for ax in flat[n:]:
         ax.set_visible(False)
     return fig, flat[:n]
 
 
-def _map_grid(n: int, width: float = 3.6, height: float = 3.6, max_cols: int = 3,
-              colorbar: bool = False) -> tuple[Figure, list[Axes], Axes | None]:
-    """Map panels on a fixed layout (inches), plus a colorbar axes on the right.
-
-    Map panels have no ticks, so a fixed layout loses nothing, and it saves solving the
-    constrained layout over hundreds of position labels.
-    """
-    cols = max(1, min(n, max_cols))
-    rows = math.ceil(n / cols)
-    head, title, foot, side, bar = 0.45, 0.3, 0.3, 0.05, (1.3 if colorbar else 0.0)
-    fig_w, fig_h = width * cols + bar, height * rows + head
-    fig = Figure(figsize=(fig_w, fig_h))
-    axes = []
-    for i in range(n):
-        r, c = divmod(i, cols)
-        left = c * width + side
-        bottom = fig_h - head - (r + 1) * height + foot
-        axes.append(fig.add_axes((left / fig_w, bottom / fig_h, (width - 2 * side) / fig_w,
-                                  (height - title - foot) / fig_h)))
-    cax = None
-    if colorbar:
-        cax = fig.add_axes(((fig_w - bar + 0.15) / fig_w, 0.2, 0.15 / fig_w,
-                            0.6 * (fig_h - head) / fig_h))
-    return fig, axes, cax
-
-
-def _band(ax: Axes, x: np.ndarray, matrix: np.ndarray, method: str, window: int,
-          scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Each run's curve smoothed by a trailing average, then their mean over runs with
-    its 95% t-interval (:data:`INTERVAL`); returns the interval's bounds."""
-    n = matrix.shape[0]
-    smooth = moving_average(matrix / scale, window, full_only=False) if window > 1 else \
-        matrix / scale
-    mean, se = mean_se(smooth)
-    se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
-    colour = method_colour(method)
-    ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
-    ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
-    return mean - se, mean + se
+def _bands(ax: Axes, study: Study, exp: str, window: int, task: str | None = None,
+           scale: float = 1.0, markers: bool = False
+           ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per method: each run's return curve smoothed by a trailing average, then their mean
+    over runs with its 95% t-interval (:data:`INTERVAL`; ``markers``: also a dot per
+    episode); returns (x, low, high) per method."""
+    out = []
+    for method in study.methods(exp):
+        matrix = study.matrix("return", exp, method, task) / scale
+        if not matrix.size:
+            continue
+        n, x = matrix.shape[0], study.episode_numbers(exp, method, task)
+        smooth = moving_average(matrix, window, full_only=False) if window > 1 else matrix
+        mean, se = mean_se(smooth)
+        se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
+        colour = method_colour(method)
+        ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
+        ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
+        if markers:
+            ax.plot(x, mean, "o", ms=2.5, color=colour)
+        out.append((x, mean - se, mean + se))
+    return out
 
 
 def _task_title(study: Study, experiment: str, task: str) -> str:
@@ -154,19 +143,14 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
-        scale = v_star if fraction_of_vstar else 1.0
-        for method in study.methods(exp):
-            m = study.matrix("return", exp, method, task)
-            if m.size:
-                _band(ax, study.episode_numbers(exp, method, task), m, method, opts.window,
-                      scale)
+        _bands(ax, study, exp, opts.window, task, v_star if fraction_of_vstar else 1.0)
         ref = 1.0 if fraction_of_vstar else v_star
         if not math.isnan(ref):
             ax.axhline(ref, color="black", ls="--", lw=0.8,
                        label="V*" if not fraction_of_vstar else "V* (= 1)")
         ax.set_title(_task_title(study, exp, task), fontsize=10)
-        ax.set_xlabel("episode")
-        ax.set_ylabel("return / V*" if fraction_of_vstar else "return (cumulative reward)")
+        ax.set(xlabel="episode",
+               ylabel="return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ax.grid(alpha=0.3)
         if fraction_of_vstar:
             ax.set_ylim(-0.1, 1.1)
@@ -195,14 +179,10 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
         switch = study.switch_episode(exp)
         for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):
             seen = []
-            for method in study.methods(exp):
-                m = study.matrix("return", exp, method)
-                if m.size:
-                    x = study.episode_numbers(exp, method)
-                    low, high = _band(ax, x, m, method, opts.window)
-                    if zoom and switch is not None:
-                        near = (x >= switch - 50) & (x <= switch + opts.after_switch)
-                        seen += [np.nanmin(low[near]), np.nanmax(high[near])]
+            for x, low, high in _bands(ax, study, exp, opts.window):
+                if zoom and switch is not None:
+                    near = (x >= switch - 50) & (x <= switch + opts.after_switch)
+                    seen += [np.nanmin(low[near]), np.nanmax(high[near])]
             if switch is not None:
                 ax.axvline(switch - 0.5, color="black", ls=":", lw=1.0, label="switch")
                 if zoom:
@@ -212,8 +192,7 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
             what = f"first {opts.after_switch} episodes after the switch" if zoom else \
                 f"task {' -> '.join(study.tasks(exp))}"
             ax.set_title(f"{exp}: {what}", fontsize=10)
-            ax.set_xlabel("episode")
-            ax.set_ylabel("return (cumulative reward)")
+            ax.set(xlabel="episode", ylabel="return (cumulative reward)")
             ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
@@ -298,7 +277,8 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
             top = max(float(np.max(m)) for m in means.values()) or 1.0
             norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=top)  # keep small counts visible
             cmap = colormaps["magma_r"]
-            fig, axes, cax = _map_grid(len(means), colorbar=True)
+            fig, axes = grid(len(means), 3.6, 3.6, 3, maps=True, right=1.3)
+            wide = fig.get_figwidth()
             for ax, (method, mean) in zip(axes, means.items(), strict=True):
                 by_area = dict(zip(study.areas, mean, strict=True))
                 values = np.array([by_area.get(world.area_of.get(p, -1), 0.0)
@@ -308,8 +288,9 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                            ["white" if v > 0.3 * top else "black" for v in values])
                 _outline_areas(ax, world, xy)
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
-            fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=cax,
-                         label="area visits per run (mean; square-root colour scale)")
+            fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=fig.add_axes(
+                (1 - 1.15 / wide, 0.2, 0.15 / wide, 0.55)),
+                label="area visits per run (mean; square-root colour scale)")
             robot = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{robot}{_task_title(study, exp, task)}: visits per area "
                          "(blue ring start, green ring goal)", fontsize=10)
@@ -340,7 +321,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
               if (s := study.route_summary(experiment, m, task)) is not None]
     if not panels:
         return []
-    fig, axes, _ = _map_grid(len(panels), width=3.6, height=3.8)
+    fig, axes = grid(len(panels), 3.6, 3.8, 3, maps=True)
     for ax, (method, summary) in zip(axes, panels, strict=True):
         _map_panel(ax, world, xy, study.task(experiment, task), 0.5, "#eeeeee", 80,
                    ["black"] * len(world.positions))
@@ -366,17 +347,11 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
     tasks = study.tasks(exp)
-    for method in study.methods(exp):
-        m = study.matrix("return", exp, method)
-        if m.size:
-            x = study.episode_numbers(exp, method)
-            _band(ax, x, m, method, window=1)
-            ax.plot(x, np.nanmean(m, axis=0), "o", ms=2.5, color=method_colour(method))
+    _bands(ax, study, exp, window=1, markers=True)
     if len(tasks) == 1:
         ax.axhline(study.v_star(exp, tasks[0]), color="black", ls="--", lw=0.8,
                    label="V*")
-    ax.set_xlabel("trial")
-    ax.set_ylabel("return (cumulative reward) per trial")
+    ax.set(xlabel="trial", ylabel="return (cumulative reward) per trial")
     ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
                  "(unsmoothed)", fontsize=10)
     ax.grid(alpha=0.3)
@@ -385,11 +360,11 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
 
 
 def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
-                 study: Study | None = None, fig_dir: str | Path | None = None) -> list[Path]:
-    """Every figure of an output folder into ``fig_dir`` (default ``out_dir/figures``),
-    drawn by two processes when the machine has two cores (:func:`_draw`)."""
+                 study: Study | None = None) -> list[Path]:
+    """Every figure of an output folder into ``out_dir/figures``, drawn by two processes
+    when the machine has two cores (:func:`_draw`)."""
     study = study or Study.open(out_dir)
-    target = Path(fig_dir) if fig_dir is not None else Path(out_dir) / "figures"
+    target = Path(out_dir) / "figures"
     jobs: list[tuple[Callable[..., list[Path]], dict]] = [
         (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
     jobs += [(learning_curves, {"experiment": exp}) for exp in study.uncovered]

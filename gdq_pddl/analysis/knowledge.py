@@ -1,20 +1,13 @@
 """Figures and ``REPORT.md`` of the wrong-knowledge experiments (``gdq-pddl knowledge``).
 
-Per case the folder holds two experiments on the same *real* world: ``<case>--accurate``
-(knowledge built from the real world) and ``<case>--wrong`` (from the case's knowledge
-world). :func:`analyse` measures per case and method: **convergence** (per run, the first
-episode at which the trailing :data:`WINDOW`-episode mean return reaches
-:func:`threshold`; the median over runs, unconverged runs later than any episode;
-docs/decisions.md says why first passage and why 85%); **the final greedy policy**,
-walked in the real world, its area route against the optimal one and its exact value;
-and along the optimal route, whether an optimal action is in DARLING's allowed set,
-GDQ's prior, the shortest plans and the 1.3x plans
-(:func:`~gdq_pddl.experiments.probes.route_check`).
+Per case, experiments ``<case>--accurate`` and ``<case>--wrong`` run on the same real
+world; :func:`analyse` measures each method's convergence, final greedy policy and
+whether the knowledge holds an optimal action along the optimal route (the report's
+definitions, ``templates/knowledge.md.j2``; docs/decisions.md says why).
 """
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,11 +28,8 @@ from gdq_pddl.experiments.work import load_world_named, resolve_task
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import Task
 
-WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100
-"""Moving-average windows (episodes) of convergence and of the curves; episodes at the
-end over which the final mean return is reported."""
-FRACTION = 0.85
-"""Convergence threshold: V* - (1 - FRACTION) |V*|."""
+WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100  # episodes: convergence, curves, final return
+FRACTION = 0.85  # convergence threshold: V* - (1 - FRACTION) |V*|
 ACCURATE, WRONG = "accurate", "wrong"
 
 
@@ -114,10 +104,8 @@ class CaseResult:
 
 def analyse(out: str | Path) -> list[CaseResult]:
     """Measure every case of an output folder of ``gdq-pddl knowledge``."""
-    out = Path(out)
-    cfg = json.loads((out / "config.json").read_text(encoding="utf-8"))
-    exps = {e["name"]: e for e in cfg.get("experiments", [])}
     study = Study.open(out)
+    exps = {e["name"]: e for e in study.config.experiments}
     described = {c.name: c.description for c in CASES}
     names = sorted({n.rsplit("--", 1)[0] for n in exps if n.endswith(("--accurate", "--wrong"))},
                    key=lambda n: (list(described).index(n) if n in described else 99, n))

@@ -1,14 +1,7 @@
-"""Tables, figure and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``).
-
-From ``runs.csv`` (one mean return per pair, method and run) and ``optimal.json``: per
-pair and method the mean over runs and its standard error; per pair and baseline the
-paired difference of the reference (GDQ when it ran) minus the baseline, its Student's t
-95% interval and win / tie / loss; summaries over sets of pairs; the IQM over pairs.
-docs/decisions.md ("Every start/goal pair") defines each. The figure has a row per
-baseline: a start-by-goal heatmap of the mean difference (diverging colours centred at
-0, ``+`` on wins and ``-`` on losses, the tuning tasks boxed) and every pair's
-difference sorted, with its 95% interval.
-"""
+"""Tables, figure and ``REPORT.md`` of a pairs folder (``gdq-pddl pairs``): per pair the
+reference (GDQ when it ran) minus each baseline, paired over runs, with its t-interval
+and win / tie / loss, summaries and the IQM over pairs (docs/decisions.md, "Every
+start/goal pair", defines each)."""
 
 from __future__ import annotations
 
@@ -40,12 +33,9 @@ from gdq_pddl.world import builtin_world, load_world
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
 OUTCOME_COLOURS = {WIN: "#2166ac", TIE: "#999999", LOSS: "#b2182b"}
-WORST = 10
-"""How many of the worst pairs the report lists per baseline."""
-TIE_STRENGTH = 0.3
-"""A tie's colour in the heatmap, as a share of its full strength (the rest white)."""
-LABELLED, LISTED_PAIRS = 30, 12
-"""Up to this many pairs the sorted plot names each one / the command line lists them."""
+WORST = 10  # pairs listed per baseline
+TIE_STRENGTH = 0.3  # a tie's colour in the heatmap, as a share of its full strength
+LABELLED, LISTED_PAIRS = 30, 12  # up to so many pairs the plot / the command names each
 
 
 @dataclass(frozen=True)
@@ -184,22 +174,19 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     its own extreme (small losses against large wins still show in full red); ties faded;
     grey: the diagonal and pairs not run."""
     names = res.positions
-    at = [(names.index(res.facts[p]["start"]), names.index(res.facts[p]["goal"]))
-          for p in res.pairs]
+    rows, cols = ([names.index(res.facts[p][end]) for p in res.pairs] for end in ("start", "goal"))
     grid = np.full((len(names), len(names)), np.nan)
-    for (r, c), value in zip(at, diff.mean, strict=True):
-        grid[r, c] = value
+    grid[rows, cols] = diff.mean
     finite = np.isfinite(grid).any()
     norm = TwoSlopeNorm(0.0, min(float(np.nanmin(grid)) if finite else -1.0, -1e-9),
                         max(float(np.nanmax(grid)) if finite else 1.0, 1e-9))
     cmap = colormaps["RdBu"].with_extremes(bad="#b0b0b0")
     rgba = cmap(norm(np.ma.masked_invalid(grid)))
-    for (r, c), outcome in zip(at, diff.outcome, strict=True):
-        if outcome == TIE:  # faded: a tie's small mean must not look like a loss
-            rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
+    tie = diff.outcome == TIE  # faded: a tie's small mean must not look like a loss
+    r, c = np.array(rows)[tie], np.array(cols)[tie]
+    rgba[r, c, :3] = 1 - TIE_STRENGTH * (1 - rgba[r, c, :3])
     ax.imshow(rgba)
-    for i, p in enumerate(res.pairs):
-        r, c = at[i]
+    for i, (p, r, c) in enumerate(zip(res.pairs, rows, cols, strict=True)):
         if mark := {WIN: "+", LOSS: "\u2212"}.get(str(diff.outcome[i]), ""):
             ax.text(c, r, mark, ha="center", va="center", fontsize=7,
                     color="white" if abs(norm(diff.mean[i]) - 0.5) > 0.3 else "black")
@@ -264,7 +251,7 @@ def report_text(res: PairRuns, diffs: list[Differences]) -> str:
     rows = [summary_row(d, np.ones(all_pairs, bool)) for d in diffs]
     rows += [summary_row(d, untuned, ", excluding A-D") for d in diffs if untuned.sum() < all_pairs]
     lost = [i for i in range(all_pairs) if any(d.outcome[i] == LOSS for d in diffs)]
-    iqms = iqm_table(res)
+    iqm_pairs, iqms = iqm_rows(res)
     return render(
         "pairs.md.j2", res=res, exp=exp, ref=res.reference, command=command(res), diffs=diffs,
         lost=lost, level=f"{LEVEL:.0%}", chance=f"{(1 - LEVEL) * all_pairs:.1f}", worst_n=WORST,
@@ -276,22 +263,20 @@ def report_text(res: PairRuns, diffs: list[Differences]) -> str:
         worst=min(((d.mean[i], d.baseline, res.pairs[i]) for d in diffs for i in lost
                    if d.outcome[i] == LOSS), default=None),
         order=[np.argsort(d.mean, kind="stable")[:WORST] for d in diffs],
-        iqm_pairs=iqms["pairs"].iloc[0] if len(iqms) else 0,
-        iqms=table_text([[m, number(r.iqm), f"[{number(r.low)}, {number(r.high)}]"]
-                         for m, r in iqms.iterrows()], ["method", "IQM of return / V*",
-                                                        "95% interval"])
-        if len(iqms) and iqms["pairs"].iloc[0] else "")
+        iqm_pairs=iqm_pairs, iqms=table_text(iqms, [
+            "method", "IQM of return / V*", "95% interval"]) if iqm_pairs else "")
 
 
-def iqm_table(res: PairRuns, seed: int = 20240501) -> pd.DataFrame:
-    """Per method over the pairs with V* > 0: the IQM of every run's mean return / V*
-    and its stratified bootstrap 95% CI (:func:`~gdq_pddl.analysis.stats.iqm_ci`)."""
+def iqm_rows(res: PairRuns) -> tuple[int, list[list[str]]]:
+    """How many pairs have V* > 0 and, per method over them, the IQM of every run's mean
+    return / V* with its stratified bootstrap 95% CI (:func:`.stats.iqm_ci`)."""
     v_star = np.array([float(res.facts[p].get("v_star") or math.nan) for p in res.pairs])
     keep = np.flatnonzero(v_star > 0)
-    rows = {m: iqm_ci([res.means[i, j] / v_star[i] for i in keep], seed)
-            for j, m in enumerate(res.methods)}
-    return pd.DataFrame.from_dict(rows, orient="index", columns=["iqm", "low", "high"]).assign(
-        pairs=len(keep))
+    rows = []
+    for j, m in enumerate(res.methods):
+        point, low, high = iqm_ci([res.means[i, j] / v_star[i] for i in keep])
+        rows.append([m, number(point), f"[{number(low)}, {number(high)}]"])
+    return len(keep), rows
 
 
 def make_pairs_report(out: str | Path) -> list[Path]:

@@ -1,12 +1,5 @@
-"""``REPORT.md`` of an output folder, with its figures and tables.
-
-What the folder holds decides the report: ``runs.csv`` without ``episodes.csv`` is a
-pairs folder (:mod:`.pairs`); experiments with ``knowledge`` in ``config.json``
-are the wrong-knowledge cases (:mod:`.knowledge`); a folder with one of the paper's
-experiments (``tasks``, ``switch-*``, ``robot``) gets the paper's hypotheses tested, with
-verdicts (:data:`SECTIONS`); any other (``gdq-pddl run`` on the office or a PDDL problem)
-gets the *Methods compared* report. Every verdict is computed from the data by
-:func:`gdq_pddl.analysis.stats.verdict`; nothing is hard-coded.
+"""``REPORT.md`` of an output folder, with its figures and tables: what the folder holds
+decides which (:func:`make_report`). Every verdict is computed from the data.
 """
 
 from __future__ import annotations
@@ -60,21 +53,21 @@ def write_report(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
     return path
 
 
-def make_all(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
-             figure_opts: FigureOptions | None = None) -> list[Path]:
+def make_all(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS) -> list[Path]:
     """Figures, tables and ``REPORT.md`` of an episodes folder; returns every written path."""
     out = Path(out_dir)
     study = Study.open(out)
-    paths = make_figures(out, figure_opts or FigureOptions(window=opts.window), study)
+    paths = make_figures(out, FigureOptions(window=opts.window), study)
     paths += make_tables(out, study)
     paths.append(write_report(out, opts, study))
     return paths
 
 
 def make_report(out_dir: str | Path, command: str | None = None) -> list[Path]:
-    """Whatever report the folder's data calls for (see the module docstring); returns
-    every written path, ``REPORT.md`` last. ``command`` names what made a knowledge
-    folder."""
+    """The report the folder's data calls for: a pairs folder's (:mod:`.pairs`), the
+    wrong-knowledge cases' (:mod:`.knowledge`; ``command`` names what made them), else
+    :func:`make_all` (the paper's hypotheses tested on its experiments, *Methods compared*
+    on any other); returns every written path, ``REPORT.md`` last."""
     out = Path(out_dir)
     config = load_config(out)
     if config.experiments and all(e.get("name") == PAIRS_EXPERIMENT

@@ -1,13 +1,6 @@
-"""Figure and REPORT.md of the scale experiment (:mod:`gdq_pddl.experiments.scale`).
-
-Every measure is given per building and, per size, over all its buildings: episodes to
-convergence (median over the converged runs, and how many converged), the mean return
-over the first :data:`~gdq_pddl.experiments.scale.FIRST` episodes and over all episodes
-(mean over runs), GDQ minus each other method in the first of those (paired runs: run
-``r`` of every method on a building has the same seeds; mean and s.e. of the per-run
-differences, a 95% t-interval in the figure) and env steps/s (all runs' steps over their
-wall time).
-"""
+"""Figure and REPORT.md of the scale experiment (:mod:`gdq_pddl.experiments.scale`):
+each measure per building and per size over its buildings (the definitions:
+``templates/scale.md.j2``)."""
 
 from __future__ import annotations
 
@@ -27,10 +20,8 @@ from gdq_pddl.experiments.results import order_methods
 from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
 from gdq_pddl.outputs import write_text
 
-REFERENCE = "GDQ"
-"""The method every other one is compared with, run by run."""
-MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
-"""A building seed's marker (by its place among the seeds), in every panel."""
+REFERENCE = "GDQ"  # the method every other one is compared with, run by run
+MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")  # a building seed's, in every panel
 
 
 def by_size(results: list[BuildingResult]) -> dict[int, list[BuildingResult]]:

@@ -1,10 +1,6 @@
-"""The sections of ``REPORT.md``, each a ``write_<name>(w)`` on a :class:`Writer`.
-
-:func:`write_methods` and :func:`write_task` make the *Methods compared* report of any
-experiment no paper section covers (``gdq-pddl run`` on the office or a PDDL problem);
-the others test the paper's hypotheses on its ``tasks``, ``switch-*`` and ``robot``
-experiments. Every number is computed from the data; nothing is typed in.
-"""
+"""The sections of ``REPORT.md``, each a ``write_<name>(w)`` on a :class:`Writer`: the
+paper's hypotheses on its ``tasks``, ``switch-*`` and ``robot`` experiments, and
+*Methods compared* (:func:`write_methods`) for any other experiment."""
 
 from __future__ import annotations
 
@@ -19,9 +15,8 @@ from gdq_pddl.analysis.stats import (
     first_positive,
     iqm_ci,
     mean_se,
-    route_indicator,
+    route_settles,
     run_means,
-    settles,
     verdict,
     verdict_reason,
 )
@@ -60,7 +55,7 @@ def write_header(w: Writer) -> None:
     """Output folder, configuration, versions and the method paragraph."""
     cfg, study = w.study.config, w.study
     w.add("# Experiment report", "",
-          f"Output folder: `{w.out_dir}`; {len(study)} episodes in `episodes.csv`; "
+          f"Output folder: `{w.out_dir}`; {len(study.results)} episodes in `episodes.csv`; "
           f"experiments: {', '.join(study.experiments) or 'none'}.", "")
     if cfg.experiments:
         w.table([[e.get("name", "?"), e.get("world", "?"), ", ".join(
@@ -293,7 +288,7 @@ def write_hypothesis_2(w: Writer) -> None:
     w.add(say("areas", table_dir=TABLE_DIR), "", area_markdown(table), say("h2"), "")
     areas = study.areas
     for task in study.tasks(exp):
-        variants = [v for v in w.variants(exp) if study.area_totals(exp, v, task).shape[0]]
+        variants = [v for v in w.variants(exp) if study.area_visits(exp, v, task).size]
         if "GDQ" not in variants:
             w.add(f"- {task}: no GDQ runs; skipped.")
         for label, irr in (("paper", table.irrelevant_paper[task]),
@@ -308,10 +303,10 @@ def write_hypothesis_2(w: Writer) -> None:
                 fewest = sum(bool(table.frame.loc[(task, variant), f"area_{a}_bold"])
                              for a in irr if a in areas)
                 w.test("II", case, "Welch + bootstrap on per-run visits to those areas",
-                       variant, exp, lambda m, t=task, c=cols: study.area_totals(
-                           exp, m, t)[:, c].sum(axis=1), higher_is_better=False, unit=" visits",
-                       note=f"{variant} has the fewest visits in {fewest} of {len(cols)} "
-                       "of these areas.")
+                       variant, exp, lambda m, t=task, c=cols: np.nansum(
+                           study.area_visits(exp, m, t)[..., c], axis=(1, 2)),
+                       higher_is_better=False, unit=" visits", note=f"{variant} has the "
+                       f"fewest visits in {fewest} of {len(cols)} of these areas.")
     for task in study.tasks(exp):
         w.figure(f"heatmap_{slug(task)}", f"area visits, task {task}")
 
@@ -374,9 +369,9 @@ paper's best route."""
             on, k = summary.on_route(world, BEST_ROUTE_C), summary.count
             share = f"{on}/{summary.runs} ({on / summary.runs:.0%})"
             common = f"{route_str(summary.areas)} ({summary.end}, {k} run{'s' * (k != 1)})"
-        conv[m] = [settles(row, opts.route_window, opts.route_share) for row in route_indicator(
-            study.area_visits(exp, m, "C"), study.matrix("success", exp, m, "C"), BEST_ROUTE_C,
-            study.areas)]
+        conv[m] = route_settles(study.area_visits(exp, m, "C"), study.matrix(
+            "success", exp, m, "C"), BEST_ROUTE_C, study.areas, opts.route_window,
+            opts.route_share)
         reached = [c for c in conv[m] if not math.isnan(c)]
         rows.append([m, share, common, f"{len(reached)}/{len(conv[m])}",
                      fmt(float(np.mean(reached)), 5) if reached else "never"])
@@ -475,9 +470,9 @@ def write_robot(w: Writer) -> None:
         if ret.size == 0:
             continue
         n, firsts = ret.shape[0], [np.argmax(row > 0) + 1.0 for row in success if any(row > 0)]
-        ind = route_indicator(study.area_visits(exp, m, task), success,
-                              truth.optimal_route_areas, study.areas)
-        conv = [settles(row, opts.robot_window, opts.robot_share) for row in ind]
+        conv = route_settles(study.area_visits(exp, m, task), success,
+                             truth.optimal_route_areas, study.areas, opts.robot_window,
+                             opts.robot_share)
         summary = study.route_summary(exp, m, task)
         rows.append([m, n, f"{np.nanmean(ret):.1f}", f"{len(firsts)}/{n}",
                      fmt(float(np.mean(firsts)), 3) if firsts else "none",

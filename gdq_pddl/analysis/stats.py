@@ -1,15 +1,7 @@
-"""Statistics for the reports: GDQ-vs-baseline tests, verdicts, milestones, the IQM.
-
-The unit is the run: one number per run and method, then Welch's t-test
-(:func:`scipy.stats.ttest_ind`) and a percentile bootstrap 95% CI of the difference in
-means (:func:`scipy.stats.bootstrap`, runs resampled within each method, fixed seed). A
-difference is *significant* when the CI excludes 0 and p < ``alpha`` (no t-test, e.g. two
-constant samples: the CI alone decides). :func:`verdict`: ``holds`` when GDQ is
-significantly better than every baseline, ``does not hold`` when worse than one or better
-than none, ``mixed`` otherwise. Milestones use trailing moving averages over full windows
-only (from episode ``w`` on). Over many tasks, :func:`iqm_ci` gives the interquartile
-mean with a stratified bootstrap CI (Agarwal et al. 2021).
-"""
+"""Statistics for the reports, one number per run and method: Welch's t-test and a
+percentile bootstrap CI of the difference in means (significant when the CI excludes 0
+and p < ``alpha``), verdicts, milestones, and the interquartile mean with a stratified
+bootstrap CI over many tasks (Agarwal et al. 2021). docs/decisions.md says why."""
 
 from __future__ import annotations
 
@@ -49,8 +41,6 @@ class Comparison:
 
     a: str
     b: str
-    mean_a: float
-    mean_b: float
     diff: float
     ci_low: float
     ci_high: float
@@ -59,12 +49,11 @@ class Comparison:
     n_a: int
     n_b: int
     higher_is_better: bool = True
-    alpha: float = ALPHA
 
     @property
     def significant(self) -> bool:
         return (min(self.n_a, self.n_b) >= 2 and (self.ci_low > 0 or self.ci_high < 0)
-                and (math.isnan(self.p) or self.p < self.alpha))
+                and (math.isnan(self.p) or self.p < ALPHA))
 
     @property
     def outcome(self) -> str:
@@ -83,12 +72,11 @@ class Comparison:
 
 
 def _finite(x: np.ndarray) -> np.ndarray:
-    x = np.asarray(x, dtype=float)
-    return x[~np.isnan(x)]
+    return np.asarray(x, dtype=float)[~np.isnan(x)]
 
 
 def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "baseline",
-            higher_is_better: bool = True, seed: int = SEED, alpha: float = ALPHA) -> Comparison:
+            higher_is_better: bool = True, seed: int = SEED) -> Comparison:
     """Welch's t-test and the percentile bootstrap 95% CI of ``mean(a) - mean(b)`` over
     runs, NaN dropped: both NaN with fewer than 2 values a side; two constant samples
     have no t-test and their CI is the point difference."""
@@ -108,8 +96,8 @@ def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "ba
             with warnings.catch_warnings():
                 warnings.filterwarnings("ignore", "Precision loss occurred", RuntimeWarning)
                 t, p = sps.ttest_ind(a, b, equal_var=False)
-    return Comparison(name_a, name_b, ma, mb, ma - mb, low, high, float(t), float(p), a.size,
-                      b.size, higher_is_better, alpha)
+    return Comparison(name_a, name_b, ma - mb, low, high, float(t), float(p), a.size,
+                      b.size, higher_is_better)
 
 
 def verdict(comparisons: Sequence[Comparison]) -> str:
@@ -143,12 +131,6 @@ def moving_average(x: np.ndarray, window: int, full_only: bool = True) -> np.nda
     return out.reshape(x.shape)
 
 
-def _first(hits: np.ndarray) -> float:
-    """1-based index of the first True (NaN if none)."""
-    idx = np.flatnonzero(hits)
-    return float(idx[0] + 1) if idx.size else math.nan
-
-
 @dataclass(frozen=True)
 class Milestone:
     """When a method's return first turns positive: per run (NaN: never within the data)
@@ -157,15 +139,6 @@ class Milestone:
     per_run: tuple[float, ...]
     on_mean_curve: float
 
-    @property
-    def reached(self) -> int:
-        return int(sum(not math.isnan(v) for v in self.per_run))
-
-    @property
-    def mean_of_reached(self) -> float:
-        vals = [v for v in self.per_run if not math.isnan(v)]
-        return float(np.mean(vals)) if vals else math.nan
-
 
 def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0) -> Milestone:
     """First episode whose ``window``-episode moving average of return exceeds
@@ -173,48 +146,43 @@ def first_positive(matrix: np.ndarray, window: int = 50, threshold: float = 0.0)
     if matrix.size == 0:
         return Milestone((), math.nan)
     mean_curve = pd.DataFrame(matrix).mean().to_numpy()
-    return Milestone(tuple(_first(row) for row in moving_average(matrix, window) > threshold),
-                     _first(moving_average(mean_curve, window) > threshold))
+    per_run = np.vstack([moving_average(matrix, window), moving_average(mean_curve, window)])
+    first = [float(np.argmax(hits) + 1) if hits.any() else math.nan for hits in
+             per_run > threshold]
+    return Milestone(tuple(first[:-1]), first[-1])
 
 
-def settles(indicator: np.ndarray, window: int, share: float) -> float:
-    """1-based episode from which the trailing ``window``-episode share of ``indicator``
-    stays at or above ``share`` to the end of the data (NaN if it never does)."""
-    ind = np.asarray(indicator, dtype=float)
-    if ind.size < window:
-        return math.nan
-    ok = moving_average(ind, window) >= share - 1e-12
-    bad = np.flatnonzero(~ok)
-    return math.nan if not ok[-1] else float(bad[-1] + 2) if bad.size else 1.0
-
-
-def route_indicator(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
-                    areas: Sequence[int]) -> np.ndarray:
-    """Per episode: succeeded visiting exactly the areas of ``route_areas``
-    (``visits[..., n_areas]``, areas in the order of ``areas``)."""
+def route_settles(visits: np.ndarray, success: np.ndarray, route_areas: Sequence[int],
+                  areas: Sequence[int], window: int, share: float) -> list[float]:
+    """Per run of ``visits[runs, episodes, n_areas]`` (areas in the order of ``areas``):
+    the 1-based episode from which at least ``share`` of the trailing ``window`` episodes
+    succeed visiting exactly the areas of ``route_areas``, to the end (NaN: never)."""
     on = np.isin(areas, route_areas)
     visited = visits > 0
-    return visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
+    follows = visited[..., on].all(axis=-1) & ~visited[..., ~on].any(axis=-1) & (success > 0)
+    if follows.shape[-1] < window:
+        return [math.nan] * len(follows)
+    out = []
+    for ok in moving_average(follows.astype(float), window) >= share - 1e-12:
+        bad = np.flatnonzero(~ok)
+        out.append(math.nan if not ok[-1] else float(bad[-1] + 2) if bad.size else 1.0)
+    return out
 
 
-def iqm(x: np.ndarray, axis: int | None = None) -> np.ndarray:
-    """Interquartile mean: the mean of the middle 50% of the values."""
-    return sps.trim_mean(x, 0.25, axis=axis)
-
-
-def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED, level: float = 0.95,
-           n_resamples: int = 2000) -> tuple[float, float, float]:
+def iqm_ci(scores: Sequence[np.ndarray], seed: int = SEED) -> tuple[float, float, float]:
     """IQM of every run's score on every task (``scores``: an array of run scores per
     task) and its stratified percentile bootstrap CI (:func:`scipy.stats.bootstrap`, one
     sample per task: runs resampled within each task); NaN CI with < 2 runs on a task."""
     samples = [s for s in (_finite(s) for s in scores) if s.size]
     if not samples:
         return math.nan, math.nan, math.nan
-    point = float(iqm(np.concatenate(samples)))
+
+    def iqm(*xs: np.ndarray, axis: int = -1) -> np.ndarray:  # the mean of the middle 50%
+        return sps.trim_mean(np.concatenate(xs, axis=axis), 0.25, axis=axis)
+
+    point = float(iqm(*samples))
     if min(s.size for s in samples) < 2:
         return point, math.nan, math.nan
-    res = sps.bootstrap(samples, lambda *xs, axis=-1: iqm(np.concatenate(xs, axis=axis),
-                                                          axis=axis),
-                        n_resamples=n_resamples, confidence_level=level, method="percentile",
+    res = sps.bootstrap(samples, iqm, n_resamples=2000, method="percentile",
                         rng=np.random.default_rng(seed))
     return point, float(res.confidence_interval.low), float(res.confidence_interval.high)

@@ -1,9 +1,5 @@
-"""One experiment output folder, read lazily: what figures, tables and reports share.
-
-What a problem is comes from its data: it has areas when its rows carry area visits,
-a map (positions, routes, a world task) when it has areas, and its V* from
-``optimal.json`` (computed from the world when the file lacks it and there is a map).
-"""
+"""One output folder, read lazily: what figures, tables and reports share. A problem
+has a map (areas, positions, routes) when its rows carry area visits."""
 
 from __future__ import annotations
 
@@ -35,8 +31,7 @@ from gdq_pddl.experiments.results import (
 )
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
-PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)
-"""With every ``switch-*``, the experiments a paper section covers."""
+PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
 
 
 @dataclass(frozen=True)
@@ -80,8 +75,7 @@ class Study:
 
     @classmethod
     def open(cls, out_dir: str | Path) -> Study:
-        out = Path(out_dir)
-        study = cls(out)
+        study = cls(Path(out_dir))
         study.results  # noqa: B018  (read and check episodes.csv now: errors name the file)
         return study
 
@@ -120,9 +114,6 @@ class Study:
             self._cache[("rows", experiment)] = df[df["experiment"] == experiment]
         return self._cache[("rows", experiment)]
 
-    def __len__(self) -> int:
-        return len(self.results)
-
     @cached_property
     def experiments(self) -> list[str]:
         return sorted(self.results["experiment"].unique())
@@ -131,12 +122,11 @@ class Study:
         df = self.results if experiment is None else self.rows(experiment)
         return order_methods(df["method"].unique())
 
-    def tasks(self, experiment: str, method: str | None = None) -> list[str]:
+    def tasks(self, experiment: str) -> list[str]:
         """Task labels in order of first appearance (a switch's old task first)."""
-        key = ("tasks", experiment, method)
+        key = ("tasks", experiment)
         if key not in self._cache:
-            df = self.rows(experiment) if method is None else self.rows(experiment, method)
-            first = df.groupby("task", observed=True)["episode"].min()
+            first = self.rows(experiment).groupby("task", observed=True)["episode"].min()
             self._cache[key] = sorted(first.index, key=lambda t: (first[t], t))
         return list(self._cache[key])
 
@@ -197,16 +187,12 @@ class Study:
 
     def area_visits(self, experiment: str, method: str, task: str | None = None
                     ) -> np.ndarray:
-        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`)."""
+        """``float64[runs, episodes, n_areas]`` of area visits (areas as in :attr:`areas`;
+        NaN where a run lacks an episode)."""
         mats = [self.matrix(c, experiment, method, task) for c in self.area_columns]
         if not mats or mats[0].size == 0:
             return np.empty((0, 0, len(mats)))
         return np.stack(mats, axis=-1)
-
-    def area_totals(self, experiment: str, method: str, task: str) -> np.ndarray:
-        """``[runs, n_areas]``: visits per area summed over each run's episodes of ``task``."""
-        rows = self.rows(experiment, method, task)
-        return rows.groupby("run")[self.area_columns].sum().to_numpy(dtype=float)
 
     def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
         """The world ``experiment`` ran in (one object per world, so models compile once)."""
@@ -268,21 +254,18 @@ class Study:
         """Learner state -> greedy action of one run's final policy (empty: none stored)."""
         return self._policy_map.get((experiment, method, task, run), {})
 
-    def routes(self, experiment: str, method: str, task: str) -> dict[int, Route]:
-        """Run -> the intended route of its final greedy policy (runs with a policy)."""
-        t = self.task(experiment, task)
-        if t is None:
-            return {}
-        world = self.world(experiment)
-        return {r: walk_policy(world, policy, t.start, t.goal)
-                for (e, m, k, r), policy in sorted(self._policy_map.items())
-                if (e, m, k) == (experiment, method, task) and policy}
-
     def route_summary(self, experiment: str, method: str, task: str) -> RouteSummary | None:
-        """The most common final greedy route of ``method`` (None: no policies)."""
-        if not (routes := self.routes(experiment, method, task)):
+        """The intended routes of ``method``'s final greedy policies, walked per run, and
+        the most common one (None: no policies or no map)."""
+        if (t := self.task(experiment, task)) is None:
             return None
-        world, runs = self.world(experiment), sorted(routes.items())
+        world = self.world(experiment)
+        routes = {r: walk_policy(world, policy, t.start, t.goal)
+                  for (e, m, k, r), policy in sorted(self._policy_map.items())
+                  if (e, m, k) == (experiment, method, task) and policy}
+        if not routes:
+            return None
+        runs = sorted(routes.items())
         (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
         members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
         top = Counter(r.positions for r in members).most_common(1)[0][0]

@@ -1,12 +1,7 @@
-"""The area-visit table in the paper's layout (its Table "explore"), by pandas.
-
-Rows are task x method, columns Area 1..k; a cell is ``mean (SE)`` over runs of the
-visits to that area summed over a run's episodes (``groupby`` sums per run, then mean
-and ``sem`` per method). The task cell lists the paper's irrelevant areas and the
-computed ones (areas the true optimal policy does not visit). In every column that is
-irrelevant to the task by either definition, the fewest visits among all methods (after
-rounding, so ties are all bold) are bold. Written by the DataFrame's own writers:
-Markdown (``to_markdown``), LaTeX (``to_latex``, booktabs) and CSV (every digit).
+"""The area-visit table in the paper's layout (its Table "explore"): a row per task and
+method, a ``mean (SE)`` cell per area of the visits summed over a run; bold, in the
+areas irrelevant by either definition, the fewest visits after rounding. Markdown,
+LaTeX (booktabs) and CSV (every digit) by the DataFrame's own writers.
 """
 
 from __future__ import annotations
@@ -31,17 +26,19 @@ class AreaTable:
     areas: tuple[int, ...]
     irrelevant_paper: dict[str, tuple[int, ...]]
     irrelevant_computed: dict[str, tuple[int, ...]]
-    decimals: int = 1
 
 
-def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int = 1
-               ) -> AreaTable:
-    """Compute the table (no rows when ``experiment`` is missing or has no areas)."""
-    areas, cols = study.areas, study.area_columns
+DECIMALS = 1
+
+
+def area_table(study: Study) -> AreaTable:
+    """Compute the table of the tasks experiment (no rows when it is missing or has no
+    areas)."""
+    areas, cols, experiment = study.areas, study.area_columns, TASKS_EXPERIMENT
     paper: dict[str, tuple[int, ...]] = {}
     computed: dict[str, tuple[int, ...]] = {}
     if not study.has(experiment) or not study.has_areas(experiment):
-        return AreaTable(pd.DataFrame(), areas, paper, computed, decimals)
+        return AreaTable(pd.DataFrame(), areas, paper, computed)
     tasks, methods = study.tasks(experiment), study.methods(experiment)
     per_run = study.rows(experiment).groupby(["task", "method", "run"], observed=True)[
         cols].sum()
@@ -51,7 +48,7 @@ def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int =
     order = [(t, m) for t in tasks for m in methods if (t, m) in mean.index]
     frame = pd.concat([by.size().rename("runs"), mean.add_suffix("_mean"),
                        se.add_suffix("_se")], axis=1).loc[order]
-    lowest = mean.round(decimals).groupby(level="task", observed=True).transform("min")
+    lowest = mean.round(DECIMALS).groupby(level="task", observed=True).transform("min")
     for task in tasks:
         truth = study.truth(experiment, task)
         paper[task], computed[task] = truth.irrelevant_areas_paper, truth.irrelevant_areas
@@ -59,13 +56,13 @@ def area_table(study: Study, experiment: str = TASKS_EXPERIMENT, decimals: int =
         irrelevant = pd.Series([a in set(paper[t]) | set(computed[t]) for t, _ in order],
                                index=frame.index)
         col = f"area_{a}"
-        frame[f"{col}_bold"] = irrelevant & (mean[col].round(decimals) <= lowest[col]).loc[order]
-    return AreaTable(frame, areas, paper, computed, decimals)
+        frame[f"{col}_bold"] = irrelevant & (mean[col].round(DECIMALS) <= lowest[col]).loc[order]
+    return AreaTable(frame, areas, paper, computed)
 
 
 def _cells(table: AreaTable, bold: str, sep: str = " ") -> pd.DataFrame:
     """The table as text: ``mean (se)`` cells, ``bold`` a format with one ``{}``."""
-    d, f = table.decimals, table.frame
+    d, f = DECIMALS, table.frame
     out = pd.DataFrame({"runs": f["runs"]})
     for a in table.areas:
         text = [f"{m:.{d}f}{sep}({s:.{d}f})" for m, s in zip(f[f"area_{a}_mean"], f[f"area_{a}_se"],
@@ -99,11 +96,10 @@ def area_latex(table: AreaTable) -> str:
         index=False, escape=False, column_format="ll" + "r" * len(table.areas))
 
 
-def make_tables(out_dir: str | Path, study: Study | None = None,
-                table_dir: str | Path | None = None) -> list[Path]:
-    """Write ``area_visits.{md,tex,csv}`` into ``table_dir`` (default ``out_dir/tables``)."""
+def make_tables(out_dir: str | Path, study: Study | None = None) -> list[Path]:
+    """Write ``area_visits.{md,tex,csv}`` into ``out_dir/tables``."""
     study = study or Study.open(out_dir)
-    target = Path(table_dir) if table_dir is not None else Path(out_dir) / TABLE_DIR
+    target = Path(out_dir) / TABLE_DIR
     table = area_table(study)
     if table.frame.empty:
         return []

@@ -63,8 +63,9 @@ def fmt(x: float, digits: int = 3) -> str:
 def milestone_str(ms: Milestone) -> str:
     """A milestone on the mean curve, then in brackets the mean over the runs that reach
     it and how many do: ``55 (61.5; 4/5)``."""
-    return (f"{fmt(ms.on_mean_curve, 5)} ({fmt(ms.mean_of_reached, 4)}; "
-            f"{ms.reached}/{len(ms.per_run)})")
+    reached = [v for v in ms.per_run if not math.isnan(v)]
+    mean = float(np.mean(reached)) if reached else math.nan
+    return f"{fmt(ms.on_mean_curve, 5)} ({fmt(mean, 4)}; {len(reached)}/{len(ms.per_run)})"
 
 
 def route_str(areas: Sequence[int]) -> str:
@@ -84,19 +85,16 @@ VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper
 """How the verdict summary names the GDQ variants."""
 
 
-def markdown_rows(frame: pd.DataFrame, align: str = "") -> list[str]:
-    """A DataFrame of text as compact Markdown table lines (unpadded, so that a line per
-    row stays greppable: ``| I | Task A | **holds** |``); ``align``: one ``l`` or ``r``
-    per column (default: every column left-aligned)."""
-    align = align or "l" * len(frame.columns)
-    return ["| " + " | ".join(map(str, frame.columns)) + " |",
-            "|" + "".join("--:|" if a == "r" else "---|" for a in align),
-            *("| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))]
-
-
-def table_text(rows: Sequence[Sequence], columns: Sequence[str], align: str = "") -> str:
-    """Rows of cells as the lines of a Markdown table (:func:`markdown_rows`), joined."""
-    return "\n".join(markdown_rows(pd.DataFrame(list(rows), columns=list(columns)), align))
+def table_text(rows: Sequence[Sequence] | pd.DataFrame, columns: Sequence[str] = (),
+               align: str = "") -> str:
+    """Rows of cells (or a DataFrame) as a compact Markdown table, unpadded so that a line
+    per row stays greppable (``| I | Task A | **holds** |``); ``align``: one ``l`` or
+    ``r`` per column (default: every column left-aligned)."""
+    frame = rows if isinstance(rows, pd.DataFrame) else pd.DataFrame(
+        list(rows), columns=list(columns), dtype=object)
+    return "\n".join(["| " + " | ".join(map(str, frame.columns)) + " |", "|" + "".join(
+        "--:|" if a == "r" else "---|" for a in align or "l" * len(frame.columns)), *(
+        "| " + " | ".join(map(str, row)) + " |" for row in frame.itertuples(index=False))])
 
 
 TEMPLATES = jinja2.Environment(
@@ -125,6 +123,7 @@ class Verdicts:
     @property
     def frame(self) -> pd.DataFrame:
         return pd.DataFrame(self.rows, columns=self.COLUMNS)
+
     def counts(self) -> str:
         """``GDQ, ... (`GDQ`): k of n cases hold; ...`` per variant, or why there is no
         verdict."""
@@ -152,7 +151,7 @@ class Verdicts:
                 ["hypothesis", "case"], sort=False).agg(basis=("basis", "first"),
                                                         why=("why", "; ".join))
             table["Basis"] = why["basis"] + ": " + why["why"]
-            summary += [*markdown_rows(table.reset_index().rename(columns={
+            summary += [table_text(table.reset_index().rename(columns={
                 "hypothesis": "Hypothesis", "case": "Case"})), ""]
         summary += [self.counts(), ""]
         if notes:
@@ -178,10 +177,9 @@ class Writer:
             self.add(f"![{caption}]({FIGURE_DIR}/{stem}.png)", "")
 
     def table(self, rows: Sequence[Sequence], columns: Sequence[str], align: str = "") -> None:
-        """``rows`` of cells as a Markdown table (see :func:`markdown_rows`), then a blank
-        line; ``align`` defaults to the first column left, the others right."""
-        frame = pd.DataFrame(list(rows), columns=list(columns), dtype=object)
-        self.add(*markdown_rows(frame, align or "l" + "r" * (len(columns) - 1)), "")
+        """``rows`` of cells as a Markdown table (:func:`table_text`), then a blank line;
+        ``align`` defaults to the first column left, the others right."""
+        self.add(table_text(rows, columns, align or "l" + "r" * (len(columns) - 1)), "")
 
     def test(self, hypothesis: str, case: str, basis: str, variant: str, experiment: str,
              stat: Callable[[str], np.ndarray], higher_is_better: bool = True,
