@@ -89,7 +89,6 @@ from gdq_pddl.envs.model import (
     StateSpace,
     compile_true_model,
     env_step,
-    merge_outcomes,
 )
 from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import reality_distances, value_within
@@ -99,7 +98,12 @@ from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
-from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
+from gdq_pddl.pddl.reachable import (
+    MAX_STATES,
+    StateGraph,
+    reachable_graph,
+    reality_outcomes,
+)
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import resolve_pddl, shipped_names
@@ -236,7 +240,7 @@ class PDDLInstance:
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   ppddl_outcomes(self.graph, own) if self.ppddl else None,
+                                   reality_outcomes(self.graph, own) if self.ppddl else None,
                                    own and self.ppddl)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))
@@ -423,19 +427,9 @@ def _checked(determinisation: str) -> str:
 def default_step_limit(graph: StateGraph) -> int:
     """``max(20, ceil(2.5 L))``, L the fewest actions from the initial state to the goal in
     reality (breadth first over every outcome; 20 if no outcome ever reaches it)."""
-    task = graph.task
-    depth = {graph.states[0]: 0}
-    frontier = [graph.states[0]]
-    while frontier:
-        nxt = []
-        for s in frontier:
-            if task.is_goal(s):
-                return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth[s]))
-            for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)):
-                if t not in depth:
-                    depth[t] = depth[s] + 1
-                    nxt.append(t)
-        frontier = nxt
+    goal_depth = graph.depth[graph.is_goal]  # the graph's BFS levels are reality's
+    if len(goal_depth):
+        return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * int(goal_depth.min())))
     return MIN_STEP_LIMIT
 
 
@@ -566,24 +560,6 @@ def graph_space(graph: StateGraph) -> StateSpace:
         obs_of=np.arange(n, dtype=np.int64),
         pos_of=np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64),
         area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
-
-
-def ppddl_outcomes(graph: StateGraph, gains: bool = False):
-    """The ``(pair, {(next, stuck): probability})`` of a PPDDL problem: every outcome of
-    every applicable ground action (``graph.task`` is a
-    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`); the other pairs are no-ops;
-    ``gains``: the keys are ``(next, stuck, the outcome's reward)``."""
-    task = graph.task
-    n_ops = len(task.ops)
-    op_pos = {id(op): k for k, op in enumerate(task.ops)}
-    index = graph.index
-    for s, state in enumerate(graph.states):
-        here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
-        for k in sorted(here):
-            yield s * n_ops + k, merge_outcomes(
-                (((s, True) if o.stuck else (index[o.apply(state)], False))
-                 + ((o.gain(state),) if gains else ()), o.probability)
-                for o in here[k].outcomes)
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,

@@ -278,6 +278,59 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                       np.concatenate(depth))
 
 
+def reality_outcomes(graph: StateGraph, gains: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The outcomes of every ground action applicable in each non-goal state of a PPDDL
+    task's graph, as rows in pair order: ``pair`` (``state * n_ops + op``), probability,
+    and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
+    outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
+    probabilities summed in outcome order; outcomes of probability 0 are left out."""
+    task, n_ops = graph.task, len(graph.task.ops)
+    n_words = graph.words.shape[1]
+    ops = _compiled(task, n_words)
+    live = np.flatnonzero(~graph.is_goal)
+    rows = graph.words[live]
+    parts: list[tuple] = []
+    for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+        at = live[op.applies(rows)]
+        if not len(at):
+            continue
+        here = graph.words[at]
+        for j, o in enumerate(ground.outcomes):
+            if o.probability > 0:
+                nxt = at if o.stuck else graph.lookup(_apply(here, (
+                    _words(o.add, n_words), _words(o.dele, n_words),
+                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
+                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
+                for alts, amount in o.rewards:
+                    earned = earned + np.where(np.logical_or.reduce([_holds(
+                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
+                        amount, 0.0)
+                parts.append((at * n_ops + k, j, o.probability, nxt, o.stuck,
+                              o.reward + earned))
+    pair = np.concatenate([p[0] for p in parts])
+    j = np.concatenate([np.full(len(p[0]), p[1]) for p in parts])
+    prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
+    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64)
+    stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
+    gain = np.concatenate([p[5] for p in parts]) if gains else np.zeros(len(pair))
+    # equal keys of a pair side by side, in outcome order; each group's first row leads
+    order = np.lexsort((j, gain, stuck, nxt, pair))
+    pair, j, prob, nxt, stuck, gain = (a[order] for a in (pair, j, prob, nxt, stuck, gain))
+    lead = np.ones(len(pair), dtype=np.bool_)
+    lead[1:] = (pair[1:] != pair[:-1]) | (nxt[1:] != nxt[:-1]) | (stuck[1:] != stuck[:-1]) \
+        | (gain[1:] != gain[:-1])
+    group = np.cumsum(lead) - 1
+    total = np.zeros(group[-1] + 1 if len(group) else 0)
+    place = np.arange(len(group)) - np.flatnonzero(lead)[group]
+    for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
+        total[group[place == r]] += prob[place == r]
+    first = np.flatnonzero(lead)
+    keep = first[np.lexsort((j[first], pair[first]))]
+    fields = [nxt[keep], stuck[keep]] + ([gain[keep]] if gains else [])
+    return pair[keep], total[group[keep]], fields
+
+
 def _too_many(source: str, cap: int, budget: bool, n_ops: int) -> PlanningError:
     why = (f"their tables over {n_ops} ground actions ({PAIR_BYTES} bytes a pair) would "
            f"pass the budget of {TABLE_BUDGET / 1e9:g} GB "
