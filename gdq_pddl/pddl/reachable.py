@@ -104,14 +104,20 @@ class StateGraph:
         return goal_distances(self)
 
     @cached_property
-    def _sorted(self) -> tuple[np.ndarray, np.ndarray]:
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray | None]:
         keys = _keys(self.words)
+        if keys.dtype == np.uint64 and int(keys.max()) < 4 * len(keys) + 65536:
+            dense = np.full(int(keys.max()) + 1, -1, dtype=np.int64)  # few facts: a table
+            dense[keys] = np.arange(len(keys))
+            return dense, None
         order = np.argsort(keys, kind="stable")
         return keys[order], order
 
     def lookup(self, rows: np.ndarray) -> np.ndarray:
         """int64 index of each reachable state in ``rows`` (``uint64[n, words]``)."""
         keys, order = self._sorted
+        if order is None:
+            return keys[_keys(rows)]
         return order[np.searchsorted(keys, _keys(rows))]
 
 
@@ -211,7 +217,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     are reachable (None: more than :func:`state_cap` of the table budget).
     """
     n_ops = len(task.ops)
-    cap = state_cap(n_ops) if max_states is None else max_states
+    cap = state_cap(n_ops, TABLE_BUDGET) if max_states is None else max_states
     n_words = max(1, -(-len(task.facts) // 64))
     ops = _compiled(task, n_words)
     width = max([len(op.known) + len(op.other) for op in ops], default=1)
@@ -298,7 +304,8 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
         here = graph.words[at]
         for j, o in enumerate(ground.outcomes):
             if o.probability > 0:
-                nxt = at if o.stuck else graph.lookup(_apply(here, (
+                same = not (o.add or o.dele or o.conditional)
+                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
                     _words(o.add, n_words), _words(o.dele, n_words),
                     tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
                 earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
@@ -339,14 +346,20 @@ def _too_many(source: str, cap: int, budget: bool, n_ops: int) -> PlanningError:
                          "are tabular, so make the problem smaller (fewer objects)")
 
 
+def distinct(a: np.ndarray) -> np.ndarray:
+    """``np.unique(a)`` of an int array by a stable sort (np.unique's hashing takes
+    minutes on 10**7 distinct keys)."""
+    a = np.sort(a, kind="stable")
+    return a[np.r_[True, a[1:] != a[:-1]]] if len(a) else a
+
+
 def goal_distances(graph: StateGraph) -> np.ndarray:
     """Backward BFS from the goal states: shortest plan length of every state (-1: none)."""
     n = graph.n_states
     src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
     order = np.argsort(graph.edge_next, kind="stable")
     pred_ptr = np.zeros(n + 1, dtype=np.int64)
-    np.add.at(pred_ptr, graph.edge_next + 1, 1)
-    pred_ptr = np.cumsum(pred_ptr)
+    np.cumsum(np.bincount(graph.edge_next, minlength=n), out=pred_ptr[1:])
     preds = src[order]
     dist = np.full(n, -1, dtype=np.int64)
     frontier = np.flatnonzero(graph.is_goal)
@@ -354,8 +367,10 @@ def goal_distances(graph: StateGraph) -> np.ndarray:
     d = 0
     while len(frontier):
         d += 1
-        cand = np.concatenate([preds[pred_ptr[t]:pred_ptr[t + 1]] for t in frontier])
-        cand = np.unique(cand)
+        count = pred_ptr[frontier + 1] - pred_ptr[frontier]
+        at = np.repeat(pred_ptr[frontier] - np.cumsum(count) + count, count) + \
+            np.arange(count.sum())  # the predecessors of every frontier state
+        cand = distinct(preds[at])
         cand = cand[dist[cand] < 0]
         dist[cand] = d
         frontier = cand
