@@ -322,11 +322,12 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
     gain = np.concatenate([p[5] for p in parts]) if gains else np.zeros(len(pair))
     # equal keys of a pair side by side, in outcome order; each group's first row leads
-    order = np.lexsort((j, gain, stuck, nxt, pair))
-    pair, j, prob, nxt, stuck, gain = (a[order] for a in (pair, j, prob, nxt, stuck, gain))
+    key = (pair * graph.n_states + nxt) * 2 + stuck
+    order = np.lexsort((j, gain, key) if gains else (j, key))
+    key, pair, j, prob, nxt, stuck, gain = (a[order] for a in (key, pair, j, prob, nxt, stuck,
+                                                               gain))
     lead = np.ones(len(pair), dtype=np.bool_)
-    lead[1:] = (pair[1:] != pair[:-1]) | (nxt[1:] != nxt[:-1]) | (stuck[1:] != stuck[:-1]) \
-        | (gain[1:] != gain[:-1])
+    lead[1:] = (key[1:] != key[:-1]) | (gain[1:] != gain[:-1])
     group = np.cumsum(lead) - 1
     total = np.zeros(group[-1] + 1 if len(group) else 0)
     place = np.arange(len(group)) - np.flatnonzero(lead)[group]
