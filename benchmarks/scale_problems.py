@@ -6,7 +6,7 @@
 ``blocks N``: a blocksworld with a hand and a table (pick-up, put-down, stack, unstack;
 a block may slip from the hand onto the table), N blocks in one tower in the initial
 state, the reverse tower as the goal. Every arrangement is reachable: 65,990 states at
-7 blocks, 98 ground actions. ``switches N``: N independent switches, each turned on by
+7 blocks, 112 ground actions. ``switches N``: N independent switches, each turned on by
 its own action, which works 9 times in 10: 2**N states, every ordering of the switches
 is a shortest plan.
 """
