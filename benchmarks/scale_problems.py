@@ -6,9 +6,10 @@
 ``blocks N``: a blocksworld with a hand and a table (pick-up, put-down, stack, unstack;
 a block may slip from the hand onto the table), N blocks in one tower in the initial
 state, the reverse tower as the goal. Every arrangement is reachable: 65,990 states at
-7 blocks, 98 ground actions. ``switches N``: N independent switches, each turned on by
-its own action, which works 9 times in 10: 2**N states, every ordering of the switches
-is a shortest plan.
+7 blocks, 112 ground actions. ``moves N``: the same blocks with a move from block to
+block besides (the same states; 322 ground actions at 7 blocks). ``switches N``: N
+independent switches, each turned on by its own action, which works 9 times in 10: 2**N
+states, every ordering of the switches is a shortest plan.
 """
 
 from __future__ import annotations
@@ -43,6 +44,13 @@ BLOCKS_DOMAIN = """\
                            0.1 (and (ontable ?x) (clear ?y) (not (on ?x ?y))))))
 """
 
+MOVES_DOMAIN = BLOCKS_DOMAIN.replace("slippery-blocks", "slippery-moves").rstrip()[:-1] + """
+  (:action move
+    :parameters (?x ?y ?z)
+    :precondition (and (on ?x ?y) (clear ?x) (clear ?z) (handempty) (not (= ?x ?z)))
+    :effect (probabilistic 0.8 (and (on ?x ?z) (clear ?y) (not (on ?x ?y)) (not (clear ?z))))))
+"""
+
 SWITCHES_DOMAIN = """\
 (define (domain noisy-switches)
   (:requirements :strips :probabilistic-effects :negative-preconditions)
@@ -74,6 +82,8 @@ def switches_problem(n: int) -> str:
 
 
 KINDS = {"blocks": (BLOCKS_DOMAIN, blocks_problem),
+         "moves": (MOVES_DOMAIN, lambda n: blocks_problem(n).replace("slippery-blocks",
+                                                                     "slippery-moves")),
          "switches": (SWITCHES_DOMAIN, switches_problem)}
 
 

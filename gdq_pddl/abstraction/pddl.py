@@ -80,8 +80,9 @@ def graph_plan_table(graph: StateGraph, tolerance: float = 0.0,
     n_ops = len(graph.task.ops)
     src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
     op, nxt = graph.edge_op, graph.edge_next
-    bound = np.array([length_bound(int(d), tolerance) if d > 0 else -1 for d in dist],
-                     dtype=np.int64)
+    levels = np.unique(dist)
+    bound = np.array([length_bound(int(d), tolerance) if d > 0 else -1 for d in levels],
+                     dtype=np.int64)[np.searchsorted(levels, dist)]
     d2 = dist[nxt]
     ok = (nxt != src) & (d2 >= 0) & (1 + d2 <= bound[src])
     away = np.flatnonzero(ok & (d2 > dist[src]))

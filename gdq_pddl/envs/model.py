@@ -115,6 +115,15 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
+def rows_csr(n_pairs: int, pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray]
+             ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """:func:`outcome_csr` of outcome rows already merged and in pair order (``pair``:
+    the pair index of each row)."""
+    ptr = np.zeros(n_pairs + 1, dtype=np.int64)
+    np.cumsum(np.bincount(pair, minlength=n_pairs), out=ptr[1:])
+    return ptr, prob, fields
+
+
 def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
@@ -194,14 +203,14 @@ def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes
 
 
 def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDist],
-                       pairs: Iterable[tuple[int, dict[tuple, float]]] | None = None,
+                       pairs: Iterable[tuple[int, dict[tuple, float]]] | tuple | None = None,
                        gains: bool = False) -> ModelArrays:
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
     one per learner action): for each (state, learner action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
     ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
     yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
-    problem's own scale)."""
+    problem's own scale), or gives them as rows (:func:`rows_csr`'s arguments)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
@@ -222,9 +231,10 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                 bar.update(i // n_a - bar.n)
                 yield i, merged
 
-    ptr, prob, (nxt, stuck, *gain) = with_noops(*outcome_csr(
+    csr = rows_csr(space.n_states * n_a, *pairs) if isinstance(pairs, tuple) else outcome_csr(
         space.n_states * n_a, shown(rule() if pairs is None else pairs),
-        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_)), n_a)
+        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
+    ptr, prob, (nxt, stuck, *gain) = with_noops(*csr, n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,

@@ -43,7 +43,6 @@ from gdq_pddl.envs.model import (
     StateSpace,
     compile_true_model,
     env_step,
-    merge_outcomes,
 )
 from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import reality_distances, value_within
@@ -53,7 +52,12 @@ from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
-from gdq_pddl.pddl.reachable import MAX_STATES, StateGraph, reachable_graph
+from gdq_pddl.pddl.reachable import (
+    MAX_STATES,
+    StateGraph,
+    reachable_graph,
+    reality_outcomes,
+)
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import resolve_pddl, shipped_names
@@ -74,14 +78,14 @@ class PDDLInstance:
     """The domain and problem as read, with the planner's determinisation."""
     overlay: Dynamics | None
     """The dynamics file as given (None: none, for a PPDDL domain only)."""
-    max_states: int = MAX_STATES
+    max_states: int | None = MAX_STATES
     """The most reachable states explored before the problem is refused as too large."""
     start_state: int = 0
     """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
 
     @classmethod
     def from_files(cls, domain: str | Path, problem: str | Path,
-                   dynamics: str | Path | None = None, max_states: int = MAX_STATES,
+                   dynamics: str | Path | None = None, max_states: int | None = MAX_STATES,
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
         """Read and check the files (errors name the file and line or key)."""
         planning = PlanningProblem.from_files(domain, problem, _checked(determinisation))
@@ -92,7 +96,7 @@ class PDDLInstance:
 
     @classmethod
     def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
-                   max_states: int = MAX_STATES,
+                   max_states: int | None = MAX_STATES,
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
         """:meth:`from_files` of texts in memory (errors name ``<domain>``, ``<problem>``)."""
         planning = PlanningProblem.from_texts(domain, problem,
@@ -102,7 +106,7 @@ class PDDLInstance:
 
     @classmethod
     def _built(cls, planning: PlanningProblem, overlay: Dynamics | None,
-                 max_states: int) -> PDDLInstance:
+                 max_states: int | None) -> PDDLInstance:
         domain = planning.source_domain
         if overlay is None and not domain.probabilistic:
             raise PlanningError(f"{domain.source} is a STRIPS domain: it says what actions do "
@@ -151,7 +155,8 @@ class PDDLInstance:
 
     @cached_property
     def graph(self) -> StateGraph:
-        """Reachable states and successors (refused past ``max_states``, :func:`check_goal`)."""
+        """Reachable states and successors (refused past ``max_states`` or the table budget,
+        and by :func:`check_goal`)."""
         graph = reachable_graph(self.problem.learner_task, self.max_states,
                                 self.problem.problem.source)
         check_goal(self.problem, graph)
@@ -177,7 +182,7 @@ class PDDLInstance:
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   ppddl_outcomes(self.graph, own) if self.ppddl else None,
+                                   reality_outcomes(self.graph, own) if self.ppddl else None,
                                    own and self.ppddl)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))
@@ -356,16 +361,9 @@ def _checked(determinisation: str) -> str:
 def default_step_limit(graph: StateGraph) -> int:
     """``max(20, ceil(2.5 L))``, L the fewest actions from the initial state to the goal in
     reality (breadth first over every outcome; 20 if no outcome ever reaches it)."""
-    task, frontier = graph.task, [graph.states[0]]
-    seen, depth = set(frontier), 0
-    while frontier:
-        if any(map(task.is_goal, frontier)):
-            return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * depth))
-        nxt = (t for s in frontier
-               for t in (*(t for _, t in task.successors(s)), *task.outcome_states(s)))
-        frontier = [t for t in dict.fromkeys(nxt) if t not in seen]
-        seen.update(frontier)
-        depth += 1
+    goal_depth = graph.depth[graph.is_goal]  # the graph's BFS levels are reality's
+    if len(goal_depth):
+        return max(MIN_STEP_LIMIT, math.ceil(STEP_LIMIT_FACTOR * int(goal_depth.min())))
     return MIN_STEP_LIMIT
 
 
@@ -479,21 +477,6 @@ def graph_space(graph: StateGraph) -> StateSpace:
         obs_of=np.arange(n, dtype=np.int64),
         pos_of=np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64),
         area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
-
-
-def ppddl_outcomes(graph: StateGraph, gains: bool = False):
-    """``(pair, {(next, stuck): probability})`` for every applicable ground action of a
-    PPDDL problem (other pairs: no-ops); ``gains`` adds the outcome's reward to keys."""
-    task = graph.task
-    n_ops = len(task.ops)
-    op_pos = {id(op): k for k, op in enumerate(task.ops)}
-    for s, state in enumerate(graph.states):
-        here = {} if graph.is_goal[s] else {op_pos[id(op)]: op for op in task.applicable(state)}
-        for k in sorted(here):
-            yield s * n_ops + k, merge_outcomes(
-                (((s, True) if o.stuck else (graph.index[o.apply(state)], False))
-                 + ((o.gain(state),) if gains else ()), o.probability)
-                for o in here[k].outcomes)
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,

@@ -19,6 +19,7 @@ from gdq_pddl.envs.compact import CompactModel, compile_compact
 from gdq_pddl.envs.model import ModelArrays, per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
 from gdq_pddl.limits import check_memory
+from gdq_pddl.pddl.reachable import distinct
 from gdq_pddl.world import Task, World
 
 
@@ -67,7 +68,7 @@ def _capacity(model: ModelArrays | CompactModel) -> int:
         keys = learner_pair * n_states + model.obs_of[model.next]
         if np.array_equal(model.obs_of, np.arange(len(model.obs_of))):  # seen as it is:
             keys = keys[(np.diff(model.ptr) > 1)[pair]]  # one outcome, one successor
-    per_pair = np.bincount(np.unique(keys) // n_states) if len(keys) else np.zeros(1)
+    per_pair = np.bincount(distinct(keys) // n_states) if len(keys) else np.zeros(1)
     return max(1, int(per_pair.max()))
 
 

@@ -17,7 +17,6 @@ give every state's shortest plans without calling a planner once per state.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
@@ -27,6 +26,7 @@ from tqdm import tqdm
 
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.ppddl import ProbabilisticOp
 
 
 def slow_progress(desc: str, unit: str, total: int | None = None,
@@ -37,29 +37,50 @@ def slow_progress(desc: str, unit: str, total: int | None = None,
                 leave=False)
 
 
-MAX_STATES = 200_000
-"""Default cap on the number of reachable states (beyond it, an error says so)."""
+PAIR_BYTES = 150
+"""Memory one (state, ground action) pair takes at most in the true model and the
+learners' tables (a model's outcomes while compiled, Q, visits, successor slots...)."""
+
+TABLE_BUDGET = 8_000_000_000
+"""Bytes the tables of states x ground actions may take (:data:`PAIR_BYTES` per pair):
+state enumeration stops with an error past it."""
+
+MAX_STATES: int | None = None
+"""Default cap on the number of reachable states (None: what :data:`TABLE_BUDGET` allows)."""
 
 
 @dataclass(frozen=True, eq=False)
 class StateGraph:
-    """Reachable states (int bitmasks, BFS order) and their successor edges (CSR).
+    """Reachable states (BFS order) and their successor edges (CSR).
 
-    The edges of state ``i`` are ``edge_op[edge_ptr[i]:edge_ptr[i + 1]]`` (index into
-    ``task.ops``) and ``edge_next[...]`` (state index); goal states have none.
+    ``words`` holds state ``i`` as ``uint64`` words (fact ``f`` is bit ``f % 64`` of word
+    ``f // 64``); :attr:`states` as Python int bitmasks. The edges of state ``i`` are
+    ``edge_op[edge_ptr[i]:edge_ptr[i + 1]]`` (index into ``task.ops``) and
+    ``edge_next[...]`` (state index); goal states have none.
     """
 
     task: GroundTask
-    states: tuple[int, ...]
+    words: np.ndarray
     edge_ptr: np.ndarray
     edge_op: np.ndarray
     edge_next: np.ndarray
     is_goal: np.ndarray
     """bool[n_states]: the task's goal holds (such states are not expanded)."""
+    depth: np.ndarray
+    """int64[n_states]: the fewest actions (edges and reality's outcomes) from state 0."""
 
     @property
     def n_states(self) -> int:
-        return len(self.states)
+        return len(self.words)
+
+    @cached_property
+    def states(self) -> tuple[int, ...]:
+        """The states as int bitmasks over ``task.facts``."""
+        cols = [w.tolist() for w in self.words.T]
+        if len(cols) == 1:
+            return tuple(cols[0])
+        return tuple(sum(c << (64 * j) for j, c in enumerate(row))
+                     for row in zip(*cols, strict=True))
 
     @cached_property
     def index(self) -> dict[int, int]:
@@ -82,54 +103,255 @@ class StateGraph:
         """int64[n_states]: shortest number of actions to a goal state (-1: unreachable)."""
         return goal_distances(self)
 
+    @cached_property
+    def _sorted(self) -> tuple[np.ndarray, np.ndarray | None]:
+        keys = _keys(self.words)
+        if keys.dtype == np.uint64 and int(keys.max()) < 4 * len(keys) + 65536:
+            dense = np.full(int(keys.max()) + 1, -1, dtype=np.int64)  # few facts: a table
+            dense[keys] = np.arange(len(keys))
+            return dense, None
+        order = np.argsort(keys, kind="stable")
+        return keys[order], order
 
-def reachable_graph(task: GroundTask, max_states: int = MAX_STATES,
+    def lookup(self, rows: np.ndarray) -> np.ndarray:
+        """int64 index of each reachable state in ``rows`` (``uint64[n, words]``)."""
+        keys, order = self._sorted
+        if order is None:
+            return keys[_keys(rows)]
+        return order[np.searchsorted(keys, _keys(rows))]
+
+
+def state_cap(n_ops: int, budget: int = TABLE_BUDGET) -> int:
+    """The most states whose tables over ``n_ops`` ground actions fit ``budget`` bytes."""
+    return budget // (PAIR_BYTES * max(1, n_ops))
+
+
+def _words(mask: int, n_words: int) -> np.ndarray:
+    return np.array([mask >> (64 * j) & (1 << 64) - 1 for j in range(n_words)],
+                    dtype=np.uint64)
+
+
+def _holds(rows: np.ndarray, pos: np.ndarray, neg: np.ndarray) -> np.ndarray:
+    """bool[n]: ``pos`` holds and no fact of ``neg`` in each row."""
+    return ((rows & pos) == pos).all(axis=1) & ~(rows & neg).any(axis=1)
+
+
+def _keys(rows: np.ndarray) -> np.ndarray:
+    """One sortable key per row (the word itself, or the row's bytes)."""
+    rows = np.ascontiguousarray(rows)
+    if rows.shape[1] == 1:
+        return rows[:, 0]
+    return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel()
+
+
+@dataclass(frozen=True)
+class _Op:
+    """A ground action on word rows: when it applies, its effects (``known``: the edges,
+    ``other``: the states only reality reaches) and their ranks in a state's order."""
+
+    pre: np.ndarray
+    neg: np.ndarray
+    alternatives: tuple[tuple[np.ndarray, np.ndarray], ...]
+    known: tuple
+    other: tuple
+
+    def applies(self, rows: np.ndarray) -> np.ndarray:
+        ok = _holds(rows, self.pre, self.neg)
+        if self.alternatives:
+            ok &= np.logical_or.reduce([_holds(rows, p, n) for p, n in self.alternatives])
+        return ok
+
+
+def _apply(rows: np.ndarray, effect: tuple) -> np.ndarray:
+    """The rows after an effect ``(add, delete, conditional effects)`` (adds win)."""
+    add, dele, conditional = effect
+    if conditional:
+        add, dele = np.broadcast_to(add, rows.shape), np.broadcast_to(dele, rows.shape)
+        for pos, neg, a, d in conditional:
+            fire = _holds(rows, pos, neg)[:, None]
+            add, dele = add | np.where(fire, a, 0), dele | np.where(fire, d, 0)
+    return (rows & ~dele) | add
+
+
+def _compiled(task: GroundTask, n_words: int) -> list[_Op]:
+    def w(mask: int) -> np.ndarray:
+        return _words(mask, n_words)
+
+    def effect(o) -> tuple:
+        return w(o.add), w(o.dele), tuple(tuple(map(w, c)) for c in
+                                         getattr(o, "conditional", ()))
+
+    out = []
+    for op in task.ops:
+        alts = tuple((w(p), w(n)) for p, n in op.alternatives) \
+            if getattr(task, "disjunctive", False) else ()
+        if isinstance(op, ProbabilisticOp):
+            known = tuple(effect(op.outcomes[k]) for k in op.known)
+            other = tuple(effect(o) for j, o in enumerate(op.outcomes)
+                          if o.probability > 0 and not o.stuck and j not in op.known
+                          and (o.add or o.dele or o.conditional))
+        else:
+            known, other = (effect(op),), ()
+        out.append(_Op(w(op.pre), w(op.neg), alts, known, other))
+    return out
+
+
+def _goal_rows(task: GroundTask, rows: np.ndarray) -> np.ndarray:
+    """bool[n]: :meth:`GroundTask.is_goal` of each row."""
+    n_words = rows.shape[1]
+    if not task.goal_possible:
+        return np.zeros(len(rows), dtype=np.bool_)
+    ok = _holds(rows, _words(task.goal_pos, n_words), _words(task.goal_neg, n_words))
+    if task.goal_alternatives:
+        ok &= np.logical_or.reduce([_holds(rows, _words(p, n_words), _words(n, n_words))
+                                    for p, n in task.goal_alternatives])
+    return ok
+
+
+def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     source: str = "problem") -> StateGraph:
-    """Every state reachable from ``task.init`` (goal states not expanded).
+    """Every state reachable from ``task.init`` (goal states not expanded), one breadth
+    first level at a time on word arrays; numbered as a one-state-at-a-time BFS would.
 
     Raises :class:`PlanningError` naming ``source`` when more than ``max_states`` states
-    are reachable.
+    are reachable (None: more than :func:`state_cap` of the table budget).
     """
-    op_pos = {id(op): k for k, op in enumerate(task.ops)}
-    index = {task.init: 0}
-    states = [task.init]
-    ptr, ops, nxt = [0], [], []
-    goal = []
-    queue = deque([task.init])
+    n_ops = len(task.ops)
+    cap = state_cap(n_ops, TABLE_BUDGET) if max_states is None else max_states
+    n_words = max(1, -(-len(task.facts) // 64))
+    ops = _compiled(task, n_words)
+    width = max([len(op.known) + len(op.other) for op in ops], default=1)
+    order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
+                for i, op in enumerate(group)}  # the order of task.applicable
+    reality_rank = np.argsort(sorted(range(n_ops), key=lambda k: order_of[id(task.ops[k])]))
+    levels = [_words(task.init, n_words)[None, :]]
+    known_keys, known_ids = _keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
+    goal, depth, src, op_of, nxt = [], [], [], [], []
+    lo, n = 0, 1
     bar = slow_progress("reachable states", " states")
-    while queue:
-        s = queue.popleft()
-        bar.update()
-        g = task.is_goal(s)
-        goal.append(g)
-        if not g:
-            for op, t in sorted(task.successors(s), key=lambda e: op_pos[id(e[0])]):
-                j = index.get(t)
-                if j is None:
-                    if len(states) >= max_states:
-                        raise _too_many(source, max_states)
-                    j = index[t] = len(states)
-                    states.append(t)
-                    queue.append(t)
-                ops.append(op_pos[id(op)])
-                nxt.append(j)
-            for t in task.outcome_states(s):  # reality beyond the knowledge (PPDDL)
-                if t not in index:
-                    if len(states) >= max_states:
-                        raise _too_many(source, max_states)
-                    index[t] = len(states)
-                    states.append(t)
-                    queue.append(t)
-        ptr.append(len(ops))
+    while lo < n:
+        rows = levels[-1]
+        is_goal = _goal_rows(task, rows)
+        goal.append(is_goal)
+        depth.append(np.full(len(rows), len(depth), dtype=np.int64))
+        parent = np.flatnonzero(~is_goal)
+        expand = rows[parent]
+        found: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
+        for k, op in enumerate(ops):
+            at = np.flatnonzero(op.applies(expand))
+            if not len(at):
+                continue
+            here = expand[at]
+            seen: list[np.ndarray] = []
+            for j, effect in enumerate(op.known):
+                t = _apply(here, effect)
+                new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
+                    if seen else np.ones(len(t), dtype=np.bool_)
+                seen.append(t)
+                found.append((t[new], at[new], k * width + j))
+            for j, effect in enumerate(op.other):
+                found.append((_apply(here, effect), at,
+                              (n_ops + reality_rank[k]) * width + j))
+        cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
+        who = np.concatenate([f[1] for f in found]) if found else parent[:0]
+        rank = np.concatenate([np.full(len(f[1]), f[2], dtype=np.int64) for f in found]) \
+            if found else parent[:0]
+        order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
+        cand, who, rank = cand[order], who[order], rank[order]
+        keys = _keys(cand)
+        uniq, first = np.unique(keys, return_index=True)
+        at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
+        fresh = np.sort(first[known_keys[at] != uniq])
+        if n + len(fresh) > cap:
+            raise _too_many(source, cap, max_states is None, n_ops)
+        known_keys = np.concatenate([known_keys, keys[fresh]])
+        known_ids = np.concatenate([known_ids, np.arange(n, n + len(fresh))])
+        resort = np.argsort(known_keys, kind="stable")
+        known_keys, known_ids = known_keys[resort], known_ids[resort]
+        edge = rank < n_ops * width
+        src.append(lo + parent[who[edge]])
+        op_of.append(rank[edge] // width)
+        nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
+        bar.update(len(rows))
+        levels.append(cand[fresh])
+        lo, n = n, n + len(fresh)
     bar.close()
-    return StateGraph(task, tuple(states), np.array(ptr, dtype=np.int64),
-                      np.array(ops, dtype=np.int64), np.array(nxt, dtype=np.int64),
-                      np.array(goal, dtype=np.bool_))
+    src_all = np.concatenate(src)
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])
+    return StateGraph(task, np.concatenate(levels), ptr, np.concatenate(op_of).astype(np.int64),
+                      np.concatenate(nxt).astype(np.int64), np.concatenate(goal),
+                      np.concatenate(depth))
 
 
-def _too_many(source: str, max_states: int) -> PlanningError:
-    return PlanningError(f"{source}: more than {max_states} reachable states; the learners "
+def reality_outcomes(graph: StateGraph, gains: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The outcomes of every ground action applicable in each non-goal state of a PPDDL
+    task's graph, as rows in pair order: ``pair`` (``state * n_ops + op``), probability,
+    and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
+    outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
+    probabilities summed in outcome order; outcomes of probability 0 are left out."""
+    task, n_ops = graph.task, len(graph.task.ops)
+    n_words = graph.words.shape[1]
+    ops = _compiled(task, n_words)
+    live = np.flatnonzero(~graph.is_goal)
+    rows = graph.words[live]
+    parts: list[tuple] = []
+    for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+        at = live[op.applies(rows)]
+        if not len(at):
+            continue
+        here = graph.words[at]
+        for j, o in enumerate(ground.outcomes):
+            if o.probability > 0:
+                same = not (o.add or o.dele or o.conditional)
+                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
+                    _words(o.add, n_words), _words(o.dele, n_words),
+                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
+                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
+                for alts, amount in o.rewards:
+                    earned = earned + np.where(np.logical_or.reduce([_holds(
+                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
+                        amount, 0.0)
+                parts.append((at * n_ops + k, j, o.probability, nxt, o.stuck,
+                              o.reward + earned))
+    pair = np.concatenate([p[0] for p in parts])
+    j = np.concatenate([np.full(len(p[0]), p[1]) for p in parts])
+    prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
+    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64)
+    stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
+    gain = np.concatenate([p[5] for p in parts]) if gains else np.zeros(len(pair))
+    # equal keys of a pair side by side, in outcome order; each group's first row leads
+    key = (pair * graph.n_states + nxt) * 2 + stuck
+    order = np.lexsort((j, gain, key) if gains else (j, key))
+    key, pair, j, prob, nxt, stuck, gain = (a[order] for a in (key, pair, j, prob, nxt, stuck,
+                                                               gain))
+    lead = np.ones(len(pair), dtype=np.bool_)
+    lead[1:] = (key[1:] != key[:-1]) | (gain[1:] != gain[:-1])
+    group = np.cumsum(lead) - 1
+    total = np.zeros(group[-1] + 1 if len(group) else 0)
+    place = np.arange(len(group)) - np.flatnonzero(lead)[group]
+    for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
+        total[group[place == r]] += prob[place == r]
+    first = np.flatnonzero(lead)
+    keep = first[np.lexsort((j[first], pair[first]))]
+    fields = [nxt[keep], stuck[keep]] + ([gain[keep]] if gains else [])
+    return pair[keep], total[group[keep]], fields
+
+
+def _too_many(source: str, cap: int, budget: bool, n_ops: int) -> PlanningError:
+    why = (f"their tables over {n_ops} ground actions ({PAIR_BYTES} bytes a pair) would "
+           f"pass the budget of {TABLE_BUDGET / 1e9:g} GB "
+           "(gdq_pddl.pddl.reachable.TABLE_BUDGET)" if budget else "the cap given")
+    return PlanningError(f"{source}: more than {cap} reachable states: {why}; the learners "
                          "are tabular, so make the problem smaller (fewer objects)")
+
+
+def distinct(a: np.ndarray) -> np.ndarray:
+    """``np.unique(a)`` of an int array by a stable sort (np.unique's hashing takes
+    minutes on 10**7 distinct keys)."""
+    a = np.sort(a, kind="stable")
+    return a[np.r_[True, a[1:] != a[:-1]]] if len(a) else a
 
 
 def goal_distances(graph: StateGraph) -> np.ndarray:
@@ -138,8 +360,7 @@ def goal_distances(graph: StateGraph) -> np.ndarray:
     src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
     order = np.argsort(graph.edge_next, kind="stable")
     pred_ptr = np.zeros(n + 1, dtype=np.int64)
-    np.add.at(pred_ptr, graph.edge_next + 1, 1)
-    pred_ptr = np.cumsum(pred_ptr)
+    np.cumsum(np.bincount(graph.edge_next, minlength=n), out=pred_ptr[1:])
     preds = src[order]
     dist = np.full(n, -1, dtype=np.int64)
     frontier = np.flatnonzero(graph.is_goal)
@@ -147,8 +368,10 @@ def goal_distances(graph: StateGraph) -> np.ndarray:
     d = 0
     while len(frontier):
         d += 1
-        cand = np.concatenate([preds[pred_ptr[t]:pred_ptr[t + 1]] for t in frontier])
-        cand = np.unique(cand)
+        count = pred_ptr[frontier + 1] - pred_ptr[frontier]
+        at = np.repeat(pred_ptr[frontier] - np.cumsum(count) + count, count) + \
+            np.arange(count.sum())  # the predecessors of every frontier state
+        cand = distinct(preds[at])
         cand = cand[dist[cand] < 0]
         dist[cand] = d
         frontier = cand

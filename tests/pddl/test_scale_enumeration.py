@@ -1,0 +1,111 @@
+"""The array state enumeration (issue 22 item 4): the numbering of a one-state-at-a-time
+BFS, a table budget instead of a state cap, and PPDDL outcomes as merged rows."""
+
+from collections import deque
+
+import numpy as np
+import pytest
+
+from gdq_pddl.envs.model import merge_outcomes
+from gdq_pddl.envs.pddl_env import load_instance
+from gdq_pddl.errors import PlanningError
+from gdq_pddl.pddl import reachable
+from gdq_pddl.pddl.reachable import distinct, reachable_graph, reality_outcomes
+from gdq_pddl.planning.base import PlanningProblem
+
+SLIPPERY = """(define (domain slip) (:requirements :strips :probabilistic-effects)
+  (:predicates (at ?x) (next ?x ?y) (tired))
+  (:action go :parameters (?x ?y) :precondition (and (at ?x) (next ?x ?y))
+    :effect (probabilistic 0.7 (and (at ?y) (not (at ?x)))
+                           0.2 (and (at ?y) (not (at ?x)) (tired)))))
+"""
+
+
+def chain(n: int, goal: str) -> str:
+    names = [f"p{i}" for i in range(n)]
+    links = " ".join(f"(next {a} {b}) (next {b} {a})" for a, b in zip(names, names[1:],
+                                                                       strict=False))
+    return (f"(define (problem chain) (:domain slip) (:objects {' '.join(names)})\n"
+            f"  (:init (at p0) {links}) (:goal {goal}))")
+
+
+PICK = """(define (domain pick) (:requirements :strips :probabilistic-effects)
+  (:predicates (free) (got ?x) (tired))
+  (:action take :parameters (?x) :precondition (free)
+    :effect (probabilistic 0.7 (and (got ?x) (not (free)))
+                           0.2 (and (got ?x) (not (free)) (tired)))))
+"""
+
+
+def pick(n: int) -> str:
+    names = " ".join(f"p{i}" for i in range(n))
+    return f"(define (problem pick) (:domain pick) (:objects {names}) (:init (free)) " \
+        f"(:goal (got p{n - 1})))"
+
+
+def one_at_a_time(task):
+    """The breadth-first numbering the arrays must keep: states popped one by one, the
+    knowledge's edges in op order, then the states only reality reaches."""
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    index, states, queue, edges = {task.init: 0}, [task.init], deque([task.init]), []
+    while queue:
+        s = queue.popleft()
+        if task.is_goal(s):
+            continue
+        succ = sorted(task.successors(s), key=lambda e: op_pos[id(e[0])])
+        for t in [t for _, t in succ] + task.outcome_states(s):
+            if t not in index:
+                index[t] = len(states)
+                states.append(t)
+                queue.append(t)
+        edges += [(index[s], op_pos[id(op)], index[t]) for op, t in succ]
+    return states, edges
+
+
+@pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
+@pytest.mark.parametrize("domain, problem", [(SLIPPERY, chain(5, "(and (at p4) (tired))")),
+                                             (PICK, pick(70))], ids=["chain", "pick70"])
+def test_numbering_is_the_one_state_bfs(domain, problem, determinisation):
+    # pick: 72 facts, two uint64 words a state; most-likely: the (tired) outcome is
+    # reality's only, and its states come after the edges' states
+    task = PlanningProblem.from_texts(domain, problem, determinisation=determinisation
+                                      ).learner_task
+    assert len(task.facts) > 64 or domain is SLIPPERY
+    graph = reachable_graph(task)
+    states, edges = one_at_a_time(task)
+    assert graph.states == tuple(states)
+    src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
+    assert list(zip(src.tolist(), graph.edge_op.tolist(), graph.edge_next.tolist(),
+                    strict=True)) == edges
+    assert graph.lookup(graph.words[::-1]).tolist() == list(range(graph.n_states))[::-1]
+
+
+def test_the_budget_is_named(monkeypatch):
+    task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
+    monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * len(task.ops) * 10)
+    with pytest.raises(PlanningError, match=r"more than 10 reachable states: .*budget"):
+        reachable_graph(task, source="chain.pddl")
+
+
+@pytest.mark.parametrize("gains", [False, True])
+def test_reality_outcomes_merge_as_the_per_state_rule(gains):
+    graph = load_instance("courier", "courier-2").graph  # conditional effects, rewards
+    task, n_ops = graph.task, len(graph.task.ops)
+    want = []
+    for s, state in enumerate(graph.states):
+        here = [] if graph.is_goal[s] else task.applicable(state)
+        for op in sorted(here, key=task.ops.index):
+            merged = merge_outcomes((((s, True) if o.stuck else (graph.index[o.apply(state)],
+                                                                 False))
+                                     + ((o.gain(state),) if gains else ()), o.probability)
+                                    for o in op.outcomes)
+            want += [(s * n_ops + task.ops.index(op), p, *key) for key, p in merged.items()]
+    pair, prob, fields = reality_outcomes(graph, gains)
+    assert list(zip(pair.tolist(), prob.tolist(), *(f.tolist() for f in fields),
+                    strict=True)) == want
+
+
+def test_distinct_is_unique():
+    a = np.random.default_rng(0).integers(0, 50, 400)
+    assert np.array_equal(distinct(a), np.unique(a))
+    assert len(distinct(a[:0])) == 0
