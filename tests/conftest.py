@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from gdq_pddl.learners import office_task_context
+from gdq_pddl.learners import office_task_context, precompile
 from gdq_pddl.world import World, load_world
 from tests.helpers import BACKGROUND
 
@@ -32,6 +32,18 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
     BACKGROUND.stop()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def no_loop_precompile():
+    """No second process to compile the episode loop before a run on several processes
+    (:mod:`gdq_pddl.learners.precompile`): here the loop is compiled, or loaded, by the
+    tests run before, so each such process only imported the package again (about 3 s of
+    CPU) to load it. The CLI run in a subprocess still starts one."""
+    patch = pytest.MonkeyPatch()
+    patch.setattr(precompile, "start", lambda: None)
+    yield
+    patch.undo()
 
 
 @pytest.fixture(scope="session")

@@ -546,11 +546,17 @@ def test_paper_experiments_get_no_methods_section(full):
     assert text.count("**Summary.** GDQ, knowledge as a prior model (`GDQ`): ") == 1
 
 
-def test_methods_section_on_a_real_run(tmp_path):
+@pytest.fixture(scope="module")
+def real_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A short real run (one for the tests below: each reads it, make_all rewrites it)."""
     from gdq_pddl.experiments import Experiment, run_experiments
 
     exp = Experiment("run", (("C", 60),), runs=2, methods=("GDQ-code", "Q-learning"))
-    out = run_experiments([exp], tmp_path, jobs=1, progress=False)
+    return run_experiments([exp], tmp_path_factory.mktemp("real"), jobs=1, progress=False)
+
+
+def test_methods_section_on_a_real_run(real_run):
+    out = real_run
     section = _methods_section(write_report(out).read_text())
     v_star = json.loads((out / "optimal.json").read_text())["C"]["v_star"]
     assert f"V* = {v_star:.2f}" in section
@@ -558,11 +564,8 @@ def test_methods_section_on_a_real_run(tmp_path):
     assert "  - GDQ-code - Q-learning = " in section
 
 
-def test_a_run_experiment_gets_its_learning_curves_linked_from_the_report(tmp_path):
-    from gdq_pddl.experiments import Experiment, run_experiments
-
-    exp = Experiment("run", (("C", 60),), runs=2, methods=("GDQ-code", "Q-learning"))
-    out = run_experiments([exp], tmp_path, jobs=1, progress=False)
+def test_a_run_experiment_gets_its_learning_curves_linked_from_the_report(real_run):
+    out = real_run
     paths = make_all(out)
     assert out / "figures" / "learning_curves_run.png" in paths
     assert "![learning curves, run](figures/learning_curves_run.png)" in (
