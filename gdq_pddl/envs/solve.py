@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import shortest_path
-from scipy.stats import norm
+from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of import)
 
 from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
@@ -59,7 +59,8 @@ def expected_costs(model: ModelArrays) -> np.ndarray:
     mu, sd = a[normal], b[normal]
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(sd > 0, mu / np.where(sd > 0, sd, 1.0), 0.0)
-        clipped = mu * norm.cdf(z) + sd * norm.pdf(z)  # E[max(0, X)], X ~ N(mu, sd^2)
+        pdf = np.exp(-z**2 / 2.0) / np.sqrt(2 * np.pi)
+        clipped = mu * ndtr(z) + sd * pdf  # E[max(0, X)], X ~ N(mu, sd^2)
     out[normal] = np.where(sd > 0, clipped, np.maximum(mu, 0.0))
     return out
 

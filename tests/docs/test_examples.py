@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from concurrent.futures import Future
@@ -15,16 +16,53 @@ BUDGET = {"task_x.py": ["--trials", "5"]}
 SCRIPTS = sorted(p.name for p in [*EXAMPLES.glob("task_*.py"), *EXAMPLES.glob("domain_*.py")])
 
 
-def start(item) -> Future:
-    """The example as a user runs it: a fresh interpreter (nothing imported before it),
-    queued when collection ends to run beside the other tests (``tests.helpers.Background``):
-    each spends most of its time starting an interpreter and loading the compiled kernels."""
-    script = item.callspec.params["script"]
+RUN_EXAMPLES = """
+import json, os, runpy, sys, tempfile, traceback
+from gdq_pddl.learners.precompile import compile_loop
+compile_loop()  # the package imported and the episode loop loaded once, before the forks
+done = {}
+for script, *argv in json.loads(sys.argv[1]):
+    out, err = tempfile.TemporaryFile("w+"), tempfile.TemporaryFile("w+")
+    pid = os.fork()
+    if pid == 0:  # the example as a script: its own __main__, argv and output
+        os.dup2(out.fileno(), 1)
+        os.dup2(err.fileno(), 2)
+        sys.argv, code = [script, *argv], 0
+        try:
+            runpy.run_path(script, run_name="__main__")
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+        except BaseException:
+            traceback.print_exc()
+            code = 1
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    status = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+    out.seek(0)
+    err.seek(0)
+    done[os.path.basename(script)] = [status, out.read(), err.read()]
+print(json.dumps(done))
+"""
+"""Runs every example, each in a process forked from one that imported the package once:
+an example spends most of its time starting an interpreter and loading the compiled
+kernels, and the examples run one after another on the second core."""
+
+
+def argv_of(script: str) -> list[str]:
     argv = BUDGET.get(script, ["--episodes", "20"])
     if script == "task_b.py" or script.startswith("domain_"):
         argv += ["--runs", "1"]
-    return BACKGROUND.run(f"example {script}", [sys.executable, str(EXAMPLES / script), *argv],
-                          timeout=300)
+    return argv
+
+
+def start(item=None) -> Future:
+    """Every example, queued when collection ends to run beside the other tests
+    (``tests.helpers.Background``); the future's stdout maps a script to
+    ``[exit status, stdout, stderr]``."""
+    jobs = [[str(EXAMPLES / script), *argv_of(script)] for script in SCRIPTS]
+    return BACKGROUND.run("examples", [sys.executable, "-c", RUN_EXAMPLES, json.dumps(jobs)],
+                          timeout=600)
 
 
 @pytest.mark.parametrize("script", SCRIPTS)
@@ -32,7 +70,9 @@ def start(item) -> Future:
 def test_example_runs(script, request):
     result = start(request.node).result()
     assert result.returncode == 0, result.stderr[-2000:]
-    assert result.stdout.strip()
+    status, out, err = json.loads(result.stdout)[script]
+    assert status == 0, err[-2000:]
+    assert out.strip()
 
 
 def test_there_is_an_example_per_task():
