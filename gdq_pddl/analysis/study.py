@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -13,7 +12,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
+from gdq_pddl.envs.evaluate import (
+    RouteSummary,
+    TaskTruth,
+    resolve_task_label,
+    summarise_routes,
+    task_truth,
+)
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.results import (
     ROBOT_EXPERIMENT,
@@ -32,28 +37,6 @@ from gdq_pddl.experiments.results import (
 from gdq_pddl.world import Task, World, builtin_world, load_world
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
-
-
-@dataclass(frozen=True)
-class RouteSummary:
-    """The final greedy routes of one method's runs, and the most common one (grouped by
-    route in *area* terms and how the walk ended; ties: the group of the lowest run).
-    :attr:`example` is that group's most common position sequence, for drawing."""
-
-    routes: dict[int, Route]
-    areas: tuple[int, ...]
-    end: str
-    count: int
-    example: Route
-
-    @property
-    def runs(self) -> int:
-        return len(self.routes)
-
-    def on_route(self, world: World, areas: tuple[int, ...]) -> int:
-        """Runs whose route reaches the goal through exactly ``areas``."""
-        return sum(r.reached_goal and r.areas(world) == tuple(areas)
-                   for r in self.routes.values())
 
 
 def slug(label: str) -> str:
@@ -259,15 +242,5 @@ class Study:
         the most common one (None: no policies or no map)."""
         if (t := self.task(experiment, task)) is None:
             return None
-        world = self.world(experiment)
-        routes = {r: walk_policy(world, policy, t.start, t.goal)
-                  for (e, m, k, r), policy in sorted(self._policy_map.items())
-                  if (e, m, k) == (experiment, method, task) and policy}
-        if not routes:
-            return None
-        runs = sorted(routes.items())
-        (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
-        members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
-        top = Counter(r.positions for r in members).most_common(1)[0][0]
-        return RouteSummary(routes, areas, end, count,
-                            next(r for r in members if r.positions == top))
+        return summarise_routes(self.world(experiment), t, {
+            r: p for (*key, r), p in self._policy_map.items() if key == [experiment, method, task]})
