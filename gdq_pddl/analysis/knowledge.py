@@ -19,18 +19,19 @@ from gdq_pddl.analysis.figures import grid, method_colour, save_all
 from gdq_pddl.analysis.stats import moving_average as rolling_mean
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.writer import render, table_text
-from gdq_pddl.envs.evaluate import optimal_route, policy_value, walk_policy
-from gdq_pddl.envs.model import compile_model
-from gdq_pddl.envs.solve import solve_task
-from gdq_pddl.experiments.knowledge import CASES, knowledge_world
-from gdq_pddl.experiments.probes import CHECKS, RouteStep, route_check
-from gdq_pddl.experiments.work import load_world_named, resolve_task
+from gdq_pddl.experiments.knowledge import (
+    ACCURATE,
+    CASES,
+    CHECKS,
+    WRONG,
+    RouteStep,
+    case_truth,
+)
 from gdq_pddl.outputs import write_text
 from gdq_pddl.world import Task
 
 WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100  # episodes: convergence, curves, final return
 FRACTION = 0.85  # convergence threshold: V* - (1 - FRACTION) |V*|
-ACCURATE, WRONG = "accurate", "wrong"
 
 
 def threshold(v_star: float, fraction: float = FRACTION) -> float:
@@ -114,12 +115,8 @@ def analyse(out: str | Path) -> list[CaseResult]:
         acc, wrong = exps.get(f"{name}--{ACCURATE}"), exps.get(f"{name}--{WRONG}")
         if acc is None or wrong is None:
             continue
-        real = load_world_named(wrong["world"])
-        task = resolve_task(real, wrong["schedule"][0][0])
-        route = optimal_route(real, task)
-        model = compile_model(real)
-        solution, s0 = solve_task(real, task, model)
-        v_star = float(solution.V[0, s0])
+        truth = case_truth(wrong)
+        task, level = truth.task, threshold(truth.v_star)
         methods = [m for m in wrong["methods"] if m in acc["methods"]]
         results: dict[str, dict[str, MethodResult]] = {}
         for kind, exp in ((ACCURATE, acc), (WRONG, wrong)):
@@ -128,23 +125,18 @@ def analyse(out: str | Path) -> list[CaseResult]:
                 returns = study.returns(exp["name"], m)
                 if returns.size == 0:
                     continue
-                pols = [p for r in range(len(returns))
-                        if (p := study.policy(exp["name"], m, task.name, r))]
-                walks = [walk_policy(real, p, task.start, task.goal) for p in pols]
                 results[kind][m] = MethodResult(
                     len(returns), returns.shape[1],
-                    [convergence_episode(row, threshold(v_star)) for row in returns],
+                    [convergence_episode(row, level) for row in returns],
                     float(np.mean(returns[:, -FINAL:])),
-                    sum(w.reached_goal and w.areas(real) == route.areas(real) for w in walks),
-                    [policy_value(real, task, p, model) for p in pols],
-                    [w.areas(real) if w.reached_goal else () for w in walks],
+                    *truth.measure({r: study.policy(exp["name"], m, task.name, r)
+                                    for r in range(len(returns))}),
                     moving_average(returns, CURVE_WINDOW).mean(axis=0))
-        kworld = knowledge_world(real, wrong.get("knowledge"))
         cases.append(CaseResult(
             name, described.get(name, ""), wrong["world"],
-            str(wrong.get("knowledge") or wrong["world"]), task, v_star, route.positions,
-            route.areas(real), methods, results,
-            {ACCURATE: route_check(real, real, task), WRONG: route_check(real, kworld, task)}))
+            str(wrong.get("knowledge") or wrong["world"]), task, truth.v_star,
+            truth.route.positions, truth.route.areas(truth.real), methods, results,
+            truth.checks))
     return cases
 
 

@@ -19,8 +19,8 @@ from gdq_pddl.experiments.knowledge import (
     derived_world,
     knowledge_experiments,
     knowledge_world,
+    route_check,
 )
-from gdq_pddl.experiments.probes import route_check
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import load_world_named, make_learner, run_unit
 from gdq_pddl.learners import office_task_context
