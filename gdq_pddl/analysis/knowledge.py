@@ -24,11 +24,12 @@ from gdq_pddl.experiments.knowledge import (
     CASES,
     CHECKS,
     WRONG,
+    CaseTruth,
     RouteStep,
     case_truth,
 )
+from gdq_pddl.experiments.scale import converged_at
 from gdq_pddl.outputs import write_text
-from gdq_pddl.world import Task
 
 WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100  # episodes: convergence, curves, final return
 FRACTION = 0.85  # convergence threshold: V* - (1 - FRACTION) |V*|
@@ -44,13 +45,6 @@ def moving_average(returns: np.ndarray, window: int = WINDOW) -> np.ndarray:
     the last axis; entry i covers episodes i+1 .. i+window (1-based)."""
     w = min(window, np.shape(returns)[-1])
     return rolling_mean(returns, w)[..., w - 1:]
-
-
-def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW) -> int | None:
-    """First episode (1-based) at which the trailing ``window``-episode mean return is
-    >= ``level``; None if it never is."""
-    hits = np.flatnonzero(moving_average(returns, window) >= level)
-    return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
 
 
 @dataclass
@@ -83,19 +77,15 @@ class MethodResult:
 
 @dataclass
 class CaseResult:
-    """One case: ``results[ACCURATE|WRONG][method]`` and ``checks[ACCURATE|WRONG]``."""
+    """One case: the real world's :class:`CaseTruth` and ``results[ACCURATE|WRONG][method]``."""
 
     name: str
     description: str
     real: str
     knowledge: str
-    task: Task
-    v_star: float
-    optimal_positions: tuple[str, ...]
-    optimal_areas: tuple[int, ...]
+    truth: CaseTruth
     methods: list[str]
     results: dict[str, dict[str, MethodResult]]
-    checks: dict[str, list[RouteStep]]
 
     def paired(self) -> list[tuple[str, MethodResult, MethodResult]]:
         """``(method, accurate, wrong)`` for each method with results in both."""
@@ -127,16 +117,14 @@ def analyse(out: str | Path) -> list[CaseResult]:
                     continue
                 results[kind][m] = MethodResult(
                     len(returns), returns.shape[1],
-                    [convergence_episode(row, level) for row in returns],
+                    [converged_at(row, level, min(WINDOW, len(row))) for row in returns],
                     float(np.mean(returns[:, -FINAL:])),
                     *truth.measure({r: study.policy(exp["name"], m, task.name, r)
                                     for r in range(len(returns))}),
                     moving_average(returns, CURVE_WINDOW).mean(axis=0))
-        cases.append(CaseResult(
-            name, described.get(name, ""), wrong["world"],
-            str(wrong.get("knowledge") or wrong["world"]), task, truth.v_star,
-            truth.route.positions, truth.route.areas(truth.real), methods, results,
-            truth.checks))
+        cases.append(CaseResult(name, described.get(name, ""), wrong["world"],
+                                str(wrong.get("knowledge") or wrong["world"]), truth, methods,
+                                results))
     return cases
 
 
@@ -152,12 +140,12 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
                 if (r := case.results[kind].get(m)) is not None:
                     ax.plot(np.arange(len(r.curve)) + min(CURVE_WINDOW, r.episodes), r.curve,
                             style, color=method_colour(m), lw=lw, label=f"{m} ({kind})")
-        level = threshold(case.v_star)
-        ax.axhline(case.v_star, color="black", lw=1, ls=":", label="V* (real world)")
+        v_star, task = case.truth.v_star, case.truth.task
+        level = threshold(v_star)
+        ax.axhline(v_star, color="black", lw=1, ls=":", label="V* (real world)")
         ax.axhline(level, color="grey", lw=0.8, ls="-.", label="convergence threshold")
-        ax.set_ylim(max(-40.0, min(case.v_star, level) - 25.0), max(case.v_star, 0.0) + 4.0)
-        ax.set_title(f"{case.name}: task {case.task.name} ({case.task.start}->{case.task.goal})",
-                     fontsize=10)
+        ax.set_ylim(max(-40.0, min(v_star, level) - 25.0), max(v_star, 0.0) + 4.0)
+        ax.set_title(f"{case.name}: task {task.name} ({task.start}->{task.goal})", fontsize=10)
         ax.set(xlabel="episode", ylabel=f"return, {CURVE_WINDOW}-episode mean over runs")
     fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=4,
                fontsize=8)
@@ -210,20 +198,20 @@ def case_data(case: CaseResult) -> dict:
     """A case's tables and findings for ``templates/knowledge.md.j2``."""
     rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
              f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
-             _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
-             f"{_frac(a.policy_values, case.v_star)}",
+             _extra(a, w), f"{_frac(w.policy_values, case.truth.v_star)} / "
+             f"{_frac(a.policy_values, case.truth.v_star)}",
              f"{w.final_return:.2f} / {a.final_return:.2f}",
              ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
                        for k, v in Counter(w.routes).most_common()) or "n/a"]
             for m, a, w in case.paired()]
-    return {"case": case, "threshold": threshold(case.v_star), "table": table_text(rows, [
+    return {"case": case, "threshold": threshold(case.truth.v_star), "table": table_text(rows, [
         "method", "on route (wrong / accurate)", "converged runs", "median convergence episode",
         "extra episodes", "policy value", "final return", "greedy routes (wrong)"]),
-        "checks": table_text([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
+        "checks": table_text([[kind, *(_check(case.truth.checks[kind], a) for a in CHECKS)]
                               for kind in (WRONG, ACCURATE)], ["knowledge", *CHECKS.values()]),
         "findings": [(m, a, w, f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}")
                      for m, a, w in case.paired()],
-        "excluded": [s.state for s in case.checks[WRONG] if not s.darling_allowed]}
+        "excluded": [s.state for s in case.truth.checks[WRONG] if not s.darling_allowed]}
 
 
 def make_knowledge_report(out: str | Path, command: str = "gdq-pddl knowledge") -> list[Path]:

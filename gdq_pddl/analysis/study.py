@@ -20,6 +20,7 @@ from gdq_pddl.envs.evaluate import (
     task_truth,
 )
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.knowledge import load_world_named
 from gdq_pddl.experiments.results import (
     ROBOT_EXPERIMENT,
     SWITCH_PREFIX,
@@ -34,7 +35,7 @@ from gdq_pddl.experiments.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.world import Task, World, builtin_world, load_world
+from gdq_pddl.world import Task, World
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
 
@@ -179,11 +180,7 @@ class Study:
 
     def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
         """The world ``experiment`` ran in (one object per world, so models compile once)."""
-        spec = self.config.world_spec(experiment)
-        if ("world", spec) not in self._cache:
-            self._cache[("world", spec)] = builtin_world(spec) if spec in (
-                "office", "office_robot") else load_world(spec)
-        return self._cache[("world", spec)]
+        return load_world_named(self.config.world_spec(experiment))
 
     def task(self, experiment: str, label: str) -> Task | None:
         """The world task a ``task`` label names (None: the problem has no map)."""
