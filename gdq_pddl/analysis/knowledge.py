@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gdq_pddl.analysis.figures import grid, method_colour, save_all
-from gdq_pddl.analysis.stats import moving_average as rolling_mean
+from gdq_pddl.analysis.stats import moving_average
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.writer import render, table_text
 from gdq_pddl.experiments.knowledge import (
@@ -38,13 +38,6 @@ FRACTION = 0.85  # convergence threshold: V* - (1 - FRACTION) |V*|
 def threshold(v_star: float, fraction: float = FRACTION) -> float:
     """The return level a converged learner's moving average reaches."""
     return v_star - (1.0 - fraction) * abs(v_star)
-
-
-def moving_average(returns: np.ndarray, window: int = WINDOW) -> np.ndarray:
-    """Trailing means over full windows of ``window`` episodes (at most all of them) along
-    the last axis; entry i covers episodes i+1 .. i+window (1-based)."""
-    w = min(window, np.shape(returns)[-1])
-    return rolling_mean(returns, w)[..., w - 1:]
 
 
 @dataclass
@@ -115,13 +108,14 @@ def analyse(out: str | Path) -> list[CaseResult]:
                 returns = study.returns(exp["name"], m)
                 if returns.size == 0:
                     continue
+                w = min(CURVE_WINDOW, returns.shape[1])
                 results[kind][m] = MethodResult(
                     len(returns), returns.shape[1],
                     [converged_at(row, level, min(WINDOW, len(row))) for row in returns],
                     float(np.mean(returns[:, -FINAL:])),
                     *truth.measure({r: study.policy(exp["name"], m, task.name, r)
                                     for r in range(len(returns))}),
-                    moving_average(returns, CURVE_WINDOW).mean(axis=0))
+                    moving_average(returns, w)[:, w - 1:].mean(axis=0))
         cases.append(CaseResult(name, described.get(name, ""), wrong["world"],
                                 str(wrong.get("knowledge") or wrong["world"]), truth, methods,
                                 results))

@@ -12,13 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.envs.evaluate import (
-    RouteSummary,
-    TaskTruth,
-    resolve_task_label,
-    summarise_routes,
-    task_truth,
-)
+from gdq_pddl.envs.evaluate import RouteSummary, TaskTruth, resolve_task_label, task_truth
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.knowledge import load_world_named
 from gdq_pddl.experiments.results import (
@@ -239,5 +233,5 @@ class Study:
         the most common one (None: no policies or no map)."""
         if (t := self.task(experiment, task)) is None:
             return None
-        return summarise_routes(self.world(experiment), t, {
+        return RouteSummary.of(self.world(experiment), t, {
             r: p for (*key, r), p in self._policy_map.items() if key == [experiment, method, task]})

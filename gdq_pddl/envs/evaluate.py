@@ -105,20 +105,20 @@ class RouteSummary:
         return sum(r.reached_goal and r.areas(world) == tuple(areas)
                    for r in self.routes.values())
 
-
-def summarise_routes(world: World, task: Task, policies: Mapping[int, Policy]
-                     ) -> RouteSummary | None:
-    """The intended routes of per-run policies (``{run: policy}``; empty ones skipped) and
-    the most common one (None: no policy)."""
-    routes = {r: walk_policy(world, p, task.start, task.goal)
-              for r, p in sorted(policies.items()) if len(p)}
-    if not routes:
-        return None
-    ends = Counter((r.areas(world), r.end) for r in routes.values())
-    (areas, end), count = ends.most_common(1)[0]
-    members = [r for r in routes.values() if (r.areas(world), r.end) == (areas, end)]
-    top = Counter(r.positions for r in members).most_common(1)[0][0]
-    return RouteSummary(routes, areas, end, count, next(r for r in members if r.positions == top))
+    @classmethod
+    def of(cls, world: World, task: Task, policies: Mapping[int, Policy]
+           ) -> RouteSummary | None:
+        """The intended routes of per-run policies (``{run: policy}``; empty ones skipped)
+        and the most common one (None: no policy)."""
+        routes = {r: walk_policy(world, p, task.start, task.goal)
+                  for r, p in sorted(policies.items()) if len(p)}
+        if not routes:
+            return None
+        ends = Counter((r.areas(world), r.end) for r in routes.values())
+        (areas, end), count = ends.most_common(1)[0]
+        members = [r for r in routes.values() if (r.areas(world), r.end) == (areas, end)]
+        top = Counter(r.positions for r in members).most_common(1)[0][0]
+        return cls(routes, areas, end, count, next(r for r in members if r.positions == top))
 
 
 def resolve_task_label(world: World, label: str) -> Task:

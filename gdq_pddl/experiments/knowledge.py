@@ -17,15 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gdq_pddl.envs.evaluate import (
-    Policy,
-    Route,
-    likeliest_next,
-    optimal_route,
-    policy_value,
-    resolve_task_label,
-    summarise_routes,
-)
+from gdq_pddl.envs.evaluate import Route, RouteSummary, likeliest_next, optimal_route, policy_value
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.envs.variants import deterministic_world, with_door
@@ -175,10 +167,9 @@ CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an
           "(GDQ-code)"}
 
 
-def route_check(real: World, knowledge: World, task: Task,
-                darling_tolerance: float = 0.3) -> list[RouteStep]:
+def route_check(real: World, knowledge: World, task: Task) -> list[RouteStep]:
     """:class:`RouteStep` s along the likeliest optimal route in ``real``."""
-    ctx = office_task_context(knowledge, task, darling_tolerance=darling_tolerance)
+    ctx = office_task_context(knowledge, task)
     tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
               ctx.darling_plans.first_actions, ctx.prior.applicable)
     model = compile_model(real)
@@ -212,11 +203,11 @@ class CaseTruth:
     route: Route
     checks: dict[str, list[RouteStep]]
 
-    def measure(self, policies: Mapping[int, Policy]
+    def measure(self, policies: Mapping[int, Mapping[int, int]]
                 ) -> tuple[int, list[float], list[tuple[int, ...]]]:
         """Of per-run final policies (empty ones skipped): the runs following the optimal
         area route to the goal, each policy's exact value and area route (``()``: no goal)."""
-        summary = summarise_routes(self.real, self.task, policies)
+        summary = RouteSummary.of(self.real, self.task, policies)
         if summary is None:
             return 0, [], []
         return (summary.on_route(self.real, self.route.areas(self.real)),
@@ -227,7 +218,7 @@ class CaseTruth:
 def case_truth(wrong: Mapping) -> CaseTruth:
     """The :class:`CaseTruth` of a case from its ``--wrong`` experiment (``config.json``)."""
     real = load_world_named(wrong["world"])
-    task = resolve_task_label(real, wrong["schedule"][0][0])
+    task = real.task(wrong["schedule"][0][0])
     solution, s0 = solve_task(real, task, compile_model(real))
     knowledge = knowledge_world(real, wrong.get("knowledge"))
     return CaseTruth(real, task, float(solution.V[0, s0]), optimal_route(real, task),
