@@ -1,6 +1,6 @@
 """Pictures of a world: a text map (``ansi``) and an image (``rgb_array``) of a
-:class:`Frame`, a learner's Q table on the map (:meth:`MapPainter.draw_q`), and any text
-as an image (:func:`text_image`, a PDDL state's ``rgb_array``). The map is a
+:class:`Frame`, the map panels of reports and Q tables (:meth:`MapPainter.draw_map`,
+``draw_route``, ``draw_q``), and any text as an image (:func:`text_image`). The map is a
 (deterministic) Kamada-Kawai layout of the position graph.
 """
 

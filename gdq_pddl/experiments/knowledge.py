@@ -5,7 +5,7 @@ A world name is told apart by its form alone: ``office`` or ``office_robot`` (sh
 ``office:<variant>`` (derived from the office in memory, :data:`WORLDS`); anything else
 is the path of a world file (:func:`world_name`). An experiment's ``knowledge`` world has
 the real world's positions and doors, so only the knowledge differs
-(``docs/decisions.md``).
+(``docs/decisions.md``); :func:`case_truth` measures a case against the real world.
 """
 
 from __future__ import annotations
