@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import multiprocessing as mp
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,18 +17,15 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.cm import ScalarMappable
-from matplotlib.collections import LineCollection
 from matplotlib.colors import PowerNorm
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle
 from scipy import stats as sps
 
 from gdq_pddl.analysis.stats import mean_se, moving_average
 from gdq_pddl.analysis.study import Study, curves_stem, slug
-from gdq_pddl.envs.render import MapPainter
+from gdq_pddl.envs.render import map_painter
 from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
 from gdq_pddl.outputs import save_figure
-from gdq_pddl.world import Task, World
 
 METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
     "GDQ": "#D55E00",  # vermillion
@@ -200,64 +197,6 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     return save_all(fig, out_dir, "switch_curves", opts)
 
 
-_LAYOUTS: dict[int, tuple[World, dict[str, np.ndarray]]] = {}
-
-
-def _map_xy(world: World) -> dict[str, np.ndarray]:
-    """Map coordinates of ``world``'s positions, laid out once per world object (the
-    Kamada-Kawai layout is the slow part of a map panel)."""
-    hit = _LAYOUTS.get(id(world))
-    if hit is None or hit[0] is not world:
-        hit = _LAYOUTS[id(world)] = (world, MapPainter(world).xy)
-    return hit[1]
-
-
-def _map_panel(ax: Axes, world: World, xy: dict[str, np.ndarray], task: Task | None,
-               alpha: float, colours: object, sizes: object, text: list[str]) -> None:
-    """A world map: corridors as thin grey lines, doors as thick dotted brown ones with
-    their names, each position a marker (``colours``, ``sizes``) with its number in
-    ``text`` colours, the task's start ringed blue and its goal green."""
-    door_edges = {frozenset(d.sides) for d in world.doors}
-    for doors, style in ((False, {"colors": "#999999", "linewidths": 1.2}),
-                         (True, {"colors": "#8c564b", "linewidths": 3.0, "linestyles": ":"})):
-        ax.add_collection(LineCollection(
-            [(xy[a], xy[b]) for a, b in world.edges if (frozenset((a, b)) in door_edges)
-             == doors], alpha=alpha, zorder=1, **style))
-    for d in world.doors:
-        if all(side in xy for side in d.sides):
-            ax.text(*(xy[d.sides[0]] + xy[d.sides[1]]) / 2, d.name, fontsize=6, ha="center",
-                    va="bottom", color="#8c564b", zorder=5, in_layout=False)
-    ax.set_axis_off()
-    ax.set_aspect("equal")
-    ax.autoscale_view()
-    ax.margins(0.1)
-    pts = np.array([xy[p] for p in world.positions])
-    ax.scatter(pts[:, 0], pts[:, 1], s=sizes, c=colours, edgecolors="#555555" if alpha < 0.6
-               else "#333333", linewidths=0.6, zorder=2 if alpha < 0.6 else 3)
-    for p, colour in zip(world.positions, text, strict=True):
-        ax.text(*xy[p], p[1:], fontsize=5, ha="center", va="center", zorder=6, color=colour,
-                in_layout=False)
-    if task is not None and task.start in xy and task.goal in xy:
-        for where, colour in ((task.start, "#1f77b4"), (task.goal, "#2ca02c")):
-            ax.scatter(*xy[where], s=420, facecolors="none", edgecolors=colour, lw=2.2,
-                       zorder=4)
-
-
-def _outline_areas(ax: Axes, world: World, xy: dict[str, np.ndarray]) -> None:
-    """Each area as a dashed circle around its positions, labelled with its number."""
-    span = np.ptp(np.array(list(xy.values())), axis=0).max() or 1.0
-    for area, positions in sorted(world.areas.items()):
-        pts = np.array([xy[p] for p in positions if p in xy])
-        if not len(pts):
-            continue
-        centre = pts.mean(axis=0)
-        radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
-        ax.add_patch(Circle(centre, radius, fill=False, ls="--", lw=0.8, ec="#555555",
-                            zorder=2, in_layout=False))
-        ax.text(centre[0], centre[1] + radius, f"area {area}", fontsize=6, ha="center",
-                va="bottom", color="#333333", zorder=6, in_layout=False)
-
-
 def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions()
                    ) -> list[Path]:
     """Per task (and for the robot task): one map panel per method, each position coloured
@@ -268,7 +207,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
         if not study.has(exp) or not study.has_areas(exp):
             continue
         world = study.world(exp)
-        xy = _map_xy(world)
+        painter = map_painter(world)
         for task in study.tasks(exp):
             means = {m: np.nanmean(np.nansum(v, axis=1), axis=0) for m in study.methods(exp)
                      if (v := study.area_visits(exp, m, task)).size}
@@ -283,10 +222,9 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 by_area = dict(zip(study.areas, mean, strict=True))
                 values = np.array([by_area.get(world.area_of.get(p, -1), 0.0)
                                    for p in world.positions])
-                _map_panel(ax, world, xy, study.task(exp, task), 0.6, cmap(norm(values)),
-                           60 + 400 * np.sqrt(values / top),
-                           ["white" if v > 0.3 * top else "black" for v in values])
-                _outline_areas(ax, world, xy)
+                painter.draw_map(ax, cmap(norm(values)), 60 + 400 * np.sqrt(values / top),
+                                 ["white" if v > 0.3 * top else "black" for v in values],
+                                 study.task(exp, task), 0.6, areas=True)
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=fig.add_axes(
                 (1 - 1.15 / wide, 0.2, 0.15 / wide, 0.55)),
@@ -299,15 +237,6 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
     return paths
 
 
-def _draw_route(ax: Axes, xy: dict[str, np.ndarray], positions: Sequence[str],
-                colour: str) -> None:
-    for a, b in zip(positions[:-1], positions[1:], strict=True):
-        if a != b:
-            ax.annotate("", xy=xy[b], xytext=xy[a], zorder=4, in_layout=False,
-                        arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.2,
-                                    "shrinkA": 6, "shrinkB": 6})
-
-
 def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
                 experiment: str = TASKS_EXPERIMENT, task: str = "C") -> list[Path]:
     """The route each method's final greedy policy takes (most common over runs)."""
@@ -315,7 +244,7 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
             study.task(experiment, task) is None:
         return []
     world = study.world(experiment)
-    xy = _map_xy(world)
+    painter = map_painter(world)
     best = study.truth(experiment, task).optimal_route_areas
     panels = [(m, s) for m in study.methods(experiment)
               if (s := study.route_summary(experiment, m, task)) is not None]
@@ -323,9 +252,9 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
         return []
     fig, axes = grid(len(panels), 3.6, 3.8, 3, maps=True)
     for ax, (method, summary) in zip(axes, panels, strict=True):
-        _map_panel(ax, world, xy, study.task(experiment, task), 0.5, "#eeeeee", 80,
-                   ["black"] * len(world.positions))
-        _draw_route(ax, xy, summary.example.positions, method_colour(method))
+        painter.draw_map(ax, "#eeeeee", 80, ["black"] * len(world.positions),
+                         study.task(experiment, task), 0.5)
+        painter.draw_route(ax, summary.example.positions, method_colour(method))
         areas = "->".join(map(str, summary.areas)) or "(none)"
         ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
                      fontsize=9, color=method_colour(method), y=1.0)

@@ -16,40 +16,28 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gdq_pddl.analysis.figures import grid, method_colour, save_all
-from gdq_pddl.analysis.stats import moving_average as rolling_mean
+from gdq_pddl.analysis.stats import moving_average
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.writer import render, table_text
-from gdq_pddl.envs.evaluate import optimal_route, policy_value, walk_policy
-from gdq_pddl.envs.model import compile_model
-from gdq_pddl.envs.solve import solve_task
-from gdq_pddl.experiments.knowledge import CASES, knowledge_world
-from gdq_pddl.experiments.probes import CHECKS, RouteStep, route_check
-from gdq_pddl.experiments.work import load_world_named, resolve_task
+from gdq_pddl.experiments.knowledge import (
+    ACCURATE,
+    CASES,
+    CHECKS,
+    WRONG,
+    CaseTruth,
+    RouteStep,
+    case_truth,
+)
+from gdq_pddl.experiments.scale import converged_at
 from gdq_pddl.outputs import write_text
-from gdq_pddl.world import Task
 
 WINDOW, CURVE_WINDOW, FINAL = 100, 50, 100  # episodes: convergence, curves, final return
 FRACTION = 0.85  # convergence threshold: V* - (1 - FRACTION) |V*|
-ACCURATE, WRONG = "accurate", "wrong"
 
 
 def threshold(v_star: float, fraction: float = FRACTION) -> float:
     """The return level a converged learner's moving average reaches."""
     return v_star - (1.0 - fraction) * abs(v_star)
-
-
-def moving_average(returns: np.ndarray, window: int = WINDOW) -> np.ndarray:
-    """Trailing means over full windows of ``window`` episodes (at most all of them) along
-    the last axis; entry i covers episodes i+1 .. i+window (1-based)."""
-    w = min(window, np.shape(returns)[-1])
-    return rolling_mean(returns, w)[..., w - 1:]
-
-
-def convergence_episode(returns: np.ndarray, level: float, window: int = WINDOW) -> int | None:
-    """First episode (1-based) at which the trailing ``window``-episode mean return is
-    >= ``level``; None if it never is."""
-    hits = np.flatnonzero(moving_average(returns, window) >= level)
-    return None if hits.size == 0 else int(hits[0]) + min(window, len(returns))
 
 
 @dataclass
@@ -82,19 +70,15 @@ class MethodResult:
 
 @dataclass
 class CaseResult:
-    """One case: ``results[ACCURATE|WRONG][method]`` and ``checks[ACCURATE|WRONG]``."""
+    """One case: the real world's :class:`CaseTruth` and ``results[ACCURATE|WRONG][method]``."""
 
     name: str
     description: str
     real: str
     knowledge: str
-    task: Task
-    v_star: float
-    optimal_positions: tuple[str, ...]
-    optimal_areas: tuple[int, ...]
+    truth: CaseTruth
     methods: list[str]
     results: dict[str, dict[str, MethodResult]]
-    checks: dict[str, list[RouteStep]]
 
     def paired(self) -> list[tuple[str, MethodResult, MethodResult]]:
         """``(method, accurate, wrong)`` for each method with results in both."""
@@ -114,12 +98,8 @@ def analyse(out: str | Path) -> list[CaseResult]:
         acc, wrong = exps.get(f"{name}--{ACCURATE}"), exps.get(f"{name}--{WRONG}")
         if acc is None or wrong is None:
             continue
-        real = load_world_named(wrong["world"])
-        task = resolve_task(real, wrong["schedule"][0][0])
-        route = optimal_route(real, task)
-        model = compile_model(real)
-        solution, s0 = solve_task(real, task, model)
-        v_star = float(solution.V[0, s0])
+        truth = case_truth(wrong)
+        task, level = truth.task, threshold(truth.v_star)
         methods = [m for m in wrong["methods"] if m in acc["methods"]]
         results: dict[str, dict[str, MethodResult]] = {}
         for kind, exp in ((ACCURATE, acc), (WRONG, wrong)):
@@ -128,23 +108,17 @@ def analyse(out: str | Path) -> list[CaseResult]:
                 returns = study.returns(exp["name"], m)
                 if returns.size == 0:
                     continue
-                pols = [p for r in range(len(returns))
-                        if (p := study.policy(exp["name"], m, task.name, r))]
-                walks = [walk_policy(real, p, task.start, task.goal) for p in pols]
+                w = min(CURVE_WINDOW, returns.shape[1])
                 results[kind][m] = MethodResult(
                     len(returns), returns.shape[1],
-                    [convergence_episode(row, threshold(v_star)) for row in returns],
+                    [converged_at(row, level, min(WINDOW, len(row))) for row in returns],
                     float(np.mean(returns[:, -FINAL:])),
-                    sum(w.reached_goal and w.areas(real) == route.areas(real) for w in walks),
-                    [policy_value(real, task, p, model) for p in pols],
-                    [w.areas(real) if w.reached_goal else () for w in walks],
-                    moving_average(returns, CURVE_WINDOW).mean(axis=0))
-        kworld = knowledge_world(real, wrong.get("knowledge"))
-        cases.append(CaseResult(
-            name, described.get(name, ""), wrong["world"],
-            str(wrong.get("knowledge") or wrong["world"]), task, v_star, route.positions,
-            route.areas(real), methods, results,
-            {ACCURATE: route_check(real, real, task), WRONG: route_check(real, kworld, task)}))
+                    *truth.measure({r: study.policy(exp["name"], m, task.name, r)
+                                    for r in range(len(returns))}),
+                    moving_average(returns, w)[:, w - 1:].mean(axis=0))
+        cases.append(CaseResult(name, described.get(name, ""), wrong["world"],
+                                str(wrong.get("knowledge") or wrong["world"]), truth, methods,
+                                results))
     return cases
 
 
@@ -160,12 +134,12 @@ def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
                 if (r := case.results[kind].get(m)) is not None:
                     ax.plot(np.arange(len(r.curve)) + min(CURVE_WINDOW, r.episodes), r.curve,
                             style, color=method_colour(m), lw=lw, label=f"{m} ({kind})")
-        level = threshold(case.v_star)
-        ax.axhline(case.v_star, color="black", lw=1, ls=":", label="V* (real world)")
+        v_star, task = case.truth.v_star, case.truth.task
+        level = threshold(v_star)
+        ax.axhline(v_star, color="black", lw=1, ls=":", label="V* (real world)")
         ax.axhline(level, color="grey", lw=0.8, ls="-.", label="convergence threshold")
-        ax.set_ylim(max(-40.0, min(case.v_star, level) - 25.0), max(case.v_star, 0.0) + 4.0)
-        ax.set_title(f"{case.name}: task {case.task.name} ({case.task.start}->{case.task.goal})",
-                     fontsize=10)
+        ax.set_ylim(max(-40.0, min(v_star, level) - 25.0), max(v_star, 0.0) + 4.0)
+        ax.set_title(f"{case.name}: task {task.name} ({task.start}->{task.goal})", fontsize=10)
         ax.set(xlabel="episode", ylabel=f"return, {CURVE_WINDOW}-episode mean over runs")
     fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncol=4,
                fontsize=8)
@@ -218,20 +192,20 @@ def case_data(case: CaseResult) -> dict:
     """A case's tables and findings for ``templates/knowledge.md.j2``."""
     rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
              f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
-             _extra(a, w), f"{_frac(w.policy_values, case.v_star)} / "
-             f"{_frac(a.policy_values, case.v_star)}",
+             _extra(a, w), f"{_frac(w.policy_values, case.truth.v_star)} / "
+             f"{_frac(a.policy_values, case.truth.v_star)}",
              f"{w.final_return:.2f} / {a.final_return:.2f}",
              ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
                        for k, v in Counter(w.routes).most_common()) or "n/a"]
             for m, a, w in case.paired()]
-    return {"case": case, "threshold": threshold(case.v_star), "table": table_text(rows, [
+    return {"case": case, "threshold": threshold(case.truth.v_star), "table": table_text(rows, [
         "method", "on route (wrong / accurate)", "converged runs", "median convergence episode",
         "extra episodes", "policy value", "final return", "greedy routes (wrong)"]),
-        "checks": table_text([[kind, *(_check(case.checks[kind], a) for a in CHECKS)]
+        "checks": table_text([[kind, *(_check(case.truth.checks[kind], a) for a in CHECKS)]
                               for kind in (WRONG, ACCURATE)], ["knowledge", *CHECKS.values()]),
         "findings": [(m, a, w, f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}")
                      for m, a, w in case.paired()],
-        "excluded": [s.state for s in case.checks[WRONG] if not s.darling_allowed]}
+        "excluded": [s.state for s in case.truth.checks[WRONG] if not s.darling_allowed]}
 
 
 def make_knowledge_report(out: str | Path, command: str = "gdq-pddl knowledge") -> list[Path]:

@@ -5,7 +5,6 @@ start/goal pair", defines each)."""
 
 from __future__ import annotations
 
-import json
 import math
 import shlex
 from dataclasses import dataclass
@@ -25,10 +24,8 @@ from scipy import stats as sps
 from gdq_pddl.analysis.figures import save_all
 from gdq_pddl.analysis.stats import iqm_ci
 from gdq_pddl.analysis.writer import number, render, table_text
-from gdq_pddl.errors import GdqError
-from gdq_pddl.experiments.results import load_config, order_methods
+from gdq_pddl.experiments.pairs import PairRuns, load_pair_runs
 from gdq_pddl.outputs import write_text
-from gdq_pddl.world import builtin_world, load_world
 
 LEVEL = 0.95
 WIN, TIE, LOSS = "win", "tie", "loss"
@@ -36,57 +33,6 @@ OUTCOME_COLOURS = {WIN: "#2166ac", TIE: "#999999", LOSS: "#b2182b"}
 WORST = 10  # pairs listed per baseline
 TIE_STRENGTH = 0.3  # a tie's colour in the heatmap, as a share of its full strength
 LABELLED, LISTED_PAIRS = 30, 12  # up to so many pairs the plot / the command names each
-
-
-@dataclass(frozen=True)
-class PairRuns:
-    """A pairs folder's results: ``means[pair, method, run]`` (NaN: no such run), methods
-    in the report's order; ``facts``: ``optimal.json`` (start, goal, shortest_plan, v_star,
-    tuning per pair); ``positions``: the world's, in its order (the heatmap's axes)."""
-
-    pairs: tuple[str, ...]
-    methods: tuple[str, ...]
-    means: np.ndarray
-    facts: dict[str, dict]
-    config: dict
-    positions: tuple[str, ...]
-
-    @property
-    def reference(self) -> str:
-        """The method the others are compared with: GDQ if it ran, else the first."""
-        return "GDQ" if "GDQ" in self.methods else self.methods[0]
-
-    @property
-    def baselines(self) -> tuple[str, ...]:
-        return tuple(m for m in self.methods if m != self.reference)
-
-    def tuning(self) -> np.ndarray:
-        """bool[pairs]: the pair is one of the tuning tasks A-D."""
-        return np.array([bool(self.facts[p].get("tuning")) for p in self.pairs])
-
-    def label(self, i: int) -> str:
-        """Pair ``i``'s name, with ``(task X)`` when it is a tuning task."""
-        tuning = self.facts[self.pairs[i]].get("tuning")
-        return self.pairs[i] + (f" (task {tuning})" if tuning else "")
-
-
-def load_pair_runs(out: Path) -> PairRuns:
-    """Read ``runs.csv``, ``optimal.json`` and ``config.json`` of a pairs folder."""
-    if not (out / "runs.csv").exists():
-        raise GdqError(f"{out} has no runs.csv: the pairs run has not finished "
-                       "(continue it with --resume)")
-    facts = json.loads((out / "optimal.json").read_text(encoding="utf-8"))
-    runs = pd.read_csv(out / "runs.csv", dtype={"pair": str, "method": str},
-                       keep_default_na=False)
-    config = load_config(out).raw
-    exp = config["experiments"][0]
-    pairs, methods = tuple(facts), tuple(order_methods(exp["methods"]))
-    grid = pd.MultiIndex.from_product([pairs, methods, range(int(exp["runs"]))])
-    means = runs.set_index(["pair", "method", "run"])["mean_return"].reindex(grid)
-    world = exp["world"]
-    world = builtin_world(world) if world in ("office", "office_robot") else load_world(world)
-    return PairRuns(pairs, methods, means.to_numpy().reshape(len(pairs), len(methods), -1),
-                    facts, config, world.positions)
 
 
 def over_runs(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections import Counter
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -13,8 +12,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.envs.evaluate import Route, TaskTruth, resolve_task_label, task_truth, walk_policy
+from gdq_pddl.envs.evaluate import RouteSummary, TaskTruth, resolve_task_label, task_truth
 from gdq_pddl.errors import GdqError
+from gdq_pddl.experiments.knowledge import load_world_named
 from gdq_pddl.experiments.results import (
     ROBOT_EXPERIMENT,
     SWITCH_PREFIX,
@@ -29,31 +29,9 @@ from gdq_pddl.experiments.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.world import Task, World, builtin_world, load_world
+from gdq_pddl.world import Task, World
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
-
-
-@dataclass(frozen=True)
-class RouteSummary:
-    """The final greedy routes of one method's runs, and the most common one (grouped by
-    route in *area* terms and how the walk ended; ties: the group of the lowest run).
-    :attr:`example` is that group's most common position sequence, for drawing."""
-
-    routes: dict[int, Route]
-    areas: tuple[int, ...]
-    end: str
-    count: int
-    example: Route
-
-    @property
-    def runs(self) -> int:
-        return len(self.routes)
-
-    def on_route(self, world: World, areas: tuple[int, ...]) -> int:
-        """Runs whose route reaches the goal through exactly ``areas``."""
-        return sum(r.reached_goal and r.areas(world) == tuple(areas)
-                   for r in self.routes.values())
 
 
 def slug(label: str) -> str:
@@ -196,11 +174,7 @@ class Study:
 
     def world(self, experiment: str = TASKS_EXPERIMENT) -> World:
         """The world ``experiment`` ran in (one object per world, so models compile once)."""
-        spec = self.config.world_spec(experiment)
-        if ("world", spec) not in self._cache:
-            self._cache[("world", spec)] = builtin_world(spec) if spec in (
-                "office", "office_robot") else load_world(spec)
-        return self._cache[("world", spec)]
+        return load_world_named(self.config.world_spec(experiment))
 
     def task(self, experiment: str, label: str) -> Task | None:
         """The world task a ``task`` label names (None: the problem has no map)."""
@@ -259,15 +233,5 @@ class Study:
         the most common one (None: no policies or no map)."""
         if (t := self.task(experiment, task)) is None:
             return None
-        world = self.world(experiment)
-        routes = {r: walk_policy(world, policy, t.start, t.goal)
-                  for (e, m, k, r), policy in sorted(self._policy_map.items())
-                  if (e, m, k) == (experiment, method, task) and policy}
-        if not routes:
-            return None
-        runs = sorted(routes.items())
-        (areas, end), count = Counter((r.areas(world), r.end) for _, r in runs).most_common(1)[0]
-        members = [r for _, r in runs if (r.areas(world), r.end) == (areas, end)]
-        top = Counter(r.positions for r in members).most_common(1)[0][0]
-        return RouteSummary(routes, areas, end, count,
-                            next(r for r in members if r.positions == top))
+        return RouteSummary.of(self.world(experiment), t, {
+            r: p for (*key, r), p in self._policy_map.items() if key == [experiment, method, task]})

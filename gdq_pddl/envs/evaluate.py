@@ -8,6 +8,7 @@ outcome, a state without a policy entry, a repeated full state or
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -81,6 +82,43 @@ def walk_policy(world: World, policy: Policy, start: str, goal: str,
 
     return _follow(world, model, full_state(world, world.position(start)),
                    world.index[world.position(goal)], action_at, max_steps, True)
+
+
+@dataclass(frozen=True)
+class RouteSummary:
+    """The final greedy routes of one method's runs, and the most common one (grouped by
+    route in *area* terms and how the walk ended; ties: the group of the lowest run).
+    :attr:`example` is that group's most common position sequence, for drawing."""
+
+    routes: dict[int, Route]
+    areas: tuple[int, ...]
+    end: str
+    count: int
+    example: Route
+
+    @property
+    def runs(self) -> int:
+        return len(self.routes)
+
+    def on_route(self, world: World, areas: tuple[int, ...]) -> int:
+        """Runs whose route reaches the goal through exactly ``areas``."""
+        return sum(r.reached_goal and r.areas(world) == tuple(areas)
+                   for r in self.routes.values())
+
+    @classmethod
+    def of(cls, world: World, task: Task, policies: Mapping[int, Policy]
+           ) -> RouteSummary | None:
+        """The intended routes of per-run policies (``{run: policy}``; empty ones skipped)
+        and the most common one (None: no policy)."""
+        routes = {r: walk_policy(world, p, task.start, task.goal)
+                  for r, p in sorted(policies.items()) if len(p)}
+        if not routes:
+            return None
+        ends = Counter((r.areas(world), r.end) for r in routes.values())
+        (areas, end), count = ends.most_common(1)[0]
+        members = [r for r in routes.values() if (r.areas(world), r.end) == (areas, end)]
+        top = Counter(r.positions for r in members).most_common(1)[0][0]
+        return cls(routes, areas, end, count, next(r for r in members if r.positions == top))
 
 
 def resolve_task_label(world: World, label: str) -> Task:

@@ -1,19 +1,20 @@
 """Pictures of a world: a text map (``ansi``) and an image (``rgb_array``) of a
-:class:`Frame`, a learner's Q table on the map (:meth:`MapPainter.draw_q`), and any text
-as an image (:func:`text_image`, a PDDL state's ``rgb_array``). The map is a
+:class:`Frame`, the map panels of reports and Q tables (:meth:`MapPainter.draw_map`,
+``draw_route``, ``draw_q``), and any text as an image (:func:`text_image`). The map is a
 (deterministic) Kamada-Kawai layout of the position graph.
 """
 
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World
+from gdq_pddl.world import Task, World
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -150,37 +151,89 @@ class MapPainter:
         from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 
-        w, xy = self.world, self.xy
-        spaces = LearnerSpaces(w)
+        spaces = LearnerSpaces(self.world)
         values = np.array([max(q[spaces.state(p, is_open)].max() for is_open in (False, True))
-                           for p in w.positions])
+                           for p in self.world.positions])
         if norm is None:
             low, high = float(values.min()), float(values.max())
             norm = Normalize(low, high if high > low else low + 1.0)
         mapping = ScalarMappable(norm=norm, cmap=cmap)
+        self.draw_map(ax, mapping.to_rgba(values), 260,
+                      ["white" if v < 0.5 else "black" for v in norm(values)])
+        for p in self.world.positions:
+            greedy = greedy_target(spaces, q, p, masks)
+            if greedy == "":
+                ax.scatter(*self.xy[p], s=500, marker="x", color="#d62728", lw=1.5, zorder=4)
+            elif greedy is not None:
+                self.draw_route(ax, (p, greedy), "#d62728", 1.8)
+        return mapping
+
+
+    def draw_map(self, ax: Axes, colours: object, sizes: object, text: Sequence[str],
+                 task: Task | None = None, alpha: float = 1.0, areas: bool = False) -> None:
+        """The world on ``ax``: corridors thin grey, doors thick dotted brown with their
+        names, each position a marker (``colours``, ``sizes``) with its number in ``text``
+        colours, the ``task``'s start ringed blue and its goal green; ``areas``: each area
+        a dashed circle labelled with its number."""
+        w, xy = self.world, self.xy
         door_edges = {frozenset(d.sides) for d in w.doors}
         for a, b in w.edges:
             door = frozenset((a, b)) in door_edges
             ax.plot(*zip(xy[a], xy[b], strict=True), color="#8c564b" if door else "#999999",
-                    lw=3.0 if door else 1.2, ls=":" if door else "-", zorder=1)
-        for p in w.positions:
-            greedy = greedy_target(spaces, q, p, masks)
-            if greedy == "":
-                ax.scatter(*xy[p], s=500, marker="x", color="#d62728", lw=1.5, zorder=4)
-            elif greedy is not None:
-                ax.annotate("", xy=xy[greedy], xytext=xy[p], zorder=4,
-                            arrowprops={"arrowstyle": "-|>", "color": "#d62728", "lw": 1.8,
-                                        "shrinkA": 8, "shrinkB": 8})
+                    lw=3.0 if door else 1.2, ls=":" if door else "-", alpha=alpha, zorder=1)
+        for d in w.doors:
+            ax.text(*(xy[d.sides[0]] + xy[d.sides[1]]) / 2, d.name, fontsize=6, ha="center",
+                    va="bottom", color="#8c564b", zorder=5, in_layout=False)
         pts = np.array([xy[p] for p in w.positions])
-        ax.scatter(pts[:, 0], pts[:, 1], s=260, c=mapping.to_rgba(values),
-                   edgecolors="#333333", linewidths=0.8, zorder=3)
-        for p, v in zip(w.positions, norm(values), strict=True):
-            ax.text(*xy[p], p[1:] if p[1:].isdigit() else p, fontsize=6, ha="center",
-                    va="center", zorder=5, color="white" if v < 0.5 else "black")
+        ax.scatter(pts[:, 0], pts[:, 1], s=sizes, c=colours, edgecolors="#333333",
+                   linewidths=0.6, zorder=3)
+        for p, colour in zip(w.positions, text, strict=True):
+            ax.text(*xy[p], p[1:] if p[1:].isdigit() else p, fontsize=5, ha="center",
+                    va="center", zorder=6, color=colour, in_layout=False)
+        if task is not None:
+            ax.scatter(*np.array([xy[task.start], xy[task.goal]]).T, s=420, facecolors="none",
+                       edgecolors=["#1f77b4", "#2ca02c"], lw=2.2, zorder=4)
+        if areas:
+            self._outline_areas(ax)
         ax.set_axis_off()
         ax.set_aspect("equal")
-        ax.margins(0.08)
-        return mapping
+        ax.margins(0.1)
+
+    def _outline_areas(self, ax: Axes) -> None:
+        from matplotlib.patches import Circle  # start-up time, as above
+
+        span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
+        for area, positions in sorted(self.world.areas.items()):
+            if not positions:
+                continue
+            pts = np.array([self.xy[p] for p in positions])
+            centre = pts.mean(axis=0)
+            radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
+            ax.add_patch(Circle(centre, radius, fill=False, ls="--", lw=0.8, ec="#555555",
+                                zorder=2, in_layout=False))
+            ax.text(centre[0], centre[1] + radius, f"area {area}", fontsize=6, ha="center",
+                    va="bottom", color="#333333", zorder=6, in_layout=False)
+
+    def draw_route(self, ax: Axes, positions: Sequence[str], colour: str,
+                   lw: float = 2.2) -> None:
+        """Arrows from each position of ``positions`` to the next (repeats skipped)."""
+        for a, b in zip(positions[:-1], positions[1:], strict=True):
+            if a != b:
+                ax.annotate("", xy=self.xy[b], xytext=self.xy[a], zorder=4, in_layout=False,
+                            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": lw,
+                                        "shrinkA": 7, "shrinkB": 7})
+
+
+_PAINTERS: dict[int, MapPainter] = {}
+
+
+def map_painter(world: World) -> MapPainter:
+    """The :class:`MapPainter` of ``world``, laid out once per world object (the
+    Kamada-Kawai layout is the slow part of a map)."""
+    painter = _PAINTERS.get(id(world))
+    if painter is None or painter.world is not world:
+        painter = _PAINTERS[id(world)] = MapPainter(world)
+    return painter
 
 
 def greedy_target(spaces: LearnerSpaces, q: np.ndarray, position: str,

@@ -5,21 +5,27 @@ A world name is told apart by its form alone: ``office`` or ``office_robot`` (sh
 ``office:<variant>`` (derived from the office in memory, :data:`WORLDS`); anything else
 is the path of a world file (:func:`world_name`). An experiment's ``knowledge`` world has
 the real world's positions and doors, so only the knowledge differs
-(``docs/decisions.md``).
+(``docs/decisions.md``); :func:`case_truth` measures a case against the real world.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
+import numpy as np
+
+from gdq_pddl.envs.evaluate import Route, RouteSummary, likeliest_next, optimal_route, policy_value
+from gdq_pddl.envs.model import compile_model
+from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World, builtin_world, load_world
+from gdq_pddl.world import Task, World, builtin_world, load_world
 
 BUILTIN = ("office", "office_robot")
 """The names of the worlds shipped with the package."""
@@ -140,3 +146,81 @@ def knowledge_world(real: World, knowledge: str | None) -> World:
         raise GdqError(f"knowledge world {knowledge!r} does not have the real world's "
                        f"positions and door sides ({real.name}): the learner spaces differ")
     return world
+
+
+@dataclass(frozen=True)
+class RouteStep:
+    """One step of the true optimal route: its optimal actions and whether one is allowed
+    by DARLING, starts a shortest / tolerant plan, or applies in GDQ's prior model."""
+
+    state: str
+    optimal: tuple[str, ...]
+    darling_allowed: bool
+    in_shortest_plans: bool
+    in_tolerant_plans: bool
+    in_prior: bool = False
+
+
+CHECKS = {"darling_allowed": "DARLING allows an optimal action", "in_prior": "an optimal "
+          "action is applicable in the prior model (GDQ)", "in_shortest_plans": "... starts "
+          "a shortest plan (GDQ-literal)", "in_tolerant_plans": "... a plan within 1.3x "
+          "(GDQ-code)"}
+
+
+def route_check(real: World, knowledge: World, task: Task) -> list[RouteStep]:
+    """:class:`RouteStep` s along the likeliest optimal route in ``real``."""
+    ctx = office_task_context(knowledge, task)
+    tables = (ctx.darling_plans.allowed_actions(), ctx.plans.first_actions,
+              ctx.darling_plans.first_actions, ctx.prior.applicable)
+    model = compile_model(real)
+    solution, fs = solve_task(real, task, model)
+    spaces = LearnerSpaces(real)
+    out: list[RouteStep] = []
+    for t in range(model.step_limit):
+        obs, q = int(model.obs_of[fs]), solution.Q[t, fs]
+        best = np.flatnonzero(q >= q.max() - 1e-9)
+        out.append(RouteStep(spaces.state_name(obs),
+                             tuple(spaces.action_name(int(a)) for a in best),
+                             *(bool(table[obs, best].any()) for table in tables)))
+        nxt = likeliest_next(model, fs, int(solution.policy[t, fs]))
+        if nxt is None or model.pos_of[nxt] == solution.goal_pos:
+            break
+        fs = nxt
+    return out
+
+
+ACCURATE, WRONG = "accurate", "wrong"
+
+
+@dataclass(frozen=True)
+class CaseTruth:
+    """A case's task in its real world: V*, the likeliest optimal route and, per knowledge
+    (:data:`ACCURATE` / :data:`WRONG`), the :func:`route_check` along it."""
+
+    real: World
+    task: Task
+    v_star: float
+    route: Route
+    checks: dict[str, list[RouteStep]]
+
+    def measure(self, policies: Mapping[int, Mapping[int, int]]
+                ) -> tuple[int, list[float], list[tuple[int, ...]]]:
+        """Of per-run final policies (empty ones skipped): the runs following the optimal
+        area route to the goal, each policy's exact value and area route (``()``: no goal)."""
+        summary = RouteSummary.of(self.real, self.task, policies)
+        if summary is None:
+            return 0, [], []
+        return (summary.on_route(self.real, self.route.areas(self.real)),
+                [policy_value(self.real, self.task, p) for p in policies.values() if p],
+                [r.areas(self.real) if r.reached_goal else () for r in summary.routes.values()])
+
+
+def case_truth(wrong: Mapping) -> CaseTruth:
+    """The :class:`CaseTruth` of a case from its ``--wrong`` experiment (``config.json``)."""
+    real = load_world_named(wrong["world"])
+    task = real.task(wrong["schedule"][0][0])
+    solution, s0 = solve_task(real, task, compile_model(real))
+    knowledge = knowledge_world(real, wrong.get("knowledge"))
+    return CaseTruth(real, task, float(solution.V[0, s0]), optimal_route(real, task),
+                     {ACCURATE: route_check(real, real, task),
+                      WRONG: route_check(real, knowledge, task)})

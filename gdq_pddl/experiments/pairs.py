@@ -16,13 +16,16 @@ import csv
 import json
 import re
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment, Unit
+from gdq_pddl.experiments.results import load_config, order_methods
 from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
 from gdq_pddl.outputs import atomic_write
 from gdq_pddl.spaces import LearnerSpaces
@@ -109,6 +112,55 @@ def collect_pairs(out: Path, experiments: list[Experiment]) -> None:
     atomic_write(out / "runs.csv", write_runs)
     facts = pair_facts(experiments)
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(facts, indent=2)))
+
+
+@dataclass(frozen=True)
+class PairRuns:
+    """A pairs folder's results: ``means[pair, method, run]`` (NaN: no such run), methods
+    in the report's order; ``facts``: ``optimal.json`` (start, goal, shortest_plan, v_star,
+    tuning per pair); ``positions``: the world's, in its order (the heatmap's axes)."""
+
+    pairs: tuple[str, ...]
+    methods: tuple[str, ...]
+    means: np.ndarray
+    facts: dict[str, dict]
+    config: dict
+    positions: tuple[str, ...]
+
+    @property
+    def reference(self) -> str:
+        """The method the others are compared with: GDQ if it ran, else the first."""
+        return "GDQ" if "GDQ" in self.methods else self.methods[0]
+
+    @property
+    def baselines(self) -> tuple[str, ...]:
+        return tuple(m for m in self.methods if m != self.reference)
+
+    def tuning(self) -> np.ndarray:
+        """bool[pairs]: the pair is one of the tuning tasks A-D."""
+        return np.array([bool(self.facts[p].get("tuning")) for p in self.pairs])
+
+    def label(self, i: int) -> str:
+        """Pair ``i``'s name, with ``(task X)`` when it is a tuning task."""
+        tuning = self.facts[self.pairs[i]].get("tuning")
+        return self.pairs[i] + (f" (task {tuning})" if tuning else "")
+
+
+def load_pair_runs(out: Path) -> PairRuns:
+    """Read ``runs.csv``, ``optimal.json`` and ``config.json`` of a pairs folder."""
+    if not (out / "runs.csv").exists():
+        raise GdqError(f"{out} has no runs.csv: the pairs run has not finished "
+                       "(continue it with --resume)")
+    facts = json.loads((out / "optimal.json").read_text(encoding="utf-8"))
+    runs = pd.read_csv(out / "runs.csv", dtype={"pair": str, "method": str},
+                       keep_default_na=False)
+    config = load_config(out).raw
+    exp = config["experiments"][0]
+    pairs, methods = tuple(facts), tuple(order_methods(exp["methods"]))
+    grid = pd.MultiIndex.from_product([pairs, methods, range(int(exp["runs"]))])
+    means = runs.set_index(["pair", "method", "run"])["mean_return"].reindex(grid)
+    return PairRuns(pairs, methods, means.to_numpy().reshape(len(pairs), len(methods), -1),
+                    facts, config, load_world_named(exp["world"]).positions)
 
 
 def pair_facts(experiments: list[Experiment]) -> dict[str, dict]:

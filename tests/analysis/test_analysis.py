@@ -18,6 +18,7 @@ from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import area_table, make_tables
 from gdq_pddl.envs.evaluate import walk_policy
 from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.render import MapPainter
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.experiments.probes import optinit_values
 from gdq_pddl.experiments.results import load_config
@@ -386,12 +387,12 @@ def test_route_figure_and_table_use_the_same_most_common_route(tmp_path):
     assert summary.runs == 3 and summary.count == 2 and summary.areas == short_areas
     assert summary.example.areas(world) == summary.areas
     drawn = []
-    original = figures._draw_route
-    figures._draw_route = lambda ax, xy, positions, colour: drawn.append(tuple(positions))
+    original = MapPainter.draw_route
+    MapPainter.draw_route = lambda self, ax, positions, colour: drawn.append(tuple(positions))
     try:
         figures.task_routes(study, tmp_path / "figs", FigureOptions(formats=("png",), dpi=40))
     finally:
-        figures._draw_route = original
+        MapPainter.draw_route = original
     by_method = dict(zip([m for m in study.methods("tasks")
                           if study.route_summary("tasks", m, "C")], drawn, strict=True))
     assert world.area_of  # routes are compared in area terms, as in the table

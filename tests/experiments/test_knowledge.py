@@ -7,7 +7,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gdq_pddl.analysis.knowledge import convergence_episode
 from gdq_pddl.cli import main
 from gdq_pddl.envs.evaluate import policy_value
 from gdq_pddl.envs.model import compile_model, full_state
@@ -19,8 +18,8 @@ from gdq_pddl.experiments.knowledge import (
     derived_world,
     knowledge_experiments,
     knowledge_world,
+    route_check,
 )
-from gdq_pddl.experiments.probes import route_check
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import load_world_named, make_learner, run_unit
 from gdq_pddl.learners import office_task_context
@@ -121,12 +120,6 @@ def test_knowledge_none_is_bit_identical_to_before(office):
         same = run_unit(Unit(replace(exp, knowledge="office"), method, 0))
         assert np.array_equal(same["returns"], got["returns"])
         assert Unit(replace(exp, knowledge="office"), method, 0).key == unit.key
-
-
-def test_convergence_is_first_passage_of_the_moving_average():
-    r = np.r_[np.full(20, -10.0), np.full(30, 10.0)]
-    assert convergence_episode(r, 9.0, window=10) == 30
-    assert convergence_episode(r, 11.0, window=10) is None
 
 
 def test_policy_value_of_the_optimal_first_step_policy_is_v_star(office):

@@ -13,10 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from gdq_pddl.analysis.pairs import PairRuns, differences
+from gdq_pddl.analysis.pairs import differences
 from gdq_pddl.analysis.writer import number
 from gdq_pddl.cli import main
 from gdq_pddl.experiments import pairs as pairs_module
+from gdq_pddl.experiments.pairs import PairRuns
 from gdq_pddl.world import load_world
 
 PAIRS = ("p3->p13", "p10->p0", "P1->P3")  # the last is task A, by its landmarks
