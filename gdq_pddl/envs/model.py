@@ -22,9 +22,8 @@ import numpy as np
 
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.dynamics import COST_KINDS, CostDist, Dynamics, Outcomes, split_action
-from gdq_pddl.limits import check_memory
+from gdq_pddl.limits import check_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
-from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces

@@ -17,25 +17,15 @@ give every state's shortest plans without calling a planner once per state.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from tqdm import tqdm
 
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
-
-
-def slow_progress(desc: str, unit: str, total: int | None = None,
-                  iterable: Iterable | None = None) -> tqdm:
-    """A progress bar on stderr that shows only after 2 s, and only on a terminal
-    (``TQDM_DISABLE=1`` silences it): state enumeration, models, value iteration."""
-    return tqdm(iterable, total=total, desc=desc, unit=unit, delay=2.0, disable=None,
-                leave=False)
-
 
 PAIR_BYTES = 150
 """Memory one (state, ground action) pair takes at most in the true model and the
