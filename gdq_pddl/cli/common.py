@@ -90,8 +90,8 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
     """--domain, --problem (``what`` the command does with it), --dynamics if
     ``dynamics``, and --determinisation (default None: :func:`determinisation`)."""
     named = "a file, or a shipped name (`gdq-pddl list` shows them)"
-    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
-                   "--problem names")
+    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the --problem file "
+                   "if it holds one, else the shipped domain --problem names")
     p.add_argument("--problem", help=f"a PDDL problem instead of an office task ({named}): "
                    f"{what}; FILE:NAME picks the problem NAME of a file that holds several")
     if dynamics:
