@@ -1,11 +1,15 @@
-"""Sizes checked before anything is allocated (:func:`check_memory`), and numbers checked
-before they are used (:func:`check_real`, :func:`check_count`)."""
+"""Sizes checked before anything is allocated (:func:`check_memory`), numbers checked
+before they are used (:func:`check_real`, :func:`check_count`), and progress shown on
+work that size makes slow (:func:`slow_progress`)."""
 
 from __future__ import annotations
 
 import math
 import numbers
 import os
+from collections.abc import Iterable
+
+from tqdm import tqdm
 
 try:
     import resource
@@ -112,3 +116,11 @@ def check_count(name: str, value: object, high: int = MAX_COUNT) -> None:
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or \
             not 0 <= value <= high:
         raise ConfigError(f"{name} must be a whole number in [0, {high:_}], got {value!r}")
+
+
+def slow_progress(desc: str, unit: str, total: int | None = None,
+                  iterable: Iterable | None = None) -> tqdm:
+    """A progress bar on stderr that shows only after 2 s, and only on a terminal
+    (``TQDM_DISABLE=1`` silences it): grounding, state enumeration, models, value iteration."""
+    return tqdm(iterable, total=total, desc=desc, unit=unit, delay=2.0, disable=None,
+                leave=False)

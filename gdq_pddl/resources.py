@@ -86,7 +86,10 @@ def resolve_pddl(domain: str | Path, problem: str | Path, dynamics: str | Path |
 
 
 def problem_domain(problem: Path) -> str:
-    """The domain a PDDL problem file names in its ``(:domain X)`` ("" if none)."""
+    """The domain a PDDL problem file names in its ``(:domain X)`` ("" if none), or the
+    file itself when it defines its domain too (IPPC-2008's files)."""
     text = read_text(problem, lambda src, msg: PDDLError(src, None, msg))
+    if re.search(r"\(\s*define\s*\(\s*domain\s", text, re.IGNORECASE):
+        return str(problem)
     found = re.search(r"\(:domain\s+([^\s()]+)", text, re.IGNORECASE)
     return found.group(1) if found else ""

@@ -15,6 +15,7 @@ from gdq_pddl.experiments.checks import check_report_size, check_sizes
 from gdq_pddl.experiments.protocol import safe_name
 from gdq_pddl.experiments.runner import saved_units
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
+from gdq_pddl.pddl.parser import problem_file
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.planning import get_planner
 from gdq_pddl.resources import problem_domain, resolve, resolve_pddl, shipped_names
@@ -89,8 +90,8 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
     """--domain, --problem (``what`` the command does with it), --dynamics if
     ``dynamics``, and --determinisation (default None: :func:`determinisation`)."""
     named = "a file, or a shipped name (`gdq-pddl list` shows them)"
-    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the shipped domain "
-                   "--problem names")
+    p.add_argument("--domain", help=f"a PDDL domain: {named}; default: the --problem file "
+                   "if it holds one, else the shipped domain --problem names")
     p.add_argument("--problem", help=f"a PDDL problem instead of an office task ({named}): "
                    f"{what}; FILE:NAME picks the problem NAME of a file that holds several")
     if dynamics:
@@ -106,11 +107,13 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None
                ) -> tuple[Path | None, Path | None, Path | None]:
-    """--domain, --problem and --dynamics as files (--domain: by default the problem's)."""
+    """--domain, --problem and --dynamics as files (--domain: by default the problem's:
+    the shipped one it names, or the problem file itself if it defines one)."""
     domain = args.domain
     if domain is None and args.problem is not None:
-        named = problem_domain(resolve("problem", args.problem))
-        domain = named if named in shipped_names("domain") else default_domain
+        path = resolve("problem", problem_file(args.problem)[0])
+        named = problem_domain(path)
+        domain = named if named in (*shipped_names("domain"), str(path)) else default_domain
     if domain is None or args.problem is None:
         return None, None, None
     return resolve_pddl(domain, args.problem, getattr(args, "dynamics", None))

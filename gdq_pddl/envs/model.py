@@ -22,9 +22,8 @@ import numpy as np
 
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.dynamics import COST_KINDS, CostDist, Dynamics, Outcomes, split_action
-from gdq_pddl.limits import check_memory
+from gdq_pddl.limits import check_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
-from gdq_pddl.pddl.reachable import slow_progress
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
@@ -129,17 +128,22 @@ def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_ac
     """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
     reward) with every pair that lists no outcome given one: a no-op, ``(its state, not
     stuck, reward 0)`` with probability 1 (most pairs of a large problem: filled without
-    a Python loop)."""
+    a Python loop; a bar counts the arrays filled past 2 s)."""
+    bar = slow_progress("true model", " arrays", len(fields) + 2)
     counts = np.diff(ptr)
     empty = counts == 0
     new_ptr = np.zeros_like(ptr)
     np.cumsum(np.where(empty, 1, counts), out=new_ptr[1:])
     at = np.repeat(new_ptr[:-1] - ptr[:-1], counts) + np.arange(len(prob))
+    bar.update()
     out_prob = np.ones(new_ptr[-1], dtype=np.float64)
     out_prob[at] = prob
+    bar.update()
     out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
     for field, given in zip(out, fields, strict=True):
         field[at] = given
+        bar.update()
+    bar.close()
     out[0][new_ptr[:-1][empty]] = np.flatnonzero(empty) // n_actions  # a no-op stays
     return new_ptr, out_prob, out
 

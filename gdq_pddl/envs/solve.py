@@ -30,8 +30,7 @@ from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of imp
 
 from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
-from gdq_pddl.limits import check_memory, human_bytes
-from gdq_pddl.pddl.reachable import slow_progress
+from gdq_pddl.limits import check_memory, human_bytes, slow_progress
 from gdq_pddl.world import Task, World
 
 TIE_TOLERANCE = 1e-9

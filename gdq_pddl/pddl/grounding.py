@@ -10,6 +10,7 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from functools import cached_property
 
+from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
 from gdq_pddl.pddl.parser import is_subtype
 
@@ -101,8 +102,10 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
         raise ValueError("a PPDDL domain has no single effect per action: ground it with "
                          "gdq_pddl.pddl.ppddl.ground_ppddl")
     fluent, static_tuples, by_type, typed = _index(domain, problem)
-    pending = [_instantiate(action, binding, fluent) for action in domain.actions
-               for binding in _bindings(action, static_tuples, by_type, typed, fluent)]
+    bindings = ((action, b) for action in domain.actions
+                for b in _bindings(action, static_tuples, by_type, typed, fluent))
+    pending = [_instantiate(action, b, fluent)
+               for action, b in slow_progress("grounding", " actions", iterable=bindings)]
     init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
     reached = set(init_fluents)
     live = []
@@ -123,8 +126,8 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     def m(atoms: set[str]) -> int:
         return sum(1 << index[a] for a in atoms if a in index)
 
-    ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
-                for name, pre, neg, add, dele in live)
+    ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add)) for name, pre, neg, add, dele
+                in slow_progress("grounding", " actions", len(live), live))
     static_strs = {str(a) for a in problem.init if a.predicate not in fluent}
     return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
                       fact_index=index, **goal_masks(problem, fluent, static_strs, index))

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, fields, replace
 from itertools import compress
 
 from gdq_pddl.errors import PDDLError
+from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.grounding import (
     GroundOp,
     GroundTask,
@@ -172,7 +173,7 @@ def ground_ppddl(domain: Domain, problem: Problem,
     task = ground(replace(domain, actions=tuple(every)), problem)
     by_name = {a.name: a for a in domain.actions}
     groups: dict[tuple[str, ...], dict[int, GroundOp]] = {}  # (schema, *args) -> outcome -> op
-    for op in task.ops:
+    for op in slow_progress("grounding", " actions", len(task.ops), task.ops):
         schema, *args = op.name.strip("()").split()
         base, _, k = schema.partition(_SEP)
         groups.setdefault((base, *args), {})[int(k or 0)] = op
@@ -245,6 +246,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         return None if atom.predicate in fluent else str(atom) in statics
 
     raw = []
+    bar = slow_progress("grounding", " actions")
     for action in domain.actions:
         def too_many(action: Action = action) -> PDDLError:
             return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
@@ -254,6 +256,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         whole = Junction("and", action.precondition + ((action.condition,)
                                                        if action.condition else ()))
         for b in _bindings(action, static_tuples, by_type, typed, fluent):
+            bar.update()
             pre = ground_dnf(whole, b, objects, static, too_many)
             if pre:
                 def value(term, binding, action: Action = action) -> float:
@@ -263,6 +266,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                         for o in _outcomes_of(action)]
                 args = tuple(b[p] for p, _ in action.parameters)
                 raw.append((action, args, pre, outs))
+    bar.close()
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, live = _relaxed(raw, init)
     facts = tuple(sorted(reached))
@@ -274,7 +278,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     raw = list(compress(raw, live))
     learner_names = {str(Atom(action.name, args)) for action, args, _, _ in raw}
     learner_ops, planner_ops, origin, taken = [], [], {}, set()
-    for action, args, pre, outs in raw:
+    for action, args, pre, outs in slow_progress("grounding", " actions", len(raw), raw):
         name = str(Atom(action.name, args))
         alts = [(m(p), m(n)) for p, n in pre if p <= reached]
         common_pos = common_neg = -1

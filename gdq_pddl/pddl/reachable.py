@@ -17,25 +17,15 @@ give every state's shortest plans without calling a planner once per state.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from tqdm import tqdm
 
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
-
-
-def slow_progress(desc: str, unit: str, total: int | None = None,
-                  iterable: Iterable | None = None) -> tqdm:
-    """A progress bar on stderr that shows only after 2 s, and only on a terminal
-    (``TQDM_DISABLE=1`` silences it): state enumeration, models, value iteration."""
-    return tqdm(iterable, total=total, desc=desc, unit=unit, delay=2.0, disable=None,
-                leave=False)
-
 
 PAIR_BYTES = 150
 """Memory one (state, ground action) pair takes at most in the true model and the
@@ -290,14 +280,17 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     task's graph, as rows in pair order: ``pair`` (``state * n_ops + op``), probability,
     and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
     outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
-    probabilities summed in outcome order; outcomes of probability 0 are left out."""
+    probabilities summed in outcome order; outcomes of probability 0 are left out. A bar
+    shows its steps (one per ground action, then sort, reorder, merge, order) past 2 s."""
     task, n_ops = graph.task, len(graph.task.ops)
     n_words = graph.words.shape[1]
     ops = _compiled(task, n_words)
     live = np.flatnonzero(~graph.is_goal)
     rows = graph.words[live]
     parts: list[tuple] = []
+    bar = slow_progress("true model", " steps", n_ops + 4)
     for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+        bar.update()
         at = live[op.applies(rows)]
         if not len(at):
             continue
@@ -324,8 +317,10 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     # equal keys of a pair side by side, in outcome order; each group's first row leads
     key = (pair * graph.n_states + nxt) * 2 + stuck
     order = np.lexsort((j, gain, key) if gains else (j, key))
+    bar.update()
     key, pair, j, prob, nxt, stuck, gain = (a[order] for a in (key, pair, j, prob, nxt, stuck,
                                                                gain))
+    bar.update()
     lead = np.ones(len(pair), dtype=np.bool_)
     lead[1:] = (key[1:] != key[:-1]) | (gain[1:] != gain[:-1])
     group = np.cumsum(lead) - 1
@@ -333,8 +328,11 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     place = np.arange(len(group)) - np.flatnonzero(lead)[group]
     for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
         total[group[place == r]] += prob[place == r]
+    bar.update()
     first = np.flatnonzero(lead)
     keep = first[np.lexsort((j[first], pair[first]))]
+    bar.update()
+    bar.close()
     fields = [nxt[keep], stuck[keep]] + ([gain[keep]] if gains else [])
     return pair[keep], total[group[keep]], fields
 

@@ -1,0 +1,67 @@
+"""Progress on slow work (issue 22 item 4): grounding and the true model's outcome rows
+count their steps on :func:`~gdq_pddl.limits.slow_progress` bars."""
+
+import io
+
+import pytest
+from tqdm import tqdm
+
+from gdq_pddl import limits
+from gdq_pddl.pddl.reachable import reachable_graph, reality_outcomes
+from gdq_pddl.planning.base import PlanningProblem
+
+SWITCHES = """(define (domain switches) (:requirements :typing :probabilistic-effects)
+  (:types switch) (:predicates (on ?s - switch))
+  (:action flip :parameters (?s - switch) :precondition (not (on ?s))
+    :effect (probabilistic 0.9 (on ?s))))
+"""
+
+STRIPS = SWITCHES.replace("(probabilistic 0.9 (on ?s))", "(on ?s)").replace(
+    ":probabilistic-effects", ":negative-preconditions")
+WHEN = SWITCHES.replace("(probabilistic 0.9 (on ?s))", "(when (not (on ?s)) (on ?s))")
+
+
+def switches(n: int) -> str:
+    names = " ".join(f"s{i}" for i in range(n))
+    goal = " ".join(f"(on s{i})" for i in range(n))
+    return f"(define (problem sw) (:domain switches) (:objects {names} - switch) (:init) " \
+        f"(:goal (and {goal})))"
+
+
+@pytest.fixture
+def bars(monkeypatch) -> list[tqdm]:
+    """Every bar :func:`slow_progress` makes, shown at once into a buffer (not stderr)."""
+    made: list[tqdm] = []
+
+    class Shown(tqdm):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs | {"disable": False, "delay": 0,
+                                                "file": io.StringIO()})
+            made.append(self)
+
+    monkeypatch.setattr(limits, "tqdm", Shown)
+    return made
+
+
+def counted(bars: list[tqdm], desc: str) -> list[int]:
+    return [bar.n for bar in bars if bar.desc.startswith(desc)]
+
+
+@pytest.mark.parametrize("domain, steps", [(STRIPS, [7, 7]), (SWITCHES, [14, 14, 14]),
+                                           (WHEN, [7, 7])], ids=["strips", "ppddl", "when"])
+def test_grounding_counts_every_ground_action(bars, domain, steps):
+    # bindings, then ground actions (PPDDL's plain path grounds each outcome apart, then
+    # groups them); a domain with `when` has its own grounder
+    problem = PlanningProblem.from_texts(domain, switches(7), "d.pddl", "p.pddl")
+    assert len(problem.learner_task.ops) == 7
+    assert counted(bars, "grounding") == steps
+
+
+def test_true_model_rows_count_their_steps(bars):
+    task = PlanningProblem.from_texts(SWITCHES, switches(6), "d.pddl", "p.pddl").learner_task
+    graph = reachable_graph(task)
+    bars.clear()
+    pair, _, _ = reality_outcomes(graph)
+    assert len(pair) == 2 * 6 * 2**5  # each off switch of each state: flipped or not
+    [model] = [bar for bar in bars if bar.desc.startswith("true model")]
+    assert model.n == model.total == 6 + 4  # a step per ground action, then 4 stages
