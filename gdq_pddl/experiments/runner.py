@@ -163,9 +163,8 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
                                "differs from what config.json records): resuming would mix "
                                "results of both versions; restore it, or start again in "
                                "another --out")
-    remove_temporary(out)  # what a write killed midway left
-    remove_temporary(out / "units")
-    remove_temporary(out / "learners")
+    for folder in (out, out / "units", out / "learners"):
+        remove_temporary(folder)  # what a write killed midway left
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(out / "config.json", lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
     done = [u for u in units if unit_path(out, u).exists()]

@@ -87,9 +87,7 @@ class GraphPlanner:
             return graph, [], 0
         bound = length_bound(shortest, tolerance)
         depth_of = {s0: 0}
-        layer, depth, goals = [s0], 0, []
-        if task.is_goal(s0, goal):
-            goals = [s0]
+        layer, depth, goals = [s0], 0, [s0] if task.is_goal(s0, goal) else []
         while layer and depth < bound:
             nxt = []
             for s in layer:
