@@ -130,14 +130,13 @@ def _held(out: Path) -> bool:
 
 def _difference(old: object, new: list) -> str:
     """What differs between two ``experiments`` lists of config.json, in words."""
-    if not isinstance(old, list) or len(old) != len(new):
-        return "the experiments differ"
-    for o, n in zip(old, new, strict=True):
-        if not isinstance(o, dict):
-            return "the experiments differ"
-        for key, value in n.items():
-            if o.get(key) != value:
-                return f"experiment {n.get('name')}: {key} was {o.get(key)}, now {value}"
+    if isinstance(old, list) and len(old) == len(new):
+        for o, n in zip(old, new, strict=True):
+            if not isinstance(o, dict):
+                break
+            for key, value in n.items():
+                if o.get(key) != value:
+                    return f"experiment {n.get('name')}: {key} was {o.get(key)}, now {value}"
     return "the experiments differ"
 
 

@@ -492,8 +492,9 @@ class _Effects:
             return self.scoped(node, items, inside)
         if head == "and":
             out: Branches = [(Fraction(1), ())]
-            for sub in items[1:]:
-                out = _product(out, self.effect(sub, inside))
+            for sub in items[1:]:  # independent effects: every pair of their outcomes
+                more = self.effect(sub, inside)
+                out = [(p * q, la + lb) for p, la in out for q, lb in more]
                 if len(out) > MAX_OUTCOMES:
                     raise r.fail(node.line, f"{ctx}: the effect has more than {MAX_OUTCOMES} "
                                  "outcomes (independent probabilistic effects multiply)")
@@ -607,11 +608,6 @@ class _Effects:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
         return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
-
-
-def _product(a: Branches, b: Branches) -> Branches:
-    """Two independent effects together: every pair of their outcomes."""
-    return [(p * q, la + lb) for p, la in a for q, lb in b]
 
 
 def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
