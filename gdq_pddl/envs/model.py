@@ -13,7 +13,7 @@ and one of a step (:func:`env_step`).
 from __future__ import annotations
 
 import weakref
-from collections.abc import Callable, Hashable, Iterable, Mapping
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple, TypeVar
 
@@ -180,20 +180,26 @@ class StateSpace:
     n_doors: int = 0
 
 
-def slip_outcomes(here: Hashable, there: Hashable, o: Outcomes,
-                  applicable: Mapping[int, Hashable], schema_of: list[str]) -> list:
-    """``((next, stuck), probability)`` of an applicable ground action whose effect leads
-    from ``here`` to ``there``, in the order the model lists them: its effect, the
-    stuck trial, then what the rest ``1 - success - stuck`` does (nothing, or the effect
-    of a uniformly random applicable ground action of the slip's schemas, in the order of
-    ``applicable``: ground action -> where it leads)."""
-    rest = max(0.0, 1.0 - o.success - o.stuck)
-    out = [((there, False), o.success), ((here, True), o.stuck)]
-    if isinstance(o.failure, tuple):
-        slips = [u for k, u in applicable.items() if schema_of[k] in o.failure]
-        if slips:
-            return out + [((u, False), rest / len(slips)) for u in slips]
-    return out + [((here, False), rest)]
+def slip_outcomes(here: Hashable, applicable: Mapping[int, Hashable],
+                  action_of_op: Sequence[int], outcomes: list[Outcomes],
+                  schema_of: list[str]) -> Iterator[tuple[int, list]]:
+    """Per learner action, in increasing order, that the ground actions applicable
+    ``here`` map to (``applicable``: ground action -> where its effect leads; the first of
+    them acts): ``((next, stuck), probability)`` of its outcomes, in the order the model
+    lists them: its effect, the stuck trial, then what the rest ``1 - success - stuck``
+    does (nothing, or the effect of a uniformly random applicable ground action of the
+    slip's schemas, in the order of ``applicable``)."""
+    acting: dict[int, int] = {}
+    for k in applicable:
+        acting.setdefault(action_of_op[k], k)
+    for a in sorted(acting):
+        o = outcomes[acting[a]]
+        rest = max(0.0, 1.0 - o.success - o.stuck)
+        out = [((applicable[acting[a]], False), o.success), ((here, True), o.stuck)]
+        slips = [u for k, u in applicable.items()
+                 if isinstance(o.failure, tuple) and schema_of[k] in o.failure]
+        yield a, out + ([((u, False), rest / len(slips)) for u in slips] if slips
+                        else [((here, False), rest)])
 
 
 def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes], list[str]]:
@@ -216,14 +222,9 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
 
     def rule():
         for s in range(space.n_states):
-            applicable = dict(space.edges(s))
-            acting: dict[int, int] = {}
-            for k in applicable:
-                acting.setdefault(space.action_of_op[k], k)
-            for a in sorted(acting):
-                k = acting[a]
-                yield s * n_a + a, merge_outcomes(
-                    slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
+            for a, outs in slip_outcomes(s, dict(space.edges(s)), space.action_of_op,
+                                         outcomes, schema_of):
+                yield s * n_a + a, merge_outcomes(outs)
 
     def shown(pairs):
         with slow_progress("true model", " states", space.n_states) as bar:
