@@ -108,10 +108,11 @@ def versions() -> dict[str, str]:
     return out
 
 
-def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
+def save_unit(path: Path, result: dict[str, np.ndarray], compressed: bool = False) -> None:
+    """Write the arrays ``result`` to ``path`` as an ``.npz`` file, atomically."""
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
-            np.savez(fh, **result)
+            (np.savez_compressed if compressed else np.savez)(fh, **result)
 
     atomic_write(path, write)
 
