@@ -15,7 +15,7 @@ from typing import Any
 
 from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import MAX_NUMBER
-from gdq_pddl.pddl.model import Domain, Problem
+from gdq_pddl.pddl.model import Atom, Domain, Problem
 
 COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
 """Numeric codes of cost distributions, as the compiled simulator reads them."""
@@ -172,8 +172,8 @@ class Dynamics:
 
 def split_action(name: str) -> tuple[str, tuple[str, ...]]:
     """``"(move a b)"`` -> ``("move", ("a", "b"))``."""
-    parts = name.strip("()").split()
-    return parts[0], tuple(parts[1:])
+    atom = Atom.parse(name)
+    return atom.predicate, atom.args
 
 
 def parse_dynamics(text: str, domain: Domain, problem: Problem,

@@ -826,18 +826,12 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init:
         raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
 
     def literals(pos: frozenset[str], neg: frozenset[str]) -> tuple[Literal, ...]:
-        return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
-            tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+        return tuple(Literal(Atom.parse(f), True) for f in sorted(pos)) + \
+            tuple(Literal(Atom.parse(f), False) for f in sorted(neg))
 
     common = literals(frozenset.intersection(*(p for p, _ in dnf)),
                       frozenset.intersection(*(n for _, n in dnf)))
     return common, (tuple(literals(p, n) for p, n in dnf) if len(dnf) > 1 else ())
-
-
-def _fact_atom(fact: str) -> Atom:
-    """``"(at r1)"`` -> ``Atom("at", ("r1",))`` (names have no spaces or parentheses)."""
-    name, *args = fact[1:-1].split()
-    return Atom(name, tuple(args))
 
 
 def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
