@@ -115,15 +115,6 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
-def rows_csr(n_pairs: int, pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray]
-             ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """:func:`outcome_csr` of outcome rows already merged and in pair order (``pair``:
-    the pair index of each row)."""
-    ptr = np.zeros(n_pairs + 1, dtype=np.int64)
-    np.cumsum(np.bincount(pair, minlength=n_pairs), out=ptr[1:])
-    return ptr, prob, fields
-
-
 def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
@@ -216,7 +207,8 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
     ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
     yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
-    problem's own scale), or gives them as rows (:func:`rows_csr`'s arguments)."""
+    problem's own scale), or gives them as rows already merged and in pair order
+    (``(pair index, probability, [next, stuck, reward...])`` arrays)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
@@ -232,9 +224,14 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                 bar.update(i // n_a - bar.n)
                 yield i, merged
 
-    csr = rows_csr(space.n_states * n_a, *pairs) if isinstance(pairs, tuple) else outcome_csr(
-        space.n_states * n_a, shown(rule() if pairs is None else pairs),
-        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
+    n_pairs = space.n_states * n_a
+    if isinstance(pairs, tuple):
+        row_pair, row_prob, fields = pairs
+        csr = np.zeros(n_pairs + 1, dtype=np.int64), row_prob, fields
+        np.cumsum(np.bincount(row_pair, minlength=n_pairs), out=csr[0][1:])
+    else:
+        csr = outcome_csr(n_pairs, shown(rule() if pairs is None else pairs),
+                          (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
     ptr, prob, (nxt, stuck, *gain) = with_noops(*csr, n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
