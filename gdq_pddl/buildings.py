@@ -169,13 +169,11 @@ def _corridors(b: Building, rng: np.random.Generator, n: int, n_fire: int,
     return rows
 
 
-def _door_between(b: Building, x: str, y: str, area_x: int, area_y: int) -> str:
+def _door_between(b: Building, x: str, y: str, area_x: int, area_y: int) -> None:
     """Put a door, with its two sides as new positions, between ``x`` and ``y``."""
     s1, s2 = b.add(area_x), b.add(area_y)
     b.edges += [(x, s1), (s1, s2), (s2, y)]
-    name = f"d{len(b.doors)}"
-    b.doors[name] = {"sides": (s1, s2)}
-    return name
+    b.doors[f"d{len(b.doors)}"] = {"sides": (s1, s2)}
 
 
 def _rooms(b: Building, rng: np.random.Generator, rows: list[list[str]], sizes: np.ndarray,
@@ -183,26 +181,28 @@ def _rooms(b: Building, rng: np.random.Generator, rows: list[list[str]], sizes: 
     door_sides = {s for d in b.doors.values() for s in d["sides"]}
     corridor = [p for row in rows for p in row if p not in door_sides]
     area = max(b.areas) + 1
-    for size in sizes:
+
+    def stub() -> str:
+        """A new position off a random corridor position (in its area), joined to it."""
         at = corridor[int(rng.integers(0, len(corridor)))]
-        corridor_area = next(a for a, ps in b.areas.items() if at in ps)
-        stub = b.add(corridor_area)
+        out = b.add(next(a for a, ps in b.areas.items() if at in ps))
+        b.edges.append((at, out))
+        return out
+
+    for size in sizes:
+        door_side = stub()
         room = [b.add(area) for _ in range(int(size))]
-        b.edges.append((at, stub))
-        b.edges.append((stub, room[0]))
-        b.doors[f"d{len(b.doors)}"] = {"sides": (stub, room[0])}
+        b.edges.append((door_side, room[0]))
+        b.doors[f"d{len(b.doors)}"] = {"sides": (door_side, room[0])}
         b.edges += list(zip(room, room[1:], strict=False))
         if size >= 4 and rng.random() < 0.5:
             b.edges.append((room[0], room[2]))
         b.rooms.append(room)
         area += 1
     for i in rng.permutation(len(b.rooms))[:n_second]:  # a second door to some rooms
-        room = b.rooms[i]  # (of 3 positions at least)
-        at = corridor[int(rng.integers(0, len(corridor)))]
-        corridor_area = next(a for a, ps in b.areas.items() if at in ps)
-        stub = b.add(corridor_area)
-        b.edges += [(at, stub), (stub, room[-1])]
-        b.doors[f"d{len(b.doors)}"] = {"sides": (stub, room[-1])}
+        door_side, room = stub(), b.rooms[i]  # (of 3 positions at least)
+        b.edges.append((door_side, room[-1]))
+        b.doors[f"d{len(b.doors)}"] = {"sides": (door_side, room[-1])}
     kinds = rng.choice(len(DOOR_KINDS), size=len(b.doors),
                        p=[k[3] for k in DOOR_KINDS])
     for door, kind in zip(b.doors.values(), kinds, strict=True):
@@ -260,11 +260,6 @@ def _route_doors(b: Building, graph, start: str, goal: str) -> list[str]:
     return out
 
 
-def _room_of(b: Building, p: str) -> set[str]:
-    """The positions of the room that ``p`` belongs to (empty if ``p`` is in no room)."""
-    return next((set(room) for room in b.rooms if p in room), set())
-
-
 def _tasks(b: Building, rng: np.random.Generator) -> None:
     graph = _graph(b)
     inner = [room[len(room) // 2] for room in b.rooms]
@@ -279,7 +274,8 @@ def _tasks(b: Building, rng: np.random.Generator) -> None:
     b.tasks = {"A": (far_a, far_b), "B": (far_b, far_a), "C": (third, far_a)}
     ends = {p for task in b.tasks.values() for p in task}
     for door in b.doors.values():  # the start and goal rooms' doors never jam
-        if door["stuck"] > 0 and any(_room_of(b, side) & ends for side in door["sides"]):
+        if door["stuck"] > 0 and any(ends & set(room) for room in b.rooms
+                                     if not set(room).isdisjoint(door["sides"])):
             door.update(label="easy", success=0.9, stuck=0.0)
     forced: set[str] = set()
     for start, goal in b.tasks.values():

@@ -15,7 +15,7 @@ from typing import Any
 
 from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import MAX_NUMBER
-from gdq_pddl.pddl.model import Domain, Problem
+from gdq_pddl.pddl.model import Atom, Domain, Problem
 
 COST_KINDS = {"const": 0, "uniform": 1, "normal": 2}
 """Numeric codes of cost distributions, as the compiled simulator reads them."""
@@ -172,8 +172,8 @@ class Dynamics:
 
 def split_action(name: str) -> tuple[str, tuple[str, ...]]:
     """``"(move a b)"`` -> ``("move", ("a", "b"))``."""
-    parts = name.strip("()").split()
-    return parts[0], tuple(parts[1:])
+    atom = Atom.parse(name)
+    return atom.predicate, atom.args
 
 
 def parse_dynamics(text: str, domain: Domain, problem: Problem,
@@ -199,14 +199,9 @@ class _DynamicsValidator(Checks):
         self.domain_source = domain.source
 
     def dynamics(self) -> Dynamics:
-        for key in self.raw:
-            if key not in ("dynamics", "actions"):
-                raise self.fail(key, "unknown table (expected [dynamics] and [actions.*])")
+        self.known_keys(self.raw, "", ("dynamics", "actions"), "table")
         d = self.get(self.raw, "dynamics", "dynamics", dict, {})
-        for key in d:
-            if key not in ("r_max", "step_limit", "name", "description"):
-                raise self.fail(f"dynamics.{key}", "unknown key (expected r_max, step_limit, "
-                                "name, description)")
+        self.known_keys(d, "dynamics", ("r_max", "step_limit", "name", "description"))
         r_max = self.positive(d, "r_max", "dynamics.r_max", 20.0)
         limit = self.count(d, "step_limit", "dynamics.step_limit", 20)
         actions, objects = {}, {}
@@ -237,11 +232,9 @@ class _DynamicsValidator(Checks):
                         frozenset(d))
 
     def outcomes(self, table: Mapping[str, Any], key: str, base: Outcomes) -> Outcomes:
-        for k in table:
-            if k not in ("success", "stuck", "failure", "cost", "objects"):
-                raise self.fail(f"{key}.{k}", "unknown key (expected success, stuck, failure, "
-                                "cost, objects)")
-            if self.overlay and k in OUTCOME_KEYS:
+        self.known_keys(table, key, (*OUTCOME_KEYS, "cost", "objects"))
+        for k in OUTCOME_KEYS if self.overlay else ():
+            if k in table:
                 raise self.fail(f"{key}.{k}", f"{self.domain_source} is a PPDDL domain: its "
                                 "probabilistic effects give the outcomes (a failed trial: "
                                 "an outcome that makes (stuck) true), so an overlay gives "

@@ -268,10 +268,8 @@ def as_world(world: str | Path | World | None) -> World:
 def pick_task(world: World, task: str | None, start: str | None, goal: str | None) -> Task:
     """The task to run (:meth:`World.resolve`), by default ``C`` or the world's first."""
     if task is None and start is None and goal is None:
-        if DEFAULT_TASK not in world.tasks and world.tasks:
-            task = next(iter(world.tasks))
-        else:
-            task = DEFAULT_TASK
+        task = next(iter(world.tasks)) if world.tasks and DEFAULT_TASK not in world.tasks \
+            else DEFAULT_TASK
     return world.resolve(task=task, start=start, goal=goal)
 
 

@@ -83,15 +83,8 @@ def _compile_compact(world: World) -> CompactModel:
             succ = sorted(((op_pos[id(op)], (at[(nxt & at_mask).bit_length() - 1],
                                              bool(nxt & bit & ~state)))
                            for op, nxt in task.successors(state)), key=lambda e: e[1][0])
-            applicable = dict(succ)
-            acting: dict[int, int] = {}
-            for k in applicable:
-                acting.setdefault(action_of_op[k], k)
-            for a in sorted(acting):
-                k = acting[a]
-                merged = merge_outcomes(
-                    ((*there, stuck), pr) for (there, stuck), pr in
-                    slip_outcomes(here, applicable[k], outcomes[k], applicable, schema_of))
+            for a, outs in slip_outcomes(here, dict(succ), action_of_op, outcomes, schema_of):
+                merged = merge_outcomes(((*there, stuck), pr) for (there, stuck), pr in outs)
                 if list(merged) == [(*here, False)]:
                     continue  # a no-op after all: leave the pair empty
                 yield s * n_actions + a, merged

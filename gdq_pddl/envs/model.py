@@ -13,7 +13,7 @@ and one of a step (:func:`env_step`).
 from __future__ import annotations
 
 import weakref
-from collections.abc import Callable, Hashable, Iterable, Mapping
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple, TypeVar
 
@@ -114,15 +114,6 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
-def rows_csr(n_pairs: int, pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray]
-             ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """:func:`outcome_csr` of outcome rows already merged and in pair order (``pair``:
-    the pair index of each row)."""
-    ptr = np.zeros(n_pairs + 1, dtype=np.int64)
-    np.cumsum(np.bincount(pair, minlength=n_pairs), out=ptr[1:])
-    return ptr, prob, fields
-
-
 def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
                ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
@@ -184,20 +175,26 @@ class StateSpace:
     n_doors: int = 0
 
 
-def slip_outcomes(here: Hashable, there: Hashable, o: Outcomes,
-                  applicable: Mapping[int, Hashable], schema_of: list[str]) -> list:
-    """``((next, stuck), probability)`` of an applicable ground action whose effect leads
-    from ``here`` to ``there``, in the order the model lists them: its effect, the
-    stuck trial, then what the rest ``1 - success - stuck`` does (nothing, or the effect
-    of a uniformly random applicable ground action of the slip's schemas, in the order of
-    ``applicable``: ground action -> where it leads)."""
-    rest = max(0.0, 1.0 - o.success - o.stuck)
-    out = [((there, False), o.success), ((here, True), o.stuck)]
-    if isinstance(o.failure, tuple):
-        slips = [u for k, u in applicable.items() if schema_of[k] in o.failure]
-        if slips:
-            return out + [((u, False), rest / len(slips)) for u in slips]
-    return out + [((here, False), rest)]
+def slip_outcomes(here: Hashable, applicable: Mapping[int, Hashable],
+                  action_of_op: Sequence[int], outcomes: list[Outcomes],
+                  schema_of: list[str]) -> Iterator[tuple[int, list]]:
+    """Per learner action, in increasing order, that the ground actions applicable
+    ``here`` map to (``applicable``: ground action -> where its effect leads; the first of
+    them acts): ``((next, stuck), probability)`` of its outcomes, in the order the model
+    lists them: its effect, the stuck trial, then what the rest ``1 - success - stuck``
+    does (nothing, or the effect of a uniformly random applicable ground action of the
+    slip's schemas, in the order of ``applicable``)."""
+    acting: dict[int, int] = {}
+    for k in applicable:
+        acting.setdefault(action_of_op[k], k)
+    for a in sorted(acting):
+        o = outcomes[acting[a]]
+        rest = max(0.0, 1.0 - o.success - o.stuck)
+        out = [((applicable[acting[a]], False), o.success), ((here, True), o.stuck)]
+        slips = [u for k, u in applicable.items()
+                 if isinstance(o.failure, tuple) and schema_of[k] in o.failure]
+        yield a, out + ([((u, False), rest / len(slips)) for u in slips] if slips
+                        else [((here, False), rest)])
 
 
 def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes], list[str]]:
@@ -214,20 +211,16 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
     ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
     yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
-    problem's own scale), or gives them as rows (:func:`rows_csr`'s arguments)."""
+    problem's own scale), or gives them as rows already merged and in pair order
+    (``(pair index, probability, [next, stuck, reward...])`` arrays)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     n_a = space.n_actions
 
     def rule():
         for s in range(space.n_states):
-            applicable = dict(space.edges(s))
-            acting: dict[int, int] = {}
-            for k in applicable:
-                acting.setdefault(space.action_of_op[k], k)
-            for a in sorted(acting):
-                k = acting[a]
-                yield s * n_a + a, merge_outcomes(
-                    slip_outcomes(s, applicable[k], outcomes[k], applicable, schema_of))
+            for a, outs in slip_outcomes(s, dict(space.edges(s)), space.action_of_op,
+                                         outcomes, schema_of):
+                yield s * n_a + a, merge_outcomes(outs)
 
     def shown(pairs):
         with slow_progress("true model", " states", space.n_states) as bar:
@@ -235,9 +228,14 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                 bar.update(i // n_a - bar.n)
                 yield i, merged
 
-    csr = rows_csr(space.n_states * n_a, *pairs) if isinstance(pairs, tuple) else outcome_csr(
-        space.n_states * n_a, shown(rule() if pairs is None else pairs),
-        (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
+    n_pairs = space.n_states * n_a
+    if isinstance(pairs, tuple):
+        row_pair, row_prob, fields = pairs
+        csr = np.zeros(n_pairs + 1, dtype=np.int64), row_prob, fields
+        np.cumsum(np.bincount(row_pair, minlength=n_pairs), out=csr[0][1:])
+    else:
+        csr = outcome_csr(n_pairs, shown(rule() if pairs is None else pairs),
+                          (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
     ptr, prob, (nxt, stuck, *gain) = with_noops(*csr, n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),

@@ -108,10 +108,11 @@ def versions() -> dict[str, str]:
     return out
 
 
-def save_unit(path: Path, result: dict[str, np.ndarray]) -> None:
+def save_unit(path: Path, result: dict[str, np.ndarray], compressed: bool = False) -> None:
+    """Write the arrays ``result`` to ``path`` as an ``.npz`` file, atomically."""
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as fh:
-            np.savez(fh, **result)
+            (np.savez_compressed if compressed else np.savez)(fh, **result)
 
     atomic_write(path, write)
 
@@ -130,14 +131,13 @@ def _held(out: Path) -> bool:
 
 def _difference(old: object, new: list) -> str:
     """What differs between two ``experiments`` lists of config.json, in words."""
-    if not isinstance(old, list) or len(old) != len(new):
-        return "the experiments differ"
-    for o, n in zip(old, new, strict=True):
-        if not isinstance(o, dict):
-            return "the experiments differ"
-        for key, value in n.items():
-            if o.get(key) != value:
-                return f"experiment {n.get('name')}: {key} was {o.get(key)}, now {value}"
+    if isinstance(old, list) and len(old) == len(new):
+        for o, n in zip(old, new, strict=True):
+            if not isinstance(o, dict):
+                break
+            for key, value in n.items():
+                if o.get(key) != value:
+                    return f"experiment {n.get('name')}: {key} was {o.get(key)}, now {value}"
     return "the experiments differ"
 
 
@@ -163,9 +163,8 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
                                "differs from what config.json records): resuming would mix "
                                "results of both versions; restore it, or start again in "
                                "another --out")
-    remove_temporary(out)  # what a write killed midway left
-    remove_temporary(out / "units")
-    remove_temporary(out / "learners")
+    for folder in (out, out / "units", out / "learners"):
+        remove_temporary(folder)  # what a write killed midway left
     config |= {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     atomic_write(out / "config.json", lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
     done = [u for u in units if unit_path(out, u).exists()]

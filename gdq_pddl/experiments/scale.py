@@ -187,16 +187,12 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
 def save_building(result: BuildingResult, path) -> None:
     """Write the returns and successes of every method on one building (keys
     ``returns/<method>``, ``success/<method>``) and the building's figures."""
-    arrays = {f"returns/{k}": v for k, v in result.returns.items()}
-    arrays |= {f"success/{k}": v for k, v in result.success.items()}
-
-    def write(tmp: Path) -> None:
-        with open(tmp, "wb") as fh:
-            np.savez_compressed(fh, positions=result.positions, seed=result.seed,
-                                v_ref=result.v_ref, r_fail=result.r_fail,
-                                threshold=result.threshold, **arrays)
-
-    atomic_write(Path(path), write)
+    save_unit(Path(path), {"positions": result.positions, "seed": result.seed,
+                           "v_ref": result.v_ref, "r_fail": result.r_fail,
+                           "threshold": result.threshold,
+                           **{f"returns/{k}": v for k, v in result.returns.items()},
+                           **{f"success/{k}": v for k, v in result.success.items()}},
+              compressed=True)
 
 
 def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int = 0,

@@ -17,6 +17,13 @@ class Atom:
     def __str__(self) -> str:
         return "(" + " ".join((self.predicate, *self.args)) + ")"
 
+    @classmethod
+    def parse(cls, text: str) -> Atom:
+        """``"(at r1)"`` -> ``Atom("at", ("r1",))``, the inverse of ``str`` (ground atoms
+        and action names: their names have no spaces or parentheses)."""
+        name, *args = text.strip("()").split()
+        return cls(name, tuple(args))
+
 
 @dataclass(frozen=True)
 class Literal:

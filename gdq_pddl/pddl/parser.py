@@ -492,8 +492,9 @@ class _Effects:
             return self.scoped(node, items, inside)
         if head == "and":
             out: Branches = [(Fraction(1), ())]
-            for sub in items[1:]:
-                out = _product(out, self.effect(sub, inside))
+            for sub in items[1:]:  # independent effects: every pair of their outcomes
+                more = self.effect(sub, inside)
+                out = [(p * q, la + lb) for p, la in out for q, lb in more]
                 if len(out) > MAX_OUTCOMES:
                     raise r.fail(node.line, f"{ctx}: the effect has more than {MAX_OUTCOMES} "
                                  "outcomes (independent probabilistic effects multiply)")
@@ -607,11 +608,6 @@ class _Effects:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
         return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
-
-
-def _product(a: Branches, b: Branches) -> Branches:
-    """Two independent effects together: every pair of their outcomes."""
-    return [(p * q, la + lb) for p, la in a for q, lb in b]
 
 
 def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
@@ -830,18 +826,12 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init:
         raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
 
     def literals(pos: frozenset[str], neg: frozenset[str]) -> tuple[Literal, ...]:
-        return tuple(Literal(_fact_atom(f), True) for f in sorted(pos)) + \
-            tuple(Literal(_fact_atom(f), False) for f in sorted(neg))
+        return tuple(Literal(Atom.parse(f), True) for f in sorted(pos)) + \
+            tuple(Literal(Atom.parse(f), False) for f in sorted(neg))
 
     common = literals(frozenset.intersection(*(p for p, _ in dnf)),
                       frozenset.intersection(*(n for _, n in dnf)))
     return common, (tuple(literals(p, n) for p, n in dnf) if len(dnf) > 1 else ())
-
-
-def _fact_atom(fact: str) -> Atom:
-    """``"(at r1)"`` -> ``Atom("at", ("r1",))`` (names have no spaces or parentheses)."""
-    name, *args = fact[1:-1].split()
-    return Atom(name, tuple(args))
 
 
 def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:

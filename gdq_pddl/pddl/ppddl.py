@@ -201,9 +201,9 @@ def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[flo
     by_name = {a.name: a for a in domain.actions}
     out: list[float | None] = []
     for name in names:
-        schema, *args = name.strip("()").split()
-        action = by_name[schema]
-        binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
+        atom = Atom.parse(name)
+        action = by_name[atom.predicate]
+        binding = dict(zip((p for p, _ in action.parameters), atom.args, strict=True))
         out.append(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
                        for term in action.cost) if action.cost else None)
     return out

@@ -5,7 +5,8 @@ from __future__ import annotations
 import enum
 import math
 import time
-from collections.abc import Iterator, Mapping
+import warnings
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -182,6 +183,17 @@ class PlanningProblem:
     def remember(self, key: tuple, result: PlanResult) -> PlanResult:
         self._results[key] = result
         return result
+
+    def solved(self, q: Query, planner: str, plans: Iterable[Plan], capped: bool,
+               tolerance: float, cap: int, **metrics: float) -> PlanResult:
+        """Remember and return the plans a backend found for ``q``, shortest first (then
+        by name), warning when more than ``cap`` were within ``tolerance`` (``capped``)."""
+        if capped:
+            warnings.warn(f"{planner} planner: more than {cap} plans within tolerance "
+                          f"{tolerance}; kept the first {cap}", stacklevel=3)
+        ordered = tuple(sorted(plans, key=lambda p: (len(p), p.actions)))
+        metrics = {"time_s": time.perf_counter() - q.started, **metrics, "plans": len(ordered)}
+        return self.remember(q.key, PlanResult(Status.SOLVED, ordered, planner, metrics, capped))
 
     def problem_pddl(self, start: State | None = None, goal: State | None = None) -> str:
         """PDDL text of this problem with another start state and/or goal: its objects,

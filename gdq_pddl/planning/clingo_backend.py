@@ -8,8 +8,6 @@ shortest length ``L``, then enumerates every answer set (one per plan) up to
 
 from __future__ import annotations
 
-import time
-import warnings
 from typing import Any
 
 from gdq_pddl.errors import PlanningError
@@ -19,7 +17,6 @@ from gdq_pddl.planning.base import (
     PlanningProblem,
     PlanResult,
     State,
-    Status,
     length_bound,
     no_plan,
 )
@@ -90,15 +87,8 @@ class ClingoPlanner:
         if distance is None:
             return problem.remember(key, no_plan(self.name, t0))
         found, shortest, horizons, capped = self._search(task, s0, gmask, distance, tolerance)
-        if capped:
-            warnings.warn(f"clingo planner: more than {self.max_plans} plans within tolerance "
-                          f"{tolerance}; kept the first {self.max_plans}", stacklevel=2)
-        plans = sorted((_replay(task, s0, ops) for ops in found),
-                       key=lambda p: (len(p), p.actions))
-        metrics = {"time_s": time.perf_counter() - t0, "plans": len(plans),
-                   "horizons": horizons, "length": shortest}
-        return problem.remember(key, PlanResult(Status.SOLVED, tuple(plans), self.name,
-                                                metrics, capped))
+        return problem.solved(q, self.name, (_replay(task, s0, ops) for ops in found), capped,
+                              tolerance, self.max_plans, horizons=horizons, length=shortest)
 
     def _search(self, task, s0: int, goal: tuple[int, int], distance: int,
                 tolerance: float) -> tuple[list[tuple[int, ...]], int, int, bool]:

@@ -11,8 +11,6 @@ from __future__ import annotations
 import heapq
 import itertools
 import math
-import time
-import warnings
 from functools import cache
 
 import networkx as nx
@@ -22,7 +20,6 @@ from gdq_pddl.planning.base import (
     PlanningProblem,
     PlanResult,
     State,
-    Status,
     length_bound,
     no_plan,
 )
@@ -64,14 +61,8 @@ class GraphPlanner:
         else:
             paths = _bounded_paths(graph, s0, length_bound(depth, tolerance))
         plans, capped = self._expand(task, graph, paths)
-        if capped:
-            warnings.warn(f"graph planner: more than {self.max_plans} plans within tolerance "
-                          f"{tolerance}; kept the first {self.max_plans}", stacklevel=2)
-        plans.sort(key=lambda p: (len(p), p.actions))
-        metrics = {"time_s": time.perf_counter() - t0, "states": graph.number_of_nodes() - 1,
-                   "generated": self._generated, "plans": len(plans)}
-        return problem.remember(key, PlanResult(Status.SOLVED, tuple(plans), self.name,
-                                                metrics, capped))
+        return problem.solved(q, self.name, plans, capped, tolerance, self.max_plans,
+                              states=graph.number_of_nodes() - 1, generated=self._generated)
 
     def _explore(self, problem: PlanningProblem, s0: int, goal: tuple[int, int],
                  tolerance: float) -> tuple[nx.DiGraph, list[int], int]:
@@ -87,9 +78,7 @@ class GraphPlanner:
             return graph, [], 0
         bound = length_bound(shortest, tolerance)
         depth_of = {s0: 0}
-        layer, depth, goals = [s0], 0, []
-        if task.is_goal(s0, goal):
-            goals = [s0]
+        layer, depth, goals = [s0], 0, [s0] if task.is_goal(s0, goal) else []
         while layer and depth < bound:
             nxt = []
             for s in layer:

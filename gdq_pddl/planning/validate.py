@@ -8,6 +8,7 @@ import weakref
 from typing import TYPE_CHECKING, Any
 
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.pddl.model import Atom
 from gdq_pddl.planning.base import Plan, PlanningProblem, State, replay
 
 if TYPE_CHECKING:
@@ -51,16 +52,10 @@ def base_up_problem(problem: PlanningProblem) -> UPProblem:
     return parsed
 
 
-def _split(atom: str) -> tuple[str, list[str]]:
-    """``"(at p0)"`` -> ``("at", ["p0"])``."""
-    name, *args = atom.strip("()").split()
-    return name, args
-
-
 def _atom(up: UPProblem, atom: str) -> Any:
-    name, args = _split(atom)
+    parsed = Atom.parse(atom)
     try:
-        return up.fluent(name)(*(up.object(a) for a in args))
+        return up.fluent(parsed.predicate)(*(up.object(a) for a in parsed.args))
     except Exception:
         raise PlanningError(f"unified-planning does not know the atom {atom}") from None
 
@@ -97,9 +92,10 @@ def _up_plan(up: UPProblem, actions: tuple[str, ...]) -> Any:
 
     steps = []
     for i, action in enumerate(actions):
-        name, args = _split(action)
+        parsed = Atom.parse(action)
         try:
-            steps.append(ActionInstance(up.action(name), tuple(up.object(a) for a in args)))
+            steps.append(ActionInstance(up.action(parsed.predicate),
+                                        tuple(up.object(a) for a in parsed.args)))
         except Exception as exc:
             raise PlanningError(f"step {i + 1} of the plan, {action}, is not an action of "
                                 f"domain {up.name}: {exc}") from None
