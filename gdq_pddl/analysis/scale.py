@@ -14,55 +14,21 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
 
 from gdq_pddl.analysis.figures import method_colour, save_all
-from gdq_pddl.analysis.stats import mean_se
 from gdq_pddl.analysis.writer import render, table_text
+from gdq_pddl.experiments import scale
 from gdq_pddl.experiments.results import order_methods
-from gdq_pddl.experiments.scale import FIRST, FRACTION, TOLERANCE, WINDOW, BuildingResult
+from gdq_pddl.experiments.scale import BuildingResult, convergence, paired_difference, steps_per_s
 from gdq_pddl.outputs import write_text
 
 REFERENCE = "GDQ"  # the method every other one is compared with, run by run
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")  # a building seed's, in every panel
 
 
-def by_size(results: list[BuildingResult]) -> dict[int, list[BuildingResult]]:
-    """The buildings of each size, sizes and seeds in the order they were run."""
-    out: dict[int, list[BuildingResult]] = {}
-    for r in results:
-        out.setdefault(r.positions, []).append(r)
-    return out
-
-
-def convergence(group: list[BuildingResult], name: str) -> tuple[float | None, int, int]:
-    """Median episodes to convergence over the converged runs of ``name`` on the buildings
-    of ``group``, how many converged and how many runs there were."""
-    runs = [c for r in group for c in r.converged(name)]
-    done = [c for c in runs if c is not None]
-    return (float(np.median(done)) if done else None), len(done), len(runs)
-
-
-def first_means(group: list[BuildingResult], name: str) -> np.ndarray:
-    """Every run's mean return over its first episodes, building after building."""
-    return np.concatenate([r.first_mean(name) for r in group])
-
-
-def steps_per_s(group: list[BuildingResult], name: str) -> float:
-    """Env steps/s of ``name`` on ``group``: all its runs' steps over their wall time."""
-    wall = sum(r.wall_s[name] for r in group)
-    return sum(r.steps[name] for r in group) / wall if wall > 0 else float("nan")
-
-
-def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[float, float]:
-    """Mean and standard error of ``a`` minus ``b`` in each run's mean return over its
-    first episodes, run ``r`` against run ``r`` of the same building (same seeds)."""
-    mean, se = mean_se(first_means(group, a) - first_means(group, b))
-    return float(mean), float(se)
-
-
 def paired_interval(r: BuildingResult, name: str) -> tuple[float, float]:
     """:func:`paired_difference` of :data:`REFERENCE` minus ``name`` on one building, with
     the half-width of its 95% t-interval over the runs (0 with one run)."""
     mean, se = paired_difference([r], REFERENCE, name)
-    n = len(first_means([r], name))
+    n = len(r.returns[name])
     return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
 
 
@@ -74,18 +40,15 @@ def _names(results: list[BuildingResult]) -> tuple[list[str], list[str]]:
 
 def _first_label(episodes: int) -> str:
     """What the early-learning measure averages over, in a run of ``episodes``."""
-    return f"first {FIRST} episodes" if episodes > FIRST else f"{episodes} episodes (all)"
+    first = scale.FIRST
+    return f"first {first} episodes" if episodes > first else f"{episodes} episodes (all)"
 
 
 def make_scale_report(results: list[BuildingResult], runs: int, episodes: int, out: Path
                       ) -> list[Path]:
     """``scale.png``, ``scale.pdf`` and ``REPORT.md`` in ``out``; returns the paths."""
-    return [*figure(results, episodes, out), report(results, runs, episodes, out)]
-
-
-def figure(results: list[BuildingResult], episodes: int, out: Path) -> list[Path]:
-    """:func:`draw` saved as ``out/scale.png`` and ``out/scale.pdf``; returns the paths."""
-    return save_all(draw(results, episodes), out, "scale")
+    return [*save_all(draw(results, episodes), out, "scale"),
+            report(results, runs, episodes, out)]
 
 
 def draw(results: list[BuildingResult], episodes: int) -> Figure:
@@ -93,7 +56,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
     the first episodes (when GDQ ran) and env steps/s against size; each building its own
     marker, a line through each size's value over all its buildings."""
     names, others = _names(results)
-    sizes = by_size(results)
+    sizes = scale.by_size(results)
     seeds = list(dict.fromkeys(r.seed for r in results))
     fig = Figure(figsize=(15 if others else 10, 4.6))
     axes = fig.subplots(1, 3 if others else 2)
@@ -156,7 +119,7 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
     seeds = list(dict.fromkeys(r.seed for r in results))
     first = _first_label(episodes)
     groups = []
-    for n, group in by_size(results).items():
+    for n, group in scale.by_size(results).items():
         groups += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
         groups += [(f"**{n} / all {len(group)}**", group)] if len(group) > 1 else []
 
@@ -178,7 +141,7 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
         "positions / building", "doors", "learner states x actions", "L", "step limit",
         "r_max", "V_ref", "R_fail", "threshold", "plan tables (s)"])
     tables = {"conv": table(names, conv), "diff": table(others, diff) if others else "",
-              "first": table(names, lambda g, m: f"{first_means(g, m).mean():.1f}"),
+              "first": table(names, lambda g, m: f"{scale.first_means(g, m).mean():.1f}"),
               "all": table(names, lambda g, m: format(np.concatenate(
                   [r.returns[m].mean(axis=1) for r in g]).mean(), ".1f")),
               "success": table(names, lambda g, m: format(np.mean(
@@ -186,7 +149,8 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
               "speed": table(names, lambda g, m: f"{steps_per_s(g, m):,.0f}")}
     path = out / "REPORT.md"
     write_text(path, render("scale.md.j2", seeds=seeds, runs=runs, episodes=episodes,
-                            window=WINDOW, fraction=FRACTION, tolerance=f"{1 + TOLERANCE:g}",
+                            window=scale.WINDOW, fraction=scale.FRACTION,
+                            tolerance=f"{1 + scale.TOLERANCE:g}",
                             first=first, reference=REFERENCE, buildings=buildings,
                             tables=tables))
     return path

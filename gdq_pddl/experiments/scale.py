@@ -22,6 +22,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from itertools import groupby
 from pathlib import Path
 
 import numpy as np
@@ -96,19 +97,6 @@ class BuildingResult:
         """The moving average at which a run has converged (:func:`converged_at`)."""
         return self.r_fail + FRACTION * (self.v_ref - self.r_fail)
 
-    def steps_per_s(self, name: str) -> float:
-        """Env steps/s of ``name``: its runs' steps over their wall time."""
-        wall = self.wall_s[name]
-        return self.steps[name] / wall if wall > 0 else float("nan")
-
-    def converged(self, name: str) -> list[int | None]:
-        """Episodes to convergence of each run of ``name``."""
-        return [converged_at(r, self.threshold) for r in self.returns[name]]
-
-    def first_mean(self, name: str) -> np.ndarray:
-        """Each run's mean return over its first :data:`FIRST` episodes."""
-        return self.returns[name][:, :FIRST].mean(axis=1)
-
 
 def building_name(positions: int, seed: int) -> str:
     """``building-N-sS``: the name :func:`gdq_pddl.buildings.generate` gives a building."""
@@ -123,6 +111,38 @@ def converged_at(returns: np.ndarray, threshold: float, window: int = WINDOW) ->
     avg = np.convolve(returns, np.ones(window) / window, mode="valid")
     hit = np.flatnonzero(avg >= threshold)
     return int(hit[0] + window) if len(hit) else None
+
+
+def by_size(results: list[BuildingResult]) -> dict[int, list[BuildingResult]]:
+    """The buildings of each size, as :func:`run_scale` returns them (by size, then seed)."""
+    return {n: list(group) for n, group in groupby(results, key=lambda r: r.positions)}
+
+
+def convergence(group: list[BuildingResult], name: str) -> tuple[float | None, int, int]:
+    """Median episodes to convergence over the converged runs of ``name`` on the buildings
+    of ``group``, how many converged and how many runs there were."""
+    runs = [converged_at(x, r.threshold) for r in group for x in r.returns[name]]
+    done = [c for c in runs if c is not None]
+    return (float(np.median(done)) if done else None), len(done), len(runs)
+
+
+def first_means(group: list[BuildingResult], name: str) -> np.ndarray:
+    """Every run's mean return over its first :data:`FIRST` episodes, building by building."""
+    return np.concatenate([r.returns[name][:, :FIRST].mean(axis=1) for r in group])
+
+
+def steps_per_s(group: list[BuildingResult], name: str) -> float:
+    """Env steps/s of ``name`` on ``group``: all its runs' steps over their wall time."""
+    wall = sum(r.wall_s[name] for r in group)
+    return sum(r.steps[name] for r in group) / wall if wall > 0 else float("nan")
+
+
+def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[float, float]:
+    """Mean and standard error of ``a`` minus ``b`` in each run's :func:`first_means`, run
+    ``r`` against run ``r`` of the same building (same seeds); standard error 0 with one run."""
+    diff = first_means(group, a) - first_means(group, b)
+    se = diff.std(ddof=1) / np.sqrt(diff.size) if diff.size > 1 else 0.0
+    return float(diff.mean()), float(se)
 
 
 def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
@@ -179,8 +199,9 @@ def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str
         out.steps[name] = sum(int(u["steps"]) for u in done)
         out.wall_s[name] = sum(float(u["wall_s"]) for u in done)
         out.table_mb[name] = float(done[-1]["table_mb"])
-        log(f"  {name}: {out.steps_per_s(name):,.0f} steps/s, tables "
-            f"{out.table_mb[name]:,.0f} MB, converged at {out.converged(name)}")
+        log(f"  {name}: {steps_per_s([out], name):,.0f} steps/s, tables "
+            f"{out.table_mb[name]:,.0f} MB, converged at "
+            f"{[converged_at(x, out.threshold) for x in out.returns[name]]}")
     return out
 
 

@@ -197,16 +197,17 @@ def test_compact_runner_is_bit_identical_to_the_office_runner(method, config):
 
 
 def test_learning_smoke_on_100_positions(tmp_path):
-    from gdq_pddl.analysis.scale import figure, report
-    from gdq_pddl.experiments.scale import converged_at, run_scale, save_building
+    from gdq_pddl.analysis.scale import make_scale_report
+    from gdq_pddl.experiments.scale import converged_at, run_scale, save_building, steps_per_s
 
     [result] = run_scale(tmp_path / "scale", [100], 1, 60, buildings=1,
                          methods=["DARLING", "Q-learning"], progress=False, log=lambda *a: None)
     assert set(result.returns) == {"DARLING", "Q-learning"}
-    assert all(result.steps_per_s(m) > 0 for m in result.returns)
+    assert all(steps_per_s([result], m) > 0 for m in result.returns)
     assert result.returns["DARLING"].shape == (1, 60)
-    assert len(figure([result], 60, tmp_path)) == 2
-    assert "| 100 / seed 0 | 12 |" in report([result], 1, 60, tmp_path).read_text()
+    paths = make_scale_report([result], 1, 60, tmp_path)
+    assert [p.name for p in paths] == ["scale.png", "scale.pdf", "REPORT.md"]
+    assert "| 100 / seed 0 | 12 |" in paths[-1].read_text()
     save_building(result, tmp_path / "building-100-s0.npz")
     saved = np.load(tmp_path / "building-100-s0.npz")
     assert np.array_equal(saved["returns/DARLING"], result.returns["DARLING"])
@@ -239,7 +240,8 @@ def _runs(first: float, rest: float, episodes: int = 400) -> list[float]:
 
 
 def test_scale_report_gives_each_building_and_each_size_over_its_buildings(tmp_path):
-    from gdq_pddl.analysis.scale import MARKERS, convergence, draw, paired_difference, report
+    from gdq_pddl.analysis.scale import MARKERS, draw, report
+    from gdq_pddl.experiments.scale import convergence, paired_difference
 
     # GDQ converges at 50 (every run), DARLING at 343 on seed 0 only (after 300 episodes
     # of -39, 43 of 13 lift the 50-episode average over 5.1), Q-learning never.
@@ -314,7 +316,7 @@ def _interrupt_after(monkeypatch, k: int) -> list:
 
 def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypatch):
     from gdq_pddl.experiments.runner import RunInterrupted
-    from gdq_pddl.experiments.scale import run_scale
+    from gdq_pddl.experiments.scale import run_scale, steps_per_s
 
     fresh = run_scale(tmp_path / "fresh", **SMALL, **QUIET)
     assert [(r.positions, r.seed) for r in fresh] == [(40, 0), (40, 1)]
@@ -337,7 +339,7 @@ def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypa
             assert np.array_equal(r.success[name], f.success[name])
             saved = [np.load(units / f"{name}-{run}.npz") for run in range(2)]
             steps = sum(int(u["steps"]) for u in saved)
-            assert r.steps_per_s(name) == steps / sum(float(u["wall_s"]) for u in saved)
+            assert steps_per_s([r], name) == steps / sum(float(u["wall_s"]) for u in saved)
         a, b = np.load(cut / f"{r.name}.npz"), np.load(tmp_path / "fresh" / f"{r.name}.npz")
         assert sorted(a.files) == sorted(b.files)
         for key in a.files:
