@@ -8,7 +8,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-import scipy.stats as sps
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import NullFormatter
@@ -17,22 +16,13 @@ from gdq_pddl.analysis.figures import method_colour, save_all
 from gdq_pddl.analysis.writer import render, table_text
 from gdq_pddl.experiments import scale
 from gdq_pddl.experiments.results import order_methods
-from gdq_pddl.experiments.scale import BuildingResult, convergence, paired_difference, steps_per_s
 from gdq_pddl.outputs import write_text
 
 REFERENCE = "GDQ"  # the method every other one is compared with, run by run
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")  # a building seed's, in every panel
 
 
-def paired_interval(r: BuildingResult, name: str) -> tuple[float, float]:
-    """:func:`paired_difference` of :data:`REFERENCE` minus ``name`` on one building, with
-    the half-width of its 95% t-interval over the runs (0 with one run)."""
-    mean, se = paired_difference([r], REFERENCE, name)
-    n = len(r.returns[name])
-    return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
-
-
-def _names(results: list[BuildingResult]) -> tuple[list[str], list[str]]:
+def _names(results: list[scale.BuildingResult]) -> tuple[list[str], list[str]]:
     """Every method, and those compared with :data:`REFERENCE` (none when it did not run)."""
     names = order_methods(n for r in results for n in r.returns)
     return names, [n for n in names if n != REFERENCE] if REFERENCE in names else []
@@ -44,14 +34,14 @@ def _first_label(episodes: int) -> str:
     return f"first {first} episodes" if episodes > first else f"{episodes} episodes (all)"
 
 
-def make_scale_report(results: list[BuildingResult], runs: int, episodes: int, out: Path
+def make_scale_report(results: list[scale.BuildingResult], runs: int, episodes: int, out: Path
                       ) -> list[Path]:
     """``scale.png``, ``scale.pdf`` and ``REPORT.md`` in ``out``; returns the paths."""
     return [*save_all(draw(results, episodes), out, "scale"),
             report(results, runs, episodes, out)]
 
 
-def draw(results: list[BuildingResult], episodes: int) -> Figure:
+def draw(results: list[scale.BuildingResult], episodes: int) -> Figure:
     """The figure: episodes to convergence, GDQ minus each other method in mean return over
     the first episodes (when GDQ ran) and env steps/s against size; each building its own
     marker, a line through each size's value over all its buildings."""
@@ -81,13 +71,14 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
                   "-", color=colour, lw=1.2, label=name)
 
     for i, name in enumerate(names):
-        panel(ax, name, i, len(names), lambda r, m=name: (convergence([r], m)[0], None),
-              lambda g, m=name: convergence(g, m)[0], open_at=episodes * (1.04 + 0.025 * i))
-        panel(bx, name, i, len(names), lambda r, m=name: (steps_per_s([r], m), None),
-              lambda g, m=name: steps_per_s(g, m))
+        panel(ax, name, i, len(names), lambda r, m=name: (scale.convergence([r], m)[0], None),
+              lambda g, m=name: scale.convergence(g, m)[0], open_at=episodes * (1.04 + 0.025 * i))
+        panel(bx, name, i, len(names), lambda r, m=name: (scale.steps_per_s([r], m), None),
+              lambda g, m=name: scale.steps_per_s(g, m))
     for j, name in enumerate(others):
-        panel(axes[1], name, j, len(others), lambda r, m=name: paired_interval(r, m),
-              lambda g, m=name: paired_difference(g, REFERENCE, m)[0])
+        panel(axes[1], name, j, len(others),
+              lambda r, m=name: scale.paired_interval(r, REFERENCE, m),
+              lambda g, m=name: scale.paired_difference(g, REFERENCE, m)[0])
     ax.axhline(episodes, color="grey", lw=0.5, ls="--")
     ax.set_ylim(bottom=0, top=episodes * (1.08 + 0.025 * len(names)))
     ax.set(xscale="log", xlabel="positions", ylabel="episodes to convergence",
@@ -112,7 +103,7 @@ def draw(results: list[BuildingResult], episodes: int) -> Figure:
     return fig
 
 
-def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -> Path:
+def report(results: list[scale.BuildingResult], runs: int, episodes: int, out: Path) -> Path:
     """REPORT.md: the definitions, the buildings, and a table per measure (a row per
     building and, in bold, per size over all its buildings; a column per method)."""
     names, others = _names(results)
@@ -123,16 +114,16 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
         groups += [(f"{r.positions} / seed {r.seed}", [r]) for r in group]
         groups += [(f"**{n} / all {len(group)}**", group)] if len(group) > 1 else []
 
-    def table(columns: list[str], cell: Callable[[list[BuildingResult], str], str]) -> str:
+    def table(columns: list[str], cell: Callable[[list[scale.BuildingResult], str], str]) -> str:
         return table_text([[label, *(cell(g, c) for c in columns)] for label, g in groups],
                           ["positions / building", *columns])
 
-    def conv(group: list[BuildingResult], name: str) -> str:
-        med, n, total = convergence(group, name)
+    def conv(group: list[scale.BuildingResult], name: str) -> str:
+        med, n, total = scale.convergence(group, name)
         return f"{med:.0f} ({n}/{total})" if med is not None else f"> {episodes} (0/{total})"
 
-    def diff(group: list[BuildingResult], name: str) -> str:
-        return "{:+.1f} ± {:.1f}".format(*paired_difference(group, REFERENCE, name))
+    def diff(group: list[scale.BuildingResult], name: str) -> str:
+        return "{:+.1f} ± {:.1f}".format(*scale.paired_difference(group, REFERENCE, name))
 
     buildings = table_text([[
         f"{r.positions} / seed {r.seed}", r.doors, f"{r.n_states} x {r.n_actions}",
@@ -146,7 +137,7 @@ def report(results: list[BuildingResult], runs: int, episodes: int, out: Path) -
                   [r.returns[m].mean(axis=1) for r in g]).mean(), ".1f")),
               "success": table(names, lambda g, m: format(np.mean(
                   [r.success[m][:, -100:].mean() for r in g]), ".2f")),
-              "speed": table(names, lambda g, m: f"{steps_per_s(g, m):,.0f}")}
+              "speed": table(names, lambda g, m: f"{scale.steps_per_s(g, m):,.0f}")}
     path = out / "REPORT.md"
     write_text(path, render("scale.md.j2", seeds=seeds, runs=runs, episodes=episodes,
                             window=scale.WINDOW, fraction=scale.FRACTION,

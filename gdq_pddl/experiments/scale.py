@@ -26,6 +26,7 @@ from itertools import groupby
 from pathlib import Path
 
 import numpy as np
+import scipy.stats as sps
 from tqdm import tqdm
 
 from gdq_pddl.buildings import building_world, generate
@@ -143,6 +144,14 @@ def paired_difference(group: list[BuildingResult], a: str, b: str) -> tuple[floa
     diff = first_means(group, a) - first_means(group, b)
     se = diff.std(ddof=1) / np.sqrt(diff.size) if diff.size > 1 else 0.0
     return float(diff.mean()), float(se)
+
+
+def paired_interval(r: BuildingResult, a: str, b: str) -> tuple[float, float]:
+    """:func:`paired_difference` of ``a`` minus ``b`` on one building, with the half-width
+    of its 95% t-interval over the runs (0 with one run)."""
+    mean, se = paired_difference([r], a, b)
+    n = len(r.returns[b])
+    return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
 
 
 def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
