@@ -44,9 +44,7 @@ x standard error."""
 
 def method_colour(method: str) -> str:
     """The colour of ``method`` in every figure (unknown methods: a stable extra colour)."""
-    if method in METHOD_COLOURS:
-        return METHOD_COLOURS[method]
-    return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
+    return METHOD_COLOURS.get(method, _EXTRA[sum(map(ord, method)) % len(_EXTRA)])
 
 
 @dataclass(frozen=True)
@@ -98,18 +96,22 @@ def grid(n: int, width: float = 5.0, height: float = 3.6, max_cols: int = 2,
     return fig, flat[:n]
 
 
-def _bands(ax: Axes, study: Study, exp: str, window: int, task: str | None = None,
-           scale: float = 1.0, markers: bool = False
+def _bands(ax: Axes, study: Study, exp: str, window: int, title: str, task: str | None = None,
+           scale: float = 1.0, markers: bool = False, xlabel: str = "episode",
+           ylabel: str = "return (cumulative reward)"
            ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per method: each run's return curve smoothed by a trailing average, then their mean
     over runs with its 95% t-interval (:data:`INTERVAL`; ``markers``: also a dot per
-    episode); returns (x, low, high) per method."""
+    episode), in a gridded panel titled ``title``; returns (x, low, high) per method."""
+    ax.set_title(title, fontsize=10)
+    ax.set(xlabel=xlabel, ylabel=ylabel)
+    ax.grid(alpha=0.3)
     out = []
     for method in study.methods(exp):
         matrix = study.matrix("return", exp, method, task) / scale
         if not matrix.size:
             continue
-        n, x = matrix.shape[0], study.episode_numbers(exp, method, task)
+        n, x = matrix.shape[0], np.unique(study.rows(exp, method, task)["episode"])
         smooth = moving_average(matrix, window, full_only=False) if window > 1 else matrix
         mean, se = mean_se(smooth)
         se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
@@ -140,15 +142,13 @@ def learning_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOpt
     fig, axes = grid(len(tasks))
     for ax, task in zip(axes, tasks, strict=True):
         v_star = study.v_star(exp, task)
-        _bands(ax, study, exp, opts.window, task, v_star if fraction_of_vstar else 1.0)
+        _bands(ax, study, exp, opts.window, _task_title(study, exp, task), task,
+               v_star if fraction_of_vstar else 1.0,
+               ylabel="return / V*" if fraction_of_vstar else "return (cumulative reward)")
         ref = 1.0 if fraction_of_vstar else v_star
         if not math.isnan(ref):
             ax.axhline(ref, color="black", ls="--", lw=0.8,
                        label="V*" if not fraction_of_vstar else "V* (= 1)")
-        ax.set_title(_task_title(study, exp, task), fontsize=10)
-        ax.set(xlabel="episode",
-               ylabel="return / V*" if fraction_of_vstar else "return (cumulative reward)")
-        ax.grid(alpha=0.3)
         if fraction_of_vstar:
             ax.set_ylim(-0.1, 1.1)
     axes[0].legend(fontsize=7, loc="lower right")
@@ -175,8 +175,10 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     for k, exp in enumerate(exps):
         switch = study.switch_episode(exp)
         for ax, zoom in ((axes[k], False), (axes[len(exps) + k], True)):
+            what = f"first {opts.after_switch} episodes after the switch" if zoom else \
+                f"task {' -> '.join(study.tasks(exp))}"
             seen = []
-            for x, low, high in _bands(ax, study, exp, opts.window):
+            for x, low, high in _bands(ax, study, exp, opts.window, f"{exp}: {what}"):
                 if zoom and switch is not None:
                     near = (x >= switch - 50) & (x <= switch + opts.after_switch)
                     seen += [np.nanmin(low[near]), np.nanmax(high[near])]
@@ -186,11 +188,6 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
                     ax.set_xlim(switch - 50, switch + opts.after_switch)
                     pad = 0.05 * (max(seen) - min(seen)) if seen else 0.0
                     ax.set_ylim(min(seen) - pad, max(seen) + pad) if seen else None
-            what = f"first {opts.after_switch} episodes after the switch" if zoom else \
-                f"task {' -> '.join(study.tasks(exp))}"
-            ax.set_title(f"{exp}: {what}", fontsize=10)
-            ax.set(xlabel="episode", ylabel="return (cumulative reward)")
-            ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
                  fontsize=11)
@@ -276,14 +273,12 @@ def robot_returns(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
     fig = Figure(figsize=(6.0, 3.8), layout="constrained")
     ax = fig.subplots()
     tasks = study.tasks(exp)
-    _bands(ax, study, exp, window=1, markers=True)
+    _bands(ax, study, exp, 1, f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
+           "(unsmoothed)", markers=True, xlabel="trial",
+           ylabel="return (cumulative reward) per trial")
     if len(tasks) == 1:
         ax.axhline(study.v_star(exp, tasks[0]), color="black", ls="--", lw=0.8,
                    label="V*")
-    ax.set(xlabel="trial", ylabel="return (cumulative reward) per trial")
-    ax.set_title(f"robot protocol, task {', '.join(tasks)}: mean, {INTERVAL} "
-                 "(unsmoothed)", fontsize=10)
-    ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     return save_all(fig, out_dir, "robot_returns", opts)
 
@@ -298,10 +293,9 @@ def make_figures(out_dir: str | Path, opts: FigureOptions = FigureOptions(),
         (learning_curves, {}), (learning_curves, {"fraction_of_vstar": True})]
     jobs += [(learning_curves, {"experiment": exp}) for exp in study.uncovered]
     jobs += [(switch_curves, {}), (visit_heatmaps, {}), (task_routes, {})]
-    if study.has(ROBOT_EXPERIMENT):
-        tasks = study.tasks(ROBOT_EXPERIMENT)
-        if tasks:
-            jobs.append((task_routes, {"experiment": ROBOT_EXPERIMENT, "task": tasks[-1]}))
+    if study.has(ROBOT_EXPERIMENT):  # its routes on its last task
+        jobs.append((task_routes, {"experiment": ROBOT_EXPERIMENT,
+                                   "task": study.tasks(ROBOT_EXPERIMENT)[-1]}))
     jobs.append((robot_returns, {}))
     return [path for paths in _draw(jobs, study, target, opts) for path in paths]
 
@@ -328,6 +322,5 @@ def _draw(jobs: list, study: Study, target: Path, opts: FigureOptions) -> list[l
 
 
 def _draw_one(i: int) -> list[Path]:
-    jobs, study, target, opts = _JOBS
-    job, kw = jobs[i]
-    return job(study, target, opts, **kw)
+    job, kw = _JOBS[0][i]
+    return job(*_JOBS[1:], **kw)

@@ -55,9 +55,6 @@ class Differences:
     high: np.ndarray
     outcome: np.ndarray
 
-    def interval(self, i: int) -> str:
-        return f"[{number(self.low[i], sign=True)}, {number(self.high[i], sign=True)}]"
-
 
 def differences(res: PairRuns, baseline: str) -> Differences:
     """Paired differences ``reference - baseline`` on every pair."""

@@ -348,8 +348,7 @@ BEST_ROUTE_C = (1, 3, 2, 6)
 def write_route_c(w: Writer) -> None:
     """Task C route finding: final greedy routes and behavioural convergence to the
 paper's best route."""
-    study, opts = w.study, w.opts
-    exp = TASKS_EXPERIMENT
+    study, opts, exp = w.study, w.opts, TASKS_EXPERIMENT
     if not w.section("Task C: route finding",
                      study.has(exp) and "C" in study.tasks(exp),
                      "Task C routes", "Task C is not in the tasks experiment"):
@@ -385,8 +384,7 @@ paper's best route."""
 def write_variants(w: Writer) -> None:
     """GDQ against the two readings of the paper's GDQ (GDQ-literal, GDQ-code), task by
 task."""
-    study = w.study
-    exp = TASKS_EXPERIMENT
+    study, exp = w.study, TASKS_EXPERIMENT
     methods = study.methods(exp) if study.has(exp) else []
     others = [m for m in ("GDQ-literal", "GDQ-code") if m in methods]
     if not w.section("GDQ vs the paper read literally (GDQ-literal) and the authors' code "
@@ -414,8 +412,7 @@ task."""
 def write_why_gdq_fails(w: Writer) -> None:
     """Measured evidence for the literal reading's failure: Q right after OptInit and
     how episodes end."""
-    study = w.study
-    exp = TASKS_EXPERIMENT
+    study, exp = w.study, TASKS_EXPERIMENT
     if not w.section("Why the paper's GDQ read literally fails here",
                      study.has(exp) and bool(set(GDQ_VARIANTS) & set(study.methods(exp))),
                      "Why GDQ-literal fails", "the tasks experiment has no GDQ runs"):
@@ -447,15 +444,14 @@ def write_why_gdq_fails(w: Writer) -> None:
                   literal=pct(timeout), code=pct(shares.get("GDQ-code", math.nan)),
                   gdq=pct(shares.get("GDQ", math.nan))), "")
 
+
 def write_robot(w: Writer) -> None:
     """The robot protocol (simulated): returns, first successes and routes per trial."""
-    study, opts = w.study, w.opts
-    exp = ROBOT_EXPERIMENT
+    study, opts, exp = w.study, w.opts, ROBOT_EXPERIMENT
     if not w.section("Robot protocol (simulated)", study.has(exp), "Robot protocol",
                      "the robot experiment is missing"):
         return
-    tasks = study.tasks(exp)
-    task = tasks[-1]
+    task = study.tasks(exp)[-1]
     world = study.world(exp)
     truth = study.truth(exp, task)
     w.figure("robot_returns", "robot protocol, return per trial")

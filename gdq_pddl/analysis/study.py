@@ -139,11 +139,6 @@ class Study:
     def returns(self, experiment: str, method: str, task: str | None = None) -> np.ndarray:
         return self.matrix("return", experiment, method, task)
 
-    def episode_numbers(self, experiment: str, method: str, task: str | None = None
-                        ) -> np.ndarray:
-        """The episode numbers (columns) of :meth:`matrix` for the same slice."""
-        return np.unique(self.rows(experiment, method, task)["episode"].to_numpy())
-
     @cached_property
     def area_columns(self) -> list[str]:
         return area_columns(self.results.columns)

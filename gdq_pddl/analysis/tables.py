@@ -35,10 +35,8 @@ def area_table(study: Study) -> AreaTable:
     """Compute the table of the tasks experiment (no rows when it is missing or has no
     areas)."""
     areas, cols, experiment = study.areas, study.area_columns, TASKS_EXPERIMENT
-    paper: dict[str, tuple[int, ...]] = {}
-    computed: dict[str, tuple[int, ...]] = {}
     if not study.has(experiment) or not study.has_areas(experiment):
-        return AreaTable(pd.DataFrame(), areas, paper, computed)
+        return AreaTable(pd.DataFrame(), areas, {}, {})
     tasks, methods = study.tasks(experiment), study.methods(experiment)
     per_run = study.rows(experiment).groupby(["task", "method", "run"], observed=True)[
         cols].sum()
@@ -49,9 +47,9 @@ def area_table(study: Study) -> AreaTable:
     frame = pd.concat([by.size().rename("runs"), mean.add_suffix("_mean"),
                        se.add_suffix("_se")], axis=1).loc[order]
     lowest = mean.round(DECIMALS).groupby(level="task", observed=True).transform("min")
-    for task in tasks:
-        truth = study.truth(experiment, task)
-        paper[task], computed[task] = truth.irrelevant_areas_paper, truth.irrelevant_areas
+    truths = {task: study.truth(experiment, task) for task in tasks}
+    paper = {task: truth.irrelevant_areas_paper for task, truth in truths.items()}
+    computed = {task: truth.irrelevant_areas for task, truth in truths.items()}
     for a in areas:
         irrelevant = pd.Series([a in set(paper[t]) | set(computed[t]) for t, _ in order],
                                index=frame.index)

@@ -12,14 +12,7 @@ import jinja2
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.analysis.stats import (
-    HOLDS,
-    Comparison,
-    Milestone,
-    compare,
-    verdict,
-    verdict_reason,
-)
+from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, compare, verdict, verdict_reason
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.experiments.results import is_gdq, order_methods
 
