@@ -28,9 +28,9 @@ dense over states x ground actions.
 
 moves 7 again later that day (1 run each, load average ~2, warm numba cache), before and
 after the true model's no-op fill and the successor count stopped making temporaries over
-every pair: model 6.1 ->
-4.3 s, plans 1.6 -> 1.0 s, total 12.2 -> 10.1 s, peak 1.95 -> 1.73 GB (the peak is now
-the learning phase's, GDQ's tables; the model phase's went from 1.71 to 1.10 GB).
+every pair: model 6.1 -> 4.3 s, plans 1.6 -> 1.0 s, total 12.2 -> 10.1 s, peak 1.95 ->
+1.73 GB (the peak is now the learning phase's, GDQ's tables; the model phase's went from
+1.71 to 1.10 GB).
 """
 
 from __future__ import annotations
