@@ -26,11 +26,15 @@ ground actions, moves 7 406 (2.7 x 10^7 pairs, where IPPC blocksworld p01 has 10
 3.3 x 10^7): the peak grows with the pairs, as the true model and the learners' tables are
 dense over states x ground actions.
 
-moves 7 again later that day (1 run each, load average ~2, warm numba cache), before and
-after the true model's no-op fill and the successor count stopped making temporaries over
-every pair: model 6.1 -> 4.3 s, plans 1.6 -> 1.0 s, total 12.2 -> 10.1 s, peak 1.95 ->
-1.73 GB (the peak is now the learning phase's, GDQ's tables; the model phase's went from
-1.71 to 1.10 GB).
+Later that day (single runs, load average 1-2, warm numba cache), before and after the true
+model's build stopped making temporaries over every pair (no-op fill, successor count,
+reality's outcome rows):
+
+    moves 7      model 6.1, 6.7 -> 4.3, 5.6, 2.4 s; total 12.2, 14.6 -> 10.1, 12.5, 8.0 s;
+                 peak 1.95 -> 1.73 GB (now GDQ's tables while learning; the model phase
+                 alone 1.71 -> 1.10 GB)
+    switches 20  model 35.3 -> 11.4 s; total 80.5 -> 36.8 s (the "before" run shared the
+                 cores with another job); peak 3.65 -> 2.97 GB
 """
 
 from __future__ import annotations
