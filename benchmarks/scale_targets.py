@@ -24,7 +24,17 @@ Measured 2026-12-02 on the shared 2-core machine (load average 9-16, so wall tim
 outright, blocks 7 took 63.1 s and 0.74 GB before the array enumeration.) blocks 7 has 112
 ground actions, moves 7 406 (2.7 x 10^7 pairs, where IPPC blocksworld p01 has 10^5 x 330 =
 3.3 x 10^7): the peak grows with the pairs, as the true model and the learners' tables are
-dense over states x ground actions, so 10^5 x 330 would pass 2 GB (about 2.4 GB).
+dense over states x ground actions.
+
+Later that day (single runs, load average 1-2, warm numba cache), before and after the true
+model's build stopped making temporaries over every pair (no-op fill, successor count,
+reality's outcome rows):
+
+    moves 7      model 6.1, 6.7 -> 4.3, 5.6, 2.4 s; total 12.2, 14.6 -> 10.1, 12.5, 8.0 s;
+                 peak 1.95 -> 1.73 GB (now GDQ's tables while learning; the model phase
+                 alone 1.71 -> 1.10 GB)
+    switches 20  model 35.3 -> 11.4 s; total 80.5 -> 36.8 s (the "before" run shared the
+                 cores with another job); peak 3.65 -> 2.97 GB
 """
 
 from __future__ import annotations

@@ -33,6 +33,9 @@ PAIR_BYTES = 150
 """Memory one (state, action) pair takes while a model is compiled: its outcomes are
 gathered as Python tuples and floats (at least one per pair) before becoming arrays."""
 
+NOOP_CHUNK = 1 << 20
+"""Pairs whose no-op states :func:`with_noops` writes at a time."""
+
 CAUSE_NONE, CAUSE_STUCK, CAUSE_GOAL, CAUSE_TIMEOUT = 0, 1, 2, 3
 CAUSES = ("", "stuck", "goal", "timeout")
 """Why an episode ended, indexed by the cause code :func:`env_step` returns."""
@@ -114,28 +117,36 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
     return ptr, np.array(prob, dtype=np.float64), fields
 
 
-def with_noops(ptr: np.ndarray, prob: np.ndarray, fields: list[np.ndarray], n_actions: int
-               ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """The CSR arrays of :func:`outcome_csr` (fields: next state, stuck, and maybe a
-    reward) with every pair that lists no outcome given one: a no-op, ``(its state, not
-    stuck, reward 0)`` with probability 1 (most pairs of a large problem: filled without
-    a Python loop; a bar counts the arrays filled past 2 s)."""
+def with_noops(row_pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray],
+               n_pairs: int, n_actions: int) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The CSR arrays (``ptr``, ``prob``, fields) of outcome rows in pair order
+    (``row_pair``: each row's pair; fields: next state, stuck, and maybe a reward) with
+    every pair of the ``n_pairs`` that lists no outcome given one: a no-op, ``(its state,
+    not stuck, reward 0)`` with probability 1. Most pairs of a large problem are no-ops:
+    filled without a Python loop, and with no temporary over all pairs but the no-ops'
+    states, a chunk at a time (a bar counts the arrays filled past 2 s)."""
     bar = slow_progress("true model", " arrays", len(fields) + 2)
-    counts = np.diff(ptr)
-    empty = counts == 0
-    new_ptr = np.zeros_like(ptr)
-    np.cumsum(np.where(empty, 1, counts), out=new_ptr[1:])
-    at = np.repeat(new_ptr[:-1] - ptr[:-1], counts) + np.arange(len(prob))
+    lead = np.ones(len(row_pair), dtype=np.bool_)
+    lead[1:] = row_pair[1:] != row_pair[:-1]
+    first = np.flatnonzero(lead)
+    listed, counts = row_pair[first], np.diff(np.append(first, len(row_pair)))
+    new_ptr = np.ones(n_pairs + 1, dtype=np.int64)
+    new_ptr[0] = 0
+    new_ptr[listed + 1] = counts
+    np.cumsum(new_ptr, out=new_ptr)
+    at = np.repeat(new_ptr[listed] - first, counts) + np.arange(len(prob))
     bar.update()
     out_prob = np.ones(new_ptr[-1], dtype=np.float64)
     out_prob[at] = prob
     bar.update()
     out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
+    for lo in range(0, n_pairs, NOOP_CHUNK):  # a no-op stays; listed pairs overwritten next
+        hi = min(lo + NOOP_CHUNK, n_pairs)
+        out[0][new_ptr[lo:hi]] = np.arange(lo, hi) // n_actions
     for field, given in zip(out, fields, strict=True):
         field[at] = given
         bar.update()
     bar.close()
-    out[0][new_ptr[:-1][empty]] = np.flatnonzero(empty) // n_actions  # a no-op stays
     return new_ptr, out_prob, out
 
 
@@ -230,13 +241,13 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
 
     n_pairs = space.n_states * n_a
     if isinstance(pairs, tuple):
-        row_pair, row_prob, fields = pairs
-        csr = np.zeros(n_pairs + 1, dtype=np.int64), row_prob, fields
-        np.cumsum(np.bincount(row_pair, minlength=n_pairs), out=csr[0][1:])
+        row_pair, prob, fields = pairs
     else:
-        csr = outcome_csr(n_pairs, shown(rule() if pairs is None else pairs),
-                          (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
-    ptr, prob, (nxt, stuck, *gain) = with_noops(*csr, n_a)
+        ptr, prob, fields = outcome_csr(
+            n_pairs, shown(rule() if pairs is None else pairs),
+            (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
+        row_pair = np.repeat(np.arange(n_pairs), np.diff(ptr))
+    ptr, prob, (nxt, stuck, *gain) = with_noops(row_pair, prob, fields, n_pairs, n_a)
     model = ModelArrays(
         n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,

@@ -172,7 +172,8 @@ def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:
     model, over outcomes of positive probability that do not end the trial (inf: none
     reaches it). One breadth-first search over the model's arrays."""
     n = model.obs_of.shape[0]
-    src = np.repeat(np.arange(len(model.ptr) - 1) // model.n_actions, np.diff(model.ptr))
+    starts = model.ptr[::max(model.n_actions, 1)]  # each state's first outcome
+    src = np.repeat(np.arange(len(starts) - 1), np.diff(starts))
     keep = (model.prob > 0) & ~model.stuck & (model.next != src)
     graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
                        shape=(n, n))

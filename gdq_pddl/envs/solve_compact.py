@@ -56,6 +56,16 @@ def successor_capacity(model: ModelArrays | CompactModel) -> int:
 
 
 def _capacity(model: ModelArrays | CompactModel) -> int:
+    if isinstance(model, ModelArrays) and np.array_equal(model.obs_of,
+                                                         np.arange(len(model.obs_of))):
+        n_states = len(model.obs_of)  # seen as it is: one outcome, one successor, so only
+        counts = np.diff(model.ptr)  # the pairs of several outcomes count (and are made)
+        several = np.flatnonzero(counts > 1)
+        counts = counts[several]
+        at = np.repeat(model.ptr[several] - np.cumsum(counts) + counts, counts) + \
+            np.arange(counts.sum())
+        keys = np.repeat(several, counts) * n_states + model.next[at]
+        return _most(keys, n_states)
     pair = np.repeat(np.arange(len(model.ptr) - 1, dtype=np.int64), np.diff(model.ptr))
     if isinstance(model, CompactModel):
         n_states = len(model.pos_of_state)
@@ -66,8 +76,10 @@ def _capacity(model: ModelArrays | CompactModel) -> int:
         learner_pair = model.obs_of[pair // model.n_actions] * model.n_actions + \
             pair % model.n_actions
         keys = learner_pair * n_states + model.obs_of[model.next]
-        if np.array_equal(model.obs_of, np.arange(len(model.obs_of))):  # seen as it is:
-            keys = keys[(np.diff(model.ptr) > 1)[pair]]  # one outcome, one successor
+    return _most(keys, n_states)
+
+
+def _most(keys: np.ndarray, n_states: int) -> int:
     per_pair = np.bincount(distinct(keys) // n_states) if len(keys) else np.zeros(1)
     return max(1, int(per_pair.max()))
 

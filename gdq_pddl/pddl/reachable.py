@@ -307,22 +307,27 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
                         here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
                         amount, 0.0)
                 parts.append((at * n_ops + k, j, o.probability, nxt, o.stuck,
-                              o.reward + earned))
+                              o.reward + earned if gains else None))
     pair = np.concatenate([p[0] for p in parts])
-    j = np.concatenate([np.full(len(p[0]), p[1]) for p in parts])
+    j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
     prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
-    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64)
+    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
     stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
-    gain = np.concatenate([p[5] for p in parts]) if gains else np.zeros(len(pair))
+    gain = np.concatenate([p[5] for p in parts]) if gains else None
+    del parts  # one copy of the rows at a time: they are most of the peak memory
     # equal keys of a pair side by side, in outcome order; each group's first row leads
     key = (pair * graph.n_states + nxt) * 2 + stuck
     order = np.lexsort((j, gain, key) if gains else (j, key))
     bar.update()
-    key, pair, j, prob, nxt, stuck, gain = (a[order] for a in (key, pair, j, prob, nxt, stuck,
-                                                               gain))
+    key, pair, j, prob = key[order], pair[order], j[order], prob[order]
+    nxt, stuck = nxt[order], stuck[order]
+    gain = gain[order] if gains else None
+    del order
     bar.update()
     lead = np.ones(len(pair), dtype=np.bool_)
-    lead[1:] = (key[1:] != key[:-1]) | (gain[1:] != gain[:-1])
+    lead[1:] = key[1:] != key[:-1]
+    if gains:
+        lead[1:] |= gain[1:] != gain[:-1]
     group = np.cumsum(lead) - 1
     total = np.zeros(group[-1] + 1 if len(group) else 0)
     place = np.arange(len(group)) - np.flatnonzero(lead)[group]

@@ -7,9 +7,9 @@ from tests.pddl.test_i22b import bars  # noqa: F401 (the fixture)
 
 
 def test_no_op_fill_counts_its_arrays(bars):  # noqa: F811
-    ptr, prob = np.array([0, 1, 1, 3]), np.array([1.0, 0.5, 0.5])
+    rows, prob = np.array([0, 2, 2]), np.array([1.0, 0.5, 0.5])  # pair 1 lists none
     fields = [np.array([4, 5, 6]), np.array([False, True, False])]
-    new_ptr, out_prob, (nxt, stuck) = with_noops(ptr, prob, fields, 3)
+    new_ptr, out_prob, (nxt, stuck) = with_noops(rows, prob, fields, 3, 3)
     assert new_ptr.tolist() == [0, 1, 2, 4] and nxt.tolist() == [4, 0, 5, 6]  # state 1//3
     [bar] = [bar for bar in bars if bar.desc.startswith("true model")]
     assert bar.n == bar.total == 2 + 2  # where rows go, probabilities, then each field
