@@ -6,8 +6,12 @@ The tests are laid out by the package's layers (``tests/pddl``, ``tests/planning
 
 from __future__ import annotations
 
-import pytest
+import io
 
+import pytest
+from tqdm import tqdm
+
+from gdq_pddl import limits
 from gdq_pddl.learners import office_task_context, precompile
 from gdq_pddl.world import World, load_world
 from tests.helpers import BACKGROUND
@@ -57,3 +61,18 @@ def ctx_c(office: World):
     """The learners' task context of the office's task C (one per test module, as a
     learner's start_task may keep a reference to it)."""
     return office_task_context(office, "C")
+
+
+@pytest.fixture
+def bars(monkeypatch) -> list[tqdm]:
+    """Every bar :func:`slow_progress` makes, shown at once into a buffer (not stderr)."""
+    made: list[tqdm] = []
+
+    class Shown(tqdm):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs | {"disable": False, "delay": 0,
+                                                "file": io.StringIO()})
+            made.append(self)
+
+    monkeypatch.setattr(limits, "tqdm", Shown)
+    return made

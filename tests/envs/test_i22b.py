@@ -3,10 +3,9 @@
 import numpy as np
 
 from gdq_pddl.envs.model import with_noops
-from tests.pddl.test_i22b import bars  # noqa: F401 (the fixture)
 
 
-def test_no_op_fill_counts_its_arrays(bars):  # noqa: F811
+def test_no_op_fill_counts_its_arrays(bars):
     rows, prob = np.array([0, 2, 2]), np.array([1.0, 0.5, 0.5])  # pair 1 lists none
     fields = [np.array([4, 5, 6]), np.array([False, True, False])]
     new_ptr, out_prob, (nxt, stuck) = with_noops(rows, prob, fields, 3, 3)

@@ -1,12 +1,9 @@
 """Progress on slow work (issue 22 item 4): grounding and the true model's outcome rows
 count their steps on :func:`~gdq_pddl.limits.slow_progress` bars."""
 
-import io
-
 import pytest
 from tqdm import tqdm
 
-from gdq_pddl import limits
 from gdq_pddl.pddl.reachable import reachable_graph, reality_outcomes
 from gdq_pddl.planning.base import PlanningProblem
 
@@ -26,21 +23,6 @@ def switches(n: int) -> str:
     goal = " ".join(f"(on s{i})" for i in range(n))
     return f"(define (problem sw) (:domain switches) (:objects {names} - switch) (:init) " \
         f"(:goal (and {goal})))"
-
-
-@pytest.fixture
-def bars(monkeypatch) -> list[tqdm]:
-    """Every bar :func:`slow_progress` makes, shown at once into a buffer (not stderr)."""
-    made: list[tqdm] = []
-
-    class Shown(tqdm):
-        def __init__(self, *args, **kwargs):
-            super().__init__(*args, **kwargs | {"disable": False, "delay": 0,
-                                                "file": io.StringIO()})
-            made.append(self)
-
-    monkeypatch.setattr(limits, "tqdm", Shown)
-    return made
 
 
 def counted(bars: list[tqdm], desc: str) -> list[int]:
