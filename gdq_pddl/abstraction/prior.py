@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gdq_pddl.errors import AbstractionError
+from gdq_pddl.pddl.reachable import column_of
 
 NO_CHANGE = -1
 """``PriorModel.next_state`` of a knowledge-inapplicable pair."""
@@ -22,7 +23,9 @@ class PriorModel:
 
     next_state: np.ndarray
     """int64[n_states, n_actions]: the learner state ``a`` leads to from ``s`` if the
-    knowledge is right, or :data:`NO_CHANGE` where the knowledge says ``a`` does nothing."""
+    knowledge is right, or :data:`NO_CHANGE` where the knowledge says ``a`` does nothing.
+    A PDDL problem's is over the columns of its states' applicable ground actions
+    (:func:`prior_from_graph`), where a padding column is NO_CHANGE."""
 
     @property
     def n_states(self) -> int:
@@ -88,10 +91,10 @@ def prior_from_task(abstraction, task, read_state: Callable[[int], int] | None =
 
 def prior_from_graph(graph) -> PriorModel:
     """The prior of a PDDL problem whose learner states are the reachable planner states
-    (O the identity): the graph's edges; of several outcomes of one action (a PPDDL
-    determinisation), the one closest to the goal (ties: the lowest state index)."""
-    n_actions = len(graph.task.ops)
-    nxt = np.full((graph.n_states, n_actions), NO_CHANGE, dtype=np.int64)
+    (O the identity), over the columns of ``graph.offered``: the graph's edges; of
+    several outcomes of one action (a PPDDL determinisation), the one closest to the goal
+    (ties: the lowest state index)."""
+    nxt = np.full(graph.offered.shape, NO_CHANGE, dtype=np.int64)
     src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
     dist = graph.distances.astype(np.float64)
     dist[dist < 0] = np.inf
@@ -101,5 +104,5 @@ def prior_from_graph(graph) -> PriorModel:
     s, op, to = src[order], graph.edge_op[order], graph.edge_next[order]
     last = np.ones(len(s), dtype=bool)
     last[:-1] = (s[1:] != s[:-1]) | (op[1:] != op[:-1])
-    nxt[s[last], op[last]] = to[last]
+    nxt[s[last], column_of(graph.offered, s[last], op[last])] = to[last]
     return PriorModel(nxt)

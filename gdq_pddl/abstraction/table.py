@@ -9,6 +9,7 @@ from typing import Protocol
 
 import numpy as np
 
+from gdq_pddl.pddl.reachable import column_of
 from gdq_pddl.planning.base import Plan, Planner, PlanningProblem, PlanResult, State, Status
 
 
@@ -89,11 +90,12 @@ class PlanTable:
     def has_plan(self) -> np.ndarray:
         return self.length >= 0
 
-    def allowed_actions(self) -> np.ndarray:
+    def allowed_actions(self, live: np.ndarray | None = None) -> np.ndarray:
         """DARLING's allowed set, a new bool array: ``first_actions``, and every action
-        in the states without a plan."""
+        (every ``live`` column, if given) in the states without a plan."""
         allowed = np.array(self.first_actions, dtype=np.bool_, copy=True)
-        allowed[~allowed.any(axis=1)] = True
+        none = ~allowed.any(axis=1)
+        allowed[none] = True if live is None else live[none]
         return allowed
 
     def start_pairs(self, s0: int) -> np.ndarray:
@@ -116,6 +118,25 @@ class PlanTable:
             lo, hi = self.pair_ptr[k], self.pair_ptr[k + 1]
             out[self.pair_state[lo:hi], self.pair_action[lo:hi]] = True
         return out
+
+    def in_columns(self, offered: np.ndarray) -> PlanTable:
+        """This table with each action ``a`` of a state ``s`` replaced by its column in
+        ``offered`` (:attr:`~gdq_pddl.pddl.reachable.StateGraph.offered`: the learners'
+        tables of a PDDL problem list each state's applicable ground actions)."""
+        live = offered >= 0
+        first = np.zeros(offered.shape, dtype=np.bool_)
+        rows = np.nonzero(live)[0]
+        first[live] = self.first_actions[rows, offered[live]]
+        layers = self.layers
+        if layers is not None:
+            layers = np.stack([layers[:, 0], column_of(offered, layers[:, 0], layers[:, 1]),
+                               layers[:, 2]], axis=1)
+
+        def plans() -> PlanArrays:
+            plan_ptr, pair_ptr, state, action, capped = self._arrays
+            return plan_ptr, pair_ptr, state, column_of(offered, state, action), capped
+
+        return PlanTable(first, self.length, plans if not self.enumerated else plans(), layers)
 
     def plans_from(self, state: int) -> list[list[tuple[int, int]]]:
         """The plans from ``state`` as lists of learner pairs (for inspection and tests)."""

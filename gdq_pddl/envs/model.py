@@ -1,9 +1,13 @@
 """The true dynamics of an office world, compiled to flat arrays, and one compiled step.
 
 The simulator's hidden state is the *full* state ``(position, which doors are open)``,
-indexed ``position * 2**n_doors + door_mask``. For every (full state, action) pair the
-model lists its outcomes (probability, next full state, stuck flag) in CSR form:
-outcomes of pair ``i = full_state * n_actions + action`` are ``ptr[i]:ptr[i+1]``.
+indexed ``position * 2**n_doors + door_mask``. For every (full state, offered action)
+pair the model lists its outcomes (probability, next full state, stuck flag) in CSR form:
+outcomes of pair ``i = full_state * width + column`` are ``ptr[i]:ptr[i+1]``. A PDDL
+problem offers in each state its applicable ground actions (``acts``, the state graph's
+``offered`` rows: column ``j`` of state ``fs`` is ground action ``acts[fs, j]``, -1 pads
+a row to ``width``); the office offers every learner action everywhere (``acts`` empty:
+column ``j`` is action ``j``, ``width = n_actions``).
 
 The gymnasium env, the fast episode runner and value iteration all read these arrays,
 so there is exactly one definition of the world's dynamics (:func:`compile_model`)
@@ -62,6 +66,22 @@ class ModelArrays(NamedTuple):
     """Empty: the library's rewards (:func:`finish_step`). Else the problem's own, as the
     IPPC scores them (:func:`file_step`): each outcome's reward besides the action's
     cost, and ``r_max`` once on reaching the goal; no penalty for a stuck or late end."""
+    acts: np.ndarray = np.zeros((0, 0), dtype=np.int64)  # int64[n_full, width]
+    """The action of each column (module docstring); empty: every action, column = action."""
+
+
+def width_of(acts: np.ndarray, n_actions: int) -> int:
+    """Columns a state's row has: ``acts``' width, or every action when ``acts`` is empty."""
+    return int(acts.shape[1]) if acts.shape[0] else int(n_actions)
+
+
+def pair_of(model: ModelArrays, fs: int, action: int) -> int | None:
+    """The pair index of ``action`` in full state ``fs`` (its outcomes are
+    ``ptr[i]:ptr[i + 1]``), or None where ``fs`` does not offer it."""
+    if not model.acts.shape[0]:
+        return fs * model.n_actions + action
+    hits = np.flatnonzero(model.acts[fs] == action)
+    return int(fs * model.acts.shape[1] + hits[0]) if len(hits) else None
 
 
 def full_state(world: World, position: str, open_doors: frozenset[str] = frozenset()) -> int:
@@ -118,13 +138,15 @@ def outcome_csr(n_pairs: int, pairs: Iterable[tuple[int, dict[tuple, float]]],
 
 
 def with_noops(row_pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray],
-               n_pairs: int, n_actions: int) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+               n_pairs: int, width: int, offered: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The CSR arrays (``ptr``, ``prob``, fields) of outcome rows in pair order
     (``row_pair``: each row's pair; fields: next state, stuck, and maybe a reward) with
-    every pair of the ``n_pairs`` that lists no outcome given one: a no-op, ``(its state,
-    not stuck, reward 0)`` with probability 1. Most pairs of a large problem are no-ops:
-    filled without a Python loop, and with no temporary over all pairs but the no-ops'
-    states, a chunk at a time (a bar counts the arrays filled past 2 s)."""
+    every pair of the ``n_pairs`` (``width`` a state) that lists no outcome given one: a
+    no-op, ``(its state, not stuck, reward 0)`` with probability 1; a padding column of
+    ``offered`` (-1) gets none. Filled without a Python loop, and with no temporary over
+    all pairs but the no-ops' states, a chunk at a time (a bar counts the arrays filled
+    past 2 s)."""
     bar = slow_progress("true model", " arrays", len(fields) + 2)
     lead = np.ones(len(row_pair), dtype=np.bool_)
     lead[1:] = row_pair[1:] != row_pair[:-1]
@@ -132,6 +154,8 @@ def with_noops(row_pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray],
     listed, counts = row_pair[first], np.diff(np.append(first, len(row_pair)))
     new_ptr = np.ones(n_pairs + 1, dtype=np.int64)
     new_ptr[0] = 0
+    if offered is not None:
+        new_ptr[1:] = offered.ravel() >= 0
     new_ptr[listed + 1] = counts
     np.cumsum(new_ptr, out=new_ptr)
     at = np.repeat(new_ptr[listed] - first, counts) + np.arange(len(prob))
@@ -142,7 +166,9 @@ def with_noops(row_pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray],
     out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
     for lo in range(0, n_pairs, NOOP_CHUNK):  # a no-op stays; listed pairs overwritten next
         hi = min(lo + NOOP_CHUNK, n_pairs)
-        out[0][new_ptr[lo:hi]] = np.arange(lo, hi) // n_actions
+        row = new_ptr[lo:hi]
+        keep = row < new_ptr[lo + 1:hi + 1]  # padding pairs have no row to write
+        out[0][row[keep]] = (np.arange(lo, hi) // width)[keep]
     for field, given in zip(out, fields, strict=True):
         field[at] = given
         bar.update()
@@ -184,6 +210,10 @@ class StateSpace:
     """int64[n_states]: what :func:`env_step`'s goal test compares with ``goal_pos``."""
     area_of_pos: np.ndarray
     n_doors: int = 0
+    offered: np.ndarray | None = None
+    """int64[n_states, width]: the actions each state offers (a PDDL problem's applicable
+    ground actions, -1 padding; :attr:`~gdq_pddl.pddl.reachable.StateGraph.offered`);
+    None: every learner action in every state (the office)."""
 
 
 def slip_outcomes(here: Hashable, applicable: Mapping[int, Hashable],
@@ -218,20 +248,24 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
                        pairs: Iterable[tuple[int, dict[tuple, float]]] | tuple | None = None,
                        gains: bool = False) -> ModelArrays:
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
-    one per learner action): for each (state, learner action) pair, the outcomes of the
+    one per learner action): for each (state, offered action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
     ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
     yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
     problem's own scale), or gives them as rows already merged and in pair order
-    (``(pair index, probability, [next, stuck, reward...])`` arrays)."""
+    (``(pair index, probability, [next, stuck, reward...])`` arrays); pair indices are
+    ``state * width + column`` (module docstring)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
-    n_a = space.n_actions
+    offered = space.offered
+    n_a = width_of(np.zeros((0, 0)) if offered is None else offered, space.n_actions)
 
     def rule():
         for s in range(space.n_states):
+            column = None if offered is None else \
+                {a: j for j, a in enumerate(offered[s].tolist()) if a >= 0}
             for a, outs in slip_outcomes(s, dict(space.edges(s)), space.action_of_op,
                                          outcomes, schema_of):
-                yield s * n_a + a, merge_outcomes(outs)
+                yield s * n_a + (a if column is None else column[a]), merge_outcomes(outs)
 
     def shown(pairs):
         with slow_progress("true model", " states", space.n_states) as bar:
@@ -247,12 +281,13 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
             n_pairs, shown(rule() if pairs is None else pairs),
             (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
         row_pair = np.repeat(np.arange(n_pairs), np.diff(ptr))
-    ptr, prob, (nxt, stuck, *gain) = with_noops(row_pair, prob, fields, n_pairs, n_a)
+    ptr, prob, (nxt, stuck, *gain) = with_noops(row_pair, prob, fields, n_pairs, n_a, offered)
     model = ModelArrays(
-        n_actions=n_a, n_doors=space.n_doors, r_max=float(dynamics.r_max),
+        n_actions=space.n_actions, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
         **cost_arrays(costs), obs_of=space.obs_of, pos_of=space.pos_of,
-        area_of_pos=space.area_of_pos, **({"gain": gain[0]} if gains else {}))
+        area_of_pos=space.area_of_pos, **({"gain": gain[0]} if gains else {}),
+        **({} if offered is None else {"acts": offered}))
     for array in model:
         if isinstance(array, np.ndarray):
             array.setflags(write=False)
@@ -376,18 +411,43 @@ def finish_step(m, action: int, nxt: int, stuck: bool, at_goal: bool, t: int,
 
 
 @numba.njit(cache=True, inline="always")
-def env_step(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
+def env_step(m: ModelArrays, fs: int, column: int, t: int, goal_pos: int,
              rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
-    """Take ``action`` in full state ``fs`` at step ``t`` (0-based) of an episode.
+    """Take the action of ``column`` (module docstring) in full state ``fs`` at step
+    ``t`` (0-based) of an episode.
 
     Returns ``(next full state, reward, terminated, truncated, cause)``. Draws exactly
     one uniform for the outcome, then one cost draw if the cost is not constant.
     """
-    k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + action, rng)  # never -1 here
+    if m.acts.shape[0]:
+        action = m.acts[fs, column]
+        k = draw_outcome(m.ptr, m.prob, fs * m.acts.shape[1] + column, rng)
+    else:
+        action = column
+        k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + column, rng)  # never -1 here
     nxt = m.next[k]
     if m.gain.shape[0]:
         return file_step(m, action, k, nxt, m.pos_of[nxt] == goal_pos, t, rng)
     return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)
+
+
+@numba.njit(cache=True)
+def env_act(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
+            rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """:func:`env_step` of an action: its column in ``fs``, or, where ``fs`` does not
+    offer it (its preconditions fail), a step that changes nothing at the action's cost
+    (one uniform drawn for the outcome all the same)."""
+    if not m.acts.shape[0]:
+        return env_step(m, fs, action, t, goal_pos, rng)
+    for j in range(m.acts.shape[1]):
+        if m.acts[fs, j] == action:
+            return env_step(m, fs, j, t, goal_pos, rng)
+    rng.random()
+    if m.gain.shape[0]:
+        reward = -sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
+        late = t + 1 >= m.step_limit
+        return fs, reward, False, late, CAUSE_TIMEOUT if late else CAUSE_NONE
+    return finish_step(m, action, fs, False, False, t, rng)
 
 
 @numba.njit(cache=True, inline="always")

@@ -138,6 +138,9 @@ class OfficeInstance:
         """How many learner actions (the office: 95)."""
         return self.spaces.n_actions
 
+    columns = None
+    """Every learner action in every state (the paper's agent chooses among all 95)."""
+
     @cached_property
     def start_state(self) -> int:
         """The full state an episode starts in (robot at the start, doors closed)."""

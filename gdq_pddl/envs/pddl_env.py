@@ -42,7 +42,7 @@ from gdq_pddl.envs.model import (
     ModelArrays,
     StateSpace,
     compile_true_model,
-    env_step,
+    env_act,
 )
 from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import reality_distances, value_within
@@ -176,9 +176,10 @@ class PDDLInstance:
     @cached_property
     def model(self) -> ModelArrays:
         """The true model (read-only); refused past its memory and by :func:`check_reality`."""
-        check_memory(self.n_states * self.n_actions * PAIR_BYTES,
+        check_memory(self.graph.offered.size * PAIR_BYTES,
                      f"{self.dynamics.source or self.problem.problem.source}: the true model "
-                     f"of {self.n_states} states x {self.n_actions} ground actions",
+                     f"of {self.n_states} states x up to {self.graph.offered.shape[1]} "
+                     f"applicable ground actions",
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
@@ -244,8 +245,15 @@ class PDDLInstance:
                 o = PDDLAbstraction(self.graph)
                 table = build_plan_table(o, self.problem, get_planner(planner), o.goal(),
                                          tolerance)
-            self._tables[key] = table
+            self._tables[key] = table.in_columns(self.columns)
         return self._tables[key]
+
+    @property
+    def columns(self) -> np.ndarray:
+        """int64[n_states, width]: the ground actions each state offers the learners (the
+        graph's :attr:`~gdq_pddl.pddl.reachable.StateGraph.offered`, -1 padding): the
+        layout of their tables, the prior and the plan tables."""
+        return self.graph.offered
 
     @property
     def n_states(self) -> int:
@@ -476,7 +484,7 @@ def graph_space(graph: StateGraph) -> StateSpace:
         action_of_op=tuple(range(len(graph.task.ops))),
         obs_of=np.arange(n, dtype=np.int64),
         pos_of=np.where(graph.is_goal, GOAL_POS, 0).astype(np.int64),
-        area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
+        area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64), offered=graph.offered)
 
 
 def load_instance(domain: str | Path | None, problem: str | Path | None,
@@ -519,7 +527,7 @@ class PDDLEnv(CompiledEnv):
         self._fs = self.instance.start_state
 
     def _advance(self, a: int) -> tuple[float, bool, bool, int]:
-        fs, reward, terminated, truncated, cause = env_step(
+        fs, reward, terminated, truncated, cause = env_act(
             self.model, self._fs, a, self._t, self.instance.goal_pos, self.np_random)
         self._fs = int(fs)
         return reward, terminated, truncated, cause

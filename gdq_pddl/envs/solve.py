@@ -29,7 +29,7 @@ from scipy.sparse.csgraph import shortest_path
 from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of import)
 
 from gdq_pddl.dynamics import COST_KINDS
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, width_of
 from gdq_pddl.limits import check_memory, human_bytes, slow_progress
 from gdq_pddl.world import Task, World
 
@@ -68,7 +68,7 @@ def solve_bytes(model: ModelArrays, tables: bool = True) -> int:
     """Memory :func:`solve` needs at most: per outcome and per pair its work arrays, per
     step V (and, with ``tables``, Q and the policy)."""
     n_full, limit = model.obs_of.shape[0], model.step_limit
-    per_step = n_full * ((model.n_actions + 2) if tables else 1) * 8
+    per_step = n_full * ((width_of(model.acts, model.n_actions) + 2) if tables else 1) * 8
     return (limit + 1) * per_step + len(model.prob) * 8 * 6 + (len(model.ptr) - 1) * 8 * 3
 
 
@@ -79,28 +79,32 @@ def check_solvable(model: ModelArrays, where: str = "") -> None:
     n_full, limit = model.obs_of.shape[0], model.step_limit
     check_memory(solve_bytes(model),
                  f"{where or 'step_limit'} = {limit}: V* by value iteration ({n_full} states x "
-                 f"{model.n_actions} actions at each of the {limit} steps)",
+                 f"{width_of(model.acts, model.n_actions)} actions at each of the {limit} "
+                 "steps)",
                  "use a smaller step_limit")
 
 
 def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
           tables: bool = True) -> Solution:
     """Optimal values and time-dependent greedy policy for reaching position ``goal_pos``
-    (``tables=False``: the values only; ``Q`` and ``policy`` are then empty).
+    (``tables=False``: the values only; ``Q`` and ``policy`` are then empty). ``Q`` and
+    ``policy`` are over the model's columns (an action where ``model.acts`` is empty).
 
     Raises :class:`~gdq_pddl.errors.SizeError` up front when the tables (``Q`` is
-    ``step_limit x states x actions``) would not fit in memory."""
+    ``step_limit x states x columns``) would not fit in memory."""
     if tables:
         check_solvable(model)
-    n_actions, limit, r = model.n_actions, model.step_limit, model.r_max
+    width, limit, r = width_of(model.acts, model.n_actions), model.step_limit, model.r_max
     n_full = model.obs_of.shape[0]
     counts = np.diff(model.ptr)
-    if np.any(counts == 0):
+    live = counts > 0 if model.acts.shape[0] else np.ones(len(counts), dtype=np.bool_)
+    if np.any(counts[live] == 0) or not live.reshape(n_full, width).any(axis=1).all():
         raise ValueError("every (full state, action) pair needs at least one outcome")
-    starts = model.ptr[:-1]
-    pair = np.repeat(np.arange(n_full * n_actions), counts)
-    cost = expected_costs(model)[pair % n_actions]
-    del pair
+    starts = model.ptr[:-1][live]
+    pair = np.repeat(np.arange(n_full * width), counts)
+    action = model.acts.ravel()[pair] if model.acts.shape[0] else pair % width
+    cost = expected_costs(model)[action]
+    del pair, action
     at_goal = model.pos_of[model.next] == goal_pos
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
@@ -111,18 +115,20 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     goal_states = model.pos_of == goal_pos
 
     V = np.zeros((limit + 1, n_full))
-    Q = np.empty((limit if tables else 0, n_full, n_actions))
+    Q = np.empty((limit if tables else 0, n_full, width))
+    q = np.full(n_full * width, -np.inf)  # a padding column is never the best
     policy = np.empty((limit if tables else 0, n_full), dtype=np.int64)
     for t in slow_progress("value iteration", " steps", limit, range(limit - 1, -1, -1)):
         if t == limit - 1:
             value = end_reward
         else:
             value = np.where(ending, end_reward, -cost + gamma * V[t + 1, model.next])
-        q = np.add.reduceat(model.prob * value, starts).reshape(n_full, n_actions)
-        best = q.max(axis=1)
+        q[live] = np.add.reduceat(model.prob * value, starts)
+        by_state = q.reshape(n_full, width)
+        best = by_state.max(axis=1)
         if tables:
-            Q[t] = q
-            policy[t] = np.argmax(q >= best[:, None] - TIE_TOLERANCE, axis=1)
+            Q[t] = by_state
+            policy[t] = np.argmax(by_state >= best[:, None] - TIE_TOLERANCE, axis=1)
         V[t] = np.where(goal_states, 0.0, best)
     return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma))
 
@@ -172,7 +178,7 @@ def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:
     model, over outcomes of positive probability that do not end the trial (inf: none
     reaches it). One breadth-first search over the model's arrays."""
     n = model.obs_of.shape[0]
-    starts = model.ptr[::max(model.n_actions, 1)]  # each state's first outcome
+    starts = model.ptr[::max(width_of(model.acts, model.n_actions), 1)]  # a state's first
     src = np.repeat(np.arange(len(starts) - 1), np.diff(starts))
     keep = (model.prob > 0) & ~model.stuck & (model.next != src)
     graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
@@ -205,7 +211,7 @@ def occupancy(model: ModelArrays, solution: Solution, start: int) -> np.ndarray:
     right after action ``t`` (ending outcomes included: stuck, goal, timeout). Row ``t``
     sums to the probability that the episode lasts at least ``t`` actions.
     """
-    limit, n_actions = model.step_limit, model.n_actions
+    limit, width = model.step_limit, width_of(model.acts, model.n_actions)
     n_full = model.obs_of.shape[0]
     out = np.zeros((limit + 1, n_full))
     running = np.zeros(n_full)
@@ -213,7 +219,7 @@ def occupancy(model: ModelArrays, solution: Solution, start: int) -> np.ndarray:
     for t in range(limit):
         after = np.zeros(n_full)
         for fs in np.flatnonzero(running):
-            i = fs * n_actions + solution.policy[t, fs]
+            i = fs * width + solution.policy[t, fs]
             k = slice(model.ptr[i], model.ptr[i + 1])
             np.add.at(out[t + 1], model.next[k], running[fs] * model.prob[k])
             goes_on = ~model.stuck[k]

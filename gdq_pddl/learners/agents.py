@@ -68,7 +68,8 @@ class Learner(Protocol):
     """What the episode loop needs from a learner."""
 
     q: np.ndarray
-    """The Q table, float64[n_states, n_actions], in the env's reward units."""
+    """The Q table, float64[n_states, n_actions], in the env's reward units (``q[s, j]``:
+    the value of the action of column ``j``, ``TaskContext.action_of(s, j)``)."""
 
     def act(self, state: int, rng: np.random.Generator) -> int:
         """The action index to take in learner state ``state``, drawing from ``rng``."""
@@ -99,7 +100,9 @@ class TabularLearner:
     context: TaskContext
     """The current task (:meth:`start_task` replaces it)."""
     q: np.ndarray
-    """The Q table, float64[n_states, n_actions], in the env's reward units."""
+    """The Q table, float64[n_states, n_actions], in the env's reward units: ``q[s, j]`` is
+    the value of the action of column ``j`` of state ``s`` (:attr:`TaskContext.columns
+    <gdq_pddl.learners.context.TaskContext.columns>`; the action ``j`` in the office)."""
 
     def __init__(self, context: TaskContext, config: LearnerConfig | None = None) -> None:
         config = self.config_type() if config is None else config
@@ -117,7 +120,7 @@ class TabularLearner:
     # -- per-learner hooks -------------------------------------------------------------
     def _allowed(self, context: TaskContext) -> np.ndarray:
         """What the max in the update and the greedy choice range over, per state."""
-        return np.ones((context.n_states, context.n_actions), dtype=np.bool_)
+        return context.live
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
         """What the learner may execute, per state (:mod:`~gdq_pddl.learners.tables`)."""
@@ -150,7 +153,8 @@ class TabularLearner:
                 np.zeros(len(allowed) + 1, dtype=np.int64), np.zeros(1, dtype=np.int64), _I0, _I0)
         table = QTable(self.q, np.zeros(len(self.q)), allowed, guide,
                        guide.sum(axis=1).astype(np.int64),
-                       np.ascontiguousarray(context.goal, dtype=np.bool_))
+                       np.ascontiguousarray(context.goal, dtype=np.bool_),
+                       context.live.sum(axis=1).astype(np.int64))
         plan_arrays = (np.ascontiguousarray(x, dtype=np.int64) for x in walked)
         tables = Tables(table, self._model, Plans(opt_r, *plan_arrays),
                         *self._prior_arrays(context))
@@ -180,28 +184,47 @@ class TabularLearner:
         self._init_task()
 
     def act(self, state: int, rng: np.random.Generator) -> int:
-        """The epsilon-greedy action index to take in learner state ``state``, drawing from
-        ``rng`` (:func:`~gdq_pddl.learners.tables.act`)."""
+        """The epsilon-greedy action (the env's index) to take in learner state ``state``,
+        drawing from ``rng`` (:func:`~gdq_pddl.learners.tables.act`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
-        return int(act(t.table, t.model.visits, t.prior.next_state, self.params, s, rng))
+        column = int(act(t.table, t.model.visits, t.prior.next_state, self.params, s, rng))
+        return self.context.action_of(s, column)
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        """Learn from one real step ``(s, a, r, s2)`` as Gymnasium's step gave it; backups
-        draw from ``rng`` (:func:`~gdq_pddl.learners.rules.observe`)."""
+        """Learn from one real step ``(s, a, r, s2)`` as Gymnasium's step gave it (``a``:
+        the env's action index); backups draw from ``rng``
+        (:func:`~gdq_pddl.learners.rules.observe`)."""
         n_s, n_a = self.q.shape
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
-        a, r = guards.check_action("a", a, n_a), guards.check_reward(r)
+        a = self._column("a", s, a)
+        r = guards.check_reward(r)
         guards.check_generator(rng)
         if not rules.observe(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
 
+    def _column(self, name: str, s: int, a: object) -> int:
+        """The column of env action ``a`` in state ``s``; refused where ``s`` does not
+        offer it (a PDDL state offers its applicable ground actions)."""
+        columns = self.context.columns
+        if columns is None:
+            return guards.check_action(name, a, self.q.shape[1])
+        j = self.context.column_of(s, guards.check_action(name, a, self.context.n_env_actions))
+        if j < 0:
+            offered = columns[s][columns[s] >= 0].tolist()
+            raise ConfigError(f"{name} = {a} is not offered in state {s}, whose applicable "
+                              f"ground actions are {offered}")
+        return j
+
     def greedy_policy(self) -> np.ndarray:
-        """int64[n_states]: per state, the lowest-index allowed action of maximal Q."""
-        return greedy(self.tables.table, self.params)
+        """int64[n_states]: per state, the env action of the lowest allowed column of
+        maximal Q (the lowest-index allowed action of maximal Q in the office)."""
+        policy = greedy(self.tables.table, self.params)
+        columns = self.context.columns
+        return policy if columns is None else columns[np.arange(len(policy)), policy]
 
     @property
     def v(self) -> np.ndarray:
@@ -225,9 +248,10 @@ class TabularLearner:
         return learned_model.dense_counts(self.tables.model.slots, n_s)
 
     def successors(self, s: int, a: int) -> dict[int, int]:
-        """``{s': count}`` of the recorded transitions of ``(s, a)``, in increasing ``s'``."""
-        n_s, n_a = self.q.shape
-        s, a = guards.check_state("s", s, n_s), guards.check_action("a", a, n_a)
+        """``{s': count}`` of the recorded transitions of ``(s, a)`` (``a``: the env's
+        action), in increasing ``s'``."""
+        s = guards.check_state("s", s, self.q.shape[0])
+        a = self._column("a", s, a)
         slots = self.tables.model.slots[s, a]
         slots = slots[slots != 0]
         return dict(zip((slots >> learned_model.SLOT_SHIFT).tolist(),
@@ -296,7 +320,7 @@ class Darling(TabularLearner):
             raise ConfigError(f"the context's DARLING plans use tolerance "
                               f"{context.darling_tolerance}, the config "
                               f"{self.config.tolerance}")
-        return table.allowed_actions()
+        return table.allowed_actions(context.live)
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
         code = self.config.variant == "code"  # the max ranges over every action
@@ -384,9 +408,11 @@ class GDQ(TabularLearner):
         if self.kind != KIND_GDQ:
             return allowed
         if self.config.explore == "plans":
-            return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions()
+            return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions(
+                context.live)
         guide = self._prior(context).applicable
-        guide[~guide.any(axis=1)] = True  # nothing applicable: explore every action
+        none = ~guide.any(axis=1)  # nothing applicable: explore every action
+        guide[none] = context.live[none]
         return guide
 
     @staticmethod

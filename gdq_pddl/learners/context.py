@@ -25,7 +25,8 @@ from gdq_pddl.world import Task, World
 
 class Instance(Protocol):
     """What :func:`task_context` reads of an instance, in the learner's states and actions
-    (the image of its observation map): ``learner_goal`` is bool[n_states];
+    (the image of its observation map): ``columns`` the actions each state offers
+    (:attr:`TaskContext.columns`); ``learner_goal`` is bool[n_states];
     ``max_successors`` bounds the distinct next learner states of a pair in the true
     model; ``source`` is the file named when the learners' tables would not fit."""
 
@@ -33,6 +34,7 @@ class Instance(Protocol):
     source: str
     n_states: int
     n_actions: int
+    columns: np.ndarray | None
     learner_start: int
     learner_goal: np.ndarray
     r_max: float
@@ -75,6 +77,18 @@ class TaskContext:
     """The action knowledge as a deterministic model over every learner pair (where each
     action leads if the knowledge is right; :mod:`gdq_pddl.abstraction.prior`): what
     GDQ's default variant plans on. None: not built (that variant then refuses)."""
+    columns: np.ndarray | None = None
+    """int64[n_states, n_actions]: the env action of each column of a state's row in the
+    learner's tables, the plans and the prior (a PDDL problem: the ground actions
+    applicable in the state, -1 padding the row to the longest); None: column ``j`` is
+    action ``j`` in every state (the office's learner actions)."""
+    n_ground_actions: int | None = None
+    """The env's number of actions where :attr:`columns` is given."""
+
+    @property
+    def n_env_actions(self) -> int:
+        """The env's number of actions (its ``action_space.n``)."""
+        return self.n_actions if self.n_ground_actions is None else self.n_ground_actions
 
     @property
     def n_states(self) -> int:
@@ -83,8 +97,27 @@ class TaskContext:
 
     @property
     def n_actions(self) -> int:
-        """Number of learner actions."""
+        """Columns of a state's row in the learner's tables (the number of learner
+        actions where :attr:`columns` is None)."""
         return int(self.plans.first_actions.shape[1])
+
+    @property
+    def live(self) -> np.ndarray:
+        """bool[n_states, n_actions]: the columns that are actions (not padding)."""
+        if self.columns is None:
+            return np.ones((self.n_states, self.n_actions), dtype=np.bool_)
+        return self.columns >= 0
+
+    def action_of(self, s: int, column: int) -> int:
+        """The env action of ``column`` in learner state ``s``."""
+        return column if self.columns is None else int(self.columns[s, column])
+
+    def column_of(self, s: int, action: int) -> int:
+        """The column of env action ``action`` in learner state ``s`` (-1: not offered)."""
+        if self.columns is None:
+            return action
+        hits = np.flatnonzero(self.columns[s] == action)
+        return int(hits[0]) if len(hits) else -1
 
 
 def empty_plan_table(n_states: int, n_actions: int) -> PlanTable:
@@ -104,10 +137,12 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
     """The :class:`TaskContext` of an instance of the one pipeline: plans by ``planner``
     (its shortest, and DARLING's within ``darling_tolerance``, built as ``darling_kind``
     says: :data:`~gdq_pddl.envs.office.TOLERANT_KINDS`)."""
-    n_s, n_a, k = instance.n_states, instance.n_actions, instance.max_successors
+    columns = getattr(instance, "columns", None)
+    n_s, k = instance.n_states, instance.max_successors
+    n_a = instance.n_actions if columns is None else columns.shape[1]
     if table_bytes(n_s, n_a, k) > MAX_TABLE_BYTES:
-        raise PlanningError(f"{instance.source}: {n_s} reachable states x {n_a} ground "
-                            f"actions (up to {k} successors each): the learners' tables "
+        raise PlanningError(f"{instance.source}: {n_s} reachable states x {n_a} actions "
+                            f"(up to {k} successors each): the learners' tables "
                             f"would need {table_bytes(n_s, n_a, k) / 1e9:.0f} GB; make the "
                             f"problem smaller")
     return TaskContext(
@@ -115,7 +150,8 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         plans=instance.plan_table(planner, 0.0), r_max=instance.r_max,
         darling_plans=instance.plan_table(planner, darling_tolerance, darling_kind),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
-        prior=instance.prior)
+        prior=instance.prior, columns=columns,
+        n_ground_actions=None if columns is None else instance.n_actions)
 
 
 pddl_task_context = task_context

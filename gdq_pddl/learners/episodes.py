@@ -154,7 +154,7 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
     check_memory(n_episodes * (17 + 8 * n_areas), f"n_episodes = {n_episodes:,}: the "
                  "episode records", "run fewer episodes at a time")
     if isinstance(learner, TabularLearner):
-        guards.check_env(*learner.q.shape, env)
+        guards.check_env(len(learner.q), learner.context.n_env_actions, env)
     reason = why_not_compiled(learner, env)
     if fast and reason is not None:
         raise ConfigError(f"fast=True: {reason}")
@@ -208,7 +208,7 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     guards.check_generator(rng)
     guards.check_generator(env_rng, "the env's generator")
     n_s, n_a = learner.q.shape
-    most = guards.check_dynamics(dynamics, start, doors, n_s, n_a)
+    most = guards.check_dynamics(dynamics, start, doors, n_s, n_a, learner.context.columns)
     check_count("n_areas", n_areas)
     if n_areas < most:
         raise ConfigError(f"n_areas is {n_areas}, the env's dynamics have {most}")

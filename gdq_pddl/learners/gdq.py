@@ -188,9 +188,9 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
             ok = prior_next[s, a] >= 0 or is_known(visits, prior_next, p.m, s, a)
             allowed[s, a] = ok
             n += ok
-        if n == 0:
-            allowed[s, :] = True
-            n = n_actions
+        if n == 0:  # nothing applicable or known: every action (every live column)
+            n = table.n_live[s]
+            allowed[s, :n] = True
         ptr[s + 1] = ptr[s] + (0 if goal[s] else n)
     pairs = np.empty(ptr[n_states], dtype=np.int64)
     for s in range(n_states):

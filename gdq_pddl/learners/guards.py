@@ -36,7 +36,7 @@ TABLES: dict[str, dict[str, tuple]] = {
     # (PTR or PTR_NONEMPTY, the largest last pointer)
     "table": {"q": (F8, "S A", None), "v": (F8, "S", None), "allowed": (B1, "S A", None),
               "guide": (B1, "S A", None), "n_guide": (I8, "S", (1, "A+1")),
-              "goal": (B1, "S", None)},
+              "goal": (B1, "S", None), "n_live": (I8, "S", (1, "A+1"))},
     "model": {"slots": (I8, "S A *", None), "stuck": (I8, "S A", None),
               "visits": (I8, "S A", None), "cost_sum": (F8, "S A", None),
               "cost_n": (I8, "S A", None), "cost_all": (F8, "2", None),
@@ -131,6 +131,10 @@ def check_tables(t: Tables, p: Params) -> None:
     if not np.array_equal(t.table.n_guide, t.table.guide.sum(axis=1)):
         raise ConfigError("learner tables: every state must let exploration draw some "
                           "action (guide), and n_guide count them")
+    live = np.arange(q.shape[1]) < t.table.n_live[:, None]
+    if (t.table.allowed & ~live).any() or (t.table.guide & ~live).any():
+        raise ConfigError("learner tables: a padding column (past n_live) is in allowed or "
+                          "guide")
     where = "learner params"
     if not 0 <= p.kind <= KIND_GDQ or p.backup not in (BACKUP_EXPECTED, BACKUP_SAMPLE) \
             or p.n_backups < 0 or p.m < 0:
@@ -184,20 +188,31 @@ def check_context(context: object, n_states: int | None = None,
 
 
 def check_dynamics(model: object, start: int, doors: np.ndarray, n_states: int,
-                   n_actions: int) -> int:
+                   n_actions: int, columns: np.ndarray | None = None) -> int:
     """The env's compiled dynamics (:class:`~gdq_pddl.envs.model.ModelArrays`, from full
     state ``start``, or :class:`~gdq_pddl.envs.compact.CompactModel`, from position
     ``start`` with the open-door array ``doors``) as :data:`DYNAMICS` says, for a learner
-    of ``n_states x n_actions``; returns the most areas."""
+    of ``n_states x n_actions`` columns (``columns``: their actions, None: every action);
+    returns the most areas."""
     where = "the env's dynamics"
-    if model.n_actions != n_actions:
+    acts = getattr(model, "acts", np.zeros((0, 0), dtype=np.int64))
+    if (columns is None) != (acts.shape[0] == 0) or columns is not None and (
+            columns.shape != acts.shape or not np.array_equal(columns, acts)):
+        raise ConfigError("the learner's columns (the actions each state offers) are not the "
+                          "env's: build the learner from this env's task context")
+    if acts.size and (acts.dtype != I8 or acts.min() < -1 or acts.max() >= model.n_actions
+                      or acts.shape[0] != len(model.obs_of)):
+        raise ConfigError(f"{where}: acts must be int64 rows of actions in [-1, "
+                          f"{model.n_actions}), one per full state")
+    width = acts.shape[1] if acts.shape[0] else model.n_actions
+    if width != n_actions:
         raise ConfigError(f"the learner has {n_actions} actions, the env's dynamics "
-                          f"{model.n_actions}: build the learner from this env's task context")
+                          f"{width}: build the learner from this env's task context")
     compact = isinstance(model, CompactModel)
     n_pos = len(model.area_of_pos)
     n_full = len(model.pos_of_state) if compact else len(model.obs_of)
-    sizes = {"*": -1, "2": 2, "A": n_actions, "O": len(model.prob), "X": n_pos, "F": n_full,
-             "PA+1": n_full * n_actions + 1, "D": model.n_doors,
+    sizes = {"*": -1, "2": 2, "A": model.n_actions, "O": len(model.prob), "X": n_pos,
+             "F": n_full, "PA+1": n_full * width + 1, "D": model.n_doors,
              "S": min(n_states, n_full) if compact else n_states}
     skip = _FULL_ONLY if compact else _COMPACT_ONLY
     check_arrays(where, model, {k: v for k, v in DYNAMICS.items() if k not in skip}, sizes)

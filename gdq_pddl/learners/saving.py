@@ -171,7 +171,8 @@ class GreedyPolicy:
     @classmethod
     def of(cls, learner: TabularLearner) -> GreedyPolicy:
         """``learner``'s greedy policy now."""
-        return cls(np.asarray(learner.greedy_policy(), dtype=np.int64), learner.q.shape[1])
+        return cls(np.asarray(learner.greedy_policy(), dtype=np.int64),
+                   learner.context.n_env_actions)
 
     def act(self, state: int, rng: np.random.Generator | None = None) -> int:
         """The policy's action in ``state`` (``rng`` unused)."""

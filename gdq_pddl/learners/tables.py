@@ -8,6 +8,11 @@ which rules run after a real step (:func:`gdq_pddl.learners.rules.observe`).
 ``guide`` is what exploration draws from. They differ for DARLING-code (a greedy action
 outside ``guide`` is replaced by a draw from it) and the default GDQ.
 
+A state's actions are the columns of its row: every learner action in the office; for a
+PDDL problem the ground actions applicable in the state (``TaskContext.columns``), left-
+packed, with padding columns (never in ``allowed`` or ``guide``) up to the longest row.
+``n_live[s]`` counts the columns of state ``s`` that are not padding.
+
 The compiled functions trust their arguments (:mod:`gdq_pddl.learners.guards` checks
 them); why the small ones are ``inline="always"``: ``docs/learners.md``, "Speed".
 """
@@ -63,6 +68,7 @@ class QTable(NamedTuple):
     guide: np.ndarray  # bool[S, A], what exploration draws from (module doc)
     n_guide: np.ndarray  # int64[S], the count of guide[s], at least 1
     goal: np.ndarray  # bool[S], goal learner states of the current task
+    n_live: np.ndarray  # int64[S], the columns of state s that are actions (module doc)
 
 
 class Model(NamedTuple):
@@ -193,9 +199,10 @@ def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
-def _draw_untried(visits: np.ndarray, s: int, rng: np.random.Generator) -> int:
+def _draw_untried(visits: np.ndarray, n_live: np.ndarray, s: int,
+                  rng: np.random.Generator) -> int:
     """A uniformly random action never tried in ``s``; any action once all were."""
-    n_actions = visits.shape[1]
+    n_actions = n_live[s]
     n = 0
     for a in range(n_actions):
         n += visits[s, a] == 0
@@ -234,7 +241,7 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
                 or not _one_step_from_goal(table.goal, prior_next, s)):
-            return _draw_untried(visits, s, rng)
+            return _draw_untried(visits, table.n_live, s, rng)
         return _draw_guided(table, s, rng)
     best = table.v[s]
     ties = 0

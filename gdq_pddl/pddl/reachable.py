@@ -28,12 +28,12 @@ from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 
 PAIR_BYTES = 150
-"""Memory one (state, ground action) pair takes at most in the true model and the
+"""Memory one (state, offered action) pair takes at most in the true model and the
 learners' tables (a model's outcomes while compiled, Q, visits, successor slots...)."""
 
 TABLE_BUDGET = 8_000_000_000
-"""Bytes the tables of states x ground actions may take (:data:`PAIR_BYTES` per pair):
-state enumeration stops with an error past it."""
+"""Bytes the tables of states x offered actions may take (:data:`PAIR_BYTES` per pair,
+every state's row as long as the longest): state enumeration stops with an error past it."""
 
 MAX_STATES: int | None = None
 """Default cap on the number of reachable states (None: what :data:`TABLE_BUDGET` allows)."""
@@ -47,6 +47,12 @@ class StateGraph:
     ``f // 64``); :attr:`states` as Python int bitmasks. The edges of state ``i`` are
     ``edge_op[edge_ptr[i]:edge_ptr[i + 1]]`` (index into ``task.ops``) and
     ``edge_next[...]`` (state index); goal states have none.
+
+    ``offered`` is what a learner may do in each state, the tables' layout (each state
+    lists its applicable ground actions, not every ground action): row ``i`` holds the
+    ground actions whose preconditions hold in state ``i`` (reality's outcomes included),
+    in increasing order, padded with -1 to the longest row; a state where none applies (a
+    goal, a dead end) lists ground action 0, which changes nothing there.
     """
 
     task: GroundTask
@@ -58,6 +64,8 @@ class StateGraph:
     """bool[n_states]: the task's goal holds (such states are not expanded)."""
     depth: np.ndarray
     """int64[n_states]: the fewest actions (edges and reality's outcomes) from state 0."""
+    offered: np.ndarray
+    """int64[n_states, width]: the ground actions offered in each state (class docstring)."""
 
     @property
     def n_states(self) -> int:
@@ -111,9 +119,40 @@ class StateGraph:
         return order[np.searchsorted(keys, _keys(rows))]
 
 
-def state_cap(n_ops: int, budget: int = TABLE_BUDGET) -> int:
-    """The most states whose tables over ``n_ops`` ground actions fit ``budget`` bytes."""
-    return budget // (PAIR_BYTES * max(1, n_ops))
+def state_cap(width: int, budget: int = TABLE_BUDGET) -> int:
+    """The most states whose tables of ``width`` actions a state fit ``budget`` bytes."""
+    return budget // (PAIR_BYTES * max(1, width))
+
+
+def offered_rows(n_states: int, state: np.ndarray, op: np.ndarray) -> np.ndarray:
+    """:attr:`StateGraph.offered` of the applicable ``(state, op)`` pairs, each once."""
+    count = np.bincount(state, minlength=n_states)
+    width = max(1, int(count.max(initial=0)))
+    order = np.lexsort((op, state))
+    state, op = state[order], op[order]
+    start = np.zeros(n_states + 1, dtype=np.int64)
+    np.cumsum(count, out=start[1:])
+    rows = np.full((n_states, width), -1, dtype=np.int64)
+    rows[state, np.arange(len(state)) - start[state]] = op
+    rows[count == 0, 0] = 0
+    return rows
+
+
+def column_of(offered: np.ndarray, state: np.ndarray, action: np.ndarray) -> np.ndarray:
+    """int64: the column of ``action[i]`` in the row of ``state[i]`` of an
+    :attr:`StateGraph.offered` table (-1 where it is not offered there)."""
+    n_states, width = offered.shape
+    live = offered >= 0
+    big = int(offered.max(initial=0)) + 1
+    keys = (np.arange(n_states, dtype=np.int64)[:, None] * big + offered)[live]
+    start = np.zeros(n_states + 1, dtype=np.int64)
+    np.cumsum(live.sum(axis=1), out=start[1:])
+    state = np.asarray(state, dtype=np.int64)
+    action = np.asarray(action, dtype=np.int64)
+    want = state * big + action
+    at = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
+    found = (keys[at] == want) & (action >= 0) & (action < big)
+    return np.where(found, at - start[state], -1)
 
 
 def _words(mask: int, n_words: int) -> np.ndarray:
@@ -207,7 +246,6 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     are reachable (None: more than :func:`state_cap` of the table budget).
     """
     n_ops = len(task.ops)
-    cap = state_cap(n_ops, TABLE_BUDGET) if max_states is None else max_states
     n_words = max(1, -(-len(task.facts) // 64))
     ops = _compiled(task, n_words)
     width = max([len(op.known) + len(op.other) for op in ops], default=1)
@@ -217,6 +255,8 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     levels = [_words(task.init, n_words)[None, :]]
     known_keys, known_ids = _keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
     goal, depth, src, op_of, nxt = [], [], [], [], []
+    app_state, app_op = [], []  # the applicable pairs: the rows of `offered`
+    width_seen = 1
     lo, n = 0, 1
     bar = slow_progress("reachable states", " states")
     while lo < n:
@@ -227,10 +267,14 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
         parent = np.flatnonzero(~is_goal)
         expand = rows[parent]
         found: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
+        n_applicable = np.zeros(len(parent), dtype=np.int64)
         for k, op in enumerate(ops):
             at = np.flatnonzero(op.applies(expand))
             if not len(at):
                 continue
+            n_applicable[at] += 1
+            app_state.append(lo + parent[at])
+            app_op.append(np.full(len(at), k, dtype=np.int64))
             here = expand[at]
             seen: list[np.ndarray] = []
             for j, effect in enumerate(op.known):
@@ -252,8 +296,10 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
         uniq, first = np.unique(keys, return_index=True)
         at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
         fresh = np.sort(first[known_keys[at] != uniq])
+        width_seen = max(width_seen, int(n_applicable.max(initial=0)))
+        cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
         if n + len(fresh) > cap:
-            raise _too_many(source, cap, max_states is None, n_ops)
+            raise _too_many(source, cap, max_states is None, width_seen)
         known_keys = np.concatenate([known_keys, keys[fresh]])
         known_ids = np.concatenate([known_ids, np.arange(n, n + len(fresh))])
         resort = np.argsort(known_keys, kind="stable")
@@ -269,20 +315,24 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     src_all = np.concatenate(src)
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])
+    offered = offered_rows(n, np.concatenate(app_state) if app_state else ptr[:0],
+                           np.concatenate(app_op) if app_op else ptr[:0])
     return StateGraph(task, np.concatenate(levels), ptr, np.concatenate(op_of).astype(np.int64),
                       np.concatenate(nxt).astype(np.int64), np.concatenate(goal),
-                      np.concatenate(depth))
+                      np.concatenate(depth), offered)
 
 
 def reality_outcomes(graph: StateGraph, gains: bool = False
                      ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The outcomes of every ground action applicable in each non-goal state of a PPDDL
-    task's graph, as rows in pair order: ``pair`` (``state * n_ops + op``), probability,
+    task's graph, as rows in pair order: ``pair`` (``state * width + column`` of the
+    graph's :attr:`~StateGraph.offered` rows), probability,
     and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
     outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
     probabilities summed in outcome order; outcomes of probability 0 are left out. A bar
     shows its steps (one per ground action, then sort, reorder, merge, order) past 2 s."""
     task, n_ops = graph.task, len(graph.task.ops)
+    width = graph.offered.shape[1]
     n_words = graph.words.shape[1]
     ops = _compiled(task, n_words)
     live = np.flatnonzero(~graph.is_goal)
@@ -295,6 +345,8 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
         if not len(at):
             continue
         here = graph.words[at]
+        row = graph.offered[at]
+        pair = at * width + ((row >= 0) & (row < k)).sum(axis=1)  # k's column: rows sorted
         for j, o in enumerate(ground.outcomes):
             if o.probability > 0:
                 same = not (o.add or o.dele or o.conditional)
@@ -306,7 +358,7 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
                     earned = earned + np.where(np.logical_or.reduce([_holds(
                         here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
                         amount, 0.0)
-                parts.append((at * n_ops + k, j, o.probability, nxt, o.stuck,
+                parts.append((pair, j, o.probability, nxt, o.stuck,
                               o.reward + earned if gains else None))
     pair = np.concatenate([p[0] for p in parts])
     j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
@@ -342,8 +394,9 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     return pair[keep], total[group[keep]], fields
 
 
-def _too_many(source: str, cap: int, budget: bool, n_ops: int) -> PlanningError:
-    why = (f"their tables over {n_ops} ground actions ({PAIR_BYTES} bytes a pair) would "
+def _too_many(source: str, cap: int, budget: bool, width: int) -> PlanningError:
+    why = (f"their tables over up to {width} applicable ground actions a state "
+           f"({PAIR_BYTES} bytes a pair) would "
            f"pass the budget of {TABLE_BUDGET / 1e9:g} GB "
            "(gdq_pddl.pddl.reachable.TABLE_BUDGET)" if budget else "the cap given")
     return PlanningError(f"{source}: more than {cap} reachable states: {why}; the learners "

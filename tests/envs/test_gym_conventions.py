@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 import gdq_pddl  # noqa: F401  (registers the envs)
 from gdq_pddl.envs import ENV_IDS, OFFICE_ID, PDDL_ID
+from gdq_pddl.envs.model import pair_of
 from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, shipped_names
 from gdq_pddl.errors import PlanningError
@@ -30,7 +31,9 @@ def make(env_id: str):
 
 def does_something(model, fs: int, a: int) -> bool:
     """Whether the true model gives (full state, action) an outcome that moves or sticks."""
-    k = fs * model.n_actions + a
+    k = pair_of(model, fs, a)
+    if k is None:  # not offered there: its preconditions fail
+        return False
     lo, hi = model.ptr[k], model.ptr[k + 1]
     return bool(np.any((model.next[lo:hi] != fs) | model.stuck[lo:hi]))
 

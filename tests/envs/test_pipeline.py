@@ -103,6 +103,8 @@ def _run_digest(exp: Experiment, method: str) -> str:
 
 # Short runs as the separate office and PDDL stacks ran them (commit e7cfd46): the office
 # with a task switch, and a PDDL problem, through the one path: same draws, same records.
+# The PDDL pins changed once since, on purpose: a PDDL state now offers the learners only
+# its applicable ground actions (docs/decisions.md, "Tables sized by what is applicable").
 OFFICE_RUN = Experiment("pin", (("C", 40), ("D", 20)), methods=("GDQ", "DARLING"), runs=1)
 KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=1,
                       world="pddl", pddl=(str(data_file("domains", "keys.pddl")),
@@ -112,6 +114,6 @@ KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=
 
 @pytest.mark.parametrize("exp,method,pinned", [
     (OFFICE_RUN, "GDQ", "4156845d332efb79"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
-    (KEYS_RUN, "GDQ", "893026f8535fb43a"), (KEYS_RUN, "Dyna-Q", "347e3e5c19ae5129")])
+    (KEYS_RUN, "GDQ", "371a82762842e5ff"), (KEYS_RUN, "Dyna-Q", "94ca498528125fed")])
 def test_a_short_run_is_the_one_it_was(exp, method, pinned):
     assert _run_digest(exp, method) == pinned

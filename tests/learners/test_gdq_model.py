@@ -28,13 +28,14 @@ TASKS = list(WORLD.tasks)
 
 
 def greedy_path(learner, ctx) -> list[tuple[int, int]]:
-    """The greedy policy's pairs from the start, followed through the prior model."""
+    """The greedy policy's pairs from the start, followed through the prior model (over
+    the context's columns)."""
     policy, nxt = learner.greedy_policy(), ctx.prior.next_state
     s, path = ctx.s0, []
     while not ctx.goal[s] and len(path) <= ctx.n_states:
         a = int(policy[s])
         path.append((s, a))
-        s = int(nxt[s, a])
+        s = int(nxt[s, ctx.column_of(s, a)])
         assert s != NO_CHANGE, f"the greedy action {a} does nothing according to the prior"
     return path
 
@@ -327,7 +328,8 @@ def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_
         for op, nexts in outcomes.items():
             several += len(nexts) > 1
             best = min(nexts, key=lambda x: (dist[x], x))
-            assert prior[s, op] == best
+            column = int(np.flatnonzero(graph.offered[s] == op)[0])  # s offers op
+            assert prior[s, column] == best
         assert (prior[s] != NO_CHANGE).sum() == len(outcomes)
     assert several > 0
 
