@@ -163,7 +163,7 @@ class TabularLearner:
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),
             epsilon=float(c.epsilon), r_max=float(context.r_max),
             n_backups=int(getattr(c, "n_backups", 0)), m=int(getattr(c, "m", 0)),
-            s0=int(context.s0), **self._extra_params())
+            s0=int(context.s0), own_scale=float(context.own_scale), **self._extra_params())
         guards.check_tables(tables, params)
         return tables, params
 

@@ -84,6 +84,9 @@ class TaskContext:
     action ``j`` in every state (the office's learner actions)."""
     n_ground_actions: int | None = None
     """The env's number of actions where :attr:`columns` is given."""
+    own_scale: bool = False
+    """Returns are on the problem's own reward scale (an IPPC file's rewards): a stuck or
+    late end costs no -r_max (:attr:`~gdq_pddl.learners.tables.Params.own_scale`)."""
 
     @property
     def n_env_actions(self) -> int:
@@ -151,7 +154,8 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         darling_plans=instance.plan_table(planner, darling_tolerance, darling_kind),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
         prior=instance.prior, columns=columns,
-        n_ground_actions=None if columns is None else instance.n_actions)
+        n_ground_actions=None if columns is None else instance.n_actions,
+        own_scale=getattr(instance, "reward_scale", "goal") == "problem")
 
 
 pddl_task_context = task_context

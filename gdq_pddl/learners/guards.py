@@ -141,7 +141,8 @@ def check_tables(t: Tables, p: Params) -> None:
         raise ConfigError(f"{where}: kind, backup, n_backups or m out of range: {p}")
     check_state("s0", p.s0, q.shape[0])
     for name in ("alpha", "gamma", "epsilon", "r_max", "opt_continue", "explore_all",
-                 "explore_all_last", "prior_cost", "sweep_threshold", "prior_weight"):
+                 "explore_all_last", "prior_cost", "sweep_threshold", "prior_weight",
+                 "own_scale"):
         x = getattr(p, name)
         if not math.isfinite(x) or abs(x) > MAX_NUMBER:
             raise ConfigError(f"{where}: {name} must be finite, at most {MAX_NUMBER:g} in "

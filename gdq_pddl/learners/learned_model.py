@@ -165,7 +165,8 @@ def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
     """The expected Bellman backup of a tried ``(s, a)`` under the learned model, with ``v``."""
     r_max, gamma = p.r_max, p.gamma
     c = mean_cost(cost_sum, cost_n, cost_all, s, a)
-    total = stuck[s, a] * -r_max
+    own = p.own_scale > 0.0  # an ending step pays its cost too, and stuck no penalty
+    total = stuck[s, a] * -c if own else stuck[s, a] * -r_max
     for j in range(slots.shape[2]):  # successors in increasing order
         here = slots[s, a, j]
         if here == 0:
@@ -173,7 +174,7 @@ def learned_value(slots: np.ndarray, stuck: np.ndarray, visits: np.ndarray,
         k = slot_count(here)
         s2 = slot_successor(here)
         if goal[s2]:
-            total += k * r_max
+            total += k * (r_max - c) if own else k * r_max
         else:
             total += k * (gamma * v[s2] - c)
     return total / visits[s, a]
@@ -198,7 +199,10 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
     """One ``(reward, next state, terminal)`` replayed from the recorded outcomes of a
     tried pair ``(s, a)`` (stuck, goal, or an ordinary step at the pair's mean cost)."""
     k = rng.integers(0, model.visits[s, a])
+    own = p.own_scale > 0.0  # as learned_value
     if k < model.stuck[s, a]:
+        if own:
+            return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s, True
         return -p.r_max, s, True
     k -= model.stuck[s, a]
     slots = model.slots  # a local: a tuple field read in a loop costs more
@@ -207,6 +211,9 @@ def sample_outcome(model: Model, goal: np.ndarray, p: Params, s: int, a: int,
         if k < 0:
             s2 = slot_successor(slots[s, a, j])
             if goal[s2]:
+                if own:
+                    c = mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a)
+                    return p.r_max - c, s2, True
                 return p.r_max, s2, True
             return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s2, False
     return -mean_cost(model.cost_sum, model.cost_n, model.cost_all, s, a), s, False

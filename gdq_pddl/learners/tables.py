@@ -57,6 +57,10 @@ class Params(NamedTuple):
     """Smallest change of a state value that prioritised sweeping propagates."""
     prior_weight: float = 0.0
     """Pseudo-observations of the prior in a known pair's model (``KIND_GDQ``)."""
+    own_scale: float = 0.0
+    """1: the problem's own reward scale (an IPPC file's rewards): the learned model charges
+    a trial that ended stuck the pair's mean step cost, not -r_max, and a step that
+    reached the goal its mean cost besides r_max, as the env pays them."""
 
 
 class QTable(NamedTuple):

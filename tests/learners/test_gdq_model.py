@@ -346,3 +346,44 @@ def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_tas
                                ctx_c.prior.next_state))
     cut = GDQ(replace(ctx_c, prior=dead))
     assert cut.v[ctx_c.s0] == pytest.approx(-p.prior_cost / (1 - p.gamma))
+
+
+# --- the problem's own reward scale ------------------------------------------------------
+
+@pytest.mark.parametrize("own", [False, True])
+def test_the_learned_model_pays_ending_steps_as_the_env_does(own):
+    """On the problem's own scale (IPPC rewards) a stuck end pays the step's cost and no
+    -r_max, and the goal step its cost besides r_max; on the goal scale -r_max and r_max."""
+    from gdq_pddl.learners.learned_model import (
+        learned_value,
+        new_model,
+        record,
+        sample_outcome,
+    )
+    from gdq_pddl.learners.tables import Params
+
+    p = Params(kind=4, alpha=0.1, gamma=1.0, epsilon=0.1, r_max=20.0, n_backups=0, m=0,
+               backup=0, s0=0, own_scale=float(own))
+    goal = np.array([False, False, True])
+    model = new_model(3, 1, 3)
+    assert record(model, goal, p, 0, 0, -3.0, 1, False, False)  # an ordinary step, cost 3
+    assert record(model, goal, p, 0, 0, -3.0, 0, True, False)  # stuck
+    assert record(model, goal, p, 0, 0, 17.0, 2, True, False)  # the goal
+    v = np.array([0.0, 5.0, 0.0])
+    value = learned_value(model.slots, model.stuck, model.visits, model.cost_sum,
+                          model.cost_n, model.cost_all, goal, v, p, 0, 0)
+    stuck, reached = (-3.0, 20.0 - 3.0) if own else (-20.0, 20.0)
+    assert value == pytest.approx((stuck + (5.0 - 3.0) + reached) / 3)
+    rng = np.random.default_rng(0)
+    seen = {sample_outcome(model, goal, p, 0, 0, rng) for _ in range(60)}
+    assert seen == {(stuck, 0, True), (-3.0, 1, False), (reached, 2, True)}
+
+
+def test_a_problem_on_its_own_scale_tells_the_learners():
+    from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.learners import make_learner, pddl_task_context
+
+    for problem, own in (("courier-1", True), ("lift-1", False)):
+        ctx = pddl_task_context(load_instance(problem.split("-")[0], problem))
+        assert ctx.own_scale is own
+        assert make_learner("GDQ", ctx).params.own_scale == float(own)

@@ -90,7 +90,7 @@ def test_the_budget_is_named(monkeypatch):
 @pytest.mark.parametrize("gains", [False, True])
 def test_reality_outcomes_merge_as_the_per_state_rule(gains):
     graph = load_instance("courier", "courier-2").graph  # conditional effects, rewards
-    task, n_ops = graph.task, len(graph.task.ops)
+    task = graph.task
     want = []
     for s, state in enumerate(graph.states):
         here = [] if graph.is_goal[s] else task.applicable(state)
