@@ -147,32 +147,31 @@ def with_noops(row_pair: np.ndarray, prob: np.ndarray, fields: list[np.ndarray],
     ``offered`` (-1) gets none. Filled without a Python loop, and with no temporary over
     all pairs but the no-ops' states, a chunk at a time (a bar counts the arrays filled
     past 2 s)."""
-    bar = slow_progress("true model", " arrays", len(fields) + 2)
-    lead = np.ones(len(row_pair), dtype=np.bool_)
-    lead[1:] = row_pair[1:] != row_pair[:-1]
-    first = np.flatnonzero(lead)
-    listed, counts = row_pair[first], np.diff(np.append(first, len(row_pair)))
-    new_ptr = np.ones(n_pairs + 1, dtype=np.int64)
-    new_ptr[0] = 0
-    if offered is not None:
-        new_ptr[1:] = offered.ravel() >= 0
-    new_ptr[listed + 1] = counts
-    np.cumsum(new_ptr, out=new_ptr)
-    at = np.repeat(new_ptr[listed] - first, counts) + np.arange(len(prob))
-    bar.update()
-    out_prob = np.ones(new_ptr[-1], dtype=np.float64)
-    out_prob[at] = prob
-    bar.update()
-    out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
-    for lo in range(0, n_pairs, NOOP_CHUNK):  # a no-op stays; listed pairs overwritten next
-        hi = min(lo + NOOP_CHUNK, n_pairs)
-        row = new_ptr[lo:hi]
-        keep = row < new_ptr[lo + 1:hi + 1]  # padding pairs have no row to write
-        out[0][row[keep]] = (np.arange(lo, hi) // width)[keep]
-    for field, given in zip(out, fields, strict=True):
-        field[at] = given
+    with slow_progress("true model", " arrays", len(fields) + 2) as bar:
+        lead = np.ones(len(row_pair), dtype=np.bool_)
+        lead[1:] = row_pair[1:] != row_pair[:-1]
+        first = np.flatnonzero(lead)
+        listed, counts = row_pair[first], np.diff(np.append(first, len(row_pair)))
+        new_ptr = np.ones(n_pairs + 1, dtype=np.int64)
+        new_ptr[0] = 0
+        if offered is not None:
+            new_ptr[1:] = offered.ravel() >= 0
+        new_ptr[listed + 1] = counts
+        np.cumsum(new_ptr, out=new_ptr)
+        at = np.repeat(new_ptr[listed] - first, counts) + np.arange(len(prob))
         bar.update()
-    bar.close()
+        out_prob = np.ones(new_ptr[-1], dtype=np.float64)
+        out_prob[at] = prob
+        bar.update()
+        out = [np.zeros(new_ptr[-1], dtype=f.dtype) for f in fields]
+        for lo in range(0, n_pairs, NOOP_CHUNK):  # a no-op stays; listed pairs overwritten next
+            hi = min(lo + NOOP_CHUNK, n_pairs)
+            row = new_ptr[lo:hi]
+            keep = row < new_ptr[lo + 1:hi + 1]  # padding pairs have no row to write
+            out[0][row[keep]] = (np.arange(lo, hi) // width)[keep]
+        for field, given in zip(out, fields, strict=True):
+            field[at] = given
+            bar.update()
     return new_ptr, out_prob, out
 
 

@@ -246,27 +246,26 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         return None if atom.predicate in fluent else str(atom) in statics
 
     raw = []
-    bar = slow_progress("grounding", " actions")
-    for action in domain.actions:
-        def too_many(action: Action = action) -> PDDLError:
-            return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
-                             f"condition or forall effect grows past {MAX_DISJUNCTS} "
-                             f"alternatives or {MAX_ATOMS} atoms once grounded over the "
-                             "problem's objects")
-        whole = Junction("and", action.precondition + ((action.condition,)
-                                                       if action.condition else ()))
-        for b in _bindings(action, static_tuples, by_type, typed, fluent):
-            bar.update()
-            pre = ground_dnf(whole, b, objects, static, too_many)
-            if pre:
-                def value(term, binding, action: Action = action) -> float:
-                    return term_value(term, binding, domain, problem, action,
-                                      f"a reward of {action.name}")
-                outs = [_ground_outcome(o, b, objects, static, fluent, too_many, value)
-                        for o in _outcomes_of(action)]
-                args = tuple(b[p] for p, _ in action.parameters)
-                raw.append((action, args, pre, outs))
-    bar.close()
+    with slow_progress("grounding", " actions") as bar:
+        for action in domain.actions:
+            def too_many(action: Action = action) -> PDDLError:
+                return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
+                                 f"condition or forall effect grows past {MAX_DISJUNCTS} "
+                                 f"alternatives or {MAX_ATOMS} atoms once grounded over the "
+                                 "problem's objects")
+            whole = Junction("and", action.precondition + ((action.condition,)
+                                                           if action.condition else ()))
+            for b in _bindings(action, static_tuples, by_type, typed, fluent):
+                bar.update()
+                pre = ground_dnf(whole, b, objects, static, too_many)
+                if pre:
+                    def value(term, binding, action: Action = action) -> float:
+                        return term_value(term, binding, domain, problem, action,
+                                          f"a reward of {action.name}")
+                    outs = [_ground_outcome(o, b, objects, static, fluent, too_many, value)
+                            for o in _outcomes_of(action)]
+                    args = tuple(b[p] for p, _ in action.parameters)
+                    raw.append((action, args, pre, outs))
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, live = _relaxed(raw, init)
     facts = tuple(sorted(reached))

@@ -258,60 +258,59 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     app_state, app_op = [], []  # the applicable pairs: the rows of `offered`
     width_seen = 1
     lo, n = 0, 1
-    bar = slow_progress("reachable states", " states")
-    while lo < n:
-        rows = levels[-1]
-        is_goal = _goal_rows(task, rows)
-        goal.append(is_goal)
-        depth.append(np.full(len(rows), len(depth), dtype=np.int64))
-        parent = np.flatnonzero(~is_goal)
-        expand = rows[parent]
-        found: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
-        n_applicable = np.zeros(len(parent), dtype=np.int64)
-        for k, op in enumerate(ops):
-            at = np.flatnonzero(op.applies(expand))
-            if not len(at):
-                continue
-            n_applicable[at] += 1
-            app_state.append(lo + parent[at])
-            app_op.append(np.full(len(at), k, dtype=np.int64))
-            here = expand[at]
-            seen: list[np.ndarray] = []
-            for j, effect in enumerate(op.known):
-                t = _apply(here, effect)
-                new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
-                    if seen else np.ones(len(t), dtype=np.bool_)
-                seen.append(t)
-                found.append((t[new], at[new], k * width + j))
-            for j, effect in enumerate(op.other):
-                found.append((_apply(here, effect), at,
-                              (n_ops + reality_rank[k]) * width + j))
-        cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
-        who = np.concatenate([f[1] for f in found]) if found else parent[:0]
-        rank = np.concatenate([np.full(len(f[1]), f[2], dtype=np.int64) for f in found]) \
-            if found else parent[:0]
-        order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
-        cand, who, rank = cand[order], who[order], rank[order]
-        keys = _keys(cand)
-        uniq, first = np.unique(keys, return_index=True)
-        at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
-        fresh = np.sort(first[known_keys[at] != uniq])
-        width_seen = max(width_seen, int(n_applicable.max(initial=0)))
-        cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
-        if n + len(fresh) > cap:
-            raise _too_many(source, cap, max_states is None, width_seen)
-        known_keys = np.concatenate([known_keys, keys[fresh]])
-        known_ids = np.concatenate([known_ids, np.arange(n, n + len(fresh))])
-        resort = np.argsort(known_keys, kind="stable")
-        known_keys, known_ids = known_keys[resort], known_ids[resort]
-        edge = rank < n_ops * width
-        src.append(lo + parent[who[edge]])
-        op_of.append(rank[edge] // width)
-        nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
-        bar.update(len(rows))
-        levels.append(cand[fresh])
-        lo, n = n, n + len(fresh)
-    bar.close()
+    with slow_progress("reachable states", " states") as bar:
+        while lo < n:
+            rows = levels[-1]
+            is_goal = _goal_rows(task, rows)
+            goal.append(is_goal)
+            depth.append(np.full(len(rows), len(depth), dtype=np.int64))
+            parent = np.flatnonzero(~is_goal)
+            expand = rows[parent]
+            found: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
+            n_applicable = np.zeros(len(parent), dtype=np.int64)
+            for k, op in enumerate(ops):
+                at = np.flatnonzero(op.applies(expand))
+                if not len(at):
+                    continue
+                n_applicable[at] += 1
+                app_state.append(lo + parent[at])
+                app_op.append(np.full(len(at), k, dtype=np.int64))
+                here = expand[at]
+                seen: list[np.ndarray] = []
+                for j, effect in enumerate(op.known):
+                    t = _apply(here, effect)
+                    new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
+                        if seen else np.ones(len(t), dtype=np.bool_)
+                    seen.append(t)
+                    found.append((t[new], at[new], k * width + j))
+                for j, effect in enumerate(op.other):
+                    found.append((_apply(here, effect), at,
+                                  (n_ops + reality_rank[k]) * width + j))
+            cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
+            who = np.concatenate([f[1] for f in found]) if found else parent[:0]
+            rank = np.concatenate([np.full(len(f[1]), f[2], dtype=np.int64) for f in found]) \
+                if found else parent[:0]
+            order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
+            cand, who, rank = cand[order], who[order], rank[order]
+            keys = _keys(cand)
+            uniq, first = np.unique(keys, return_index=True)
+            at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
+            fresh = np.sort(first[known_keys[at] != uniq])
+            width_seen = max(width_seen, int(n_applicable.max(initial=0)))
+            cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
+            if n + len(fresh) > cap:
+                raise _too_many(source, cap, max_states is None, width_seen)
+            known_keys = np.concatenate([known_keys, keys[fresh]])
+            known_ids = np.concatenate([known_ids, np.arange(n, n + len(fresh))])
+            resort = np.argsort(known_keys, kind="stable")
+            known_keys, known_ids = known_keys[resort], known_ids[resort]
+            edge = rank < n_ops * width
+            src.append(lo + parent[who[edge]])
+            op_of.append(rank[edge] // width)
+            nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
+            bar.update(len(rows))
+            levels.append(cand[fresh])
+            lo, n = n, n + len(fresh)
     src_all = np.concatenate(src)
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])
@@ -338,58 +337,57 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     live = np.flatnonzero(~graph.is_goal)
     rows = graph.words[live]
     parts: list[tuple] = []
-    bar = slow_progress("true model", " steps", n_ops + 4)
-    for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+    with slow_progress("true model", " steps", n_ops + 4) as bar:
+        for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+            bar.update()
+            at = live[op.applies(rows)]
+            if not len(at):
+                continue
+            here = graph.words[at]
+            row = graph.offered[at]
+            pair = at * width + ((row >= 0) & (row < k)).sum(axis=1)  # k's column: rows sorted
+            for j, o in enumerate(ground.outcomes):
+                if o.probability > 0:
+                    same = not (o.add or o.dele or o.conditional)
+                    nxt = at if o.stuck or same else graph.lookup(_apply(here, (
+                        _words(o.add, n_words), _words(o.dele, n_words),
+                        tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
+                    earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
+                    for alts, amount in o.rewards:
+                        earned = earned + np.where(np.logical_or.reduce([_holds(
+                            here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
+                            amount, 0.0)
+                    parts.append((pair, j, o.probability, nxt, o.stuck,
+                                  o.reward + earned if gains else None))
+        pair = np.concatenate([p[0] for p in parts])
+        j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
+        prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
+        nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
+        stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
+        gain = np.concatenate([p[5] for p in parts]) if gains else None
+        del parts  # one copy of the rows at a time: they are most of the peak memory
+        # equal keys of a pair side by side, in outcome order; each group's first row leads
+        key = (pair * graph.n_states + nxt) * 2 + stuck
+        order = np.lexsort((j, gain, key) if gains else (j, key))
         bar.update()
-        at = live[op.applies(rows)]
-        if not len(at):
-            continue
-        here = graph.words[at]
-        row = graph.offered[at]
-        pair = at * width + ((row >= 0) & (row < k)).sum(axis=1)  # k's column: rows sorted
-        for j, o in enumerate(ground.outcomes):
-            if o.probability > 0:
-                same = not (o.add or o.dele or o.conditional)
-                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
-                    _words(o.add, n_words), _words(o.dele, n_words),
-                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
-                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
-                for alts, amount in o.rewards:
-                    earned = earned + np.where(np.logical_or.reduce([_holds(
-                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
-                        amount, 0.0)
-                parts.append((pair, j, o.probability, nxt, o.stuck,
-                              o.reward + earned if gains else None))
-    pair = np.concatenate([p[0] for p in parts])
-    j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
-    prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
-    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
-    stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
-    gain = np.concatenate([p[5] for p in parts]) if gains else None
-    del parts  # one copy of the rows at a time: they are most of the peak memory
-    # equal keys of a pair side by side, in outcome order; each group's first row leads
-    key = (pair * graph.n_states + nxt) * 2 + stuck
-    order = np.lexsort((j, gain, key) if gains else (j, key))
-    bar.update()
-    key, pair, j, prob = key[order], pair[order], j[order], prob[order]
-    nxt, stuck = nxt[order], stuck[order]
-    gain = gain[order] if gains else None
-    del order
-    bar.update()
-    lead = np.ones(len(pair), dtype=np.bool_)
-    lead[1:] = key[1:] != key[:-1]
-    if gains:
-        lead[1:] |= gain[1:] != gain[:-1]
-    group = np.cumsum(lead) - 1
-    total = np.zeros(group[-1] + 1 if len(group) else 0)
-    place = np.arange(len(group)) - np.flatnonzero(lead)[group]
-    for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
-        total[group[place == r]] += prob[place == r]
-    bar.update()
-    first = np.flatnonzero(lead)
-    keep = first[np.lexsort((j[first], pair[first]))]
-    bar.update()
-    bar.close()
+        key, pair, j, prob = key[order], pair[order], j[order], prob[order]
+        nxt, stuck = nxt[order], stuck[order]
+        gain = gain[order] if gains else None
+        del order
+        bar.update()
+        lead = np.ones(len(pair), dtype=np.bool_)
+        lead[1:] = key[1:] != key[:-1]
+        if gains:
+            lead[1:] |= gain[1:] != gain[:-1]
+        group = np.cumsum(lead) - 1
+        total = np.zeros(group[-1] + 1 if len(group) else 0)
+        place = np.arange(len(group)) - np.flatnonzero(lead)[group]
+        for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
+            total[group[place == r]] += prob[place == r]
+        bar.update()
+        first = np.flatnonzero(lead)
+        keep = first[np.lexsort((j[first], pair[first]))]
+        bar.update()
     fields = [nxt[keep], stuck[keep]] + ([gain[keep]] if gains else [])
     return pair[keep], total[group[keep]], fields
 

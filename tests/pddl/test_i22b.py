@@ -47,3 +47,15 @@ def test_true_model_rows_count_their_steps(bars):
     assert len(pair) == 2 * 6 * 2**5  # each off switch of each state: flipped or not
     [model] = [bar for bar in bars if bar.desc.startswith("true model")]
     assert model.n == model.total == 6 + 4  # a step per ground action, then 4 stages
+
+
+def test_a_refusal_midway_clears_its_bar_before_the_message(bars):
+    """Each slow step's bar is a ``with`` block: an error inside it closes the bar first
+    (a closed tqdm bar is disabled), so the message is not printed over a bar."""
+    from gdq_pddl.errors import PlanningError
+
+    task = PlanningProblem.from_texts(SWITCHES, switches(6), "d.pddl", "p.pddl").learner_task
+    with pytest.raises(PlanningError, match="more than 5 reachable states"):
+        reachable_graph(task, max_states=5)
+    [enumerating] = [bar for bar in bars if bar.desc.startswith("reachable states")]
+    assert enumerating.disable  # closed
