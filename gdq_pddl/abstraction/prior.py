@@ -95,14 +95,18 @@ def prior_from_graph(graph) -> PriorModel:
     several outcomes of one action (a PPDDL determinisation), the one closest to the goal
     (ties: the lowest state index)."""
     nxt = np.full(graph.offered.shape, NO_CHANGE, dtype=np.int64)
-    src = np.repeat(np.arange(graph.n_states), np.diff(graph.edge_ptr))
-    dist = graph.distances.astype(np.float64)
-    dist[dist < 0] = np.inf
-    # sorted by (state, action), the best edge of each last; keep only those last edges
-    # (a fancy assignment with repeated indices has no defined winner)
-    order = np.lexsort((-graph.edge_next, -dist[graph.edge_next], graph.edge_op, src))
-    s, op, to = src[order], graph.edge_op[order], graph.edge_next[order]
-    last = np.ones(len(s), dtype=bool)
-    last[:-1] = (s[1:] != s[:-1]) | (op[1:] != op[:-1])
-    nxt[s[last], column_of(graph.offered, s[last], op[last])] = to[last]
+    n = graph.n_states
+    src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
+    op, to = graph.edge_op, graph.edge_next
+    pair = src * (int(op.max(initial=0)) + 1) + op
+    if len(pair) and (np.diff(pair) < 0).any():  # the graph lists a state's edges by action
+        order = np.argsort(pair, kind="stable")
+        pair, src, op, to = pair[order], src[order], op[order], to[order]
+    if not len(pair):
+        return PriorModel(nxt)
+    dist = np.where(graph.distances < 0, n + 1, graph.distances)  # unreachable: farthest
+    key = dist[to] * (n + 2) + to  # closest to the goal, then the lowest state index
+    first = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
+    best = np.minimum.reduceat(key, first)
+    nxt[src[first], column_of(graph.offered, src[first], op[first])] = best % (n + 2)
     return PriorModel(nxt)

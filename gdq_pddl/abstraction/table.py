@@ -101,19 +101,22 @@ class PlanTable:
     def start_pairs(self, s0: int) -> np.ndarray:
         """bool[n_states, n_actions]: the pairs on some plan from ``s0`` (OptInit's)."""
         out = np.zeros_like(self.first_actions, dtype=np.bool_)
-        if self.layers is not None:  # the shortest-path graph: forward from s0
-            s, a = self.layers[:, 0], self.layers[:, 1]
-            nxt = self.layers[:, 2]
+        if self.layers is not None:  # the shortest-path graph: breadth first from s0
+            order = np.argsort(self.layers[:, 0], kind="stable")
+            s, a, nxt = (self.layers[order, k] for k in range(3))
+            ptr = np.searchsorted(s, np.arange(self.n_states + 1))
             seen = np.zeros(self.n_states, dtype=np.bool_)
-            seen[s0] = self.length[s0] > 0
-            while True:
-                on = seen[s]
-                out[s[on], a[on]] = True
-                grown = seen.copy()
-                grown[nxt[on]] = True
-                if (grown == seen).all():
-                    return out
-                seen = grown
+            frontier = np.array([s0] if self.length[s0] > 0 else [], dtype=np.int64)
+            seen[frontier] = True
+            while len(frontier):
+                lo, hi = ptr[frontier], ptr[frontier + 1]
+                edges = np.repeat(lo - np.cumsum(hi - lo) + (hi - lo), hi - lo) + \
+                    np.arange(int((hi - lo).sum()))
+                out[s[edges], a[edges]] = True
+                reached = np.unique(nxt[edges])
+                frontier = reached[~seen[reached]]
+                seen[frontier] = True
+            return out
         for k in range(self.plan_ptr[s0], self.plan_ptr[s0 + 1]):
             lo, hi = self.pair_ptr[k], self.pair_ptr[k + 1]
             out[self.pair_state[lo:hi], self.pair_action[lo:hi]] = True

@@ -95,3 +95,19 @@ def test_learners_act_and_learn_in_env_actions(inst):
         bad = next(a for a in range(inst.n_actions) if a not in inst.columns[s])
         with pytest.raises(ValueError, match="not offered in state"):
             learner.observe(s, bad, -1.0, s, False, False, rng)
+
+
+def test_the_prior_is_each_offered_actions_edge_closest_to_the_goal(inst):
+    """prior_from_graph against its definition, state by state: per offered action, the
+    planner edge closest to the goal (ties: the lowest state), else no change."""
+    graph = inst.graph
+    dist = np.where(graph.distances < 0, np.inf, graph.distances)
+    prior = inst.prior.next_state
+    assert prior.shape == graph.offered.shape
+    for s in range(graph.n_states):
+        best: dict[int, int] = {}
+        for op, nxt in graph.edges(s):
+            if op not in best or (dist[nxt], nxt) < (dist[best[op]], best[op]):
+                best[op] = nxt
+        want = [best.get(int(a), -1) for a in graph.offered[s]]
+        assert prior[s].tolist() == want
