@@ -92,6 +92,9 @@ def once(kind: str, n: int, episodes: int) -> dict[str, float]:
 
     records = timed("learning", learn)
     out["states"], out["actions"] = inst.n_states, inst.n_actions
+    columns = getattr(inst, "columns", None)  # None: a version with dense tables
+    out["width"] = inst.n_actions if columns is None else columns.shape[1]
+    out["applicable"] = float("nan") if columns is None else int((columns >= 0).sum())
     out["v_star"] = float("nan") if v is None else v
     out["mean_return"] = float(np.mean(records.returns))
     out["total"] = sum(out[k] for k in ("parse", "enumerate", "model", "V*", "prior", "plans",
@@ -123,6 +126,8 @@ def main() -> None:
     print(f"{args.kind} {args.n}: {int(med['states'])} states, {int(med['actions'])} ground "
           f"actions, GDQ {args.episodes} episodes, median of {len(runs)} run(s); V* budget "
           f"{VSTAR_BUDGET}")
+    print(f"  tables {int(med['states'])} x {int(med['width'])} columns (a state's row; "
+          f"{med['applicable']:,.0f} applicable pairs)")
     for k in ("parse", "enumerate", "model", "V*", "prior", "plans", "learning", "total"):
         print(f"  {k:>9} {med[k]:8.1f} s")
     print(f"  peak memory {med['peak_bytes'] / 1e9:.2f} GB; CPU {med['cpu']:.1f} s (the "
