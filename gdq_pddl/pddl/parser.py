@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import string
+import warnings
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import partial
@@ -122,8 +123,18 @@ class _Reader:
             else:
                 stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
             line += tok.count("\n")
+        suspect = _suspect_unclosed(self.text) if len(stack) > 1 else None
+        if len(stack) == 2 and stack[1][1][:1] and stack[1][1][0].symbol == "define" and \
+                suspect in (None, stack[1][0]):
+            # only the last (define ...) is open at the end, and the indentation does not
+            # point at a '(' inside it: pddlgym ships files that lack the define's final
+            # ')' (navigation2-10) and reads them; so do we, saying so
+            start, items = stack.pop()
+            warnings.warn(f"{self.source}:{start}: this (define ...) is never closed; read as "
+                          "if the file ended with its ')'", stacklevel=2)
+            top.append(Node(start, tuple(items)))
         if len(stack) > 1:
-            line = _suspect_unclosed(self.text) or stack[-1][0]
+            line = suspect or stack[-1][0]
             raise self.fail(line, "expected ')': this '(' is never closed")
         if not top:
             raise self.fail(None, "empty file: expected (define ...)")

@@ -96,3 +96,19 @@ def test_a_bare_name_that_is_no_zero_ary_predicate_or_cost_is_refused(effect, me
         :effect {effect}))"""
     with pytest.raises(PDDLError, match=message):
         parse_domain(text, "d.pddl")
+
+
+def test_a_last_define_missing_only_its_final_parenthesis_is_read_with_a_warning():
+    # as pddlgym's navigation2-10 domains are shipped; anything else left open at the end
+    # is still an error (an action cut short, a second form open inside the define)
+    cut = PARENTHESISED[:PARENTHESISED.index("(define (problem")].rstrip()[:-1] + "\n"
+    with pytest.warns(UserWarning, match=r"^l.pddl:1: this \(define \.\.\.\) is never "
+                                         r"closed; read as if the file ended with its '\)'"):
+        assert parse_domain(cut, "l.pddl") == parse_domain(PARENTHESISED, "l.pddl")
+    inner = cut.replace("(broken) (warned))", "(broken) (warned)")
+    with pytest.raises(PDDLError, match=r"^l.pddl:3: expected '\)': this '\(' is never "
+                                        "closed"):
+        parse_domain(inner, "l.pddl")
+    action_cut = cut[:cut.index(":effect (and (not (broken)) (warned)")]
+    with pytest.raises(PDDLError, match="never closed"):
+        parse_domain(action_cut, "l.pddl")
