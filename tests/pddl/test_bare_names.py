@@ -7,8 +7,11 @@ or function is still refused where it stands."""
 
 from __future__ import annotations
 
+import warnings
+
 import pytest
 
+from gdq_pddl import cli
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.ppddl import ground_ppddl
@@ -112,3 +115,23 @@ def test_a_last_define_missing_only_its_final_parenthesis_is_read_with_a_warning
     action_cut = cut[:cut.index(":effect (and (not (broken)) (warned)")]
     with pytest.raises(PDDLError, match="never closed"):
         parse_domain(action_cut, "l.pddl")
+
+
+def test_the_command_line_runs_it_and_shows_the_warning_as_one_line(capsys, tmp_path):
+    cut = PARENTHESISED[:PARENTHESISED.index("(define (problem")].rstrip()[:-1] + "\n"
+    domain, problem = tmp_path / "lamp.pddl", tmp_path / "lamp-1.pddl"
+    domain.write_text(cut, encoding="utf-8")
+    problem.write_text(PARENTHESISED[PARENTHESISED.index("(define (problem"):],
+                       encoding="utf-8")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = cli.main(["run", "--domain", str(domain), "--problem", str(problem),
+                         "--episodes", "2", "--runs", "1", "--method", "Q-learning",
+                         "--jobs", "1", "--no-report", "--out", str(tmp_path / "out")])
+    out = capsys.readouterr()
+    assert code == 0, out.out + out.err
+    shown = {cli._format_warning(w.message, w.category, w.filename, w.lineno)
+             for w in caught if "never closed" in str(w.message)}
+    # one line naming the user's file and line, not the library line that warned
+    assert shown == {f"gdq-pddl: warning: {domain}:1: this (define ...) is never closed; "
+                     "read as if the file ended with its ')'\n"}
