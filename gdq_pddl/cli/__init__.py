@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from typing import TextIO
 
@@ -45,6 +46,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return EXIT_ERROR
     stdout, sys.stdout = sys.stdout, _NamedOutput(sys.stdout)
+    formatwarning, warnings.formatwarning = warnings.formatwarning, _format_warning
     try:
         code = args.func(args)
         sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
@@ -71,6 +73,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_ERROR
     finally:
         sys.stdout = stdout
+        warnings.formatwarning = formatwarning
+
+
+def _format_warning(message: Warning | str, category: type[Warning], filename: str,
+                    lineno: int, line: str | None = None) -> str:
+    """A warning as one line that names what it is about (a user's file, in the message),
+    not the library line that raised it."""
+    return f"gdq-pddl: warning: {message}\n"
 
 
 class _NamedOutput:

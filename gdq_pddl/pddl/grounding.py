@@ -104,33 +104,44 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     fluent, static_tuples, by_type, typed = _index(domain, problem)
     bindings = ((action, b) for action in domain.actions
                 for b in _bindings(action, static_tuples, by_type, typed, fluent))
-    pending = [_instantiate(action, b, fluent)
-               for action, b in slow_progress("grounding", " actions", iterable=bindings)]
+    with slow_progress("grounding", " actions", iterable=bindings) as bar:
+        pending = [_instantiate(action, b, fluent) for action, b in bar]
     init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
-    reached = set(init_fluents)
-    live = []
-    changed = True
-    while changed:
-        changed, rest = False, []
-        for op in pending:
-            if op[1] <= reached:
-                live.append(op)
-                reached |= op[3]
-                changed = True
-            else:
-                rest.append(op)
-        pending = rest
+    reached, live = relaxed_reachable(pending, init_fluents)
     facts = tuple(sorted(reached))
     index = {f: i for i, f in enumerate(facts)}
 
     def m(atoms: set[str]) -> int:
         return sum(1 << index[a] for a in atoms if a in index)
 
-    ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add)) for name, pre, neg, add, dele
-                in slow_progress("grounding", " actions", len(live), live))
+    with slow_progress("grounding", " actions", len(live), live) as bar:
+        ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
+                    for name, pre, neg, add, dele in bar)
     static_strs = {str(a) for a in problem.init if a.predicate not in fluent}
     return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
                       fact_index=index, **goal_masks(problem, fluent, static_strs, index))
+
+
+def relaxed_reachable(pending: list[tuple], init: set[str]) -> tuple[set[str], list[tuple]]:
+    """The facts reachable from ``init`` with deletes ignored, and the ground actions
+    ``(name, pre, neg, add, dele)`` of ``pending`` whose positive preconditions they hold
+    (in the order they were found); a bar counts those actions past 2 s."""
+    reached = set(init)
+    live: list[tuple] = []
+    with slow_progress("relaxed reachability", " actions", len(pending)) as bar:
+        changed = True
+        while changed:
+            changed, rest = False, []
+            for op in pending:
+                if op[1] <= reached:
+                    live.append(op)
+                    reached |= op[3]
+                    changed = True
+                    bar.update()
+                else:
+                    rest.append(op)
+            pending = rest
+    return reached, live
 
 
 def _index(domain: Domain, problem: Problem) -> tuple[

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import re
 import string
+import warnings
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import partial
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
@@ -121,8 +123,18 @@ class _Reader:
             else:
                 stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
             line += tok.count("\n")
+        suspect = _suspect_unclosed(self.text) if len(stack) > 1 else None
+        if len(stack) == 2 and stack[1][1][:1] and stack[1][1][0].symbol == "define" and \
+                suspect in (None, stack[1][0]):
+            # only the last (define ...) is open at the end, and the indentation does not
+            # point at a '(' inside it: pddlgym ships files that lack the define's final
+            # ')' (navigation2-10) and reads them; so do we, saying so
+            start, items = stack.pop()
+            warnings.warn(f"{self.source}:{start}: this (define ...) is never closed; read as "
+                          "if the file ended with its ')'", stacklevel=2)
+            top.append(Node(start, tuple(items)))
         if len(stack) > 1:
-            line = _suspect_unclosed(self.text) or stack[-1][0]
+            line = suspect or stack[-1][0]
             raise self.fail(line, "expected ')': this '(' is never closed")
         if not top:
             raise self.fail(None, "empty file: expected (define ...)")
@@ -484,6 +496,7 @@ class _Effects:
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
         r, ctx = self.r, self.ctx
+        node = _bare(r, node) if node is not None else None
         items = r.lst(node, "an effect") if node is not None else ()
         if not items:
             return [(Fraction(1), ())]
@@ -509,6 +522,7 @@ class _Effects:
             self.conditional = True  # a reward of the outcome or the state
             return [(Fraction(1), (Reward(term, sign, self.variables, self.when),))]
         if head == "not":
+            items = (items[0], *map(partial(_bare, r), items[1:]))
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
                 raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
@@ -585,7 +599,7 @@ class _Effects:
         ``(increase (total-cost) X)`` (sign -1)."""
         r, ctx = self.r, self.ctx
         head = items[0].symbol
-        target = items[1] if len(items) == 3 else None
+        target = _bare_term(items[1]) if len(items) == 3 else None
         fluent = target.items[0].symbol if target is not None and target.is_list and \
             len(target.items) == 1 else None
         if fluent not in COST_FLUENTS:
@@ -597,6 +611,8 @@ class _Effects:
         self.reward_effects |= fluent == "reward"
         sign = 1.0 if (head, fluent) == ("increase", "reward") else -1.0
         value = items[2]
+        if not value.is_list and r.functions.get(value.symbol) == ():
+            value = _bare_term(value)
         if not value.is_list:
             number = _number(r, value, ctx)
             if number is None or number < 0:
@@ -666,6 +682,7 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
 def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condition:
     """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
     :class:`Junction` kinds, for :func:`~gdq_pddl.pddl.normalise.nnf`)."""
+    node = _bare(r, node)
     items = r.lst(node, "a formula")
     if not items:
         return Junction("and", ())
@@ -700,10 +717,26 @@ def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condi
     return Literal(_atom(r, node, scope, ctx), True)
 
 
+def _bare(r: _Reader, node: Node) -> Node:
+    """``node``, or, if it is the bare name of a declared 0-ary predicate (``dead`` for
+    ``(dead)``, as published IPPC domains write it), its atom ``(dead)``."""
+    if not node.is_list and r.predicates.get(node.symbol) == ():
+        return Node(node.line, (node,))
+    return node
+
+
+def _bare_term(node: Node) -> Node:
+    """A function term written without parentheses (``reward`` for ``(reward)``: PDDL
+    2.1's ``<f-head> ::= <function-symbol>``, as published IPPC domains write it) as the
+    term; any other node as it is."""
+    return Node(node.line, (node,)) if not node.is_list else node
+
+
 def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str,
           effect: bool = False) -> Atom:
     """An atom of a declared predicate; (stuck) only in an ``effect``: it marks a failed
     trial, never part of a state."""
+    node = _bare(r, node)
     items = r.lst(node, "an atom")
     if not items:
         raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
@@ -837,7 +870,7 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init:
 def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
     """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
     items = r.lst(node, "(= TERM NUMBER)")
-    term = items[1] if len(items) == 3 else None
+    term = _bare_term(items[1]) if len(items) == 3 else None
     head = term.items if term is not None and term.is_list else None
     if not head or head[0].is_list:
         raise r.fail(node.line, f"init: expected (= (FUNCTION ARGS...) NUMBER), found "
@@ -867,9 +900,10 @@ def _goal_reward(r: _Reader, node: Node) -> float:
 
 def _metric(r: _Reader, node: Node) -> str:
     """The metric, one of those that keep the task (maximise the reward, minimise costs)."""
-    text = node.text()
+    items = r.lst(node, "(:metric maximize (reward))")
+    text = Node(node.line, (*items[:2], *map(_bare_term, items[2:3]), *items[3:])).text()
     if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
-        raise r.fail(node.line, f"{text} is not supported: the metrics read are (:metric "
+        raise r.fail(node.line, f"{node.text()} is not supported: the metrics read are (:metric "
                      "maximize (reward)) and (:metric minimize (total-cost)) "
                      "(docs/domains.md, \"Rewards\")")
     return text[len("(:metric "):-1]

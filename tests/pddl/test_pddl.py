@@ -37,7 +37,7 @@ def test_tiny_domain_grounds_to_its_static_links():
 
 
 @pytest.mark.parametrize(("text", "line", "expected"), [
-    (TINY_DOMAIN[:TINY_DOMAIN.index("(:action")], 1, "never closed"),
+    (TINY_DOMAIN[:TINY_DOMAIN.index(":effect")], 5, "never closed"),
     (TINY_DOMAIN.replace("(link ?a ?b))\n", "(link ?a ?b)\n"), 6, "never closed"),
     (TINY_DOMAIN.replace("(link ?a ?b))", "(lnk ?a ?b))"), 6, "unknown predicate 'lnk'"),
     (TINY_DOMAIN.replace("(at ?b)", "(at ?c)"), 7, "unknown variable '?c'"),
