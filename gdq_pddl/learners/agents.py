@@ -330,6 +330,16 @@ class Darling(TabularLearner):
         return self._plan_actions(context) if self.config.variant == "code" else allowed
 
 
+def prior_step_cost(prior_cost: float, context: TaskContext) -> float:
+    """The step cost GDQ's prior charges: ``prior_cost``, and on a problem's own reward
+    scale at most ``r_max / step_limit``. There a step may cost nothing (an IPPC goal
+    reward of 1, free actions): a prior that charged 1 a step would value every plan of
+    more than one action below a loop of free steps, and GDQ would learn to do nothing."""
+    if context.own_scale and context.step_limit:
+        return float(min(prior_cost, context.r_max / context.step_limit))
+    return float(prior_cost)
+
+
 def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
     """The context's plans within ``tolerance`` (its shortest plans for 0)."""
     if not tolerance:
@@ -395,7 +405,7 @@ class GDQ(TabularLearner):
             return shared
         return {**shared, "explore_all": float(c.explore_all),
                 "explore_all_last": float(c.explore_all_last_step),
-                "prior_cost": float(c.prior_cost),
+                "prior_cost": prior_step_cost(c.prior_cost, self.context),
                 "sweep_threshold": float(c.sweep_threshold),
                 "prior_weight": float(c.prior_weight)}
 

@@ -87,6 +87,9 @@ class TaskContext:
     own_scale: bool = False
     """Returns are on the problem's own reward scale (an IPPC file's rewards): a stuck or
     late end costs no -r_max (:attr:`~gdq_pddl.learners.tables.Params.own_scale`)."""
+    step_limit: int | None = None
+    """The env's step limit where :attr:`own_scale` (GDQ's prior caps its step cost by
+    ``r_max / step_limit`` there)."""
 
     @property
     def n_env_actions(self) -> int:
@@ -155,7 +158,8 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
-        own_scale=getattr(instance, "reward_scale", "goal") == "problem")
+        **({"own_scale": True, "step_limit": int(instance.model.step_limit)}
+           if getattr(instance, "reward_scale", "goal") == "problem" else {}))
 
 
 pddl_task_context = task_context

@@ -387,3 +387,22 @@ def test_a_problem_on_its_own_scale_tells_the_learners():
         ctx = pddl_task_context(load_instance(problem.split("-")[0], problem))
         assert ctx.own_scale is own
         assert make_learner("GDQ", ctx).params.own_scale == float(own)
+
+
+def test_the_prior_step_cost_keeps_every_plan_within_the_limit_worth_doing_on_own_scale():
+    """On a problem's own scale a step may cost nothing: the prior's step cost is capped
+    at r_max / step_limit there (unchanged on the goal scale)."""
+    from dataclasses import replace
+
+    from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.learners import make_learner, pddl_task_context
+    from gdq_pddl.learners.agents import prior_step_cost
+
+    ctx = pddl_task_context(load_instance("courier", "courier-2"))
+    assert ctx.own_scale and ctx.step_limit == 20 and ctx.r_max == 20.0
+    assert prior_step_cost(1.0, ctx) == 1.0
+    small = replace(ctx, r_max=1.0)  # an IPPC goal reward of 1
+    assert prior_step_cost(1.0, small) == pytest.approx(1.0 / 20)
+    assert make_learner("GDQ", small).params.prior_cost == pytest.approx(1.0 / 20)
+    goal_scale = pddl_task_context(load_instance("lift", "lift-2"))
+    assert prior_step_cost(1.0, replace(goal_scale, r_max=1.0)) == 1.0
