@@ -108,11 +108,17 @@ SWITCHES_DOMAIN = """\
 """
 
 
-def blocks_problem(n: int) -> str:
-    """One tower b1 on b2 on ... on bN in the initial state; the reverse tower as goal."""
+def _tower(n: int) -> tuple[list[str], list[str], list[str]]:
+    """Blocks b1..bN, the tower b1 on b2 on ... on bN, and the reverse tower."""
     names = [f"b{i}" for i in range(1, n + 1)]
     init = [f"(on {a} {b})" for a, b in zip(names, names[1:], strict=False)]
     goal = [f"(on {b} {a})" for a, b in zip(names, names[1:], strict=False)]
+    return names, init, goal
+
+
+def blocks_problem(n: int) -> str:
+    """One tower b1 on b2 on ... on bN in the initial state; the reverse tower as goal."""
+    names, init, goal = _tower(n)
     return (f"(define (problem blocks-{n}) (:domain slippery-blocks)\n"
             f"  (:objects {' '.join(names)})\n"
             f"  (:init (handempty) (clear b1) (ontable {names[-1]}) {' '.join(init)})\n"
@@ -121,10 +127,8 @@ def blocks_problem(n: int) -> str:
 
 def arms_problem(n: int, arms: int = 2) -> str:
     """The tower and goal of :func:`blocks_problem`, typed, with ``arms`` free arms."""
-    names = [f"b{i}" for i in range(1, n + 1)]
+    names, init, goal = _tower(n)
     hands = [f"a{i}" for i in range(1, arms + 1)]
-    init = [f"(on {a} {b})" for a, b in zip(names, names[1:], strict=False)]
-    goal = [f"(on {b} {a})" for a, b in zip(names, names[1:], strict=False)]
     return (f"(define (problem arms-{n}) (:domain slippery-arms)\n"
             f"  (:objects {' '.join(names)} - block {' '.join(hands)} - arm)\n"
             f"  (:init {' '.join(f'(free {h})' for h in hands)} (clear b1) "
