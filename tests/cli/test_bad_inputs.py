@@ -901,3 +901,13 @@ def test_the_shipped_and_generated_worlds_still_load():
     for name in ("office", "office_robot"):
         assert builtin_world(name).tasks
     assert building_world(300, 1).tasks
+
+
+def test_a_problem_file_without_its_domain_says_which_domain_to_give(capsys, tmp_path):
+    """An IPPC-2008 problem file may hold a problem alone, its domain in another file."""
+    problem = tmp_path / "p02.pddl"
+    problem.write_text(KEYS_PROBLEM.replace("(:domain keys)", "(:domain locks-elsewhere)"),
+                       encoding="utf-8")
+    assert "locks-elsewhere" in problem.read_text(encoding="utf-8")
+    code, out = cli(capsys, "run", "--problem", problem, *FAST, "--out", tmp_path / "o")
+    refused(code, out, str(problem), "domain locks-elsewhere", "--domain")
