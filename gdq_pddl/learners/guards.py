@@ -183,6 +183,13 @@ def check_context(context: object, n_states: int | None = None,
         elif table is not None:  # plans enumerated when read: their first actions now
             check_arrays(f"TaskContext.{name}", table,
                          {"first_actions": TABLES["plans"]["opt_r"]}, _sizes(*size, None))
+    columns = getattr(context, "columns", None)
+    if columns is not None:
+        live = columns >= 0 if isinstance(columns, np.ndarray) else None
+        if live is None or columns.dtype != I8 or columns.shape != size or \
+                not live[:, 0].all() or (live[:, 1:] & ~live[:, :-1]).any():
+            raise ConfigError(f"TaskContext.columns must be an int64 array of shape "
+                              f"{size}, each row its actions (at least one) then -1 padding")
     if context.prior is not None:
         check_arrays("TaskContext.prior", context.prior,
                      {"next_state": TABLES["prior"]["next_state"]}, _sizes(*size, None))

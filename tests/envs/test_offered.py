@@ -111,3 +111,14 @@ def test_the_prior_is_each_offered_actions_edge_closest_to_the_goal(inst):
                 best[op] = nxt
         want = [best.get(int(a), -1) for a in graph.offered[s]]
         assert prior[s].tolist() == want
+
+
+def test_a_context_with_broken_columns_is_refused():
+    from dataclasses import replace
+
+    ctx = pddl_task_context(load_instance("keys", "keys-1"))
+    holes = ctx.columns.copy()
+    holes[3, 0] = -1  # a row that starts with padding
+    for bad in (holes, ctx.columns[:, :1].copy(), ctx.columns.astype(np.int32)):
+        with pytest.raises(ValueError, match="TaskContext.columns"):
+            make_learner("Q-learning", replace(ctx, columns=bad))
