@@ -47,6 +47,10 @@ class GroundTask:
     goal_alternatives: tuple[tuple[int, int], ...] = ()
     """A goal with alternatives: ``(must hold, must not hold)`` masks, one of which must
     be met besides ``goal_pos``/``goal_neg`` (the part they share). Empty: none."""
+    incomplete: str = ""
+    """Why some ground actions have no planner action here (a PPDDL action whose
+    conditional effects need too many STRIPS variants); planners asked a query on such a
+    task refuse with it. Empty: every ground action is here."""
 
     @cached_property
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:

@@ -277,6 +277,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     raw = list(compress(raw, live))
     learner_names = {str(Atom(action.name, args)) for action, args, _, _ in raw}
     learner_ops, planner_ops, origin, taken = [], [], {}, set()
+    incomplete = ""
     for action, args, pre, outs in slow_progress("grounding", " actions", len(raw), raw):
         name = str(Atom(action.name, args))
         alts = [(m(p), m(n)) for p, n in pre if p <= reached]
@@ -293,9 +294,14 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         known = kept_outcomes(action, determinisation)
         learner_ops.append(ProbabilisticOp(name, common_pos, common_neg, 0, 0, outcomes, known,
                                            tuple(alts) if len(alts) > 1 else ()))
-        for k in known:
-            for j, (p, n, a, d) in enumerate(_variants(alts, outcomes[k], name, domain,
-                                                       action)):
+        try:  # the STRIPS variants of each kept outcome, for the per-query planners
+            variants = [(k, _variants(alts, outcomes[k], name, domain, action))
+                        for k in known]
+        except PDDLError as exc:  # the state graph reads conditional effects itself
+            incomplete = incomplete or str(exc)
+            variants = []
+        for k, strips in variants:
+            for j, (p, n, a, d) in enumerate(strips):
                 schema = names[(action.name, k)] + (f"_v{j + 1}" if j else "")
                 pname = str(Atom(schema, args))
                 if pname in taken or (pname != name and pname in learner_names):
@@ -311,7 +317,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                                 determinisation=determinisation,
                                 disjunctive=any(op.alternatives for op in learner_ops), **goal)
     planner = GroundTask(facts, tuple(planner_ops), m(init), statics=statics, fact_index=index,
-                         **goal)
+                         incomplete=incomplete, **goal)
     return learner, planner
 
 

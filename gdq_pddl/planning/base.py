@@ -154,6 +154,10 @@ class PlanningProblem:
             raise PlanningError(f"tolerance must be a finite number in [0, {MAX_TOLERANCE:g}] "
                                 f"(plans up to {1 + MAX_TOLERANCE:g} x the shortest), got "
                                 f"{tolerance!r}")
+        if self.task.incomplete:  # the graph of states reads it; a query cannot
+            raise PlanningError(f"{self.task.incomplete}; the {planner} planner answers "
+                                "queries on those STRIPS actions: use the state graph "
+                                "(gdq-pddl run's default --planner graph)")
         key = (planner, start, goal, tolerance, *options)
         hit = self._results.get(key)
         if hit is not None:  # answered before: skip resolving the masks

@@ -33,8 +33,8 @@ def base_up_problem(problem: PlanningProblem) -> UPProblem:
     hit = _PARSED.get(problem)
     if hit is not None:
         return hit
-    if problem.text_gap:
-        raise PlanningError(problem.text_gap)
+    if problem.text_gap or problem.task.incomplete:
+        raise PlanningError(problem.text_gap or problem.task.incomplete)
     if not problem.domain_text:
         raise PlanningError("unified-planning needs the domain as PDDL text: build the "
                             "problem with PlanningProblem.from_texts or from_files")
