@@ -3,7 +3,7 @@ PPDDL part gdq_pddl reads: probabilistic effects, action costs, a goal reward)."
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
 
@@ -92,6 +92,29 @@ class Outcome:
     conditional: tuple[CondEffect, ...] = ()
     rewards: tuple[Reward, ...] = ()
     """Rewards of the outcome or the state; a plain cost is the action's :attr:`Action.cost`."""
+    choices: tuple[Choice, ...] = ()
+    """Quantified probabilistic effects, drawn once per binding when grounded."""
+
+    def literals(self) -> Iterator[Literal]:
+        """Every literal the outcome may set: its own, its conditional effects' and those
+        of its choices' outcomes."""
+        yield from self.effect
+        yield from (c.literal for c in self.conditional)
+        for choice in self.choices:
+            for o in choice.outcomes:
+                yield from o.literals()
+
+
+@dataclass(frozen=True)
+class Choice:
+    """``(forall (?x - t ...) EFFECT)`` whose ``EFFECT`` is probabilistic, read as PPDDL
+    planners and MDPSim read it: once grounded, one independent draw from ``outcomes``
+    (``EFFECT``'s distribution, in terms of ``variables``) per binding of ``variables``,
+    as if the bindings' effects stood side by side. ``line``: where the forall is."""
+
+    variables: tuple[tuple[str, str], ...]
+    outcomes: tuple[Outcome, ...]
+    line: int = 0
 
 
 @dataclass(frozen=True)
@@ -137,9 +160,7 @@ class Domain:
     def fluent_predicates(self) -> frozenset[str]:
         """Predicates some action (some outcome of it) changes; the others are static."""
         return frozenset(lit.atom.predicate for a in self.actions
-                         for lits in (a.effect, *(o.effect for o in a.outcomes),
-                                      *((c.literal for c in o.conditional)
-                                        for o in a.outcomes))
+                         for lits in (a.effect, *(o.literals() for o in a.outcomes))
                          for lit in lits)
 
 

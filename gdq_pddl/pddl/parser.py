@@ -20,6 +20,7 @@ from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.pddl.model import (
     Action,
     Atom,
+    Choice,
     CondEffect,
     Condition,
     CostTerm,
@@ -479,7 +480,7 @@ def _precondition(r: _Reader, node: Node | None, scope: dict[str, str],
     return literals, (others[0] if len(others) == 1 else Junction("and", others))
 
 
-Branches = list[tuple[Fraction, tuple[Literal | CondEffect | Reward, ...]]]
+Branches = list[tuple[Fraction, tuple[Literal | CondEffect | Reward | Choice, ...]]]
 """An effect as a distribution: ``(probability, effects)`` pairs summing to 1."""
 
 
@@ -550,13 +551,14 @@ class _Effects:
 
     def scoped(self, node: Node, items: tuple[Node, ...], inside: bool) -> Branches:
         """``(when CONDITION EFFECT)`` or ``(forall (?x - t ...) EFFECT)``: the effect's
-        literals hold under the condition, for every binding of the variables. A
-        probabilistic effect may be inside a ``when``, not a ``forall`` (a choice per
-        object)."""
+        literals hold under the condition, for every binding of the variables. A forall
+        of a probabilistic effect is a :class:`Choice` (:meth:`choice`)."""
         r, ctx, head = self.r, self.ctx, items[0].symbol
         if len(items) != 3:
             raise r.fail(node.line, f"{ctx}: expected ({head} "
                          f"{'CONDITION' if head == 'when' else '(?x - TYPE ...)'} EFFECT)")
+        if head == "forall" and _mentions(items[2], "probabilistic"):
+            return self.choice(node, items)
         saved = self.scope, self.variables, self.when  # an error ends the reading
         if head == "when":
             cond = nnf(_condition(r, items[1], self.scope, ctx))
@@ -567,10 +569,22 @@ class _Effects:
             self.scope = {**self.scope, **dict(variables)}
         branches = self.effect(items[2], inside)
         self.scope, self.variables, self.when = saved
-        if head == "forall" and len(branches) > 1:
-            raise r.fail(node.line, f"{ctx}: (probabilistic ...) inside (forall ...) is not "
-                         "supported (a choice per object)")
         return branches
+
+    def choice(self, node: Node, items: tuple[Node, ...]) -> Branches:
+        """``(forall (?x - t ...) EFFECT)`` with a probabilistic ``EFFECT``: one draw of
+        ``EFFECT``'s outcomes per binding, expanded when the action is grounded (the
+        objects are not known yet; ``docs/decisions.md``, "Flattening"). Every forall
+        around it is such a choice too, so its variables are bound by then; the ``when``
+        conditions around it stay on its literals."""
+        variables = self.r.variables(items[1], self.ctx)
+        saved = self.scope
+        self.scope = {**self.scope, **dict(variables)}
+        branches = self.effect(items[2], inside=True)  # a cost in it is paid per binding
+        self.scope = saved
+        self.conditional = True
+        outcomes = _outcomes(branches, self.r.stuck_domain)
+        return [(Fraction(1), (Choice(variables, outcomes, node.line),))]
 
     def probabilistic_effect(self, node: Node, items: tuple[Node, ...]) -> Branches:
         """``(probabilistic p1 e1 ...)``: each ``e_i`` with ``p_i``; the rest, no effect."""
@@ -637,10 +651,17 @@ def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
         lits = tuple(dict.fromkeys(e for e in effects if isinstance(e, Literal)))
         conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         rewards = tuple(e for e in effects if isinstance(e, Reward))  # two add up: no merge
-        key = ((), True, (), rewards) if stuck_domain and stuck in lits else \
-            (lits, False, conds, rewards)  # Outcome's fields after its probability
+        choices = tuple(e for e in effects if isinstance(e, Choice))  # two draw twice
+        key = ((), True, (), rewards, ()) if stuck_domain and stuck in lits else \
+            (lits, False, conds, rewards, choices)  # Outcome's fields after its probability
         merged[key] = merged.get(key, Fraction(0)) + p
     return tuple(Outcome(float(p), *key) for key, p in merged.items())
+
+
+def _mentions(node: Node, head: str) -> bool:
+    """Whether ``(head ...)`` is written anywhere in ``node``."""
+    return node.is_list and any(i == 0 and n.symbol == head or _mentions(n, head)
+                                for i, n in enumerate(node.items))  # type: ignore[arg-type]
 
 
 def _number(r: _Reader, node: Node, ctx: str) -> Fraction | None:
@@ -851,8 +872,11 @@ def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init:
 
     fluent = domain.fluent_predicates()
     static = frozenset(a for a in init if a.predicate not in fluent)
-    dnf = ground_dnf(cond, {}, of_type, lambda a: None, too_many)
-    if len(dnf) > 1:  # decide what no action changes, and look again
+    try:
+        dnf: list | None = ground_dnf(cond, {}, of_type, lambda a: None, too_many)
+    except PDDLError:  # e.g. (forall (?b) (exists (?c) (and (destination ?b ?c) ...)))
+        dnf = None
+    if dnf is None or len(dnf) > 1:  # decide what no action changes, and look again
         dnf = ground_dnf(cond, {}, of_type, lambda a: None if a.predicate in fluent else
                          a in static, too_many)
     if not dnf:

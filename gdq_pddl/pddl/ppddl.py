@@ -7,7 +7,7 @@ than one; :attr:`ProbabilisticTask.origin` maps each back to its ground action.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from itertools import compress
 
@@ -22,8 +22,18 @@ from gdq_pddl.pddl.grounding import (
     goal_masks,
     ground,
 )
-from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Literal, Outcome, Problem
+from gdq_pddl.pddl.model import (
+    Action,
+    Atom,
+    Choice,
+    Domain,
+    Junction,
+    Literal,
+    Outcome,
+    Problem,
+)
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, extend, ground_dnf
+from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
@@ -113,7 +123,7 @@ def kept_outcomes(action: Action, determinisation: str) -> tuple[int, ...]:
     if not action.outcomes:
         return (0,)
     useful = [k for k, o in enumerate(action.outcomes)
-              if o.probability > 0 and not o.stuck and (o.effect or o.conditional)]
+              if o.probability > 0 and not o.stuck and (o.effect or o.conditional or o.choices)]
     if determinisation == "all-outcomes":
         return tuple(useful)
     best = max(range(len(action.outcomes)), key=lambda k: (action.outcomes[k].probability, -k))
@@ -162,7 +172,8 @@ def ground_ppddl(domain: Domain, problem: Problem,
             raise PDDLError(domain.source, action.line or None, f"action {action.name}: "
                             f"{_SEP!r} cannot be part of an action name")
     names = planner_names(domain, determinisation)
-    if any(a.condition is not None or any(o.conditional or o.rewards for o in a.outcomes)
+    if any(a.condition is not None or any(o.conditional or o.rewards or o.choices
+                                              for o in a.outcomes)
            for a in domain.actions):
         return _ground_normalised(domain, problem, determinisation, names)
     # one deterministic schema per outcome: the grounder's relaxed reachability then gives
@@ -262,9 +273,9 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                     def value(term, binding, action: Action = action) -> float:
                         return term_value(term, binding, domain, problem, action,
                                           f"a reward of {action.name}")
-                    outs = [_ground_outcome(o, b, objects, static, fluent, too_many, value)
-                            for o in _outcomes_of(action)]
                     args = tuple(b[p] for p, _ in action.parameters)
+                    outs = _ground_outcomes(action, args, b, objects, static, fluent,
+                                            too_many, value, domain.source)
                     raw.append((action, args, pre, outs))
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, live = _relaxed(raw, init)
@@ -285,24 +296,23 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
         for p, n in alts:
             common_pos, common_neg = common_pos & p, common_neg & n
         outcomes = tuple(GroundOutcome(
-            o.probability, m(add), m(dele - add), o.stuck,
+            p, m(add), m(dele - add), stuck,
             tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached),
             reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts if cp <= reached),
                                        amount) for alts, amount in rewards) if r[0]))
-            for o, (add, dele, conds, reward, rewards) in zip(_outcomes_of(action), outs,
-                                                               strict=True))
-        known = kept_outcomes(action, determinisation)
+            for _, p, (add, dele, conds, reward, rewards, stuck) in outs)
+        known, kept_names = _kept(action, outs, outcomes, determinisation, names)
         learner_ops.append(ProbabilisticOp(name, common_pos, common_neg, 0, 0, outcomes, known,
                                            tuple(alts) if len(alts) > 1 else ()))
         try:  # the STRIPS variants of each kept outcome, for the per-query planners
-            variants = [(k, _variants(alts, outcomes[k], name, domain, action))
-                        for k in known]
+            variants = [(base, _variants(alts, outcomes[k], name, domain, action))
+                        for k, base in zip(known, kept_names, strict=True)]
         except PDDLError as exc:  # the state graph reads conditional effects itself
             incomplete = incomplete or str(exc)
             variants = []
-        for k, strips in variants:
+        for base, strips in variants:
             for j, (p, n, a, d) in enumerate(strips):
-                schema = names[(action.name, k)] + (f"_v{j + 1}" if j else "")
+                schema = base + (f"_v{j + 1}" if j else "")
                 pname = str(Atom(schema, args))
                 if pname in taken or (pname != name and pname in learner_names):
                     raise PDDLError(domain.source, action.line or None, f"action "
@@ -326,25 +336,85 @@ def _outcomes_of(action: Action) -> tuple[Outcome, ...]:
     return action.outcomes or (Outcome(1.0, action.effect),)
 
 
+Ground = tuple[frozenset[str], frozenset[str], tuple[tuple, ...], float, tuple, bool]
+"""A ground outcome's effect as fact sets: adds, deletes, conditional effects ``(must hold,
+must not hold, adds, deletes)``, the reward it always earns, its conditional rewards
+``(alternatives, amount)`` and whether it is a failed trial; equal ones are one outcome."""
+def _ground_outcomes(action: Action, args: tuple[str, ...], b: dict[str, str], objects,
+                     static, fluent: frozenset[str], too_many, value,
+                     source: str) -> list[tuple[int, float, Ground]]:
+    """The ground outcomes of ``action`` under binding ``b``: ``(index of the outcome of
+    the schema it comes from, probability, effect)``; one per schema outcome but where a
+    :class:`~gdq_pddl.pddl.model.Choice` expands, refused past :data:`MAX_OUTCOMES`."""
+    def past(choice: Choice | None) -> PDDLError:
+        where = f"the forall at line {choice.line} " if choice is not None else ""
+        return PDDLError(source, (choice.line if choice else action.line) or None,
+                         f"action {action.name}: {str(Atom(action.name, args))} has more than "
+                         f"{MAX_OUTCOMES} outcomes once {where}is grounded over the "
+                         "problem's objects (each binding of a forall of a probabilistic "
+                         "effect is an independent draw: their outcomes multiply)")
+
+    out = [(k, p, g) for k, o in enumerate(_outcomes_of(action))
+           for p, g in _ground_outcome(o, b, objects, static, fluent, too_many, value, past)]
+    if len(out) > MAX_OUTCOMES:
+        raise past(None)
+    return out
+
+
+def _kept(action: Action, outs: list[tuple[int, float, Ground]],
+          outcomes: tuple[GroundOutcome, ...], determinisation: str,
+          names: dict[tuple[str, int], str]) -> tuple[tuple[int, ...], list[str]]:
+    """The ground outcomes the planner keeps and their planner schema names: those of
+    :func:`kept_outcomes` where each schema outcome is one ground outcome; where a choice
+    expands one into several, each that does something (``_c<j>`` after the schema
+    outcome's name), or the most likely (named as the action)."""
+    if len(outs) == len(_outcomes_of(action)):
+        known = kept_outcomes(action, determinisation)
+        return known, [names[(action.name, k)] for k in known]
+
+    def useful(i: int) -> bool:
+        o = outcomes[i]
+        return o.probability > 0 and not o.stuck and bool(o.add or o.dele or o.conditional)
+
+    if determinisation != "all-outcomes":
+        best = max(range(len(outs)), key=lambda i: (outs[i][1], -i))
+        return ((best,), [action.name]) if useful(best) else ((), [])
+    schema = kept_outcomes(action, determinisation)
+    count = {k: sum(1 for kk, _, _ in outs if kk == k) for k in schema}
+    known: list[int] = []
+    kept: list[str] = []
+    seen: dict[int, int] = {}
+    for i, (k, _, _) in enumerate(outs):
+        seen[k] = seen.get(k, 0) + 1
+        if k in count and useful(i):
+            known.append(i)
+            kept.append(names[(action.name, k)] + (f"_c{seen[k]}" if count[k] > 1 else ""))
+    return tuple(known), kept
+
+
 def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: frozenset[str],
-                    too_many, value) -> tuple[set[str], set[str], list[tuple], float, list]:
-    """An outcome under binding ``b`` as fact sets: its adds, deletes, conditional effects
-    ``(must hold, must not hold, adds, deletes)``, the reward it always earns and its
-    conditional rewards ``(alternatives, amount)`` (``value(term, binding)``: an amount)."""
+                    too_many, value, past: Callable[[Choice], PDDLError],
+                    ) -> list[tuple[float, Ground]]:
+    """The distribution of outcome ``o`` (its probability included) under binding ``b``:
+    its own effect, and side by side one draw per binding of each of its choices, equal
+    effects merged (``value(term, binding)``: an amount; ``past(choice)``: the error past
+    :data:`~gdq_pddl.pddl.parser.MAX_OUTCOMES` outcomes)."""
     def fact(lit: Literal, binding: Mapping[str, str]) -> str:
         return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
 
-    add = {fact(lit, b) for lit in o.effect if lit.positive and lit.atom.predicate in fluent}
-    dele = {fact(lit, b) for lit in o.effect if not lit.positive and lit.atom.predicate in fluent}
-    conds: list[tuple] = []
+    add = frozenset(fact(lit, b) for lit in o.effect
+                    if lit.positive and lit.atom.predicate in fluent)
+    dele = frozenset(fact(lit, b) for lit in o.effect
+                     if not lit.positive and lit.atom.predicate in fluent)
+    conds: dict[tuple, None] = {}
     for ce in o.conditional:
         for bb in extend(b, ce.variables, objects, MAX_ATOMS, too_many):
             when = TRUE if ce.condition is None else \
                 ground_dnf(ce.condition, bb, objects, static, too_many)
-            f = {fact(ce.literal, bb)}
-            for cp, cn in when:
-                conds.append((cp, cn, f if ce.literal.positive else set(),
-                              set() if ce.literal.positive else f))
+            f = frozenset((fact(ce.literal, bb),))
+            for cp, cn in when:  # in the order written: the planner's variants are named so
+                conds[(cp, cn, f if ce.literal.positive else frozenset(),
+                       frozenset() if ce.literal.positive else f)] = None
     reward, rewards = 0.0, []
     for rw in o.rewards:
         for bb in extend(b, rw.variables, objects, MAX_ATOMS, too_many):
@@ -354,8 +424,32 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
             if when == TRUE:
                 reward += amount
             elif when:
-                rewards.append((when, amount))
-    return add, dele, conds, reward, rewards
+                rewards.append((tuple(when), amount))
+    out = [(o.probability, (add, dele, tuple(conds), reward, tuple(rewards), o.stuck))]
+    for choice in o.choices:
+        for bb in extend(b, choice.variables, objects, MAX_ATOMS, too_many):
+            draw = _merged([g for inner in choice.outcomes for g in _ground_outcome(
+                inner, bb, objects, static, fluent, too_many, value, past)])
+            out = _merged([(p * q, _both(x, y)) for p, x in out for q, y in draw])
+            if len(out) > MAX_OUTCOMES:
+                raise past(choice)
+    return out
+
+
+def _both(x: Ground, y: Ground) -> Ground:
+    """Two effects side by side (a failed trial has no other effect)."""
+    if x[5] or y[5]:
+        return (frozenset(), frozenset(), (), x[3] + y[3], x[4] + y[4], True)
+    return (x[0] | y[0], x[1] | y[1], tuple(dict.fromkeys(x[2] + y[2])), x[3] + y[3],
+            x[4] + y[4], False)
+
+
+def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
+    """``dist`` with equal effects one outcome (first appearance first)."""
+    out: dict[Ground, float] = {}
+    for p, g in dist:
+        out[g] = out.get(g, 0.0) + p
+    return [(p, g) for g, p in out.items()]
 
 
 def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
@@ -370,7 +464,7 @@ def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
                 if not any(p <= reached for p, _ in pre):
                     continue
                 live[i] = changed = True
-            for add, _, conds, *_ in outs:
+            for _, _, (add, _, conds, *_) in outs:
                 new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
                 if new:
                     reached |= new

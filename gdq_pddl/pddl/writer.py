@@ -50,7 +50,7 @@ def untold(domain: Domain, problem: Problem) -> str:
     """Why the STRIPS text of ``domain``'s determinisation cannot carry it, so that the
     backends that read text cannot be used; "" if it can."""
     found = {"conditional or quantified effects": [a.name for a in domain.actions if any(
-                 o.conditional for o in a.outcomes)],
+                 o.conditional or o.choices for o in a.outcomes)],
              "a disjunctive or quantified precondition": [a.name for a in domain.actions
                                                           if a.condition is not None]}
     parts = [f"{what} ({', '.join(names)})" for what, names in found.items() if names]

@@ -439,35 +439,50 @@ def random_condition(rng, depth: int, variables: list[str]) -> str:
     return f"(= {a} {b})"
 
 
-def random_effect(rng, depth: int, variables: list[str]) -> str:
+def random_effect(rng, depth: int, variables: list[str], choices: bool = False) -> str:
+    """A random effect; ``choices``: a forall's body may be any effect (probabilistic ones
+    too), else a when of a literal."""
     lits = [f"(p {v})" for v in variables] + [f"(q {v})" for v in variables] + ["(r)"]
     lit = lits[rng.integers(len(lits))]
-    kind = rng.integers(0, 6) if depth > 0 else 0
+    kind = rng.integers(0, 8 if choices else 6) if depth > 0 else 0
+    if kind >= 6:  # a forall of a draw, under a when or beside a literal
+        v = f"?w{depth}"
+        inner = [*variables, v]
+        body = f"(probabilistic 1/4 {random_effect(rng, depth - 1, inner, choices)} " \
+               f"1/2 {random_effect(rng, depth - 1, inner, choices)})"
+        if kind == 6:
+            body = f"(when {random_condition(rng, 1, inner)} {body})"
+        else:
+            body = f"(and {random_effect(rng, 0, inner)} {body})"
+        return f"(forall ({v} - t) {body})"
     if kind == 0:
         return lit
     if kind == 1:
         return f"(not {lit})"
     if kind == 2:
-        return f"(and {random_effect(rng, depth - 1, variables)} " \
-               f"{random_effect(rng, depth - 1, variables)})"
+        return f"(and {random_effect(rng, depth - 1, variables, choices)} " \
+               f"{random_effect(rng, depth - 1, variables, choices)})"
     if kind == 3:
         return f"(when {random_condition(rng, 2, variables)} " \
-               f"{random_effect(rng, depth - 1, variables)})"
+               f"{random_effect(rng, depth - 1, variables, choices)})"
     if kind == 4:
         v = f"?w{depth}"
-        body = f"(when {random_condition(rng, 1, [*variables, v])} " \
-               f"{random_effect(rng, 0, [*variables, v])})"
+        if choices and rng.random() < 0.7:
+            body = random_effect(rng, depth - 1, [*variables, v], choices)
+        else:
+            body = f"(when {random_condition(rng, 1, [*variables, v])} " \
+                   f"{random_effect(rng, 0, [*variables, v])})"
         return f"(forall ({v} - t) {body})"
-    return f"(probabilistic 1/3 {random_effect(rng, depth - 1, variables)} " \
-           f"1/2 {random_effect(rng, depth - 1, variables)})"
+    return f"(probabilistic 1/3 {random_effect(rng, depth - 1, variables, choices)} " \
+           f"1/2 {random_effect(rng, depth - 1, variables, choices)})"
 
 
-def random_domain(rng) -> tuple[str, str]:
+def random_domain(rng, choices: bool = False) -> tuple[str, str]:
     actions = []
     for i in range(3):
         actions.append(f"""  (:action a{i} :parameters (?x - t)
     :precondition {random_condition(rng, 3, ['?x'])}
-    :effect {random_effect(rng, 3, ['?x'])})""")
+    :effect {random_effect(rng, 2 if choices else 3, ['?x'], choices)})""")
     init = [f"({p} {o})" for p in "pqs" for o in OBJECTS if rng.random() < 0.5]
     init += ["(r)"] * int(rng.random() < 0.5)
     domain = ("(define (domain rnd) (:requirements :adl :probabilistic-effects)\n"
@@ -480,10 +495,14 @@ def random_domain(rng) -> tuple[str, str]:
 
 @pytest.mark.parametrize("seed", range(40))
 def test_the_grounded_model_agrees_with_an_independent_interpreter(seed):
+    interpreted_model_agrees(*random_domain(np.random.default_rng(seed)))
+
+
+def interpreted_model_agrees(domain_text: str, problem_text: str) -> None:
+    """The interpreter and the library reach the same states, and in each agree on what
+    applies and where it leads."""
     from gdq_pddl.pddl.reachable import reachable_graph
 
-    rng = np.random.default_rng(seed)
-    domain_text, problem_text = random_domain(rng)
     learner, planner = grounded(domain_text, problem_text)
     planner_agrees(learner, planner)
     graph = reachable_graph(learner)  # (g) never holds: every state is expanded
