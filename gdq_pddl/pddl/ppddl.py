@@ -454,21 +454,24 @@ def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
 
 def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
     """Relaxed reachability (deletes ignored) from ``init``: the facts some sequence of
-    ground actions may make true, and which ground actions may ever apply."""
+    ground actions may make true, and which ground actions may ever apply (a bar counts
+    those past 2 s)."""
     reached, live = set(init), [False] * len(raw)
     changed = True
-    while changed:
-        changed = False
-        for i, (_, _, pre, outs) in enumerate(raw):
-            if not live[i]:
-                if not any(p <= reached for p, _ in pre):
-                    continue
-                live[i] = changed = True
-            for _, _, (add, _, conds, *_) in outs:
-                new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
-                if new:
-                    reached |= new
-                    changed = True
+    with slow_progress("relaxed reachability", " actions", len(raw)) as bar:
+        while changed:
+            changed = False
+            for i, (_, _, pre, outs) in enumerate(raw):
+                if not live[i]:
+                    if not any(p <= reached for p, _ in pre):
+                        continue
+                    live[i] = changed = True
+                    bar.update()
+                for _, _, (add, _, conds, *_) in outs:
+                    new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
+                    if new:
+                        reached |= new
+                        changed = True
     return reached, live
 
 

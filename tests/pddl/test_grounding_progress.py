@@ -50,3 +50,16 @@ def test_a_bar_is_closed_before_an_error_leaves_grounding(bars, monkeypatch):
     [bar] = [b for b in bars if b.desc == "grounding"]
     assert bar.disable and len(calls) == 3
     assert error.value.__traceback__ is not None
+
+
+def test_the_ppddl_grounders_relaxed_reachability_counts_too(bars):
+    """The same road with a conditional effect goes through PPDDL's grounder."""
+    from gdq_pddl.pddl.ppddl import ground_ppddl
+
+    text = ROAD.replace("(and (at ?b) (not (at ?a)))",
+                        "(and (at ?b) (not (at ?a)) (when (at ?a) (at ?a)))")
+    domain = parse_domain(text)
+    learner, _ = ground_ppddl(domain, parse_problem(PROBLEM, domain))
+    assert len(learner.ops) == 5
+    [bar] = [b for b in bars if b.desc == "relaxed reachability"]
+    assert (bar.n, bar.total) == (5, 6) and bar.disable
