@@ -35,6 +35,9 @@ TABLE_BUDGET = 8_000_000_000
 """Bytes the tables of states x offered actions may take (:data:`PAIR_BYTES` per pair,
 every state's row as long as the longest): state enumeration stops with an error past it."""
 
+PARENT_CHUNK = 1 << 17
+"""States of a level expanded at a time: their successors' work arrays stay bounded."""
+
 MAX_STATES: int | None = None
 """Default cap on the number of reachable states (None: what :data:`TABLE_BUDGET` allows)."""
 
@@ -257,60 +260,68 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     goal, depth, src, op_of, nxt = [], [], [], [], []
     app_state, app_op = [], []  # the applicable pairs: the rows of `offered`
     width_seen = 1
-    lo, n = 0, 1
+    lo, n = 0, 1  # the first state of the level expanded, and the states known
     with slow_progress("reachable states", " states") as bar:
         while lo < n:
             rows = levels[-1]
             is_goal = _goal_rows(task, rows)
             goal.append(is_goal)
             depth.append(np.full(len(rows), len(depth), dtype=np.int64))
-            parent = np.flatnonzero(~is_goal)
-            expand = rows[parent]
-            found: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
-            n_applicable = np.zeros(len(parent), dtype=np.int64)
-            for k, op in enumerate(ops):
-                at = np.flatnonzero(op.applies(expand))
-                if not len(at):
-                    continue
-                n_applicable[at] += 1
-                app_state.append(lo + parent[at])
-                app_op.append(np.full(len(at), k, dtype=np.int64))
-                here = expand[at]
-                seen: list[np.ndarray] = []
-                for j, effect in enumerate(op.known):
-                    t = _apply(here, effect)
-                    new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
-                        if seen else np.ones(len(t), dtype=np.bool_)
-                    seen.append(t)
-                    found.append((t[new], at[new], k * width + j))
-                for j, effect in enumerate(op.other):
-                    found.append((_apply(here, effect), at,
-                                  (n_ops + reality_rank[k]) * width + j))
-            cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
-            who = np.concatenate([f[1] for f in found]) if found else parent[:0]
-            rank = np.concatenate([np.full(len(f[1]), f[2], dtype=np.int64) for f in found]) \
-                if found else parent[:0]
-            order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
-            cand, who, rank = cand[order], who[order], rank[order]
-            keys = _keys(cand)
-            uniq, first = np.unique(keys, return_index=True)
-            at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
-            fresh = np.sort(first[known_keys[at] != uniq])
-            width_seen = max(width_seen, int(n_applicable.max(initial=0)))
-            cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
-            if n + len(fresh) > cap:
-                raise _too_many(source, cap, max_states is None, width_seen)
-            known_keys = np.concatenate([known_keys, keys[fresh]])
-            known_ids = np.concatenate([known_ids, np.arange(n, n + len(fresh))])
-            resort = np.argsort(known_keys, kind="stable")
-            known_keys, known_ids = known_keys[resort], known_ids[resort]
-            edge = rank < n_ops * width
-            src.append(lo + parent[who[edge]])
-            op_of.append(rank[edge] // width)
-            nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
-            bar.update(len(rows))
-            levels.append(cand[fresh])
-            lo, n = n, n + len(fresh)
+            parents = np.flatnonzero(~is_goal)
+            bar.update(len(rows) - len(parents))
+            level_start, next_rows = n, []
+            for c in range(0, len(parents), PARENT_CHUNK):  # bounded work arrays
+                parent = parents[c:c + PARENT_CHUNK]
+                expand = rows[parent]
+                found: list[tuple[np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
+                n_applicable = np.zeros(len(parent), dtype=np.int64)
+                for k, op in enumerate(ops):
+                    at = np.flatnonzero(op.applies(expand))
+                    if not len(at):
+                        continue
+                    n_applicable[at] += 1
+                    app_state.append(lo + parent[at])
+                    app_op.append(np.full(len(at), k, dtype=np.int64))
+                    here = expand[at]
+                    seen: list[np.ndarray] = []
+                    for j, effect in enumerate(op.known):
+                        t = _apply(here, effect)
+                        new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
+                            if seen else np.ones(len(t), dtype=np.bool_)
+                        seen.append(t)
+                        found.append((t[new], at[new], k * width + j))
+                    for j, effect in enumerate(op.other):
+                        found.append((_apply(here, effect), at,
+                                      (n_ops + reality_rank[k]) * width + j))
+                cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
+                who = np.concatenate([f[1] for f in found]) if found else parent[:0]
+                rank = np.concatenate([np.full(len(f[1]), f[2], dtype=np.int64)
+                                       for f in found]) if found else parent[:0]
+                del found
+                order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
+                cand, who, rank = cand[order], who[order], rank[order]
+                keys = _keys(cand)
+                uniq, first = np.unique(keys, return_index=True)
+                at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
+                fresh = np.sort(first[known_keys[at] != uniq])
+                width_seen = max(width_seen, int(n_applicable.max(initial=0)))
+                cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
+                if n + len(fresh) > cap:
+                    raise _too_many(source, cap, max_states is None, width_seen)
+                added = keys[fresh]  # into the sorted known keys, without sorting them all
+                by_key = np.argsort(added, kind="stable")
+                where = np.searchsorted(known_keys, added[by_key])
+                known_keys = np.insert(known_keys, where, added[by_key])
+                known_ids = np.insert(known_ids, where, np.arange(n, n + len(fresh))[by_key])
+                edge = rank < n_ops * width
+                src.append(lo + parent[who[edge]])
+                op_of.append(rank[edge] // width)
+                nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
+                next_rows.append(cand[fresh])
+                n += len(fresh)
+                bar.update(len(parent))
+            levels.append(np.concatenate(next_rows) if next_rows else rows[:0])
+            lo = level_start
     src_all = np.concatenate(src)
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])

@@ -65,9 +65,12 @@ def one_at_a_time(task):
 @pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
 @pytest.mark.parametrize("domain, problem", [(SLIPPERY, chain(5, "(and (at p4) (tired))")),
                                              (PICK, pick(70))], ids=["chain", "pick70"])
-def test_numbering_is_the_one_state_bfs(domain, problem, determinisation):
+@pytest.mark.parametrize("chunk", [reachable.PARENT_CHUNK, 2])
+def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk, monkeypatch):
     # pick: 72 facts, two uint64 words a state; most-likely: the (tired) outcome is
-    # reality's only, and its states come after the edges' states
+    # reality's only, and its states come after the edges' states; chunk 2: a level's
+    # states are expanded two at a time
+    monkeypatch.setattr(reachable, "PARENT_CHUNK", chunk)
     task = PlanningProblem.from_texts(domain, problem, determinisation=determinisation
                                       ).learner_task
     assert len(task.facts) > 64 or domain is SLIPPERY
@@ -78,6 +81,10 @@ def test_numbering_is_the_one_state_bfs(domain, problem, determinisation):
     assert list(zip(src.tolist(), graph.edge_op.tolist(), graph.edge_next.tolist(),
                     strict=True)) == edges
     assert graph.lookup(graph.words[::-1]).tolist() == list(range(graph.n_states))[::-1]
+    offered = [sorted({op_pos for op_pos, _ in graph.edges(i)}) or [0]
+               for i in range(graph.n_states)]
+    assert all(set(e) <= set(row[row >= 0].tolist())
+               for e, row in zip(offered, graph.offered, strict=True))
 
 
 def test_the_budget_is_named(monkeypatch):
