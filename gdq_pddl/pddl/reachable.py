@@ -322,13 +322,15 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 bar.update(len(parent))
             levels.append(np.concatenate(next_rows) if next_rows else rows[:0])
             lo = level_start
-    src_all = np.concatenate(src)
+    none = np.zeros(0, dtype=np.int64)  # no level expanded (the start is a goal)
+    src_all = np.concatenate(src) if src else none
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])
     offered = offered_rows(n, np.concatenate(app_state) if app_state else ptr[:0],
                            np.concatenate(app_op) if app_op else ptr[:0])
-    return StateGraph(task, np.concatenate(levels), ptr, np.concatenate(op_of).astype(np.int64),
-                      np.concatenate(nxt).astype(np.int64), np.concatenate(goal),
+    return StateGraph(task, np.concatenate(levels), ptr,
+                      np.concatenate(op_of or [none]).astype(np.int64),
+                      np.concatenate(nxt or [none]).astype(np.int64), np.concatenate(goal),
                       np.concatenate(depth), offered)
 
 

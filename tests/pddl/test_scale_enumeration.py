@@ -118,3 +118,11 @@ def test_distinct_is_unique():
     a = np.random.default_rng(0).integers(0, 50, 400)
     assert np.array_equal(distinct(a), np.unique(a))
     assert len(distinct(a[:0])) == 0
+
+
+def test_a_start_that_is_a_goal_is_a_graph_of_one_state():
+    task = PlanningProblem.from_texts(SLIPPERY, chain(3, "(at p0)")).learner_task
+    graph = reachable_graph(task)
+    assert graph.n_states == 1 and graph.is_goal.tolist() == [True]
+    assert graph.edge_ptr.tolist() == [0, 0] and len(graph.edge_op) == len(graph.edge_next) == 0
+    assert graph.offered.tolist() == [[0]]
