@@ -108,12 +108,17 @@ def pddl_args(p: argparse.ArgumentParser, what: str, dynamics: bool = False) -> 
 def pddl_files(args: argparse.Namespace, default_domain: str | None = None
                ) -> tuple[Path | None, Path | None, Path | None]:
     """--domain, --problem and --dynamics as files (--domain: by default the problem's:
-    the shipped one it names, or the problem file itself if it defines one)."""
+    the shipped one it names, or the problem file itself if it defines one, else
+    ``default_domain``; with none of these, an error saying which domain to give)."""
     domain = args.domain
     if domain is None and args.problem is not None:
         path = resolve("problem", problem_file(args.problem)[0])
         named = problem_domain(path)
         domain = named if named in (*shipped_names("domain"), str(path)) else default_domain
+        if domain is None:  # IPPC-2008 ships problems apart from their domain
+            raise GdqError(f"{path} holds a problem of domain {named or '(none named)'} and "
+                           f"no domain, and {named or 'it'} is not a shipped domain: give "
+                           "the file that defines it with --domain")
     if domain is None or args.problem is None:
         return None, None, None
     return resolve_pddl(domain, args.problem, getattr(args, "dynamics", None))

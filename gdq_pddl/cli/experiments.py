@@ -38,8 +38,6 @@ from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experime
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
-from gdq_pddl.pddl.parser import problem_file
-from gdq_pddl.resources import problem_domain, resolve
 
 
 def register_run(sub) -> None:
@@ -74,12 +72,6 @@ def _run_pddl(args: argparse.Namespace) -> int:
         raise GdqError("--task/--start/--goal/--world are for the office; a PDDL run takes "
                        "its start and goal from --problem")
     domain, problem, dynamics = pddl_files(args)
-    if args.domain is None and args.problem is not None and problem is None:
-        path = resolve("problem", problem_file(args.problem)[0])
-        named = problem_domain(path)
-        raise GdqError(f"{path} holds a problem of domain {named or '(none named)'} and no "
-                       f"domain, and {named or 'it'} is not a shipped domain: give the file "
-                       "that defines it with --domain")
     if domain is None or problem is None:
         raise GdqError("a PDDL run needs --problem, and --domain unless the problem names a "
                        "shipped domain (and --dynamics for a STRIPS domain of your own)")
