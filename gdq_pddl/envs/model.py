@@ -256,7 +256,7 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
     ``state * width + column`` (module docstring)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
     offered = space.offered
-    n_a = width_of(np.zeros((0, 0)) if offered is None else offered, space.n_actions)
+    n_a = space.n_actions if offered is None else offered.shape[1]
 
     def rule():
         for s in range(space.n_states):
@@ -426,7 +426,8 @@ def env_step(m: ModelArrays, fs: int, column: int, t: int, goal_pos: int,
         k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + column, rng)  # never -1 here
     nxt = m.next[k]
     if m.gain.shape[0]:
-        return file_step(m, action, k, nxt, m.pos_of[nxt] == goal_pos, t, rng)
+        return file_step(m, action, m.gain[k], nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t,
+                         rng)
     return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)
 
 
@@ -443,19 +444,17 @@ def env_act(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
             return env_step(m, fs, j, t, goal_pos, rng)
     rng.random()
     if m.gain.shape[0]:
-        reward = -sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
-        late = t + 1 >= m.step_limit
-        return fs, reward, False, late, CAUSE_TIMEOUT if late else CAUSE_NONE
+        return file_step(m, action, 0.0, fs, False, False, t, rng)
     return finish_step(m, action, fs, False, False, t, rng)
 
 
 @numba.njit(cache=True, inline="always")
-def file_step(m: ModelArrays, action: int, k: int, nxt: int, at_goal: bool, t: int,
-              rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
-    """:func:`finish_step` on the problem's own scale (:attr:`ModelArrays.gain`)."""
-    reward = m.gain[k] - sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action],
-                                     rng)
-    if m.stuck[k]:
+def file_step(m: ModelArrays, action: int, gain: float, nxt: int, stuck: bool, at_goal: bool,
+              t: int, rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+    """:func:`finish_step` on the problem's own scale: the outcome's ``gain``
+    (:attr:`ModelArrays.gain`) less the action's cost."""
+    reward = gain - sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
+    if stuck:
         return nxt, reward, True, False, CAUSE_STUCK
     if at_goal:
         return nxt, reward + m.r_max, True, False, CAUSE_GOAL
