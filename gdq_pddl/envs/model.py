@@ -70,9 +70,11 @@ class ModelArrays(NamedTuple):
     """The action of each column (module docstring); empty: every action, column = action."""
 
 
-def width_of(acts: np.ndarray, n_actions: int) -> int:
-    """Columns a state's row has: ``acts``' width, or every action when ``acts`` is empty."""
-    return int(acts.shape[1]) if acts.shape[0] else int(n_actions)
+def width_of(model: ModelArrays | tuple) -> int:
+    """Columns a state's row has in ``model`` (a :class:`ModelArrays`, or a compact model,
+    which has no ``acts``): ``acts``' width, or every action when ``acts`` is empty."""
+    acts = getattr(model, "acts", None)
+    return int(acts.shape[1]) if acts is not None and acts.shape[0] else int(model.n_actions)
 
 
 def pair_of(model: ModelArrays, fs: int, action: int) -> int | None:

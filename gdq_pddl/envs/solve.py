@@ -68,7 +68,7 @@ def solve_bytes(model: ModelArrays, tables: bool = True) -> int:
     """Memory :func:`solve` needs at most: per outcome and per pair its work arrays, per
     step V (and, with ``tables``, Q and the policy)."""
     n_full, limit = model.obs_of.shape[0], model.step_limit
-    per_step = n_full * ((width_of(model.acts, model.n_actions) + 2) if tables else 1) * 8
+    per_step = n_full * ((width_of(model) + 2) if tables else 1) * 8
     return (limit + 1) * per_step + len(model.prob) * 8 * 6 + (len(model.ptr) - 1) * 8 * 3
 
 
@@ -79,7 +79,7 @@ def check_solvable(model: ModelArrays, where: str = "") -> None:
     n_full, limit = model.obs_of.shape[0], model.step_limit
     check_memory(solve_bytes(model),
                  f"{where or 'step_limit'} = {limit}: V* by value iteration ({n_full} states x "
-                 f"{width_of(model.acts, model.n_actions)} actions at each of the {limit} "
+                 f"{width_of(model)} actions at each of the {limit} "
                  "steps)",
                  "use a smaller step_limit")
 
@@ -94,7 +94,7 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     ``step_limit x states x columns``) would not fit in memory."""
     if tables:
         check_solvable(model)
-    width, limit, r = width_of(model.acts, model.n_actions), model.step_limit, model.r_max
+    width, limit, r = width_of(model), model.step_limit, model.r_max
     n_full = model.obs_of.shape[0]
     counts = np.diff(model.ptr)
     live = counts > 0 if model.acts.shape[0] else np.ones(len(counts), dtype=np.bool_)
@@ -178,7 +178,7 @@ def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:
     model, over outcomes of positive probability that do not end the trial (inf: none
     reaches it). One breadth-first search over the model's arrays."""
     n = model.obs_of.shape[0]
-    starts = model.ptr[::max(width_of(model.acts, model.n_actions), 1)]  # a state's first
+    starts = model.ptr[::max(width_of(model), 1)]  # each state's first outcome
     src = np.repeat(np.arange(len(starts) - 1), np.diff(starts))
     keep = (model.prob > 0) & ~model.stuck & (model.next != src)
     graph = csr_matrix((np.ones(int(keep.sum())), (src[keep], model.next[keep])),
@@ -211,7 +211,7 @@ def occupancy(model: ModelArrays, solution: Solution, start: int) -> np.ndarray:
     right after action ``t`` (ending outcomes included: stuck, goal, timeout). Row ``t``
     sums to the probability that the episode lasts at least ``t`` actions.
     """
-    limit, width = model.step_limit, width_of(model.acts, model.n_actions)
+    limit, width = model.step_limit, width_of(model)
     n_full = model.obs_of.shape[0]
     out = np.zeros((limit + 1, n_full))
     running = np.zeros(n_full)

@@ -15,6 +15,7 @@ import numbers
 import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel
+from gdq_pddl.envs.model import width_of
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
@@ -212,7 +213,7 @@ def check_dynamics(model: object, start: int, doors: np.ndarray, n_states: int,
                       or acts.shape[0] != len(model.obs_of)):
         raise ConfigError(f"{where}: acts must be int64 rows of actions in [-1, "
                           f"{model.n_actions}), one per full state")
-    width = acts.shape[1] if acts.shape[0] else model.n_actions
+    width = width_of(model)
     if width != n_actions:
         raise ConfigError(f"the learner has {n_actions} actions, the env's dynamics "
                           f"{width}: build the learner from this env's task context")
