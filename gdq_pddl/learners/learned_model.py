@@ -127,15 +127,19 @@ def has_successor(slots: np.ndarray, s: int, a: int, s2: int) -> bool:
 @numba.njit(cache=True, inline="always")
 def record(model: Model, goal: np.ndarray, p: Params, s: int, a: int, r: float, s2: int,
            terminated: bool, truncated: bool) -> bool:
-    """Count one real transition in the model; False (nothing recorded) if no slot is free."""
+    """Count one real transition in the model; False (nothing recorded) if no slot is free.
+    A step's cost is what it paid; on the problem's own scale an ending step's too (the
+    goal step: what it paid besides ``r_max``), since there it can differ from the
+    ordinary steps' (a delivery that earns more than the goal reward)."""
     if terminated and not goal[s2]:
         model.stuck[s, a] += 1
     elif not add_successor(model.slots, s, a, s2):
         return False
-    if not terminated and not truncated:
-        model.cost_sum[s, a] -= r
+    if p.own_scale > 0.0 or not (terminated or truncated):
+        cost = p.r_max - r if terminated and goal[s2] else -r
+        model.cost_sum[s, a] += cost
         model.cost_n[s, a] += 1
-        model.cost_all[0] -= r
+        model.cost_all[0] += cost
         model.cost_all[1] += 1.0
     visits = model.visits
     visits[s, a] += 1

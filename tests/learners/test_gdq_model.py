@@ -379,6 +379,28 @@ def test_the_learned_model_pays_ending_steps_as_the_env_does(own):
     assert seen == {(stuck, 0, True), (-3.0, 1, False), (reached, 2, True)}
 
 
+def test_the_learned_model_keeps_what_an_ending_step_itself_pays_on_own_scale():
+    """An ending step's own reward is learned from the ending steps themselves: a goal step
+    that pays 25 besides the goal reward (the courier's on-time delivery) is worth 45, a
+    stuck step that cost 7 is worth -7, whatever the pair's or other pairs' ordinary steps
+    cost."""
+    from gdq_pddl.learners.learned_model import learned_value, new_model, record
+    from gdq_pddl.learners.tables import Params
+
+    p = Params(kind=4, alpha=0.1, gamma=1.0, epsilon=0.1, r_max=20.0, n_backups=0, m=0,
+               backup=0, s0=0, own_scale=1.0)
+    goal = np.array([False, False, True])
+    model = new_model(3, 2, 3)
+    assert record(model, goal, p, 1, 0, -1.0, 0, False, False)  # an ordinary step elsewhere
+    assert record(model, goal, p, 0, 0, 45.0, 2, True, False)  # the goal, 25 over r_max
+    assert record(model, goal, p, 0, 1, -7.0, 0, True, False)  # stuck after paying 7
+    v = np.zeros(3)
+    args = (model.slots, model.stuck, model.visits, model.cost_sum, model.cost_n,
+            model.cost_all, goal, v, p, 0)
+    assert learned_value(*args, 0) == pytest.approx(45.0)
+    assert learned_value(*args, 1) == pytest.approx(-7.0)
+
+
 def test_a_problem_on_its_own_scale_tells_the_learners():
     from gdq_pddl.envs.pddl_env import load_instance
     from gdq_pddl.learners import make_learner, pddl_task_context
