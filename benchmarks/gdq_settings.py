@@ -34,6 +34,7 @@ SETTINGS: dict[str, dict] = {
     "prior_weight = 0": {"prior_weight": 0.0},
     "prior_weight = 0.5": {"prior_weight": 0.5},
     "prior_weight = 2": {"prior_weight": 2.0},
+    "explore = plans": {"explore": "plans"},
     "explore = applicable": {"explore": "applicable"},
     "explore_all = 0": {"explore_all": 0.0},
     "explore_all = 0.25": {"explore_all": 0.25},

@@ -14,6 +14,7 @@ from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import gdq, gdq_paper, guards, learned_model, rules
 from gdq_pddl.learners.config import (
+    EXPLORE_ALL,
     DarlingConfig,
     DynaQConfig,
     GDQConfig,
@@ -403,11 +404,15 @@ class GDQ(TabularLearner):
                   "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
         if self.kind != KIND_GDQ:
             return shared
-        return {**shared, "explore_all": float(c.explore_all),
+        explore_all = c.explore_all
+        if explore_all is None:
+            explore_all = 0.0 if self.context.exact_knowledge else EXPLORE_ALL
+        return {**shared, "explore_all": float(explore_all),
                 "explore_all_last": float(c.explore_all_last_step),
                 "prior_cost": prior_step_cost(c.prior_cost, self.context),
                 "sweep_threshold": float(c.sweep_threshold),
-                "prior_weight": float(c.prior_weight)}
+                "prior_weight": float(c.prior_weight),
+                "explore_band": float(c.plan_tolerance) if c.explore == "values" else -1.0}
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
         if self.kind != KIND_GDQ:
@@ -417,7 +422,7 @@ class GDQ(TabularLearner):
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
         if self.kind != KIND_GDQ:
             return allowed
-        if self.config.explore == "plans":
+        if self.config.explore in ("values", "plans"):  # "values" draws near the best
             return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions(
                 context.live)
         guide = self._prior(context).applicable

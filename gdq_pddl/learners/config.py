@@ -17,6 +17,9 @@ from typing import Literal
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.limits import MAX_NUMBER, MAX_TOLERANCE, check_count, check_real
 
+EXPLORE_ALL = 0.1
+"""The default GDQ's ``explore_all`` where the knowledge may differ from reality."""
+
 GDQVariant = Literal["prior", "literal", "code"]
 GDQ_VARIANTS: tuple[str, ...] = ("prior", "literal", "code")
 """``prior``, the default GDQ; ``literal`` and ``code``, the paper's two readings (the
@@ -127,16 +130,23 @@ class GDQConfig(LearnerConfig):
     """``prior`` only: a known pair's model is the posterior mean with the prior as this
     many pseudo-observations, ``(w * prior + n * learned) / (w + n)`` after ``n``
     trials; 0 is the plain empirical model."""
-    explore: Literal["plans", "applicable"] = "plans"
+    explore: Literal["values", "plans", "applicable"] = "values"
     """``prior`` only: what exploring steps draw from (but for the ``explore_all`` share):
-    ``"plans"``, the first actions of the plans within ``plan_tolerance`` from the
-    current state (DARLING's set; every action in a state with no plan);
-    ``"applicable"``, every action the knowledge says can do something here."""
-    explore_all: float = 0.1
+    ``"values"``, the actions whose value is within ``plan_tolerance`` of the state's
+    (``q >= v - plan_tolerance * (r_max - v)``: DARLING's length tolerance carried to
+    GDQ's own values, so that at first, on accurate knowledge, they are the plans' first
+    actions, and an action learned to be worse leaves them); ``"plans"``, the first
+    actions of the plans within ``plan_tolerance`` from the current state (DARLING's set;
+    every action in a state with no plan); ``"applicable"``, every action the knowledge
+    says can do something here. Why ``"values"``: ``docs/decisions.md``."""
+    explore_all: float | None = None
     """``prior`` only: this share of exploring steps draws from every action instead,
     one never tried in the current state first (any action once all were). Above 0 the
     knowledge never forbids an action; on accurate knowledge every such step is wasted.
-    Raise it when the knowledge may lack actions (``docs/decisions.md``)."""
+    None: 0.1 where the knowledge may differ from reality (the office, a STRIPS domain
+    with a dynamics file), 0 where it is reality's own actions and outcomes (a PPDDL
+    domain: no action or outcome can be missing from it;
+    :attr:`~gdq_pddl.learners.context.TaskContext.exact_knowledge`)."""
     explore_all_last_step: bool = True
     """``prior`` only: whether the ``explore_all`` share applies also in a state from which
     the knowledge reaches the goal in one action (where an action it lacks cannot
@@ -173,8 +183,9 @@ class GDQConfig(LearnerConfig):
         check_count("m", self.m)
         check_real("plan_tolerance", self.plan_tolerance, 0.0, MAX_TOLERANCE)
         check_choice("optimistic_successor", self.optimistic_successor, ("start", "terminal"))
-        check_choice("explore", self.explore, ("plans", "applicable"))
-        check_real("explore_all", self.explore_all, 0.0, 1.0)
+        check_choice("explore", self.explore, ("values", "plans", "applicable"))
+        if self.explore_all is not None:
+            check_real("explore_all", self.explore_all, 0.0, 1.0)
         check_choice("explore_all_last_step", self.explore_all_last_step, (True, False))
         for name in ("prior_weight", "prior_cost", "sweep_threshold"):
             check_real(name, getattr(self, name), 0.0, MAX_NUMBER)

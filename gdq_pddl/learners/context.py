@@ -90,6 +90,12 @@ class TaskContext:
     step_limit: int | None = None
     """The env's step limit where :attr:`own_scale` (GDQ's prior caps its step cost by
     ``r_max / step_limit`` there)."""
+    exact_knowledge: bool = False
+    """The knowledge is reality's own actions and outcomes: a PPDDL domain (a dynamics
+    file may add only a step limit and costs), whose planner and prior read the actions
+    and outcomes the env samples, leaving their probabilities and costs to learn. False
+    where reality may differ (the office, a STRIPS domain with a dynamics file); GDQ
+    then tries untried actions (:attr:`~gdq_pddl.learners.config.GDQConfig.explore_all`)."""
 
     @property
     def n_env_actions(self) -> int:
@@ -158,6 +164,7 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
+        exact_knowledge=bool(getattr(instance, "ppddl", False)),
         **({"own_scale": True, "step_limit": int(instance.model.step_limit)}
            if getattr(instance, "reward_scale", "goal") == "problem" else {}))
 

@@ -61,6 +61,10 @@ class Params(NamedTuple):
     """1: the problem's own reward scale (an IPPC file's rewards): the learned model charges
     a trial that ended stuck the pair's mean step cost, not -r_max, and a step that
     reached the goal its mean cost besides r_max, as the env pays them."""
+    explore_band: float = -1.0
+    """``KIND_GDQ``: at least 0, an exploring step (but for the ``explore_all`` share) draws
+    among the allowed actions whose Q is within this tolerance of the state's value,
+    ``q >= v - explore_band * max(0, r_max - v)``; below 0, from ``guide``."""
 
 
 class QTable(NamedTuple):
@@ -203,6 +207,26 @@ def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
+def _draw_near_best(table: QTable, p: Params, s: int, rng: np.random.Generator) -> int:
+    """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
+    DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
+    short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost).
+    The state's greedy actions always qualify."""
+    q, allowed, n_live = table.q, table.allowed, table.n_live[s]
+    floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
+    n = 0
+    for a in range(n_live):
+        n += allowed[s, a] and q[s, a] >= floor
+    k = rng.integers(0, n)
+    for a in range(n_live):
+        if allowed[s, a] and q[s, a] >= floor:
+            if k == 0:
+                return a
+            k -= 1
+    return 0  # unreachable: the greedy actions are counted
+
+
+@numba.njit(cache=True)
 def _draw_untried(visits: np.ndarray, n_live: np.ndarray, s: int,
                   rng: np.random.Generator) -> int:
     """A uniformly random action never tried in ``s``; any action once all were."""
@@ -235,10 +259,11 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
         rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
-    uniform action of ``guide[s]`` (for a share ``explore_all`` of those steps an untried
-    one, unless ``explore_all_last`` is 0 and the knowledge reaches the goal from ``s`` in
-    one action); else a uniform maximiser of Q over ``allowed[s]``, which DARLING replaces
-    by a uniform action of ``guide[s]`` if it is not in it."""
+    uniform action of ``guide[s]``, or for the default GDQ (``explore_band >= 0``) of the
+    actions near the best (:func:`_draw_near_best`) (for a share ``explore_all`` of those
+    steps an untried one, unless ``explore_all_last`` is 0 and the knowledge reaches the
+    goal from ``s`` in one action); else a uniform maximiser of Q over ``allowed[s]``,
+    which DARLING replaces by a uniform action of ``guide[s]`` if it is not in it."""
     q, allowed = table.q, table.allowed
     n_actions = q.shape[1]
     if rng.random() < p.epsilon:
@@ -246,6 +271,8 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
                 or not _one_step_from_goal(table.goal, prior_next, s)):
             return _draw_untried(visits, table.n_live, s, rng)
+        if p.explore_band >= 0.0 and p.kind == KIND_GDQ:
+            return _draw_near_best(table, p, s, rng)
         return _draw_guided(table, s, rng)
     best = table.v[s]
     ties = 0
