@@ -17,9 +17,10 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
   successor, ``pp_*``; known pairs through the reverse index ``rev_*``) until
   ``n_backups`` are done; the heap carries the rest to the next step.
 - ``allowed`` (what v and the greedy choice range over) holds the applicable and the
-  known pairs (every action where nothing is applicable); ``guide`` (what exploration
-  draws from) the plans' first actions, a share ``explore_all`` of exploring steps
-  drawing an untried action instead (:func:`gdq_pddl.learners.tables.act`).
+  known pairs (every action where nothing is applicable). Exploring steps draw among
+  the allowed actions whose value is near the state's (``explore_band``), a share
+  ``explore_all`` of them an untried action instead where the knowledge may lack
+  actions (:func:`gdq_pddl.learners.tables.act`).
 
 ``docs/learners.md`` explains the rule, ``docs/decisions.md`` measures its settings.
 """

@@ -240,6 +240,45 @@ def test_exploration_of_every_action_tries_the_untried_ones_first(ctx_c):
     assert len(again) > ctx_c.n_actions // 2
 
 
+def test_exploring_steps_draw_the_actions_near_the_best_value(ctx_c):
+    """``explore="values"`` (the default): an exploring step draws every allowed action
+    whose Q is within ``plan_tolerance`` of the state's value (``v - 0.3 (r_max - v)``),
+    and none below; an action whose value falls below leaves the set."""
+    learner = GDQ(ctx_c, GDQConfig(epsilon=1.0, explore_all=0.0, n_backups=0))
+    t, p, s = learner.tables.table, learner.params, ctx_c.s0
+    assert p.explore_band == 0.3
+
+    def near():
+        floor = t.v[s] - 0.3 * max(0.0, p.r_max - t.v[s])
+        return {int(a) for a in np.flatnonzero(t.allowed[s]) if t.q[s, a] >= floor}
+
+    rng = np.random.default_rng(0)
+    first = near()
+    assert len(first) > 1 and {learner.act(s, rng) for _ in range(2000)} == first
+    worse = min(first, key=lambda a: (t.q[s, a], a))  # another action keeps v at its max
+    t.q[s, worse] = t.v[s] - p.r_max  # learned to be bad
+    assert near() == first - {worse}
+    assert {learner.act(s, rng) for _ in range(2000)} == first - {worse}
+    plans = GDQ(ctx_c, GDQConfig(explore="plans")).params
+    assert plans.explore_band < 0  # the former rule: the plans' first actions (guide)
+
+
+@pytest.mark.parametrize(("domain", "problem", "dynamics", "exact"), [
+    ("keys", "keys-1", "keys", False),  # STRIPS + a dynamics file: reality may differ
+    ("keys-ppddl", "keys-ppddl-2", None, True),  # PPDDL: the actions and outcomes are reality's
+])
+def test_untried_actions_are_explored_only_where_the_knowledge_may_lack_them(
+        ctx_c, domain, problem, dynamics, exact):
+    from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.learners import make_learner, pddl_task_context
+
+    ctx = pddl_task_context(load_instance(domain, problem, dynamics))
+    assert ctx.exact_knowledge is exact
+    assert make_learner("GDQ", ctx).params.explore_all == (0.0 if exact else 0.1)
+    assert make_learner("GDQ", ctx, explore_all=0.25).params.explore_all == 0.25
+    assert not ctx_c.exact_knowledge and GDQ(ctx_c).params.explore_all == 0.1  # the office
+
+
 def test_exploration_of_every_action_can_spare_the_last_step(ctx_c):
     """With ``explore_all_last_step=False`` a state the knowledge takes to the goal in one
     action explores only the plans' first actions; a state farther away still tries
