@@ -13,8 +13,9 @@ knowledge``'s ``passage`` case, Task C); for each share of exploring steps that 
 the knowledge, in how many runs the final greedy policy takes the corridor, and the mean
 return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these figures.
 ``losses``: a diagnostic, not a tuning step: on the pairs a ``gdq-pddl pairs`` folder
-counts as losses against DARLING, GDQ minus DARLING with the default and with
-``explore_all = 0`` and with ``explore_all_last_step = False`` (same seeds as ``tasks``).
+counts as losses against DARLING, GDQ minus DARLING with the default, with
+``explore_all = 0``, with ``explore_all_last_step = False`` and with ``explore = "plans"``
+(same seeds as ``tasks``).
 """
 
 from __future__ import annotations
@@ -117,7 +118,8 @@ def losses(folder: str, runs: int = 10, episodes: int = 300) -> None:
     print(f"{len(rows)} pairs where GDQ loses to DARLING; shortest plan: median "
           f"{np.median(lengths):g}, longest {max(lengths)}; {runs} runs x {episodes} episodes")
     for label, config in (("default", {}), ("explore_all = 0", {"explore_all": 0.0}),
-                          ("explore_all_last_step = False", {"explore_all_last_step": False})):
+                          ("explore_all_last_step = False", {"explore_all_last_step": False}),
+                          ("explore = plans", {"explore": "plans"})):
         diffs = []
         for r in rows:
             t = Task(f"{r['start']}->{r['goal']}", r["start"], r["goal"])
