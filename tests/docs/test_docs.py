@@ -61,6 +61,8 @@ def _check_tutorial_claims(ns: dict) -> None:
     policy = demo.greedy_policy()
     assert spaces.action_name(int(policy[s0])) == "approach p2"
     assert spaces.action_name(int(policy[at_d0])) == "approach p2"
+    # exploring near the best values: the tutorial's sets are what the learner draws
+    _check_exploring_sets(ns)
     # learning: GDQ well ahead of the baselines and of both older readings
     mean = {name: returns.mean() for name, returns in ns["curves"].items()}
     assert set(mean) == {"Q-learning", "Dyna-Q", "GDQ", "GDQ-literal", "GDQ-code"}
@@ -80,10 +82,47 @@ def _check_tutorial_claims(ns: dict) -> None:
     shortest, detour = spaces.action("approach", "p9"), spaces.action("goto", "p5")
     assert optinit_q[p8, shortest] > optinit_q[p8, detour]
     assert q[p8, detour] > q[p8, shortest]
+    # ... and the door it learned is bad has left the exploring set, the detour joined it
+    assert "approach p9" not in ns["learned_draws"] and "goto p5" in ns["learned_draws"]
     route = ns["route"]
     assert ns["lengths"] == [8, 9, 10]
     assert route[0] == ns["first"] == "approach p2"
     assert len(route) == 9 and {"gothrough p4", "gothrough p7"} <= set(route)
+
+
+def _check_exploring_sets(ns: dict) -> None:
+    """Section 5's exploring sets, recomputed in the tutorial from Q and V with the
+    formula, are the actions the learner's own exploring step draws, right after OptInit
+    (a fresh learner) and after the 300 episodes (section 6's learner at p8)."""
+    from gdq_pddl.learners import GDQ
+    from gdq_pddl.learners.tables import _draw_near_best
+
+    spaces, context, gdq = ns["spaces"], ns["context"], ns["gdq"]
+    fresh = GDQ(context)
+    rng = np.random.default_rng(0)
+
+    def drawn(learner, s: int) -> set[str]:
+        table, params = learner.tables.table, learner.params
+        return {spaces.action_name(int(_draw_near_best(table, params, s, rng)))
+                for _ in range(400)}
+
+    for learner in (fresh, gdq):  # the tutorial's "what the max ranges over"
+        allowed = ns["prior"].applicable | (learner.visits > 0)
+        assert np.array_equal(allowed, learner.tables.table.allowed)
+    assert ns["optinit_draws"] == {"p0": ["approach p1", "approach p2"],
+                                   "p8": ["approach p9"]}
+    for position, names in ns["optinit_draws"].items():
+        assert drawn(fresh, spaces.state(position)) == set(names)
+    assert drawn(gdq, ns["p8"]) == set(ns["learned_draws"])
+    # goto p5 misses the floor at p8 by 0.003 after OptInit; its shortfall 1.3006 x
+    p8, v = ns["p8"], fresh.v[ns["p8"]]
+    detour = fresh.q[p8, spaces.action("goto", "p5")]
+    floor = v - fresh.config.plan_tolerance * (ns["r_max"] - v)
+    assert 0 < floor - detour < 0.005
+    assert (ns["r_max"] - detour) / (ns["r_max"] - v) == pytest.approx(1.3006, abs=5e-5)
+    # explore_all: None by default, 0.1 in the office (its knowledge may differ)
+    assert gdq.config.explore_all is None and not context.exact_knowledge
+    assert gdq.params.explore_all == pytest.approx(0.1)
 
 
 NOTEBOOK = DOCS / "tutorial.ipynb"
