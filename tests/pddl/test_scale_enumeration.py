@@ -9,6 +9,7 @@ import pytest
 from gdq_pddl.envs.model import merge_outcomes
 from gdq_pddl.envs.pddl_env import load_instance
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
 from gdq_pddl.pddl.reachable import distinct, reachable_graph, reality_outcomes
 from gdq_pddl.planning.base import PlanningProblem
@@ -89,9 +90,29 @@ def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk,
 
 def test_the_budget_is_named(monkeypatch):
     task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
-    monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * 10)  # <= 10 states
-    with pytest.raises(PlanningError, match=r"more than \d+ reachable states: .*budget"):
+    monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * 10)  # <= 5 states
+    need = human_bytes(6 * 2 * reachable.PAIR_BYTES)  # 2 actions a state (go left, right)
+    with pytest.raises(PlanningError, match=rf"chain.pddl: more than 5 reachable states, up "
+                       rf"to 2 .* would need more than {need} .*TABLE_BUDGET = "
+                       rf"{reachable.PAIR_BYTES * 10:,}; states of breadth-first levels"):
         reachable_graph(task, source="chain.pddl")
+
+
+def test_the_budget_is_a_share_of_the_machines_memory(monkeypatch):
+    task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
+    whole = reachable_graph(task).n_states
+    assert reachable.TABLE_BUDGET is None  # the default: what the machine has
+    # a machine whose MEMORY_SHARE holds the tables of 12 states of 2 actions, then of 24
+    for states in (12, 24):
+        memory = states * 2 * reachable.PAIR_BYTES / reachable.MEMORY_SHARE
+        monkeypatch.setenv("GDQ_PDDL_MEMORY", str(int(memory) + 1))
+        assert reachable.state_cap(2) == states
+        with pytest.raises(PlanningError, match=rf"more than {states} reachable states.*"
+                           rf"{reachable.MEMORY_SHARE:g} of this machine's .*MEMORY_SHARE"):
+            reachable_graph(task, source="chain.pddl")
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(int(whole * 2 * reachable.PAIR_BYTES
+                                                  / reachable.MEMORY_SHARE) + 1))
+    assert reachable_graph(task).n_states == whole  # fits: every state
 
 
 @pytest.mark.parametrize("gains", [False, True])
