@@ -27,14 +27,15 @@ from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 
-PAIR_BYTES = 300
+PAIR_BYTES = 160
 """Peak memory one cell of the tables over states x offered actions (a state's row as
 long as the longest) takes through a whole run: the graph, the true model while it is
-compiled (the peak: sorting and merging its outcome rows), the prior, the plan tables
-and a learner's tables. Measured with ``/usr/bin/time -v`` (docs/decisions.md, "Size is
-a budget"): 153 bytes a cell on switches 20 (21 million cells, one outcome a pair), 270
-on a one-box boxworld (5.6 million cells of 210 actions, conditional effects and
-rewards), the interpreter's 0.14 GB taken off; rounded up to cover both."""
+compiled, the prior, the plan tables and a learner's tables. Measured as the peak
+resident set over the cells, the interpreter's 0.14 GB taken off (docs/decisions.md,
+"Size is a budget"): 148 bytes on switches 20 (21 million cells, one outcome a pair; the
+peak is GDQ's tables beside the plans), 140 on a one-box, five-truck boxworld (36
+million cells of 245 actions, conditional effects; the peak is the true model's
+compilation); rounded up."""
 
 MEMORY_SHARE = 0.75
 """The share of the machine's memory (:func:`~gdq_pddl.limits.physical_memory`,
@@ -47,7 +48,14 @@ state enumeration stops with an error past it. None (the default): :data:`MEMORY
 of this machine's memory (:func:`table_budget`); set a number of bytes to fix it."""
 
 PARENT_CHUNK = 1 << 17
-"""States of a level expanded at a time: their successors' work arrays stay bounded."""
+"""States of a level expanded at a time at most: their successors' work arrays stay
+bounded."""
+
+EXPAND_CELLS = 1 << 21
+"""(state, applicable ground action) pairs of a level expanded at a time at most, by the
+widest row seen so far: a problem of wide rows (boxworld: 750 ground actions in every
+state) expands fewer states at a time, so its work arrays stay near 1 GB and a problem
+past the budget is refused after the chunk that passes it."""
 
 OUTCOME_CHUNK = 1 << 22
 """Cells (states x row width) whose outcomes :func:`reality_outcomes` sorts and merges at
@@ -307,8 +315,11 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
             parents = np.flatnonzero(~is_goal)
             bar.update(len(rows) - len(parents))
             level_start, next_rows = n, []
-            for c in range(0, len(parents), PARENT_CHUNK):  # bounded work arrays
-                parent = parents[c:c + PARENT_CHUNK]
+            c = 0
+            while c < len(parents):  # bounded work arrays: rows of the widest seen
+                step = max(1, min(PARENT_CHUNK, EXPAND_CELLS // width_seen))
+                parent = parents[c:c + step]
+                c += step
                 expand = rows[parent]
                 found: list[tuple[np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
                 n_applicable = np.zeros(len(parent), dtype=np.int64)
@@ -498,8 +509,9 @@ def _outcomes_of(graph: StateGraph, ops: list[_Op], live: np.ndarray, column,
 
 def _too_many(source: str, cap: int, budget: bool, width: int,
               levels: list[int]) -> PlanningError:
-    """The refusal past ``cap`` states: the need, the budget and what sets it, and the
-    breadth-first levels so far (``levels``: states a level, the last still growing)."""
+    """The refusal past ``cap`` states: the need (of the states found so far, every row as
+    wide as the widest), the budget and what sets it, and the breadth-first levels so far
+    (``levels``: states a level, the last unfinished)."""
     shown = ", ".join(f"{n:,}" for n in levels[-6:])
     grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
         f"{len(levels) - 1} (the last unfinished): {shown}"
@@ -507,18 +519,17 @@ def _too_many(source: str, cap: int, budget: bool, width: int,
         return PlanningError(f"{source}: more than {cap:,} reachable states: past the cap "
                              f"given{grown}; the learners are tabular, so make the problem "
                              "smaller (fewer objects)")
-    have, limit = physical_memory(), table_budget()
+    have, limit, found = physical_memory(), table_budget(), sum(levels)
     setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
                is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
                "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
     return PlanningError(
-        f"{source}: more than {cap:,} reachable states, up to {width} applicable ground "
-        f"actions a state: a run would need more than "
-        f"{human_bytes((cap + 1) * width * PAIR_BYTES)} "
-        f"({PAIR_BYTES} bytes a state x action cell, gdq_pddl.pddl.reachable.PAIR_BYTES), "
-        f"past the budget of {human_bytes(limit)}: {setting}{grown}; the learners are "
-        "tabular, so make the problem smaller (fewer objects), or run it on a machine "
-        "with more memory")
+        f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
+        f"{width} applicable ground actions a state): a run would need at least "
+        f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
+        f"cell, gdq_pddl.pddl.reachable.PAIR_BYTES), past the budget of "
+        f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
+        "problem smaller (fewer objects), or run it on a machine with more memory")
 
 
 def distinct(a: np.ndarray) -> np.ndarray:

@@ -92,9 +92,10 @@ def test_the_budget_is_named(monkeypatch):
     task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
     monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * 10)  # <= 5 states
     need = human_bytes(6 * 2 * reachable.PAIR_BYTES)  # 2 actions a state (go left, right)
-    with pytest.raises(PlanningError, match=rf"chain.pddl: more than 5 reachable states, up "
-                       rf"to 2 .* would need more than {need} .*TABLE_BUDGET = "
-                       rf"{reachable.PAIR_BYTES * 10:,}; states of breadth-first levels"):
+    with pytest.raises(PlanningError, match=rf"chain.pddl: more than 5 reachable states \(6 "
+                       rf"found so far, up to 2 .* would need at least {need} .*TABLE_BUDGET "
+                       rf"= {reachable.PAIR_BYTES * 10:,}; states of breadth-first levels 0 "
+                       r"to 2 \(the last unfinished\): 1, 2, 3;"):
         reachable_graph(task, source="chain.pddl")
 
 
