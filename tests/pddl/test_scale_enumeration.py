@@ -66,12 +66,14 @@ def one_at_a_time(task):
 @pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
 @pytest.mark.parametrize("domain, problem", [(SLIPPERY, chain(5, "(and (at p4) (tired))")),
                                              (PICK, pick(70))], ids=["chain", "pick70"])
-@pytest.mark.parametrize("chunk", [reachable.PARENT_CHUNK, 2])
+@pytest.mark.parametrize("chunk", [("PARENT_CHUNK", reachable.PARENT_CHUNK),
+                                   ("PARENT_CHUNK", 2), ("EXPAND_CELLS", 3)])
 def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk, monkeypatch):
     # pick: 72 facts, two uint64 words a state; most-likely: the (tired) outcome is
     # reality's only, and its states come after the edges' states; chunk 2: a level's
-    # states are expanded two at a time
-    monkeypatch.setattr(reachable, "PARENT_CHUNK", chunk)
+    # states are expanded two at a time; 3 cells: 3 // the widest row seen so far (1, 2
+    # or 3 states at a time as rows widen)
+    monkeypatch.setattr(reachable, *chunk)
     task = PlanningProblem.from_texts(domain, problem, determinisation=determinisation
                                       ).learner_task
     assert len(task.facts) > 64 or domain is SLIPPERY
@@ -86,6 +88,13 @@ def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk,
                for i in range(graph.n_states)]
     assert all(set(e) <= set(row[row >= 0].tolist())
                for e, row in zip(offered, graph.offered, strict=True))
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    rows = [[] if goal else sorted(op_pos[id(op)] for op in task.applicable(state))
+            for state, goal in zip(states, graph.is_goal.tolist(), strict=True)]
+    want = np.full((len(rows), max(1, *map(len, rows))), -1)
+    for i, row in enumerate(rows):
+        want[i, :max(1, len(row))] = row or [0]  # none applies: ground action 0
+    assert graph.offered.dtype == np.int64 and np.array_equal(graph.offered, want)
 
 
 def test_the_budget_is_named(monkeypatch):
