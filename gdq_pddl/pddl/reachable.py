@@ -239,6 +239,38 @@ class _Op:
         return ok
 
 
+FILTER_BYTES = 1 << 27
+"""The most bytes :func:`_fact_rows` spends on a chunk's per-fact membership (else every
+ground action is tested on every state of the chunk)."""
+
+
+def _positive_facts(pre: np.ndarray) -> np.ndarray:
+    """The facts (bit numbers) set in a word row ``pre``."""
+    bits = np.unpackbits(pre.view(np.uint8), bitorder="little")
+    return np.flatnonzero(bits)
+
+
+def _fact_rows(rows: np.ndarray, need: list[np.ndarray]) -> dict[int, np.ndarray] | None:
+    """For each fact some ground action needs, the rows (increasing) where it holds; None
+    when that is more than :data:`FILTER_BYTES` facts x rows to look at."""
+    facts = np.unique(np.concatenate(need)) if need else np.zeros(0, dtype=np.int64)
+    if not len(facts) or len(facts) * len(rows) > FILTER_BYTES:
+        return None
+    words = {int(w): np.ascontiguousarray(rows[:, w]) for w in np.unique(facts // 64)}
+    return {f: np.flatnonzero(words[f // 64] & np.uint64(1 << f % 64))
+            for f in facts.tolist()}
+
+
+def _applicable(op: _Op, rows: np.ndarray, holding: dict[int, np.ndarray] | None,
+                need: np.ndarray) -> np.ndarray:
+    """The rows (increasing) where ``op`` applies: tested only on the rows where its
+    rarest needed fact holds, when ``holding`` lists them."""
+    if holding is None or not len(need):
+        return np.flatnonzero(op.applies(rows))
+    cand = min((holding[int(f)] for f in need.tolist()), key=len)
+    return cand[op.applies(rows[cand])] if len(cand) else cand
+
+
 def _apply(rows: np.ndarray, effect: tuple) -> np.ndarray:
     """The rows after an effect ``(add, delete, conditional effects)`` (adds win)."""
     add, dele, conditional = effect
@@ -300,6 +332,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
                 for i, op in enumerate(group)}  # the order of task.applicable
     reality_rank = np.argsort(sorted(range(n_ops), key=lambda k: order_of[id(task.ops[k])]))
+    need = [_positive_facts(op.pre) for op in ops]  # each op's facts that must hold
     levels = [_words(task.init, n_words)[None, :]]
     known_keys, known_ids = _keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
     goal, depth, src, op_of, nxt = [], [], [], [], []
@@ -325,8 +358,9 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 found: list[tuple[np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
                 n_applicable = np.zeros(len(parent), dtype=np.int64)
                 applicable: list[tuple[int, np.ndarray]] = []
+                holding = _fact_rows(expand, need)
                 for k, op in enumerate(ops):
-                    at = np.flatnonzero(op.applies(expand))
+                    at = _applicable(op, expand, holding, need[k])
                     if not len(at):
                         continue
                     n_applicable[at] += 1
