@@ -96,17 +96,25 @@ def prior_from_graph(graph) -> PriorModel:
     (ties: the lowest state index)."""
     nxt = np.full(graph.offered.shape, NO_CHANGE, dtype=np.int64)
     n = graph.n_states
-    src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
     op, to = graph.edge_op, graph.edge_next
+    if not len(op):
+        return PriorModel(nxt)
+    src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
     pair = src * (int(op.max(initial=0)) + 1) + op
-    if len(pair) and (np.diff(pair) < 0).any():  # the graph lists a state's edges by action
+    if (pair[1:] < pair[:-1]).any():  # the graph lists a state's edges by action
         order = np.argsort(pair, kind="stable")
         pair, src, op, to = pair[order], src[order], op[order], to[order]
-    if not len(pair):
-        return PriorModel(nxt)
-    dist = np.where(graph.distances < 0, n + 1, graph.distances)  # unreachable: farthest
-    key = dist[to] * (n + 2) + to  # closest to the goal, then the lowest state index
+        del order
     first = np.flatnonzero(np.r_[True, pair[1:] != pair[:-1]])
+    del pair  # each array dropped once read: edges are most of the graph's memory
+    src, op = src[first], op[first]
+    dist = np.where(graph.distances < 0, n + 1, graph.distances)  # unreachable: farthest
+    key = dist[to]
+    del dist
+    key *= n + 2
+    key += to  # closest to the goal, then the lowest state index
     best = np.minimum.reduceat(key, first)
-    nxt[src[first], column_of(graph.offered, src[first], op[first])] = best % (n + 2)
+    del key, first
+    best %= n + 2
+    nxt[src, column_of(graph.offered, src, op)] = best
     return PriorModel(nxt)

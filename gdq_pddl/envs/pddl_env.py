@@ -38,7 +38,6 @@ from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph
 from gdq_pddl.dynamics import CostDist, Dynamics, parse_dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import (
-    PAIR_BYTES,
     ModelArrays,
     StateSpace,
     compile_true_model,
@@ -54,6 +53,7 @@ from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
 from gdq_pddl.pddl.reachable import (
     MAX_STATES,
+    PAIR_BYTES,
     StateGraph,
     reachable_graph,
     reality_outcomes,

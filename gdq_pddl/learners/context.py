@@ -20,6 +20,7 @@ from gdq_pddl.abstraction.table import pack_plans
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
+from gdq_pddl.limits import human_bytes, physical_memory
 from gdq_pddl.world import Task, World
 
 
@@ -138,10 +139,13 @@ def empty_plan_table(n_states: int, n_actions: int) -> PlanTable:
                       np.full(n_states, -1, dtype=np.int64), False)
 
 
-MAX_TABLE_BYTES = 16_000_000_000
+MAX_TABLE_BYTES: int | None = None
 """A learner keeps arrays per (state, action) pair, with ``max_successors`` successor
-slots each (:func:`gdq_pddl.learners.tables.table_bytes`); a task whose tables would
-exceed this is refused with a clear message instead of exhausting memory."""
+slots each (:func:`gdq_pddl.learners.tables.table_bytes`, an upper bound: most of them are
+never written); a task whose tables would exceed this many bytes is refused with a clear
+message instead of exhausting memory. None (the default): the machine's memory
+(:func:`~gdq_pddl.limits.physical_memory`), so a problem the state enumeration's budget
+lets through is not stopped here by a fixed figure."""
 
 
 def task_context(instance: Instance, planner: str = "graph", darling_tolerance: float = 0.3,
@@ -152,11 +156,14 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
     columns = getattr(instance, "columns", None)
     n_s, k = instance.n_states, instance.max_successors
     n_a = instance.n_actions if columns is None else columns.shape[1]
-    if table_bytes(n_s, n_a, k) > MAX_TABLE_BYTES:
+    limit = physical_memory() if MAX_TABLE_BYTES is None else MAX_TABLE_BYTES
+    if table_bytes(n_s, n_a, k) > limit:
         raise PlanningError(f"{instance.source}: {n_s} reachable states x {n_a} actions "
                             f"(up to {k} successors each): the learners' tables "
-                            f"would need {table_bytes(n_s, n_a, k) / 1e9:.0f} GB; make the "
-                            f"problem smaller")
+                            f"would need {human_bytes(table_bytes(n_s, n_a, k))}, more than "
+                            f"{human_bytes(limit)} (this machine's memory, or "
+                            "gdq_pddl.learners.context.MAX_TABLE_BYTES); make the problem "
+                            "smaller")
     return TaskContext(
         s0=instance.learner_start, goal=instance.learner_goal,
         plans=instance.plan_table(planner, 0.0), r_max=instance.r_max,

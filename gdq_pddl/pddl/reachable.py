@@ -23,23 +23,47 @@ from functools import cached_property
 import numpy as np
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.limits import slow_progress
+from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 
-PAIR_BYTES = 150
-"""Memory one (state, offered action) pair takes at most in the true model and the
-learners' tables (a model's outcomes while compiled, Q, visits, successor slots...)."""
+PAIR_BYTES = 160
+"""Peak memory one cell of the tables over states x offered actions (a state's row as
+long as the longest) takes through a whole run: the graph, the true model while it is
+compiled, the prior, the plan tables and a learner's tables. Measured as the peak
+resident set over the cells, the interpreter's 0.14 GB taken off (docs/decisions.md,
+"Size is a budget"): 148 bytes on switches 20 (21 million cells, one outcome a pair; the
+peak is GDQ's tables beside the plans), 140 on a one-box, five-truck boxworld (36
+million cells of 245 actions, conditional effects; the peak is the true model's
+compilation), 154 on its two-box, four-truck variant (82 million cells: ``gdq-pddl run``
+of GDQ, DARLING and Q-learning, 12.7 GB); rounded up."""
 
-TABLE_BUDGET = 8_000_000_000
-"""Bytes the tables of states x offered actions may take (:data:`PAIR_BYTES` per pair,
-every state's row as long as the longest): state enumeration stops with an error past it."""
+MEMORY_SHARE = 0.75
+"""The share of the machine's memory (:func:`~gdq_pddl.limits.physical_memory`,
+``GDQ_PDDL_MEMORY`` overrides it) the tables may take when :data:`TABLE_BUDGET` is None:
+the rest is headroom for the interpreter, numba and what else the machine runs."""
+
+TABLE_BUDGET: int | None = None
+"""Bytes the tables of states x offered actions may take (:data:`PAIR_BYTES` a cell):
+state enumeration stops with an error past it. None (the default): :data:`MEMORY_SHARE`
+of this machine's memory (:func:`table_budget`); set a number of bytes to fix it."""
 
 PARENT_CHUNK = 1 << 17
-"""States of a level expanded at a time: their successors' work arrays stay bounded."""
+"""States of a level expanded at a time at most: their successors' work arrays stay
+bounded."""
+
+EXPAND_CELLS = 1 << 21
+"""(state, applicable ground action) pairs of a level expanded at a time at most, by the
+widest row seen so far: a problem of wide rows (boxworld: 750 ground actions in every
+state) expands fewer states at a time, so its work arrays stay near 1 GB and a problem
+past the budget is refused after the chunk that passes it."""
+
+OUTCOME_CHUNK = 1 << 22
+"""Cells (states x row width) whose outcomes :func:`reality_outcomes` sorts and merges at
+a time: its work arrays (about 200 bytes an outcome) stay near 1 GB."""
 
 MAX_STATES: int | None = None
-"""Default cap on the number of reachable states (None: what :data:`TABLE_BUDGET` allows)."""
+"""Default cap on the number of reachable states (None: what :func:`table_budget` allows)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,8 +146,18 @@ class StateGraph:
         return order[np.searchsorted(keys, _keys(rows))]
 
 
-def state_cap(width: int, budget: int = TABLE_BUDGET) -> int:
-    """The most states whose tables of ``width`` actions a state fit ``budget`` bytes."""
+def table_budget() -> int:
+    """Bytes the tables may take: :data:`TABLE_BUDGET`, or when it is None
+    :data:`MEMORY_SHARE` of :func:`~gdq_pddl.limits.physical_memory`."""
+    if TABLE_BUDGET is not None:
+        return int(TABLE_BUDGET)
+    return int(MEMORY_SHARE * physical_memory())
+
+
+def state_cap(width: int, budget: int | None = None) -> int:
+    """The most states whose tables of ``width`` actions a state fit ``budget`` bytes
+    (None: :func:`table_budget`)."""
+    budget = table_budget() if budget is None else budget
     return budget // (PAIR_BYTES * max(1, width))
 
 
@@ -144,18 +178,29 @@ def offered_rows(n_states: int, state: np.ndarray, op: np.ndarray) -> np.ndarray
 def column_of(offered: np.ndarray, state: np.ndarray, action: np.ndarray) -> np.ndarray:
     """int64: the column of ``action[i]`` in the row of ``state[i]`` of an
     :attr:`StateGraph.offered` table (-1 where it is not offered there)."""
-    n_states, width = offered.shape
+    return columns_in(offered)(state, action)
+
+
+def columns_in(offered: np.ndarray):
+    """:func:`column_of` over one ``offered`` table, its index built once: each call then
+    costs a binary search per query, not a pass over the whole table."""
+    n_states = offered.shape[0]
     live = offered >= 0
     big = int(offered.max(initial=0)) + 1
     keys = (np.arange(n_states, dtype=np.int64)[:, None] * big + offered)[live]
     start = np.zeros(n_states + 1, dtype=np.int64)
     np.cumsum(live.sum(axis=1), out=start[1:])
-    state = np.asarray(state, dtype=np.int64)
-    action = np.asarray(action, dtype=np.int64)
-    want = state * big + action
-    at = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
-    found = (keys[at] == want) & (action >= 0) & (action < big)
-    return np.where(found, at - start[state], -1)
+    del live
+
+    def column(state: np.ndarray, action: np.ndarray) -> np.ndarray:
+        state = np.asarray(state, dtype=np.int64)
+        action = np.asarray(action, dtype=np.int64)
+        want = state * big + action
+        at = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
+        found = (keys[at] == want) & (action >= 0) & (action < big)
+        return np.where(found, at - start[state], -1)
+
+    return column
 
 
 def _words(mask: int, n_words: int) -> np.ndarray:
@@ -192,6 +237,38 @@ class _Op:
         if self.alternatives:
             ok &= np.logical_or.reduce([_holds(rows, p, n) for p, n in self.alternatives])
         return ok
+
+
+FILTER_BYTES = 1 << 27
+"""The most bytes :func:`_fact_rows` spends on a chunk's per-fact membership (else every
+ground action is tested on every state of the chunk)."""
+
+
+def _positive_facts(pre: np.ndarray) -> np.ndarray:
+    """The facts (bit numbers) set in a word row ``pre``."""
+    bits = np.unpackbits(pre.view(np.uint8), bitorder="little")
+    return np.flatnonzero(bits)
+
+
+def _fact_rows(rows: np.ndarray, need: list[np.ndarray]) -> dict[int, np.ndarray] | None:
+    """For each fact some ground action needs, the rows (increasing) where it holds; None
+    when that is more than :data:`FILTER_BYTES` facts x rows to look at."""
+    facts = np.unique(np.concatenate(need)) if need else np.zeros(0, dtype=np.int64)
+    if not len(facts) or len(facts) * len(rows) > FILTER_BYTES:
+        return None
+    words = {int(w): np.ascontiguousarray(rows[:, w]) for w in np.unique(facts // 64)}
+    return {f: np.flatnonzero(words[f // 64] & np.uint64(1 << f % 64))
+            for f in facts.tolist()}
+
+
+def _applicable(op: _Op, rows: np.ndarray, holding: dict[int, np.ndarray] | None,
+                need: np.ndarray) -> np.ndarray:
+    """The rows (increasing) where ``op`` applies: tested only on the rows where its
+    rarest needed fact holds, when ``holding`` lists them."""
+    if holding is None or not len(need):
+        return np.flatnonzero(op.applies(rows))
+    cand = min((holding[int(f)] for f in need.tolist()), key=len)
+    return cand[op.applies(rows[cand])] if len(cand) else cand
 
 
 def _apply(rows: np.ndarray, effect: tuple) -> np.ndarray:
@@ -255,10 +332,12 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
                 for i, op in enumerate(group)}  # the order of task.applicable
     reality_rank = np.argsort(sorted(range(n_ops), key=lambda k: order_of[id(task.ops[k])]))
+    need = [_positive_facts(op.pre) for op in ops]  # each op's facts that must hold
     levels = [_words(task.init, n_words)[None, :]]
     known_keys, known_ids = _keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
     goal, depth, src, op_of, nxt = [], [], [], [], []
-    app_state, app_op = [], []  # the applicable pairs: the rows of `offered`
+    rows_of: list[tuple[np.ndarray, np.ndarray]] = []  # (states, their offered rows)
+    op_type = np.int16 if n_ops <= np.iinfo(np.int16).max else np.int32
     width_seen = 1
     lo, n = 0, 1  # the first state of the level expanded, and the states known
     with slow_progress("reachable states", " states") as bar:
@@ -270,18 +349,22 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
             parents = np.flatnonzero(~is_goal)
             bar.update(len(rows) - len(parents))
             level_start, next_rows = n, []
-            for c in range(0, len(parents), PARENT_CHUNK):  # bounded work arrays
-                parent = parents[c:c + PARENT_CHUNK]
+            c = 0
+            while c < len(parents):  # bounded work arrays: rows of the widest seen
+                step = max(1, min(PARENT_CHUNK, EXPAND_CELLS // width_seen))
+                parent = parents[c:c + step]
+                c += step
                 expand = rows[parent]
                 found: list[tuple[np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
                 n_applicable = np.zeros(len(parent), dtype=np.int64)
+                applicable: list[tuple[int, np.ndarray]] = []
+                holding = _fact_rows(expand, need)
                 for k, op in enumerate(ops):
-                    at = np.flatnonzero(op.applies(expand))
+                    at = _applicable(op, expand, holding, need[k])
                     if not len(at):
                         continue
                     n_applicable[at] += 1
-                    app_state.append(lo + parent[at])
-                    app_op.append(np.full(len(at), k, dtype=np.int64))
+                    applicable.append((k, at))
                     here = expand[at]
                     seen: list[np.ndarray] = []
                     for j, effect in enumerate(op.known):
@@ -305,9 +388,13 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
                 fresh = np.sort(first[known_keys[at] != uniq])
                 width_seen = max(width_seen, int(n_applicable.max(initial=0)))
-                cap = state_cap(width_seen, TABLE_BUDGET) if max_states is None else max_states
+                rows_of.append((lo + parent, _row_block(applicable, len(parent), op_type)))
+                del applicable
+                cap = state_cap(width_seen) if max_states is None else max_states
                 if n + len(fresh) > cap:
-                    raise _too_many(source, cap, max_states is None, width_seen)
+                    raise _too_many(source, cap, max_states is None, width_seen,
+                                    [len(level) for level in levels] + [n + len(fresh)
+                                                                       - level_start])
                 added = keys[fresh]  # into the sorted known keys, without sorting them all
                 by_key = np.argsort(added, kind="stable")
                 where = np.searchsorted(known_keys, added[by_key])
@@ -324,14 +411,36 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
             lo = level_start
     none = np.zeros(0, dtype=np.int64)  # no level expanded (the start is a goal)
     src_all = np.concatenate(src) if src else none
+    del src
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(src_all, minlength=n), out=ptr[1:])
-    offered = offered_rows(n, np.concatenate(app_state) if app_state else ptr[:0],
-                           np.concatenate(app_op) if app_op else ptr[:0])
-    return StateGraph(task, np.concatenate(levels), ptr,
-                      np.concatenate(op_of or [none]).astype(np.int64),
-                      np.concatenate(nxt or [none]).astype(np.int64), np.concatenate(goal),
-                      np.concatenate(depth), offered)
+    del src_all
+    offered = np.full((n, width_seen), -1, dtype=np.int64)
+    while rows_of:  # each block freed once copied: one copy of the rows at the peak
+        states, block = rows_of.pop()
+        offered[states, :block.shape[1]] = block
+    offered[offered[:, 0] < 0, 0] = 0  # none applies (a goal, a dead end): ground action 0
+    edge_op = np.concatenate(op_of or [none]).astype(np.int64, copy=False)
+    del op_of
+    edge_next = np.concatenate(nxt or [none]).astype(np.int64, copy=False)
+    del nxt
+    return StateGraph(task, np.concatenate(levels), ptr, edge_op, edge_next,
+                      np.concatenate(goal), np.concatenate(depth), offered)
+
+
+def _row_block(applicable: list[tuple[int, np.ndarray]], n_rows: int,
+               dtype: type) -> np.ndarray:
+    """The :attr:`StateGraph.offered` rows (``dtype``, -1 padding) of ``n_rows`` states
+    from ``(ground action, rows where it applies)`` in increasing action order."""
+    count = np.zeros(n_rows, dtype=np.int64)
+    for _, at in applicable:
+        count[at] += 1
+    block = np.full((n_rows, max(1, int(count.max(initial=0)))), -1, dtype=dtype)
+    count[:] = 0
+    for k, at in applicable:
+        block[at, count[at]] = k
+        count[at] += 1
+    return block
 
 
 def reality_outcomes(graph: StateGraph, gains: bool = False
@@ -341,77 +450,121 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     graph's :attr:`~StateGraph.offered` rows), probability,
     and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
     outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
-    probabilities summed in outcome order; outcomes of probability 0 are left out. A bar
-    shows its steps (one per ground action, then sort, reorder, merge, order) past 2 s."""
-    task, n_ops = graph.task, len(graph.task.ops)
+    probabilities summed in outcome order; outcomes of probability 0 are left out.
+
+    Built :data:`OUTCOME_CHUNK` cells of states at a time (pairs of different states
+    never merge, so the chunks' rows, in state order, are the whole's): the sort and
+    merge work arrays stay bounded, and only the merged rows are kept. A bar counts the
+    chunks past 2 s."""
+    task = graph.task
     width = graph.offered.shape[1]
     n_words = graph.words.shape[1]
     ops = _compiled(task, n_words)
     live = np.flatnonzero(~graph.is_goal)
+    column = columns_in(graph.offered)
+    step = max(1, OUTCOME_CHUNK // width)
+    chunks = []
+    with slow_progress("true model", " chunks", -(-len(live) // step)) as bar:
+        for c in range(0, len(live), step):
+            chunks.append(_outcomes_of(graph, ops, live[c:c + step], column, gains))
+            bar.update()
+    n_fields = 3 if gains else 2
+    out = []
+    for f in range(2 + n_fields):  # one field joined at a time, its pieces freed
+        pieces = [chunk[f] for chunk in chunks]
+        for chunk in chunks:
+            chunk[f] = None
+        out.append(np.concatenate(pieces) if pieces else np.zeros(0))
+        del pieces
+    return out[0], out[1], out[2:]
+
+
+def _outcomes_of(graph: StateGraph, ops: list[_Op], live: np.ndarray, column,
+                 gains: bool) -> list:
+    """:func:`reality_outcomes` of the states ``live`` (increasing), as a list ``[pair,
+    probability, next, stuck(, reward)]``."""
+    task, width = graph.task, graph.offered.shape[1]
+    n_words = graph.words.shape[1]
     rows = graph.words[live]
     parts: list[tuple] = []
-    with slow_progress("true model", " steps", n_ops + 4) as bar:
-        for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
-            bar.update()
-            at = live[op.applies(rows)]
-            if not len(at):
-                continue
-            here = graph.words[at]
-            row = graph.offered[at]
-            pair = at * width + ((row >= 0) & (row < k)).sum(axis=1)  # k's column: rows sorted
-            for j, o in enumerate(ground.outcomes):
-                if o.probability > 0:
-                    same = not (o.add or o.dele or o.conditional)
-                    nxt = at if o.stuck or same else graph.lookup(_apply(here, (
-                        _words(o.add, n_words), _words(o.dele, n_words),
-                        tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
-                    earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
-                    for alts, amount in o.rewards:
-                        earned = earned + np.where(np.logical_or.reduce([_holds(
-                            here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
-                            amount, 0.0)
-                    parts.append((pair, j, o.probability, nxt, o.stuck,
-                                  o.reward + earned if gains else None))
-        pair = np.concatenate([p[0] for p in parts])
-        j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
-        prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
-        nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
-        stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
-        gain = np.concatenate([p[5] for p in parts]) if gains else None
-        del parts  # one copy of the rows at a time: they are most of the peak memory
-        # equal keys of a pair side by side, in outcome order; each group's first row leads
-        key = (pair * graph.n_states + nxt) * 2 + stuck
-        order = np.lexsort((j, gain, key) if gains else (j, key))
-        bar.update()
-        key, pair, j, prob = key[order], pair[order], j[order], prob[order]
-        nxt, stuck = nxt[order], stuck[order]
-        gain = gain[order] if gains else None
-        del order
-        bar.update()
-        lead = np.ones(len(pair), dtype=np.bool_)
-        lead[1:] = key[1:] != key[:-1]
-        if gains:
-            lead[1:] |= gain[1:] != gain[:-1]
-        group = np.cumsum(lead) - 1
-        total = np.zeros(group[-1] + 1 if len(group) else 0)
-        place = np.arange(len(group)) - np.flatnonzero(lead)[group]
-        for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
-            total[group[place == r]] += prob[place == r]
-        bar.update()
-        first = np.flatnonzero(lead)
-        keep = first[np.lexsort((j[first], pair[first]))]
-        bar.update()
-    fields = [nxt[keep], stuck[keep]] + ([gain[keep]] if gains else [])
-    return pair[keep], total[group[keep]], fields
+    for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
+        at = live[op.applies(rows)]
+        if not len(at):
+            continue
+        here = graph.words[at]
+        pair = at * width + column(at, np.full(len(at), k))
+        for j, o in enumerate(ground.outcomes):
+            if o.probability > 0:
+                same = not (o.add or o.dele or o.conditional)
+                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
+                    _words(o.add, n_words), _words(o.dele, n_words),
+                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
+                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
+                for alts, amount in o.rewards:
+                    earned = earned + np.where(np.logical_or.reduce([_holds(
+                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
+                        amount, 0.0)
+                parts.append((pair, j, o.probability, nxt, o.stuck,
+                              o.reward + earned if gains else None))
+    if not parts:  # no ground action applies in these states (dead ends)
+        return [np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64),
+                np.zeros(0, dtype=np.bool_)] + ([np.zeros(0)] if gains else [])
+    pair = np.concatenate([p[0] for p in parts])
+    j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
+    prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
+    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
+    stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
+    gain = np.concatenate([p[5] for p in parts]) if gains else None
+    del parts  # one copy of the rows at a time: they are most of the peak memory
+    # equal keys of a pair side by side, in outcome order; each group's first row leads
+    key = (pair * graph.n_states + nxt) * 2 + stuck
+    order = np.lexsort((j, gain, key) if gains else (j, key))
+    key = key[order]  # one array reordered at a time: one extra copy at the peak
+    pair = pair[order]
+    j = j[order]
+    prob = prob[order]
+    nxt = nxt[order]
+    stuck = stuck[order]
+    gain = gain[order] if gains else None
+    del order
+    lead = np.ones(len(pair), dtype=np.bool_)
+    lead[1:] = key[1:] != key[:-1]
+    if gains:
+        lead[1:] |= gain[1:] != gain[:-1]
+    group = np.cumsum(lead) - 1
+    total = np.zeros(group[-1] + 1 if len(group) else 0)
+    place = np.arange(len(group)) - np.flatnonzero(lead)[group]
+    for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
+        total[group[place == r]] += prob[place == r]
+    first = np.flatnonzero(lead)
+    keep = first[np.lexsort((j[first], pair[first]))]
+    return [pair[keep], total[group[keep]], nxt[keep], stuck[keep]] + \
+        ([gain[keep]] if gains else [])
 
 
-def _too_many(source: str, cap: int, budget: bool, width: int) -> PlanningError:
-    why = (f"their tables over up to {width} applicable ground actions a state "
-           f"({PAIR_BYTES} bytes a pair) would "
-           f"pass the budget of {TABLE_BUDGET / 1e9:g} GB "
-           "(gdq_pddl.pddl.reachable.TABLE_BUDGET)" if budget else "the cap given")
-    return PlanningError(f"{source}: more than {cap} reachable states: {why}; the learners "
-                         "are tabular, so make the problem smaller (fewer objects)")
+def _too_many(source: str, cap: int, budget: bool, width: int,
+              levels: list[int]) -> PlanningError:
+    """The refusal past ``cap`` states: the need (of the states found so far, every row as
+    wide as the widest), the budget and what sets it, and the breadth-first levels so far
+    (``levels``: states a level, the last unfinished)."""
+    shown = ", ".join(f"{n:,}" for n in levels[-6:])
+    grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
+        f"{len(levels) - 1} (the last unfinished): {shown}"
+    if not budget:
+        return PlanningError(f"{source}: more than {cap:,} reachable states: past the cap "
+                             f"given{grown}; the learners are tabular, so make the problem "
+                             "smaller (fewer objects)")
+    have, limit, found = physical_memory(), table_budget(), sum(levels)
+    setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
+               is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
+               "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
+    return PlanningError(
+        f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
+        f"{width} applicable ground actions a state): a run would need at least "
+        f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
+        f"cell, gdq_pddl.pddl.reachable.PAIR_BYTES), past the budget of "
+        f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
+        "problem smaller (fewer objects), or run it on a machine with more memory")
 
 
 def distinct(a: np.ndarray) -> np.ndarray:

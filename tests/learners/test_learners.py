@@ -553,3 +553,22 @@ def test_numba_cache_is_dropped_when_a_compiled_module_changes(tmp_path):
     assert not _jit_cache.refresh(tmp_path) and cached.exists()  # nothing changed
     (tmp_path / "learners" / "mod.py").write_text("x = 2\n")  # a callee changes
     assert _jit_cache.refresh(tmp_path) and not cached.exists()
+
+
+def test_learner_tables_are_refused_past_the_machines_memory(monkeypatch):
+    from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.errors import PlanningError
+    from gdq_pddl.learners import context
+    from gdq_pddl.learners.tables import table_bytes
+
+    inst = load_instance("courier", "courier-1")
+    need = table_bytes(inst.n_states, inst.columns.shape[1], inst.max_successors)
+    assert context.MAX_TABLE_BYTES is None  # the default: what the machine has
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(need))
+    assert context.task_context(inst).columns is inst.columns  # fits exactly
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(need - 1))
+    with pytest.raises(PlanningError, match=r"courier-1.pddl: .*learners' tables would need "
+                       r".*this machine's memory, or .*MAX_TABLE_BYTES"):
+        context.task_context(inst)
+    monkeypatch.setattr(context, "MAX_TABLE_BYTES", need)  # a figure of one's own wins
+    assert context.task_context(inst).columns is inst.columns

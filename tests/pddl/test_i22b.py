@@ -1,9 +1,11 @@
 """Progress on slow work (issue 22 item 4): grounding and the true model's outcome rows
 count their steps on :func:`~gdq_pddl.limits.slow_progress` bars."""
 
+import numpy as np
 import pytest
 from tqdm import tqdm
 
+from gdq_pddl.pddl import reachable
 from gdq_pddl.pddl.reachable import reachable_graph, reality_outcomes
 from gdq_pddl.planning.base import PlanningProblem
 
@@ -39,14 +41,19 @@ def test_grounding_counts_every_ground_action(bars, domain, steps):
     assert counted(bars, "grounding") == steps
 
 
-def test_true_model_rows_count_their_steps(bars):
+def test_true_model_rows_count_their_chunks(bars, monkeypatch):
     task = PlanningProblem.from_texts(SWITCHES, switches(6), "d.pddl", "p.pddl").learner_task
     graph = reachable_graph(task)
+    whole = reality_outcomes(graph)  # one chunk
+    assert len(whole[0]) == 2 * 6 * 2**5  # each off switch of each state: flipped or not
+    n_live = int((~graph.is_goal).sum())
+    monkeypatch.setattr(reachable, "OUTCOME_CHUNK", 10 * graph.offered.shape[1])
     bars.clear()
-    pair, _, _ = reality_outcomes(graph)
-    assert len(pair) == 2 * 6 * 2**5  # each off switch of each state: flipped or not
+    pair, prob, fields = reality_outcomes(graph)  # 10 states a chunk
     [model] = [bar for bar in bars if bar.desc.startswith("true model")]
-    assert model.n == model.total == 6 + 4  # a step per ground action, then 4 stages
+    assert model.n == model.total == -(-n_live // 10) > 1
+    for a, b in zip([pair, prob, *fields], [whole[0], whole[1], *whole[2]], strict=True):
+        assert a.dtype == b.dtype and np.array_equal(a, b)  # the chunks' rows are the whole's
 
 
 def test_a_refusal_midway_clears_its_bar_before_the_message(bars):

@@ -9,6 +9,7 @@ import pytest
 from gdq_pddl.envs.model import merge_outcomes
 from gdq_pddl.envs.pddl_env import load_instance
 from gdq_pddl.errors import PlanningError
+from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
 from gdq_pddl.pddl.reachable import distinct, reachable_graph, reality_outcomes
 from gdq_pddl.planning.base import PlanningProblem
@@ -65,12 +66,14 @@ def one_at_a_time(task):
 @pytest.mark.parametrize("determinisation", ["all-outcomes", "most-likely"])
 @pytest.mark.parametrize("domain, problem", [(SLIPPERY, chain(5, "(and (at p4) (tired))")),
                                              (PICK, pick(70))], ids=["chain", "pick70"])
-@pytest.mark.parametrize("chunk", [reachable.PARENT_CHUNK, 2])
+@pytest.mark.parametrize("chunk", [("PARENT_CHUNK", reachable.PARENT_CHUNK),
+                                   ("PARENT_CHUNK", 2), ("EXPAND_CELLS", 3)])
 def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk, monkeypatch):
     # pick: 72 facts, two uint64 words a state; most-likely: the (tired) outcome is
     # reality's only, and its states come after the edges' states; chunk 2: a level's
-    # states are expanded two at a time
-    monkeypatch.setattr(reachable, "PARENT_CHUNK", chunk)
+    # states are expanded two at a time; 3 cells: 3 // the widest row seen so far (1, 2
+    # or 3 states at a time as rows widen)
+    monkeypatch.setattr(reachable, *chunk)
     task = PlanningProblem.from_texts(domain, problem, determinisation=determinisation
                                       ).learner_task
     assert len(task.facts) > 64 or domain is SLIPPERY
@@ -85,13 +88,41 @@ def test_numbering_is_the_one_state_bfs(domain, problem, determinisation, chunk,
                for i in range(graph.n_states)]
     assert all(set(e) <= set(row[row >= 0].tolist())
                for e, row in zip(offered, graph.offered, strict=True))
+    op_pos = {id(op): k for k, op in enumerate(task.ops)}
+    rows = [[] if goal else sorted(op_pos[id(op)] for op in task.applicable(state))
+            for state, goal in zip(states, graph.is_goal.tolist(), strict=True)]
+    want = np.full((len(rows), max(1, *map(len, rows))), -1)
+    for i, row in enumerate(rows):
+        want[i, :max(1, len(row))] = row or [0]  # none applies: ground action 0
+    assert graph.offered.dtype == np.int64 and np.array_equal(graph.offered, want)
 
 
 def test_the_budget_is_named(monkeypatch):
     task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
-    monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * 10)  # <= 10 states
-    with pytest.raises(PlanningError, match=r"more than \d+ reachable states: .*budget"):
+    monkeypatch.setattr(reachable, "TABLE_BUDGET", reachable.PAIR_BYTES * 10)  # <= 5 states
+    need = human_bytes(6 * 2 * reachable.PAIR_BYTES)  # 2 actions a state (go left, right)
+    with pytest.raises(PlanningError, match=rf"chain.pddl: more than 5 reachable states \(6 "
+                       rf"found so far, up to 2 .* would need at least {need} .*TABLE_BUDGET "
+                       rf"= {reachable.PAIR_BYTES * 10:,}; states of breadth-first levels 0 "
+                       r"to 2 \(the last unfinished\): 1, 2, 3;"):
         reachable_graph(task, source="chain.pddl")
+
+
+def test_the_budget_is_a_share_of_the_machines_memory(monkeypatch):
+    task = PlanningProblem.from_texts(SLIPPERY, chain(30, "(at p29)")).learner_task
+    whole = reachable_graph(task).n_states
+    assert reachable.TABLE_BUDGET is None  # the default: what the machine has
+    # a machine whose MEMORY_SHARE holds the tables of 12 states of 2 actions, then of 24
+    for states in (12, 24):
+        memory = states * 2 * reachable.PAIR_BYTES / reachable.MEMORY_SHARE
+        monkeypatch.setenv("GDQ_PDDL_MEMORY", str(int(memory) + 1))
+        assert reachable.state_cap(2) == states
+        with pytest.raises(PlanningError, match=rf"more than {states} reachable states.*"
+                           rf"{reachable.MEMORY_SHARE:g} of this machine's .*MEMORY_SHARE"):
+            reachable_graph(task, source="chain.pddl")
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", str(int(whole * 2 * reachable.PAIR_BYTES
+                                                  / reachable.MEMORY_SHARE) + 1))
+    assert reachable_graph(task).n_states == whole  # fits: every state
 
 
 @pytest.mark.parametrize("gains", [False, True])
