@@ -13,6 +13,10 @@ determinisation keeps, so a state may have several edges with one op.
 :func:`goal_distances` is one backward BFS over that graph: every state's shortest
 number of actions to the goal (-1: the goal cannot be reached from it). Together they
 give every state's shortest plans without calling a planner once per state.
+
+:func:`reality_outcomes` lists reality's outcomes of every (state, offered action) pair
+of a PPDDL task's graph. The graph's :attr:`StateGraph.offered` table is read through
+:mod:`gdq_pddl.pddl.offered`.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import numpy as np
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.offered import columns_in
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 
 PAIR_BYTES = 160
@@ -159,48 +164,6 @@ def state_cap(width: int, budget: int | None = None) -> int:
     (None: :func:`table_budget`)."""
     budget = table_budget() if budget is None else budget
     return budget // (PAIR_BYTES * max(1, width))
-
-
-def offered_rows(n_states: int, state: np.ndarray, op: np.ndarray) -> np.ndarray:
-    """:attr:`StateGraph.offered` of the applicable ``(state, op)`` pairs, each once."""
-    count = np.bincount(state, minlength=n_states)
-    width = max(1, int(count.max(initial=0)))
-    order = np.lexsort((op, state))
-    state, op = state[order], op[order]
-    start = np.zeros(n_states + 1, dtype=np.int64)
-    np.cumsum(count, out=start[1:])
-    rows = np.full((n_states, width), -1, dtype=np.int64)
-    rows[state, np.arange(len(state)) - start[state]] = op
-    rows[count == 0, 0] = 0
-    return rows
-
-
-def column_of(offered: np.ndarray, state: np.ndarray, action: np.ndarray) -> np.ndarray:
-    """int64: the column of ``action[i]`` in the row of ``state[i]`` of an
-    :attr:`StateGraph.offered` table (-1 where it is not offered there)."""
-    return columns_in(offered)(state, action)
-
-
-def columns_in(offered: np.ndarray):
-    """:func:`column_of` over one ``offered`` table, its index built once: each call then
-    costs a binary search per query, not a pass over the whole table."""
-    n_states = offered.shape[0]
-    live = offered >= 0
-    big = int(offered.max(initial=0)) + 1
-    keys = (np.arange(n_states, dtype=np.int64)[:, None] * big + offered)[live]
-    start = np.zeros(n_states + 1, dtype=np.int64)
-    np.cumsum(live.sum(axis=1), out=start[1:])
-    del live
-
-    def column(state: np.ndarray, action: np.ndarray) -> np.ndarray:
-        state = np.asarray(state, dtype=np.int64)
-        action = np.asarray(action, dtype=np.int64)
-        want = state * big + action
-        at = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
-        found = (keys[at] == want) & (action >= 0) & (action < big)
-        return np.where(found, at - start[state], -1)
-
-    return column
 
 
 def _words(mask: int, n_words: int) -> np.ndarray:
