@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gdq_pddl.errors import AbstractionError
-from gdq_pddl.pddl.reachable import column_of
+from gdq_pddl.pddl.offered import column_of
 
 NO_CHANGE = -1
 """``PriorModel.next_state`` of a knowledge-inapplicable pair."""

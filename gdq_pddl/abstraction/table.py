@@ -9,7 +9,7 @@ from typing import Protocol
 
 import numpy as np
 
-from gdq_pddl.pddl.reachable import column_of
+from gdq_pddl.pddl.offered import column_of
 from gdq_pddl.planning.base import Plan, Planner, PlanningProblem, PlanResult, State, Status
 
 

@@ -50,14 +50,9 @@ from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.model import Problem
+from gdq_pddl.pddl.outcomes import reality_outcomes
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
-from gdq_pddl.pddl.reachable import (
-    MAX_STATES,
-    PAIR_BYTES,
-    StateGraph,
-    reachable_graph,
-    reality_outcomes,
-)
+from gdq_pddl.pddl.reachable import MAX_STATES, PAIR_BYTES, StateGraph, reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import resolve_pddl, shipped_names

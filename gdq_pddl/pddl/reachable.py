@@ -1,4 +1,5 @@
-"""The reachable state graph of a grounded task, and distances to its goal.
+"""The reachable state graph of a grounded task, within a table budget, and distances to
+its goal.
 
 :func:`reachable_graph` enumerates, breadth first from the initial state, every state a
 sequence of ground operators can reach, *without expanding goal states* (a plan ends
@@ -8,11 +9,20 @@ pairs, one per applicable operator, in the order of :attr:`GroundTask.ops`. For 
 task (:class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`) the states are those reality
 reaches (every outcome of every action), numbered after the edges' states, and the edges
 are the planner's knowledge: one per applicable ground action and outcome its
-determinisation keeps, so a state may have several edges with one op.
+determinisation keeps, so a state may have several edges with one op. States are rows of
+``uint64`` words and the ground actions are compiled onto them (:func:`_compiled`); each
+state's applicable ground actions are the graph's :attr:`StateGraph.offered` table
+(:mod:`gdq_pddl.pddl.offered` reads it).
+
+The enumeration stops with an error once the tables over states x offered actions would
+pass the budget (:data:`TABLE_BUDGET`, :func:`table_budget`, :func:`state_cap`).
 
 :func:`goal_distances` is one backward BFS over that graph: every state's shortest
 number of actions to the goal (-1: the goal cannot be reached from it). Together they
 give every state's shortest plans without calling a planner once per state.
+
+Reality's outcomes of each (state, offered action) pair of a PPDDL task are in
+:mod:`gdq_pddl.pddl.outcomes`.
 """
 
 from __future__ import annotations
@@ -58,9 +68,6 @@ widest row seen so far: a problem of wide rows (boxworld: 750 ground actions in 
 state) expands fewer states at a time, so its work arrays stay near 1 GB and a problem
 past the budget is refused after the chunk that passes it."""
 
-OUTCOME_CHUNK = 1 << 22
-"""Cells (states x row width) whose outcomes :func:`reality_outcomes` sorts and merges at
-a time: its work arrays (about 200 bytes an outcome) stay near 1 GB."""
 
 MAX_STATES: int | None = None
 """Default cap on the number of reachable states (None: what :func:`table_budget` allows)."""
@@ -161,46 +168,29 @@ def state_cap(width: int, budget: int | None = None) -> int:
     return budget // (PAIR_BYTES * max(1, width))
 
 
-def offered_rows(n_states: int, state: np.ndarray, op: np.ndarray) -> np.ndarray:
-    """:attr:`StateGraph.offered` of the applicable ``(state, op)`` pairs, each once."""
-    count = np.bincount(state, minlength=n_states)
-    width = max(1, int(count.max(initial=0)))
-    order = np.lexsort((op, state))
-    state, op = state[order], op[order]
-    start = np.zeros(n_states + 1, dtype=np.int64)
-    np.cumsum(count, out=start[1:])
-    rows = np.full((n_states, width), -1, dtype=np.int64)
-    rows[state, np.arange(len(state)) - start[state]] = op
-    rows[count == 0, 0] = 0
-    return rows
-
-
-def column_of(offered: np.ndarray, state: np.ndarray, action: np.ndarray) -> np.ndarray:
-    """int64: the column of ``action[i]`` in the row of ``state[i]`` of an
-    :attr:`StateGraph.offered` table (-1 where it is not offered there)."""
-    return columns_in(offered)(state, action)
-
-
-def columns_in(offered: np.ndarray):
-    """:func:`column_of` over one ``offered`` table, its index built once: each call then
-    costs a binary search per query, not a pass over the whole table."""
-    n_states = offered.shape[0]
-    live = offered >= 0
-    big = int(offered.max(initial=0)) + 1
-    keys = (np.arange(n_states, dtype=np.int64)[:, None] * big + offered)[live]
-    start = np.zeros(n_states + 1, dtype=np.int64)
-    np.cumsum(live.sum(axis=1), out=start[1:])
-    del live
-
-    def column(state: np.ndarray, action: np.ndarray) -> np.ndarray:
-        state = np.asarray(state, dtype=np.int64)
-        action = np.asarray(action, dtype=np.int64)
-        want = state * big + action
-        at = np.minimum(np.searchsorted(keys, want), len(keys) - 1)
-        found = (keys[at] == want) & (action >= 0) & (action < big)
-        return np.where(found, at - start[state], -1)
-
-    return column
+def _too_many(source: str, cap: int, budget: bool, width: int,
+              levels: list[int]) -> PlanningError:
+    """The refusal past ``cap`` states: the need (of the states found so far, every row as
+    wide as the widest), the budget and what sets it, and the breadth-first levels so far
+    (``levels``: states a level, the last unfinished)."""
+    shown = ", ".join(f"{n:,}" for n in levels[-6:])
+    grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
+        f"{len(levels) - 1} (the last unfinished): {shown}"
+    if not budget:
+        return PlanningError(f"{source}: more than {cap:,} reachable states: past the cap "
+                             f"given{grown}; the learners are tabular, so make the problem "
+                             "smaller (fewer objects)")
+    have, limit, found = physical_memory(), table_budget(), sum(levels)
+    setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
+               is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
+               "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
+    return PlanningError(
+        f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
+        f"{width} applicable ground actions a state): a run would need at least "
+        f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
+        f"cell, gdq_pddl.pddl.reachable.PAIR_BYTES), past the budget of "
+        f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
+        "problem smaller (fewer objects), or run it on a machine with more memory")
 
 
 def _words(mask: int, n_words: int) -> np.ndarray:
@@ -441,130 +431,6 @@ def _row_block(applicable: list[tuple[int, np.ndarray]], n_rows: int,
         block[at, count[at]] = k
         count[at] += 1
     return block
-
-
-def reality_outcomes(graph: StateGraph, gains: bool = False
-                     ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """The outcomes of every ground action applicable in each non-goal state of a PPDDL
-    task's graph, as rows in pair order: ``pair`` (``state * width + column`` of the
-    graph's :attr:`~StateGraph.offered` rows), probability,
-    and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
-    outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
-    probabilities summed in outcome order; outcomes of probability 0 are left out.
-
-    Built :data:`OUTCOME_CHUNK` cells of states at a time (pairs of different states
-    never merge, so the chunks' rows, in state order, are the whole's): the sort and
-    merge work arrays stay bounded, and only the merged rows are kept. A bar counts the
-    chunks past 2 s."""
-    task = graph.task
-    width = graph.offered.shape[1]
-    n_words = graph.words.shape[1]
-    ops = _compiled(task, n_words)
-    live = np.flatnonzero(~graph.is_goal)
-    column = columns_in(graph.offered)
-    step = max(1, OUTCOME_CHUNK // width)
-    chunks = []
-    with slow_progress("true model", " chunks", -(-len(live) // step)) as bar:
-        for c in range(0, len(live), step):
-            chunks.append(_outcomes_of(graph, ops, live[c:c + step], column, gains))
-            bar.update()
-    n_fields = 3 if gains else 2
-    out = []
-    for f in range(2 + n_fields):  # one field joined at a time, its pieces freed
-        pieces = [chunk[f] for chunk in chunks]
-        for chunk in chunks:
-            chunk[f] = None
-        out.append(np.concatenate(pieces) if pieces else np.zeros(0))
-        del pieces
-    return out[0], out[1], out[2:]
-
-
-def _outcomes_of(graph: StateGraph, ops: list[_Op], live: np.ndarray, column,
-                 gains: bool) -> list:
-    """:func:`reality_outcomes` of the states ``live`` (increasing), as a list ``[pair,
-    probability, next, stuck(, reward)]``."""
-    task, width = graph.task, graph.offered.shape[1]
-    n_words = graph.words.shape[1]
-    rows = graph.words[live]
-    parts: list[tuple] = []
-    for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
-        at = live[op.applies(rows)]
-        if not len(at):
-            continue
-        here = graph.words[at]
-        pair = at * width + column(at, np.full(len(at), k))
-        for j, o in enumerate(ground.outcomes):
-            if o.probability > 0:
-                same = not (o.add or o.dele or o.conditional)
-                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
-                    _words(o.add, n_words), _words(o.dele, n_words),
-                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
-                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
-                for alts, amount in o.rewards:
-                    earned = earned + np.where(np.logical_or.reduce([_holds(
-                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
-                        amount, 0.0)
-                parts.append((pair, j, o.probability, nxt, o.stuck,
-                              o.reward + earned if gains else None))
-    if not parts:  # no ground action applies in these states (dead ends)
-        return [np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64),
-                np.zeros(0, dtype=np.bool_)] + ([np.zeros(0)] if gains else [])
-    pair = np.concatenate([p[0] for p in parts])
-    j = np.concatenate([np.full(len(p[0]), p[1], dtype=np.int32) for p in parts])
-    prob = np.concatenate([np.full(len(p[0]), p[2]) for p in parts])
-    nxt = np.concatenate([p[3] for p in parts]).astype(np.int64, copy=False)
-    stuck = np.concatenate([np.full(len(p[0]), p[4]) for p in parts])
-    gain = np.concatenate([p[5] for p in parts]) if gains else None
-    del parts  # one copy of the rows at a time: they are most of the peak memory
-    # equal keys of a pair side by side, in outcome order; each group's first row leads
-    key = (pair * graph.n_states + nxt) * 2 + stuck
-    order = np.lexsort((j, gain, key) if gains else (j, key))
-    key = key[order]  # one array reordered at a time: one extra copy at the peak
-    pair = pair[order]
-    j = j[order]
-    prob = prob[order]
-    nxt = nxt[order]
-    stuck = stuck[order]
-    gain = gain[order] if gains else None
-    del order
-    lead = np.ones(len(pair), dtype=np.bool_)
-    lead[1:] = key[1:] != key[:-1]
-    if gains:
-        lead[1:] |= gain[1:] != gain[:-1]
-    group = np.cumsum(lead) - 1
-    total = np.zeros(group[-1] + 1 if len(group) else 0)
-    place = np.arange(len(group)) - np.flatnonzero(lead)[group]
-    for r in range(int(place.max(initial=-1)) + 1):  # summed in order, as merge_outcomes
-        total[group[place == r]] += prob[place == r]
-    first = np.flatnonzero(lead)
-    keep = first[np.lexsort((j[first], pair[first]))]
-    return [pair[keep], total[group[keep]], nxt[keep], stuck[keep]] + \
-        ([gain[keep]] if gains else [])
-
-
-def _too_many(source: str, cap: int, budget: bool, width: int,
-              levels: list[int]) -> PlanningError:
-    """The refusal past ``cap`` states: the need (of the states found so far, every row as
-    wide as the widest), the budget and what sets it, and the breadth-first levels so far
-    (``levels``: states a level, the last unfinished)."""
-    shown = ", ".join(f"{n:,}" for n in levels[-6:])
-    grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
-        f"{len(levels) - 1} (the last unfinished): {shown}"
-    if not budget:
-        return PlanningError(f"{source}: more than {cap:,} reachable states: past the cap "
-                             f"given{grown}; the learners are tabular, so make the problem "
-                             "smaller (fewer objects)")
-    have, limit, found = physical_memory(), table_budget(), sum(levels)
-    setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
-               is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
-               "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
-    return PlanningError(
-        f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
-        f"{width} applicable ground actions a state): a run would need at least "
-        f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
-        f"cell, gdq_pddl.pddl.reachable.PAIR_BYTES), past the budget of "
-        f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
-        "problem smaller (fewer objects), or run it on a machine with more memory")
 
 
 def distinct(a: np.ndarray) -> np.ndarray:

@@ -9,7 +9,7 @@ import pytest
 from gdq_pddl.envs.model import env_act, env_step
 from gdq_pddl.envs.pddl_env import PDDLEnv, load_instance
 from gdq_pddl.learners import make_learner, pddl_task_context
-from gdq_pddl.pddl.reachable import column_of, offered_rows
+from gdq_pddl.pddl.offered import column_of, offered_rows
 
 SHIPPED = [("keys", "keys-1"), ("lift", "lift-2"), ("courier", "courier-2"),
            ("keys-ppddl", "keys-ppddl-1"), ("delivery", "delivery-1")]

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 from tqdm import tqdm
 
-from gdq_pddl.pddl import reachable
-from gdq_pddl.pddl.reachable import reachable_graph, reality_outcomes
+from gdq_pddl.pddl import outcomes
+from gdq_pddl.pddl.outcomes import reality_outcomes
+from gdq_pddl.pddl.reachable import reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
 
 SWITCHES = """(define (domain switches) (:requirements :typing :probabilistic-effects)
@@ -47,7 +48,7 @@ def test_true_model_rows_count_their_chunks(bars, monkeypatch):
     whole = reality_outcomes(graph)  # one chunk
     assert len(whole[0]) == 2 * 6 * 2**5  # each off switch of each state: flipped or not
     n_live = int((~graph.is_goal).sum())
-    monkeypatch.setattr(reachable, "OUTCOME_CHUNK", 10 * graph.offered.shape[1])
+    monkeypatch.setattr(outcomes, "OUTCOME_CHUNK", 10 * graph.offered.shape[1])
     bars.clear()
     pair, prob, fields = reality_outcomes(graph)  # 10 states a chunk
     [model] = [bar for bar in bars if bar.desc.startswith("true model")]

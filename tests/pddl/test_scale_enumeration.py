@@ -11,7 +11,8 @@ from gdq_pddl.envs.pddl_env import load_instance
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
-from gdq_pddl.pddl.reachable import distinct, reachable_graph, reality_outcomes
+from gdq_pddl.pddl.outcomes import reality_outcomes
+from gdq_pddl.pddl.reachable import distinct, reachable_graph
 from gdq_pddl.planning.base import PlanningProblem
 
 SLIPPERY = """(define (domain slip) (:requirements :strips :probabilistic-effects)
