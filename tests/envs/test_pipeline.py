@@ -113,7 +113,20 @@ KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=
 
 
 @pytest.mark.parametrize("exp,method,pinned", [
-    (OFFICE_RUN, "GDQ", "4156845d332efb79"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
-    (KEYS_RUN, "GDQ", "371a82762842e5ff"), (KEYS_RUN, "Dyna-Q", "94ca498528125fed")])
+    (OFFICE_RUN, "GDQ", "5158e3ad79977194"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
+    (KEYS_RUN, "GDQ", "3d914ee2216ec11b"), (KEYS_RUN, "Dyna-Q", "94ca498528125fed")])
 def test_a_short_run_is_the_one_it_was(exp, method, pinned):
+    """GDQ's pins changed once more on purpose: its exploring steps draw near its own
+    best values (docs/decisions.md); the former rule still gives the former bits (below)."""
     assert _run_digest(exp, method) == pinned
+
+
+@pytest.mark.parametrize("exp,pinned", [(OFFICE_RUN, "4156845d332efb79"),
+                                        (KEYS_RUN, "371a82762842e5ff")])
+def test_gdq_exploring_along_the_plans_is_the_former_gdq(monkeypatch, exp, pinned):
+    from gdq_pddl.experiments import work
+
+    make = work.learner_by_name
+    monkeypatch.setattr(work, "learner_by_name", lambda method, context, **kw: make(
+        method, context, **kw, **({"explore": "plans"} if method == "GDQ" else {})))
+    assert _run_digest(exp, "GDQ") == pinned
