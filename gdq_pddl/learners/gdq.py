@@ -5,8 +5,9 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 :func:`value_iteration` (OptInit, at the start of each task).
 
 - **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
-  change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``;
-  reaching a goal pays R_max (:func:`prior_backup`).
+  change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``
+  (on a problem's own scale paying the file's reward of that outcome, ``Prior.reward``,
+  instead); reaching a goal pays R_max (:func:`prior_backup`).
 - **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
   the knowledge says does nothing after its first.
 - **The hybrid backup**: an unknown pair is worth its prior backup, a known one
@@ -184,8 +185,8 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
     over the allowed pairs until no state value moves by more than ``tol``), then every
     other pair's Q from the converged values, the reverse index rebuilt for the known
     pairs and the queue emptied. Goal rows are 0. The sweeps start from the prior's own
-    values (:func:`prior_values`), exact when no pair is known yet, so a first task
-    takes one sweep however large the world. Returns the number of sweeps, or -1 when
+    values (:func:`prior_values`), exact when no pair is known yet (with the file's
+    rewards too), so a first task takes one sweep however large the world. Returns the number of sweeps, or -1 when
     the reverse index is too small (the caller sizes it for the known pairs)."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     visits, prior_next = model.visits, prior.next_state
