@@ -121,37 +121,31 @@ def prior_from_graph(graph) -> PriorModel:
     return PriorModel(nxt)
 
 
-def prior_rewards(next_state: np.ndarray, ptr: np.ndarray, nxt: np.ndarray,
-                  stuck: np.ndarray, gain: np.ndarray, pair_cost: np.ndarray) -> np.ndarray:
-    """float64[n_states, n_actions]: what the true model pays for each pair's prior
-    outcome, on a problem's own reward scale, where learner states are full states (a PDDL
-    problem): the ``gain`` of the outcome that reaches the prior successor (the state
-    itself where the prior says "no change"; of several such outcomes, the largest gain
-    of those that do not end stuck), less the action's mean cost ``pair_cost``
-    (float64[n_states, n_actions]; 0 in padding columns). The outcome arrays are a
-    :class:`~gdq_pddl.envs.model.ModelArrays`' (``ptr``, ``next``, ``stuck``, ``gain``);
-    a pair with no outcome (a padding column) pays 0."""
-    return _prior_rewards(next_state, ptr, nxt, stuck, gain, pair_cost)
+def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,
+                  pair_cost: np.ndarray) -> np.ndarray:
+    """float64[n_states, n_actions]: the most a trial of each pair can pay, on a problem's
+    own reward scale, where learner states are full states (a PDDL problem): the largest
+    ``gain`` of its outcomes that do not end stuck (of all, where every one does), less
+    the action's mean cost ``pair_cost`` (float64[n_states, n_actions]); 0 for a pair
+    with no outcome (a padding column). Optimistic, as the prior's successor is (the
+    outcome closest to the goal, which may be the one that pays least: the death of the
+    human to rescue in IPPC-2008 search and rescue ends the mission sooner).
+    ``ptr``, ``stuck``, ``gain``: a :class:`~gdq_pddl.envs.model.ModelArrays`'."""
+    return _prior_rewards(ptr, stuck, gain, pair_cost)
 
 
 @numba.njit(cache=True)
-def _prior_rewards(next_state, ptr, nxt, stuck, gain, pair_cost):
-    n_states, n_actions = next_state.shape
+def _prior_rewards(ptr, stuck, gain, pair_cost):
+    n_states, n_actions = pair_cost.shape
     out = np.zeros((n_states, n_actions))
-    for s in range(n_states):
-        for a in range(n_actions):
-            i = s * n_actions + a
-            if ptr[i] == ptr[i + 1]:
-                continue
-            x = next_state[s, a]
-            x = s if x < 0 else x
-            best, any_best = -np.inf, -np.inf  # of the outcomes not stuck, of all
-            for k in range(ptr[i], ptr[i + 1]):
-                if nxt[k] == x:
-                    any_best = max(any_best, gain[k])
-                    if not stuck[k]:
-                        best = max(best, gain[k])
-            if best == -np.inf:
-                best = any_best if any_best > -np.inf else 0.0
-            out[s, a] = best - pair_cost[s, a]
+    for i in range(n_states * n_actions):
+        if ptr[i] == ptr[i + 1]:
+            continue
+        best, any_best = -np.inf, -np.inf  # of the outcomes not stuck, of all
+        for k in range(ptr[i], ptr[i + 1]):
+            any_best = max(any_best, gain[k])
+            if not stuck[k]:
+                best = max(best, gain[k])
+        s, a = i // n_actions, i % n_actions
+        out[s, a] = (best if best > -np.inf else any_best) - pair_cost[s, a]
     return out

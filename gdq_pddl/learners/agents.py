@@ -333,15 +333,12 @@ class Darling(TabularLearner):
 
 
 def prior_step_cost(prior_cost: float, context: TaskContext) -> float:
-    """The flat step cost GDQ's prior charges: ``prior_cost``; nothing where the prior
-    charges the file's own rewards (:func:`prior_reward`), a step the file makes free
-    costing it nothing; else, on a problem's own reward scale, at most
-    ``r_max / step_limit``: there a step may cost nothing (an IPPC goal reward of 1, free
-    actions), and a prior that charged 1 a step would value every plan of more than one
-    action below a loop of free steps, so GDQ would learn to do nothing
-    (``docs/decisions.md``, "the prior's step cost")."""
-    if prior_reward(context).shape[0]:
-        return 0.0
+    """The flat step cost GDQ's prior charges: ``prior_cost``, and on a problem's own
+    reward scale at most ``r_max / step_limit`` (besides the file's rewards there,
+    :func:`prior_reward`). There a step may cost nothing (an IPPC goal reward of 1, free
+    actions): a prior that charged 1 a step would value every plan of more than one
+    action below a loop of free steps, and GDQ would learn to do nothing; why it charges
+    the capped cost at all: ``docs/decisions.md``, "the prior's step cost cap"."""
     if context.own_scale and context.step_limit:
         return float(min(prior_cost, context.r_max / context.step_limit))
     return float(prior_cost)

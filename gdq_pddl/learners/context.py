@@ -91,13 +91,14 @@ class TaskContext:
     """Returns are on the problem's own reward scale (an IPPC file's rewards): a stuck or
     late end costs no -r_max (:attr:`~gdq_pddl.learners.tables.Params.own_scale`)."""
     step_limit: int | None = None
-    """The env's step limit where :attr:`own_scale` (where :attr:`prior_reward` is None,
-    GDQ's prior caps its flat step cost by ``r_max / step_limit`` there)."""
+    """The env's step limit where :attr:`own_scale` (GDQ's prior caps its flat step cost
+    by ``r_max / step_limit`` there)."""
     prior_reward: np.ndarray | None = None
-    """float64[n_states, n_actions], only where :attr:`own_scale`: what the problem's file
-    pays for each pair's prior outcome (its reward less the action's mean cost,
-    :func:`~gdq_pddl.abstraction.prior.prior_rewards`; reaching the goal pays ``r_max``
-    besides), which GDQ's prior charges instead of a flat step cost. None: the flat cost."""
+    """float64[n_states, n_actions], only where :attr:`own_scale`: the most the problem's
+    file pays for a trial of each pair (its outcomes' largest reward less the action's
+    mean cost, :func:`~gdq_pddl.abstraction.prior.prior_rewards`; reaching the goal pays
+    ``r_max`` besides), which GDQ's prior pays besides its flat step cost. None: the flat
+    cost alone."""
     exact_knowledge: bool = False
     """The knowledge is reality's own actions and outcomes: a PPDDL domain (a dynamics
     file may add only a step limit and costs), whose planner and prior read the actions
@@ -196,8 +197,7 @@ def file_prior_rewards(model: ModelArrays, prior: PriorModel) -> np.ndarray:
     live = model.acts >= 0
     pair_cost = np.where(live, expected_costs(model)[np.where(live, model.acts, 0)], 0.0)
     gain = model.gain if len(model.gain) == len(model.prob) else np.zeros(len(model.prob))
-    return prior_rewards(prior.next_state, model.ptr, model.next, model.stuck, gain,
-                         pair_cost)
+    return prior_rewards(model.ptr, model.stuck, gain, pair_cost)
 
 
 pddl_task_context = task_context

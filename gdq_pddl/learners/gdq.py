@@ -153,12 +153,12 @@ def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray,
     """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
     if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``;
     where ``prior_reward`` is given (a problem's own scale, ``Prior.reward``), the file's
-    reward ``r`` of the prior outcome instead of the flat cost: ``r + R_max`` or
+    reward too: with ``r = prior_reward[s, a] - prior_cost``, ``r + R_max`` or
     ``r + gamma * v[prior successor]``."""
     s2 = prior_successor(prior_next, s, a)
     if prior_reward.shape[0] == 0:
         return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
-    r = prior_reward[s, a]
+    r = prior_reward[s, a] - p.prior_cost
     return r + p.r_max if goal[s2] else r + p.gamma * v[s2]
 
 
@@ -186,8 +186,9 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
     other pair's Q from the converged values, the reverse index rebuilt for the known
     pairs and the queue emptied. Goal rows are 0. The sweeps start from the prior's own
     values (:func:`prior_values`), exact when no pair is known yet (with the file's
-    rewards too), so a first task takes one sweep however large the world. Returns the number of sweeps, or -1 when
-    the reverse index is too small (the caller sizes it for the known pairs)."""
+    rewards too), so a first task takes one sweep however large the world. Returns the
+    number of sweeps, or -1 when the reverse index is too small (the caller sizes it
+    for the known pairs)."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     visits, prior_next = model.visits, prior.next_state
     n_states, n_actions = q.shape
@@ -312,7 +313,8 @@ def _own_prior_values(table: QTable, prior: Prior, p: Params, dist: np.ndarray
     pays. A switch needs a gain above 1e-12 x R_max, so it ends; past 1000 policies the
     values are returned as they are (OptInit's sweeps finish the job)."""
     goal, n_live = table.goal, table.n_live
-    nxt, rew = prior.next_state, prior.reward
+    nxt = prior.next_state
+    rew = prior.reward - p.prior_cost  # a step's reward on the prior
     n_states, n_actions = nxt.shape
     gamma, r_max = p.gamma, p.r_max
     eps = 1e-12 * max(1.0, r_max)
@@ -403,8 +405,8 @@ def _own_prior_values(table: QTable, prior: Prior, p: Params, dist: np.ndarray
 def fill_untried(table: QTable, prior_reward: np.ndarray, p: Params) -> None:
     """Q of every pair that is not allowed (untried, and the knowledge says it does
     nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]`` (on a
-    problem's own scale ``prior_reward[s, a] + gamma * v[s]``, the file's reward of staying,
-    0 in a padding column); goal rows stay 0. The sweeps never read these entries, so
+    problem's own scale plus ``prior_reward[s, a]``, 0 in a padding column); goal rows
+    stay 0. The sweeps never read these entries, so
     they leave them to this."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     own = prior_reward.shape[0] > 0
@@ -414,7 +416,7 @@ def fill_untried(table: QTable, prior_reward: np.ndarray, p: Params) -> None:
         stay = -p.prior_cost + p.gamma * v[s]
         for a in range(q.shape[1]):
             if not allowed[s, a]:
-                q[s, a] = prior_reward[s, a] + p.gamma * v[s] if own else stay
+                q[s, a] = prior_reward[s, a] + stay if own else stay
 
 
 # --- the reverse index: which known pairs read a state -----------------------------------------
