@@ -6,8 +6,8 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 
 - **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
   change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``
-  (on a problem's own scale paying the file's reward of that outcome, ``Prior.reward``,
-  instead); reaching a goal pays R_max (:func:`prior_backup`).
+  (on a problem's own scale besides the most the file pays for a trial of the action,
+  ``Prior.reward``); reaching a goal pays R_max (:func:`prior_backup`).
 - **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
   the knowledge says does nothing after its first.
 - **The hybrid backup**: an unknown pair is worth its prior backup, a known one

@@ -54,8 +54,8 @@ class Params(NamedTuple):
     explore_all_last: float = 1.0
     """0: no such draw where the knowledge reaches the goal in one action (``KIND_GDQ``)."""
     prior_cost: float = 1.0
-    """Step cost of a pair still on the prior (``KIND_GDQ``) where ``Prior.reward`` is
-    empty (where it is not, the file's rewards replace it: 0 there)."""
+    """Step cost of a pair still on the prior (``KIND_GDQ``; besides ``Prior.reward``
+    where that is not empty)."""
     sweep_threshold: float = 0.0
     """Smallest change of a state value that prioritised sweeping propagates."""
     prior_weight: float = 0.0
@@ -118,8 +118,8 @@ class Prior(NamedTuple):
     rev_pair: np.ndarray  # int64[C]: the known pair s * A + a of an entry
     rev_n: np.ndarray  # int64[1]: entries used
     reward: np.ndarray  # float64[S, A] on a problem's own scale, float64[0, 0] else: the
-    # file's reward of a pair's prior outcome (TaskContext.prior_reward), which the prior
-    # charges instead of Params.prior_cost
+    # most the file pays for a trial of a pair (TaskContext.prior_reward), which a prior
+    # step pays besides -Params.prior_cost
 
 
 class Queue(NamedTuple):
