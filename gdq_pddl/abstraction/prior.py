@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from gdq_pddl.errors import AbstractionError
@@ -118,3 +119,33 @@ def prior_from_graph(graph) -> PriorModel:
     best %= n + 2
     nxt[src, column_of(graph.offered, src, op)] = best
     return PriorModel(nxt)
+
+
+def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,
+                  pair_cost: np.ndarray) -> np.ndarray:
+    """float64[n_states, n_actions]: the most a trial of each pair can pay, on a problem's
+    own reward scale, where learner states are full states (a PDDL problem): the largest
+    ``gain`` of its outcomes that do not end stuck (of all, where every one does), less
+    the action's mean cost ``pair_cost`` (float64[n_states, n_actions]); 0 for a pair
+    with no outcome (a padding column). Optimistic, as the prior's successor is (the
+    outcome closest to the goal, which may be the one that pays least: the death of the
+    human to rescue in IPPC-2008 search and rescue ends the mission sooner).
+    ``ptr``, ``stuck``, ``gain``: a :class:`~gdq_pddl.envs.model.ModelArrays`'."""
+    return _prior_rewards(ptr, stuck, gain, pair_cost)
+
+
+@numba.njit(cache=True)
+def _prior_rewards(ptr, stuck, gain, pair_cost):
+    n_states, n_actions = pair_cost.shape
+    out = np.zeros((n_states, n_actions))
+    for i in range(n_states * n_actions):
+        if ptr[i] == ptr[i + 1]:
+            continue
+        best, any_best = -np.inf, -np.inf  # of the outcomes not stuck, of all
+        for k in range(ptr[i], ptr[i + 1]):
+            any_best = max(any_best, gain[k])
+            if not stuck[k]:
+                best = max(best, gain[k])
+        s, a = i // n_actions, i % n_actions
+        out[s, a] = (best if best > -np.inf else any_best) - pair_cost[s, a]
+    return out

@@ -46,8 +46,9 @@ MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
 """The learner kinds that record transitions in a learned model."""
 
 _I0 = np.zeros(0, dtype=np.int64)
+_F00 = np.zeros((0, 0))
 _NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
-                   np.zeros(1, dtype=np.int64)),
+                   np.zeros(1, dtype=np.int64), _F00),
              Queue(_I0, _I0, np.zeros(0), np.zeros(1, dtype=np.int64)))
 """The default GDQ's prior and queue, for the other learners (never read or written)."""
 
@@ -332,13 +333,23 @@ class Darling(TabularLearner):
 
 
 def prior_step_cost(prior_cost: float, context: TaskContext) -> float:
-    """The step cost GDQ's prior charges: ``prior_cost``, and on a problem's own reward
-    scale at most ``r_max / step_limit``. There a step may cost nothing (an IPPC goal
-    reward of 1, free actions): a prior that charged 1 a step would value every plan of
-    more than one action below a loop of free steps, and GDQ would learn to do nothing."""
+    """The flat step cost GDQ's prior charges: ``prior_cost``, and on a problem's own
+    reward scale at most ``r_max / step_limit`` (besides the file's rewards there,
+    :func:`prior_reward`). There a step may cost nothing (an IPPC goal reward of 1, free
+    actions): a prior that charged 1 a step would value every plan of more than one
+    action below a loop of free steps, and GDQ would learn to do nothing; why it charges
+    the capped cost at all: ``docs/decisions.md``, "the prior's step cost cap"."""
     if context.own_scale and context.step_limit:
         return float(min(prior_cost, context.r_max / context.step_limit))
     return float(prior_cost)
+
+
+def prior_reward(context: TaskContext) -> np.ndarray:
+    """``Prior.reward`` for ``context``: its :attr:`~TaskContext.prior_reward` on a
+    problem's own scale, else an empty array (the prior charges a flat step cost)."""
+    if context.own_scale and context.prior_reward is not None:
+        return np.ascontiguousarray(context.prior_reward, dtype=np.float64)
+    return _F00
 
 
 def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
@@ -386,7 +397,7 @@ class GDQ(TabularLearner):
         changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
         entries, so they are filled in here, when the table is read."""
         if self.kind == KIND_GDQ and hasattr(self, "tables"):
-            gdq.fill_untried(self.tables.table, self.params)
+            gdq.fill_untried(self.tables.table, self.tables.prior.reward, self.params)
         return self._q
 
     @q.setter
@@ -455,7 +466,7 @@ class GDQ(TabularLearner):
                       rev_head=np.full(n_s, -1, dtype=np.int64),
                       rev_next=np.full(capacity, -1, dtype=np.int64),
                       rev_pair=np.zeros(capacity, dtype=np.int64),
-                      rev_n=np.zeros(1, dtype=np.int64)),
+                      rev_n=np.zeros(1, dtype=np.int64), reward=prior_reward(context)),
                 Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 

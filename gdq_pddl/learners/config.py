@@ -155,8 +155,8 @@ class GDQConfig(LearnerConfig):
     prior_cost: float = 1.0
     """``prior`` only: the step cost the prior charges (the planner counts actions). On
     a problem's own reward scale at most ``r_max / step_limit``, so that no plan within
-    the step limit is worth less to the prior than doing nothing
-    (``docs/decisions.md``)."""
+    the step limit is worth less to the prior than doing nothing, and charged besides
+    the file's rewards (``TaskContext.prior_reward``; ``docs/decisions.md``)."""
     sweep_threshold: float = 1e-6
     """``prior`` only: a state-value change smaller than this is not propagated."""
     optimistic_successor: Literal["start", "terminal"] = "start"

@@ -15,9 +15,11 @@ from typing import Protocol
 import numpy as np
 
 from gdq_pddl.abstraction import PlanTable
-from gdq_pddl.abstraction.prior import PriorModel
+from gdq_pddl.abstraction.prior import PriorModel, prior_rewards
 from gdq_pddl.abstraction.table import pack_plans
+from gdq_pddl.envs.model import ModelArrays
 from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import human_bytes, physical_memory
@@ -89,8 +91,14 @@ class TaskContext:
     """Returns are on the problem's own reward scale (an IPPC file's rewards): a stuck or
     late end costs no -r_max (:attr:`~gdq_pddl.learners.tables.Params.own_scale`)."""
     step_limit: int | None = None
-    """The env's step limit where :attr:`own_scale` (GDQ's prior caps its step cost by
-    ``r_max / step_limit`` there)."""
+    """The env's step limit where :attr:`own_scale` (GDQ's prior caps its flat step cost
+    by ``r_max / step_limit`` there)."""
+    prior_reward: np.ndarray | None = None
+    """float64[n_states, n_actions], only where :attr:`own_scale`: the most the problem's
+    file pays for a trial of each pair (its outcomes' largest reward less the action's
+    mean cost, :func:`~gdq_pddl.abstraction.prior.prior_rewards`; reaching the goal pays
+    ``r_max`` besides), which GDQ's prior pays besides its flat step cost. None: the flat
+    cost alone."""
     exact_knowledge: bool = False
     """The knowledge is reality's own actions and outcomes: a PPDDL domain (a dynamics
     file may add only a step limit and costs), whose planner and prior read the actions
@@ -172,8 +180,24 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),
-        **({"own_scale": True, "step_limit": int(instance.model.step_limit)}
+        **({"own_scale": True, "step_limit": int(instance.model.step_limit),
+            "prior_reward": file_prior_rewards(instance.model, instance.prior)}
            if getattr(instance, "reward_scale", "goal") == "problem" else {}))
+
+
+def file_prior_rewards(model: ModelArrays, prior: PriorModel) -> np.ndarray:
+    """:attr:`TaskContext.prior_reward` of a PDDL problem on its own reward scale, from
+    its true model (whose full states are the learner's states and whose columns are the
+    prior's)."""
+    n_states, width = prior.next_state.shape
+    if not np.array_equal(model.obs_of, np.arange(n_states)) or \
+            model.acts.shape != (n_states, width):
+        raise PlanningError("the file's rewards reach GDQ's prior only where the learner's "
+                            "states and columns are the true model's (a PDDL problem)")
+    live = model.acts >= 0
+    pair_cost = np.where(live, expected_costs(model)[np.where(live, model.acts, 0)], 0.0)
+    gain = model.gain if len(model.gain) == len(model.prob) else np.zeros(len(model.prob))
+    return prior_rewards(model.ptr, model.stuck, gain, pair_cost)
 
 
 pddl_task_context = task_context

@@ -5,8 +5,9 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 :func:`value_iteration` (OptInit, at the start of each task).
 
 - **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
-  change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``;
-  reaching a goal pays R_max (:func:`prior_backup`).
+  change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``
+  (on a problem's own scale besides the most the file pays for a trial of the action,
+  ``Prior.reward``); reaching a goal pays R_max (:func:`prior_backup`).
 - **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
   the knowledge says does nothing after its first.
 - **The hybrid backup**: an unknown pair is worth its prior backup, a known one
@@ -65,12 +66,12 @@ def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Param
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray, p: Params, s: int,
-                  a: int) -> float:
+def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray,
+                  prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
     """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
     :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
-    return _hybrid(table.v, table.goal, prior_next, model.slots, model.stuck, model.visits,
-                   model.cost_sum, model.cost_n, model.cost_all, p, s, a)
+    return _hybrid(table.v, table.goal, prior_next, prior_reward, model.slots, model.stuck,
+                   model.visits, model.cost_sum, model.cost_n, model.cost_all, p, s, a)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -85,12 +86,13 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
     slots, stuck, visits = model.slots, model.stuck, model.visits
     cost_sum, cost_n, cost_all = model.cost_sum, model.cost_n, model.cost_all
     prior_next, pp_ptr, pp_pair = prior.next_state, prior.pp_ptr, prior.pp_pair
+    prior_reward = prior.reward
     rev_head, rev_next, rev_pair = prior.rev_head, prior.rev_next, prior.rev_pair
     heap, pos, prio, heap_n = queue.heap, queue.pos, queue.prio, queue.n
     n_actions = q.shape[1]
     if is_known(visits, prior_next, p.m, s, a):
-        _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
-                 cost_all, heap, pos, prio, heap_n, p, s, a)
+        _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
+                 cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, s, a)
     budget = p.n_backups
     while budget > 0 and heap_n[0] > 0:
         x = _pop(queue)
@@ -99,8 +101,8 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps] or is_known(visits, prior_next, p.m, ps, pa):
                 continue  # goal rows keep 0; known pairs are in the reverse index
-            _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
-                     cost_all, heap, pos, prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
+                     cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
         e = rev_head[x]
         while e >= 0:  # known pairs whose backup reads x
@@ -109,32 +111,33 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps]:  # known before a task switch made its state a goal
                 continue
-            _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
-                     cost_all, heap, pos, prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
+                     cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
 
 
 # The sweep's inner loop on arrays (the groups' fields, one by one: see sweep).
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _revalue(q, v, allowed, goal, prior_next, slots, stuck, visits, cost_sum, cost_n,
-             cost_all, heap, pos, prio, heap_n, p: Params, s: int, a: int) -> None:
+def _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits, cost_sum,
+             cost_n, cost_all, heap, pos, prio, heap_n, p: Params, s: int, a: int) -> None:
     """``q[s, a] <-`` its hybrid backup; queue ``s`` if that moved its value by more than
     the sweep threshold. (The untried pairs the knowledge says do nothing are not allowed:
     nothing here reads their Q, which :func:`fill_untried` fills in when it is read.)"""
     old = v[s]
-    set_q_arrays(q, v, allowed, s, a, _hybrid(v, goal, prior_next, slots, stuck, visits,
-                                              cost_sum, cost_n, cost_all, p, s, a))
+    set_q_arrays(q, v, allowed, s, a, _hybrid(v, goal, prior_next, prior_reward, slots,
+                                              stuck, visits, cost_sum, cost_n, cost_all, p,
+                                              s, a))
     change = abs(v[s] - old)
     if change > p.sweep_threshold:
         _push(heap, pos, prio, heap_n, s, change)
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _hybrid(v, goal, prior_next, slots, stuck, visits, cost_sum, cost_n, cost_all,
-            p: Params, s: int, a: int) -> float:
+def _hybrid(v, goal, prior_next, prior_reward, slots, stuck, visits, cost_sum, cost_n,
+            cost_all, p: Params, s: int, a: int) -> float:
     """:func:`hybrid_backup`: the prior backup, mixed with the learned model's once known."""
-    prior = prior_backup(v, goal, prior_next, p, s, a)
+    prior = prior_backup(v, goal, prior_next, prior_reward, p, s, a)
     if is_known(visits, prior_next, p.m, s, a):
         n = visits[s, a]
         learned = learned_value(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, p,
@@ -145,12 +148,18 @@ def _hybrid(v, goal, prior_next, slots, stuck, visits, cost_sum, cost_n, cost_al
 
 
 @numba.njit(cache=True, inline="always")
-def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
-                 a: int) -> float:
+def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray,
+                 prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
     """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
-    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``."""
+    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``;
+    where ``prior_reward`` is given (a problem's own scale, ``Prior.reward``), the file's
+    reward too: with ``r = prior_reward[s, a] - prior_cost``, ``r + R_max`` or
+    ``r + gamma * v[prior successor]``."""
     s2 = prior_successor(prior_next, s, a)
-    return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+    if prior_reward.shape[0] == 0:
+        return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+    r = prior_reward[s, a] - p.prior_cost
+    return r + p.r_max if goal[s2] else r + p.gamma * v[s2]
 
 
 @numba.njit(cache=True, inline="always")
@@ -176,9 +185,10 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
     over the allowed pairs until no state value moves by more than ``tol``), then every
     other pair's Q from the converged values, the reverse index rebuilt for the known
     pairs and the queue emptied. Goal rows are 0. The sweeps start from the prior's own
-    values (:func:`prior_values`), exact when no pair is known yet, so a first task
-    takes one sweep however large the world. Returns the number of sweeps, or -1 when
-    the reverse index is too small (the caller sizes it for the known pairs)."""
+    values (:func:`prior_values`), exact when no pair is known yet (with the file's
+    rewards too), so a first task takes one sweep however large the world. Returns the
+    number of sweeps, or -1 when the reverse index is too small (the caller sizes it
+    for the known pairs)."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     visits, prior_next = model.visits, prior.next_state
     n_states, n_actions = q.shape
@@ -214,7 +224,7 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
             best = -np.inf
             for k in range(ptr[s], ptr[s + 1]):
                 a = pairs[k]
-                x = hybrid_backup(table, model, prior_next, p, s, a)
+                x = hybrid_backup(table, model, prior_next, prior.reward, p, s, a)
                 q[s, a] = x
                 if x > best:
                     best = x
@@ -227,7 +237,7 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
             continue
         for a in range(n_actions):
             if not allowed[s, a]:
-                q[s, a] = hybrid_backup(table, model, prior_next, p, s, a)
+                q[s, a] = hybrid_backup(table, model, prior_next, prior.reward, p, s, a)
     prior.rev_head[:] = -1
     prior.rev_n[0] = 0
     for s in range(n_states):
@@ -242,10 +252,31 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
 
 @numba.njit(cache=True)
 def prior_values(table: QTable, prior: Prior, p: Params) -> np.ndarray:
-    """The state values of the prior alone: a state ``d`` prior steps from the goal
-    is worth R_max for d = 1 and ``-prior_cost + gamma * V_{d-1}`` beyond (backward
-    breadth-first search over the prior's edges); one that cannot reach it
-    ``-prior_cost / (1 - gamma)``; a goal 0."""
+    """The state values of the prior alone. With a flat step cost: a state ``d`` prior
+    steps from the goal is worth R_max for d = 1 and ``-prior_cost + gamma * V_{d-1}``
+    beyond (backward breadth-first search over the prior's edges); one that cannot reach
+    it ``-prior_cost / (1 - gamma)``; a goal 0. With the file's rewards (``Prior.reward``
+    not empty): :func:`_own_prior_values`."""
+    dist = _prior_distances(table, prior)
+    if prior.reward.shape[0]:
+        return _own_prior_values(table, prior, p, dist)
+    n_states = len(dist)
+    longest = 0
+    for s in range(n_states):
+        longest = max(longest, dist[s])
+    by_distance = np.zeros(longest + 1)
+    for d in range(1, longest + 1):
+        by_distance[d] = p.r_max if d == 1 else -p.prior_cost + p.gamma * by_distance[d - 1]
+    out = np.empty(n_states)
+    for s in range(n_states):
+        out[s] = by_distance[dist[s]] if dist[s] >= 0 else -p.prior_cost / (1.0 - p.gamma)
+    return out
+
+
+@numba.njit(cache=True)
+def _prior_distances(table: QTable, prior: Prior) -> np.ndarray:
+    """Prior steps from each state to the goal (backward breadth-first search over the
+    prior's edges); -1 where the prior cannot reach it."""
     n_states, n_actions = table.q.shape
     goal, pp_ptr, pp_pair = table.goal, prior.pp_ptr, prior.pp_pair
     dist = np.full(n_states, -1, dtype=np.int64)
@@ -265,31 +296,127 @@ def prior_values(table: QTable, prior: Prior, p: Params) -> np.ndarray:
                 dist[ps] = dist[x] + 1
                 queue[tail] = ps
                 tail += 1
-    longest = 0
-    for s in range(n_states):
-        longest = max(longest, dist[s])
-    by_distance = np.zeros(longest + 1)
-    for d in range(1, longest + 1):
-        by_distance[d] = p.r_max if d == 1 else -p.prior_cost + p.gamma * by_distance[d - 1]
-    out = np.empty(n_states)
-    for s in range(n_states):
-        out[s] = by_distance[dist[s]] if dist[s] >= 0 else -p.prior_cost / (1.0 - p.gamma)
-    return out
+    return dist
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _own_prior_values(table: QTable, prior: Prior, p: Params, dist: np.ndarray
+                      ) -> np.ndarray:
+    """The state values of the prior with the file's rewards: policy iteration on the
+    prior's deterministic model over the pairs OptInit first allows (the applicable
+    ones; every live column where none is), each policy evaluated exactly along its one
+    successor per state (a path to the goal, or into a cycle, whose value is its
+    discounted rewards over ``1 - gamma^length``). It starts from the policy that moves
+    closest to the goal (``dist``), so where the file's rewards agree with shortest plans
+    one evaluation and one improvement step suffice; a few more elsewhere, each O(pairs),
+    where Gauss-Seidel sweeps would take ~log(tol) / log(gamma) sweeps around a loop that
+    pays. A switch needs a gain above 1e-12 x R_max, so it ends; past 1000 policies the
+    values are returned as they are (OptInit's sweeps finish the job)."""
+    goal, n_live = table.goal, table.n_live
+    nxt = prior.next_state
+    rew = prior.reward - p.prior_cost  # a step's reward on the prior
+    n_states, n_actions = nxt.shape
+    gamma, r_max = p.gamma, p.r_max
+    eps = 1e-12 * max(1.0, r_max)
+    far = n_states + 1
+    policy = np.zeros(n_states, dtype=np.int64)
+    for s in range(n_states):  # first policy: closest to the goal, then the best reward
+        if goal[s]:
+            continue
+        best_d, best_r = far + 1, -np.inf
+        for a in range(n_actions):
+            x = nxt[s, a]
+            if x < 0:
+                continue
+            d = dist[x] if dist[x] >= 0 else far
+            if d < best_d or (d == best_d and rew[s, a] > best_r):
+                best_d, best_r, policy[s] = d, rew[s, a], a
+        if best_d > far:  # nothing applicable: the best-paying live column
+            for a in range(n_live[s]):
+                if rew[s, a] > best_r:
+                    best_r, policy[s] = rew[s, a], a
+    v = np.zeros(n_states)
+    mark = np.zeros(n_states, dtype=np.int8)  # 0 new, 1 on the walk, 2 valued
+    at = np.zeros(n_states, dtype=np.int64)  # a walked state's place on the stack
+    stack = np.empty(n_states, dtype=np.int64)
+    for _ in range(1000):
+        for s in range(n_states):
+            mark[s] = 2 if goal[s] else 0
+            if goal[s]:
+                v[s] = 0.0
+        for s0 in range(n_states):  # evaluate: walk each policy path until valued
+            if mark[s0]:
+                continue
+            top, x = 0, s0
+            while True:
+                mark[x], at[x], stack[top] = 1, top, x
+                top += 1
+                y = prior_successor(nxt, x, policy[x])
+                if goal[y]:
+                    v[x] = rew[x, policy[x]] + r_max
+                    mark[x] = 2
+                    top -= 1
+                    break
+                if mark[y] == 2:
+                    break
+                if mark[y] == 1:  # a cycle from y to x: value y, then the rest
+                    j = at[y]
+                    total, g = 0.0, 1.0
+                    for k in range(j, top):
+                        total += g * rew[stack[k], policy[stack[k]]]
+                        g *= gamma
+                    v[y] = total / (1.0 - g)
+                    mark[y] = 2
+                    for k in range(top - 1, j, -1):
+                        z = stack[k]
+                        v[z] = rew[z, policy[z]] + gamma * v[prior_successor(nxt, z, policy[z])]
+                        mark[z] = 2
+                    top = j
+                    break
+                x = y
+            for k in range(top - 1, -1, -1):  # the walk back from where it was valued
+                z = stack[k]
+                v[z] = rew[z, policy[z]] + gamma * v[prior_successor(nxt, z, policy[z])]
+                mark[z] = 2
+        changed = False
+        for s in range(n_states):  # improve
+            if goal[s]:
+                continue
+            applicable = False
+            for a in range(n_actions):
+                applicable = applicable or nxt[s, a] >= 0
+            best, best_a = v[s], policy[s]
+            for a in range(n_live[s] if not applicable else n_actions):
+                if applicable and nxt[s, a] < 0:
+                    continue
+                x = prior_successor(nxt, s, a)
+                value = rew[s, a] + (r_max if goal[x] else gamma * v[x])
+                if value > best + eps:
+                    best, best_a = value, a
+            if best_a != policy[s]:
+                policy[s] = best_a
+                changed = True
+        if not changed:
+            break
+    return v
 
 
 @numba.njit(cache=True)
-def fill_untried(table: QTable, p: Params) -> None:
+def fill_untried(table: QTable, prior_reward: np.ndarray, p: Params) -> None:
     """Q of every pair that is not allowed (untried, and the knowledge says it does
-    nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]``; goal rows
-    stay 0. The sweeps never read these entries, so they leave them to this."""
+    nothing) <- its prior backup ``-prior_cost + gamma * v[s]``, below ``v[s]`` (on a
+    problem's own scale plus ``prior_reward[s, a]``, 0 in a padding column); goal rows
+    stay 0. The sweeps never read these entries, so
+    they leave them to this."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
+    own = prior_reward.shape[0] > 0
     for s in range(q.shape[0]):
         if goal[s]:
             continue
         stay = -p.prior_cost + p.gamma * v[s]
         for a in range(q.shape[1]):
             if not allowed[s, a]:
-                q[s, a] = stay
+                q[s, a] = prior_reward[s, a] + stay if own else stay
 
 
 # --- the reverse index: which known pairs read a state -----------------------------------------

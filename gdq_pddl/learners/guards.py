@@ -48,7 +48,7 @@ TABLES: dict[str, dict[str, tuple]] = {
     "prior": {"next_state": (I8, "S A", (-1, "S")), "pp_ptr": (I8, "S+1", (PTR, "E")),
               "pp_pair": (I8, "E", (0, "SA")), "rev_head": (I8, "S", (-1, "C")),
               "rev_next": (I8, "C", (-1, "C")), "rev_pair": (I8, "C", (0, "SA")),
-              "rev_n": (I8, "1", (0, "C+1"))},
+              "rev_n": (I8, "1", (0, "C+1")), "reward": (F8, "R RA", None)},
     "queue": {"heap": (I8, "S", None), "pos": (I8, "S", None), "prio": (F8, "S", None),
               "n": (I8, "1", (0, "S+1"))},
 }
@@ -111,6 +111,8 @@ def _sizes(n_states: int, n_actions: int, plans: object, prior: object = None) -
                              ("E", prior, "pp_pair"), ("C", prior, "rev_pair")):
         sizes[key] = len(getattr(group, name, ()))
     sizes["P-1"], sizes["C+1"] = sizes["P"] - 1, sizes["C"] + 1
+    own = getattr(getattr(prior, "reward", None), "size", 0) > 0  # else empty: 0 x 0
+    sizes["R"], sizes["RA"] = (n_states, n_actions) if own else (0, 0)
     return sizes
 
 
@@ -129,6 +131,8 @@ def check_tables(t: Tables, p: Params) -> None:
     for group in ("table", "model", "plans") + (("prior", "queue") if p.kind == KIND_GDQ
                                                  else ()):
         check_arrays(f"learner tables ({group})", getattr(t, group), TABLES[group], sizes)
+    if p.kind == KIND_GDQ:
+        _check_rewards("learner tables (prior): reward", t.prior.reward)
     if not np.array_equal(t.table.n_guide, t.table.guide.sum(axis=1)):
         raise ConfigError("learner tables: every state must let exploration draw some "
                           "action (guide), and n_guide count them")
@@ -194,6 +198,21 @@ def check_context(context: object, n_states: int | None = None,
     if context.prior is not None:
         check_arrays("TaskContext.prior", context.prior,
                      {"next_state": TABLES["prior"]["next_state"]}, _sizes(*size, None))
+    reward = getattr(context, "prior_reward", None)
+    if reward is not None:
+        if not getattr(context, "own_scale", False):
+            raise ConfigError("TaskContext.prior_reward is the file's rewards of a problem on "
+                              "its own reward scale: give it only with own_scale=True")
+        if not isinstance(reward, np.ndarray) or reward.dtype != F8 or reward.shape != size:
+            raise ConfigError(f"TaskContext.prior_reward must be a float64 array of shape "
+                              f"{size}")
+        _check_rewards("TaskContext.prior_reward", reward)
+
+
+def _check_rewards(where: str, reward: np.ndarray) -> None:
+    """Rewards the prior charges: finite, at most MAX_NUMBER in size."""
+    if reward.size and not (np.isfinite(reward).all() and np.abs(reward).max() <= MAX_NUMBER):
+        raise ConfigError(f"{where} must be finite, at most {MAX_NUMBER:g} in size")
 
 
 def check_dynamics(model: object, start: int, doors: np.ndarray, n_states: int,

@@ -118,6 +118,9 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
         learner = cls(context, cls.config_type(**header["config"]))
         params = Params(**header["params"])
         loaded = {**arrays, **{k: arrays[v] for k, v in header["aliases"].items()}}
+        # a file saved before the prior knew the file's rewards has no prior.reward: the
+        # context's (empty on the goal scale, where nothing else changed)
+        loaded.setdefault("prior.reward", learner.tables.prior.reward)
         tables = Tables(*(type(group)(*(loaded[f"{g}.{field}"] for field in group._fields))
                           for g, group in zip(Tables._fields, learner.tables, strict=True)))
         guards.check_tables(tables, params)

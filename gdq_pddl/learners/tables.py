@@ -54,7 +54,8 @@ class Params(NamedTuple):
     explore_all_last: float = 1.0
     """0: no such draw where the knowledge reaches the goal in one action (``KIND_GDQ``)."""
     prior_cost: float = 1.0
-    """Step cost of a pair still on the prior (``KIND_GDQ``)."""
+    """Step cost of a pair still on the prior (``KIND_GDQ``; besides ``Prior.reward``
+    where that is not empty)."""
     sweep_threshold: float = 0.0
     """Smallest change of a state value that prioritised sweeping propagates."""
     prior_weight: float = 0.0
@@ -116,6 +117,9 @@ class Prior(NamedTuple):
     rev_next: np.ndarray  # int64[C]: next entry of the same successor, -1 none
     rev_pair: np.ndarray  # int64[C]: the known pair s * A + a of an entry
     rev_n: np.ndarray  # int64[1]: entries used
+    reward: np.ndarray  # float64[S, A] on a problem's own scale, float64[0, 0] else: the
+    # most the file pays for a trial of a pair (TaskContext.prior_reward), which a prior
+    # step pays besides -Params.prior_cost
 
 
 class Queue(NamedTuple):

@@ -145,3 +145,48 @@ def test_a_greedy_policy_exports_saves_and_evaluates_in_one_call(ctx_c, tmp_path
     # it steps the env through its wrappers
     wrapped = evaluate_policy(TransformReward(made, lambda r: -1.0), loaded, 50, seed=1)
     assert np.array_equal(wrapped.returns, -res.steps.astype(float))
+
+
+def test_a_gdq_on_a_problems_own_scale_round_trips_with_its_file_rewards(tmp_path):
+    """The prior's file rewards (``prior.reward``, empty on the goal scale) are saved and
+    loaded with the rest: the loaded learner continues bit for bit on courier-1."""
+    def env():
+        e = gymnasium.make("gdq_pddl/PDDL-v0", domain="courier", problem="courier-1")
+        e.reset(seed=5)
+        return e
+
+    first_env = env()
+    ctx = pddl_task_context(first_env.unwrapped.instance)
+    whole = make_learner("GDQ", ctx)
+    ref = run_episodes(whole, env(), 12, np.random.default_rng(6))
+    part = make_learner("GDQ", ctx)
+    assert part.tables.prior.reward.shape == (ctx.n_states, ctx.n_actions)
+    assert part.tables.prior.reward.any()
+    rng = np.random.default_rng(6)
+    first = run_episodes(part, first_env, 5, rng)
+    path = tmp_path / "own.npz"
+    save_learner(path, part, rng=rng, env=first_env.unwrapped.np_random)
+    fresh = env()
+    learner = load_learner(path, pddl_task_context(fresh.unwrapped.instance))
+    gens = load_generators(path)
+    fresh.unwrapped.np_random = gens["env"]
+    rest = run_episodes(learner, fresh, 7, gens["rng"])
+    assert np.array_equal(np.concatenate([first.returns, rest.returns]), ref.returns)
+    assert np.array_equal(learner.tables.prior.reward, whole.tables.prior.reward)
+    for a, b in zip(_arrays(learner), _arrays(whole), strict=True):
+        assert a.dtype == b.dtype and np.array_equal(a, b)
+
+
+def test_a_file_saved_before_the_prior_knew_rewards_loads(ctx_c, tmp_path):
+    """A file without ``prior.reward`` (saved before it existed) loads, with the
+    context's (empty on the goal scale); every other array as saved."""
+    path, old = tmp_path / "g.npz", tmp_path / "old.npz"
+    learner = make_learner("GDQ", ctx_c)
+    save_learner(path, learner)
+    with np.load(path, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files if k != "prior.reward"}
+    np.savez(old, **arrays)
+    loaded = load_learner(old, ctx_c)
+    assert loaded.tables.prior.reward.shape == (0, 0)
+    for a, b in zip(_arrays(loaded), _arrays(learner), strict=True):
+        assert a.dtype == b.dtype and np.array_equal(a, b)
