@@ -18,7 +18,7 @@ from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.variants import deterministic_world
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.learners import GDQ, GDQConfig, gdq, office_task_context, run_episodes
+from gdq_pddl.learners import GDQ, GDQConfig, gdq, office_task_context, run_episodes, warm_start
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import load_world
 from tests.helpers import Recording, run
@@ -378,7 +378,7 @@ def test_optinit_starts_from_the_prior_values_and_needs_one_sweep_on_a_first_tas
     """The closed form from the goal distances is the prior's fixed point."""
     learner = GDQ(ctx_c)
     t, p = learner.tables, learner.params
-    init = gdq.prior_values(t.table, t.prior, p)
+    init = warm_start.prior_values(t.table, t.prior, p)
     assert np.allclose(init, learner.v, atol=1e-9)
     assert gdq.value_iteration(t.table, t.model, t.prior, t.queue, p, 1e-9, 1000) == 1
     # a state that cannot reach the goal by the knowledge's actions: -c / (1 - gamma)
@@ -537,7 +537,7 @@ def test_the_prior_on_the_own_scale_pays_the_files_rewards(tmp_path, back):
         assert want_b > 12 - c
     assert learner.v[a] == pytest.approx(want_a, abs=1e-9)
     assert learner.v[b] == pytest.approx(want_b, abs=1e-9)
-    init = gdq.prior_values(t.table, t.prior, p)
+    init = warm_start.prior_values(t.table, t.prior, p)
     assert init[a] == pytest.approx(want_a, abs=1e-9) and init[at["g"]] == 0.0
     assert gdq.value_iteration(t.table, t.model, t.prior, t.queue, p, 1e-9, 1000) == 1
     walk = int(np.flatnonzero(t.prior.reward[a] == -3.0)[0])
