@@ -433,7 +433,9 @@ class GDQ(TabularLearner):
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
         if self.kind != KIND_GDQ:
             return allowed
-        if self.config.explore in ("values", "plans"):  # "values" draws near the best
+        if self.config.explore == "values":  # draws near the best of allowed, not guide:
+            return context.live  # no plan mask is built for nothing (every row has one)
+        if self.config.explore == "plans":
             return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions(
                 context.live)
         guide = self._prior(context).applicable

@@ -8,7 +8,8 @@ which rules run after a real step (:func:`gdq_pddl.learners.rules.observe`).
 ``guide`` is what exploration draws from. They differ for DARLING-code (a greedy action
 outside ``guide`` is replaced by a draw from it) and the default GDQ with
 ``explore="plans"`` or ``"applicable"``; with ``"values"`` (its default) it draws among the
-allowed actions near the best instead (``Params.explore_band``).
+allowed actions near the best instead (``Params.explore_band``), and ``guide`` is every
+action, unread.
 
 A state's actions are the columns of its row: every learner action in the office; for a
 PDDL problem the ground actions applicable in the state (``TaskContext.columns``), left-
