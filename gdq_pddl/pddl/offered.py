@@ -7,28 +7,13 @@ the longest row; a state where none applies lists ground action 0. A learner's t
 the true model, the prior and the plan tables are indexed by ``(state, column)``, so a
 ground action is found by its column in its state's row.
 
-:func:`offered_rows` builds such a table from ``(state, ground action)`` pairs;
-:func:`column_of` and :func:`columns_in` find the column of a ground action in a row.
+:func:`column_of` and :func:`columns_in` find the column of a ground action in a row
+(the enumeration, :func:`~gdq_pddl.pddl.reachable.reachable_graph`, builds the table).
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-
-def offered_rows(n_states: int, state: np.ndarray, op: np.ndarray) -> np.ndarray:
-    """The offered table (module docstring) of the applicable ``(state, op)`` pairs, each
-    once."""
-    count = np.bincount(state, minlength=n_states)
-    width = max(1, int(count.max(initial=0)))
-    order = np.lexsort((op, state))
-    state, op = state[order], op[order]
-    start = np.zeros(n_states + 1, dtype=np.int64)
-    np.cumsum(count, out=start[1:])
-    rows = np.full((n_states, width), -1, dtype=np.int64)
-    rows[state, np.arange(len(state)) - start[state]] = op
-    rows[count == 0, 0] = 0
-    return rows
 
 
 def column_of(offered: np.ndarray, state: np.ndarray, action: np.ndarray) -> np.ndarray:
