@@ -5,8 +5,8 @@ non-goal state of a :class:`~gdq_pddl.pddl.reachable.StateGraph` (reality's outc
 not only the determinisation's that make the graph's edges) and merges the equal ones of
 a pair: the rows a PPDDL problem's true model is compiled from
 (:func:`gdq_pddl.envs.model.compile_true_model`). It reads the graph's states as word
-rows and applies the ground actions as the enumeration compiles them
-(:mod:`gdq_pddl.pddl.reachable`), a chunk of states at a time.
+rows and applies the ground actions as the enumeration does
+(:mod:`gdq_pddl.pddl.wordrows`), a chunk of states at a time.
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import numpy as np
 
 from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.offered import columns_in
-from gdq_pddl.pddl.reachable import StateGraph, _apply, _compiled, _holds, _Op, _words
+from gdq_pddl.pddl.reachable import StateGraph
+from gdq_pddl.pddl.wordrows import CompiledOp, apply_effect, compile_ops, holds, words
 
 OUTCOME_CHUNK = 1 << 22
 """Cells (states x row width) whose outcomes :func:`reality_outcomes` sorts and merges at
@@ -38,7 +39,7 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     task = graph.task
     width = graph.offered.shape[1]
     n_words = graph.words.shape[1]
-    ops = _compiled(task, n_words)
+    ops = compile_ops(task, n_words)
     live = np.flatnonzero(~graph.is_goal)
     column = columns_in(graph.offered)
     step = max(1, OUTCOME_CHUNK // width)
@@ -58,7 +59,7 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     return out[0], out[1], out[2:]
 
 
-def _outcomes_of(graph: StateGraph, ops: list[_Op], live: np.ndarray, column,
+def _outcomes_of(graph: StateGraph, ops: list[CompiledOp], live: np.ndarray, column,
                  gains: bool) -> list:
     """:func:`reality_outcomes` of the states ``live`` (increasing), as a list ``[pair,
     probability, next, stuck(, reward)]``."""
@@ -75,13 +76,13 @@ def _outcomes_of(graph: StateGraph, ops: list[_Op], live: np.ndarray, column,
         for j, o in enumerate(ground.outcomes):
             if o.probability > 0:
                 same = not (o.add or o.dele or o.conditional)
-                nxt = at if o.stuck or same else graph.lookup(_apply(here, (
-                    _words(o.add, n_words), _words(o.dele, n_words),
-                    tuple(tuple(_words(m, n_words) for m in c) for c in o.conditional))))
+                nxt = at if o.stuck or same else graph.lookup(apply_effect(here, (
+                    words(o.add, n_words), words(o.dele, n_words),
+                    tuple(tuple(words(m, n_words) for m in c) for c in o.conditional))))
                 earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
                 for alts, amount in o.rewards:
-                    earned = earned + np.where(np.logical_or.reduce([_holds(
-                        here, _words(p, n_words), _words(n, n_words)) for p, n in alts]),
+                    earned = earned + np.where(np.logical_or.reduce([holds(
+                        here, words(p, n_words), words(n, n_words)) for p, n in alts]),
                         amount, 0.0)
                 parts.append((pair, j, o.probability, nxt, o.stuck,
                               o.reward + earned if gains else None))

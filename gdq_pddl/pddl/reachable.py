@@ -10,7 +10,8 @@ task (:class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`) the states are those real
 reaches (every outcome of every action), numbered after the edges' states, and the edges
 are the planner's knowledge: one per applicable ground action and outcome its
 determinisation keeps, so a state may have several edges with one op. States are rows of
-``uint64`` words and the ground actions are compiled onto them (:func:`_compiled`); each
+``uint64`` words and the ground actions are compiled onto them
+(:func:`~gdq_pddl.pddl.wordrows.compile_ops`); each
 state's applicable ground actions are the graph's :attr:`StateGraph.offered` table
 (:mod:`gdq_pddl.pddl.offered` reads it).
 
@@ -35,7 +36,16 @@ import numpy as np
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
-from gdq_pddl.pddl.ppddl import ProbabilisticOp
+from gdq_pddl.pddl.wordrows import (
+    applicable_rows,
+    apply_effect,
+    compile_ops,
+    fact_rows,
+    goal_rows,
+    positive_facts,
+    row_keys,
+    words,
+)
 
 PAIR_BYTES = 160
 """Peak memory one cell of the tables over states x offered actions (a state's row as
@@ -137,7 +147,7 @@ class StateGraph:
 
     @cached_property
     def _sorted(self) -> tuple[np.ndarray, np.ndarray | None]:
-        keys = _keys(self.words)
+        keys = row_keys(self.words)
         if keys.dtype == np.uint64 and int(keys.max()) < 4 * len(keys) + 65536:
             dense = np.full(int(keys.max()) + 1, -1, dtype=np.int64)  # few facts: a table
             dense[keys] = np.arange(len(keys))
@@ -149,8 +159,8 @@ class StateGraph:
         """int64 index of each reachable state in ``rows`` (``uint64[n, words]``)."""
         keys, order = self._sorted
         if order is None:
-            return keys[_keys(rows)]
-        return order[np.searchsorted(keys, _keys(rows))]
+            return keys[row_keys(rows)]
+        return order[np.searchsorted(keys, row_keys(rows))]
 
 
 def table_budget() -> int:
@@ -193,120 +203,6 @@ def _too_many(source: str, cap: int, budget: bool, width: int,
         "problem smaller (fewer objects), or run it on a machine with more memory")
 
 
-def _words(mask: int, n_words: int) -> np.ndarray:
-    return np.array([mask >> (64 * j) & (1 << 64) - 1 for j in range(n_words)],
-                    dtype=np.uint64)
-
-
-def _holds(rows: np.ndarray, pos: np.ndarray, neg: np.ndarray) -> np.ndarray:
-    """bool[n]: ``pos`` holds and no fact of ``neg`` in each row."""
-    return ((rows & pos) == pos).all(axis=1) & ~(rows & neg).any(axis=1)
-
-
-def _keys(rows: np.ndarray) -> np.ndarray:
-    """One sortable key per row (the word itself, or the row's bytes)."""
-    rows = np.ascontiguousarray(rows)
-    if rows.shape[1] == 1:
-        return rows[:, 0]
-    return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel()
-
-
-@dataclass(frozen=True)
-class _Op:
-    """A ground action on word rows: when it applies, its effects (``known``: the edges,
-    ``other``: the states only reality reaches) and their ranks in a state's order."""
-
-    pre: np.ndarray
-    neg: np.ndarray
-    alternatives: tuple[tuple[np.ndarray, np.ndarray], ...]
-    known: tuple
-    other: tuple
-
-    def applies(self, rows: np.ndarray) -> np.ndarray:
-        ok = _holds(rows, self.pre, self.neg)
-        if self.alternatives:
-            ok &= np.logical_or.reduce([_holds(rows, p, n) for p, n in self.alternatives])
-        return ok
-
-
-FILTER_BYTES = 1 << 27
-"""The most bytes :func:`_fact_rows` spends on a chunk's per-fact membership (else every
-ground action is tested on every state of the chunk)."""
-
-
-def _positive_facts(pre: np.ndarray) -> np.ndarray:
-    """The facts (bit numbers) set in a word row ``pre``."""
-    bits = np.unpackbits(pre.view(np.uint8), bitorder="little")
-    return np.flatnonzero(bits)
-
-
-def _fact_rows(rows: np.ndarray, need: list[np.ndarray]) -> dict[int, np.ndarray] | None:
-    """For each fact some ground action needs, the rows (increasing) where it holds; None
-    when that is more than :data:`FILTER_BYTES` facts x rows to look at."""
-    facts = np.unique(np.concatenate(need)) if need else np.zeros(0, dtype=np.int64)
-    if not len(facts) or len(facts) * len(rows) > FILTER_BYTES:
-        return None
-    words = {int(w): np.ascontiguousarray(rows[:, w]) for w in np.unique(facts // 64)}
-    return {f: np.flatnonzero(words[f // 64] & np.uint64(1 << f % 64))
-            for f in facts.tolist()}
-
-
-def _applicable(op: _Op, rows: np.ndarray, holding: dict[int, np.ndarray] | None,
-                need: np.ndarray) -> np.ndarray:
-    """The rows (increasing) where ``op`` applies: tested only on the rows where its
-    rarest needed fact holds, when ``holding`` lists them."""
-    if holding is None or not len(need):
-        return np.flatnonzero(op.applies(rows))
-    cand = min((holding[int(f)] for f in need.tolist()), key=len)
-    return cand[op.applies(rows[cand])] if len(cand) else cand
-
-
-def _apply(rows: np.ndarray, effect: tuple) -> np.ndarray:
-    """The rows after an effect ``(add, delete, conditional effects)`` (adds win)."""
-    add, dele, conditional = effect
-    if conditional:
-        add, dele = np.broadcast_to(add, rows.shape), np.broadcast_to(dele, rows.shape)
-        for pos, neg, a, d in conditional:
-            fire = _holds(rows, pos, neg)[:, None]
-            add, dele = add | np.where(fire, a, 0), dele | np.where(fire, d, 0)
-    return (rows & ~dele) | add
-
-
-def _compiled(task: GroundTask, n_words: int) -> list[_Op]:
-    def w(mask: int) -> np.ndarray:
-        return _words(mask, n_words)
-
-    def effect(o) -> tuple:
-        return w(o.add), w(o.dele), tuple(tuple(map(w, c)) for c in
-                                         getattr(o, "conditional", ()))
-
-    out = []
-    for op in task.ops:
-        alts = tuple((w(p), w(n)) for p, n in op.alternatives) \
-            if getattr(task, "disjunctive", False) else ()
-        if isinstance(op, ProbabilisticOp):
-            known = tuple(effect(op.outcomes[k]) for k in op.known)
-            other = tuple(effect(o) for j, o in enumerate(op.outcomes)
-                          if o.probability > 0 and not o.stuck and j not in op.known
-                          and (o.add or o.dele or o.conditional))
-        else:
-            known, other = (effect(op),), ()
-        out.append(_Op(w(op.pre), w(op.neg), alts, known, other))
-    return out
-
-
-def _goal_rows(task: GroundTask, rows: np.ndarray) -> np.ndarray:
-    """bool[n]: :meth:`GroundTask.is_goal` of each row."""
-    n_words = rows.shape[1]
-    if not task.goal_possible:
-        return np.zeros(len(rows), dtype=np.bool_)
-    ok = _holds(rows, _words(task.goal_pos, n_words), _words(task.goal_neg, n_words))
-    if task.goal_alternatives:
-        ok &= np.logical_or.reduce([_holds(rows, _words(p, n_words), _words(n, n_words))
-                                    for p, n in task.goal_alternatives])
-    return ok
-
-
 def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     source: str = "problem") -> StateGraph:
     """Every state reachable from ``task.init`` (goal states not expanded), one breadth
@@ -317,14 +213,14 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     """
     n_ops = len(task.ops)
     n_words = max(1, -(-len(task.facts) // 64))
-    ops = _compiled(task, n_words)
+    ops = compile_ops(task, n_words)
     width = max([len(op.known) + len(op.other) for op in ops], default=1)
     order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
                 for i, op in enumerate(group)}  # the order of task.applicable
     reality_rank = np.argsort(sorted(range(n_ops), key=lambda k: order_of[id(task.ops[k])]))
-    need = [_positive_facts(op.pre) for op in ops]  # each op's facts that must hold
-    levels = [_words(task.init, n_words)[None, :]]
-    known_keys, known_ids = _keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
+    need = [positive_facts(op.pre) for op in ops]  # each op's facts that must hold
+    levels = [words(task.init, n_words)[None, :]]
+    known_keys, known_ids = row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
     goal, depth, src, op_of, nxt = [], [], [], [], []
     rows_of: list[tuple[np.ndarray, np.ndarray]] = []  # (states, their offered rows)
     op_type = np.int16 if n_ops <= np.iinfo(np.int16).max else np.int32
@@ -333,7 +229,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     with slow_progress("reachable states", " states") as bar:
         while lo < n:
             rows = levels[-1]
-            is_goal = _goal_rows(task, rows)
+            is_goal = goal_rows(task, rows)
             goal.append(is_goal)
             depth.append(np.full(len(rows), len(depth), dtype=np.int64))
             parents = np.flatnonzero(~is_goal)
@@ -348,9 +244,9 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 found: list[tuple[np.ndarray, np.ndarray, int]] = []  # rows, parent, rank
                 n_applicable = np.zeros(len(parent), dtype=np.int64)
                 applicable: list[tuple[int, np.ndarray]] = []
-                holding = _fact_rows(expand, need)
+                holding = fact_rows(expand, need)
                 for k, op in enumerate(ops):
-                    at = _applicable(op, expand, holding, need[k])
+                    at = applicable_rows(op, expand, holding, need[k])
                     if not len(at):
                         continue
                     n_applicable[at] += 1
@@ -358,13 +254,13 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     here = expand[at]
                     seen: list[np.ndarray] = []
                     for j, effect in enumerate(op.known):
-                        t = _apply(here, effect)
+                        t = apply_effect(here, effect)
                         new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
                             if seen else np.ones(len(t), dtype=np.bool_)
                         seen.append(t)
                         found.append((t[new], at[new], k * width + j))
                     for j, effect in enumerate(op.other):
-                        found.append((_apply(here, effect), at,
+                        found.append((apply_effect(here, effect), at,
                                       (n_ops + reality_rank[k]) * width + j))
                 cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
                 who = np.concatenate([f[1] for f in found]) if found else parent[:0]
@@ -373,7 +269,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 del found
                 order = np.argsort(who * (2 * n_ops * width) + rank, kind="stable")
                 cand, who, rank = cand[order], who[order], rank[order]
-                keys = _keys(cand)
+                keys = row_keys(cand)
                 uniq, first = np.unique(keys, return_index=True)
                 at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
                 fresh = np.sort(first[known_keys[at] != uniq])

@@ -1,0 +1,136 @@
+"""States as rows of ``uint64`` words (one bit a fact), and ground actions compiled onto
+them: what the enumeration (:mod:`gdq_pddl.pddl.reachable`) and reality's outcomes
+(:mod:`gdq_pddl.pddl.outcomes`) apply to a whole block of states at once.
+
+:func:`words` turns a fact bitmask into a row, :func:`holds` tests a condition on rows,
+:func:`row_keys` gives each row a sortable key, :func:`compile_ops` compiles a task's
+ground actions (:class:`CompiledOp`: when one applies, its effects) and
+:func:`apply_effect` applies an effect. :func:`applicable_rows` finds where a ground
+action applies, testing it only on the rows where its rarest precondition fact holds
+(:func:`fact_rows`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.ppddl import ProbabilisticOp
+
+
+def words(mask: int, n_words: int) -> np.ndarray:
+    """A fact bitmask as a row of ``n_words`` uint64 words."""
+    return np.array([mask >> (64 * j) & (1 << 64) - 1 for j in range(n_words)],
+                    dtype=np.uint64)
+
+
+def holds(rows: np.ndarray, pos: np.ndarray, neg: np.ndarray) -> np.ndarray:
+    """bool[n]: ``pos`` holds and no fact of ``neg`` in each row."""
+    return ((rows & pos) == pos).all(axis=1) & ~(rows & neg).any(axis=1)
+
+
+def row_keys(rows: np.ndarray) -> np.ndarray:
+    """One sortable key per row (the word itself, or the row's bytes)."""
+    rows = np.ascontiguousarray(rows)
+    if rows.shape[1] == 1:
+        return rows[:, 0]
+    return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel()
+
+
+@dataclass(frozen=True)
+class CompiledOp:
+    """A ground action on word rows: when it applies, its effects (``known``: the edges,
+    ``other``: the states only reality reaches) and their ranks in a state's order."""
+
+    pre: np.ndarray
+    neg: np.ndarray
+    alternatives: tuple[tuple[np.ndarray, np.ndarray], ...]
+    known: tuple
+    other: tuple
+
+    def applies(self, rows: np.ndarray) -> np.ndarray:
+        ok = holds(rows, self.pre, self.neg)
+        if self.alternatives:
+            ok &= np.logical_or.reduce([holds(rows, p, n) for p, n in self.alternatives])
+        return ok
+
+
+FILTER_BYTES = 1 << 27
+"""The most bytes :func:`fact_rows` spends on a chunk's per-fact membership (else every
+ground action is tested on every state of the chunk)."""
+
+
+def positive_facts(pre: np.ndarray) -> np.ndarray:
+    """The facts (bit numbers) set in a word row ``pre``."""
+    bits = np.unpackbits(pre.view(np.uint8), bitorder="little")
+    return np.flatnonzero(bits)
+
+
+def fact_rows(rows: np.ndarray, need: list[np.ndarray]) -> dict[int, np.ndarray] | None:
+    """For each fact some ground action needs, the rows (increasing) where it holds; None
+    when that is more than :data:`FILTER_BYTES` facts x rows to look at."""
+    facts = np.unique(np.concatenate(need)) if need else np.zeros(0, dtype=np.int64)
+    if not len(facts) or len(facts) * len(rows) > FILTER_BYTES:
+        return None
+    words = {int(w): np.ascontiguousarray(rows[:, w]) for w in np.unique(facts // 64)}
+    return {f: np.flatnonzero(words[f // 64] & np.uint64(1 << f % 64))
+            for f in facts.tolist()}
+
+
+def applicable_rows(op: CompiledOp, rows: np.ndarray, holding: dict[int, np.ndarray] | None,
+                need: np.ndarray) -> np.ndarray:
+    """The rows (increasing) where ``op`` applies: tested only on the rows where its
+    rarest needed fact holds, when ``holding`` lists them."""
+    if holding is None or not len(need):
+        return np.flatnonzero(op.applies(rows))
+    cand = min((holding[int(f)] for f in need.tolist()), key=len)
+    return cand[op.applies(rows[cand])] if len(cand) else cand
+
+
+def apply_effect(rows: np.ndarray, effect: tuple) -> np.ndarray:
+    """The rows after an effect ``(add, delete, conditional effects)`` (adds win)."""
+    add, dele, conditional = effect
+    if conditional:
+        add, dele = np.broadcast_to(add, rows.shape), np.broadcast_to(dele, rows.shape)
+        for pos, neg, a, d in conditional:
+            fire = holds(rows, pos, neg)[:, None]
+            add, dele = add | np.where(fire, a, 0), dele | np.where(fire, d, 0)
+    return (rows & ~dele) | add
+
+
+def compile_ops(task: GroundTask, n_words: int) -> list[CompiledOp]:
+    """Every ground action of ``task`` on rows of ``n_words`` words."""
+    def w(mask: int) -> np.ndarray:
+        return words(mask, n_words)
+
+    def effect(o) -> tuple:
+        return w(o.add), w(o.dele), tuple(tuple(map(w, c)) for c in
+                                         getattr(o, "conditional", ()))
+
+    out = []
+    for op in task.ops:
+        alts = tuple((w(p), w(n)) for p, n in op.alternatives) \
+            if getattr(task, "disjunctive", False) else ()
+        if isinstance(op, ProbabilisticOp):
+            known = tuple(effect(op.outcomes[k]) for k in op.known)
+            other = tuple(effect(o) for j, o in enumerate(op.outcomes)
+                          if o.probability > 0 and not o.stuck and j not in op.known
+                          and (o.add or o.dele or o.conditional))
+        else:
+            known, other = (effect(op),), ()
+        out.append(CompiledOp(w(op.pre), w(op.neg), alts, known, other))
+    return out
+
+
+def goal_rows(task: GroundTask, rows: np.ndarray) -> np.ndarray:
+    """bool[n]: :meth:`GroundTask.is_goal` of each row."""
+    n_words = rows.shape[1]
+    if not task.goal_possible:
+        return np.zeros(len(rows), dtype=np.bool_)
+    ok = holds(rows, words(task.goal_pos, n_words), words(task.goal_neg, n_words))
+    if task.goal_alternatives:
+        ok &= np.logical_or.reduce([holds(rows, words(p, n_words), words(n, n_words))
+                                    for p, n in task.goal_alternatives])
+    return ok
