@@ -47,12 +47,39 @@ FALLBACK_MEMORY = 16 * 1024**3
 """What :func:`physical_memory` assumes where the system does not say."""
 
 
+MEMORY_UNITS = {"": 1, "b": 1, "k": 1000, "kb": 1000, "m": 1000**2, "mb": 1000**2,
+                "g": 1000**3, "gb": 1000**3, "t": 1000**4, "tb": 1000**4, "kib": 1024,
+                "mib": 1024**2, "gib": 1024**3, "tib": 1024**4}
+"""The units ``GDQ_PDDL_MEMORY`` takes (any case): decimal as :func:`human_bytes` writes
+them, binary with an ``i``."""
+
+
+def memory_override() -> int | None:
+    """The bytes ``GDQ_PDDL_MEMORY`` says this machine has (``17179869184``, ``16GB``,
+    ``16 GiB``, ``1.5TB``), or None where it is unset or empty; a ConfigError for any
+    other text, so that a mistyped value is not silently ignored."""
+    text = os.environ.get("GDQ_PDDL_MEMORY", "").strip()
+    if not text:
+        return None
+    number = text.rstrip("bBiIkKmMgGtT ")
+    unit = text[len(number):].strip().lower()
+    try:
+        value = float(number) * MEMORY_UNITS[unit]
+    except (ValueError, KeyError):
+        value = math.nan
+    if not (math.isfinite(value) and 1 <= value <= MAX_NUMBER):
+        raise ConfigError(f"GDQ_PDDL_MEMORY={text!r}: expected the machine's memory, a "
+                          "positive size in bytes (17179869184) or with a unit (16GB, "
+                          f"16GiB, 512MB), at most {MAX_NUMBER:g} bytes")
+    return int(value)
+
+
 def physical_memory() -> int:
     """Bytes of physical memory (``FALLBACK_MEMORY`` if unknown), or the address-space
-    limit if lower; ``GDQ_PDDL_MEMORY`` (bytes) overrides it."""
-    override = os.environ.get("GDQ_PDDL_MEMORY")
-    if override and override.isdigit():
-        return int(override)
+    limit if lower; ``GDQ_PDDL_MEMORY`` overrides it (:func:`memory_override`)."""
+    override = memory_override()
+    if override is not None:
+        return override
     try:
         have = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (AttributeError, ValueError, OSError):

@@ -19,6 +19,7 @@ from gdq_pddl.cli import experiments, planning  # noqa: E402 (after the check ab
 from gdq_pddl.cli.common import EXIT_ERROR  # noqa: E402
 from gdq_pddl.errors import GdqError  # noqa: E402
 from gdq_pddl.experiments.runner import RunInterrupted  # noqa: E402
+from gdq_pddl.limits import memory_override  # noqa: E402
 from gdq_pddl.outputs import writing  # noqa: E402
 
 EXIT_INTERRUPTED = 130  # the shell's convention for a program ended by SIGINT
@@ -48,6 +49,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     stdout, sys.stdout = sys.stdout, _NamedOutput(sys.stdout)
     formatwarning, warnings.formatwarning = warnings.formatwarning, _format_warning
     try:
+        memory_override()  # a mistyped GDQ_PDDL_MEMORY is refused before any work
         code = args.func(args)
         sys.stdout.flush()  # a full disk shows here, not in the interpreter's last flush
         return code

@@ -484,6 +484,29 @@ def test_scale_checks_the_memory_of_all_buildings_together(capsys, tmp_path, mon
     refused(code, out, "--seed + --buildings - 1", "4611686018427387905")
 
 
+@pytest.mark.parametrize("text, have", [("17179869184", 17179869184), ("16GB", 16 * 10**9),
+                                        ("16 GiB", 16 * 1024**3), ("1.5tb", 15 * 10**11),
+                                        ("512MB", 512 * 10**6), ("", None), ("  ", None)])
+def test_the_memory_override_takes_bytes_or_a_unit(monkeypatch, text, have):
+    from gdq_pddl.limits import memory_override, physical_memory
+
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", text)
+    assert memory_override() == have
+    if have is not None:
+        assert physical_memory() == have
+
+
+@pytest.mark.parametrize("text", ["abc", "0", "-5", "8XB", "8 G B", "nan", "inf", "1e300"])
+def test_a_mistyped_memory_override_is_refused_before_any_work(capsys, tmp_path,
+                                                               monkeypatch, text):
+    # before, a value that was not all digits was ignored without a word
+    monkeypatch.setenv("GDQ_PDDL_MEMORY", text)
+    code, out = cli(capsys, "run", "--task", "C", "--episodes", "3", "--runs", "1",
+                    "--out", tmp_path / "o")
+    refused(code, out, "GDQ_PDDL_MEMORY", repr(text.strip()), "16GB")
+    assert not (tmp_path / "o").exists()
+
+
 def test_jobs_are_capped_at_the_runs_and_said(capsys, tmp_path):
     # one run: it runs in this process (two would start a pool of workers, each loading
     # the kernels, for the same message)
