@@ -8,7 +8,8 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 - **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
   change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``
   (on a problem's own scale besides the most the file pays for a trial of the action,
-  ``Prior.reward``); reaching a goal pays R_max (:func:`prior_backup`).
+  ``Prior.reward``); reaching a goal pays R_max
+  (:func:`~gdq_pddl.learners.warm_start.prior_backup`).
 - **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
   the knowledge says does nothing after its first.
 - **The hybrid backup**: an unknown pair is worth its prior backup, a known one
@@ -39,7 +40,7 @@ from gdq_pddl.learners.learned_model import (
     slot_successor,
 )
 from gdq_pddl.learners.tables import Model, Params, Prior, QTable, Queue, set_q_arrays
-from gdq_pddl.learners.warm_start import prior_successor, prior_values
+from gdq_pddl.learners.warm_start import prior_backup, prior_successor, prior_values
 
 # --- the rule --------------------------------------------------------------------------------
 
@@ -71,7 +72,8 @@ def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Param
 def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray,
                   prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
     """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
-    :func:`prior_backup` while unknown, ``(n * learned + w * prior) / (n + w)`` once known."""
+    :func:`~gdq_pddl.learners.warm_start.prior_backup` while unknown,
+    ``(n * learned + w * prior) / (n + w)`` once known."""
     return _hybrid(table.v, table.goal, prior_next, prior_reward, model.slots, model.stuck,
                    model.visits, model.cost_sum, model.cost_n, model.cost_all, p, s, a)
 
@@ -147,21 +149,6 @@ def _hybrid(v, goal, prior_next, prior_reward, slots, stuck, visits, cost_sum, c
         w = p.prior_weight
         return (n * learned + w * prior) / (n + w)
     return prior
-
-
-@numba.njit(cache=True, inline="always")
-def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray,
-                 prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
-    """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
-    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``;
-    where ``prior_reward`` is given (a problem's own scale, ``Prior.reward``), the file's
-    reward too: with ``r = prior_reward[s, a] - prior_cost``, ``r + R_max`` or
-    ``r + gamma * v[prior successor]``."""
-    s2 = prior_successor(prior_next, s, a)
-    if prior_reward.shape[0] == 0:
-        return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
-    r = prior_reward[s, a] - p.prior_cost
-    return r + p.r_max if goal[s2] else r + p.gamma * v[s2]
 
 
 @numba.njit(cache=True, inline="always")

@@ -1,8 +1,9 @@
-"""OptInit's warm start: the state values of the default GDQ's prior alone
-(:func:`prior_values`), from which :func:`gdq_pddl.learners.gdq.value_iteration` starts, so
-that a first task takes one sweep however large the world. With a flat step cost they
-have a closed form by goal distance; with a problem's own rewards (``Prior.reward``),
-policy iteration on the prior's deterministic model gives them."""
+"""The default GDQ's prior alone: what it says a pair is worth (:func:`prior_backup`, also
+the hybrid backup of a pair not yet known) and the state values it gives
+(:func:`prior_values`), OptInit's warm start: :func:`gdq_pddl.learners.gdq.value_iteration`
+starts from them, so that a first task takes one sweep however large the world. With a
+flat step cost they have a closed form by goal distance; with a problem's own rewards
+(``Prior.reward``), policy iteration on the prior's deterministic model gives them."""
 
 from __future__ import annotations
 
@@ -17,6 +18,21 @@ def prior_successor(prior_next: np.ndarray, s: int, a: int) -> int:
     """Where the prior says ``(s, a)`` leads (``s`` itself where it says "no change")."""
     x = prior_next[s, a]
     return s if x < 0 else x
+
+
+@numba.njit(cache=True, inline="always")
+def prior_backup(v: np.ndarray, goal: np.ndarray, prior_next: np.ndarray,
+                 prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
+    """The backup of ``(s, a)`` under the prior alone, with the state values ``v``: R_max
+    if its prior successor is a goal, else ``-prior_cost + gamma * v[prior successor]``;
+    where ``prior_reward`` is given (a problem's own scale, ``Prior.reward``), the file's
+    reward too: with ``r = prior_reward[s, a] - prior_cost``, ``r + R_max`` or
+    ``r + gamma * v[prior successor]``."""
+    s2 = prior_successor(prior_next, s, a)
+    if prior_reward.shape[0] == 0:
+        return p.r_max if goal[s2] else -p.prior_cost + p.gamma * v[s2]
+    r = prior_reward[s, a] - p.prior_cost
+    return r + p.r_max if goal[s2] else r + p.gamma * v[s2]
 
 
 @numba.njit(cache=True)
@@ -158,8 +174,7 @@ def _own_prior_values(table: QTable, prior: Prior, p: Params, dist: np.ndarray
             for a in range(n_live[s] if not applicable else n_actions):
                 if applicable and nxt[s, a] < 0:
                     continue
-                x = prior_successor(nxt, s, a)
-                value = rew[s, a] + (r_max if goal[x] else gamma * v[x])
+                value = prior_backup(v, goal, nxt, prior.reward, p, s, a)
                 if value > best + eps:
                     best, best_a = value, a
             if best_a != policy[s]:
