@@ -22,6 +22,7 @@ import signal
 import socket
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
@@ -50,8 +51,9 @@ from gdq_pddl.experiments.folder import (
 from gdq_pddl.experiments.knowledge import is_file_name
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.work import run_unit, warm_up
-from gdq_pddl.limits import check_count
+from gdq_pddl.limits import check_count, human_bytes, physical_memory
 from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
+from gdq_pddl.pddl.reachable import MEMORY_SHARE
 
 __all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_experiments"]
 
@@ -358,9 +360,37 @@ def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray
     return job[0], job[2](job[1])
 
 
+def memory_jobs(jobs: int, per_run: int, have: int, in_use: int) -> int:
+    """How many of ``jobs`` worker processes fit in memory: each adds its learner's tables
+    (``per_run`` bytes) to what it shares with the parent (``in_use``, the instance and
+    its plans, inherited copy-on-write), within :data:`MEMORY_SHARE` of ``have``; at
+    least 1, as one process is the run itself (its tables were checked to fit)."""
+    free = MEMORY_SHARE * have - in_use
+    return max(1, min(jobs, int(free // max(1, per_run))))
+
+
+def _resident_bytes() -> int:
+    """This process's resident memory now; 0 where /proc does not say (not Linux)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
 def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
     # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
-    warm_up(units)
+    per_run = warm_up(units)
+    fit = memory_jobs(jobs, per_run, physical_memory(), _resident_bytes())
+    if fit < jobs:  # each worker's tables on top: more would be killed for memory
+        warnings.warn(f"{jobs} worker processes (--jobs) capped at {fit}: each run's "
+                      f"learner tables take {human_bytes(per_run)}, and this machine has "
+                      f"{human_bytes(physical_memory())} (GDQ_PDDL_MEMORY), "
+                      f"{human_bytes(_resident_bytes())} of it held already", stacklevel=2)
+        jobs = fit
+        if jobs == 1:
+            yield from ((u, work(u)) for u in units)
+            return
     # multiprocessing.Pool, not ProcessPoolExecutor: on Ctrl-C the workers in flight are
     # terminated, and an executor whose workers were terminated can hang the interpreter
     # at exit (its manager thread waits on a half-written result pipe).

@@ -94,8 +94,9 @@ def load_pddl_instance(files: tuple[str, ...]):
                                    else "all-outcomes")
 
 
-def warm_up(units: list[Unit]) -> None:
-    """Compile every kernel once in this process, so forked workers need not."""
+def warm_up(units: list[Unit]) -> int:
+    """Compile every kernel once in this process, so forked workers need not; returns the
+    bytes of the largest learner's tables (what each worker adds to what it inherits)."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
         if (u.experiment.world, u.method) not in tiny:
@@ -103,12 +104,16 @@ def warm_up(units: list[Unit]) -> None:
                           schedule=((u.experiment.schedule[0][0], 2),), runs=1)
             tiny[u.experiment.world, u.method] = Unit(exp, u.method, 0)
     loop = precompile.start()
+    largest = 0
     try:
         for unit in tiny.values():  # a learner for the first task: its OptInit kernels
             exp = unit.experiment
-            make_learner(unit.method, context_of(exp, instance_of(exp, exp.schedule[0][0])),
-                         exp.hyper)
+            learner = make_learner(unit.method, context_of(exp, instance_of(
+                exp, exp.schedule[0][0])), exp.hyper)
+            largest = max(largest, learner.nbytes)
+            del learner
     finally:
         precompile.wait(loop)
     for unit in tiny.values():
         run_unit(unit)
+    return largest

@@ -113,6 +113,29 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
     assert len(keys) == len(set(keys)) == 3 * 4 * 400
 
 
+def test_workers_are_capped_by_the_memory_their_tables_need():
+    from gdq_pddl.experiments.runner import memory_jobs
+
+    gb = 10**9
+    assert memory_jobs(2, per_run=gb, have=16 * gb, in_use=gb) == 2
+    assert memory_jobs(8, per_run=5 * gb, have=16 * gb, in_use=gb) == 2  # 12 GB share - 1
+    assert memory_jobs(4, per_run=20 * gb, have=16 * gb, in_use=gb) == 1  # one always runs
+    assert memory_jobs(4, per_run=0, have=16 * gb, in_use=20 * gb) == 1
+
+
+def test_too_many_jobs_for_memory_run_fewer_with_the_same_results(tmp_path, two_jobs,
+                                                                 monkeypatch):
+    # a machine where the parent fits but not a second worker's tables: one process,
+    # said, and the results of any number of jobs
+    import gdq_pddl.experiments.runner as runner
+
+    monkeypatch.setattr(runner, "physical_memory", lambda: 1)
+    with pytest.warns(UserWarning, match=r"2 worker processes \(--jobs\) capped at 1"):
+        run_experiments(task_experiments(tasks=("C",), **SMALL), tmp_path / "capped", jobs=2)
+    assert (tmp_path / "capped" / "episodes.csv").read_bytes() == \
+        (two_jobs / "episodes.csv").read_bytes()
+
+
 def test_interrupt_message_says_how_to_resume(tmp_path):
     """Ctrl-C while the workers run: one clear line, no traceback, runs already saved."""
     argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "10000",
