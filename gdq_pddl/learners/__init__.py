@@ -10,21 +10,14 @@
     env.reset(seed=0)
     records = run_episodes(learner, env, 300, np.random.default_rng(1))
 
-The classes and :func:`make_learner` are in :mod:`~gdq_pddl.learners.agents`, the
-default GDQ's rule in :mod:`~gdq_pddl.learners.gdq`; ``docs/learners.md`` says where
-everything else is, compares the variants and records the decisions behind them.
+The shared base class is in :mod:`~gdq_pddl.learners.tabular`, the GDQ class in
+:mod:`~gdq_pddl.learners.gdq_learner` (the default GDQ's rule in
+:mod:`~gdq_pddl.learners.gdq`), the baselines and :func:`make_learner` in
+:mod:`~gdq_pddl.learners.agents`; ``docs/learners.md`` says where everything else is,
+compares the variants and records the decisions behind them.
 """
 
-from gdq_pddl.learners.agents import (
-    GDQ,
-    METHODS,
-    Darling,
-    DynaQ,
-    Learner,
-    QLearning,
-    TabularLearner,
-    make_learner,
-)
+from gdq_pddl.learners.agents import METHODS, Darling, DynaQ, QLearning, make_learner
 from gdq_pddl.learners.config import (
     DarlingConfig,
     DynaQConfig,
@@ -44,7 +37,9 @@ from gdq_pddl.learners.episodes import (
     run_compact,
     run_episodes,
 )
+from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.saving import GreedyPolicy, load_generators, load_learner, save_learner
+from gdq_pddl.learners.tabular import Learner, TabularLearner
 
 __all__ = [
     "GDQ", "METHODS", "Darling", "DarlingConfig", "DynaQ", "DynaQConfig", "EpisodeRecords",

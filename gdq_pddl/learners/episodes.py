@@ -27,12 +27,14 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import GDQ, Darling, DynaQ, Learner, QLearning, TabularLearner
+from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
+from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
+from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
 
 

@@ -21,9 +21,10 @@ import numpy as np
 
 from gdq_pddl.errors import ConfigError, ResultsError
 from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import METHODS, TabularLearner
+from gdq_pddl.learners.agents import METHODS
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.tables import Params, Tables
+from gdq_pddl.learners.tabular import TabularLearner
 
 FORMAT_VERSION = 1
 """The version of the file layout (``docs/learners.md``); another is refused on load."""
@@ -103,7 +104,7 @@ def save_learner(file: File, learner: TabularLearner, **generators: np.random.Ge
 def load_learner(file: File, context: TaskContext) -> TabularLearner:
     """The learner saved in ``file`` (:func:`save_learner`), for ``context``, the task it
     goes on learning (of the saved size; its tables are the saved ones, so it continues
-    as the saved learner would; :meth:`~gdq_pddl.learners.agents.TabularLearner.start_task`
+    as the saved learner would; :meth:`~gdq_pddl.learners.tabular.TabularLearner.start_task`
     switches it to another task)."""
     name = _name(file)
     header, arrays = _read(file, "learner")

@@ -383,7 +383,8 @@ def test_a_goal_reality_cannot_reach_is_refused_naming_the_dynamics_file(capsys,
     (KEYS_PROBLEM, edit(NO_MOVE, "success = 0.0", 'success = 0.0\nfailure = ["move"]'), 8),
 ])  # the last: every move fails, and slips into a random move, the intended one included
 def test_reality_that_still_reaches_the_goal_runs(tmp_path, problem, dynamics, steps):
-    from gdq_pddl.envs.pddl_env import PDDLInstance, reality_distances
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+    from gdq_pddl.envs.solve import reality_distances
 
     inst = PDDLInstance.from_files(*pddl_files(tmp_path, problem=problem, dynamics=dynamics))
     assert reality_distances(inst.model)[inst.graph.is_goal].min() == steps  # model built

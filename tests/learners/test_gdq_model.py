@@ -459,7 +459,7 @@ def test_the_prior_step_cost_keeps_every_plan_within_the_limit_worth_doing_on_ow
 
     from gdq_pddl.envs.pddl_env import load_instance
     from gdq_pddl.learners import make_learner, pddl_task_context
-    from gdq_pddl.learners.agents import prior_step_cost
+    from gdq_pddl.learners.gdq_learner import prior_step_cost
 
     ctx = pddl_task_context(load_instance("courier", "courier-2"))
     assert ctx.own_scale and ctx.step_limit == 20 and ctx.r_max == 20.0

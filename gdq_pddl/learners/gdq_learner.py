@@ -1,0 +1,207 @@
+"""Guided Dyna-Q's learner class, :class:`GDQ` (all three variants), and what it derives
+from the task context: the prior's step cost and rewards, the plans within a tolerance.
+Its rules are :mod:`gdq_pddl.learners.gdq` (the default) and
+:mod:`gdq_pddl.learners.gdq_paper` (the paper's two readings).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gdq_pddl.abstraction import PlanTable
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import gdq, gdq_paper
+from gdq_pddl.learners.config import EXPLORE_ALL, GDQConfig
+from gdq_pddl.learners.context import TaskContext
+from gdq_pddl.learners.tables import (
+    BACKUP_EXPECTED,
+    BACKUP_SAMPLE,
+    KIND_GDQ,
+    KIND_GDQ_PLANS,
+    Prior,
+    Queue,
+)
+from gdq_pddl.learners.tabular import NO_PRIOR, NO_REWARD, TabularLearner
+from gdq_pddl.limits import check_count
+
+
+def prior_step_cost(prior_cost: float, context: TaskContext) -> float:
+    """The flat step cost GDQ's prior charges: ``prior_cost``, and on a problem's own
+    reward scale at most ``r_max / step_limit`` (besides the file's rewards there,
+    :func:`prior_reward`). There a step may cost nothing (an IPPC goal reward of 1, free
+    actions): a prior that charged 1 a step would value every plan of more than one
+    action below a loop of free steps, and GDQ would learn to do nothing; why it charges
+    the capped cost at all: ``docs/decisions.md``, "the prior's step cost cap"."""
+    if context.own_scale and context.step_limit:
+        return float(min(prior_cost, context.r_max / context.step_limit))
+    return float(prior_cost)
+
+
+def prior_reward(context: TaskContext) -> np.ndarray:
+    """``Prior.reward`` for ``context``: its :attr:`~TaskContext.prior_reward` on a
+    problem's own scale, else an empty array (the prior charges a flat step cost)."""
+    if context.own_scale and context.prior_reward is not None:
+        return np.ascontiguousarray(context.prior_reward, dtype=np.float64)
+    return NO_REWARD
+
+
+def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
+    """The context's plans within ``tolerance`` (its shortest plans for 0)."""
+    if not tolerance:
+        return context.plans
+    if context.darling_plans is None or context.darling_tolerance is None or \
+            not np.isclose(context.darling_tolerance, tolerance):
+        raise ConfigError(f"GDQ with plan_tolerance {tolerance} needs a task context whose "
+                          f"tolerant plan table was built with that tolerance (it has "
+                          f"{context.darling_tolerance})")
+    return context.darling_plans
+
+
+class GDQ(TabularLearner):
+    """Guided Dyna-Q. The default (``variant="prior"``) takes the action knowledge as an
+    optimistic prior over every (state, action) pair and plans on it.
+
+    Its update rule is one module, :mod:`gdq_pddl.learners.gdq`. After each real step,
+    :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned model and
+    calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets each
+    pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
+    :func:`~gdq_pddl.learners.gdq.prior_backup` until tried more than ``m`` times, then
+    the learned model's backup with the prior as ``prior_weight`` pseudo-trials. OptInit
+    is :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model.
+
+    ``variant="literal"`` (GDQ-literal) and ``"code"`` (GDQ-code) are the paper's two
+    readings, in :mod:`gdq_pddl.learners.gdq_paper`; ``docs/learners.md`` compares them.
+    """
+
+    kind = KIND_GDQ
+    name = "GDQ"
+    config: GDQConfig
+    config_type = GDQConfig
+
+    def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
+        if isinstance(config, GDQConfig) and config.variant != "prior":
+            self.kind = KIND_GDQ_PLANS
+        super().__init__(context, config)
+
+    @property
+    def q(self) -> np.ndarray:
+        """The Q table, float64[n_states, n_actions]. In the default variant an untried
+        action the knowledge says does nothing is worth its prior backup, one step that
+        changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
+        entries, so they are filled in here, when the table is read."""
+        if self.kind == KIND_GDQ and hasattr(self, "tables"):
+            gdq.fill_untried(self.tables.table, self.tables.prior.reward, self.params)
+        return self._q
+
+    @q.setter
+    def q(self, value: np.ndarray) -> None:
+        self._q = value
+
+    def _plans(self, context: TaskContext) -> PlanTable:
+        if self.config.variant == "prior":
+            return context.plans
+        return _tolerant_plans(context, self.config.plan_tolerance)
+
+    def _extra_params(self) -> dict[str, float]:
+        c = self.config
+        shared = {"backup": BACKUP_SAMPLE if c.variant == "code" else BACKUP_EXPECTED,
+                  "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
+        if self.kind != KIND_GDQ:
+            return shared
+        explore_all = c.explore_all
+        if explore_all is None:
+            explore_all = 0.0 if self.context.exact_knowledge else EXPLORE_ALL
+        return {**shared, "explore_all": float(explore_all),
+                "explore_all_last": float(c.explore_all_last_step),
+                "prior_cost": prior_step_cost(c.prior_cost, self.context),
+                "sweep_threshold": float(c.sweep_threshold),
+                "prior_weight": float(c.prior_weight),
+                "explore_band": float(c.plan_tolerance) if c.explore == "values" else -1.0}
+
+    def _allowed(self, context: TaskContext) -> np.ndarray:
+        if self.kind != KIND_GDQ:
+            return super()._allowed(context)
+        return self._prior(context).applicable  # OptInit adds the known pairs
+
+    def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
+        if self.kind != KIND_GDQ:
+            return allowed
+        if self.config.explore == "values":  # draws near the best of allowed, not guide:
+            return context.live  # no plan mask is built for nothing (every row has one)
+        if self.config.explore == "plans":
+            return _tolerant_plans(context, self.config.plan_tolerance).allowed_actions(
+                context.live)
+        guide = self._prior(context).applicable
+        none = ~guide.any(axis=1)  # nothing applicable: explore every action
+        guide[none] = context.live[none]
+        return guide
+
+    @staticmethod
+    def _prior(context: TaskContext):
+        if context.prior is None:
+            raise ConfigError("the default GDQ plans on the knowledge's prior, and this task "
+                              "context has none (build it with office_task_context or "
+                              "pddl_task_context, or pass prior=...)")
+        return context.prior  # its shape and values: guards.check_context
+
+    def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
+        if self.kind != KIND_GDQ:
+            return NO_PRIOR
+        prior = self._prior(context)
+        n_s = context.n_states
+        pp_ptr, pp_pair = prior.predecessors()
+        # the reverse index: room for the known pairs (the recorded successors of every pair
+        # tried, and a prior successor each) and 64 steps more; a task switch keeps its room
+        tried = self._model.visits > 0
+        capacity = int(np.count_nonzero(self._model.slots[tried])) + int(
+            np.count_nonzero(tried)) + gdq.reverse_room(self._model.slots.shape[2], 64)
+        if hasattr(self, "tables"):
+            capacity = max(capacity, len(self.tables.prior.rev_pair))
+        return (Prior(np.ascontiguousarray(prior.next_state, dtype=np.int64), pp_ptr, pp_pair,
+                      rev_head=np.full(n_s, -1, dtype=np.int64),
+                      rev_next=np.full(capacity, -1, dtype=np.int64),
+                      rev_pair=np.zeros(capacity, dtype=np.int64),
+                      rev_n=np.zeros(1, dtype=np.int64), reward=prior_reward(context)),
+                Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
+                      np.zeros(n_s), np.zeros(1, dtype=np.int64)))
+
+    def reserve_reverse(self, entries: int) -> None:
+        """Make room for ``entries`` more reverse-index entries (the default GDQ)."""
+        check_count("entries", entries)
+        prior = self.tables.prior
+        used = int(prior.rev_n[0])
+        if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
+            return
+        grow = (0, max(len(prior.rev_pair), used + entries - len(prior.rev_pair)))
+        self.tables = self.tables._replace(prior=prior._replace(
+            rev_next=np.pad(prior.rev_next, grow, constant_values=-1),
+            rev_pair=np.pad(prior.rev_pair, grow)))
+
+    def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+                rng: np.random.Generator) -> None:
+        """:meth:`TabularLearner.observe`, then a sweep (the default variant) or N backups
+        along plans (``literal``, ``code``)."""
+        if self.kind == KIND_GDQ:
+            self.reserve_reverse(gdq.reverse_room(self.max_successors))
+        super().observe(s, a, r, s2, terminated, truncated, rng)
+
+    def _init_task(self) -> None:
+        """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
+        literally (``literal``) or the authors' code's shortcut (``code``)."""
+        self.q[:, :] = 0.0
+        t = self.tables
+        if self.kind == KIND_GDQ:
+            tol = 1e-9 * max(1.0, self.params.r_max)
+            if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
+                                   1_000_000) < 0:
+                raise AssertionError("reverse index sized too small")  # _prior_arrays
+        elif self.config.variant == "literal":
+            gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r, self.params)
+        else:
+            gdq_paper.seed_plan_pairs(t.table, t.plans.opt_r, self.params.r_max)
+
+    @property
+    def optimistic_pairs(self) -> np.ndarray:
+        """bool[S, A]: OptInit's plan pairs (R = R_max in the optimistic model of the
+        ``literal`` variant; Q = R_max in the ``code`` variant's OptInit)."""
+        return self.tables.plans.opt_r
