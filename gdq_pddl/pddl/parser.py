@@ -6,13 +6,22 @@ negation normal form. One file may hold a domain and its problems. Every error i
 
 from __future__ import annotations
 
-import re
 from fractions import Fraction
 from functools import partial
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.limits import MAX_NUMBER
+from gdq_pddl.pddl.formulas import (
+    COST_FLUENTS,
+    bare_atom,
+    bare_term,
+    is_subtype,
+    read_atom,
+    read_condition,
+    read_number,
+    read_requirements,
+    read_term,
+)
 from gdq_pddl.pddl.model import (
     STUCK,
     Action,
@@ -32,31 +41,13 @@ from gdq_pddl.pddl.model import (
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, conjunction, ground_dnf, nnf
 from gdq_pddl.pddl.sexpr import Node, Reader, read_pddl_text
 
-COST_FLUENTS = ("total-cost", "reward")
-"""The numeric fluents an effect may change: the action's cost, in either convention."""
 _COST_TERMS = tuple(f"({f})" for f in COST_FLUENTS)
 MAX_OUTCOMES = 4096
 """Most outcomes one action's effect may flatten into."""
-MAX_LITERAL = 100
-"""Most characters a number may be written in."""
-MAX_EXPONENT = 400
-"""The largest exponent, in size, of a number like ``2.5e-3``: past what a float holds,
-and small enough that its exact fraction is built at once."""
-_NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
-"""What may be a number (:class:`~fractions.Fraction` decides); linear in its length."""
 _DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions",
                     ":action")
 _PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
                      ":metric")
-KNOWN_REQUIREMENTS = frozenset({
-    ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
-    ":equality", ":existential-preconditions", ":universal-preconditions",
-    ":quantified-preconditions", ":conditional-effects", ":fluents", ":numeric-fluents",
-    ":object-fluents", ":adl", ":durative-actions", ":duration-inequalities",
-    ":continuous-effects", ":derived-predicates", ":timed-initial-literals",
-    ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
-    ":rewards", ":mdp", ":non-deterministic"})
-"""Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
                 "increase", "decrease", "and", "not", "=")
 _RESERVED = frozenset(_CONNECTIVES) - {"="} | {"either", "assign"}
@@ -68,7 +59,7 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
     r = Reader(text, source)
     _, name, body = r.pick("domain")
     sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
-    reqs = _requirements(r, sec.get(":requirements"))
+    reqs = read_requirements(r, sec.get(":requirements"))
     if ":types" in sec:
         r.types = _types(r, sec[":types"])
     constants = {c: t for c, t, _ in r.typed_list(sec[":constants"].items[1:], False,
@@ -87,19 +78,6 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
         actions.append(action)
     return Domain(name, frozenset(reqs), r.types, constants, r.predicates, tuple(actions),
                   source, r.functions, rewards)
-
-
-def _requirements(r: Reader, node: Node | None) -> set[str]:
-    """The keys of ``(:requirements ...)``; one that is not a requirement of PDDL or PPDDL
-    (a typo) is refused. They never decide what is read."""
-    out = set()
-    for n in node.items[1:] if node is not None else ():  # type: ignore[index]
-        req = r.symbol(n, "a requirement")
-        if req not in KNOWN_REQUIREMENTS:
-            raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
-                         "PPDDL are :strips, :typing, :adl, :probabilistic-effects, ...)")
-        out.add(req)
-    return out
 
 
 def _types(r: Reader, node: Node) -> dict[str, str | None]:
@@ -199,7 +177,7 @@ def _precondition(r: Reader, node: Node | None, scope: dict[str, str],
     that only grounding can decide (quantifiers, disjunctions; None: there is none)."""
     if node is None:
         return (), None
-    cond = nnf(_condition(r, node, scope, ctx))
+    cond = nnf(read_condition(r, node, scope, ctx))
     lits = conjunction(cond)
     if lits is not None:
         return lits, None
@@ -227,7 +205,7 @@ class _Effects:
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
         r, ctx = self.r, self.ctx
-        node = _bare(r, node) if node is not None else None
+        node = bare_atom(r, node) if node is not None else None
         items = r.lst(node, "an effect") if node is not None else ()
         if not items:
             return [(Fraction(1), ())]
@@ -253,7 +231,7 @@ class _Effects:
             self.conditional = True  # a reward of the outcome or the state
             return [(Fraction(1), (Reward(term, sign, self.variables, self.when),))]
         if head == "not":
-            items = (items[0], *map(partial(_bare, r), items[1:]))
+            items = (items[0], *map(partial(bare_atom, r), items[1:]))
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
                 raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
@@ -266,7 +244,7 @@ class _Effects:
                          "effect is made of literals, and, when, forall, probabilistic and "
                          "costs)")
         positive = head != "not"
-        atom = _atom(r, node if positive else items[1], self.scope, ctx, effect=True)
+        atom = read_atom(r, node if positive else items[1], self.scope, ctx, effect=True)
         if not positive and atom.predicate == STUCK and r.stuck_domain:
             raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) marks "
                          "a failed trial, which ends the episode")
@@ -291,7 +269,7 @@ class _Effects:
             return self.choice(node, items)
         saved = self.scope, self.variables, self.when  # an error ends the reading
         if head == "when":
-            cond = nnf(_condition(r, items[1], self.scope, ctx))
+            cond = nnf(read_condition(r, items[1], self.scope, ctx))
             self.when = cond if self.when is None else Junction("and", (self.when, cond))
         else:
             variables = r.variables(items[1], ctx)
@@ -343,7 +321,7 @@ class _Effects:
         ``(increase (total-cost) X)`` (sign -1)."""
         r, ctx = self.r, self.ctx
         head = items[0].symbol
-        target = _bare_term(items[1]) if len(items) == 3 else None
+        target = bare_term(items[1]) if len(items) == 3 else None
         fluent = target.items[0].symbol if target is not None and target.is_list and \
             len(target.items) == 1 else None
         if fluent not in COST_FLUENTS:
@@ -356,9 +334,9 @@ class _Effects:
         sign = 1.0 if (head, fluent) == ("increase", "reward") else -1.0
         value = items[2]
         if not value.is_list and r.functions.get(value.symbol) == ():
-            value = _bare_term(value)
+            value = bare_term(value)
         if not value.is_list:
-            number = _number(r, value, ctx)
+            number = read_number(r, value, ctx)
             if number is None or number < 0:
                 raise r.fail(value.line, f"{ctx}: expected an amount >= 0 (a number or a "
                              f"function term), found {value.symbol!r}")
@@ -367,7 +345,7 @@ class _Effects:
         if fname not in r.functions or fname in COST_FLUENTS:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
-        return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
+        return read_term(r, value, fname, r.functions[fname], self.scope, ctx), sign
 
 
 def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
@@ -394,140 +372,14 @@ def _mentions(node: Node, head: str) -> bool:
                                 for i, n in enumerate(node.items))  # type: ignore[arg-type]
 
 
-def _number(r: Reader, node: Node, ctx: str) -> Fraction | None:
-    """``0.25``, ``.5``, ``1/4``, ``3`` or ``2.5e-3`` as an exact fraction (None: not a
-    number); refused past :data:`~gdq_pddl.limits.MAX_NUMBER`, :data:`MAX_LITERAL`
-    characters or an exponent of :data:`MAX_EXPONENT`."""
-    text = node.symbol
-    match = None if node.is_list else _NUMERIC.fullmatch(text)
-    if match is None or not any(ch.isdigit() for ch in text):
-        return None
-    if len(text) > MAX_LITERAL:
-        raise r.fail(node.line, f"{ctx}: the number {text[:24]}... is {len(text)} characters "
-                     f"long; a number is read in at most {MAX_LITERAL}")
-    if match.group(1) is not None and abs(int(match.group(1))) > MAX_EXPONENT:
-        raise r.fail(node.line, f"{ctx}: {text}: an exponent past {MAX_EXPONENT} in size is "
-                     f"not read (no float holds such a number; a number is at most "
-                     f"{MAX_NUMBER:g} in size)")
-    try:
-        value = Fraction(text)
-    except (ValueError, ZeroDivisionError):
-        return None
-    if abs(value) > MAX_NUMBER:
-        shown = f"{float(value):g}" if abs(value) < 10**308 else text  # a float holds it
-        raise r.fail(node.line, f"{ctx}: expected a number of at most {MAX_NUMBER:g} in size, "
-                     f"found {text}" + (f" (= {shown})" if shown != text else ""))
-    return value
-
-
 def _probability(r: Reader, node: Node, ctx: str) -> Fraction:
-    value = _number(r, node, ctx)
+    value = read_number(r, node, ctx)
     if value is None:
         raise r.fail(node.line, f"{ctx}: expected a probability (a number such as 0.25 or "
                      f"1/4), found {node.text()}")
     if not 0 <= value <= 1:
         raise r.fail(node.line, f"{ctx}: a probability must be in [0, 1], got {node.symbol}")
     return value
-
-
-def _condition(r: Reader, node: Node, scope: dict[str, str], ctx: str) -> Condition:
-    """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
-    :class:`Junction` kinds, for :func:`~gdq_pddl.pddl.normalise.nnf`)."""
-    node = _bare(r, node)
-    items = r.lst(node, "a formula")
-    if not items:
-        return Junction("and", ())
-    head = items[0].symbol
-
-    def sub(n: Node, extra: dict[str, str] | None = None) -> Condition:
-        return _condition(r, n, {**scope, **extra} if extra else scope, ctx)
-
-    if head in ("and", "or"):
-        return Junction(head, tuple(sub(i) for i in items[1:]))
-    if head == "not":
-        if len(items) != 2:
-            raise r.fail(node.line, f"{ctx}: expected (not FORMULA)")
-        return Junction("not", (sub(items[1]),))
-    if head == "imply":
-        if len(items) != 3:
-            raise r.fail(node.line, f"{ctx}: expected (imply FORMULA FORMULA)")
-        return Junction("imply", (sub(items[1]), sub(items[2])))
-    if head in ("forall", "exists"):
-        if len(items) != 3:
-            raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
-        variables = r.variables(items[1], ctx)
-        return Quantified(head, variables, sub(items[2], dict(variables)))
-    if head == "probabilistic":
-        raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
-                     f"{'precondition' if ctx.startswith('action') else 'goal'}")
-    if head in ("when", "increase", "decrease", "oneof"):
-        raise r.fail(node.line, f"{ctx}: ({head} ...) can only be an effect, not part of a "
-                     "condition")
-    if head == "=":
-        return Literal(_term(r, node, "=", ("object", "object"), scope, ctx), True)
-    return Literal(_atom(r, node, scope, ctx), True)
-
-
-def _bare(r: Reader, node: Node) -> Node:
-    """``node``, or, if it is the bare name of a declared 0-ary predicate (``dead`` for
-    ``(dead)``, as published IPPC domains write it), its atom ``(dead)``."""
-    if not node.is_list and r.predicates.get(node.symbol) == ():
-        return Node(node.line, (node,))
-    return node
-
-
-def _bare_term(node: Node) -> Node:
-    """A function term written without parentheses (``reward`` for ``(reward)``: PDDL
-    2.1's ``<f-head> ::= <function-symbol>``, as published IPPC domains write it) as the
-    term; any other node as it is."""
-    return Node(node.line, (node,)) if not node.is_list else node
-
-
-def _atom(r: Reader, node: Node, scope: dict[str, str], ctx: str,
-          effect: bool = False) -> Atom:
-    """An atom of a declared predicate; (stuck) only in an ``effect``: it marks a failed
-    trial, never part of a state."""
-    node = _bare(r, node)
-    items = r.lst(node, "an atom")
-    if not items:
-        raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
-    name = r.symbol(items[0], "a predicate name")
-    if name not in r.predicates:
-        raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
-                     f"(declared: {', '.join(sorted(r.predicates)) or 'none'})")
-    atom = _term(r, node, name, r.predicates[name], scope, ctx)
-    if atom.predicate == STUCK and r.stuck_domain and not effect:
-        raise r.fail(node.line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes "
-                     "it true ends the episode), so it cannot be a precondition, a goal or "
-                     "initially true; rename the predicate if it is an ordinary fluent")
-    return atom
-
-
-def _term(r: Reader, node: Node, name: str, want: tuple[str, ...], scope: dict[str, str],
-          ctx: str) -> Atom:
-    """``(name args...)`` whose arguments, known in ``scope``, fit the types ``want``."""
-    args = tuple(r.symbol(a, "a term") for a in node.items[1:])
-    if len(args) != len(want):
-        raise r.fail(node.line, f"{ctx}: {name} takes {len(want)} argument(s), got {len(args)}")
-    for a, t in zip(args, want, strict=True):
-        if a not in scope:
-            raise r.fail(node.line, f"{ctx}: unknown {'variable' if a[0] == '?' else 'object'}"
-                         f" {a!r} in ({name} ...)")
-        if not is_subtype(r.types, scope[a], t):
-            raise r.fail(node.line, f"{ctx}: {a} is a {scope[a]}, but {name} expects a {t}")
-    return Atom(name, args)
-
-
-def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
-    """Whether type ``t`` is ``want`` or one of its descendants."""
-    seen: set[str] = set()
-    cur: str | None = t
-    while cur is not None and cur not in seen:
-        if cur == want:
-            return True
-        seen.add(cur)
-        cur = types.get(cur)
-    return want == "object"
 
 
 def parse_problem(text: str, domain: Domain, source: str = "<problem>",
@@ -537,7 +389,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
     r = Reader(text, source, domain)
     top, name, body = r.pick("problem", name)
     sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
-    _requirements(r, sec.get(":requirements"))
+    read_requirements(r, sec.get(":requirements"))
     if ":domain" not in sec:
         raise r.fail(top.line, "expected (:domain NAME)")
     dnode = sec[":domain"]
@@ -570,7 +422,7 @@ def parse_problem(text: str, domain: Domain, source: str = "<problem>",
         if head == "probabilistic":
             raise r.fail(node.line, "init: a probabilistic initial state is not supported "
                          "(the learner starts in one state)")
-        init.append(_atom(r, node, objects, "init"))
+        init.append(read_atom(r, node, objects, "init"))
     goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
     metric = _metric(r, sec[":metric"]) if ":metric" in sec else None
     if ":goal" not in sec:
@@ -588,7 +440,7 @@ def _goal(r: Reader, node: Node, domain: Domain, objects: dict[str, str], init: 
           ) -> tuple[tuple[Literal, ...], tuple[tuple[Literal, ...], ...]]:
     """The goal as the literals all its alternatives share, and the alternatives (none:
     a conjunction), quantifiers expanded and atoms no action changes decided."""
-    cond = nnf(_condition(r, node, objects, "goal"))
+    cond = nnf(read_condition(r, node, objects, "goal"))
     lits = conjunction(cond)
     if lits is not None:
         return lits, ()
@@ -624,7 +476,7 @@ def _goal(r: Reader, node: Node, domain: Domain, objects: dict[str, str], init: 
 def _init_value(r: Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
     """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
     items = r.lst(node, "(= TERM NUMBER)")
-    term = _bare_term(items[1]) if len(items) == 3 else None
+    term = bare_term(items[1]) if len(items) == 3 else None
     head = term.items if term is not None and term.is_list else None
     if not head or head[0].is_list:
         raise r.fail(node.line, f"init: expected (= (FUNCTION ARGS...) NUMBER), found "
@@ -636,8 +488,8 @@ def _init_value(r: Reader, node: Node, objects: dict[str, str]) -> tuple[str, fl
         raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
                      f"{', '.join(sorted(r.functions)) or 'none'})")
     else:
-        term = str(_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
-    value = _number(r, items[2], f"init: {term}")
+        term = str(read_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
+    value = read_number(r, items[2], f"init: {term}")
     if value is None:
         raise r.fail(items[2].line, f"init: expected a number for {term}, found "
                      f"{items[2].text()}")
@@ -646,7 +498,7 @@ def _init_value(r: Reader, node: Node, objects: dict[str, str]) -> tuple[str, fl
 
 def _goal_reward(r: Reader, node: Node) -> float:
     items = r.lst(node, "(:goal-reward N)")
-    value = _number(r, items[1], ":goal-reward") if len(items) == 2 else None
+    value = read_number(r, items[1], ":goal-reward") if len(items) == 2 else None
     if value is None or value <= 0:
         raise r.fail(node.line, f"expected (:goal-reward N) with N > 0, found {node.text()}")
     return float(value)
@@ -655,7 +507,7 @@ def _goal_reward(r: Reader, node: Node) -> float:
 def _metric(r: Reader, node: Node) -> str:
     """The metric, one of those that keep the task (maximise the reward, minimise costs)."""
     items = r.lst(node, "(:metric maximize (reward))")
-    text = Node(node.line, (*items[:2], *map(_bare_term, items[2:3]), *items[3:])).text()
+    text = Node(node.line, (*items[:2], *map(bare_term, items[2:3]), *items[3:])).text()
     if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
         raise r.fail(node.line, f"{node.text()} is not supported: the metrics read are (:metric "
                      "maximize (reward)) and (:metric minimize (total-cost)) "
