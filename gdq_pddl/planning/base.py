@@ -16,8 +16,9 @@ from gdq_pddl.errors import PlanningError, SizeError
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.pddl.parser import parse_domain, parse_problem, problem_file
+from gdq_pddl.pddl.parser import parse_domain
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
+from gdq_pddl.pddl.problem_reader import parse_problem, problem_file
 from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.pddl.writer import untold, write_domain, write_parsed_problem
 
