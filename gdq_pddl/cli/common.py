@@ -15,8 +15,8 @@ from gdq_pddl.experiments.checks import check_report_size, check_sizes
 from gdq_pddl.experiments.protocol import safe_name
 from gdq_pddl.experiments.runner import saved_units
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
-from gdq_pddl.pddl.parser import problem_file
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
+from gdq_pddl.pddl.problem_reader import problem_file
 from gdq_pddl.planning import get_planner
 from gdq_pddl.resources import problem_domain, resolve, resolve_pddl, shipped_names
 from gdq_pddl.world import Task, World, load_world

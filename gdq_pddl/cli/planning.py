@@ -24,7 +24,7 @@ from gdq_pddl.cli.common import (
 )
 from gdq_pddl.errors import ConfigError, SizeError
 from gdq_pddl.outputs import output_file, output_folder, write_text
-from gdq_pddl.pddl.parser import _read
+from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
 from gdq_pddl.resources import domain_text, problem_domain, resolve, shipped_names
 from gdq_pddl.world import builtin_world, office_problem
@@ -112,7 +112,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                      "an office task has no determinisation to choose")
         world, task = world_and_task(args)
         dtext, dsrc = (domain_text(), "office.pddl (built in)") if args.domain is None else \
-            (_read(resolve("domain", args.domain)), args.domain)
+            (read_pddl_text(resolve("domain", args.domain)), args.domain)
         source = f"task {task.name} (generated from {world.source})"
         problem = PlanningProblem.from_texts(dtext, office_problem(world, task), dsrc, source)
         abstraction = OfficeAbstraction(world)

@@ -2,7 +2,8 @@
 
 from gdq_pddl.pddl.grounding import GroundOp, GroundTask, ground
 from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
-from gdq_pddl.pddl.parser import parse_domain, parse_problem, read_domain, read_problem
+from gdq_pddl.pddl.parser import parse_domain, read_domain
+from gdq_pddl.pddl.problem_reader import parse_problem, read_problem
 
 __all__ = ["Action", "Atom", "Domain", "GroundOp", "GroundTask", "Literal", "Problem",
            "ground", "parse_domain", "parse_problem", "read_domain", "read_problem"]

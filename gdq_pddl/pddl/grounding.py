@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 from gdq_pddl.limits import slow_progress
+from gdq_pddl.pddl.formulas import is_subtype
 from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
-from gdq_pddl.pddl.parser import is_subtype
 
 
 @dataclass(frozen=True)

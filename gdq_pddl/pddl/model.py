@@ -6,6 +6,9 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
+STUCK = "stuck"
+"""The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
+
 
 @dataclass(frozen=True)
 class Atom:

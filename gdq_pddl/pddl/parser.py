@@ -1,23 +1,34 @@
-"""A reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``, "PPDDL";
-why not unified-planning's: ``docs/decisions.md``) into the frozen types of
-:mod:`gdq_pddl.pddl.model`: probabilistic effects flattened into outcomes, conditions in
-negation normal form. One file may hold a domain and its problems. Every error is a
-:class:`~gdq_pddl.errors.PDDLError` naming the file, the line and what was expected."""
+"""The domain reader for the PPDDL of the IPPC probabilistic tracks (``docs/domains.md``,
+"PPDDL"; why not unified-planning's: ``docs/decisions.md``) into the frozen types of
+:mod:`gdq_pddl.pddl.model`: types, predicates and functions declared, actions with their
+preconditions and effects, probabilistic effects flattened into outcomes, conditions in
+negation normal form. Every error is a :class:`~gdq_pddl.errors.PDDLError` naming the
+file, the line and what was expected.
+
+The s-expressions are read by :mod:`gdq_pddl.pddl.sexpr`, what a domain and a problem both
+write by :mod:`gdq_pddl.pddl.formulas`, problems by :mod:`gdq_pddl.pddl.problem_reader`;
+the problem reader's public functions and :class:`~gdq_pddl.errors.PDDLError` can be
+imported from here too."""
 
 from __future__ import annotations
 
-import re
-import string
-import warnings
-from dataclasses import dataclass
 from fractions import Fraction
 from functools import partial
 from pathlib import Path
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.inputs import BOM, read_text
-from gdq_pddl.limits import MAX_NUMBER
+from gdq_pddl.pddl.formulas import (
+    COST_FLUENTS,
+    bare_atom,
+    bare_term,
+    read_atom,
+    read_condition,
+    read_number,
+    read_requirements,
+    read_term,
+)
 from gdq_pddl.pddl.model import (
+    STUCK,
     Action,
     Atom,
     Choice,
@@ -28,305 +39,20 @@ from gdq_pddl.pddl.model import (
     Junction,
     Literal,
     Outcome,
-    Problem,
     Quantified,
     Reward,
 )
-from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, conjunction, ground_dnf, nnf
+from gdq_pddl.pddl.normalise import conjunction, nnf
+from gdq_pddl.pddl.problem_reader import parse_problem, problem_file, read_problem
+from gdq_pddl.pddl.sexpr import Node, Reader, read_pddl_text
 
-STUCK = "stuck"
-"""The 0-ary predicate whose becoming true is a failed trial (PPDDL domains)."""
-COST_FLUENTS = ("total-cost", "reward")
-"""The numeric fluents an effect may change: the action's cost, in either convention."""
-_COST_TERMS = tuple(f"({f})" for f in COST_FLUENTS)
+__all__ = ["MAX_OUTCOMES", "PDDLError", "parse_domain", "parse_problem", "problem_file",
+           "read_domain", "read_problem"]
+
 MAX_OUTCOMES = 4096
 """Most outcomes one action's effect may flatten into."""
-MAX_LITERAL = 100
-"""Most characters a number may be written in."""
-MAX_EXPONENT = 400
-"""The largest exponent, in size, of a number like ``2.5e-3``: past what a float holds,
-and small enough that its exact fraction is built at once."""
-_NUMERIC = re.compile(r"[+-]?[\d._/]+(?:e([+-]?[\d_]+))?")
-"""What may be a number (:class:`~fractions.Fraction` decides); linear in its length."""
-_TOKEN = re.compile(r";[^\n]*|\(|\)|[^\s();]+|\s+")
-_SYMBOL = re.compile(r"[?:]?[A-Za-z0-9_.+/-]+|=")
-"""A name, ``?variable``, ``:keyword``, number, ``-`` or ``=``; any other character is
-refused where it stands (``#`` does not start a comment: ``;`` does)."""
-_SYMBOL_CHARS = frozenset(string.ascii_letters + string.digits + "_.+/-")
-_NAME = re.compile(r"[a-z][a-z0-9_-]*")
-"""PDDL's names: a letter, then letters, digits, ``-`` and ``_``."""
-_PROBLEM_NAME = re.compile(r"[a-z0-9][a-z0-9_-]*")
-"""A problem's name may also start with a digit (as a world file's name may)."""
-MAX_DEPTH = 200
-"""Deepest nesting of parentheses read (later stages recurse over formulas)."""
-
-
-@dataclass(frozen=True)
-class Node:
-    """An s-expression: a list of nodes or a lower-cased symbol, with its line."""
-
-    line: int
-    items: tuple[Node, ...] | None = None
-    symbol: str = ""
-
-    @property
-    def is_list(self) -> bool:
-        return self.items is not None
-
-    def text(self) -> str:
-        if self.items is None:
-            return self.symbol
-        return "(" + " ".join(i.text() for i in self.items) + ")"
-
-
-class _Reader:
-    """One file's text, and the declarations of the domain being read or read for."""
-
-    def __init__(self, text: str, source: str, domain: Domain | None = None) -> None:
-        self.text, self.source = text.removeprefix(BOM), source
-        self.types: dict[str, str | None] = dict(domain.types) if domain else {"object": None}
-        self.predicates = dict(domain.predicates) if domain else {}
-        self.functions = dict(domain.functions) if domain else {}
-
-    @property
-    def stuck_domain(self) -> bool:
-        """The domain declares the 0-ary predicate :data:`STUCK`."""
-        return self.predicates.get(STUCK) == ()
-
-    def fail(self, line: int | None, message: str) -> PDDLError:
-        return PDDLError(self.source, line, message)
-
-    def forms(self) -> list[Node]:
-        """The file's top-level forms (one ``(define ...)`` each); a file using constructs
-        outside the language is refused, naming every use."""
-        top: list[Node] = []
-        stack: list[tuple[int, list[Node]]] = [(0, top)]  # the file, then the open forms
-        line, outside = 1, {}  # outside: construct -> the lines it is used at
-        for match in _TOKEN.finditer(self.text):
-            tok = match.group()
-            if tok == "(":
-                if len(stack) > MAX_DEPTH:
-                    raise self.fail(line, f"parentheses nested more than {MAX_DEPTH} levels "
-                                    "deep; no domain or problem needs that many (is a ')' "
-                                    "missing?)")
-                stack.append((line, []))
-            elif tok == ")":
-                if len(stack) == 1:
-                    raise self.fail(line, "unexpected ')' with no '(' open")
-                start, items = stack.pop()
-                if items and items[0].symbol in _OUTSIDE:
-                    outside.setdefault(items[0].symbol, []).append(start)
-                stack[-1][1].append(Node(start, tuple(items)))
-            elif tok[0].isspace() or tok[0] == ";":
-                pass
-            elif len(stack) == 1:
-                raise self.fail(line, f"expected '(' but found {tok!r}")
-            else:
-                stack[-1][1].append(Node(line, symbol=self.checked(tok, line)))
-            line += tok.count("\n")
-        suspect = _suspect_unclosed(self.text) if len(stack) > 1 else None
-        if len(stack) == 2 and stack[1][1][:1] and stack[1][1][0].symbol == "define" and \
-                suspect in (None, stack[1][0]):
-            # only the last (define ...) is open at the end, and the indentation does not
-            # point at a '(' inside it: pddlgym ships files that lack the define's final
-            # ')' (navigation2-10) and reads them; so do we, saying so
-            start, items = stack.pop()
-            warnings.warn(f"{self.source}:{start}: this (define ...) is never closed; read as "
-                          "if the file ended with its ')'", stacklevel=2)
-            top.append(Node(start, tuple(items)))
-        if len(stack) > 1:
-            line = suspect or stack[-1][0]
-            raise self.fail(line, "expected ')': this '(' is never closed")
-        if not top:
-            raise self.fail(None, "empty file: expected (define ...)")
-        if outside:
-            order = sorted(outside, key=lambda h: min(outside[h]))
-            listed = "; ".join(f"({h} ...){_OUTSIDE[h]} at line"
-                               f"{'s' if len(outside[h]) > 1 else ''} "
-                               f"{', '.join(map(str, sorted(outside[h])))}" for h in order)
-            raise self.fail(min(outside[order[0]]), "not supported (gdq_pddl reads the PPDDL of "
-                            f"the IPPC probabilistic tracks, docs/domains.md): {listed}")
-        return top
-
-    def pick(self, kind: str, name: str | None = None) -> tuple[Node, str, tuple[Node, ...]]:
-        """The ``(define (KIND NAME) BODY...)`` form of the file (the only one of its kind,
-        or the one named ``name``; the others may be of the other kind), its name and
-        body."""
-        found: list[tuple[str, Node]] = []
-        for node in self.forms():
-            items = self.lst(node, "(define ...)")
-            head = items[1] if len(items) >= 2 and items[0].symbol == "define" else None
-            if head is None or not head.is_list or not head.items or \
-                    head.items[0].symbol not in ("domain", "problem"):
-                text = node.text()
-                raise self.fail(node.line, "expected (define (domain NAME) ...) or (define "
-                                "(problem NAME) ...), found "
-                                + (text if len(text) <= 60 else text[:57] + "..."))
-            if head.items[0].symbol == kind:
-                label = head.items[1].symbol if len(head.items) == 2 else ""
-                found.append((label, node))
-        if not found:
-            raise self.fail(None, f"expected a (define ({kind} NAME) ...) form; this file "
-                            f"has only {'problem' if kind == 'domain' else 'domain'}s")
-        labels = ", ".join(label for label, _ in found)
-        if name is not None:
-            chosen = [node for label, node in found if label == name.lower()]
-            if not chosen:
-                raise self.fail(None, f"no {kind} named {name!r} in this file (it has "
-                                f"{labels})")
-            top = chosen[0]
-        elif len(found) > 1:
-            raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
-                            f"({labels}): pick one by name"
-                            + (f" ({self.source}:{found[0][0]})" if kind == "problem" else ""))
-        else:
-            top = found[0][1]
-        items = self.lst(top, "(define ...)")
-        head = self.lst(items[1], f"({kind} NAME)")
-        if len(head) != 2:
-            raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
-        grammar = _PROBLEM_NAME if kind == "problem" else _NAME
-        return top, self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
-
-    def checked(self, tok: str, line: int) -> str:
-        """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that
-        no symbol may have."""
-        if _SYMBOL.fullmatch(tok):
-            return tok.lower()
-        bad = next((ch for i, ch in enumerate(tok)
-                    if ch not in _SYMBOL_CHARS and not (i == 0 and ch in "?:")), None)
-        if bad is None:  # a lone '?' or ':'
-            raise self.fail(line, f"expected a name, a ?variable, a :keyword or a number, "
-                            f"found {tok!r}")
-        hint = " (a comment starts with ';', not '#')" if bad == "#" else ""
-        raise self.fail(line, f"the character {bad!r} cannot be part of a name, found in "
-                        f"{tok!r}{hint}; names are ASCII letters, digits, '-' and '_'")
-
-    def name(self, node: Node, what: str, variable: bool = False,
-             grammar: re.Pattern = _NAME) -> str:
-        """The symbol ``node``, which must be a name (``variable``: a ``?name``)."""
-        text = self.symbol(node, what)
-        bare = text[1:] if variable and text.startswith("?") else text
-        if (variable and not text.startswith("?")) or not grammar.fullmatch(bare):
-            first = "letter or digit" if grammar is _PROBLEM_NAME else "letter"
-            raise self.fail(node.line, f"expected {what}, found {text!r} (a name is a "
-                            f"{first}, then letters, digits, '-' and '_'"
-                            + ("; a variable is '?' and a name)" if variable else ")"))
-        return text
-
-    def symbol(self, node: Node, what: str) -> str:
-        if node.is_list:
-            raise self.fail(node.line, f"expected {what}, found {node.text()}")
-        return node.symbol
-
-    def lst(self, node: Node, what: str) -> tuple[Node, ...]:
-        if not node.is_list:
-            raise self.fail(node.line, f"expected {what}, found {node.symbol!r}")
-        return node.items  # type: ignore[return-value]
-
-    def typed_list(self, nodes: tuple[Node, ...], variables: bool, what: str,
-                   check: bool = True) -> list[tuple[str, str, int]]:
-        """``a b - t c`` -> [(a, t, line), (b, t, line), (c, object, line)]; a name
-        given twice (``what``: what the names are) and, if ``check``, an undeclared type
-        are refused."""
-        out: list[tuple[str, str, int]] = []
-        pending: list[tuple[str, int]] = []
-        first: dict[str, int] = {}
-        i = 0
-        while i < len(nodes):
-            glued = nodes[i].symbol[:1] == "-" and _NAME.fullmatch(nodes[i].symbol[1:])
-            if nodes[i].symbol == "-" or glued:  # '-TYPE' is '- TYPE', as PDDL lexers read it
-                if (not glued and i + 1 >= len(nodes)) or not pending:
-                    raise self.fail(nodes[i].line, "expected names before '- TYPE'")
-                typ = nodes[i].symbol[1:] if glued else self.name(nodes[i + 1], "a type name")
-                out += [(p, typ, line) for p, line in pending]
-                pending = []
-                i += 1 if glued else 2
-                continue
-            kind = "a variable (?x)" if variables else "a name (not a variable)"
-            name = self.name(nodes[i], kind, variable=variables)
-            if name in first:
-                raise self.fail(nodes[i].line, f"{what} {name} is declared twice (first at "
-                                f"line {first[name]})")
-            first[name] = nodes[i].line
-            pending.append((name, nodes[i].line))
-            i += 1
-        out += [(p, "object", line) for p, line in pending]
-        for _, t, line in out if check else ():
-            if t not in self.types:
-                raise self.fail(line, f"unknown type {t!r} (declared: "
-                                f"{', '.join(sorted(self.types))})")
-        return out
-
-    def variables(self, node: Node, ctx: str) -> tuple[tuple[str, str], ...]:
-        """The ``(?x - t ...)`` of a ``forall`` or ``exists``."""
-        typed = self.typed_list(self.lst(node, "a variable list"), True, f"{ctx}: variable")
-        return tuple((v, t) for v, t, _ in typed)
-
-    def sections(self, body: tuple[Node, ...], known: tuple[str, ...],
-                 kind: str) -> tuple[dict[str, Node], list[Node]]:
-        """The sections of a domain or problem by keyword, and its ``(:action ...)``
-        forms in order; a keyword not in ``known`` and a section given twice are refused."""
-        out: dict[str, Node] = {}
-        actions: list[Node] = []
-        for node in body:
-            items = self.lst(node, "a section such as (:predicates ...)")
-            if not items or items[0].is_list or not items[0].symbol.startswith(":"):
-                raise self.fail(node.line,
-                                f"expected a section (:keyword ...), found {node.text()}")
-            key = items[0].symbol
-            if key not in known:
-                raise self.fail(node.line, f"unknown section {key} in a {kind} (expected "
-                                f"one of {', '.join(known)})")
-            if key == ":action":
-                actions.append(node)
-                continue
-            if key in out:
-                raise self.fail(node.line, f"duplicate section {key} (first at line "
-                                f"{out[key].line})")
-            out[key] = node
-        return out, actions
-
-
-def _suspect_unclosed(text: str) -> int | None:
-    """The line of the '(' most likely missing its ')': the last one still open when a
-    later line (not starting with ')') starts at its indentation or further left."""
-    open_at: list[tuple[int, int]] = []  # (line, indentation of that line)
-    for number, raw in enumerate(text.splitlines(), 1):
-        code = raw.split(";", 1)[0]
-        stripped = code.lstrip()
-        indent = len(code) - len(stripped)
-        if stripped and not stripped.startswith(")"):
-            for line, ind in reversed(open_at):
-                if line < number and ind >= indent:
-                    return line
-        for ch in code:
-            if ch == "(":
-                open_at.append((number, indent))
-            elif ch == ")" and open_at:
-                open_at.pop()
-    return None
-
-
 _DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions",
                     ":action")
-_PROBLEM_SECTIONS = (":domain", ":requirements", ":objects", ":init", ":goal", ":goal-reward",
-                     ":metric")
-KNOWN_REQUIREMENTS = frozenset({
-    ":strips", ":typing", ":negative-preconditions", ":disjunctive-preconditions",
-    ":equality", ":existential-preconditions", ":universal-preconditions",
-    ":quantified-preconditions", ":conditional-effects", ":fluents", ":numeric-fluents",
-    ":object-fluents", ":adl", ":durative-actions", ":duration-inequalities",
-    ":continuous-effects", ":derived-predicates", ":timed-initial-literals",
-    ":preferences", ":constraints", ":action-costs", ":probabilistic-effects",
-    ":rewards", ":mdp", ":non-deterministic"})
-"""Every requirement key of PDDL 3.1 and PPDDL: one outside it is a typo, refused."""
-_OUTSIDE = {"oneof": " (FOND: give probabilities with (probabilistic ...))",
-            "assign": " (numeric fluents)", "scale-up": " (numeric fluents)",
-            "scale-down": " (numeric fluents)", "either": " (either-types)",
-            **dict.fromkeys((":durative-action", ":derived", ":process", ":event", ":axiom",
-                             ":constraints", ":timed-initial-literals"), "")}
-"""Connectives and sections outside the language read, each with a hint."""
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
                 "increase", "decrease", "and", "not", "=")
 _RESERVED = frozenset(_CONNECTIVES) - {"="} | {"either", "assign"}
@@ -335,10 +61,10 @@ _RESERVED = frozenset(_CONNECTIVES) - {"="} | {"either", "assign"}
 
 def parse_domain(text: str, source: str = "<domain>") -> Domain:
     """Parse a domain; raise :class:`PDDLError` with file and line on any problem."""
-    r = _Reader(text, source)
+    r = Reader(text, source)
     _, name, body = r.pick("domain")
     sec, action_nodes = r.sections(body, _DOMAIN_SECTIONS, "domain")
-    reqs = _requirements(r, sec.get(":requirements"))
+    reqs = read_requirements(r, sec.get(":requirements"))
     if ":types" in sec:
         r.types = _types(r, sec[":types"])
     constants = {c: t for c, t, _ in r.typed_list(sec[":constants"].items[1:], False,
@@ -359,20 +85,7 @@ def parse_domain(text: str, source: str = "<domain>") -> Domain:
                   source, r.functions, rewards)
 
 
-def _requirements(r: _Reader, node: Node | None) -> set[str]:
-    """The keys of ``(:requirements ...)``; one that is not a requirement of PDDL or PPDDL
-    (a typo) is refused. They never decide what is read."""
-    out = set()
-    for n in node.items[1:] if node is not None else ():  # type: ignore[index]
-        req = r.symbol(n, "a requirement")
-        if req not in KNOWN_REQUIREMENTS:
-            raise r.fail(n.line, f"unknown requirement {req} (the requirements of PDDL and "
-                         "PPDDL are :strips, :typing, :adl, :probabilistic-effects, ...)")
-        out.add(req)
-    return out
-
-
-def _types(r: _Reader, node: Node) -> dict[str, str | None]:
+def _types(r: Reader, node: Node) -> dict[str, str | None]:
     """``(:types a b - c)`` -> ``{object: None, a: c, b: c, c: object}``; a type declared
     twice, an undeclared parent and a cycle of parents are refused."""
     types: dict[str, str | None] = {"object": None}
@@ -397,7 +110,7 @@ def _types(r: _Reader, node: Node) -> dict[str, str | None]:
     return types
 
 
-def _declarations(r: _Reader, node: Node | None, what: str) -> dict[str, tuple[str, ...]]:
+def _declarations(r: Reader, node: Node | None, what: str) -> dict[str, tuple[str, ...]]:
     """``(:predicates (p ?x - t) ...)`` or ``(:functions (f ?x - t) - number ...)`` ->
     ``{p: (t,), ...}`` (``what``: ``"predicate"`` or ``"function"``)."""
     out: dict[str, tuple[str, ...]] = {}
@@ -429,7 +142,7 @@ def _declarations(r: _Reader, node: Node | None, what: str) -> dict[str, tuple[s
     return out
 
 
-def _action(r: _Reader, node: Node, constants: dict[str, str]) -> tuple[Action, bool]:
+def _action(r: Reader, node: Node, constants: dict[str, str]) -> tuple[Action, bool]:
     """An action, and whether an effect of it changes ``(reward)``."""
     items = r.lst(node, "an action")
     if len(items) < 2:
@@ -463,13 +176,13 @@ def _action(r: _Reader, node: Node, constants: dict[str, str]) -> tuple[Action, 
                   tuple(reader.costs), rest), reader.reward_effects
 
 
-def _precondition(r: _Reader, node: Node | None, scope: dict[str, str],
+def _precondition(r: Reader, node: Node | None, scope: dict[str, str],
                   ctx: str) -> tuple[tuple[Literal, ...], Condition | None]:
     """A precondition as its literals (in order) and the rest, in negation normal form,
     that only grounding can decide (quantifiers, disjunctions; None: there is none)."""
     if node is None:
         return (), None
-    cond = nnf(_condition(r, node, scope, ctx))
+    cond = nnf(read_condition(r, node, scope, ctx))
     lits = conjunction(cond)
     if lits is not None:
         return lits, None
@@ -487,7 +200,7 @@ Branches = list[tuple[Fraction, tuple[Literal | CondEffect | Reward | Choice, ..
 class _Effects:
     """Reads one action's effect into :data:`Branches`, and its cost terms."""
 
-    def __init__(self, r: _Reader, scope: dict[str, str], ctx: str) -> None:
+    def __init__(self, r: Reader, scope: dict[str, str], ctx: str) -> None:
         self.r, self.scope, self.ctx = r, scope, ctx
         self.costs: list[CostTerm] = []
         self.probabilistic = self.conditional = self.reward_effects = False
@@ -497,7 +210,7 @@ class _Effects:
     def effect(self, node: Node | None, inside: bool) -> Branches:
         """The distribution of ``node``'s outcomes; ``inside`` a probabilistic effect."""
         r, ctx = self.r, self.ctx
-        node = _bare(r, node) if node is not None else None
+        node = bare_atom(r, node) if node is not None else None
         items = r.lst(node, "an effect") if node is not None else ()
         if not items:
             return [(Fraction(1), ())]
@@ -523,7 +236,7 @@ class _Effects:
             self.conditional = True  # a reward of the outcome or the state
             return [(Fraction(1), (Reward(term, sign, self.variables, self.when),))]
         if head == "not":
-            items = (items[0], *map(partial(_bare, r), items[1:]))
+            items = (items[0], *map(partial(bare_atom, r), items[1:]))
             if len(items) != 2 or not items[1].is_list or not items[1].items or \
                     items[1].items[0].symbol in _CONNECTIVES:
                 raise r.fail(node.line, f"{ctx}: (not ...) must wrap a single atom")
@@ -536,7 +249,7 @@ class _Effects:
                          "effect is made of literals, and, when, forall, probabilistic and "
                          "costs)")
         positive = head != "not"
-        atom = _atom(r, node if positive else items[1], self.scope, ctx, effect=True)
+        atom = read_atom(r, node if positive else items[1], self.scope, ctx, effect=True)
         if not positive and atom.predicate == STUCK and r.stuck_domain:
             raise r.fail(node.line, f"{ctx}: (not (stuck)) is not an effect: (stuck) marks "
                          "a failed trial, which ends the episode")
@@ -561,7 +274,7 @@ class _Effects:
             return self.choice(node, items)
         saved = self.scope, self.variables, self.when  # an error ends the reading
         if head == "when":
-            cond = nnf(_condition(r, items[1], self.scope, ctx))
+            cond = nnf(read_condition(r, items[1], self.scope, ctx))
             self.when = cond if self.when is None else Junction("and", (self.when, cond))
         else:
             variables = r.variables(items[1], ctx)
@@ -613,7 +326,7 @@ class _Effects:
         ``(increase (total-cost) X)`` (sign -1)."""
         r, ctx = self.r, self.ctx
         head = items[0].symbol
-        target = _bare_term(items[1]) if len(items) == 3 else None
+        target = bare_term(items[1]) if len(items) == 3 else None
         fluent = target.items[0].symbol if target is not None and target.is_list and \
             len(target.items) == 1 else None
         if fluent not in COST_FLUENTS:
@@ -626,9 +339,9 @@ class _Effects:
         sign = 1.0 if (head, fluent) == ("increase", "reward") else -1.0
         value = items[2]
         if not value.is_list and r.functions.get(value.symbol) == ():
-            value = _bare_term(value)
+            value = bare_term(value)
         if not value.is_list:
-            number = _number(r, value, ctx)
+            number = read_number(r, value, ctx)
             if number is None or number < 0:
                 raise r.fail(value.line, f"{ctx}: expected an amount >= 0 (a number or a "
                              f"function term), found {value.symbol!r}")
@@ -637,7 +350,7 @@ class _Effects:
         if fname not in r.functions or fname in COST_FLUENTS:
             raise r.fail(value.line, f"{ctx}: expected a cost (a number, or a function "
                          f"declared in :functions), found {value.text()}")
-        return _term(r, value, fname, r.functions[fname], self.scope, ctx), sign
+        return read_term(r, value, fname, r.functions[fname], self.scope, ctx), sign
 
 
 def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
@@ -664,34 +377,8 @@ def _mentions(node: Node, head: str) -> bool:
                                 for i, n in enumerate(node.items))  # type: ignore[arg-type]
 
 
-def _number(r: _Reader, node: Node, ctx: str) -> Fraction | None:
-    """``0.25``, ``.5``, ``1/4``, ``3`` or ``2.5e-3`` as an exact fraction (None: not a
-    number); refused past :data:`~gdq_pddl.limits.MAX_NUMBER`, :data:`MAX_LITERAL`
-    characters or an exponent of :data:`MAX_EXPONENT`."""
-    text = node.symbol
-    match = None if node.is_list else _NUMERIC.fullmatch(text)
-    if match is None or not any(ch.isdigit() for ch in text):
-        return None
-    if len(text) > MAX_LITERAL:
-        raise r.fail(node.line, f"{ctx}: the number {text[:24]}... is {len(text)} characters "
-                     f"long; a number is read in at most {MAX_LITERAL}")
-    if match.group(1) is not None and abs(int(match.group(1))) > MAX_EXPONENT:
-        raise r.fail(node.line, f"{ctx}: {text}: an exponent past {MAX_EXPONENT} in size is "
-                     f"not read (no float holds such a number; a number is at most "
-                     f"{MAX_NUMBER:g} in size)")
-    try:
-        value = Fraction(text)
-    except (ValueError, ZeroDivisionError):
-        return None
-    if abs(value) > MAX_NUMBER:
-        shown = f"{float(value):g}" if abs(value) < 10**308 else text  # a float holds it
-        raise r.fail(node.line, f"{ctx}: expected a number of at most {MAX_NUMBER:g} in size, "
-                     f"found {text}" + (f" (= {shown})" if shown != text else ""))
-    return value
-
-
-def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
-    value = _number(r, node, ctx)
+def _probability(r: Reader, node: Node, ctx: str) -> Fraction:
+    value = read_number(r, node, ctx)
     if value is None:
         raise r.fail(node.line, f"{ctx}: expected a probability (a number such as 0.25 or "
                      f"1/4), found {node.text()}")
@@ -700,258 +387,6 @@ def _probability(r: _Reader, node: Node, ctx: str) -> Fraction:
     return value
 
 
-def _condition(r: _Reader, node: Node, scope: dict[str, str], ctx: str) -> Condition:
-    """A precondition, goal or ``when`` condition as written (``not`` and ``imply`` as
-    :class:`Junction` kinds, for :func:`~gdq_pddl.pddl.normalise.nnf`)."""
-    node = _bare(r, node)
-    items = r.lst(node, "a formula")
-    if not items:
-        return Junction("and", ())
-    head = items[0].symbol
-
-    def sub(n: Node, extra: dict[str, str] | None = None) -> Condition:
-        return _condition(r, n, {**scope, **extra} if extra else scope, ctx)
-
-    if head in ("and", "or"):
-        return Junction(head, tuple(sub(i) for i in items[1:]))
-    if head == "not":
-        if len(items) != 2:
-            raise r.fail(node.line, f"{ctx}: expected (not FORMULA)")
-        return Junction("not", (sub(items[1]),))
-    if head == "imply":
-        if len(items) != 3:
-            raise r.fail(node.line, f"{ctx}: expected (imply FORMULA FORMULA)")
-        return Junction("imply", (sub(items[1]), sub(items[2])))
-    if head in ("forall", "exists"):
-        if len(items) != 3:
-            raise r.fail(node.line, f"{ctx}: expected ({head} (?x - TYPE ...) FORMULA)")
-        variables = r.variables(items[1], ctx)
-        return Quantified(head, variables, sub(items[2], dict(variables)))
-    if head == "probabilistic":
-        raise r.fail(node.line, f"{ctx}: (probabilistic ...) can only be an effect, not a "
-                     f"{'precondition' if ctx.startswith('action') else 'goal'}")
-    if head in ("when", "increase", "decrease", "oneof"):
-        raise r.fail(node.line, f"{ctx}: ({head} ...) can only be an effect, not part of a "
-                     "condition")
-    if head == "=":
-        return Literal(_term(r, node, "=", ("object", "object"), scope, ctx), True)
-    return Literal(_atom(r, node, scope, ctx), True)
-
-
-def _bare(r: _Reader, node: Node) -> Node:
-    """``node``, or, if it is the bare name of a declared 0-ary predicate (``dead`` for
-    ``(dead)``, as published IPPC domains write it), its atom ``(dead)``."""
-    if not node.is_list and r.predicates.get(node.symbol) == ():
-        return Node(node.line, (node,))
-    return node
-
-
-def _bare_term(node: Node) -> Node:
-    """A function term written without parentheses (``reward`` for ``(reward)``: PDDL
-    2.1's ``<f-head> ::= <function-symbol>``, as published IPPC domains write it) as the
-    term; any other node as it is."""
-    return Node(node.line, (node,)) if not node.is_list else node
-
-
-def _atom(r: _Reader, node: Node, scope: dict[str, str], ctx: str,
-          effect: bool = False) -> Atom:
-    """An atom of a declared predicate; (stuck) only in an ``effect``: it marks a failed
-    trial, never part of a state."""
-    node = _bare(r, node)
-    items = r.lst(node, "an atom")
-    if not items:
-        raise r.fail(node.line, f"{ctx}: expected an atom (PREDICATE ARGS...), found ()")
-    name = r.symbol(items[0], "a predicate name")
-    if name not in r.predicates:
-        raise r.fail(node.line, f"{ctx}: unknown predicate {name!r} "
-                     f"(declared: {', '.join(sorted(r.predicates)) or 'none'})")
-    atom = _term(r, node, name, r.predicates[name], scope, ctx)
-    if atom.predicate == STUCK and r.stuck_domain and not effect:
-        raise r.fail(node.line, f"{ctx}: (stuck) marks a failed trial (an outcome that makes "
-                     "it true ends the episode), so it cannot be a precondition, a goal or "
-                     "initially true; rename the predicate if it is an ordinary fluent")
-    return atom
-
-
-def _term(r: _Reader, node: Node, name: str, want: tuple[str, ...], scope: dict[str, str],
-          ctx: str) -> Atom:
-    """``(name args...)`` whose arguments, known in ``scope``, fit the types ``want``."""
-    args = tuple(r.symbol(a, "a term") for a in node.items[1:])
-    if len(args) != len(want):
-        raise r.fail(node.line, f"{ctx}: {name} takes {len(want)} argument(s), got {len(args)}")
-    for a, t in zip(args, want, strict=True):
-        if a not in scope:
-            raise r.fail(node.line, f"{ctx}: unknown {'variable' if a[0] == '?' else 'object'}"
-                         f" {a!r} in ({name} ...)")
-        if not is_subtype(r.types, scope[a], t):
-            raise r.fail(node.line, f"{ctx}: {a} is a {scope[a]}, but {name} expects a {t}")
-    return Atom(name, args)
-
-
-def is_subtype(types: dict[str, str | None], t: str, want: str) -> bool:
-    """Whether type ``t`` is ``want`` or one of its descendants."""
-    seen: set[str] = set()
-    cur: str | None = t
-    while cur is not None and cur not in seen:
-        if cur == want:
-            return True
-        seen.add(cur)
-        cur = types.get(cur)
-    return want == "object"
-
-
-def parse_problem(text: str, domain: Domain, source: str = "<problem>",
-                  name: str | None = None) -> Problem:
-    """Parse a problem for ``domain``; raise :class:`PDDLError` if it does not fit.
-    ``name`` picks one of several problems in ``text`` (which may hold the domain too)."""
-    r = _Reader(text, source, domain)
-    top, name, body = r.pick("problem", name)
-    sec, _ = r.sections(body, _PROBLEM_SECTIONS, "problem")
-    _requirements(r, sec.get(":requirements"))
-    if ":domain" not in sec:
-        raise r.fail(top.line, "expected (:domain NAME)")
-    dnode = sec[":domain"]
-    dname = r.symbol(dnode.items[1], "a domain name") if len(dnode.items) == 2 else None
-    if dname != domain.name:
-        raise r.fail(dnode.line, f"problem is for domain {dname!r}, but the domain is "
-                     f"{domain.name!r} ({domain.source})")
-    objects = dict(domain.constants)
-    if ":objects" in sec:
-        for o, t, line in r.typed_list(sec[":objects"].items[1:], False, "object"):
-            if o in objects:
-                raise r.fail(line, f"object {o} is declared twice (as a constant of the "
-                             f"domain, {domain.source})")
-            objects[o] = t
-    if ":init" not in sec:
-        raise r.fail(top.line, "expected (:init ...), the initial state")
-    init, values = [], {}
-    given: dict[str, tuple[float, Node]] = {}  # function term -> its value, where given
-    for node in sec[":init"].items[1:]:
-        head = node.items[0].symbol if node.is_list and node.items else ""
-        if head == "=":
-            term, value = _init_value(r, node, objects)
-            first, where = given.setdefault(term, (value, node))
-            if first != value:  # the same value twice is the same fact twice: allowed
-                raise r.fail(node.line, f"init: {term} is given two values, "
-                             f"{where.items[2].symbol} (line {where.line}) and "
-                             f"{node.items[2].symbol}; give it one")
-            values[term] = 0.0 if term in _COST_TERMS else value
-            continue
-        if head == "probabilistic":
-            raise r.fail(node.line, "init: a probabilistic initial state is not supported "
-                         "(the learner starts in one state)")
-        init.append(_atom(r, node, objects, "init"))
-    goal_reward = _goal_reward(r, sec[":goal-reward"]) if ":goal-reward" in sec else None
-    metric = _metric(r, sec[":metric"]) if ":metric" in sec else None
-    if ":goal" not in sec:
-        raise r.fail(top.line, "expected (:goal ...)")
-    gnode = sec[":goal"]
-    if len(gnode.items) != 2:
-        raise r.fail(gnode.line, f"expected (:goal FORMULA), one formula; found "
-                     f"{len(gnode.items) - 1}")
-    goal, alternatives = _goal(r, gnode.items[1], domain, objects, init)
-    return Problem(name, domain.name, objects, frozenset(init), goal, source, values,
-                   goal_reward, metric, alternatives)
-
-
-def _goal(r: _Reader, node: Node, domain: Domain, objects: dict[str, str], init: list[Atom],
-          ) -> tuple[tuple[Literal, ...], tuple[tuple[Literal, ...], ...]]:
-    """The goal as the literals all its alternatives share, and the alternatives (none:
-    a conjunction), quantifiers expanded and atoms no action changes decided."""
-    cond = nnf(_condition(r, node, objects, "goal"))
-    lits = conjunction(cond)
-    if lits is not None:
-        return lits, ()
-
-    def of_type(t: str) -> list[str]:
-        return sorted(o for o, ot in objects.items() if is_subtype(domain.types, ot, t))
-
-    def too_many() -> PDDLError:
-        return r.fail(node.line, f"goal: more than {MAX_DISJUNCTS} alternatives or "
-                      f"{MAX_ATOMS} atoms once its quantifiers are expanded")
-
-    fluent = domain.fluent_predicates()
-    static = frozenset(a for a in init if a.predicate not in fluent)
-    try:
-        dnf: list | None = ground_dnf(cond, {}, of_type, lambda a: None, too_many)
-    except PDDLError:  # e.g. (forall (?b) (exists (?c) (and (destination ?b ?c) ...)))
-        dnf = None
-    if dnf is None or len(dnf) > 1:  # decide what no action changes, and look again
-        dnf = ground_dnf(cond, {}, of_type, lambda a: None if a.predicate in fluent else
-                         a in static, too_many)
-    if not dnf:
-        raise r.fail(node.line, "goal: it can never hold (false for the problem's objects)")
-
-    def literals(pos: frozenset[str], neg: frozenset[str]) -> tuple[Literal, ...]:
-        return tuple(Literal(Atom.parse(f), True) for f in sorted(pos)) + \
-            tuple(Literal(Atom.parse(f), False) for f in sorted(neg))
-
-    common = literals(frozenset.intersection(*(p for p, _ in dnf)),
-                      frozenset.intersection(*(n for _, n in dnf)))
-    return common, (tuple(literals(p, n) for p, n in dnf) if len(dnf) > 1 else ())
-
-
-def _init_value(r: _Reader, node: Node, objects: dict[str, str]) -> tuple[str, float]:
-    """``(= (f a b) 3)`` in ``:init`` -> ``("(f a b)", 3.0)``."""
-    items = r.lst(node, "(= TERM NUMBER)")
-    term = _bare_term(items[1]) if len(items) == 3 else None
-    head = term.items if term is not None and term.is_list else None
-    if not head or head[0].is_list:
-        raise r.fail(node.line, f"init: expected (= (FUNCTION ARGS...) NUMBER), found "
-                     f"{node.text()}")
-    fname = head[0].symbol
-    if fname in COST_FLUENTS:  # (= (total-cost) 0): where the sum starts; not needed
-        term = f"({fname})"
-    elif fname not in r.functions:
-        raise r.fail(node.line, f"init: unknown function {fname!r} (declared: "
-                     f"{', '.join(sorted(r.functions)) or 'none'})")
-    else:
-        term = str(_term(r, Node(node.line, head), fname, r.functions[fname], objects, "init"))
-    value = _number(r, items[2], f"init: {term}")
-    if value is None:
-        raise r.fail(items[2].line, f"init: expected a number for {term}, found "
-                     f"{items[2].text()}")
-    return term, float(value)
-
-
-def _goal_reward(r: _Reader, node: Node) -> float:
-    items = r.lst(node, "(:goal-reward N)")
-    value = _number(r, items[1], ":goal-reward") if len(items) == 2 else None
-    if value is None or value <= 0:
-        raise r.fail(node.line, f"expected (:goal-reward N) with N > 0, found {node.text()}")
-    return float(value)
-
-
-def _metric(r: _Reader, node: Node) -> str:
-    """The metric, one of those that keep the task (maximise the reward, minimise costs)."""
-    items = r.lst(node, "(:metric maximize (reward))")
-    text = Node(node.line, (*items[:2], *map(_bare_term, items[2:3]), *items[3:])).text()
-    if text not in ("(:metric minimize (total-cost))", "(:metric maximize (reward))"):
-        raise r.fail(node.line, f"{node.text()} is not supported: the metrics read are (:metric "
-                     "maximize (reward)) and (:metric minimize (total-cost)) "
-                     "(docs/domains.md, \"Rewards\")")
-    return text[len("(:metric "):-1]
-
-
 def read_domain(path: str | Path) -> Domain:
     """Read and parse a domain file."""
-    return parse_domain(_read(path), str(path))
-
-
-def read_problem(path: str | Path, domain: Domain, name: str | None = None) -> Problem:
-    """Read and parse a problem file for ``domain`` (``name``: which one of several)."""
-    return parse_problem(_read(path), domain, str(path), name)
-
-
-def problem_file(path: str | Path) -> tuple[str | Path, str | None]:
-    """``FILE:NAME`` -> ``(FILE, NAME)``: one problem of a file that holds several; a path
-    that exists, or whose part before the last ``:`` does not, is a path."""
-    text = str(path)
-    head, sep, name = text.rpartition(":")
-    if not sep or not name or Path(text).exists() or not Path(head).is_file():
-        return path, None
-    return head, name
-
-
-def _read(path: str | Path) -> str:
-    return read_text(path, lambda src, msg: PDDLError(src, None, msg))
+    return parse_domain(read_pddl_text(path), str(path))

@@ -16,8 +16,10 @@ from gdq_pddl.errors import PlanningError, SizeError
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
 from gdq_pddl.pddl.grounding import GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
-from gdq_pddl.pddl.parser import _read, parse_domain, parse_problem, problem_file
+from gdq_pddl.pddl.parser import parse_domain
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
+from gdq_pddl.pddl.problem_reader import parse_problem, problem_file
+from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.pddl.writer import untold, write_domain, write_parsed_problem
 
 State = frozenset[str]
@@ -118,7 +120,7 @@ class PlanningProblem:
                    determinisation: str = "all-outcomes") -> PlanningProblem:
         """Read and parse a domain and problem file (``problem_path`` may be ``FILE:NAME``)."""
         path, name = problem_file(problem_path)
-        return cls.from_texts(_read(domain_path), _read(path), str(domain_path),
+        return cls.from_texts(read_pddl_text(domain_path), read_pddl_text(path), str(domain_path),
                               str(path), determinisation, name)
 
     @cached_property

@@ -12,8 +12,8 @@ import pytest
 from gdq_pddl.cli import main
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import ground, parse_domain, parse_problem, read_domain, read_problem
-from gdq_pddl.pddl.parser import MAX_DEPTH
 from gdq_pddl.pddl.ppddl import ground_ppddl
+from gdq_pddl.pddl.sexpr import MAX_DEPTH
 
 # A lamp that a flaky switch turns on (0.8) or breaks (0.2); a spare switch always works.
 LAMP_DOMAIN = """(define (domain lamp)

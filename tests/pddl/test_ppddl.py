@@ -174,7 +174,7 @@ def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, s
     """Property: probabilities written as decimals (``0.0000125``) or in scientific
     notation (``125e-7``) that sum to 1 leave no "no effect" outcome, and one more of
     10**-MAX_EXPONENT, the smallest a number may be written, makes the sum too large."""
-    from gdq_pddl.pddl.parser import MAX_EXPONENT
+    from gdq_pddl.pddl.formulas import MAX_EXPONENT
 
     ks = [*weights, 10**digits - sum(weights)]
     probs = [f"{k}e-{digits}" if scientific else f"0.{k:0{digits}d}" for k in ks]
