@@ -65,7 +65,7 @@ class GDQ(TabularLearner):
     :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned model and
     calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets each
     pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
-    :func:`~gdq_pddl.learners.gdq.prior_backup` until tried more than ``m`` times, then
+    :func:`~gdq_pddl.learners.warm_start.prior_backup` until tried more than ``m`` times, then
     the learned model's backup with the prior as ``prior_weight`` pseudo-trials. OptInit
     is :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model.
 
