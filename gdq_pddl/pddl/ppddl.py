@@ -2,12 +2,14 @@
 ground action with all its outcomes, :class:`ProbabilisticTask`) and the planner's view,
 a STRIPS *determinisation* (:data:`DETERMINISATIONS`, ``docs/domains.md``) whose actions
 are outcomes of those ground actions, named ``<schema>_o<k>`` where an action keeps more
-than one; :attr:`ProbabilisticTask.origin` maps each back to its ground action.
+than one; :attr:`ProbabilisticTask.origin` maps each back to its ground action. The
+ground effects of an action's outcomes, and the relaxed reachability over them, are in
+:mod:`gdq_pddl.pddl.ppddl_effects`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from itertools import compress
 
@@ -22,52 +24,21 @@ from gdq_pddl.pddl.grounding import (
     goal_masks,
     ground,
 )
-from gdq_pddl.pddl.model import (
-    Action,
-    Atom,
-    Choice,
-    Domain,
-    Junction,
-    Literal,
-    Outcome,
-    Problem,
+from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Problem
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
+from gdq_pddl.pddl.ppddl_effects import (
+    Ground,
+    GroundOutcome,
+    ground_outcomes,
+    outcomes_of,
+    relaxed_reachability,
 )
-from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, TRUE, extend, ground_dnf
-from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (see the module docstring); first: default."""
 
 _SEP = "#"
 """Joins a schema and an outcome index while grounding (no name of a domain has it)."""
-
-
-@dataclass(frozen=True)
-class GroundOutcome:
-    """One outcome of a ground action: probability, add and delete masks, failed trial."""
-
-    probability: float
-    add: int
-    dele: int
-    stuck: bool = False
-    conditional: tuple[tuple[int, int, int, int], ...] = ()
-    """Conditional effects ``(must hold, must not hold, add, delete)`` (adds win)."""
-    reward: float = 0.0
-    """The reward the outcome always earns besides the action's cost."""
-    rewards: tuple[tuple[tuple[tuple[int, int], ...], float], ...] = ()
-    """``(alternatives (must hold, must not hold), amount)``: earned where one holds."""
-
-    def gain(self, state: int) -> float:
-        """The outcome's reward when the action is taken in ``state``."""
-        return self.reward + sum(amount for alts, amount in self.rewards
-                                 if any(state & p == p and not state & n for p, n in alts))
-
-    def apply(self, state: int) -> int:
-        add, dele = self.add, self.dele
-        for pos, neg, a, d in self.conditional:
-            if state & pos == pos and not state & neg:
-                add, dele = add | a, dele | d
-        return (state & ~dele) | add
 
 
 @dataclass(frozen=True)
@@ -180,7 +151,7 @@ def ground_ppddl(domain: Domain, problem: Problem,
     # every fact some outcome can make true
     every = [replace(action, name=f"{action.name}{_SEP}{k}", effect=o.effect, outcomes=(),
                      cost=()) if action.outcomes else action
-             for action in domain.actions for k, o in enumerate(_outcomes_of(action))]
+             for action in domain.actions for k, o in enumerate(outcomes_of(action))]
     task = ground(replace(domain, actions=tuple(every)), problem)
     by_name = {a.name: a for a in domain.actions}
     groups: dict[tuple[str, ...], dict[int, GroundOp]] = {}  # (schema, *args) -> outcome -> op
@@ -193,7 +164,7 @@ def ground_ppddl(domain: Domain, problem: Problem,
         action, name = by_name[base], "(" + " ".join((base, *args)) + ")"
         ops = [by_outcome[k] for k in range(len(by_outcome))]  # all share a precondition
         outcomes = tuple(GroundOutcome(o.probability, op.add, op.dele, o.stuck)
-                         for o, op in zip(_outcomes_of(action), ops, strict=True))
+                         for o, op in zip(outcomes_of(action), ops, strict=True))
         known = kept_outcomes(action, determinisation)
         learner_ops.append(ProbabilisticOp(name, ops[0].pre, ops[0].neg, 0, 0, outcomes, known))
         for k in known:
@@ -274,11 +245,11 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                         return term_value(term, binding, domain, problem, action,
                                           f"a reward of {action.name}")
                     args = tuple(b[p] for p, _ in action.parameters)
-                    outs = _ground_outcomes(action, args, b, objects, static, fluent,
+                    outs = ground_outcomes(action, args, b, objects, static, fluent,
                                             too_many, value, domain.source)
                     raw.append((action, args, pre, outs))
     init = {str(a) for a in problem.init if a.predicate in fluent}
-    reached, live = _relaxed(raw, init)
+    reached, live = relaxed_reachability(raw, init)
     facts = tuple(sorted(reached))
     index = {f: i for i, f in enumerate(facts)}
 
@@ -331,34 +302,6 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     return learner, planner
 
 
-def _outcomes_of(action: Action) -> tuple[Outcome, ...]:
-    """``action``'s outcomes; a STRIPS action's effect is its one outcome."""
-    return action.outcomes or (Outcome(1.0, action.effect),)
-
-
-Ground = tuple[frozenset[str], frozenset[str], tuple[tuple, ...], float, tuple, bool]
-"""A ground outcome's effect as fact sets: adds, deletes, conditional effects ``(must hold,
-must not hold, adds, deletes)``, the reward it always earns, its conditional rewards
-``(alternatives, amount)`` and whether it is a failed trial; equal ones are one outcome."""
-def _ground_outcomes(action: Action, args: tuple[str, ...], b: dict[str, str], objects,
-                     static, fluent: frozenset[str], too_many, value,
-                     source: str) -> list[tuple[int, float, Ground]]:
-    """The ground outcomes of ``action`` under binding ``b``: ``(index of the outcome of
-    the schema it comes from, probability, effect)``; one per schema outcome but where a
-    :class:`~gdq_pddl.pddl.model.Choice` expands, refused past :data:`MAX_OUTCOMES`."""
-    def past(choice: Choice | None) -> PDDLError:
-        where = f"the forall at line {choice.line} " if choice is not None else ""
-        return PDDLError(source, (choice.line if choice else action.line) or None,
-                         f"action {action.name}: {str(Atom(action.name, args))} has more than "
-                         f"{MAX_OUTCOMES} outcomes once {where}is grounded over the "
-                         "problem's objects (each binding of a forall of a probabilistic "
-                         "effect is an independent draw: their outcomes multiply)")
-
-    out = [(k, p, g) for k, o in enumerate(_outcomes_of(action))
-           for p, g in _ground_outcome(o, b, objects, static, fluent, too_many, value, past)]
-    if len(out) > MAX_OUTCOMES:
-        raise past(None)
-    return out
 
 
 def _kept(action: Action, outs: list[tuple[int, float, Ground]],
@@ -368,7 +311,7 @@ def _kept(action: Action, outs: list[tuple[int, float, Ground]],
     :func:`kept_outcomes` where each schema outcome is one ground outcome; where a choice
     expands one into several, each that does something (``_c<j>`` after the schema
     outcome's name), or the most likely (named as the action)."""
-    if len(outs) == len(_outcomes_of(action)):
+    if len(outs) == len(outcomes_of(action)):
         known = kept_outcomes(action, determinisation)
         return known, [names[(action.name, k)] for k in known]
 
@@ -392,87 +335,6 @@ def _kept(action: Action, outs: list[tuple[int, float, Ground]],
     return tuple(known), kept
 
 
-def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: frozenset[str],
-                    too_many, value, past: Callable[[Choice], PDDLError],
-                    ) -> list[tuple[float, Ground]]:
-    """The distribution of outcome ``o`` (its probability included) under binding ``b``:
-    its own effect, and side by side one draw per binding of each of its choices, equal
-    effects merged (``value(term, binding)``: an amount; ``past(choice)``: the error past
-    :data:`~gdq_pddl.pddl.parser.MAX_OUTCOMES` outcomes)."""
-    def fact(lit: Literal, binding: Mapping[str, str]) -> str:
-        return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
-
-    add = frozenset(fact(lit, b) for lit in o.effect
-                    if lit.positive and lit.atom.predicate in fluent)
-    dele = frozenset(fact(lit, b) for lit in o.effect
-                     if not lit.positive and lit.atom.predicate in fluent)
-    conds: dict[tuple, None] = {}
-    for ce in o.conditional:
-        for bb in extend(b, ce.variables, objects, MAX_ATOMS, too_many):
-            when = TRUE if ce.condition is None else \
-                ground_dnf(ce.condition, bb, objects, static, too_many)
-            f = frozenset((fact(ce.literal, bb),))
-            for cp, cn in when:  # in the order written: the planner's variants are named so
-                conds[(cp, cn, f if ce.literal.positive else frozenset(),
-                       frozenset() if ce.literal.positive else f)] = None
-    reward, rewards = 0.0, []
-    for rw in o.rewards:
-        for bb in extend(b, rw.variables, objects, MAX_ATOMS, too_many):
-            when = TRUE if rw.condition is None else \
-                ground_dnf(rw.condition, bb, objects, static, too_many)
-            amount = rw.sign * value(rw.amount, bb)
-            if when == TRUE:
-                reward += amount
-            elif when:
-                rewards.append((tuple(when), amount))
-    out = [(o.probability, (add, dele, tuple(conds), reward, tuple(rewards), o.stuck))]
-    for choice in o.choices:
-        for bb in extend(b, choice.variables, objects, MAX_ATOMS, too_many):
-            draw = _merged([g for inner in choice.outcomes for g in _ground_outcome(
-                inner, bb, objects, static, fluent, too_many, value, past)])
-            out = _merged([(p * q, _both(x, y)) for p, x in out for q, y in draw])
-            if len(out) > MAX_OUTCOMES:
-                raise past(choice)
-    return out
-
-
-def _both(x: Ground, y: Ground) -> Ground:
-    """Two effects side by side (a failed trial has no other effect)."""
-    if x[5] or y[5]:
-        return (frozenset(), frozenset(), (), x[3] + y[3], x[4] + y[4], True)
-    return (x[0] | y[0], x[1] | y[1], tuple(dict.fromkeys(x[2] + y[2])), x[3] + y[3],
-            x[4] + y[4], False)
-
-
-def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
-    """``dist`` with equal effects one outcome (first appearance first)."""
-    out: dict[Ground, float] = {}
-    for p, g in dist:
-        out[g] = out.get(g, 0.0) + p
-    return [(p, g) for g, p in out.items()]
-
-
-def _relaxed(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
-    """Relaxed reachability (deletes ignored) from ``init``: the facts some sequence of
-    ground actions may make true, and which ground actions may ever apply (a bar counts
-    those past 2 s)."""
-    reached, live = set(init), [False] * len(raw)
-    changed = True
-    with slow_progress("relaxed reachability", " actions", len(raw)) as bar:
-        while changed:
-            changed = False
-            for i, (_, _, pre, outs) in enumerate(raw):
-                if not live[i]:
-                    if not any(p <= reached for p, _ in pre):
-                        continue
-                    live[i] = changed = True
-                    bar.update()
-                for _, _, (add, _, conds, *_) in outs:
-                    new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
-                    if new:
-                        reached |= new
-                        changed = True
-    return reached, live
 
 
 def _variants(alts: list[tuple[int, int]], outcome: GroundOutcome, name: str, domain: Domain,
