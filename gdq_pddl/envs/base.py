@@ -19,7 +19,7 @@ from gymnasium.envs.registration import EnvSpec
 from gymnasium.error import ResetNeeded
 from gymnasium.spaces import Discrete
 
-from gdq_pddl.envs.model import CAUSES
+from gdq_pddl.envs.step import CAUSES
 from gdq_pddl.errors import ConfigError
 
 RESET_OPTIONS = ("start", "goal")

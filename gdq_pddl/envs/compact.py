@@ -20,8 +20,6 @@ import numpy as np
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.envs.model import (
     cost_arrays,
-    draw_outcome,
-    finish_step,
     ground_outcomes,
     merge_outcomes,
     office_costs,
@@ -30,6 +28,7 @@ from gdq_pddl.envs.model import (
     reality_task,
     slip_outcomes,
 )
+from gdq_pddl.envs.step import draw_outcome, finish_step
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import World
 

@@ -34,11 +34,12 @@ from gdq_pddl.abstraction.prior import PriorModel, prior_from_task
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, per_object
+from gdq_pddl.envs.model import compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
 from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
 from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, WorldError
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem

@@ -13,8 +13,8 @@ import tomllib
 from dataclasses import replace
 
 from gdq_pddl.dynamics import Dynamics, parse_dynamics
-from gdq_pddl.envs.model import ModelArrays
 from gdq_pddl.envs.solve import reality_distances
+from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.pddl.model import Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS

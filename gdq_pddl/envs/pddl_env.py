@@ -3,7 +3,7 @@
 The domain and problem (files or shipped names) are the robot's knowledge. Reality is a
 dynamics file (:mod:`gdq_pddl.dynamics`) for a STRIPS domain, or a PPDDL domain's own
 probabilistic effects (the planner knows their ``determinisation``) with an optional
-overlay. The true model is a :class:`~gdq_pddl.envs.model.ModelArrays`, as the office's.
+overlay. The true model is a :class:`~gdq_pddl.envs.step.ModelArrays`, as the office's.
 
 - Actions: ``Discrete(n_ops)``, the ground actions in the grounder's order; one whose
   precondition does not hold costs its cost and changes nothing.
@@ -35,12 +35,7 @@ from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
 from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph
 from gdq_pddl.dynamics import CostDist, Dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
-from gdq_pddl.envs.model import (
-    ModelArrays,
-    StateSpace,
-    compile_true_model,
-    env_act,
-)
+from gdq_pddl.envs.model import StateSpace, compile_true_model
 from gdq_pddl.envs.pddl_checks import (
     DEFAULT_R_MAX,
     check_determinisation,
@@ -54,6 +49,7 @@ from gdq_pddl.envs.pddl_checks import (
 from gdq_pddl.envs.render import text_image
 from gdq_pddl.envs.solve import value_within
 from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.envs.step import ModelArrays, env_act
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory

@@ -9,11 +9,11 @@ An episode lasts at most ``step_limit`` actions and running out of them is a fai
   is over);
 - ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index).
 
-Expected rewards mirror :func:`gdq_pddl.envs.model.env_step` outcome by outcome: a stuck
+Expected rewards mirror :func:`gdq_pddl.envs.step.env_step` outcome by outcome: a stuck
 outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
 any other outcome of the last allowed action gives -r_max; otherwise the reward is minus
 the mean cost of the action (for a normal cost, the mean of the draw clipped at 0).
-On the problem's own scale (:attr:`~gdq_pddl.envs.model.ModelArrays.gain`), every outcome
+On the problem's own scale (:attr:`~gdq_pddl.envs.step.ModelArrays.gain`), every outcome
 pays its reward minus the cost, and reaching the goal adds r_max once. Returns are
 undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
 per episode that the experiments report.
@@ -29,7 +29,8 @@ from scipy.sparse.csgraph import shortest_path
 from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of import)
 
 from gdq_pddl.dynamics import COST_KINDS
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, width_of
+from gdq_pddl.envs.model import compile_model, full_state
+from gdq_pddl.envs.step import ModelArrays, width_of
 from gdq_pddl.limits import check_memory, human_bytes, slow_progress
 from gdq_pddl.world import Task, World
 
@@ -49,7 +50,8 @@ class Solution:
 
 
 def expected_costs(model: ModelArrays) -> np.ndarray:
-    """Mean cost of every action (``float64[n_actions]``), as :func:`sample_cost` draws it."""
+    """Mean cost of every action (``float64[n_actions]``), as
+    :func:`~gdq_pddl.envs.step.sample_cost` draws it."""
     kind, a, b = model.cost_kind, model.cost_a, model.cost_b
     out = a.astype(np.float64).copy()
     uniform = kind == COST_KINDS["uniform"]
@@ -109,7 +111,7 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
     end_reward = np.where(model.stuck, -r, np.where(at_goal, r, -r))
-    if model.gain.size:  # the problem's own rewards (model.file_step): no penalty
+    if model.gain.size:  # the problem's own rewards (step.file_step): no penalty
         cost = cost - model.gain
         end_reward = -cost + np.where(at_goal & ~model.stuck, r, 0.0)
     goal_states = model.pos_of == goal_pos

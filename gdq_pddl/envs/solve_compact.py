@@ -16,8 +16,9 @@ import numba
 import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel, compile_compact
-from gdq_pddl.envs.model import ModelArrays, per_object
+from gdq_pddl.envs.model import per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
+from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.reachable import distinct
 from gdq_pddl.world import Task, World

@@ -17,9 +17,9 @@ import numpy as np
 from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.abstraction.prior import PriorModel, prior_rewards
 from gdq_pddl.abstraction.table import pack_plans
-from gdq_pddl.envs.model import ModelArrays
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.solve import expected_costs
+from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import human_bytes, physical_memory

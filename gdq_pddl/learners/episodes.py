@@ -21,10 +21,10 @@ from numba import types
 from numba.extending import overload
 
 from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
-from gdq_pddl.envs.model import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
+from gdq_pddl.envs.step import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards
 from gdq_pddl.learners.agents import Darling, DynaQ, QLearning

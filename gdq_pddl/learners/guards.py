@@ -15,7 +15,7 @@ import numbers
 import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel
-from gdq_pddl.envs.model import width_of
+from gdq_pddl.envs.step import width_of
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
@@ -217,7 +217,7 @@ def _check_rewards(where: str, reward: np.ndarray) -> None:
 
 def check_dynamics(model: object, start: int, doors: np.ndarray, n_states: int,
                    n_actions: int, columns: np.ndarray | None = None) -> int:
-    """The env's compiled dynamics (:class:`~gdq_pddl.envs.model.ModelArrays`, from full
+    """The env's compiled dynamics (:class:`~gdq_pddl.envs.step.ModelArrays`, from full
     state ``start``, or :class:`~gdq_pddl.envs.compact.CompactModel`, from position
     ``start`` with the open-door array ``doors``) as :data:`DYNAMICS` says, for a learner
     of ``n_states x n_actions`` columns (``columns``: their actions, None: every action);

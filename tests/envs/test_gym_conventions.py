@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 
 import gdq_pddl  # noqa: F401  (registers the envs)
 from gdq_pddl.envs import ENV_IDS, OFFICE_ID, PDDL_ID
-from gdq_pddl.envs.model import pair_of
 from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, shipped_names
+from gdq_pddl.envs.step import pair_of
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners import office_task_context
 from tests.helpers import REPO_ROOT as ROOT

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gdq_pddl.envs.model import env_act, env_step
 from gdq_pddl.envs.pddl_env import PDDLEnv, load_instance
+from gdq_pddl.envs.step import env_act, env_step
 from gdq_pddl.learners import make_learner, pddl_task_context
 from gdq_pddl.pddl.offered import column_of
 

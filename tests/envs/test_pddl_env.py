@@ -12,9 +12,9 @@ from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
 from gdq_pddl.abstraction.table import build_plan_table
 from gdq_pddl.cli import main
 from gdq_pddl.dynamics import parse_dynamics
-from gdq_pddl.envs.model import pair_of
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLEnv, PDDLInstance
 from gdq_pddl.envs.solve import optimal_value, solve
+from gdq_pddl.envs.step import pair_of
 from gdq_pddl.errors import PlanningError, WorldError
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.pddl.reachable import reachable_graph

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gdq_pddl  # noqa: F401  (registers the env)
-from gdq_pddl.envs.model import ModelArrays, compile_model, full_state
+from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import (
     expected_area_visits,
     expected_costs,
@@ -20,6 +20,7 @@ from gdq_pddl.envs.solve import (
     solve,
     solve_task,
 )
+from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.envs.variants import deterministic_world
 from gdq_pddl.world import CostDist, parse_world
 from tests.helpers import corridor_text

@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
 from gdq_pddl.abstraction.table import build_plan_table
 from gdq_pddl.cli import main
-from gdq_pddl.envs.model import pair_of
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLEnv, PDDLInstance
 from gdq_pddl.envs.solve import expected_costs, solve
+from gdq_pddl.envs.step import pair_of
 from gdq_pddl.errors import PDDLError, PlanningError, WorldError
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.pddl import parse_domain, parse_problem
