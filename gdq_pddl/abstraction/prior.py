@@ -130,7 +130,7 @@ def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,
     with no outcome (a padding column). Optimistic, as the prior's successor is (the
     outcome closest to the goal, which may be the one that pays least: the death of the
     human to rescue in IPPC-2008 search and rescue ends the mission sooner).
-    ``ptr``, ``stuck``, ``gain``: a :class:`~gdq_pddl.envs.model.ModelArrays`'."""
+    ``ptr``, ``stuck``, ``gain``: a :class:`~gdq_pddl.envs.step.ModelArrays`'."""
     return _prior_rewards(ptr, stuck, gain, pair_cost)
 
 
