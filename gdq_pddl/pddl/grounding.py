@@ -56,15 +56,15 @@ class GroundTask:
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
         """Operators keyed by one positive precondition bit (or -1 for none)."""
         out: dict[int, list[GroundOp]] = defaultdict(list)
-        counts = Counter(bit for op in self.ops for bit in _bits(op.pre))
+        counts = Counter(bit for op in self.ops for bit in set_bits(op.pre))
         for op in self.ops:
-            out[min(_bits(op.pre), key=counts.__getitem__, default=-1)].append(op)
+            out[min(set_bits(op.pre), key=counts.__getitem__, default=-1)].append(op)
         return {k: tuple(v) for k, v in out.items()}
 
     def applicable(self, state: int) -> list[GroundOp]:
         """Every operator whose precondition holds in ``state``."""
         table = self.ops_by_fact
-        return [op for key in (-1, *_bits(state)) for op in table.get(key, ())
+        return [op for key in (-1, *set_bits(state)) for op in table.get(key, ())
                 if state & op.pre == op.pre and not state & op.neg]
 
     def successors(self, state: int) -> list[tuple[GroundOp, int]]:
@@ -86,14 +86,15 @@ class GroundTask:
 
     def atoms(self, state: int) -> frozenset[str]:
         """The fluent atoms true in ``state``."""
-        return frozenset(self.facts[b] for b in _bits(state))
+        return frozenset(self.facts[b] for b in set_bits(state))
 
     def mask(self, atoms: frozenset[str] | set[str]) -> int:
         """Bitmask of fluent atoms; raises KeyError naming an unknown atom."""
         return sum(1 << self.fact_index[a] for a in set(atoms))
 
 
-def _bits(mask: int):
+def set_bits(mask: int):
+    """The indices of the bits set in ``mask``, lowest first."""
     while mask:
         low = mask & -mask
         yield low.bit_length() - 1
@@ -105,9 +106,9 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
     if any(a.outcomes for a in domain.actions):
         raise ValueError("a PPDDL domain has no single effect per action: ground it with "
                          "gdq_pddl.pddl.ppddl.ground_ppddl")
-    fluent, static_tuples, by_type, typed = _index(domain, problem)
+    fluent, static_tuples, by_type, typed = index_problem(domain, problem)
     bindings = ((action, b) for action in domain.actions
-                for b in _bindings(action, static_tuples, by_type, typed, fluent))
+                for b in action_bindings(action, static_tuples, by_type, typed, fluent))
     with slow_progress("grounding", " actions", iterable=bindings) as bar:
         pending = [_instantiate(action, b, fluent) for action, b in bar]
     init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
@@ -148,11 +149,11 @@ def relaxed_reachable(pending: list[tuple], init: set[str]) -> tuple[set[str], l
     return reached, live
 
 
-def _index(domain: Domain, problem: Problem) -> tuple[
+def index_problem(domain: Domain, problem: Problem) -> tuple[
         frozenset[str], dict[str, set[tuple[str, ...]]], dict[str, list[str]],
         dict[str, frozenset[str]]]:
     """The fluent predicates, the static atoms' arguments by predicate, and the objects
-    of each type (sorted, and as a set): what :func:`_bindings` reads."""
+    of each type (sorted, and as a set): what :func:`action_bindings` reads."""
     fluent = domain.fluent_predicates()
     static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
     for a in problem.init:
@@ -163,9 +164,9 @@ def _index(domain: Domain, problem: Problem) -> tuple[
     return fluent, static_tuples, by_type, {t: frozenset(o) for t, o in by_type.items()}
 
 
-def _bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
-              by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
-              fluent: frozenset[str]):
+def action_bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
+                    by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
+                    fluent: frozenset[str]):
     """Yield every parameter binding that satisfies the static preconditions."""
     params = dict(action.parameters)
     fixed = [lit for lit in action.precondition if lit.atom.predicate not in fluent]

@@ -18,11 +18,11 @@ from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.grounding import (
     GroundOp,
     GroundTask,
-    _bindings,
-    _bits,
-    _index,
+    action_bindings,
     goal_masks,
     ground,
+    index_problem,
+    set_bits,
 )
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Problem
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
@@ -218,7 +218,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
     """:func:`ground_ppddl` of a domain with quantified or disjunctive conditions, or
     conditional or quantified effects: reality's ops keep them; the planner's are STRIPS,
     one per alternative and way the conditional effects fire."""
-    fluent, static_tuples, by_type, typed = _index(domain, problem)
+    fluent, static_tuples, by_type, typed = index_problem(domain, problem)
     statics = frozenset(str(a) for a in problem.init if a.predicate not in fluent)
 
     def objects(t: str) -> list[str]:
@@ -237,7 +237,7 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
                                  "problem's objects")
             whole = Junction("and", action.precondition + ((action.condition,)
                                                            if action.condition else ()))
-            for b in _bindings(action, static_tuples, by_type, typed, fluent):
+            for b in action_bindings(action, static_tuples, by_type, typed, fluent):
                 bar.update()
                 pre = ground_dnf(whole, b, objects, static, too_many)
                 if pre:
@@ -348,9 +348,9 @@ def _variants(alts: list[tuple[int, int]], outcome: GroundOutcome, name: str, do
         for p, n, add, dele in variants:
             if not (p | cp) & (n | cn):
                 nxt[(p | cp, n | cn, add | a, dele | d)] = None
-            for bit in _bits(cp & ~p):
+            for bit in set_bits(cp & ~p):
                 nxt[(p, n | (1 << bit), add, dele)] = None
-            for bit in _bits(cn & ~n):
+            for bit in set_bits(cn & ~n):
                 if not (p | (1 << bit)) & n:
                     nxt[(p | (1 << bit), n, add, dele)] = None
         variants = nxt

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.pddl.grounding import _bits
+from gdq_pddl.pddl.grounding import set_bits
 from gdq_pddl.planning.base import (
     Plan,
     PlanningProblem,
@@ -149,10 +149,10 @@ def _facts(task, s0: int, goal: tuple[int, int]) -> str:
     for i, op in enumerate(task.ops):
         for pred, mask in (("pre", op.pre), ("neg", op.neg), ("add", op.add),
                            ("del", op.dele)):
-            out.extend(f"{pred}({i},{b})." for b in _bits(mask))
-    out.extend(f"init({b})." for b in _bits(s0))
-    out.extend(f"goal({b})." for b in _bits(goal[0]))
-    out.extend(f"goal_neg({b})." for b in _bits(goal[1]))
+            out.extend(f"{pred}({i},{b})." for b in set_bits(mask))
+    out.extend(f"init({b})." for b in set_bits(s0))
+    out.extend(f"goal({b})." for b in set_bits(goal[0]))
+    out.extend(f"goal_neg({b})." for b in set_bits(goal[1]))
     return "\n".join(out)
 
 
