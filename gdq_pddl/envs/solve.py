@@ -188,14 +188,15 @@ def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:
     return shortest_path(graph, directed=True, unweighted=True, indices=start)
 
 
-def _task(world: World, task: Task | str) -> Task:
+def resolve_world_task(world: World, task: Task | str) -> Task:
+    """``task`` itself, or the world's task of that name."""
     return world.task(task) if isinstance(task, str) else task
 
 
 def solve_task(world: World, task: Task | str,
                model: ModelArrays | None = None) -> tuple[Solution, int]:
     """Solve ``task`` in ``world``; return the solution and the start full state."""
-    t = _task(world, task)
+    t = resolve_world_task(world, task)
     model = compile_model(world) if model is None else model
     return solve(model, world.index[t.goal]), full_state(world, t.start)
 
@@ -237,7 +238,7 @@ def expected_area_visits(world: World, task: Task | str) -> dict[int, float]:
     A visit is the position observed after an action (the start is not counted); every
     area of the world is a key (0 collects positions in no area, if there are any).
     """
-    t = _task(world, task)
+    t = resolve_world_task(world, task)
     model = compile_model(world)
     solution, s0 = solve_task(world, t, model)
     per_pos = np.zeros(len(world.positions))

@@ -17,7 +17,7 @@ import numpy as np
 
 from gdq_pddl.envs.compact import CompactModel, compile_compact
 from gdq_pddl.envs.model import per_object
-from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
+from gdq_pddl.envs.solve import TIE_TOLERANCE, expected_costs, resolve_world_task
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.reachable import distinct
@@ -172,7 +172,7 @@ def solve_compact(model: CompactModel, start_pos: int, goal_pos: int) -> Compact
 def solve_compact_task(world: World, task: Task | str,
                        model: CompactModel | None = None) -> CompactSolution:
     """:func:`solve_compact` for ``task`` in ``world`` (compiling the model if not given)."""
-    t = _task(world, task)
+    t = resolve_world_task(world, task)
     model = compile_compact(world) if model is None else model
     return solve_compact(model, world.index[t.start], world.index[t.goal])
 
