@@ -3,7 +3,7 @@
     python benchmarks/scale.py [--sizes 100 300 1000] [--repeats 5] [--seed 0]
 
 For each size, the building of ``gdq-pddl building --positions N --seed S`` and its
-task A (start and goal in rooms far apart) plus the reverse of task C:
+task A (start and goal in rooms far apart) plus the reverse of task C (`C-reversed`):
 
 cold      parse the domain and problem, ground, all shortest plans (a fresh problem)
 warm      all shortest plans with the result cache emptied (grounding kept)
@@ -47,7 +47,7 @@ def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dic
     domain = domain_text()
     planner = get_planner("graph")
     out = []
-    tasks = [world.tasks["A"], Task("C'", world.tasks["C"].goal, world.tasks["C"].start)]
+    tasks = [world.tasks["A"], Task("C-reversed", world.tasks["C"].goal, world.tasks["C"].start)]
     for task in tasks:
         text = office_problem(world, task)
 
