@@ -31,7 +31,7 @@ from gdq_pddl.envs.model import (
     slip_outcomes,
 )
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World
+from gdq_pddl.world_types import World
 
 
 class CompactModel(NamedTuple):

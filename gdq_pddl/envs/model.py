@@ -31,7 +31,7 @@ from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, office_problem
+from gdq_pddl.world_types import Task, World, office_problem
 
 PAIR_BYTES = 150
 """Memory one (state, action) pair takes while a model is compiled: its outcomes are
@@ -347,7 +347,7 @@ def office_costs(world: World) -> list[CostDist]:
 
 def compile_model(world: World) -> ModelArrays:
     """The world's true model: :func:`compile_true_model` of its :func:`office_space`
-    under :meth:`World.dynamics <gdq_pddl.world.World.dynamics>` (read-only, compiled
+    under :meth:`World.dynamics <gdq_pddl.world_types.World.dynamics>` (read-only, compiled
     once per world).
 
     Every env, solver and analysis of the same :class:`World` object shares one copy:

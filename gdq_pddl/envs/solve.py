@@ -31,7 +31,7 @@ from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of imp
 from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import ModelArrays, compile_model, full_state, width_of
 from gdq_pddl.limits import check_memory, human_bytes, slow_progress
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 TIE_TOLERANCE = 1e-9
 """Actions whose value is within this of the best count as tied (lowest index wins)."""

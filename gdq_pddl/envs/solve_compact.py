@@ -20,7 +20,7 @@ from gdq_pddl.envs.model import ModelArrays, per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, _task, expected_costs
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.reachable import distinct
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 
 @dataclass(frozen=True)
