@@ -316,7 +316,7 @@ def _interrupt_after(monkeypatch, k: int) -> list:
 
 
 def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypatch):
-    from gdq_pddl.experiments.runner import RunInterrupted
+    from gdq_pddl.experiments.interrupts import RunInterrupted
     from gdq_pddl.experiments.scale import run_scale, steps_per_s
 
     fresh = run_scale(tmp_path / "fresh", **SMALL, **QUIET)
