@@ -26,7 +26,8 @@ import numpy as np
 
 from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
-from gdq_pddl.world import Task, World, load_world
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import Task, World
 
 SETTINGS: dict[str, dict] = {
     "default": {},
@@ -49,7 +50,7 @@ SETTINGS: dict[str, dict] = {
 def mean_returns(world: World, real: World, task, method: str, config: dict,
                  runs: int, episodes: int) -> np.ndarray:
     """float[runs]: each run's mean return per episode (knowledge from ``world``, the env
-    simulating ``real``; ``task`` a name or a :class:`~gdq_pddl.world.Task`)."""
+    simulating ``real``; ``task`` a name or a :class:`~gdq_pddl.world_types.Task`)."""
     ctx = office_task_context(world, task)
     env = OfficeEnv(world=real, task=task) if isinstance(task, str) else \
         OfficeEnv(world=real, start=task.start, goal=task.goal)

@@ -22,7 +22,8 @@ from _timing import median_ms  # benchmarks/_timing.py (this folder is on sys.pa
 from gdq_pddl.abstraction import OfficeAbstraction
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
-from gdq_pddl.world import load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import office_problem
 
 
 def main() -> None:

@@ -39,7 +39,7 @@ from gdq_pddl.learners import make_learner, office_task_context
 from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
-from gdq_pddl.world import Task, office_problem
+from gdq_pddl.world_types import Task, office_problem
 
 
 def measure(n: int, seed: int, repeats: int, tolerance: bool = True) -> list[dict]:

@@ -22,7 +22,8 @@ from gdq_pddl.errors import WorldError
 from gdq_pddl.limits import check_memory
 from gdq_pddl.outputs import output_folder, write_text
 from gdq_pddl.resources import domain_text
-from gdq_pddl.world import Task, World, office_problem, parse_world
+from gdq_pddl.world import parse_world
+from gdq_pddl.world_types import Task, World, office_problem
 
 DOOR_KINDS: tuple[tuple[str, float, float, float], ...] = (
     # label, success, stuck, how often

@@ -13,7 +13,8 @@ from tqdm import tqdm
 
 from gdq_pddl import limits
 from gdq_pddl.learners import office_task_context, precompile
-from gdq_pddl.world import World, load_world
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import World
 from tests.helpers import BACKGROUND
 
 

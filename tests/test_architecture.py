@@ -32,7 +32,7 @@ LAYERS: dict[str, int] = {
     "pddl": 1,
     "planning": 2,
     "abstraction": 3, "spaces": 3,
-    "dynamics": 4, "world": 4, "buildings": 4,
+    "dynamics": 4, "world_types": 4, "world": 4, "buildings": 4,
     "envs": 5,
     "learners": 6,
     "experiments": 7,

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from gdq_pddl.analysis import sections
+from gdq_pddl.analysis import generic, sections
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
 from gdq_pddl.analysis.knowledge import make_knowledge_report
 from gdq_pddl.analysis.pairs import make_pairs_report
@@ -18,7 +18,7 @@ from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
 from gdq_pddl.experiments.results import load_config
 from gdq_pddl.outputs import write_text
 
-SECTIONS = (sections.write_header, sections.write_methods, sections.write_ground_truth,
+SECTIONS = (generic.write_header, generic.write_methods, sections.write_ground_truth,
             sections.write_hypothesis_1, sections.write_hypothesis_2,
             sections.write_hypothesis_3, sections.write_route_c, sections.write_variants,
             sections.write_why_gdq_fails, sections.write_robot)
@@ -33,8 +33,8 @@ def report_text(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
     study = study or Study.open(out)
     w = Writer(study, opts, out)
     if len(study.uncovered) == len(study.experiments):  # no paper experiment
-        w.add("# Run report", "", *sections.setup_lines(study), "")
-        sections.write_methods(w, full=False)
+        w.add("# Run report", "", *generic.setup_lines(study), "")
+        generic.write_methods(w, full=False)
         return "\n".join(w.lines)
     for section in SECTIONS:
         section(w)

@@ -29,7 +29,7 @@ from gdq_pddl.experiments.results import (
     optimal_entry,
     order_methods,
 )
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
 

@@ -18,7 +18,7 @@ if (_REFUSAL := address_space_refusal()) is not None:  # before numpy's BLAS and
 from gdq_pddl.cli import experiments, planning  # noqa: E402 (after the check above)
 from gdq_pddl.cli.common import EXIT_ERROR  # noqa: E402
 from gdq_pddl.errors import GdqError  # noqa: E402
-from gdq_pddl.experiments.runner import RunInterrupted  # noqa: E402
+from gdq_pddl.experiments.interrupts import RunInterrupted  # noqa: E402
 from gdq_pddl.limits import memory_override  # noqa: E402
 from gdq_pddl.outputs import writing  # noqa: E402
 

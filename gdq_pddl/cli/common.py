@@ -19,7 +19,8 @@ from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.problem_reader import problem_file
 from gdq_pddl.planning import get_planner
 from gdq_pddl.resources import problem_domain, resolve, resolve_pddl, shipped_names
-from gdq_pddl.world import Task, World, load_world
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import Task, World
 
 EXIT_ERROR, EXIT_NO_PLAN = 2, 1
 

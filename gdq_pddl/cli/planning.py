@@ -27,7 +27,8 @@ from gdq_pddl.outputs import output_file, output_folder, write_text
 from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
 from gdq_pddl.resources import domain_text, problem_domain, resolve, shipped_names
-from gdq_pddl.world import builtin_world, office_problem
+from gdq_pddl.world import builtin_world
+from gdq_pddl.world_types import office_problem
 
 
 def register_problem(sub) -> None:

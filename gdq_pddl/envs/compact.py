@@ -30,7 +30,7 @@ from gdq_pddl.envs.model import (
 )
 from gdq_pddl.envs.step import draw_outcome, finish_step
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World
+from gdq_pddl.world_types import World
 
 
 class CompactModel(NamedTuple):

@@ -18,7 +18,7 @@ import numpy as np
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.solve import expected_area_visits, expected_costs, optimal_value, solve_task
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 MAX_ROUTE_STEPS = 30
 RELEVANCE_THRESHOLD = 0.05

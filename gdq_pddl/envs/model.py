@@ -42,7 +42,7 @@ from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, office_problem
+from gdq_pddl.world_types import Task, World, office_problem
 
 __all__ = [  # the step's names too, which this module held before envs/step.py
     "CAUSES", "CAUSE_GOAL", "CAUSE_NONE", "CAUSE_STUCK", "CAUSE_TIMEOUT", "NOOP_CHUNK",
@@ -322,7 +322,7 @@ def office_costs(world: World) -> list[CostDist]:
 
 def compile_model(world: World) -> ModelArrays:
     """The world's true model: :func:`compile_true_model` of its :func:`office_space`
-    under :meth:`World.dynamics <gdq_pddl.world.World.dynamics>` (read-only, compiled
+    under :meth:`World.dynamics <gdq_pddl.world_types.World.dynamics>` (read-only, compiled
     once per world).
 
     Every env, solver and analysis of the same :class:`World` object shares one copy:

@@ -3,7 +3,7 @@
 A robot moves between named positions, some pairs of them the two sides of a door that
 a person opens on request (building and dynamics: a world file, default ``office.toml``).
 An :class:`OfficeInstance` is a task of a world as an instance of the one pipeline:
-knowledge ``domains/office.pddl``, reality :meth:`~gdq_pddl.world.World.dynamics` and the
+knowledge ``domains/office.pddl``, reality :meth:`~gdq_pddl.world_types.World.dynamics` and the
 observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v0``
 (:func:`OfficeEnv`) is ``PDDLEnv`` on one; :class:`CompactEnv` suits large buildings.
 
@@ -45,7 +45,8 @@ from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, as_world, office_problem, pick_task
+from gdq_pddl.world import as_world, pick_task
+from gdq_pddl.world_types import Task, World, office_problem
 
 
 def _knowledge(world: World, task: Task | str) -> PlanningProblem:

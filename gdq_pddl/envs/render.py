@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

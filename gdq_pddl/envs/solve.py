@@ -32,7 +32,7 @@ from gdq_pddl.dynamics import COST_KINDS
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.step import ModelArrays, width_of
 from gdq_pddl.limits import check_memory, human_bytes, slow_progress
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 TIE_TOLERANCE = 1e-9
 """Actions whose value is within this of the best count as tied (lowest index wins)."""

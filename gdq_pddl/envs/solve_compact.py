@@ -21,7 +21,7 @@ from gdq_pddl.envs.solve import TIE_TOLERANCE, expected_costs, resolve_world_tas
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.reachable import distinct
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from gdq_pddl.errors import WorldError
-from gdq_pddl.world import World
+from gdq_pddl.world_types import World
 
 
 def deterministic_world(world: World) -> World:

@@ -1,5 +1,6 @@
 """Experiments: the paper's protocol, run in parallel, resumable, collected as CSV/JSON."""
 
+from gdq_pddl.experiments.interrupts import RunInterrupted
 from gdq_pddl.experiments.protocol import (
     DEFAULT_METHODS,
     METHODS,
@@ -12,7 +13,7 @@ from gdq_pddl.experiments.protocol import (
     switch_experiment,
     task_experiments,
 )
-from gdq_pddl.experiments.runner import ResultsError, RunInterrupted, run_experiments
+from gdq_pddl.experiments.runner import ResultsError, run_experiments
 
 __all__ = ["DEFAULT_METHODS", "METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError",
            "RunInterrupted", "Unit", "paper_protocol", "robot_experiment", "run_experiments",

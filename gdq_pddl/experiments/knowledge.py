@@ -25,7 +25,8 @@ from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Experiment
 from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, builtin_world, load_world
+from gdq_pddl.world import builtin_world, load_world
+from gdq_pddl.world_types import Task, World
 
 BUILTIN = ("office", "office_robot")
 """The names of the worlds shipped with the package."""

@@ -29,7 +29,8 @@ from gdq_pddl.experiments.results import load_config, order_methods
 from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
 from gdq_pddl.outputs import atomic_write
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World, WorldError
+from gdq_pddl.world import WorldError
+from gdq_pddl.world_types import World
 
 PAIRS_EXPERIMENT = "pairs"
 """The name of every experiment of a pairs folder."""

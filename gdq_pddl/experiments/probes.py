@@ -12,7 +12,7 @@ from gdq_pddl.experiments.protocol import GDQ_VARIANTS, Hyper
 from gdq_pddl.experiments.results import RunConfig
 from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners.context import office_task_context
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 
 @dataclass(frozen=True)

@@ -10,24 +10,21 @@ Layout of an output folder::
     learners/*.npz   with keep_learners: each run's final learner, named as its unit
 
 An interrupted run loses at most the units in flight; ``resume=True`` checks that the
-configuration and every input file are the same and runs only what is missing.
+configuration and every input file are the same and runs only what is missing. Where the
+units run is :mod:`~gdq_pddl.experiments.executors`; how a stop is caught,
+:mod:`~gdq_pddl.experiments.interrupts`.
 """
 
 from __future__ import annotations
 
-import ctypes
 import json
 import os
 import signal
-import socket
 import sys
 import time
-import warnings
-from collections.abc import Callable, Iterable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -36,67 +33,26 @@ from tqdm import tqdm
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.experiments.checks import preflight
 from gdq_pddl.experiments.collect import collect as collect_episodes
+from gdq_pddl.experiments.executors import Work, execute
 from gdq_pddl.experiments.folder import (
     UNIT_ARRAYS,
     FolderLock,
     ResultsError,
     changed_input,
-    close_inherited_locks,
     input_hashes,
     read_config,
     read_unit,
     resume_config,
     unit_path,
 )
+from gdq_pddl.experiments.interrupts import RunInterrupted, stop_on_signals
 from gdq_pddl.experiments.knowledge import is_file_name
 from gdq_pddl.experiments.protocol import Experiment, Unit
-from gdq_pddl.experiments.work import run_unit, warm_up
-from gdq_pddl.limits import check_count, human_bytes, physical_memory
+from gdq_pddl.experiments.work import run_unit
+from gdq_pddl.limits import check_count
 from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
-from gdq_pddl.pddl.reachable import MEMORY_SHARE
 
 __all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_experiments"]
-
-
-class RunInterrupted(ResultsError):
-    """The run was stopped (Ctrl-C, SIGTERM or SIGHUP: ``signal``); what finished is saved."""
-
-    def __init__(self, message: str, signum: int = signal.SIGINT) -> None:
-        super().__init__(message)
-        self.signal = signum
-
-    def __reduce__(self):
-        return type(self), (str(self), self.signal)
-
-
-class _Stopped(KeyboardInterrupt):
-    """SIGTERM or SIGHUP in the driver, raised as Ctrl-C's KeyboardInterrupt would be."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signal.Signals(signum).name)
-        self.signal = signum
-
-
-STOP_SIGNALS = (signal.SIGTERM, getattr(signal, "SIGHUP", signal.SIGTERM))
-"""The signals besides SIGINT (Ctrl-C) that stop a run cleanly: its workers end with it."""
-
-
-@contextmanager
-def _stop_on_signals() -> Iterator[None]:
-    """While the block runs, SIGTERM and SIGHUP raise :class:`_Stopped` (main thread only)."""
-    def stop(signum: int, _frame: object) -> None:
-        raise _Stopped(signum)
-
-    try:
-        previous = {s: signal.signal(s, stop) for s in STOP_SIGNALS}
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
 
 
 def versions() -> dict[str, str]:
@@ -213,9 +169,6 @@ def run_unit_keeping_learner(unit: Unit) -> dict[str, np.ndarray]:
     return run_unit(unit, keep_learner=True)
 
 
-Work = Callable[[Unit], dict[str, np.ndarray]]
-"""What runs one unit (a module-level function: worker processes and Ray pickle it by name)."""
-
 
 def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None = None,
                     executor: str = "local", address: str | None = None,
@@ -240,7 +193,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
     wanted = check_jobs(jobs)
     preflight(experiments, wanted)
     output_folder(out)
-    with FolderLock(out), _stop_on_signals():
+    with FolderLock(out), stop_on_signals():
         pending = prepare(out, experiments, resume, unit_arrays)
         processes = min(wanted, max(1, len(pending)))
         if log is not None and not pending:
@@ -257,7 +210,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                              progress, work)
                 _check_unchanged(out, experiments)
                 collect(out, experiments)
-            except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP (_Stopped)
+            except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP (stop_on_signals)
                 raise _interrupted(out, experiments, resume, exc) from None
         except Exception:
             if not resume and not _held(out):  # nothing saved: leave no config.json behind
@@ -305,7 +258,7 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
                dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
     units_dir = out / "units"
     try:
-        for unit, result in _execute(pending, jobs, executor, address, work):
+        for unit, result in execute(pending, jobs, executor, address, work):
             learner = result.pop("learner", None)
             if learner is not None:  # before its unit: a saved unit has its learner
                 atomic_write(out / "learners" / f"{unit.key}.npz",
@@ -316,131 +269,3 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
         bar.close()
 
 
-def _execute(units: list[Unit], jobs: int | None, executor: str, address: str | None,
-             work: Work = run_unit) -> Iterable[tuple[Unit, dict[str, np.ndarray]]]:
-    if not units:
-        return iter(())
-    if executor == "ray":
-        return _ray(units, jobs, address, work)
-    if executor != "local":
-        raise ResultsError(f"unknown executor {executor!r} (known: local, ray)")
-    jobs = jobs or os.cpu_count() or 1
-    if jobs == 1 or len(units) == 1:
-        return ((u, work(u)) for u in units)
-    return _processes(units, jobs, work)
-
-
-def _init_worker() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the driver handles Ctrl-C for everyone
-    for s in STOP_SIGNALS:  # the driver's handlers, inherited by the fork: end quietly
-        signal.signal(s, signal.SIG_DFL)
-    _die_with_parent()
-    close_inherited_locks()
-
-
-PR_SET_PDEATHSIG = 1
-"""Linux's ``prctl`` option: the signal a process gets when its parent dies."""
-
-
-def _die_with_parent() -> None:
-    """Have the kernel send this worker SIGTERM when the driver dies, SIGKILL included, so
-    no worker runs on as an orphan (Linux only)."""
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
-    except (OSError, AttributeError):  # pragma: no cover (no libc prctl)
-        return
-    if os.getppid() == 1:  # the driver died before the prctl took effect
-        os._exit(1)
-
-
-def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray]]:
-    return job[0], job[2](job[1])
-
-
-def memory_jobs(jobs: int, per_run: int, have: int, in_use: int) -> int:
-    """How many of ``jobs`` worker processes fit in memory: each adds its learner's tables
-    (``per_run`` bytes) to what it shares with the parent (``in_use``, the instance and
-    its plans, inherited copy-on-write), within :data:`MEMORY_SHARE` of ``have``; at
-    least 1, as one process is the run itself (its tables were checked to fit)."""
-    free = MEMORY_SHARE * have - in_use
-    return max(1, min(jobs, int(free // max(1, per_run))))
-
-
-def _resident_bytes() -> int:
-    """This process's resident memory now; 0 where /proc does not say (not Linux)."""
-    try:
-        with open("/proc/self/statm") as f:
-            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
-
-
-def _processes(units: list[Unit], jobs: int, work: Work = run_unit):
-    # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
-    per_run = warm_up(units)
-    fit = memory_jobs(jobs, per_run, physical_memory(), _resident_bytes())
-    if fit < jobs:  # each worker's tables on top: more would be killed for memory
-        warnings.warn(f"{jobs} worker processes (--jobs) capped at {fit}: each run's "
-                      f"learner tables take {human_bytes(per_run)}, and this machine has "
-                      f"{human_bytes(physical_memory())} (GDQ_PDDL_MEMORY), "
-                      f"{human_bytes(_resident_bytes())} of it held already", stacklevel=2)
-        jobs = fit
-        if jobs == 1:
-            yield from ((u, work(u)) for u in units)
-            return
-    # multiprocessing.Pool, not ProcessPoolExecutor: on Ctrl-C the workers in flight are
-    # terminated, and an executor whose workers were terminated can hang the interpreter
-    # at exit (its manager thread waits on a half-written result pipe).
-    pool = get_context("fork").Pool(jobs, initializer=_init_worker)
-    try:
-        tagged = ((i, u, work) for i, u in enumerate(units))
-        for i, result in pool.imap_unordered(_run_indexed, tagged):
-            yield units[i], result
-        pool.close()
-    finally:
-        pool.terminate()
-        pool.join()
-
-
-def _ray(units: list[Unit], jobs: int | None, address: str | None, work: Work = run_unit):
-    try:
-        import ray  # optional dependency: imported only when --executor ray asks for it
-    except ImportError:
-        raise ResultsError("--executor ray needs the optional package ray "
-                           "(pip install 'gdq_pddl[ray]')") from None
-    started = not ray.is_initialized()
-    if started:
-        if address:
-            _check_reachable(address)
-        kwargs = {"address": address} if address else {"num_cpus": jobs or os.cpu_count()}
-        try:
-            ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
-        except Exception as exc:  # connection refused, bad address ...
-            raise ResultsError(f"cannot reach a Ray cluster at {address or 'local'}: "
-                               f"{exc}") from None
-    remote = ray.remote(work)
-    try:
-        refs = {remote.remote(u): u for u in units}
-        pending = list(refs)
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            for ref in done:
-                yield refs[ref], ray.get(ref)
-    finally:
-        if started:
-            ray.shutdown()
-
-
-def _check_reachable(address: str, timeout: float = 5.0) -> None:
-    """Fail fast on a ``host:port`` nobody answers (ray.init retries for minutes)."""
-    host, sep, port = address.removeprefix("ray://").rpartition(":")
-    if not sep or not port.isdigit():
-        return  # "auto" and other forms: let Ray resolve them
-    try:
-        socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout).close()
-    except OSError as exc:
-        raise ResultsError(f"cannot reach a Ray cluster at {address}: {exc.strerror or exc}"
-                           ) from None

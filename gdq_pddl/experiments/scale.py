@@ -41,9 +41,10 @@ from gdq_pddl.experiments.folder import (
     read_config,
     resume_config,
 )
+from gdq_pddl.experiments.interrupts import RunInterrupted
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
 from gdq_pddl.experiments.protocol import SCALE_METHODS as METHODS
-from gdq_pddl.experiments.runner import RunInterrupted, atomic_write, save_unit, versions
+from gdq_pddl.experiments.runner import atomic_write, save_unit, versions
 from gdq_pddl.learners import make_learner
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact

@@ -19,7 +19,7 @@ from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
 from gdq_pddl.learners.saving import save_learner
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 
 def resolve_task(world: World, spec: str) -> Task:

@@ -23,7 +23,7 @@ from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import human_bytes, physical_memory
-from gdq_pddl.world import Task, World
+from gdq_pddl.world_types import Task, World
 
 
 class Instance(Protocol):

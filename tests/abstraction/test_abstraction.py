@@ -8,7 +8,8 @@ from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
-from gdq_pddl.world import load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import office_problem
 
 
 @pytest.fixture(scope="module")

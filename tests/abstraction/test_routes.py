@@ -15,7 +15,8 @@ from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.planning import PlanningProblem
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import Task, office_problem
 
 TOL = 0.3
 

@@ -25,7 +25,8 @@ from gdq_pddl.experiments.results import load_config
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import World, builtin_world, load_world, office_problem
+from gdq_pddl.world import builtin_world, load_world
+from gdq_pddl.world_types import World, office_problem
 
 METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
 ROBOT_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q")  # robot_experiment's default

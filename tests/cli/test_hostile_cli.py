@@ -322,7 +322,7 @@ def _alive(pid: int) -> bool:
 def test_a_stop_signal_ends_the_workers_and_leaves_a_resumable_folder(tmp_path, capsys):
     """SIGTERM during --jobs 2 used to kill the driver alone (exit 143) while its workers
     ran on as orphans and then printed BrokenPipeError tracebacks. (SIGHUP takes the same
-    path: runner.STOP_SIGNALS.)"""
+    path: interrupts.STOP_SIGNALS.)"""
     signum = signal.SIGTERM
     argv = [sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C", "--episodes", "20000",
             "--runs", "6", "--method", "Q-learning", "--jobs", "2", "--out", str(tmp_path),

@@ -17,7 +17,8 @@ from gdq_pddl.envs.solve_compact import (
     solve_compact_task,
 )
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, World, parse_world
+from gdq_pddl.world import parse_world
+from gdq_pddl.world_types import Task, World
 from tests.helpers import corridor_text
 
 

@@ -114,7 +114,7 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
 
 
 def test_workers_are_capped_by_the_memory_their_tables_need():
-    from gdq_pddl.experiments.runner import memory_jobs
+    from gdq_pddl.experiments.executors import memory_jobs
 
     gb = 10**9
     assert memory_jobs(2, per_run=gb, have=16 * gb, in_use=gb) == 2
@@ -127,9 +127,9 @@ def test_too_many_jobs_for_memory_run_fewer_with_the_same_results(tmp_path, two_
                                                                  monkeypatch):
     # a machine where the parent fits but not a second worker's tables: one process,
     # said, and the results of any number of jobs
-    import gdq_pddl.experiments.runner as runner
+    import gdq_pddl.experiments.executors as executors
 
-    monkeypatch.setattr(runner, "physical_memory", lambda: 1)
+    monkeypatch.setattr(executors, "physical_memory", lambda: 1)
     with pytest.warns(UserWarning, match=r"2 worker processes \(--jobs\) capped at 1"):
         run_experiments(task_experiments(tasks=("C",), **SMALL), tmp_path / "capped", jobs=2)
     assert (tmp_path / "capped" / "episodes.csv").read_bytes() == \

@@ -18,7 +18,8 @@ from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.planning import PlanningProblem, get_planner
 from gdq_pddl.resources import domain_text
-from gdq_pddl.world import Task, load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import Task, office_problem
 
 
 def test_generator_is_deterministic_and_validates(tmp_path):
@@ -315,7 +316,7 @@ def _interrupt_after(monkeypatch, k: int) -> list:
 
 
 def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypatch):
-    from gdq_pddl.experiments.runner import RunInterrupted
+    from gdq_pddl.experiments.interrupts import RunInterrupted
     from gdq_pddl.experiments.scale import run_scale, steps_per_s
 
     fresh = run_scale(tmp_path / "fresh", **SMALL, **QUIET)

@@ -27,7 +27,8 @@ from gdq_pddl.learners import (
     tables,
 )
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import Task, load_world
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import Task
 from tests.helpers import Recording, run
 
 WORLD = load_world()

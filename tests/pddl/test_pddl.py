@@ -10,7 +10,8 @@ import pytest
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import ground, parse_domain, parse_problem
 from gdq_pddl.resources import domain_text, problem_text
-from gdq_pddl.world import load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import office_problem
 from tests.helpers import BACKGROUND
 
 TINY_DOMAIN = """(define (domain tiny)

@@ -12,7 +12,8 @@ from gdq_pddl.planning.clingo_backend import ClingoPlanner
 from gdq_pddl.planning.graph import GraphPlanner
 from gdq_pddl.planning.pyperplan_backend import PyperplanPlanner
 from gdq_pddl.planning.validate import validate_plan
-from gdq_pddl.world import load_world, office_problem
+from gdq_pddl.world import load_world
+from gdq_pddl.world_types import office_problem
 
 LENGTHS = {"A": 5, "B": 4, "C": 8, "D": 9}
 COUNTS = {"C": 2, "D": 3}
