@@ -217,7 +217,7 @@ def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
-def _draw_near_best(table: QTable, prior_next: np.ndarray, p: Params, s: int,
+def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
                     rng: np.random.Generator) -> int:
     """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
     DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
@@ -227,10 +227,10 @@ def _draw_near_best(table: QTable, prior_next: np.ndarray, p: Params, s: int,
     floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
     n = 0
     for a in range(table.n_live[s]):
-        n += _near_best(table, prior_next, p, s, a, floor)
+        n += _near_best(table, prior, p, s, a, floor)
     k = rng.integers(0, n)
     for a in range(table.n_live[s]):
-        if _near_best(table, prior_next, p, s, a, floor):
+        if _near_best(table, prior, p, s, a, floor):
             if k == 0:
                 return a
             k -= 1
@@ -238,21 +238,25 @@ def _draw_near_best(table: QTable, prior_next: np.ndarray, p: Params, s: int,
 
 
 @numba.njit(cache=True, inline="always")
-def _near_best(table: QTable, prior_next: np.ndarray, p: Params, s: int, a: int,
+def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int,
                floor: float) -> bool:
     """Whether an exploring step may draw ``a`` in ``s``: allowed, with ``q >= floor``,
     and, unless ``explore_loops``, not a move the next greedy step undoes (the prior
-    leads ``a`` to ``x`` and a greedy action of ``x`` leads back to ``s``): far from the
-    goal the band is wide enough for such a two-step loop (put a block down, pick it up
-    again), which makes no way and, where moves are risky, adds the risk of two."""
+    leads ``a`` to ``x`` and a greedy action of ``x`` leads back to ``s``; the pairs the
+    prior leads to ``s`` are ``prior.pp_*``'s, a handful): far from the goal the band is
+    wide enough for such a two-step loop (put a block down, pick it up again), which
+    makes no way and, where moves are risky, adds the risk of two."""
     q, v, allowed = table.q, table.v, table.allowed
     if not allowed[s, a] or q[s, a] < floor:
         return False
-    x = prior_next[s, a]
+    x = prior.next_state[s, a]
     if p.explore_loops > 0.0 or q[s, a] >= v[s] or x < 0 or x == s:
         return True
-    for b in range(table.n_live[x]):
-        if allowed[x, b] and q[x, b] >= v[x] and prior_next[x, b] == s:
+    n_actions = q.shape[1]
+    for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
+        pair = prior.pp_pair[k]
+        b = pair - x * n_actions
+        if 0 <= b < n_actions and allowed[x, b] and q[x, b] >= v[x]:
             return False
     return True
 
@@ -287,7 +291,7 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 
 
 @numba.njit(cache=True)
-def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
         rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
     uniform action of ``guide[s]``, or for the default GDQ (``explore_band >= 0``) of the
@@ -300,10 +304,10 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
     if rng.random() < p.epsilon:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
-                or not _one_step_from_goal(table.goal, prior_next, s)):
+                or not _one_step_from_goal(table.goal, prior.next_state, s)):
             return _draw_untried(visits, table.n_live, s, rng)
         if p.explore_band >= 0.0 and p.kind == KIND_GDQ:
-            return _draw_near_best(table, prior_next, p, s, rng)
+            return _draw_near_best(table, prior, p, s, rng)
         return _draw_guided(table, s, rng)
     best = table.v[s]
     ties = 0

@@ -103,7 +103,7 @@ def _check_exploring_sets(ns: dict) -> None:
 
     def drawn(learner, s: int) -> set[str]:
         t, params = learner.tables, learner.params
-        return {spaces.action_name(int(_draw_near_best(t.table, t.prior.next_state, params,
+        return {spaces.action_name(int(_draw_near_best(t.table, t.prior, params,
                                                          s, rng)))
                 for _ in range(400)}
 
