@@ -14,8 +14,8 @@ the knowledge, in how many runs the final greedy policy takes the corridor, and 
 return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these figures.
 ``losses``: a diagnostic, not a tuning step: on the pairs a ``gdq-pddl pairs`` folder
 counts as losses against DARLING, GDQ minus DARLING with the default, with
-``explore_all = 0``, with ``explore_all_last_step = False`` and with ``explore = "plans"``
-(same seeds as ``tasks``).
+``explore_all = 0``, with ``explore_all_last_step = False``, with ``explore = "plans"``
+and with ``explore_loops = True`` (same seeds as ``tasks``).
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ SETTINGS: dict[str, dict] = {
     "prior_weight = 2": {"prior_weight": 2.0},
     "explore = plans": {"explore": "plans"},
     "explore = applicable": {"explore": "applicable"},
+    "explore_loops = True": {"explore_loops": True},
     "explore_all = 0": {"explore_all": 0.0},
     "explore_all = 0.25": {"explore_all": 0.25},
     "n_backups = 1": {"n_backups": 1},
@@ -120,7 +121,8 @@ def losses(folder: str, runs: int = 10, episodes: int = 300) -> None:
           f"{np.median(lengths):g}, longest {max(lengths)}; {runs} runs x {episodes} episodes")
     for label, config in (("default", {}), ("explore_all = 0", {"explore_all": 0.0}),
                           ("explore_all_last_step = False", {"explore_all_last_step": False}),
-                          ("explore = plans", {"explore": "plans"})):
+                          ("explore = plans", {"explore": "plans"}),
+                          ("explore_loops = True", {"explore_loops": True})):
         diffs = []
         for r in rows:
             t = Task(f"{r['start']}->{r['goal']}", r["start"], r["goal"])

@@ -139,6 +139,12 @@ class GDQConfig(LearnerConfig):
     actions of the plans within ``plan_tolerance`` from the current state (DARLING's set;
     every action in a state with no plan); ``"applicable"``, every action the knowledge
     says can do something here. Why ``"values"``: ``docs/decisions.md``."""
+    explore_loops: bool = False
+    """``prior`` with ``explore="values"`` only: whether an exploring step may draw a move
+    that the next greedy step would undo, where the knowledge says it leads to a state
+    whose greedy action leads straight back (a two-step loop: put a block down, pick it
+    up again). False: such moves are left out, as DARLING's plans are loop-free. Why:
+    ``docs/decisions.md``."""
     explore_all: float | None = None
     """``prior`` only: this share of exploring steps draws from every action instead,
     one never tried in the current state first (any action once all were). Above 0 the
@@ -187,6 +193,7 @@ class GDQConfig(LearnerConfig):
         if self.explore_all is not None:
             check_real("explore_all", self.explore_all, 0.0, 1.0)
         check_choice("explore_all_last_step", self.explore_all_last_step, (True, False))
+        check_choice("explore_loops", self.explore_loops, (True, False))
         for name in ("prior_weight", "prior_cost", "sweep_threshold"):
             check_real(name, getattr(self, name), 0.0, MAX_NUMBER)
 

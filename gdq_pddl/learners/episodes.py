@@ -315,7 +315,7 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = act(table, model.visits, prior.next_state, p, s, rng)
+            a = act(table, model.visits, prior, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)

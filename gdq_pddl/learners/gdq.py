@@ -21,7 +21,8 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
   ``n_backups`` are done; the heap carries the rest to the next step.
 - ``allowed`` (what v and the greedy choice range over) holds the applicable and the
   known pairs (every action where nothing is applicable). Exploring steps draw among
-  the allowed actions whose value is near the state's (``explore_band``), a share
+  the allowed actions whose value is near the state's (``explore_band``) but for a move
+  the next greedy step would undo (``explore_loops``), a share
   ``explore_all`` of them an untried action instead where the knowledge may lack
   actions (:func:`gdq_pddl.learners.tables.act`).
 

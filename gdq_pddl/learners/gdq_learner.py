@@ -116,7 +116,8 @@ class GDQ(TabularLearner):
                 "prior_cost": prior_step_cost(c.prior_cost, self.context),
                 "sweep_threshold": float(c.sweep_threshold),
                 "prior_weight": float(c.prior_weight),
-                "explore_band": float(c.plan_tolerance) if c.explore == "values" else -1.0}
+                "explore_band": float(c.plan_tolerance) if c.explore == "values" else -1.0,
+                "explore_loops": float(c.explore_loops)}
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
         if self.kind != KIND_GDQ:

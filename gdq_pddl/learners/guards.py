@@ -147,7 +147,7 @@ def check_tables(t: Tables, p: Params) -> None:
     check_state("s0", p.s0, q.shape[0])
     for name in ("alpha", "gamma", "epsilon", "r_max", "opt_continue", "explore_all",
                  "explore_all_last", "prior_cost", "sweep_threshold", "prior_weight",
-                 "own_scale", "explore_band"):
+                 "own_scale", "explore_band", "explore_loops"):
         x = getattr(p, name)
         if not math.isfinite(x) or abs(x) > MAX_NUMBER:
             raise ConfigError(f"{where}: {name} must be finite, at most {MAX_NUMBER:g} in "

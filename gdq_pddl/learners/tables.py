@@ -69,6 +69,9 @@ class Params(NamedTuple):
     """``KIND_GDQ``: at least 0, an exploring step (but for the ``explore_all`` share) draws
     among the allowed actions whose Q is within this tolerance of the state's value,
     ``q >= v - explore_band * max(0, r_max - v)``; below 0, from ``guide``."""
+    explore_loops: float = 1.0
+    """``KIND_GDQ`` with ``explore_band``: 0, such a draw leaves out a move that a greedy
+    step from where the prior says it leads would undo (:func:`_near_best`)."""
 
 
 class QTable(NamedTuple):
@@ -214,23 +217,48 @@ def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
-def _draw_near_best(table: QTable, p: Params, s: int, rng: np.random.Generator) -> int:
+def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
+                    rng: np.random.Generator) -> int:
     """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
     DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
-    short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost).
-    The state's greedy actions always qualify."""
-    q, allowed, n_live = table.q, table.allowed, table.n_live[s]
+    short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost),
+    and loop-free as DARLING's plans are (:func:`_near_best`). The state's greedy
+    actions always qualify."""
     floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
     n = 0
-    for a in range(n_live):
-        n += allowed[s, a] and q[s, a] >= floor
+    for a in range(table.n_live[s]):
+        n += _near_best(table, prior, p, s, a, floor)
     k = rng.integers(0, n)
-    for a in range(n_live):
-        if allowed[s, a] and q[s, a] >= floor:
+    for a in range(table.n_live[s]):
+        if _near_best(table, prior, p, s, a, floor):
             if k == 0:
                 return a
             k -= 1
     return 0  # unreachable: the greedy actions are counted
+
+
+@numba.njit(cache=True, inline="always")
+def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int,
+               floor: float) -> bool:
+    """Whether an exploring step may draw ``a`` in ``s``: allowed, with ``q >= floor``,
+    and, unless ``explore_loops``, not a move the next greedy step undoes (the prior
+    leads ``a`` to ``x`` and a greedy action of ``x`` leads back to ``s``; the pairs the
+    prior leads to ``s`` are ``prior.pp_*``'s, a handful): far from the goal the band is
+    wide enough for such a two-step loop (put a block down, pick it up again), which
+    makes no way and, where moves are risky, adds the risk of two."""
+    q, v, allowed = table.q, table.v, table.allowed
+    if not allowed[s, a] or q[s, a] < floor:
+        return False
+    x = prior.next_state[s, a]
+    if p.explore_loops > 0.0 or q[s, a] >= v[s] or x < 0 or x == s:
+        return True
+    n_actions = q.shape[1]
+    for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
+        pair = prior.pp_pair[k]
+        b = pair - x * n_actions
+        if 0 <= b < n_actions and allowed[x, b] and q[x, b] >= v[x]:
+            return False
+    return True
 
 
 @numba.njit(cache=True)
@@ -263,7 +291,7 @@ def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> boo
 
 
 @numba.njit(cache=True)
-def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s: int,
+def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
         rng: np.random.Generator) -> int:
     """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
     uniform action of ``guide[s]``, or for the default GDQ (``explore_band >= 0``) of the
@@ -276,10 +304,10 @@ def act(table: QTable, visits: np.ndarray, prior_next: np.ndarray, p: Params, s:
     if rng.random() < p.epsilon:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
-                or not _one_step_from_goal(table.goal, prior_next, s)):
+                or not _one_step_from_goal(table.goal, prior.next_state, s)):
             return _draw_untried(visits, table.n_live, s, rng)
         if p.explore_band >= 0.0 and p.kind == KIND_GDQ:
-            return _draw_near_best(table, p, s, rng)
+            return _draw_near_best(table, prior, p, s, rng)
         return _draw_guided(table, s, rng)
     best = table.v[s]
     ties = 0

@@ -185,7 +185,7 @@ class TabularLearner:
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
-        column = int(act(t.table, t.model.visits, t.prior.next_state, self.params, s, rng))
+        column = int(act(t.table, t.model.visits, t.prior, self.params, s, rng))
         return self.context.action_of(s, column)
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,

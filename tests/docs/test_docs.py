@@ -102,8 +102,9 @@ def _check_exploring_sets(ns: dict) -> None:
     rng = np.random.default_rng(0)
 
     def drawn(learner, s: int) -> set[str]:
-        table, params = learner.tables.table, learner.params
-        return {spaces.action_name(int(_draw_near_best(table, params, s, rng)))
+        t, params = learner.tables, learner.params
+        return {spaces.action_name(int(_draw_near_best(t.table, t.prior, params,
+                                                         s, rng)))
                 for _ in range(400)}
 
     for learner in (fresh, gdq):  # the tutorial's "what the max ranges over"

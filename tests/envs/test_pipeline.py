@@ -113,20 +113,32 @@ KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=
 
 
 @pytest.mark.parametrize("exp,method,pinned", [
-    (OFFICE_RUN, "GDQ", "5158e3ad79977194"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
-    (KEYS_RUN, "GDQ", "3d914ee2216ec11b"), (KEYS_RUN, "Dyna-Q", "94ca498528125fed")])
+    (OFFICE_RUN, "GDQ", "8aed483bf26565ef"), (OFFICE_RUN, "DARLING", "bd5cf209f29ea9b1"),
+    (KEYS_RUN, "GDQ", "4e8f3cb55273b2aa"), (KEYS_RUN, "Dyna-Q", "94ca498528125fed")])
 def test_a_short_run_is_the_one_it_was(exp, method, pinned):
-    """GDQ's pins changed once more on purpose: its exploring steps draw near its own
-    best values (docs/decisions.md); the former rule still gives the former bits (below)."""
+    """GDQ's pins changed twice more on purpose: its exploring steps draw near its own
+    best values, then leave out two-step loops (docs/decisions.md); each former rule
+    still gives its former bits (below)."""
     assert _run_digest(exp, method) == pinned
+
+
+def _gdq_with(monkeypatch, **setting) -> None:
+    from gdq_pddl.experiments import work
+
+    make = work.learner_by_name
+    monkeypatch.setattr(work, "learner_by_name", lambda method, context, **kw: make(
+        method, context, **kw, **(setting if method == "GDQ" else {})))
+
+
+@pytest.mark.parametrize("exp,pinned", [(OFFICE_RUN, "5158e3ad79977194"),
+                                        (KEYS_RUN, "3d914ee2216ec11b")])
+def test_gdq_exploring_loops_too_is_the_former_gdq(monkeypatch, exp, pinned):
+    _gdq_with(monkeypatch, explore_loops=True)
+    assert _run_digest(exp, "GDQ") == pinned
 
 
 @pytest.mark.parametrize("exp,pinned", [(OFFICE_RUN, "4156845d332efb79"),
                                         (KEYS_RUN, "371a82762842e5ff")])
 def test_gdq_exploring_along_the_plans_is_the_former_gdq(monkeypatch, exp, pinned):
-    from gdq_pddl.experiments import work
-
-    make = work.learner_by_name
-    monkeypatch.setattr(work, "learner_by_name", lambda method, context, **kw: make(
-        method, context, **kw, **({"explore": "plans"} if method == "GDQ" else {})))
+    _gdq_with(monkeypatch, explore="plans")
     assert _run_digest(exp, "GDQ") == pinned

@@ -264,6 +264,37 @@ def test_exploring_steps_draw_the_actions_near_the_best_value(ctx_c):
     assert plans.explore_band < 0  # the former rule: the plans' first actions (guide)
 
 
+def _two_step_loops(learner) -> set[tuple[int, int]]:
+    """The pairs within the exploring band, not greedy, whose prior successor has a greedy
+    action the prior leads straight back (computed here with numpy, not the kernel)."""
+    t, p, leads = learner.tables.table, learner.params, learner.tables.prior.next_state
+    out = set()
+    for s in np.flatnonzero(~t.goal):
+        floor = t.v[s] - p.explore_band * max(0.0, p.r_max - t.v[s])
+        for a in np.flatnonzero(t.allowed[s] & (t.q[s] >= floor) & (t.q[s] < t.v[s])):
+            x = leads[s, a]
+            if x >= 0 and x != s and (leads[x, t.allowed[x] & (t.q[x] >= t.v[x])] == s).any():
+                out.add((int(s), int(a)))
+    return out
+
+
+def test_exploring_steps_leave_out_a_move_the_next_greedy_step_undoes(ctx_c):
+    """``explore_loops=False`` (the default): a move within the band whose prior successor's
+    greedy step leads straight back is never drawn; ``True`` draws it as before."""
+    config = {"epsilon": 1.0, "explore_all": 0.0, "n_backups": 0}
+    default = GDQ(ctx_c, GDQConfig(**config))
+    looping = GDQ(ctx_c, GDQConfig(**config, explore_loops=True))
+    assert not default.config.explore_loops and default.params.explore_loops == 0.0
+    pairs = _two_step_loops(default)
+    assert pairs and pairs == _two_step_loops(looping)  # after OptInit on task C: 2 pairs
+    rng = np.random.default_rng(0)
+    for s in {s for s, _ in pairs}:
+        loops = {a for x, a in pairs if x == s}
+        drawn = {default.act(s, rng) for _ in range(2000)}
+        drawn_too = {looping.act(s, rng) for _ in range(2000)}
+        assert drawn_too - drawn == loops and not drawn & loops
+
+
 @pytest.mark.parametrize(("domain", "problem", "dynamics", "exact"), [
     ("keys", "keys-1", "keys", False),  # STRIPS + a dynamics file: reality may differ
     ("keys-ppddl", "keys-ppddl-2", None, True),  # PPDDL: the actions and outcomes are reality's
