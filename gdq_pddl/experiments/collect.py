@@ -1,13 +1,14 @@
 """Turn the per-unit files of an output folder into its CSV and JSON results:
 ``episodes.csv`` (:data:`EPISODE_COLUMNS`, then ``area_1 .. area_K`` for a problem with
-areas) and ``policies.csv`` (each run's final greedy action per learner state), text
-quoted as the ``csv`` module quotes it."""
+areas) and ``policies.csv`` (each run's final greedy action per learner state, up to
+:data:`MAX_POLICY_ROWS` rows), text quoted as the ``csv`` module quotes it."""
 
 from __future__ import annotations
 
 import csv
 import io
 import json
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -22,6 +23,11 @@ EPISODE_COLUMNS = ("experiment", "method", "task", "run", "episode", "return", "
                    "success")
 POLICY_COLUMNS = ("experiment", "method", "task", "run", "state", "action", "state_name",
                   "action_name")
+MAX_POLICY_ROWS = 5_000_000
+"""The most rows ``policies.csv`` is written with (one per learner state and run, with the
+state's name: on a PDDL problem of millions of states, gigabytes of text that took longer
+to write than the runs took); past it the file is left out, and each run's greedy
+policy stays in its unit file (``units/<key>.npz``, array ``policy``)."""
 
 
 def csv_field(text: str) -> str:
@@ -66,7 +72,17 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
                                  for s, a in enumerate(data["policy"].tolist()))
 
     atomic_write(out / "episodes.csv", write_episodes)
-    atomic_write(out / "policies.csv", write_policies)
+    rows = sum(instance_of(u.experiment, u.experiment.schedule[-1][0]).n_states
+               for u in units)
+    if rows <= MAX_POLICY_ROWS:
+        atomic_write(out / "policies.csv", write_policies)
+    else:
+        (out / "policies.csv").unlink(missing_ok=True)  # not one of another configuration
+        warnings.warn(f"policies.csv left out: {len(units):,} runs x their learner states "
+                      f"make {rows:,} rows, more than {MAX_POLICY_ROWS:,} "
+                      "(gdq_pddl.experiments.collect.MAX_POLICY_ROWS); each run's greedy "
+                      f"policy is in its unit file, {out / 'units'}/*.npz (array 'policy')",
+                      stacklevel=2)
     optimal = optimal_summary(experiments)
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
 

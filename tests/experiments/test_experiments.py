@@ -113,6 +113,25 @@ def test_a_killed_run_resumes_without_losing_or_duplicating(tmp_path):
     assert len(keys) == len(set(keys)) == 3 * 4 * 400
 
 
+def test_policies_csv_is_left_out_past_its_row_limit(tmp_path, monkeypatch):
+    """A PDDL problem of millions of states would make gigabytes of policies.csv: past
+    MAX_POLICY_ROWS it is not written (said), the report still is, the policies stay in
+    the unit files."""
+    from gdq_pddl.experiments import collect
+
+    argv = ["run", "--domain", "keys-ppddl", "--problem", "keys-ppddl-1", "--episodes", "5",
+            "--runs", "2", "--method", "GDQ", "--jobs", "1"]
+    assert main([*argv, "--out", str(tmp_path / "all")]) == 0
+    rows = (tmp_path / "all" / "policies.csv").read_text().count("\n") - 1
+    monkeypatch.setattr(collect, "MAX_POLICY_ROWS", rows - 1)
+    with pytest.warns(UserWarning, match=f"policies.csv left out: .* {rows:,} rows"):
+        assert main([*argv, "--out", str(tmp_path / "capped")]) == 0
+    assert not (tmp_path / "capped" / "policies.csv").exists()
+    assert (tmp_path / "capped" / "REPORT.md").exists()
+    units = sorted((tmp_path / "capped" / "units").glob("*.npz"))
+    assert len(units) == 2 and all("policy" in np.load(u) for u in units)
+
+
 def test_workers_are_capped_by_the_memory_their_tables_need():
     from gdq_pddl.experiments.executors import memory_jobs
 
