@@ -250,8 +250,8 @@ def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int,
     if not allowed[s, a] or q[s, a] < floor:
         return False
     x = prior.next_state[s, a]
-    if p.explore_loops > 0.0 or q[s, a] >= v[s] or x < 0 or x == s:
-        return True
+    if p.explore_loops > 0.0 or q[s, a] >= v[s] or x < 0 or x == s or table.goal[x]:
+        return True  # a goal ends the episode: no step undoes a move into it
     n_actions = q.shape[1]
     for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
         pair = prior.pp_pair[k]

@@ -295,6 +295,22 @@ def test_exploring_steps_leave_out_a_move_the_next_greedy_step_undoes(ctx_c):
         assert drawn_too - drawn == loops and not drawn & loops
 
 
+def test_a_move_into_the_goal_is_never_taken_for_a_loop(ctx_c):
+    """The episode ends in a goal, so a move into it is drawn even where the goal state
+    has an action the prior leads straight back (goal rows keep Q = V = 0, so every
+    action there counts as greedy)."""
+    learner = GDQ(ctx_c, GDQConfig(epsilon=1.0, explore_all=0.0, n_backups=0))
+    t, leads = learner.tables.table, learner.tables.prior.next_state
+    goal = int(np.flatnonzero(t.goal)[0])
+    s, a = next((s, int(a)) for s in range(len(t.v)) for a in np.flatnonzero(leads[s] == goal)
+                if (leads[goal] == s).any() and t.allowed[s].sum() > 1)
+    other = int(next(b for b in np.flatnonzero(t.allowed[s]) if b != a))
+    t.q[s, t.allowed[s]] = 0.0
+    t.q[s, a], t.q[s, other], t.v[s] = 15.0, 16.0, 16.0  # a: not greedy, within the band
+    rng = np.random.default_rng(0)
+    assert {learner.act(s, rng) for _ in range(500)} == {a, other}
+
+
 @pytest.mark.parametrize(("domain", "problem", "dynamics", "exact"), [
     ("keys", "keys-1", "keys", False),  # STRIPS + a dynamics file: reality may differ
     ("keys-ppddl", "keys-ppddl-2", None, True),  # PPDDL: the actions and outcomes are reality's
