@@ -71,7 +71,7 @@ class Params(NamedTuple):
     ``q >= v - explore_band * max(0, r_max - v)``; below 0, from ``guide``."""
     explore_loops: float = 1.0
     """``KIND_GDQ`` with ``explore_band``: 0, such a draw leaves out a move that a greedy
-    step from where the prior says it leads would undo (:func:`_near_best`)."""
+    step from where the prior says it leads would undo (:func:`_undone`)."""
 
 
 class QTable(NamedTuple):
@@ -222,43 +222,44 @@ def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
     """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
     DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
     short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost),
-    and loop-free as DARLING's plans are (:func:`_near_best`). The state's greedy
-    actions always qualify."""
-    floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
+    and, unless ``explore_loops``, loop-free as DARLING's plans are (:func:`_undone`).
+    The state's greedy actions always qualify."""
+    q, v, allowed, n_live = table.q, table.v, table.allowed, table.n_live[s]
+    floor = v[s] - p.explore_band * max(0.0, p.r_max - v[s])
+    loops = p.explore_loops > 0.0
     n = 0
-    for a in range(table.n_live[s]):
-        n += _near_best(table, prior, p, s, a, floor)
+    for a in range(n_live):
+        if allowed[s, a] and q[s, a] >= floor and (
+                loops or q[s, a] >= v[s] or not _undone(table, prior, s, a)):
+            n += 1
     k = rng.integers(0, n)
-    for a in range(table.n_live[s]):
-        if _near_best(table, prior, p, s, a, floor):
+    for a in range(n_live):
+        if allowed[s, a] and q[s, a] >= floor and (
+                loops or q[s, a] >= v[s] or not _undone(table, prior, s, a)):
             if k == 0:
                 return a
             k -= 1
     return 0  # unreachable: the greedy actions are counted
 
 
-@numba.njit(cache=True, inline="always")
-def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int,
-               floor: float) -> bool:
-    """Whether an exploring step may draw ``a`` in ``s``: allowed, with ``q >= floor``,
-    and, unless ``explore_loops``, not a move the next greedy step undoes (the prior
-    leads ``a`` to ``x`` and a greedy action of ``x`` leads back to ``s``; the pairs the
-    prior leads to ``s`` are ``prior.pp_*``'s, a handful): far from the goal the band is
+@numba.njit(cache=True)
+def _undone(table: QTable, prior: Prior, s: int, a: int) -> bool:
+    """Whether the next greedy step would undo the move ``a`` in ``s``: the prior leads it
+    to ``x`` and a greedy action of ``x`` leads straight back to ``s`` (the pairs the
+    prior leads to ``s`` are ``prior.pp_*``'s, a handful). Far from the goal the band is
     wide enough for such a two-step loop (put a block down, pick it up again), which
-    makes no way and, where moves are risky, adds the risk of two."""
-    q, v, allowed = table.q, table.v, table.allowed
-    if not allowed[s, a] or q[s, a] < floor:
-        return False
+    makes no way and, where moves are risky, adds the risk of two. A move into a goal is
+    none: the episode ends there. Called only for the few actions in the band."""
     x = prior.next_state[s, a]
-    if p.explore_loops > 0.0 or q[s, a] >= v[s] or x < 0 or x == s or table.goal[x]:
-        return True  # a goal ends the episode: no step undoes a move into it
+    if x < 0 or x == s or table.goal[x]:
+        return False
+    q, v, allowed = table.q, table.v, table.allowed
     n_actions = q.shape[1]
     for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
-        pair = prior.pp_pair[k]
-        b = pair - x * n_actions
+        b = prior.pp_pair[k] - x * n_actions
         if 0 <= b < n_actions and allowed[x, b] and q[x, b] >= v[x]:
-            return False
-    return True
+            return True
+    return False
 
 
 @numba.njit(cache=True)
