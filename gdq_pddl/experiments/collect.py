@@ -72,8 +72,8 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
                                  for s, a in enumerate(data["policy"].tolist()))
 
     atomic_write(out / "episodes.csv", write_episodes)
-    rows = sum(instance_of(u.experiment, u.experiment.schedule[-1][0]).n_states
-               for u in units)
+    rows = sum(len(e.units()) * instance_of(e, e.schedule[-1][0]).n_states
+               for e in experiments)  # a unit's policy: one action per learner state
     if rows <= MAX_POLICY_ROWS:
         atomic_write(out / "policies.csv", write_policies)
     else:
