@@ -189,7 +189,7 @@ class GDQ(TabularLearner):
     def _init_task(self) -> None:
         """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
         literally (``literal``) or the authors' code's shortcut (``code``)."""
-        self.q[:, :] = 0.0
+        self._q[:, :] = 0.0  # not self.q, whose getter first fills every untried pair
         t = self.tables
         if self.kind == KIND_GDQ:
             tol = 1e-9 * max(1.0, self.params.r_max)
