@@ -1,16 +1,19 @@
 """Delete-relaxation heuristics (Bonet & Geffner 2001) of a grounded task, with unit
 action costs, compiled: h_max (:class:`HMax`, admissible and consistent: a breadth-first
-search over facts) and h_add (:class:`HAdd`, not admissible but far better informed where
-a goal has many facts: a generalized Dijkstra over facts).
+search over facts) and h_add (:class:`HAdd`, not admissible, but it sums the costs of all
+the goal facts where h_max takes the dearest: a generalized Dijkstra over facts).
 
 Both read the same *relaxed actions* of the task (:func:`relaxed_actions`): positive
 preconditions and adds only. A plain :class:`~gdq_pddl.pddl.grounding.GroundOp` is one;
 a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticOp` (reality's ground action of a PPDDL
 problem) gives one per outcome the planner knows (``op.known``) and per conditional
-effect of such an outcome, times each alternative of a disjunctive precondition, so
-that a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask` is relaxed as the planner's
-determinisation of it is. Every state is a Python-int bitmask over ``task.facts`` (or,
-for :meth:`HAdd.many`, a row of uint64 words, as :mod:`gdq_pddl.pddl.wordrows`).
+effect of such an outcome, times each alternative of a disjunctive precondition: a
+:class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask` is relaxed as the planner's
+determinisation of it (the same values where no action has a conditional effect; where
+one has, each conditional effect is its own relaxed action, while the determinisation's
+STRIPS variants join them, so its values are never lower). Every state is a Python-int
+bitmask over ``task.facts`` (or, for :meth:`HAdd.many`, a row of uint64 words, as
+:mod:`gdq_pddl.pddl.wordrows`).
 """
 
 from __future__ import annotations
@@ -190,7 +193,9 @@ class HAdd:
 
     Computed by a compiled generalized Dijkstra over facts (a fact's cost is final when it
     leaves the heap; an action fires once all its preconditions are final), stopped once
-    every goal fact is final.
+    every goal fact is final. A fact's cost saturates at ``2**62 // n_facts`` (the heap's
+    keys are ``cost * n_facts + fact``), which only costs that double along a chain of
+    actions reach.
     """
 
     def __init__(self, task: GroundTask) -> None:
