@@ -215,9 +215,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     n_words = max(1, -(-len(task.facts) // 64))
     ops = compile_ops(task, n_words)
     width = max([len(op.known) + len(op.other) for op in ops], default=1)
-    order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
-                for i, op in enumerate(group)}  # the order of task.applicable
-    reality_rank = np.argsort(sorted(range(n_ops), key=lambda k: order_of[id(task.ops[k])]))
+    reality_rank = reality_ranks(task)
     need = [positive_facts(op.pre) for op in ops]  # each op's facts that must hold
     levels = [words(task.init, n_words)[None, :]]
     known_keys, known_ids = row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
@@ -312,6 +310,16 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     del nxt
     return StateGraph(task, np.concatenate(levels), ptr, edge_op, edge_next,
                       np.concatenate(goal), np.concatenate(depth), offered)
+
+
+def reality_ranks(task: GroundTask) -> np.ndarray:
+    """int64[n_ops]: each ground action's place in the order :meth:`GroundTask.applicable`
+    lists them; a state's successors only reality reaches are numbered in it (after the
+    edges' successors, which go by ground action), as :meth:`GroundTask.outcome_states`
+    lists them. The online store (:mod:`gdq_pddl.pddl.lazy`) numbers them the same way."""
+    order_of = {id(op): (key, i) for key, group in task.ops_by_fact.items()
+                for i, op in enumerate(group)}
+    return np.argsort(sorted(range(len(task.ops)), key=lambda k: order_of[id(task.ops[k])]))
 
 
 def _row_block(applicable: list[tuple[int, np.ndarray]], n_rows: int,

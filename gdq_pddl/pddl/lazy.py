@@ -1,0 +1,272 @@
+"""The states of a grounded task found as an agent visits them, each expanded on demand:
+the online counterpart of the enumeration (:func:`~gdq_pddl.pddl.reachable.reachable_graph`
+and :func:`~gdq_pddl.pddl.outcomes.reality_outcomes`), for problems whose reachable states
+are too many to enumerate (10**10 and more: exploding blocks of 23 blocks, IPPC boxworld).
+
+:class:`LazyGraph` holds the states discovered so far (state 0: the initial state) with
+their word rows (:mod:`gdq_pddl.pddl.wordrows`) and goal flags. Expanding a state finds
+the ground actions applicable in it (one vectorised test of every ground action on its
+row), the determinisation's edges and reality's outcomes of each, and gives the
+successors never seen the next ids. The semantics are the enumeration's: the same
+applicability (negative preconditions, a disjunctive task's alternatives), effects
+(conditional ones included), edges deduplicated per ground action, outcomes of
+probability 0 left out, a failed trial (stuck) staying, equal outcomes of a pair merged
+with their probabilities summed in outcome order, goal states never expanded. Expanding
+every state in id order numbers them exactly as the enumeration does; in any other order
+the graph is the same up to renaming states.
+
+A state's effects are applied on its Python int bitmask by the ground task's own
+outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.ppddl_effects.GroundOutcome.apply>`,
+:meth:`GroundOutcome.gain <gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain>`): for one
+state that is some microseconds an outcome, where a numpy call on a one-row array costs
+more than the whole effect.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.ppddl import ProbabilisticOp
+from gdq_pddl.pddl.reachable import reality_ranks
+from gdq_pddl.pddl.wordrows import compile_ops, goal_rows, holds
+
+_NONE = np.zeros(0, dtype=np.int64)
+
+
+class LazyGraph:
+    """The states of a grounded task (:class:`GroundTask` or
+    :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`) found so far, each expanded (its
+    applicable ground actions, the determinisation's edges, reality's outcomes) only when
+    asked.
+
+    State 0 is ``task.init``, discovered, not expanded. Ids are given in discovery order
+    and never change. ``gains``: also compute each outcome's reward on the problem's own
+    scale, as ``reality_outcomes(graph, gains=True)`` does.
+
+    For a STRIPS task (no outcomes) reality's outcome of a ground action is its one
+    effect, probability 1 and gain 0: the task's own dynamics, not a dynamics file's.
+    """
+
+    def __init__(self, task: GroundTask, gains: bool = False) -> None:
+        self.task = task
+        self.gains = gains
+        self.n_words = max(1, -(-len(task.facts) // 64))
+        compiled = compile_ops(task, self.n_words)  # the enumeration's applicability rule
+        n_ops, w = len(task.ops), self.n_words
+        self._pre = np.stack([op.pre for op in compiled]) if compiled else \
+            np.zeros((0, w), dtype=np.uint64)
+        self._neg = np.stack([op.neg for op in compiled]) if compiled else self._pre
+        alt = [(k, p, n) for k, op in enumerate(compiled) for p, n in op.alternatives]
+        self._alt_op = np.array([k for k, _, _ in alt], dtype=np.int64)
+        self._alt_pre = np.stack([p for _, p, _ in alt]) if alt else None
+        self._alt_neg = np.stack([n for _, _, n in alt]) if alt else None
+        self._plain = np.ones(n_ops, dtype=np.bool_)  # no alternatives to meet
+        self._plain[self._alt_op] = False
+        self._rank = reality_ranks(task).tolist()
+        self._known: list[tuple] = []  # per ground action: the edges' effects (apply)
+        self._other: list[tuple] = []  # the effects only reality reaches (apply)
+        self._reality: list[tuple] = []  # (probability, stuck, apply or None: stays, outcome)
+        for op in task.ops:
+            if isinstance(op, ProbabilisticOp):
+                out = op.outcomes
+                self._known.append(tuple(out[k].apply for k in op.known))
+                self._other.append(tuple(
+                    o.apply for j, o in enumerate(out) if o.probability > 0 and not o.stuck
+                    and j not in op.known and (o.add or o.dele or o.conditional)))
+                self._reality.append(tuple(
+                    (o.probability, bool(o.stuck),
+                     None if o.stuck or not (o.add or o.dele or o.conditional) else o.apply, o)
+                    for o in out if o.probability > 0))
+            else:
+                self._known.append((op.apply,))
+                self._other.append(())
+                self._reality.append(((1.0, False, op.apply, None),))
+        self._masks: list[int] = [task.init]
+        self._index: dict[int, int] = {task.init: 0}
+        self._words = np.zeros((16, w), dtype=np.uint64)
+        self._goal = np.zeros(16, dtype=np.bool_)
+        self._expanded = np.zeros(16, dtype=np.bool_)
+        self._n = 0
+        self._append([task.init])
+        self._offered: dict[int, np.ndarray] = {}
+        self._edges: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._outcomes: dict[int, tuple[np.ndarray, ...]] = {}
+
+    @property
+    def n_states(self) -> int:
+        """States discovered so far (ids ``0 .. n_states - 1``)."""
+        return self._n
+
+    @property
+    def words(self) -> np.ndarray:
+        """uint64[n_states, n_words]: the discovered states' rows (a view, valid until the
+        next :meth:`expand` that discovers states)."""
+        return self._words[:self._n]
+
+    @property
+    def is_goal(self) -> np.ndarray:
+        """bool[n_states]: the goal holds (:func:`~gdq_pddl.pddl.wordrows.goal_rows`); a
+        view, as :attr:`words`."""
+        return self._goal[:self._n]
+
+    @property
+    def expanded(self) -> np.ndarray:
+        """bool[n_states]: the state was expanded; a view, as :attr:`words`."""
+        return self._expanded[:self._n]
+
+    def expand(self, ids) -> np.ndarray:
+        """Expand each listed state that is neither a goal nor expanded yet (others are
+        ignored), in the order given; return the ids of the states discovered (increasing).
+
+        Successors never seen get the next ids: by expanded state in the order given,
+        then as the enumeration orders them (the determinisation's edges by ground action
+        then outcome, then reality's other outcomes in the order
+        :func:`~gdq_pddl.pddl.reachable.reality_ranks` gives the ground actions)."""
+        order = np.asarray(ids, dtype=np.int64).ravel().tolist()
+        bad = [x for x in order if not 0 <= x < self._n]
+        if bad:
+            raise IndexError(f"state {bad[0]} is not a discovered state (0 to "
+                             f"{self._n - 1})")
+        start = self._n
+        for x in order:
+            if not (self._expanded[x] or self._goal[x]):
+                self._append(self._expand_one(x))
+        return np.arange(start, self._n, dtype=np.int64)
+
+    def _expand_one(self, x: int) -> list[int]:
+        """Expand state ``x``: store its offered actions, edges and outcomes; return the
+        masks of the states it discovers (already given ids in :attr:`_index`)."""
+        s, index, fresh = self._masks[x], self._index, []
+        n = self._n
+
+        def id_of(t: int) -> int:
+            i = index.get(t)
+            if i is None:
+                i = index[t] = n + len(fresh)
+                fresh.append(t)
+            return i
+
+        acts = self._applicable(self._words[x]).tolist()
+        edge_op, edge_next = [], []
+        for k in acts:  # the edges: by ground action, then kept outcome, each state once
+            seen: dict[int, None] = {}
+            for apply in self._known[k]:
+                t = apply(s)
+                if t not in seen:
+                    seen[t] = None
+                    edge_op.append(k)
+                    edge_next.append(id_of(t))
+        for k in sorted((k for k in acts if self._other[k]), key=self._rank.__getitem__):
+            for apply in self._other[k]:
+                id_of(apply(s))
+        column, prob, nxt, stuck, gain = [], [], [], [], []
+        for c, k in enumerate(acts):  # reality: equal outcomes merged in outcome order
+            merged: dict[tuple, float] = {}
+            for p, st, apply, o in self._reality[k]:
+                key: tuple = (index[s if apply is None else apply(s)], st)
+                if self.gains:
+                    key += (o.gain(s) if o is not None else 0.0,)
+                merged[key] = merged.get(key, 0.0) + p
+            for key, p in merged.items():
+                column.append(c)
+                prob.append(p)
+                nxt.append(key[0])
+                stuck.append(key[1])
+                gain.append(key[2] if self.gains else 0.0)
+        self._offered[x] = np.array(acts, dtype=np.int64)
+        self._edges[x] = (np.array(edge_op, dtype=np.int64),
+                          np.array(edge_next, dtype=np.int64))
+        self._outcomes[x] = (np.array(column, dtype=np.int64), np.array(prob, dtype=float),
+                             np.array(nxt, dtype=np.int64), np.array(stuck, dtype=np.bool_),
+                             np.array(gain, dtype=float))
+        self._expanded[x] = True
+        return fresh
+
+    def _applicable(self, row: np.ndarray) -> np.ndarray:
+        """int64: the ground actions whose precondition holds in ``row``, increasing: every
+        ground action tested at once on its precondition rows."""
+        ok = holds(row[None, :], self._pre, self._neg)
+        if self._alt_pre is not None:  # one alternative of a disjunctive precondition
+            met = np.zeros(len(ok), dtype=np.bool_)
+            met[self._alt_op[holds(row[None, :], self._alt_pre, self._alt_neg)]] = True
+            ok &= met | self._plain
+        return np.flatnonzero(ok)
+
+    def _append(self, masks: list[int]) -> None:
+        """Store newly discovered states (their ids already in :attr:`_index`), growing
+        the arrays by doubling."""
+        if not masks:
+            return
+        rows = self._rows(masks)
+        n, m = self._n, len(masks)
+        if n + m > len(self._words):
+            cap = max(2 * len(self._words), n + m)
+            for name in ("_words", "_goal", "_expanded"):
+                old = getattr(self, name)
+                new = np.zeros((cap, *old.shape[1:]), dtype=old.dtype)
+                new[:n] = old[:n]
+                setattr(self, name, new)
+        self._words[n:n + m] = rows
+        self._goal[n:n + m] = goal_rows(self.task, rows)
+        if n:  # state 0's mask is in place from the start
+            self._masks.extend(masks)
+        self._n = n + m
+
+    def _rows(self, masks: list[int]) -> np.ndarray:
+        """uint64[len(masks), n_words]: bitmasks as word rows (fact ``f`` is bit ``f % 64``
+        of word ``f // 64``, as :func:`~gdq_pddl.pddl.wordrows.words`)."""
+        size = 8 * self.n_words
+        data = b"".join(m.to_bytes(size, "little") for m in masks)
+        return np.frombuffer(data, dtype="<u8").astype(np.uint64).reshape(-1, self.n_words)
+
+    def _require(self, x: int) -> bool:
+        """Whether state ``x`` was expanded (False: a goal, never expanded); an error for
+        a state not discovered or not expanded yet."""
+        if not 0 <= x < self._n:
+            raise IndexError(f"state {x} is not a discovered state (0 to {self._n - 1})")
+        if self._expanded[x]:
+            return True
+        if self._goal[x]:
+            return False
+        raise ValueError(f"state {x} is not expanded yet: call expand([{x}]) first")
+
+    def offered(self, x: int) -> np.ndarray:
+        """int64[k]: the ground actions applicable in expanded state ``x``, increasing;
+        empty for a dead end and a goal (unlike :attr:`StateGraph.offered
+        <gdq_pddl.pddl.reachable.StateGraph.offered>`, which lists ground action 0 there)."""
+        return self._offered[x] if self._require(x) else _NONE
+
+    def edges(self, x: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(op index, next id)`` of state ``x``'s determinisation edges: those
+        :meth:`StateGraph.edges <gdq_pddl.pddl.reachable.StateGraph.edges>` gives, in its
+        order (none for a goal)."""
+        return self._edges[x] if self._require(x) else (_NONE, _NONE)
+
+    def outcomes(self, x: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                        np.ndarray]:
+        """Reality's outcomes of every offered action of expanded state ``x``: ``(column,
+        probability, next id, stuck, gain)``, ``column`` an index into :meth:`offered`,
+        merged and ordered as :func:`~gdq_pddl.pddl.outcomes.reality_outcomes` gives the
+        state's pairs (gain all zeros without ``gains``; none for a goal)."""
+        if self._require(x):
+            return self._outcomes[x]
+        return _NONE, np.zeros(0), _NONE, np.zeros(0, dtype=np.bool_), np.zeros(0)
+
+    def lookup(self, rows: np.ndarray) -> np.ndarray:
+        """int64 id of each row of ``rows`` (``uint64[n, n_words]``), -1 where the state
+        was not discovered."""
+        rows = np.asarray(rows, dtype=np.uint64).reshape(-1, self.n_words)
+        size = 8 * self.n_words
+        data = rows.astype("<u8").tobytes()
+        get = self._index.get
+        return np.array([get(int.from_bytes(data[i:i + size], "little"), -1)
+                         for i in range(0, len(data), size)], dtype=np.int64)
+
+    def mask(self, x: int) -> int:
+        """State ``x`` as a Python int bitmask over ``task.facts``."""
+        return self._masks[x]
+
+    def atoms(self, x: int) -> frozenset[str]:
+        """The fluent atoms true in state ``x``."""
+        return self.task.atoms(self._masks[x])
