@@ -34,6 +34,30 @@ from gdq_pddl.pddl.wordrows import compile_ops, goal_rows, holds
 _NONE = np.zeros(0, dtype=np.int64)
 
 
+def _compiled(op) -> tuple[tuple, tuple, tuple]:
+    """A ground action for one state at a time: reality's outcomes ``(probability, stuck,
+    apply or None (the state stays), gain or None (it depends on the state: see
+    GroundOutcome.gain), outcome)`` of probability > 0, in outcome order; the edges'
+    outcomes (a place in that tuple, or an apply of its own for an outcome reality leaves
+    out); the places of the outcomes only reality reaches (those with an effect that are
+    not the edges', failed trials aside), as :func:`~gdq_pddl.pddl.wordrows.compile_ops`
+    sorts them."""
+    if not isinstance(op, ProbabilisticOp):  # STRIPS: its one effect, for sure
+        return ((1.0, False, op.apply, 0.0, None),), (0,), ()
+    place, reality = {}, []
+    for j, o in enumerate(op.outcomes):
+        if o.probability > 0:
+            place[j] = len(reality)
+            effect = bool(o.add or o.dele or o.conditional)
+            reality.append((o.probability, bool(o.stuck), o.apply if effect and not o.stuck
+                            else None, None if o.rewards else o.reward + 0.0, o))
+    known = tuple(place[j] if j in place and not op.outcomes[j].stuck
+                  else op.outcomes[j].apply for j in op.known)
+    other = tuple(place[j] for j, o in enumerate(op.outcomes) if o.probability > 0
+                  and not o.stuck and j not in op.known and (o.add or o.dele or o.conditional))
+    return tuple(reality), known, other
+
+
 class LazyGraph:
     """The states of a grounded task (:class:`GroundTask` or
     :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask`) found so far, each expanded (its
@@ -64,24 +88,8 @@ class LazyGraph:
         self._plain = np.ones(n_ops, dtype=np.bool_)  # no alternatives to meet
         self._plain[self._alt_op] = False
         self._rank = reality_ranks(task).tolist()
-        self._known: list[tuple] = []  # per ground action: the edges' effects (apply)
-        self._other: list[tuple] = []  # the effects only reality reaches (apply)
-        self._reality: list[tuple] = []  # (probability, stuck, apply or None: stays, outcome)
-        for op in task.ops:
-            if isinstance(op, ProbabilisticOp):
-                out = op.outcomes
-                self._known.append(tuple(out[k].apply for k in op.known))
-                self._other.append(tuple(
-                    o.apply for j, o in enumerate(out) if o.probability > 0 and not o.stuck
-                    and j not in op.known and (o.add or o.dele or o.conditional)))
-                self._reality.append(tuple(
-                    (o.probability, bool(o.stuck),
-                     None if o.stuck or not (o.add or o.dele or o.conditional) else o.apply, o)
-                    for o in out if o.probability > 0))
-            else:
-                self._known.append((op.apply,))
-                self._other.append(())
-                self._reality.append(((1.0, False, op.apply, None),))
+        self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
+            if task.ops else ((), (), ())
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
         self._words = np.zeros((16, w), dtype=np.uint64)
@@ -148,32 +156,44 @@ class LazyGraph:
             return i
 
         acts = self._applicable(self._words[x]).tolist()
+        reality, gains = self._reality, self.gains
+        nexts = [[s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
+                 for k in acts]  # each outcome applied once
         edge_op, edge_next = [], []
-        for k in acts:  # the edges: by ground action, then kept outcome, each state once
+        for k, ts in zip(acts, nexts, strict=True):  # by ground action, then kept outcome
             seen: dict[int, None] = {}
-            for apply in self._known[k]:
-                t = apply(s)
-                if t not in seen:
+            for at in self._known[k]:
+                t = ts[at] if isinstance(at, int) else at(s)
+                if t not in seen:  # each state once a ground action
                     seen[t] = None
                     edge_op.append(k)
                     edge_next.append(id_of(t))
-        for k in sorted((k for k in acts if self._other[k]), key=self._rank.__getitem__):
-            for apply in self._other[k]:
-                id_of(apply(s))
+        for k, ts in sorted(((k, ts) for k, ts in zip(acts, nexts, strict=True)
+                             if self._other[k]), key=lambda e: self._rank[e[0]]):
+            for at in self._other[k]:
+                id_of(ts[at])
         column, prob, nxt, stuck, gain = [], [], [], [], []
-        for c, k in enumerate(acts):  # reality: equal outcomes merged in outcome order
+        for c, (k, ts) in enumerate(zip(acts, nexts, strict=True)):  # reality, merged
+            if len(ts) == 1:  # one outcome (most ground actions): nothing to merge
+                p, st, _, fixed, o = reality[k][0]
+                column.append(c)
+                prob.append(p)
+                nxt.append(index[ts[0]])
+                stuck.append(st)
+                gain.append((o.gain(s) if fixed is None else fixed) if gains else 0.0)
+                continue
             merged: dict[tuple, float] = {}
-            for p, st, apply, o in self._reality[k]:
-                key: tuple = (index[s if apply is None else apply(s)], st)
-                if self.gains:
-                    key += (o.gain(s) if o is not None else 0.0,)
-                merged[key] = merged.get(key, 0.0) + p
+            for t, (p, st, _, fixed, o) in zip(ts, reality[k], strict=True):
+                key: tuple = (index[t], st)
+                if gains:
+                    key += (o.gain(s) if fixed is None else fixed,)
+                merged[key] = merged.get(key, 0.0) + p  # summed in outcome order
             for key, p in merged.items():
                 column.append(c)
                 prob.append(p)
                 nxt.append(key[0])
                 stuck.append(key[1])
-                gain.append(key[2] if self.gains else 0.0)
+                gain.append(key[2] if gains else 0.0)
         self._offered[x] = np.array(acts, dtype=np.int64)
         self._edges[x] = (np.array(edge_op, dtype=np.int64),
                           np.array(edge_next, dtype=np.int64))
