@@ -35,6 +35,11 @@ class PlanningError(GdqError):
     """A planner cannot be found, loaded or run."""
 
 
+class TooManyStates(PlanningError):
+    """The reachable states of a problem do not fit the table budget: it can be explored
+    online instead (``gdq-pddl run --explore``)."""
+
+
 class AbstractionError(GdqError):
     """A planner state or action has no counterpart in the learner's spaces."""
 

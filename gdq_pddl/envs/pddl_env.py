@@ -137,15 +137,20 @@ class PDDLInstance:
     @cached_property
     def dynamics(self) -> Dynamics:
         """Reality's r_max and step limit (and the dynamics file's outcomes, if STRIPS)."""
+        overlay = self.overlay_with_r_max()
+        if self.ppddl and "step_limit" not in overlay.stated:
+            overlay = replace(overlay, step_limit=default_step_limit(self.graph))
+        check_step_limit(self.problem, self.graph, overlay)
+        return overlay
+
+    def overlay_with_r_max(self) -> Dynamics:
+        """The dynamics file (or none) with reality's r_max (the file's, the goal's, 20)."""
         overlay = self.overlay or Dynamics(source="")
         goal_reward = self.problem.problem.goal_reward
         if "r_max" not in overlay.stated and (goal_reward or self.reward_scale == "problem"):
             overlay = replace(overlay, r_max=goal_reward or 0.0)
         elif "r_max" not in overlay.stated and self.ppddl:
             overlay = replace(overlay, r_max=DEFAULT_R_MAX)
-        if self.ppddl and "step_limit" not in overlay.stated:
-            overlay = replace(overlay, step_limit=default_step_limit(self.graph))
-        check_step_limit(self.problem, self.graph, overlay)
         return overlay
 
     @cached_property
@@ -161,7 +166,7 @@ class PDDLInstance:
     def costs(self) -> list[CostDist]:
         """Every ground action's cost: the dynamics file's, else the domain's, else 1 (0 on
         the problem's own reward scale)."""
-        names = [op.name for op in self.graph.task.ops]
+        names = [op.name for op in self.problem.learner_task.ops]  # the graph's task
         stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
         return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
@@ -190,10 +195,8 @@ class PDDLInstance:
         """``int8[n_states, n_actions]``, read-only: 1 where the ground action is applicable."""
         return graph_action_mask(self.graph)
 
-    @property
-    def source(self) -> str:
-        """The problem file errors name."""
-        return self.problem.problem.source
+    source = property(lambda self: self.problem.problem.source)
+    """The problem file errors name."""
 
     @property
     def learner_start(self) -> int:

@@ -33,7 +33,7 @@ from functools import cached_property
 
 import numpy as np
 
-from gdq_pddl.errors import PlanningError
+from gdq_pddl.errors import TooManyStates
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
@@ -179,7 +179,7 @@ def state_cap(width: int, budget: int | None = None) -> int:
 
 
 def _too_many(source: str, cap: int, budget: bool, width: int,
-              levels: list[int]) -> PlanningError:
+              levels: list[int]) -> TooManyStates:
     """The refusal past ``cap`` states: the need (of the states found so far, every row as
     wide as the widest), the budget and what sets it, and the breadth-first levels so far
     (``levels``: states a level, the last unfinished)."""
@@ -187,14 +187,14 @@ def _too_many(source: str, cap: int, budget: bool, width: int,
     grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
         f"{len(levels) - 1} (the last unfinished): {shown}"
     if not budget:
-        return PlanningError(f"{source}: more than {cap:,} reachable states: past the cap "
+        return TooManyStates(f"{source}: more than {cap:,} reachable states: past the cap "
                              f"given{grown}; the learners are tabular, so make the problem "
                              "smaller (fewer objects)")
     have, limit, found = physical_memory(), table_budget(), sum(levels)
     setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
                is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
                "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
-    return PlanningError(
+    return TooManyStates(
         f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
         f"{width} applicable ground actions a state): a run would need at least "
         f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
