@@ -1,0 +1,400 @@
+"""A PPDDL problem explored online: its states found as episodes reach them.
+
+A problem whose reachable states do not fit the table budget (pddlgym's
+manyexplodingblockssmallpiles: 23 blocks, more states than any memory) cannot be
+enumerated. :class:`OnlineInstance` gives the learners and the env the same view as a
+:class:`~gdq_pddl.envs.pddl_env.PDDLInstance`, over the states found so far
+(:class:`~gdq_pddl.pddl.lazy.LazyGraph`): a state is *expanded* (its applicable ground
+actions, the knowledge's edges, reality's outcomes) when an episode first reaches it.
+
+The learners' rows (the env's observations) are of three kinds:
+
+- an **expanded** state: its applicable ground actions, as an enumerated problem's;
+- a **frontier** state, a successor of an expanded one not reached yet: one column, the
+  *estimate* action (ground action ``n_ops``, which the env never applies), whose prior
+  successor is the chain row ``h - 1`` for the heuristic's estimate ``h`` of its goal
+  distance (:func:`~gdq_pddl.planning.heuristic.hadd_for`: h_add of the knowledge's
+  relaxation); a state the relaxation cannot take to the goal has no prior successor;
+- a **chain** row ``k``, "k actions from the goal by the estimate": one estimate column
+  leading to chain row ``k - 1``; chain row 0 is a goal.
+
+So GDQ's prior, DARLING's plan lengths and GDQ's warm start read estimates exactly as
+they read shortest plans on an enumerated problem, without any change to their rules.
+Distances of expanded states are one-step lookaheads over the estimates
+(``d(s) = 1 + min d(s')``), fixed when the state is expanded.
+
+Rows never move; the arrays grow by doubling (a new *revision*: the learners resize);
+each change logs the rows it touched (:attr:`OnlineInstance.log`), which the episode
+loop hands to the learner (:class:`gdq_pddl.learners.online.Follower`). Unused rows are
+inert goal rows.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from gdq_pddl.abstraction import PlanTable
+from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, prior_rewards
+from gdq_pddl.dynamics import CostDist, Dynamics
+from gdq_pddl.envs.model import cost_arrays
+from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
+from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
+from gdq_pddl.envs.solve import expected_costs
+from gdq_pddl.envs.step import ModelArrays
+from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.pddl.lazy import LazyGraph
+from gdq_pddl.planning.base import length_bound
+from gdq_pddl.planning.heuristic import INFINITE, hadd_for
+
+ESTIMATE = "(estimate)"
+"""The name of the estimate action (ground action ``n_ops``: see the module docstring)."""
+
+FIRST_ROWS = 1024
+"""Rows allocated at first (doubled when full)."""
+
+STEP_MODELS = 4096
+"""The expanded states whose one-state true models :meth:`OnlineInstance.step_model`
+keeps (building one takes about as long as the rest of a step)."""
+
+
+class OnlineInstance:
+    """A PPDDL problem (a :class:`PDDLInstance`'s files and settings) whose states are
+    found as episodes reach them. One per run: the rows depend on what the run visits."""
+
+    def __init__(self, base: PDDLInstance, darling_tolerance: float = 0.3,
+                 dynamics: Dynamics | None = None) -> None:
+        """``dynamics``: reality's constants (``r_max``, the step limit); None: the
+        base's, with the default step limit by the estimate from the initial state."""
+        if not base.ppddl:
+            raise PlanningError(f"{base.problem.source_domain.source}: a STRIPS domain is "
+                                "explored online only with its states enumerated; online "
+                                "exploration reads a PPDDL domain's own outcomes")
+        self.base = base
+        self.task = base.problem.learner_task
+        self.own = base.reward_scale == "problem"
+        self.graph = LazyGraph(self.task, gains=self.own)
+        self.heuristic = hadd_for(self.task)
+        self.darling_tolerance = float(darling_tolerance)
+        self.n_ops = len(self.task.ops)
+        h0 = int(self.heuristic.many(self.graph.words[:1])[0])
+        if h0 == INFINITE:
+            raise PlanningError(f"{self.source}: the goal cannot be reached from the initial "
+                                "state even ignoring every delete effect")
+        if self.graph.is_goal[0]:
+            raise PlanningError(f"{self.source}: the goal already holds in the initial state: "
+                                "every episode would be over before it begins")
+        self.h_start = h0
+        self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
+        self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]
+        self._cost_arrays = cost_arrays(self.costs)
+        self.mean_cost = expected_costs(self.model)
+        self.revision = 0
+        self._step_models: dict[int, tuple[ModelArrays, np.ndarray]] = {}
+        self.log: list[int] = []
+        self.n_rows = 0
+        self.chain: list[int] = []
+        self.row_of_state = np.full(FIRST_ROWS, -1, dtype=np.int64)
+        self._allocate(FIRST_ROWS, 1)
+        self._new_rows(np.array([0]))
+        self.expand(0)
+
+    # -- what the learners' context reads (the Instance protocol of learners.context) -----
+    name = property(lambda self: self.base.name)
+    source = property(lambda self: self.base.source)
+    ppddl = True
+    reward_scale = property(lambda self: self.base.reward_scale)
+    determinisation = property(lambda self: self.base.determinisation)
+    n_states = property(lambda self: len(self.goal))  # rows allocated (tables, observations)
+    n_actions = property(lambda self: self.n_ops + 1)  # the ground actions and the estimate
+    learner_start = property(lambda self: int(self.row_of_state[0]))
+    learner_goal = property(lambda self: self.goal)
+    r_max = property(lambda self: float(self.dynamics.r_max))
+    goal_pos = GOAL_POS
+
+    @property
+    def max_successors(self) -> int:
+        """Distinct next states a pair can have at most: its outcomes of probability > 0."""
+        return max([sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
+
+    @property
+    def prior(self) -> PriorModel:
+        return PriorModel(self.prior_next)
+
+    @property
+    def model(self) -> ModelArrays:
+        """The env's constants (costs, ``r_max``, the step limit) with no outcomes: each
+        step reads the current state's (:meth:`step_model`)."""
+        return ModelArrays(n_actions=self.n_actions, n_doors=0, r_max=self.r_max,
+                           step_limit=int(self.dynamics.step_limit),
+                           ptr=np.zeros(1, dtype=np.int64), prob=np.zeros(0),
+                           next=np.zeros(0, dtype=np.int64), stuck=np.zeros(0, dtype=np.bool_),
+                           **self._cost_arrays, obs_of=np.zeros(0, dtype=np.int64),
+                           pos_of=np.zeros(0, dtype=np.int64),
+                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
+
+    def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
+                   kind: str = "all") -> PlanTable:
+        """The plans' first actions and lengths by the estimates (tolerance 0, or the
+        DARLING tolerance this instance was made with); only the ``graph`` planner."""
+        if planner != "graph":
+            raise PlanningError(f"{self.source}: explored online, plans come from the "
+                                f"heuristic's estimates, not a planner: use --planner graph "
+                                f"(not {planner})")
+        if tolerance and not math.isclose(tolerance, self.darling_tolerance):
+            raise PlanningError(f"{self.source}: explored online with DARLING tolerance "
+                                f"{self.darling_tolerance}, asked for {tolerance}")
+        first = self.first_tolerant if tolerance else self.first_shortest
+        return PlanTable(first, self.dist, _not_enumerated,
+                         np.zeros((0, 3), dtype=np.int64))
+
+    @property
+    def prior_reward(self) -> np.ndarray | None:
+        return self._prior_reward if self.own else None
+
+    # -- the env's view ------------------------------------------------------------------
+    def state_of(self, row: int) -> int:
+        """The graph state of a row of a real state (-1: a chain or unused row)."""
+        return int(self.state_of_row[row])
+
+    def expand(self, x: int) -> None:
+        """Expand graph state ``x`` (a goal or an expanded state: nothing to do), adding
+        its new successors as frontier rows."""
+        g = self.graph
+        if g.is_goal[x] or g.expanded[x]:
+            return
+        new = g.expand([x])
+        if len(new):
+            self._new_rows(new)
+        self._fill_expanded(x)
+
+    def step_model(self, x: int) -> tuple[ModelArrays, np.ndarray]:
+        """The true model of expanded state ``x`` alone (its row is full state 0, its
+        successors 1, 2, ...) and the graph states of those full states; the last
+        :data:`STEP_MODELS` made are kept."""
+        hit = self._step_models.pop(x, None)
+        if hit is None:
+            hit = self._step_model(x)
+            if len(self._step_models) >= STEP_MODELS:
+                del self._step_models[next(iter(self._step_models))]
+        self._step_models[x] = hit  # the most recently used last
+        return hit
+
+    def _step_model(self, x: int) -> tuple[ModelArrays, np.ndarray]:
+        g = self.graph
+        offered = self._offered(x)
+        column, prob, nxt, stuck, gain = g.outcomes(x)
+        none = np.setdiff1d(np.arange(len(offered)), column)
+        if len(none):  # a pair with no outcome (a dead end's column) changes nothing
+            order = np.argsort(np.r_[column, none], kind="stable")
+            column = np.r_[column, none][order]
+            prob = np.r_[prob, np.ones(len(none))][order]
+            nxt = np.r_[nxt, np.full(len(none), x)][order]
+            stuck = np.r_[np.asarray(stuck, dtype=np.bool_), np.zeros(len(none), np.bool_)][order]
+            gain = np.r_[gain, np.zeros(len(none))][order]
+        states, local = np.unique(np.r_[x, nxt], return_inverse=True)
+        order = np.r_[np.flatnonzero(states == x), np.flatnonzero(states != x)]
+        where = np.empty(len(states), dtype=np.int64)
+        where[order] = np.arange(len(states))
+        states = states[order]
+        ptr = np.zeros(len(offered) + 1, dtype=np.int64)
+        np.add.at(ptr, column + 1, 1)
+        return ModelArrays(
+            n_actions=self.n_actions, n_doors=0, r_max=self.r_max,
+            step_limit=int(self.dynamics.step_limit), ptr=np.cumsum(ptr), prob=prob,
+            next=where[local[1:]], stuck=np.asarray(stuck, dtype=np.bool_),
+            **self._cost_arrays, obs_of=np.zeros(len(states), dtype=np.int64),
+            pos_of=np.where(g.is_goal[states], GOAL_POS, 0).astype(np.int64),
+            area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64),
+            **({"gain": np.asarray(gain, dtype=np.float64)} if self.own else {}),
+            acts=offered[None, :]), states
+
+    def action_name(self, a: int) -> str:
+        return ESTIMATE if a == self.n_ops else self.task.ops[a].name
+
+    def state_name(self, row: int) -> str:
+        x = self.state_of(row)
+        if x < 0:
+            return f"(estimate: {self.dist[row]} actions to the goal)"
+        return " ".join(sorted(self.graph.atoms(x)))
+
+    def atoms(self, row: int) -> frozenset[str]:
+        x = self.state_of(row)
+        return frozenset() if x < 0 else self.graph.atoms(x)
+
+    @property
+    def mask_table(self) -> _RowMasks:
+        return _RowMasks(self)
+
+    info = staticmethod(lambda pos: {})
+
+    def restarted(self, start: Any = None, goal: None = None) -> OnlineInstance:
+        if start is None and goal is None:
+            return self
+        raise ConfigError("reset options: a problem explored online starts at its initial "
+                          "state (its states are not enumerated)")
+
+    def optimal(self) -> dict[str, Any]:
+        """What is known without enumerating: no V*, the estimate from the start."""
+        return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
+                "reward_scale": self.reward_scale, "step_limit": self.dynamics.step_limit,
+                "v_star": None, "v_star_note": "not computed: the problem was explored "
+                "online (its states are not enumerated)", "explored": "online",
+                "estimate_from_start": self.h_start, "shortest_plan": None,
+                "states": None, "actions": self.n_ops, "relevant_areas": [],
+                "irrelevant_areas_paper": [], "expected_area_visits": {}}
+
+    # -- rows ----------------------------------------------------------------------------
+    def _allocate(self, rows: int, width: int) -> None:
+        """(Re)allocate every per-row array with ``rows`` rows and ``width`` columns,
+        keeping what is there; unused rows are inert goal rows."""
+        old = getattr(self, "columns", None)
+
+        def grown(name: str, fill: Any, dtype: Any, two_d: bool = True) -> np.ndarray:
+            shape = (rows, width) if two_d else (rows,)
+            out = np.full(shape, fill, dtype=dtype)
+            if old is not None:
+                have = getattr(self, name)
+                out[tuple(slice(0, n) for n in have.shape)] = have
+            return out
+
+        self.columns = grown("columns", -1, np.int64)
+        if old is None:
+            self.columns[:, 0] = self.n_ops
+        else:
+            self.columns[len(old):, 0] = self.n_ops
+        self.prior_next = grown("prior_next", NO_CHANGE, np.int64)
+        self.first_shortest = grown("first_shortest", False, np.bool_)
+        self.first_tolerant = grown("first_tolerant", False, np.bool_)
+        self._prior_reward = grown("_prior_reward", 0.0, np.float64)
+        self.goal = grown("goal", True, np.bool_, False)
+        self.dist = grown("dist", -1, np.int64, False)
+        self.state_of_row = grown("state_of_row", -1, np.int64, False)
+        self.revision += 1
+
+    def _room(self, rows: int, width: int) -> None:
+        n, w = self.columns.shape
+        if rows > n or width > w:
+            self._allocate(max(n, 1 << max(0, rows - 1).bit_length()), max(w, width))
+
+    def _chain_row(self, k: int) -> int:
+        """The row "k actions from the goal by the estimate", made with those below it."""
+        while len(self.chain) <= k:
+            j = len(self.chain)
+            r = self._take_row()
+            self.goal[r] = j == 0
+            self.dist[r] = j
+            if j:
+                self.prior_next[r, 0] = self.chain[j - 1]
+                self.first_shortest[r, 0] = self.first_tolerant[r, 0] = True
+            self.chain.append(r)
+            self.log.append(r)
+        return self.chain[k]
+
+    def _take_row(self) -> int:
+        self._room(self.n_rows + 1, 1)
+        r = self.n_rows
+        self.n_rows += 1
+        return r
+
+    def _new_rows(self, states: np.ndarray) -> None:
+        """Rows for newly found graph states: goal rows, or frontier rows by the estimate."""
+        g = self.graph
+        if len(self.row_of_state) < g.n_states:
+            grown = np.full(max(g.n_states, 2 * len(self.row_of_state)), -1, dtype=np.int64)
+            grown[:len(self.row_of_state)] = self.row_of_state
+            self.row_of_state = grown
+        h = self.heuristic.many(g.words[states])
+        for x, hx in zip(states.tolist(), h.tolist(), strict=True):
+            r = self._take_row()
+            self.row_of_state[x] = r
+            self.state_of_row[r] = x
+            self.goal[r] = bool(g.is_goal[x])
+            if self.goal[r]:
+                self.dist[r] = 0
+            elif hx != INFINITE:
+                self.prior_next[r, 0] = self._chain_row(max(hx, 1) - 1)
+                self.first_shortest[r, 0] = self.first_tolerant[r, 0] = True
+                self.dist[r] = max(hx, 1)
+            self.log.append(r)
+
+    def _offered(self, x: int) -> np.ndarray:
+        offered = self.graph.offered(x)
+        return offered if len(offered) else np.zeros(1, dtype=np.int64)  # a dead end
+
+    def _fill_expanded(self, x: int) -> None:
+        """The row of graph state ``x``, just expanded: its applicable ground actions,
+        each one's prior successor (of several outcomes the knowledge keeps, the one
+        closest to the goal by the estimates, then the lowest row), the distance by one
+        step of lookahead, the plans' first actions, the prior's rewards."""
+        g = self.graph
+        offered = self._offered(x)
+        self._room(self.n_rows, len(offered))
+        r = int(self.row_of_state[x])
+        k = len(offered)
+        self.columns[r] = -1
+        self.columns[r, :k] = offered
+        self.prior_next[r] = NO_CHANGE
+        self.first_shortest[r] = self.first_tolerant[r] = False
+        op, nxt = g.edges(x)
+        to = self.row_of_state[nxt]
+        col = np.searchsorted(offered, op)
+        d_to = self.dist[to]
+        other = (to != r) & (d_to >= 0)
+        d = int(1 + d_to[other].min()) if other.any() else -1
+        self.dist[r] = d
+        d_to = np.where(to == r, d, d_to)
+        key = np.where(d_to < 0, np.iinfo(np.int64).max // 4, d_to * (self.n_rows + 1) + to)
+        for j in range(k):
+            mine = col == j
+            if mine.any():
+                self.prior_next[r, j] = to[mine][np.argmin(key[mine])]
+        if d > 0:
+            bound = length_bound(d, self.darling_tolerance)
+            shortest = other & (1 + d_to == d)
+            tolerant = other & (1 + d_to <= bound)
+            self.first_shortest[r, col[shortest]] = True
+            self.first_tolerant[r, col[tolerant]] = True
+        if self.own:
+            m, _ = self.step_model(x)
+            pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
+            self._prior_reward[r] = 0.0
+            self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+        self.log.append(r)
+
+
+class _RowMasks:
+    """``mask_table[row]``: int8[n_actions], 1 where the ground action is applicable."""
+
+    def __init__(self, instance: OnlineInstance) -> None:
+        self.instance = instance
+
+    def __getitem__(self, row: int) -> np.ndarray:
+        inst = self.instance
+        out = np.zeros(inst.n_actions, dtype=np.int8)
+        x = inst.state_of(int(row))
+        if x >= 0 and inst.graph.expanded[x]:
+            out[inst.graph.offered(x)] = 1
+        elif x >= 0:  # a goal where an episode ended (or a frontier state)
+            index = {id(op): k for k, op in enumerate(inst.task.ops)}
+            out[[index[id(op)] for op in inst.task.applicable(inst.graph.mask(x))]] = 1
+        return out
+
+
+def _not_enumerated():
+    raise ConfigError("a problem explored online has no enumerated plans (GDQ-literal and "
+                      "GDQ-code walk plans: run the default GDQ, DARLING or Q-learning)")
+
+
+def _dynamics(base: PDDLInstance, h0: int) -> Dynamics:
+    """The problem's reality constants as :attr:`PDDLInstance.dynamics` gives them, but
+    the default step limit ``max(20, ceil(2.5 h))`` by the estimate ``h`` from the
+    initial state (no state is enumerated to count the fewest actions)."""
+    overlay = base.overlay_with_r_max()
+    if "step_limit" not in overlay.stated:
+        overlay = replace(overlay, step_limit=max(MIN_STEP_LIMIT,
+                                                  math.ceil(STEP_LIMIT_FACTOR * h0)))
+    return overlay
