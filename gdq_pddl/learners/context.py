@@ -9,7 +9,7 @@ between them, each instance says through :class:`Instance`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -141,6 +141,22 @@ class TaskContext:
         return int(hits[0]) if len(hits) else -1
 
 
+def row_context(context: TaskContext, rows: np.ndarray) -> TaskContext:
+    """``context`` restricted to the states ``rows`` (in that order): what the learners'
+    mask hooks read, so a problem explored online remakes only the rows it changed."""
+    def plans(table: PlanTable | None) -> PlanTable | None:
+        return None if table is None else PlanTable(table.first_actions[rows],
+                                                    table.length[rows], table.plans)
+
+    prior = context.prior
+    return replace(
+        context, s0=0, goal=context.goal[rows], plans=plans(context.plans),
+        darling_plans=plans(context.darling_plans),
+        prior=None if prior is None else PriorModel(prior.next_state[rows]),
+        columns=None if context.columns is None else context.columns[rows],
+        prior_reward=None if context.prior_reward is None else context.prior_reward[rows])
+
+
 def empty_plan_table(n_states: int, n_actions: int) -> PlanTable:
     """A plan table with no plan at all (what a planner that finds nothing yields)."""
     return pack_plans(n_actions, [[] for _ in range(n_states)],
@@ -181,8 +197,16 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),
         **({"own_scale": True, "step_limit": int(instance.model.step_limit),
-            "prior_reward": file_prior_rewards(instance.model, instance.prior)}
+            "prior_reward": own_prior_rewards(instance)}
            if getattr(instance, "reward_scale", "goal") == "problem" else {}))
+
+
+def own_prior_rewards(instance: Instance) -> np.ndarray:
+    """:attr:`TaskContext.prior_reward` of an instance on its problem's own reward scale:
+    its own (a problem explored online fills them in as it finds states), else from its
+    true model (:func:`file_prior_rewards`)."""
+    own = getattr(instance, "prior_reward", None)
+    return own if own is not None else file_prior_rewards(instance.model, instance.prior)
 
 
 def file_prior_rewards(model: ModelArrays, prior: PriorModel) -> np.ndarray:

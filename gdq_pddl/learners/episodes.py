@@ -22,6 +22,7 @@ from numba.extending import overload
 
 from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
 from gdq_pddl.envs.office import CompactEnv
+from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import CAUSE_GOAL, ModelArrays, env_step
@@ -31,6 +32,7 @@ from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
+from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
@@ -174,7 +176,9 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
 
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
-    if isinstance(learner, TabularLearner):
+    online = isinstance(env.unwrapped, OnlineEnv) and isinstance(learner, TabularLearner)
+    follow = Follower(learner, env.unwrapped.instance) if online else None
+    if isinstance(learner, TabularLearner) and not online:
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
     returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     for ep in range(n_episodes):
@@ -183,6 +187,8 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
         while not done:
             a = learner.act(s, rng)
             s2, r, terminated, truncated, info = env.step(a)
+            if follow is not None:  # rows the step found, before the learner reads them
+                follow()
             learner.observe(s, a, r, s2, terminated, truncated, rng)
             returns[ep] += r
             steps[ep] += 1
@@ -192,6 +198,8 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 success[ep] = True
             done = terminated or truncated
             s = s2
+        if follow is not None:
+            follow.episode_end()
     return EpisodeRecords(returns, steps, success, areas)
 
 

@@ -251,6 +251,36 @@ def fill_untried(table: QTable, prior_reward: np.ndarray, p: Params) -> None:
                 q[s, a] = prior_reward[s, a] + stay if own else stay
 
 
+@numba.njit(cache=True)
+def revalue_rows(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params,
+                 rows: np.ndarray) -> None:
+    """A problem explored online changed ``rows`` (in order: a row's prior successors
+    before it): each row's allowed pairs <- their hybrid backups, repeated until the row's
+    value settles (a row whose pairs lead back to itself), and the row queued by the
+    change, as a sweep does. Goal rows are 0."""
+    q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
+    tol = 1e-9 * max(1.0, p.r_max)
+    for s in rows:
+        if goal[s]:
+            q[s, :] = 0.0
+            v[s] = 0.0
+            continue
+        old = v[s]
+        for _ in range(100_000):
+            best = -np.inf
+            for a in range(q.shape[1]):
+                if allowed[s, a]:
+                    x = hybrid_backup(table, model, prior.next_state, prior.reward, p, s, a)
+                    q[s, a] = x
+                    best = max(best, x)
+            settled = abs(best - v[s]) <= tol
+            v[s] = best
+            if settled:
+                break
+        if abs(v[s] - old) > p.sweep_threshold:
+            _push(queue.heap, queue.pos, queue.prio, queue.n, s, abs(v[s] - old))
+
+
 # --- the reverse index: which known pairs read a state -----------------------------------------
 
 def reverse_room(max_successors: int, steps: int = 1) -> int:

@@ -166,6 +166,22 @@ class GDQ(TabularLearner):
                 Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 
+    def _revalue_rows(self, rows: np.ndarray) -> None:
+        if self.kind != KIND_GDQ:
+            return super()._revalue_rows(rows)
+        t = self.tables
+        none = ~t.table.allowed[rows].any(axis=1)  # nothing applicable: every action
+        t.table.allowed[rows[none]] = self.context.live[rows[none]]
+        gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params, rows)
+
+    def refresh_predecessors(self) -> None:
+        """Index the prior's pairs by successor again (a problem explored online added
+        pairs since the task started: until this, sweeps do not reach them)."""
+        if self.kind == KIND_GDQ:
+            pp_ptr, pp_pair = self._prior(self.context).predecessors()
+            self.tables = self.tables._replace(
+                prior=self.tables.prior._replace(pp_ptr=pp_ptr, pp_pair=pp_pair))
+
     def reserve_reverse(self, entries: int) -> None:
         """Make room for ``entries`` more reverse-index entries (the default GDQ)."""
         check_count("entries", entries)

@@ -67,6 +67,23 @@ def with_successor_slots(model: Model, max_successors: int) -> Model:
     return model._replace(slots=wider)
 
 
+def resized(model: Model, n_states: int, n_actions: int) -> Model:
+    """``model`` over ``n_states x n_actions`` (at least its own), the transitions kept:
+    a problem explored online found more states, or a state with more actions."""
+    old_s, old_a, k = model.slots.shape
+    if (n_states, n_actions) == (old_s, old_a):
+        return model
+    out = new_model(n_states, n_actions, k)
+    for name in ("slots", "stuck", "visits", "cost_sum", "cost_n"):
+        getattr(out, name)[:old_s, :old_a] = getattr(model, name)
+    out.cost_all[:] = model.cost_all
+    n = int(model.n_known[0])
+    pairs = model.known[:n]
+    out.known[:n] = pairs // old_a * n_actions + pairs % old_a  # pair s * A + a, new A
+    out.n_known[0] = n
+    return out
+
+
 def dense_counts(slots: np.ndarray, n_states: int) -> np.ndarray:
     """The transition counts as a dense int64 ``[S, A, n_states]`` array."""
     out = np.zeros((*slots.shape[:2], n_states), dtype=np.int64)

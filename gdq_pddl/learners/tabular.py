@@ -16,7 +16,7 @@ from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards, learned_model, rules
 from gdq_pddl.learners.config import LearnerConfig
-from gdq_pddl.learners.context import TaskContext
+from gdq_pddl.learners.context import TaskContext, row_context
 from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
     KIND_DYNAQ,
@@ -178,6 +178,46 @@ class TabularLearner:
         self.tables, self.params = self._build(context)
         recompute_all_v(self.tables.table)
         self._init_task()
+
+    # -- a problem explored online (gdq_pddl.learners.online) ---------------------------
+    def resize(self, context: TaskContext) -> None:
+        """Take ``context``, the same task over more states or wider rows (a problem
+        explored online outgrew its arrays): the tables are padded, what was learned is
+        kept, and the task starts again on them (OptInit for GDQ)."""
+        guards.check_context(context)
+        n_s, n_a = context.n_states, context.n_actions
+        old_s, old_a = self.q.shape
+        if n_s < old_s or n_a < old_a:
+            raise ConfigError(f"resize: the task has {n_s} x {n_a} states x actions, fewer "
+                              f"than the learner's {old_s} x {old_a}")
+        q = np.zeros((n_s, n_a))
+        q[:old_s, :old_a] = self._q if hasattr(self, "_q") else self.q
+        self.q = q
+        self._model = learned_model.resized(self._model, n_s, n_a)
+        self._set_task(context)
+
+    def update_rows(self, rows: np.ndarray) -> None:
+        """The context's rows ``rows`` changed in place (a problem explored online: a state
+        expanded, its successors found): their allowed and guide masks are made again
+        from the context, and their values from their Q rows (zero: untried)."""
+        rows = np.asarray(rows, dtype=np.int64)
+        part = row_context(self.context, rows)
+        allowed = self._allowed(part)
+        guide = self._guide(part, allowed)
+        t = self.tables.table
+        live = part.live
+        t.allowed[rows] = allowed
+        t.guide[rows] = guide
+        t.n_guide[rows] = guide.sum(axis=1)
+        t.n_live[rows] = live.sum(axis=1)
+        t.q[rows] = 0.0
+        self._revalue_rows(rows)
+
+    def _revalue_rows(self, rows: np.ndarray) -> None:
+        """Values of rows whose masks were just set (their Q rows are zero)."""
+        t = self.tables.table
+        best = np.where(t.allowed[rows], t.q[rows], -np.inf).max(axis=1)
+        t.v[rows] = np.where(t.goal[rows], 0.0, best)
 
     def act(self, state: int, rng: np.random.Generator) -> int:
         """The epsilon-greedy action (the env's index) to take in learner state ``state``,
