@@ -128,10 +128,17 @@ def _facts(info: dict) -> list[str]:
         reality = (f"PPDDL: reality is the domain's probabilistic model ({overlay}; r_max "
                    f"{info.get('r_max'):g}, step limit {info.get('step_limit')}), the planner "
                    f"knows its {info['determinisation']} determinisation")
+    if info.get("explored") == "online":
+        states = [f"- explored online: each run found states as its episodes reached them "
+                  f"(rows of the learners' tables), the knowledge's distances by the "
+                  f"heuristic's estimates (from the start: {info.get('estimate_from_start')} "
+                  f"actions); {info.get('actions')} ground actions"]
+    else:
+        states = [f"- learner: {info.get('states')} states (every reachable planner state), "
+                  f"{info.get('actions')} actions (ground actions)",
+                  f"- shortest plan: {info.get('shortest_plan')} actions"]
     return [f"- PDDL domain `{info.get('domain')}`, problem `{info.get('problem')}`, {reality}",
-            f"- learner: {info.get('states')} states (every reachable planner state), "
-            f"{info.get('actions')} actions (ground actions)",
-            f"- shortest plan: {info.get('shortest_plan')} actions",
+            *states,
             *(["- returns on the problem's own scale, as the IPPC scores them: its rewards "
                "minus its costs, the goal reward once at the goal, no penalty for a failed "
                "or late end"] if info.get("reward_scale") == "problem" else []), ""]

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -26,7 +27,8 @@ from gdq_pddl.cli.common import (
     world_and_task,
     world_arg,
 )
-from gdq_pddl.errors import GdqError, SizeError
+from gdq_pddl.envs.online import OnlineInstance
+from gdq_pddl.errors import GdqError, SizeError, TooManyStates
 from gdq_pddl.experiments import (
     Experiment,
     pairs,
@@ -39,6 +41,9 @@ from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
 
+EXPLORE = ("auto", "enumerate", "online")
+"""``gdq-pddl run --explore``: how a PPDDL problem's states are found."""
+
 
 def register_run(sub) -> None:
     p = sub.add_parser("run", help="compare methods on one task",
@@ -49,6 +54,10 @@ def register_run(sub) -> None:
     pddl_args(p, "learn on it (a STRIPS domain needs --dynamics, a PPDDL domain is its "
               "own reality: docs/domains.md)", dynamics=True)
     run_args(p, "results/run-<task>, or results/run-<problem name> for --problem")
+    p.add_argument("--explore", choices=EXPLORE, default="auto",
+                   help="a PPDDL problem's states: 'enumerate' them all first (V* in the "
+                        "report), find them 'online' as episodes reach them (any size; no "
+                        "V*), or 'auto' (default): online only where they do not fit")
     p.add_argument("--keep-learners", action="store_true",
                    help="save each run's final learner in --out/learners/<run>.npz "
                         "(gdq_pddl.load_learner reads it)")
@@ -60,6 +69,9 @@ def cmd_run(args: argparse.Namespace) -> int:
         return _run_pddl(args)
     refuse_given(args, ["--determinisation"], "is for a PPDDL domain (with --domain and "
                  "--problem); an office task has no determinisation to choose")
+    if args.explore != "auto":
+        raise GdqError("--explore is for a PPDDL problem (with --problem); the office's "
+                       "states are always enumerated")
     world, task = world_and_task(args)
     kw = experiment_kw(args)
     spec = task.name if task.name in world.tasks else f"{task.start}->{task.goal}"
@@ -79,12 +91,24 @@ def _run_pddl(args: argparse.Namespace) -> int:
              determinisation(args))
     try:  # check the files (and size) before any worker
         instance = load_pddl_instance(files)
-        instance.model  # noqa: B018
-    except MemoryError as exc:  # past the machine's memory, or a `ulimit -v`
-        if isinstance(exc, SizeError):
+        if args.explore == "online":
+            files = (*files, "online")
+            instance = OnlineInstance(instance)  # its own checks
+        else:
+            instance.model  # noqa: B018
+    except (MemoryError, TooManyStates) as exc:  # past the budget, or a `ulimit -v`
+        if args.explore == "auto" and load_pddl_instance(files).ppddl and \
+                isinstance(exc, (TooManyStates, SizeError)):
+            files = (*files, "online")
+            instance = OnlineInstance(load_pddl_instance(files[:4]))
+            print(f"gdq-pddl: {exc}\ngdq-pddl: so {problem} is explored online: its states "
+                  "are found as episodes reach them, and V* is not computed (--explore)",
+                  file=sys.stderr)
+        elif isinstance(exc, (SizeError, TooManyStates)):
             raise
-        raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
-                        "smaller problem") from None
+        else:
+            raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
+                            "smaller problem") from None
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)

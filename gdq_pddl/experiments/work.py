@@ -11,6 +11,8 @@ from functools import cache
 import numpy as np
 
 from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.online import OnlineInstance
+from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
 from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
@@ -18,6 +20,7 @@ from gdq_pddl.learners import precompile
 from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
+from gdq_pddl.learners.online import online_context
 from gdq_pddl.learners.saving import save_learner
 from gdq_pddl.world_types import Task, World
 
@@ -40,7 +43,10 @@ def instance_of(exp: Experiment, spec: str) -> PDDLInstance | OfficeInstance:
     """The instance schedule entry ``spec`` of ``exp`` runs on: its PDDL problem
     (``exp.pddl``), or the task ``spec`` of its world (a name or ``start->goal``)."""
     if exp.pddl is not None:
-        return load_pddl_instance(tuple(exp.pddl))
+        files = tuple(exp.pddl)
+        if files[4:5] == ("online",):  # states found as episodes reach them: one per run
+            return OnlineInstance(load_pddl_instance(files[:4]))
+        return load_pddl_instance(files)
     world = load_world_named(exp.world)
     return OfficeInstance(world, resolve_task(world, spec))
 
@@ -49,6 +55,8 @@ def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> Task
     """The learners' task context of ``instance``, planned on ``exp.knowledge``."""
     if exp.knowledge is not None:  # the same task, planned on another world's building
         instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
+    if isinstance(instance, OnlineInstance):
+        return online_context(instance, exp.planner)
     return task_context(instance, exp.planner)
 
 
@@ -65,7 +73,8 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
             learner = make_learner(unit.method, context, exp.hyper)
         else:
             learner.start_task(context)
-        env = PDDLEnv(instance=instance)
+        env = OnlineEnv(instance) if isinstance(instance, OnlineInstance) else \
+            PDDLEnv(instance=instance)
         env.reset(seed=env_seed + i)
         parts.append(run_episodes(learner, env, episodes, rng))
         names.append(instance.name)
@@ -88,7 +97,7 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
 @cache
 def load_pddl_instance(files: tuple[str, ...]):
     """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``."""
-    domain, problem, dynamics, *determinisation = files
+    domain, problem, dynamics, *determinisation = files[:4]
     return PDDLInstance.from_files(domain, problem, dynamics or None,
                                    determinisation=determinisation[0] if determinisation
                                    else "all-outcomes")

@@ -1,0 +1,184 @@
+"""A PPDDL problem explored online (gdq_pddl.envs.online, gdq_pddl.learners.online): the
+env steps exactly as the enumerated env does, Q-learning learns exactly as on the
+enumerated problem, the rows of frontier and chain states carry the estimates, a
+learner keeps what it learned when the arrays grow, and the command line falls back to
+online exploration where the states do not fit."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from gdq_pddl.cli import main
+from gdq_pddl.envs.online import ESTIMATE, OnlineInstance
+from gdq_pddl.envs.online_env import OnlineEnv
+from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
+from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
+from gdq_pddl.learners.learned_model import new_model, resized
+from gdq_pddl.learners.online import online_context
+from gdq_pddl.resources import resolve_pddl
+
+PPDDL = [("keys-ppddl", "keys-ppddl-1"), ("lift", "lift-1"), ("courier", "courier-1"),
+         ("courier", "courier-2")]
+
+
+def shipped(domain: str, problem: str) -> PDDLInstance:
+    return load_instance(domain, problem)
+
+
+def twins(domain: str, problem: str) -> tuple[PDDLInstance, OnlineInstance]:
+    """The enumerated instance and an online one with its reality constants."""
+    base = shipped(domain, problem)
+    return base, OnlineInstance(base, dynamics=base.dynamics)
+
+
+@pytest.mark.parametrize("domain,problem", PPDDL)
+def test_online_env_steps_as_the_enumerated_env(domain: str, problem: str) -> None:
+    base, online = twins(domain, problem)
+    a, b = PDDLEnv(instance=base), OnlineEnv(online)
+    pick = np.random.default_rng(7)
+    for episode in range(30):
+        a.reset(seed=episode)
+        b.reset(seed=episode)
+        done = False
+        while not done:
+            mask = a.action_masks()
+            act = int(pick.choice(np.flatnonzero(mask))) if pick.random() < 0.9 else \
+                int(pick.integers(base.n_actions))
+            s1, r1, t1, u1, i1 = a.step(act)
+            s2, r2, t2, u2, i2 = b.step(act)
+            assert base.atoms(s1) == online.atoms(s2)
+            assert (r1, t1, u1, i1["cause"]) == (r2, t2, u2, i2["cause"])
+            assert np.array_equal(i1["action_mask"], i2["action_mask"][:base.n_actions])
+            done = t1 or u1
+
+
+@pytest.mark.parametrize("domain,problem", PPDDL)
+def test_q_learning_online_learns_as_on_the_enumerated_problem(domain: str,
+                                                                problem: str) -> None:
+    base, online = twins(domain, problem)
+    enumerated = make_learner("Q-learning", pddl_task_context(base))
+    found = make_learner("Q-learning", online_context(online))
+    a, b = PDDLEnv(instance=base), OnlineEnv(online)
+    a.reset(seed=3)
+    b.reset(seed=3)
+    ra = run_episodes(enumerated, a, 60, np.random.default_rng(5))
+    rb = run_episodes(found, b, 60, np.random.default_rng(5))
+    assert np.array_equal(ra.returns, rb.returns) and np.array_equal(ra.steps, rb.steps)
+    for row in range(online.n_rows):  # the same Q for the same state, action by action
+        x = online.state_of(row)
+        if x < 0 or not online.graph.expanded[x]:
+            continue
+        s = base.graph.index[online.graph.mask(x)]
+        live = online.columns[row] >= 0
+        assert np.array_equal(online.columns[row][live], base.columns[s][base.columns[s] >= 0])
+        assert np.allclose(found.q[row][live], enumerated.q[s][:live.sum()])
+
+
+def test_rows_carry_the_estimates() -> None:
+    _, online = twins("lift", "lift-1")
+    n_ops = online.n_ops
+    chain = online.chain
+    assert online.goal[chain[0]] and not online.goal[chain[1:]].any()
+    for k, r in enumerate(chain[1:], start=1):  # chain row k leads to chain row k - 1
+        assert online.columns[r, 0] == n_ops and online.prior_next[r, 0] == chain[k - 1]
+        assert online.dist[r] == k
+    for row in range(online.n_rows):
+        x = online.state_of(row)
+        if x < 0 or online.graph.is_goal[x]:
+            continue
+        if not online.graph.expanded[x]:  # frontier: the estimate action to chain h - 1
+            h = int(online.heuristic.many(online.graph.words[[x]])[0])
+            assert online.columns[row, 0] == n_ops and (online.columns[row, 1:] < 0).all()
+            assert online.prior_next[row, 0] == chain[max(h, 1) - 1]
+        else:  # expanded: one lookahead step over its successors' distances
+            nxt = online.prior_next[row][online.prior_next[row] >= 0]
+            assert online.dist[row] == 1 + online.dist[nxt].min()
+    assert online.action_name(n_ops) == ESTIMATE
+
+
+def test_gdq_values_a_frontier_state_by_its_estimate() -> None:
+    _, online = twins("keys-ppddl", "keys-ppddl-1")
+    gdq = make_learner("GDQ", online_context(online))
+    gamma, cost, r_max = gdq.config.gamma, gdq.params.prior_cost, online.r_max
+
+    def closed_form(d: int) -> float:  # R_max one step before the goal, then -cost + gamma V
+        v = r_max
+        for _ in range(d - 1):
+            v = -cost + gamma * v
+        return v
+
+    frontier = [r for r in range(online.n_rows) if online.state_of(r) >= 0
+                and not online.graph.expanded[online.state_of(r)]
+                and not online.goal[r] and online.prior_next[r, 0] >= 0]
+    assert frontier
+    for r in frontier:
+        assert gdq.v[r] == pytest.approx(closed_form(int(online.dist[r])))
+
+
+def test_resized_model_keeps_transitions_and_known_pairs() -> None:
+    m = new_model(3, 2, 2)
+    m.visits[1, 1] = 4
+    m.slots[1, 1, 0] = (2 << 32) | 4
+    m.known[0] = 1 * 2 + 1
+    m.n_known[0] = 1
+    big = resized(m, 5, 4)
+    assert big.visits.shape == (5, 4) and big.visits[1, 1] == 4
+    assert big.slots[1, 1, 0] == (2 << 32) | 4
+    assert big.known[0] == 1 * 4 + 1 and big.n_known[0] == 1
+
+
+@pytest.mark.parametrize("method", ["Q-learning", "DARLING", "GDQ"])
+def test_learners_keep_learning_through_growth(method: str) -> None:
+    _, online = twins("keys-ppddl", "keys-ppddl-2")
+    learner = make_learner(method, online_context(online))
+    env = OnlineEnv(online)
+    env.reset(seed=0)
+    first = online.revision
+    records = run_episodes(learner, env, 40, np.random.default_rng(0))
+    assert online.revision > first  # the arrays grew while learning
+    assert learner.q.shape == online.columns.shape
+    assert records.success.any()
+
+
+def test_online_refusals() -> None:
+    _, online = twins("lift", "lift-1")
+    with pytest.raises(ConfigError, match="starts at its initial state"):
+        OnlineEnv(online).reset(options={"start": "(at l1)"})
+    with pytest.raises(PlanningError, match="not .*pyperplan"):
+        online.plan_table("pyperplan")
+    with pytest.raises(PlanningError, match="STRIPS"):
+        OnlineInstance(shipped("keys", "keys-1"))
+    learner = make_learner("GDQ-literal", pddl_task_context(shipped("lift", "lift-1")))
+    assert learner is not None  # the paper's variants walk plans: refused online
+    with pytest.raises(ConfigError, match="no enumerated plans"):
+        make_learner("GDQ-literal", online_context(online))
+
+
+def test_cli_explores_online(tmp_path, capsys) -> None:
+    out = tmp_path / "run"
+    domain, problem, _ = resolve_pddl("lift", "lift-2", None)
+    assert main(["run", "--domain", str(domain), "--problem", str(problem), "--explore",
+                 "online", "--method", "GDQ", "Q-learning", "--episodes", "20", "--runs",
+                 "2", "--jobs", "1", "--out", str(out), "--no-report"]) == 0
+    optimal = next(iter(json.loads((out / "optimal.json").read_text()).values()))
+    assert optimal["explored"] == "online" and optimal["v_star"] is None
+    assert not (out / "policies.csv").exists()
+    rows = (out / "episodes.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 2 * 20
+
+
+def test_cli_falls_back_to_online_past_the_budget(tmp_path, capsys, monkeypatch) -> None:
+    monkeypatch.setattr("gdq_pddl.pddl.reachable.TABLE_BUDGET", 20_000)
+    out = tmp_path / "run"
+    domain, problem, _ = resolve_pddl("lift", "lift-2", None)
+    assert main(["run", "--domain", str(domain), "--problem", str(problem), "--method",
+                 "DARLING", "--episodes", "5", "--runs", "1", "--jobs", "1", "--out",
+                 str(out), "--no-report"]) == 0
+    assert "explored online" in capsys.readouterr().err
+    assert main(["run", "--task", "C", "--explore", "online", "--out",
+                 str(tmp_path / "x")]) != 0
+    assert "--explore is for a PPDDL problem" in capsys.readouterr().err
