@@ -9,14 +9,17 @@ actions, the knowledge's edges, reality's outcomes) when an episode first reache
 
 The learners' rows (the env's observations) are of three kinds:
 
-- an **expanded** state: its applicable ground actions, as an enumerated problem's;
-- a **frontier** state, a successor of an expanded one not reached yet: one column, the
-  *estimate* action (ground action ``n_ops``, which the env never applies), whose prior
-  successor is the chain row ``h - 1`` for the heuristic's estimate ``h`` of its goal
-  distance (:func:`~gdq_pddl.planning.heuristic.hadd_for`: h_add of the knowledge's
-  relaxation); a state the relaxation cannot take to the goal has no prior successor;
-- a **chain** row ``k``, "k actions from the goal by the estimate": one estimate column
-  leading to chain row ``k - 1``; chain row 0 is a goal.
+- a state an episode reached: its applicable ground actions, as an enumerated problem's
+  (a goal: a goal row);
+- a **chain** row ``k``, "k actions from the goal by the estimate": one column, the
+  *estimate* action (ground action ``n_ops``, which the env never applies), leading to
+  chain row ``k - 1``; chain row 0 is a goal; and a **dead** row, no prior successor.
+
+A pair whose prior successor is a state not reached yet (the frontier) leads, in the
+prior, to the chain row ``h - 1`` for that state's estimate ``h`` of its goal distance
+(:func:`~gdq_pddl.planning.heuristic.hadd_for`: h_add of the knowledge's relaxation;
+the dead row where the relaxation cannot reach the goal), until the state is reached
+and has its own row.
 
 So GDQ's prior, DARLING's plan lengths and GDQ's warm start read estimates exactly as
 they read shortest plans on an enumerated problem, without any change to their rules.
@@ -94,13 +97,20 @@ class OnlineInstance:
         self.mean_cost = expected_costs(self.model)
         self.revision = 0
         self._step_models: dict[int, tuple[ModelArrays, np.ndarray]] = {}
-        self.log: list[int] = []
+        self.log: list[int] = []  # rows made (in order: what a row reads first)
+        self.retargeted: list[int] = []  # rows whose prior successor found its own row
+        self.waiting: dict[int, list[tuple[int, int]]] = {}
         self.n_rows = 0
         self.chain: list[int] = []
         self.row_of_state = np.full(FIRST_ROWS, -1, dtype=np.int64)
+        self.h_of = np.full(FIRST_ROWS, INFINITE, dtype=np.int64)
         self._allocate(FIRST_ROWS, 1)
-        self._new_rows(np.array([0]))
-        self.expand(0)
+        self.dead = self._take_row()  # valued as a dead end: no prior successor
+        self.goal[self.dead] = False
+        self.log.append(self.dead)
+        self._chain_row(0)
+        self._found(np.array([0]))
+        self._row(0)
 
     # -- what the learners' context reads (the Instance protocol of learners.context) -----
     name = property(lambda self: self.base.name)
@@ -160,16 +170,10 @@ class OnlineInstance:
         """The graph state of a row of a real state (-1: a chain or unused row)."""
         return int(self.state_of_row[row])
 
-    def expand(self, x: int) -> None:
-        """Expand graph state ``x`` (a goal or an expanded state: nothing to do), adding
-        its new successors as frontier rows."""
-        g = self.graph
-        if g.is_goal[x] or g.expanded[x]:
-            return
-        new = g.expand([x])
-        if len(new):
-            self._new_rows(new)
-        self._fill_expanded(x)
+    def visit(self, x: int) -> int:
+        """The row of graph state ``x``, which an episode reached: made, and ``x``
+        expanded, on the first visit."""
+        return self._row(x)
 
     def step_model(self, x: int) -> tuple[ModelArrays, np.ndarray]:
         """The true model of expanded state ``x`` alone (its row is full state 0, its
@@ -218,7 +222,8 @@ class OnlineInstance:
     def state_name(self, row: int) -> str:
         x = self.state_of(row)
         if x < 0:
-            return f"(estimate: {self.dist[row]} actions to the goal)"
+            return "(estimate: a dead end)" if row == self.dead else \
+                f"(estimate: {self.dist[row]} actions to the goal)"
         return " ".join(sorted(self.graph.atoms(x)))
 
     def atoms(self, row: int) -> frozenset[str]:
@@ -300,70 +305,99 @@ class OnlineInstance:
         self.n_rows += 1
         return r
 
-    def _new_rows(self, states: np.ndarray) -> None:
-        """Rows for newly found graph states: goal rows, or frontier rows by the estimate."""
+    def _found(self, states: np.ndarray) -> None:
+        """Estimates of newly found graph states (0 at a goal)."""
         g = self.graph
         if len(self.row_of_state) < g.n_states:
-            grown = np.full(max(g.n_states, 2 * len(self.row_of_state)), -1, dtype=np.int64)
-            grown[:len(self.row_of_state)] = self.row_of_state
-            self.row_of_state = grown
-        h = self.heuristic.many(g.words[states])
-        for x, hx in zip(states.tolist(), h.tolist(), strict=True):
-            r = self._take_row()
-            self.row_of_state[x] = r
-            self.state_of_row[r] = x
-            self.goal[r] = bool(g.is_goal[x])
-            if self.goal[r]:
-                self.dist[r] = 0
-            elif hx != INFINITE:
-                self.prior_next[r, 0] = self._chain_row(max(hx, 1) - 1)
-                self.first_shortest[r, 0] = self.first_tolerant[r, 0] = True
-                self.dist[r] = max(hx, 1)
-            self.log.append(r)
+            size = max(g.n_states, 2 * len(self.row_of_state))
+            for name, fill in (("row_of_state", -1), ("h_of", INFINITE)):
+                grown = np.full(size, fill, dtype=np.int64)
+                old = getattr(self, name)
+                grown[:len(old)] = old
+                setattr(self, name, grown)
+        live = states[~g.is_goal[states]]
+        self.h_of[states[g.is_goal[states]]] = 0
+        if len(live):
+            self.h_of[live] = self.heuristic.many(g.words[live])
+
+    def _row(self, x: int) -> int:
+        """The row of graph state ``x``, made (and ``x`` expanded) on first call: the
+        pairs whose prior successor stood for ``x`` (its estimate) then lead to it."""
+        r = int(self.row_of_state[x])
+        if r >= 0:
+            return r
+        r = self._take_row()
+        self.row_of_state[x] = r
+        self.state_of_row[r] = x
+        self.goal[r] = bool(self.graph.is_goal[x])
+        self.dist[r] = 0
+        self.log.append(r)
+        if not self.goal[r]:
+            new = self.graph.expand([x])
+            if len(new):
+                self._found(new)
+            self._fill_expanded(x, r)
+        for pr, pj in self.waiting.pop(x, ()):
+            self.prior_next[pr, pj] = r
+            self.retargeted.append(pr)
+        return r
+
+    def _target(self, y: int) -> tuple[int, int]:
+        """The prior successor row standing for graph state ``y`` and its distance: its
+        own row, else the chain row of its estimate (the dead-end row where the
+        relaxation cannot reach the goal)."""
+        r = int(self.row_of_state[y])
+        if r >= 0:
+            return r, int(self.dist[r])
+        h = int(self.h_of[y])
+        if h == 0:
+            return self.chain[0], 0
+        if h == INFINITE:
+            return self.dead, -1
+        return self._chain_row(h - 1), h
 
     def _offered(self, x: int) -> np.ndarray:
         offered = self.graph.offered(x)
         return offered if len(offered) else np.zeros(1, dtype=np.int64)  # a dead end
 
-    def _fill_expanded(self, x: int) -> None:
-        """The row of graph state ``x``, just expanded: its applicable ground actions,
+    def _fill_expanded(self, x: int, r: int) -> None:
+        """Row ``r`` of graph state ``x``, just expanded: its applicable ground actions,
         each one's prior successor (of several outcomes the knowledge keeps, the one
-        closest to the goal by the estimates, then the lowest row), the distance by one
-        step of lookahead, the plans' first actions, the prior's rewards."""
+        closest to the goal by the estimates, then the lowest graph state), the distance
+        by one step of lookahead, the plans' first actions, the prior's rewards."""
         g = self.graph
         offered = self._offered(x)
-        self._room(self.n_rows, len(offered))
-        r = int(self.row_of_state[x])
         k = len(offered)
-        self.columns[r] = -1
-        self.columns[r, :k] = offered
-        self.prior_next[r] = NO_CHANGE
-        self.first_shortest[r] = self.first_tolerant[r] = False
         op, nxt = g.edges(x)
-        to = self.row_of_state[nxt]
+        targets = [self._target(y) if y != x else (r, -1) for y in nxt.tolist()]
+        self._room(self.n_rows, k)
+        to = np.array([t for t, _ in targets], dtype=np.int64)
+        d_to = np.array([d for _, d in targets], dtype=np.int64)
         col = np.searchsorted(offered, op)
-        d_to = self.dist[to]
-        other = (to != r) & (d_to >= 0)
+        other = (nxt != x) & (d_to >= 0)
         d = int(1 + d_to[other].min()) if other.any() else -1
         self.dist[r] = d
-        d_to = np.where(to == r, d, d_to)
-        key = np.where(d_to < 0, np.iinfo(np.int64).max // 4, d_to * (self.n_rows + 1) + to)
+        d_to = np.where(nxt == x, d, d_to)
+        key = np.where(d_to < 0, np.iinfo(np.int64).max // 4,
+                       d_to * (g.n_states + 1) + nxt)
+        self.columns[r] = -1
+        self.columns[r, :k] = offered
         for j in range(k):
-            mine = col == j
-            if mine.any():
-                self.prior_next[r, j] = to[mine][np.argmin(key[mine])]
+            mine = np.flatnonzero(col == j)
+            if len(mine):
+                best = mine[np.argmin(key[mine])]
+                self.prior_next[r, j] = to[best]
+                y = int(nxt[best])
+                if self.row_of_state[y] < 0 and not g.is_goal[y]:
+                    self.waiting.setdefault(y, []).append((r, j))
         if d > 0:
             bound = length_bound(d, self.darling_tolerance)
-            shortest = other & (1 + d_to == d)
-            tolerant = other & (1 + d_to <= bound)
-            self.first_shortest[r, col[shortest]] = True
-            self.first_tolerant[r, col[tolerant]] = True
+            self.first_shortest[r, col[other & (1 + d_to == d)]] = True
+            self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
         if self.own:
             m, _ = self.step_model(x)
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
-            self._prior_reward[r] = 0.0
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
-        self.log.append(r)
 
 
 class _RowMasks:

@@ -31,7 +31,7 @@ class OnlineEnv(CompiledEnv):
         fs, reward, terminated, truncated, cause = env_act(
             model, 0, a, self._t, GOAL_POS, self.np_random)
         self._x = int(states[fs])
-        inst.expand(self._x)
+        inst.visit(self._x)
         self.observation_space.n = inst.n_states
         return reward, terminated, truncated, cause
 

@@ -174,6 +174,12 @@ class GDQ(TabularLearner):
         t.table.allowed[rows[none]] = self.context.live[rows[none]]
         gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params, rows)
 
+    def prior_changed(self, rows: np.ndarray) -> None:
+        if self.kind == KIND_GDQ:
+            t = self.tables
+            gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params,
+                             np.asarray(rows, dtype=np.int64))
+
     def refresh_predecessors(self) -> None:
         """Index the prior's pairs by successor again (a problem explored online added
         pairs since the task started: until this, sweeps do not reach them)."""

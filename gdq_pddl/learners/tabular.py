@@ -213,6 +213,10 @@ class TabularLearner:
         t.q[rows] = 0.0
         self._revalue_rows(rows)
 
+    def prior_changed(self, rows: np.ndarray) -> None:
+        """The prior successors of some pairs of ``rows`` changed (a problem explored
+        online: the state an estimate stood for now has a row); only GDQ reads them."""
+
     def _revalue_rows(self, rows: np.ndarray) -> None:
         """Values of rows whose masks were just set (their Q rows are zero)."""
         t = self.tables.table

@@ -78,45 +78,71 @@ def test_q_learning_online_learns_as_on_the_enumerated_problem(domain: str,
         assert np.allclose(found.q[row][live], enumerated.q[s][:live.sum()])
 
 
+def test_own_scale_prior_rewards_are_the_enumerated_ones() -> None:
+    base, online = twins("courier", "courier-2")
+    enumerated = pddl_task_context(base).prior_reward
+    env = OnlineEnv(online)
+    run_episodes(make_learner("Q-learning", online_context(online)), env, 30,
+                 np.random.default_rng(1))
+    checked = 0
+    for row in range(online.n_rows):
+        x = online.state_of(row)
+        if x >= 0 and online.graph.expanded[x]:
+            s = base.graph.index[online.graph.mask(x)]
+            k = int((online.columns[row] >= 0).sum())
+            assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
+            checked += 1
+    assert checked > 5
+
+
 def test_rows_carry_the_estimates() -> None:
-    _, online = twins("lift", "lift-1")
-    n_ops = online.n_ops
-    chain = online.chain
+    _, online = twins("lift", "lift-2")
+    env = OnlineEnv(online)
+    run_episodes(make_learner("Q-learning", online_context(online)), env, 5,
+                 np.random.default_rng(2))
+    n_ops, chain, g = online.n_ops, online.chain, online.graph
     assert online.goal[chain[0]] and not online.goal[chain[1:]].any()
     for k, r in enumerate(chain[1:], start=1):  # chain row k leads to chain row k - 1
         assert online.columns[r, 0] == n_ops and online.prior_next[r, 0] == chain[k - 1]
         assert online.dist[r] == k
-    for row in range(online.n_rows):
-        x = online.state_of(row)
-        if x < 0 or online.graph.is_goal[x]:
-            continue
-        if not online.graph.expanded[x]:  # frontier: the estimate action to chain h - 1
-            h = int(online.heuristic.many(online.graph.words[[x]])[0])
-            assert online.columns[row, 0] == n_ops and (online.columns[row, 1:] < 0).all()
-            assert online.prior_next[row, 0] == chain[max(h, 1) - 1]
-        else:  # expanded: one lookahead step over its successors' distances
-            nxt = online.prior_next[row][online.prior_next[row] >= 0]
-            assert online.dist[row] == 1 + online.dist[nxt].min()
+    assert online.prior_next[online.dead, 0] < 0 and online.dist[online.dead] == -1
     assert online.action_name(n_ops) == ESTIMATE
+    unreached = 0
+    for r in range(online.n_rows):
+        x = online.state_of(r)
+        if x < 0 or g.is_goal[x]:
+            continue
+        assert g.expanded[x]  # a state with a row was reached, and expanded then
+        op, nxt = g.edges(x)
+        for j, a in enumerate(online.columns[r][online.columns[r] >= 0].tolist()):
+            stands = set()  # what the prior successor of each outcome of a would be
+            for y in nxt[op == a].tolist():
+                if g.is_goal[y]:  # a goal's own row or the chain's: both pay R_max
+                    stands |= {chain[0], int(online.row_of_state[y])}
+                elif online.row_of_state[y] >= 0:
+                    stands.add(int(online.row_of_state[y]))
+                else:
+                    h = int(online.h_of[y])
+                    stands.add(online.dead if h < 0 else chain[h - 1])
+                    unreached += 1
+            if stands:
+                assert online.prior_next[r, j] in stands
+            else:
+                assert online.prior_next[r, j] < 0
+    assert unreached  # some prior successors stand for states not reached yet
 
 
-def test_gdq_values_a_frontier_state_by_its_estimate() -> None:
-    _, online = twins("keys-ppddl", "keys-ppddl-1")
+def test_gdq_values_the_chain_by_its_estimates() -> None:
+    _, online = twins("keys-ppddl", "keys-ppddl-2")
     gdq = make_learner("GDQ", online_context(online))
+    env = OnlineEnv(online)
+    run_episodes(gdq, env, 20, np.random.default_rng(4))
     gamma, cost, r_max = gdq.config.gamma, gdq.params.prior_cost, online.r_max
-
-    def closed_form(d: int) -> float:  # R_max one step before the goal, then -cost + gamma V
-        v = r_max
-        for _ in range(d - 1):
-            v = -cost + gamma * v
-        return v
-
-    frontier = [r for r in range(online.n_rows) if online.state_of(r) >= 0
-                and not online.graph.expanded[online.state_of(r)]
-                and not online.goal[r] and online.prior_next[r, 0] >= 0]
-    assert frontier
-    for r in frontier:
-        assert gdq.v[r] == pytest.approx(closed_form(int(online.dist[r])))
+    v = r_max  # R_max one step before the goal, then -cost + gamma V a step further
+    for r in online.chain[1:]:
+        assert gdq.v[r] == pytest.approx(v)
+        v = -cost + gamma * v
+    assert gdq.v[online.dead] == pytest.approx(-cost / (1 - gamma))
 
 
 def test_resized_model_keeps_transitions_and_known_pairs() -> None:
@@ -142,6 +168,19 @@ def test_learners_keep_learning_through_growth(method: str) -> None:
     assert online.revision > first  # the arrays grew while learning
     assert learner.q.shape == online.columns.shape
     assert records.success.any()
+    if method == "GDQ":  # an untried pair is worth its prior backup, however it was found
+        t = learner.tables
+        for r in range(online.n_rows):
+            x = online.state_of(r)
+            if x < 0 or online.goal[r]:
+                continue
+            for j in np.flatnonzero(t.table.allowed[r] & (t.model.visits[r] == 0)):
+                nxt = online.prior_next[r, j]
+                if nxt >= 0:
+                    expected = online.r_max if online.goal[nxt] else \
+                        -learner.params.prior_cost + learner.config.gamma * learner.v[nxt]
+                    # within what the sweeps leave: they stop at a threshold and budget
+                    assert learner.q[r, j] == pytest.approx(expected, abs=0.05)
 
 
 def test_online_refusals() -> None:
