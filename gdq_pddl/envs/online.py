@@ -44,6 +44,7 @@ from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, prior_rewards
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
+from gdq_pddl.envs.one_state import RowMasks, one_state_model
 from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
 from gdq_pddl.envs.solve import expected_costs
@@ -188,33 +189,7 @@ class OnlineInstance:
         return hit
 
     def _step_model(self, x: int) -> tuple[ModelArrays, np.ndarray]:
-        g = self.graph
-        offered = self._offered(x)
-        column, prob, nxt, stuck, gain = g.outcomes(x)
-        none = np.setdiff1d(np.arange(len(offered)), column)
-        if len(none):  # a pair with no outcome (a dead end's column) changes nothing
-            order = np.argsort(np.r_[column, none], kind="stable")
-            column = np.r_[column, none][order]
-            prob = np.r_[prob, np.ones(len(none))][order]
-            nxt = np.r_[nxt, np.full(len(none), x)][order]
-            stuck = np.r_[np.asarray(stuck, dtype=np.bool_), np.zeros(len(none), np.bool_)][order]
-            gain = np.r_[gain, np.zeros(len(none))][order]
-        states, local = np.unique(np.r_[x, nxt], return_inverse=True)
-        order = np.r_[np.flatnonzero(states == x), np.flatnonzero(states != x)]
-        where = np.empty(len(states), dtype=np.int64)
-        where[order] = np.arange(len(states))
-        states = states[order]
-        ptr = np.zeros(len(offered) + 1, dtype=np.int64)
-        np.add.at(ptr, column + 1, 1)
-        return ModelArrays(
-            n_actions=self.n_actions, n_doors=0, r_max=self.r_max,
-            step_limit=int(self.dynamics.step_limit), ptr=np.cumsum(ptr), prob=prob,
-            next=where[local[1:]], stuck=np.asarray(stuck, dtype=np.bool_),
-            **self._cost_arrays, obs_of=np.zeros(len(states), dtype=np.int64),
-            pos_of=np.where(g.is_goal[states], GOAL_POS, 0).astype(np.int64),
-            area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64),
-            **({"gain": np.asarray(gain, dtype=np.float64)} if self.own else {}),
-            acts=offered[None, :]), states
+        return one_state_model(self.graph, x, self._offered(x), self.model, self.own)
 
     def action_name(self, a: int) -> str:
         return ESTIMATE if a == self.n_ops else self.task.ops[a].name
@@ -231,8 +206,8 @@ class OnlineInstance:
         return frozenset() if x < 0 else self.graph.atoms(x)
 
     @property
-    def mask_table(self) -> _RowMasks:
-        return _RowMasks(self)
+    def mask_table(self) -> RowMasks:
+        return RowMasks(self)
 
     info = staticmethod(lambda pos: {})
 
@@ -398,24 +373,6 @@ class OnlineInstance:
             m, _ = self.step_model(x)
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
-
-
-class _RowMasks:
-    """``mask_table[row]``: int8[n_actions], 1 where the ground action is applicable."""
-
-    def __init__(self, instance: OnlineInstance) -> None:
-        self.instance = instance
-
-    def __getitem__(self, row: int) -> np.ndarray:
-        inst = self.instance
-        out = np.zeros(inst.n_actions, dtype=np.int8)
-        x = inst.state_of(int(row))
-        if x >= 0 and inst.graph.expanded[x]:
-            out[inst.graph.offered(x)] = 1
-        elif x >= 0:  # a goal where an episode ended (or a frontier state)
-            index = {id(op): k for k, op in enumerate(inst.task.ops)}
-            out[[index[id(op)] for op in inst.task.applicable(inst.graph.mask(x))]] = 1
-        return out
 
 
 def _not_enumerated():
