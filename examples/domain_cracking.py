@@ -7,7 +7,7 @@ learner by hand (the API), then GDQ, DARLING and Q-learning through the experime
 with the report. The command line does the same: `gdq-pddl run --domain cracking-blocks
 --problem cracking-1` (online by itself once the states do not fit).
 
-    python examples/online.py --episodes 100 --runs 2
+    python examples/domain_cracking.py --episodes 100 --runs 2
 """
 
 from __future__ import annotations
