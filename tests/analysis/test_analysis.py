@@ -1,4 +1,7 @@
-"""Figures, tables and report from a small synthetic experiment output folder."""
+"""The paper's figures, tables and report from a small synthetic experiment output folder
+(tests/analysis/synthetic.py): verdicts that flip with the data, skipped sections,
+OptInit values, routes; and the statistics, policy walks and config reading they rest
+on. A run no paper section covers: test_run_report.py."""
 
 from __future__ import annotations
 
@@ -10,161 +13,27 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gdq_pddl.abstraction import OfficeAbstraction, build_plan_table
 from gdq_pddl.analysis import figures, make_all, write_report
 from gdq_pddl.analysis.figures import FigureOptions, make_figures
 from gdq_pddl.analysis.stats import compare, first_positive, moving_average, verdict
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.analysis.tables import area_table, make_tables
 from gdq_pddl.envs.evaluate import walk_policy
-from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.render import MapPainter
-from gdq_pddl.envs.solve import solve
 from gdq_pddl.experiments.probes import optinit_values
 from gdq_pddl.experiments.results import load_config
-from gdq_pddl.planning import PlanningProblem, get_planner
-from gdq_pddl.resources import domain_text
 from gdq_pddl.spaces import LearnerSpaces
-from gdq_pddl.world import builtin_world, load_world
-from gdq_pddl.world_types import World, office_problem
-
-METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
-ROBOT_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q")  # robot_experiment's default
-QUALITY = {"GDQ": 1.0, "GDQ-code": 0.9, "DARLING": 0.6, "Dyna-Q": 0.4, "Q-learning": 0.2}
-V_STAR = {"A": 14.6, "B": 15.7, "C": 11.5, "D": 11.4, "E": 14.6}
-RELEVANT = {"A": [2, 4, 6, 7], "B": [4, 7], "C": [1, 2, 3, 6], "D": [1, 3, 4, 7],
-            "E": [4, 6, 7]}
-PAPER_IRR = {"A": [1, 2, 3], "B": [1, 2, 3, 6], "C": [4, 5, 7], "D": [2, 5], "E": []}
-ROUTE = {"A": [4, 7, 6], "B": [4, 7], "C": [1, 3, 2, 6], "D": [1, 3, 4, 7], "E": [6, 7, 4]}
-RUNS, EPISODES = 2, 60
-SWITCH_AT = EPISODES + 1
-HEADER = ["experiment", "method", "task", "run", "episode", "return", "steps", "success",
-          *[f"area_{k}" for k in range(1, 8)]]
-
-
-def optimal_policy(world: World, task: str) -> dict[int, int]:
-    """Learner policy from the true optimal policy at step 0 (only the local door open)."""
-    model = compile_model(world)
-    sol = solve(model, world.index[world.task(task).goal])
-    spaces = LearnerSpaces(world)
-    out = {}
-    for s, (p, is_open) in enumerate(spaces.states):
-        door = world.door_at.get(p)
-        fs = full_state(world, p, frozenset({door.name}) if door and is_open else frozenset())
-        out[s] = int(sol.policy[0, fs])
-    return out
-
-
-def plan_policy(world: World, task: str) -> dict[int, int]:
-    """Learner policy: the first action of the first shortest graph plan from each state."""
-    ab = OfficeAbstraction(world)
-    problem = PlanningProblem.from_texts(domain_text(), office_problem(world, world.task(task)))
-    table = build_plan_table(ab, problem, get_planner("graph"), ab.goal(world.task(task).goal))
-    return {s: plans[0][0][1] for s in range(ab.n_states) if (plans := table.plans_from(s))}
-
-
-def _episode(rng: np.random.Generator, q: float, episode: int, task: str, v_star: float,
-             r_max: float, route_from: int) -> tuple[float, int, int, list[int]]:
-    """One fake episode: return rising with quality ``q``; area visits on the task's route
-    (off-route areas visited with a probability that falls with ``q``)."""
-    level = -r_max + (v_star + r_max) * q * (1 - np.exp(-episode / 10))
-    ret = float(level + rng.normal(0, r_max / 10))
-    areas = [0] * 7
-    for a in ROUTE[task] if episode >= route_from else RELEVANT[task]:
-        areas[a - 1] += int(rng.integers(1, 3))
-    for a in range(1, 8):
-        if a not in RELEVANT[task] and rng.random() < (1.05 - q) * 0.8:
-            areas[a - 1] += int(rng.integers(1, 4))
-    success = int(ret > 0)
-    return ret, sum(areas), success, areas
-
-
-def write_output(out: Path, worse_task: str | None = None, switches: bool = True,
-                 robot: bool = True, worse_method: str = "GDQ") -> Path:
-    """A synthetic output folder; GDQ (and GDQ-code) are best unless ``worse_task`` makes
-    ``worse_method`` worst there."""
-    rng = np.random.default_rng(7)
-    world, robot_world = load_world(), builtin_world("office_robot")
-    out.mkdir(parents=True, exist_ok=True)
-    rows: list[list] = []
-
-    def quality(method: str, task: str) -> float:
-        return 0.05 if method == worse_method and task == worse_task else QUALITY[method]
-
-    def add(exp: str, method: str, task: str, run: int, ep: int, local: int, v: float,
-            r_max: float, route_from: int) -> None:
-        ret, steps, success, areas = _episode(rng, quality(method, task), local, task, v,
-                                              r_max, route_from)
-        rows.append([exp, method, task, run, ep, f"{ret:.3f}", steps, success, *areas])
-
-    for method in METHODS:
-        route_from = 20 if method.startswith("GDQ") else 10**6
-        for task in "ABCD":
-            for run in range(RUNS):
-                for e in range(1, EPISODES + 1):
-                    add("tasks", method, task, run, e, e, V_STAR[task], 20.0, route_from)
-        if switches:
-            for second in "DE":
-                for run in range(RUNS):
-                    for e in range(1, 2 * EPISODES + 1):
-                        task = "C" if e < SWITCH_AT else second
-                        local = e if task == "C" else e - SWITCH_AT + 1
-                        add(f"switch-C-{second}", method, task, run, e, local,
-                            V_STAR[task], 20.0, route_from)
-    if robot:
-        for method in ROBOT_METHODS:
-            for run in range(RUNS):
-                for e in range(1, 31):
-                    if method.startswith("GDQ"):
-                        ret, success = 900.0 - 600 * np.exp(-e / 5) + rng.normal(0, 20), 1
-                        areas = [0, 2, 2, 0, 0, 2, 0] if e > 10 else [0, 1, 2, 0, 0, 2, 1]
-                    else:
-                        ret, success, areas = -1000.0 - rng.uniform(0, 200), 0, [0, 0, 3, 2,
-                                                                                0, 0, 0]
-                    rows.append(["robot", method, "X", run, e, f"{ret:.3f}", sum(areas),
-                                 success, *areas])
-    with (out / "episodes.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(HEADER)
-        w.writerows(rows)
-
-    policies: list[list] = []
-    good, short = optimal_policy(world, "C"), plan_policy(world, "C")
-    for method in METHODS:
-        for run in range(RUNS):
-            pol = good if method.startswith("GDQ") or (method == "DARLING" and run == 0) \
-                else short
-            policies += [["tasks", method, "C", run, s, a] for s, a in pol.items()]
-    if robot:
-        good_x = optimal_policy(robot_world, "X")
-        for run in range(RUNS):
-            policies += [["robot", "GDQ", "X", run, s, a] for s, a in good_x.items()]
-            policies += [["robot", "GDQ-code", "X", run, s, a] for s, a in good_x.items()]
-            policies += [["robot", "Dyna-Q", "X", run, s, 0] for s in good_x]
-    with (out / "policies.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["experiment", "method", "task", "run", "state", "action"])
-        w.writerows(policies)
-
-    optimal = {t: {"v_star": V_STAR[t], "relevant_areas": RELEVANT[t],
-                   "irrelevant_areas_paper": PAPER_IRR[t], "optimal_route_areas": ROUTE[t]}
-               for t in "ABCDE"}
-    # the runner's layout: one entry per experiment (tasks: one per task), versions
-    entries = [{"name": "tasks", "schedule": [[t, EPISODES]], "methods": list(METHODS),
-                "runs": RUNS, "world": "office", "seed": 1} for t in "ABCD"]
-    entries += [{"name": f"switch-C-{t}", "schedule": [["C", EPISODES], [t, EPISODES]],
-                 "methods": list(METHODS), "runs": RUNS, "world": "office", "seed": 1}
-                for t in "DE" if switches]
-    if robot:
-        entries.append({"name": "robot", "schedule": [["X", 30]], "methods": list(ROBOT_METHODS),
-                        "runs": RUNS, "world": "office_robot", "seed": 1})
-        optimal["X@office_robot"] = {"v_star": 900.0, "relevant_areas": [2, 3, 6],
-                                     "irrelevant_areas_paper": []}
-    config = {"experiments": entries, "versions": {"gdq_pddl": "test"},
-              "unknown_key": {"ignored": True}}
-    (out / "optimal.json").write_text(json.dumps(optimal))
-    (out / "config.json").write_text(json.dumps(config))
-    return out
+from gdq_pddl.world import load_world
+from tests.analysis.synthetic import (
+    EPISODES,
+    METHODS,
+    ROBOT_METHODS,
+    RUNS,
+    SWITCH_AT,
+    optimal_policy,
+    plan_policy,
+    write_output,
+)
 
 
 @pytest.fixture(scope="module")
@@ -406,169 +275,8 @@ def test_route_figure_and_table_use_the_same_most_common_route(tmp_path):
                          rf"\({s.end}, {s.count} runs?\) \|", text, re.M), method
 
 
-# --- an experiment no paper section covers (gdq-pddl run) ---------------------------
-
-RUN_METHODS = ("Q-learning", "DARLING-code", "GDQ", "Dyna-Q", "DARLING", "GDQ-code")
-RUN_QUALITY = {**QUALITY, "DARLING-code": 0.5}
-RUN_RUNS, RUN_EPISODES = 3, 120
-
-
-def write_run_output(out: Path, methods: tuple[str, ...] = RUN_METHODS) -> Path:
-    """A synthetic ``gdq-pddl run --task C`` folder (experiment ``run``), laid out as the
-    runner writes it."""
-    rng = np.random.default_rng(11)
-    out.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for method in methods:
-        for run in range(RUN_RUNS):
-            for e in range(1, RUN_EPISODES + 1):
-                ret, steps, success, areas = _episode(rng, RUN_QUALITY[method], e, "C",
-                                                      V_STAR["C"], 20.0, 10**6)
-                rows.append(["run", method, "C", run, e, f"{ret:.3f}", steps, success,
-                             *areas])
-    with (out / "episodes.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(HEADER)
-        w.writerows(rows)
-    (out / "optimal.json").write_text(json.dumps(
-        {"C": {"world": "office", "start": "p0", "goal": "p17", "v_star": V_STAR["C"],
-               "relevant_areas": RELEVANT["C"], "irrelevant_areas_paper": PAPER_IRR["C"]}}))
-    (out / "config.json").write_text(json.dumps(
-        {"experiments": [{"name": "run", "schedule": [["C", RUN_EPISODES]],
-                          "methods": list(methods), "runs": RUN_RUNS, "world": "office",
-                          "seed": 0}], "versions": {"gdq_pddl": "test"}}))
-    return out
-
-
-def _methods_section(text: str) -> str:
-    start = text.index("## Methods compared")
-    end = text.find("\n## ", start + 1)
-    return text[start:end if end >= 0 else None]
-
-
-def _expected_row(returns: np.ndarray, success: np.ndarray, window: int = 50) -> str:
-    """The section's table cells of one method, computed here with plain numpy."""
-    runs, n = returns.shape
-    tail = max(1, n // 10)
-    means, lasts = returns.mean(axis=1), returns[:, n - tail:].mean(axis=1)
-
-    def se(x: np.ndarray) -> float:
-        return x.std(ddof=1) / np.sqrt(x.size)
-
-    curve = returns.mean(axis=0)
-    ma = np.convolve(curve, np.ones(window) / window, mode="valid")  # ends at episode k+w
-    hits = np.flatnonzero(ma > 0)
-    per_run = [np.flatnonzero(np.convolve(r, np.ones(window) / window, "valid") > 0)
-               for r in returns]
-    reached = [h[0] + window for h in per_run if h.size]
-    milestone = (f"{hits[0] + window} ({np.mean(reached):.4g}; {len(reached)}/{runs})"
-                 if hits.size else f"n/a (n/a; 0/{runs})")
-    return (f"{runs} | {means.mean():.2f} ({se(means):.2f}) | {lasts.mean():.2f} "
-            f"({se(lasts):.2f}) | {success.mean():.1%} | {milestone} |")
-
-
-def _read_matrices(out: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Method -> (returns, success) as ``[runs, episodes]``, straight from the CSV."""
-    cells: dict[str, dict[tuple[int, int], tuple[float, float]]] = {}
-    with (out / "episodes.csv").open(newline="") as f:
-        for r in csv.DictReader(f):
-            cells.setdefault(r["method"], {})[(int(r["run"]), int(r["episode"]))] = (
-                float(r["return"]), float(r["success"]))
-    out_m = {}
-    for method, c in cells.items():
-        runs = sorted({k[0] for k in c})
-        eps = sorted({k[1] for k in c})
-        arr = np.array([[c[(r, e)] for e in eps] for r in runs])
-        out_m[method] = (arr[..., 0], arr[..., 1])
-    return out_m
-
-
-@pytest.fixture(scope="module")
-def run_folder(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
-    out = write_run_output(tmp_path_factory.mktemp("run"))
-    return out, write_report(out).read_text()
-
-
-def test_run_experiment_gets_a_methods_section_with_numbers_from_the_csv(run_folder):
-    out, text = run_folder
-    section = _methods_section(text)
-    assert "### run: task C" in section
-    assert f"V* = {V_STAR['C']:.2f}" in section
-    rows = re.findall(r"^\| (\*\*)?([A-Za-z-]+)(?:\*\*)? \| (\d+ \|.*)$", section, re.M)
-    names = [name for _, name, _ in rows]
-    # a row per method, in METHOD_ORDER (DARLING-code after DARLING)
-    assert names == ["GDQ", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q", "Q-learning"]
-    data = _read_matrices(out)
-    for _, method, cells in rows:
-        assert cells == _expected_row(*data[method]), method
-    best = max(data, key=lambda m: data[m][0].mean(axis=1).mean())
-    assert [name for b, name, _ in rows if b] == [best]
-
-
-def test_methods_section_compares_each_gdq_variant_with_each_baseline(run_folder):
-    out, text = run_folder
-    section = _methods_section(text)
-    data = _read_matrices(out)
-    for variant in ("GDQ", "GDQ-code"):
-        assert f"- **{variant}**, all episodes: {variant} " in section
-        assert f"- **{variant}**, last 10% of episodes: {variant} " in section
-        for baseline in ("DARLING", "DARLING-code", "Dyna-Q", "Q-learning"):
-            for tail, expect in ((0, "all episodes"), (RUN_EPISODES - RUN_EPISODES // 10,
-                                                      "last 10%")):
-                a = data[variant][0][:, tail:].mean(axis=1)
-                b = data[baseline][0][:, tail:].mean(axis=1)
-                c = compare(a, b, variant, baseline)
-                assert f"  - {c.describe()}" in section, (variant, baseline, expect)
-    # the fake GDQ-code is far better than Q-learning; baselines are never tested as "a"
-    assert re.search(r"GDQ-code - Q-learning = \+[\d.]+ .*: better", section)
-    assert not any(f"{b} - " in section for b in ("DARLING", "Dyna-Q", "Q-learning"))
-
-
-def test_a_folder_without_paper_experiments_gets_the_run_report(run_folder):
-    _, text = run_folder
-    assert text.startswith("# Run report\n")
-    assert "no GDQ runs in the data" not in text and "**Summary.**" not in text
-    assert "Welch's t-test (two-sided) and a percentile bootstrap 95% CI" in text
-    assert "planner `?`; world `office`" in text  # what produced it, from config.json
-
-
-def test_methods_section_without_gdq_says_so(tmp_path):
-    out = write_run_output(tmp_path, methods=("DARLING", "DARLING-code", "Q-learning"))
-    text = write_report(out).read_text()
-    section = _methods_section(text)
-    assert "No GDQ variant ran on this task: nothing to compare." in section
-    assert re.findall(r"^\| (?:\*\*)?(DARLING-code|DARLING|Q-learning)", section, re.M) == [
-        "DARLING", "DARLING-code", "Q-learning"]
-
-
 def test_paper_experiments_get_no_methods_section(full):
     out, _ = full
     text = (out / "REPORT.md").read_text()
     assert "Methods compared" not in text
     assert text.count("**Summary.** GDQ, knowledge as a prior model (`GDQ`): ") == 1
-
-
-@pytest.fixture(scope="module")
-def real_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A short real run (one for the tests below: each reads it, make_all rewrites it)."""
-    from gdq_pddl.experiments import Experiment, run_experiments
-
-    exp = Experiment("run", (("C", 60),), runs=2, methods=("GDQ-code", "Q-learning"))
-    return run_experiments([exp], tmp_path_factory.mktemp("real"), jobs=1, progress=False)
-
-
-def test_methods_section_on_a_real_run(real_run):
-    out = real_run
-    section = _methods_section(write_report(out).read_text())
-    v_star = json.loads((out / "optimal.json").read_text())["C"]["v_star"]
-    assert f"V* = {v_star:.2f}" in section
-    assert "| **GDQ-code** | 2 |" in section or "| GDQ-code | 2 |" in section
-    assert "  - GDQ-code - Q-learning = " in section
-
-
-def test_a_run_experiment_gets_its_learning_curves_linked_from_the_report(real_run):
-    out = real_run
-    paths = make_all(out)
-    assert out / "figures" / "learning_curves_run.png" in paths
-    assert "![learning curves, run](figures/learning_curves_run.png)" in (
-        out / "REPORT.md").read_text()

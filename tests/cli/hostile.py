@@ -1,6 +1,8 @@
 """What the hostile-input tests share (``test_bad_inputs``, ``test_bad_results``,
 ``test_bad_api``): the shipped texts they edit, a fast run's options, and the checks that a
-refusal is one clear line naming what is at fault."""
+refusal is one clear line naming what is at fault. ``test_hostile_cli`` and
+``test_hostile_runs`` take the shipped texts from here too; their fast options (without a
+report) and refusal check (exit 2) are their own."""
 
 from __future__ import annotations
 

@@ -275,7 +275,7 @@ def test_the_prior_of_an_action_with_several_outcomes_is_the_one_closest_to_the_
     """A PPDDL domain's all-outcomes determinisation gives one ground action several
     planner edges; the optimistic prior takes the best of them."""
     from gdq_pddl.abstraction.prior import prior_from_graph
-    from tests.pddl.test_ppddl import hike
+    from tests.pddl.hike import hike
 
     graph = hike("all-outcomes").graph
     prior = prior_from_graph(graph).next_state

@@ -15,7 +15,7 @@ from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 from gdq_pddl.pddl.ppddl import ground_ppddl
-from tests.pddl.test_ippc_language import (
+from tests.pddl.ippc import (
     dist,
     grounded,
     interpreted_model_agrees,

@@ -11,7 +11,7 @@ import pytest
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.ppddl import ground_costs, ground_ppddl
-from tests.pddl.test_ippc_language import (
+from tests.pddl.ippc import (
     OBJECTS,
     holds,
     random_condition,
