@@ -20,7 +20,7 @@ from gdq_pddl.pddl.wordrows import words
 from gdq_pddl.planning.base import PlanningProblem
 from tests.helpers import REPO_ROOT
 from tests.pddl import test_ippc_language as language
-from tests.pddl.test_ippc_language import random_domain
+from tests.pddl.ippc import random_domain
 from tests.pddl.test_ippc_rewards import reward_effect
 from tests.pddl.test_scale_enumeration import PICK, SLIPPERY, chain, pick
 

@@ -16,7 +16,7 @@ from gdq_pddl.pddl.ppddl import ProbabilisticOp, ProbabilisticTask, ground_ppddl
 from gdq_pddl.pddl.ppddl_effects import GroundOutcome
 from gdq_pddl.pddl.wordrows import words
 from gdq_pddl.planning.heuristic import INFINITE, HAdd, HMax, hadd_for, hmax_for
-from tests.pddl.test_ippc_language import random_domain
+from tests.pddl.ippc import random_domain
 
 
 def strips(text: str) -> GroundTask:
