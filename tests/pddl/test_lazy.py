@@ -19,7 +19,7 @@ from gdq_pddl.pddl.reachable import reachable_graph
 from gdq_pddl.pddl.wordrows import words
 from gdq_pddl.planning.base import PlanningProblem
 from tests.helpers import REPO_ROOT
-from tests.pddl import test_ippc_language as language
+from tests.pddl import ippc as language
 from tests.pddl.ippc import random_domain
 from tests.pddl.test_ippc_rewards import reward_effect
 from tests.pddl.test_scale_enumeration import PICK, SLIPPERY, chain, pick
