@@ -197,9 +197,9 @@ class TabularLearner:
         self._set_task(context)
 
     def update_rows(self, rows: np.ndarray) -> None:
-        """The context's rows ``rows`` changed in place (a problem explored online: a state
-        expanded, its successors found): their allowed and guide masks are made again
-        from the context, and their values from their Q rows (zero: untried)."""
+        """The context's rows ``rows`` were made in place (a problem explored online: rows
+        for the states an episode reached, and for estimates): their allowed and guide
+        masks are made from the context, their values from their untried pairs."""
         rows = np.asarray(rows, dtype=np.int64)
         part = row_context(self.context, rows)
         allowed = self._allowed(part)
