@@ -74,9 +74,9 @@ class OnlineInstance:
         """``dynamics``: reality's constants (``r_max``, the step limit); None: the
         base's, with the default step limit by the estimate from the initial state."""
         if not base.ppddl:
-            raise PlanningError(f"{base.problem.source_domain.source}: a STRIPS domain is "
-                                "explored online only with its states enumerated; online "
-                                "exploration reads a PPDDL domain's own outcomes")
+            raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
+                                "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
+                                "dynamics file has its states enumerated")
         self.base = base
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"

@@ -189,7 +189,7 @@ def test_online_refusals() -> None:
         OnlineEnv(online).reset(options={"start": "(at l1)"})
     with pytest.raises(PlanningError, match="not .*pyperplan"):
         online.plan_table("pyperplan")
-    with pytest.raises(PlanningError, match="STRIPS"):
+    with pytest.raises(PlanningError, match="STRIPS domain with a dynamics file"):
         OnlineInstance(shipped("keys", "keys-1"))
     learner = make_learner("GDQ-literal", pddl_task_context(shipped("lift", "lift-1")))
     assert learner is not None  # the paper's variants walk plans: refused online
