@@ -374,25 +374,25 @@ def _hadd_rows(rows: np.ndarray, goal: np.ndarray, alt_ptr: np.ndarray, alt_idx:
     return out
 
 
-_CACHE: dict[int, tuple[weakref.ref, HMax]] = {}
-_HADD_CACHE: dict[int, tuple[weakref.ref, HAdd]] = {}
+_CACHE: dict[tuple[type, int], tuple[weakref.ref, HMax | HAdd]] = {}
+
+
+def _cached(kind: type, task: GroundTask):
+    """The (cached) heuristic ``kind`` of ``task``: building one reads every ground
+    action, and online exploration asks for it once per run."""
+    hit = _CACHE.get((kind, id(task)))
+    if hit is not None and hit[0]() is task:
+        return hit[1]
+    h = kind(task)
+    _CACHE[kind, id(task)] = (weakref.ref(task), h)
+    return h
 
 
 def hmax_for(task: GroundTask) -> HMax:
     """The (cached) :class:`HMax` of ``task``."""
-    hit = _CACHE.get(id(task))
-    if hit is not None and hit[0]() is task:
-        return hit[1]
-    h = HMax(task)
-    _CACHE[id(task)] = (weakref.ref(task), h)
-    return h
+    return _cached(HMax, task)
 
 
 def hadd_for(task: GroundTask) -> HAdd:
     """The (cached) :class:`HAdd` of ``task``."""
-    hit = _HADD_CACHE.get(id(task))
-    if hit is not None and hit[0]() is task:
-        return hit[1]
-    h = HAdd(task)
-    _HADD_CACHE[id(task)] = (weakref.ref(task), h)
-    return h
+    return _cached(HAdd, task)
