@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -135,7 +136,7 @@ class OnlineInstance:
     def prior(self) -> PriorModel:
         return PriorModel(self.prior_next)
 
-    @property
+    @cached_property
     def model(self) -> ModelArrays:
         """The env's constants (costs, ``r_max``, the step limit) with no outcomes: each
         step reads the current state's (:meth:`step_model`)."""

@@ -72,9 +72,9 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
                                  for s, a in enumerate(data["policy"].tolist()))
 
     atomic_write(out / "episodes.csv", write_episodes)
-    online = [e.name for e in experiments if e.pddl and tuple(e.pddl)[4:5] == ("online",)]
-    rows = sum(len(e.units()) * instance_of(e, e.schedule[-1][0]).n_states
-               for e in experiments)  # a unit's policy: one action per learner state
+    online = any(e.pddl and tuple(e.pddl)[4:5] == ("online",) for e in experiments)
+    rows = 0 if online else sum(len(e.units()) * instance_of(e, e.schedule[-1][0]).n_states
+                                for e in experiments)  # a policy: an action per state
     if online:  # each run numbered the states it found in its own order
         (out / "policies.csv").unlink(missing_ok=True)
     elif rows <= MAX_POLICY_ROWS:

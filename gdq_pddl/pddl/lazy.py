@@ -257,6 +257,11 @@ class LazyGraph:
         <gdq_pddl.pddl.reachable.StateGraph.offered>`, which lists ground action 0 there)."""
         return self._offered[x] if self._require(x) else _NONE
 
+    def applicable(self, x: int) -> np.ndarray:
+        """int64: the ground actions whose precondition holds in state ``x``, expanded or
+        not (a goal too), increasing."""
+        return self._applicable(self.words[x])
+
     def edges(self, x: int) -> tuple[np.ndarray, np.ndarray]:
         """``(op index, next id)`` of state ``x``'s determinisation edges: those
         :meth:`StateGraph.edges <gdq_pddl.pddl.reachable.StateGraph.edges>` gives, in its
