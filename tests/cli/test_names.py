@@ -37,7 +37,8 @@ def test_an_unknown_name_lists_the_shipped_ones():
 
 
 @pytest.mark.parametrize("argv,message", [
-    (["plan", "--domain", "nosuch", "--problem", "keys-2"], "shipped: courier, cracking-blocks, delivery, keys"),
+    (["plan", "--domain", "nosuch", "--problem", "keys-2"],
+     "shipped: courier, cracking-blocks, delivery, keys"),
     (["run", "--problem", "nosuch"], "no shipped problem of that name"),
     (["run", "--task", "C", "--world", "nosuch"], "shipped: office, office_robot"),
     (["run", "--domain", "keys", "--problem", "keys-2", "--dynamics", "nosuch"],
