@@ -137,6 +137,9 @@ def _facts(info: dict) -> list[str]:
         states = [f"- learner: {info.get('states')} states (every reachable planner state), "
                   f"{info.get('actions')} actions (ground actions)",
                   f"- shortest plan: {info.get('shortest_plan')} actions"]
+    if 0 in (info.get("shortest_plan"), info.get("estimate_from_start")):
+        states.append("- the goal holds in the initial state: every episode ends there "
+                      "before its first action, with return 0 (mdpsim's rule)")
     return [f"- PDDL domain `{info.get('domain')}`, problem `{info.get('problem')}`, {reality}",
             *states,
             *(["- returns on the problem's own scale, as the IPPC scores them: its rewards "

@@ -109,6 +109,10 @@ def _run_pddl(args: argparse.Namespace) -> int:
         else:
             raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
                             "smaller problem") from None
+    if instance.graph.is_goal[0]:
+        print(f"gdq-pddl: warning: {problem}: the goal already holds in the initial state: "
+              "every episode ends there before its first action (return 0), as mdpsim "
+              "ends such a round at turn 0", file=sys.stderr)
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)

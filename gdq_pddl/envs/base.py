@@ -73,7 +73,9 @@ class CompiledEnv(gym.Env[int, int]):
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[int, dict[str, Any]]:
-        """Start an episode, at ``options``' ``start``/``goal`` if given (see ``restarted``)."""
+        """Start an episode, at ``options``' ``start``/``goal`` if given (see ``restarted``).
+        Where the goal holds at the start the episode is already over: ``info["cause"]``
+        is ``"goal"`` and :meth:`step` raises ``ResetNeeded``."""
         super().reset(seed=seed)
         unknown = [k for k in options or {} if k not in RESET_OPTIONS]
         if unknown:
@@ -81,7 +83,10 @@ class CompiledEnv(gym.Env[int, int]):
                               f"{', '.join(RESET_OPTIONS)})")
         self.instance = self._given.restarted(**options) if options else self._given
         self._restart()
-        self._t, self._cause, self._done = 0, "", False
+        # A start where the goal holds is over before its first action, as in mdpsim:
+        # info's cause says "goal" and step() asks for a new reset.
+        at_goal = self._position() == self.instance.goal_pos
+        self._t, self._cause, self._done = 0, "goal" if at_goal else "", at_goal
         return self._observe(), self._info()
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:

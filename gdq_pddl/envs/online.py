@@ -89,9 +89,6 @@ class OnlineInstance:
         if h0 == INFINITE:
             raise PlanningError(f"{self.source}: the goal cannot be reached from the initial "
                                 "state even ignoring every delete effect")
-        if self.graph.is_goal[0]:
-            raise PlanningError(f"{self.source}: the goal already holds in the initial state: "
-                                "every episode would be over before it begins")
         self.h_start = h0
         self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
         self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]

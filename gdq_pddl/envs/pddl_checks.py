@@ -74,9 +74,6 @@ def check_goal(problem: PlanningProblem, graph: StateGraph) -> None:
     if not problem.problem.goal and not problem.problem.goal_alternatives:
         raise PlanningError(f"{source}: the goal is empty: it holds in every state, so "
                             "there is nothing to learn; give a goal")
-    if graph.is_goal[0]:
-        raise PlanningError(f"{source}: the goal already holds in the initial state: every "
-                            "episode would be over before it begins")
     if not graph.is_goal.any():
         domain = problem.source_domain
         never, both = never_true(problem), contradiction(problem.problem)

@@ -182,8 +182,8 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
     returns, steps, success, areas = _empty_records(n_episodes, n_areas)
     for ep in range(n_episodes):
-        s, _ = env.reset()
-        done = False
+        s, info = env.reset()
+        done = success[ep] = info["cause"] == "goal"  # over before any action
         while not done:
             a = learner.act(s, rng)
             s2, r, terminated, truncated, info = env.step(a)
@@ -242,12 +242,17 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
 # the dynamics' type (inlined for speed: docs/learners.md): the hidden state an episode
-# starts in, the learner state it shows, one step, the area of a state.
+# starts in, the learner state it shows, whether the goal holds there, one step, the area
+# of a state.
 def _restart(m, start, doors):
     raise NotImplementedError  # compiled code only (see the overloads below)
 
 
 def _observe(m, state, doors):
+    raise NotImplementedError
+
+
+def _at_goal(m, state, goal_pos):
     raise NotImplementedError
 
 
@@ -295,6 +300,15 @@ def _step_impl(m, state, doors, action, t, goal_pos, rng):
     return None
 
 
+@overload(_at_goal, inline="always")
+def _at_goal_impl(m, state, goal_pos):
+    if _kind(m) is ModelArrays:
+        return lambda m, state, goal_pos: m.pos_of[state] == goal_pos
+    if _kind(m) is CompactModel:
+        return lambda m, state, goal_pos: state == goal_pos
+    return None
+
+
 @overload(_area, inline="always")
 def _area_impl(m, state):
     if _kind(m) is ModelArrays:
@@ -320,6 +334,9 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
             return ep
         state = _restart(m, start, doors)
+        if _at_goal(m, state, goal_pos):  # over before any action, as the env's reset says
+            success[ep] = True
+            continue
         s = _observe(m, state, doors)
         step = 0
         while True:

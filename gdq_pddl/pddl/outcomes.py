@@ -49,12 +49,14 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
             chunks.append(_outcomes_of(graph, ops, live[c:c + step], column, gains))
             bar.update()
     n_fields = 3 if gains else 2
+    if not chunks:  # every state a goal (the initial state is one): no outcome at all
+        chunks = [_outcomes_of(graph, ops, live, column, gains)]
     out = []
     for f in range(2 + n_fields):  # one field joined at a time, its pieces freed
         pieces = [chunk[f] for chunk in chunks]
         for chunk in chunks:
             chunk[f] = None
-        out.append(np.concatenate(pieces) if pieces else np.zeros(0))
+        out.append(np.concatenate(pieces))
         del pieces
     return out[0], out[1], out[2:]
 

@@ -145,8 +145,6 @@ PROBLEMS = {
     "goal-room-cut-off": (edit(edit(edit(edit(KEYS_PROBLEM, "(adj c25 c35)", ""),
                                           "(adj c34 c35)", ""), "(adj c35 c34)", ""),
                                "(adj c35 c25)", ""), ["problem.pddl", "cannot be reached"]),
-    "goal-holds-at-start": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (at c11))"),
-                            ["problem.pddl", "already holds"]),
     "goal-empty": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (and))"),
                    ["problem.pddl", "empty"]),
     "goal-two-formulas": (edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (at c35) (at c34))"),
@@ -156,6 +154,7 @@ PROBLEMS = {
     "no-init": (KEYS_PROBLEM[:KEYS_PROBLEM.index("  (:init")] + "  (:goal (at c35)))\n",
                 ["problem.pddl", ":init"]),
 }
+GOAL_AT_START = edit(KEYS_PROBLEM, "(:goal (at c35))", "(:goal (at c11))")
 DYNAMICS = {
     "r_max-nan": (edit(KEYS_DYNAMICS, "r_max = 20.0", "r_max = nan"), ["dynamics.r_max", "nan"]),
     "r_max-inf": (edit(KEYS_DYNAMICS, "r_max = 20.0", "r_max = inf"), ["dynamics.r_max", "inf"]),
@@ -208,7 +207,7 @@ def test_non_utf8_pddl_inputs_name_the_file(capsys, tmp_path, which):
 
 
 def test_plan_still_answers_no_plan_and_warns_on_an_empty_plan(capsys, tmp_path):
-    d, p, _ = pddl_files(tmp_path, problem=PROBLEMS["goal-holds-at-start"][0])
+    d, p, _ = pddl_files(tmp_path, problem=GOAL_AT_START)
     code, out = cli(capsys, "plan", "--domain", d, "--problem", p)
     assert code == 0 and "warning" in out and "already holds" in out
     d, p, _ = pddl_files(tmp_path, problem=PROBLEMS["goal-never-true"][0])
