@@ -25,6 +25,7 @@ import numpy as np
 
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
+from gdq_pddl.planning.relaxed_costs import cheapest_alternative, hadd_costs, relaxed_plan_size
 
 INFINITE = -1
 """What :meth:`HMax.__call__` and :class:`HAdd` return when the goal is unreachable even
@@ -82,8 +83,10 @@ class _Compiled:
         add_ptr = [0]
         add_idx: list[int] = []
         free: list[int] = []
+        op_pre: list[np.ndarray] = []
         for i, (pre_mask, add_mask) in enumerate(actions):
             pre = _bit_list(pre_mask, n_facts)
+            op_pre.append(pre)
             n_pre[i] = len(pre)
             for f in pre.tolist():
                 pre_of[f].append(i)
@@ -98,6 +101,13 @@ class _Compiled:
         self.add_ptr = np.array(add_ptr, dtype=np.int64)
         self.add_idx = np.array(add_idx, dtype=np.int64)
         self.free = np.array(free, dtype=np.int64)
+        self.op_pre_ptr = np.cumsum([0] + [len(x) for x in op_pre]).astype(np.int64)
+        self.op_pre_idx = np.concatenate(op_pre) if op_pre else np.zeros(0, dtype=np.int64)
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays the compiled estimates read, in their order."""
+        return (self.n_pre, self.pre_ptr, self.pre_ops, self.add_ptr, self.add_idx, self.free,
+                self.op_pre_ptr, self.op_pre_idx)
 
 
 class HMax:
@@ -198,6 +208,9 @@ class HAdd:
     actions reach.
     """
 
+    ff = False
+    """Whether the estimate is h_FF (:class:`HFF`) rather than h_add."""
+
     def __init__(self, task: GroundTask) -> None:
         c = _Compiled(task)
         self.n_facts = n = c.n_facts
@@ -219,142 +232,59 @@ class HAdd:
         self.cap = (1 << 62) // max(n, 1) - 1
 
     def __call__(self, state: int) -> int:
-        """h_add of the bitmask ``state`` to the task's goal (:data:`INFINITE`: none)."""
+        """The estimate of the bitmask ``state`` to the task's goal (:data:`INFINITE`: none)."""
         if not self.possible:
             return INFINITE
-        c = self._c
-        return int(_hadd(_bit_list(state, self.n_facts), self.goal, self.alt_ptr, self.alt_idx,
-                         self.relevant, self.n_facts, c.n_pre, c.pre_ptr, c.pre_ops,
-                         c.add_ptr, c.add_idx, c.free, self._heap_size, self.cap))
+        return int(_estimate(_bit_list(state, self.n_facts), self.ff, self.goal, self.alt_ptr,
+                             self.alt_idx, self.relevant, self._c.arrays(), self._heap_size,
+                             self.cap))
 
     def many(self, words: np.ndarray) -> np.ndarray:
-        """int64 h_add of each row of uint64 words ``words[n, n_words]`` (fact ``f``: bit
+        """The int64 estimate of each row of uint64 words ``words[n, n_words]`` (fact ``f``: bit
         ``f % 64`` of word ``f // 64``; bits past the task's facts ignored), -1 where
         unreachable."""
         rows = np.ascontiguousarray(words, dtype=np.uint64)
         if rows.ndim != 2:
-            raise ValueError(f"HAdd.many takes a 2-d array of word rows, not shape {rows.shape}")
+            raise ValueError(f"{type(self).__name__}.many takes a 2-d array of word rows, "
+                             f"not shape {rows.shape}")
         if not self.possible:
             return np.full(len(rows), INFINITE, dtype=np.int64)
-        c = self._c
-        return _hadd_rows(rows, self.goal, self.alt_ptr, self.alt_idx, self.relevant,
-                          self.n_facts, c.n_pre, c.pre_ptr, c.pre_ops, c.add_ptr, c.add_idx,
-                          c.free, self._heap_size, self.cap)
+        return _estimate_rows(rows, self.ff, self.goal, self.alt_ptr, self.alt_idx,
+                              self.relevant, self._c.arrays(), self._heap_size, self.cap)
 
 
 @numba.njit(cache=True)
-def _push(heap: np.ndarray, size: int, key: int) -> int:
-    """Push ``key`` onto the binary min-heap ``heap[:size]``; the new size."""
-    i = size
-    heap[i] = key
-    while i > 0:
-        parent = (i - 1) >> 1
-        if heap[parent] <= key:
-            break
-        heap[i] = heap[parent]
-        i = parent
-    heap[i] = key
-    return size + 1
-
-
-@numba.njit(cache=True)
-def _pop(heap: np.ndarray, size: int) -> int:
-    """Remove the least key, ``heap[0]`` (the caller reads it first), from the binary
-    min-heap ``heap[:size]``; the new size."""
-    size -= 1
-    last = heap[size]
-    i = 0
-    while True:
-        child = 2 * i + 1
-        if child >= size:
-            break
-        if child + 1 < size and heap[child + 1] < heap[child]:
-            child += 1
-        if heap[child] >= last:
-            break
-        heap[i] = heap[child]
-        i = child
-    if size > 0:
-        heap[i] = last
-    return size
-
-
-@numba.njit(cache=True)
-def _hadd(state: np.ndarray, goal: np.ndarray, alt_ptr: np.ndarray, alt_idx: np.ndarray,
-          relevant: np.ndarray, n_facts: int, n_pre: np.ndarray, pre_ptr: np.ndarray,
-          pre_ops: np.ndarray, add_ptr: np.ndarray, add_idx: np.ndarray, free: np.ndarray,
-          heap_size: int, cap: int) -> int:
+def _estimate(state: np.ndarray, ff: bool, goal: np.ndarray, alt_ptr: np.ndarray,
+              alt_idx: np.ndarray, relevant: np.ndarray, c: tuple, heap_size: int,
+              cap: int) -> int:
+    """h_add (``ff`` False) or h_FF of the facts ``state``; ``c``: :meth:`_Compiled.arrays`."""
+    n_pre, pre_ptr, pre_ops, add_ptr, add_idx, free, op_pre_ptr, op_pre_idx = c
     big = np.iinfo(np.int64).max
-    cost = np.full(n_facts, big, dtype=np.int64)
-    done = np.zeros(n_facts, dtype=np.bool_)
-    heap = np.empty(heap_size, dtype=np.int64)  # keys cost * n_facts + fact
-    size = 0
-    for f in state:
-        if cost[f] != 0:
-            cost[f] = 0
-            size = _push(heap, size, f)
-    left = 0
-    for f in range(n_facts):
-        if relevant[f] and cost[f] != 0:
-            left += 1
-    if left > 0:
-        for i in free:  # relaxed actions without preconditions: cost 1
-            for k in range(add_ptr[i], add_ptr[i + 1]):
-                g = add_idx[k]
-                if cost[g] > 1:
-                    cost[g] = 1
-                    size = _push(heap, size, n_facts + g)
-        acc = np.zeros(len(n_pre), dtype=np.int64)
-        waiting = n_pre.copy()
-        while size > 0 and left > 0:
-            key = heap[0]
-            size = _pop(heap, size)
-            f = key % n_facts
-            if done[f]:
-                continue
-            done[f] = True
-            c = key // n_facts
-            if relevant[f] and c > 0:
-                left -= 1
-            for k in range(pre_ptr[f], pre_ptr[f + 1]):
-                op = pre_ops[k]
-                acc[op] += c
-                waiting[op] -= 1
-                if waiting[op] == 0:
-                    ca = min(acc[op] + 1, cap)
-                    for j in range(add_ptr[op], add_ptr[op + 1]):
-                        g = add_idx[j]
-                        if ca < cost[g]:
-                            cost[g] = ca
-                            size = _push(heap, size, ca * n_facts + g)
+    cost = np.empty(len(relevant), dtype=np.int64)
+    sup = np.empty(len(relevant), dtype=np.int64)
+    hadd_costs(state, relevant, len(relevant), n_pre, pre_ptr, pre_ops, add_ptr, add_idx,
+               free, heap_size, cap, cost, sup)
+    if ff:
+        return relaxed_plan_size(cost, sup, goal, alt_ptr, alt_idx, op_pre_ptr, op_pre_idx)
     total = 0
     for f in goal:
         if cost[f] == big:
             return -1
         total += cost[f]
-    n_alts = len(alt_ptr) - 1
-    if n_alts > 0:
-        best = big
-        for a in range(n_alts):
-            s = 0
-            for k in range(alt_ptr[a], alt_ptr[a + 1]):
-                if cost[alt_idx[k]] == big:
-                    s = big
-                    break
-                s += cost[alt_idx[k]]
-            if s < best:
-                best = s
-        if best == big:
+    if len(alt_ptr) > 1:
+        a = cheapest_alternative(cost, alt_ptr, alt_idx)
+        if a < 0:
             return -1
-        total += best
+        for k in range(alt_ptr[a], alt_ptr[a + 1]):
+            total += cost[alt_idx[k]]
     return total
 
 
 @numba.njit(cache=True)
-def _hadd_rows(rows: np.ndarray, goal: np.ndarray, alt_ptr: np.ndarray, alt_idx: np.ndarray,
-               relevant: np.ndarray, n_facts: int, n_pre: np.ndarray, pre_ptr: np.ndarray,
-               pre_ops: np.ndarray, add_ptr: np.ndarray, add_idx: np.ndarray,
-               free: np.ndarray, heap_size: int, cap: int) -> np.ndarray:
+def _estimate_rows(rows: np.ndarray, ff: bool, goal: np.ndarray, alt_ptr: np.ndarray,
+                   alt_idx: np.ndarray, relevant: np.ndarray, c: tuple, heap_size: int,
+                   cap: int) -> np.ndarray:
+    n_facts = len(relevant)
     out = np.empty(rows.shape[0], dtype=np.int64)
     state = np.empty(n_facts, dtype=np.int64)
     one = np.uint64(1)
@@ -369,9 +299,21 @@ def _hadd_rows(rows: np.ndarray, goal: np.ndarray, alt_ptr: np.ndarray, alt_idx:
                 if (word >> np.uint64(b)) & one:
                     state[n] = f
                     n += 1
-        out[r] = _hadd(state[:n], goal, alt_ptr, alt_idx, relevant, n_facts, n_pre, pre_ptr,
-                       pre_ops, add_ptr, add_idx, free, heap_size, cap)
+        out[r] = _estimate(state[:n], ff, goal, alt_ptr, alt_idx, relevant, c, heap_size, cap)
     return out
+
+
+class HFF(HAdd):
+    """h_FF (Hoffmann & Nebel 2001) of any state of one grounded task: the number of
+    distinct relaxed actions in the relaxed plan that :class:`HAdd`'s best supporters
+    make (each goal fact, and each fact of the cheapest goal alternative, supported by
+    the relaxed action that gave it its h_add cost, and that action's preconditions in
+    turn, back to the state's facts; ties keep the action found first). At most h_add,
+    since an action that supports several facts counts once where h_add counts it for
+    each (blocks: one ``stack`` gives ``handempty`` and ``on``); 0 and :data:`INFINITE`
+    exactly where h_add has them. Not admissible either."""
+
+    ff = True
 
 
 _CACHE: dict[tuple[type, int], tuple[weakref.ref, HMax | HAdd]] = {}
@@ -396,3 +338,8 @@ def hmax_for(task: GroundTask) -> HMax:
 def hadd_for(task: GroundTask) -> HAdd:
     """The (cached) :class:`HAdd` of ``task``."""
     return _cached(HAdd, task)
+
+
+def hff_for(task: GroundTask) -> HFF:
+    """The (cached) :class:`HFF` of ``task``."""
+    return _cached(HFF, task)
