@@ -4,6 +4,7 @@
     python benchmarks/gdq_settings.py corridor         # explore_all vs the corridor
     python benchmarks/gdq_settings.py                  # both
     python benchmarks/gdq_settings.py losses results/pairs   # explain GDQ's losses there
+    python benchmarks/gdq_settings.py online DOMAIN PROBLEM  # the settings, explored online
 
 ``tasks``: every setting differs from the default in one field; for each, the mean
 return per episode over the first 300 episodes of tasks A-D, minus DARLING's, paired
@@ -16,6 +17,11 @@ return over the run. Nothing else was tuned; ``docs/decisions.md`` quotes these 
 counts as losses against DARLING, GDQ minus DARLING with the default, with
 ``explore_all = 0``, with ``explore_all_last_step = False``, with ``explore = "plans"``
 and with ``explore_loops = True`` (same seeds as ``tasks``).
+``online``: a diagnostic too: each setting on a PPDDL problem explored online
+(``--explore online``), GDQ minus DARLING per run (paired, same seeds as ``tasks``;
+a paired t-test's p), the share of the last 50 episodes that reach the goal and
+the median length of those that do, per run: where GDQ settles on a longer route; last,
+GDQ and DARLING with h_FF in place of h_add as the estimate of states not reached yet.
 """
 
 from __future__ import annotations
@@ -133,12 +139,55 @@ def losses(folder: str, runs: int = 10, episodes: int = 300) -> None:
               f"{(d < 0).sum()} of {len(d)}", flush=True)
 
 
+def _online_run(job: tuple) -> tuple[float, float, float]:
+    from gdq_pddl.envs.online import OnlineInstance
+    from gdq_pddl.envs.online_env import OnlineEnv
+    from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.learners.online import online_context
+
+    domain, problem, method, config, estimate, run, episodes = job
+    instance = OnlineInstance(load_instance(domain, problem), estimate=estimate)
+    env = OnlineEnv(instance)
+    env.reset(seed=1000 + run)
+    rec = run_episodes(make_learner(method, online_context(instance), **config), env,
+                       episodes, np.random.default_rng(2000 + run))
+    tail = rec.success[-50:]
+    return (float(rec.returns.mean()), float(tail.mean()),
+            float(np.median(rec.steps[-50:][tail])) if tail.any() else float("nan"))
+
+
+def online(domain: str, problem: str, runs: int = 10, episodes: int = 300) -> None:
+    from concurrent.futures import ProcessPoolExecutor
+
+    from scipy import stats
+
+    print(f"{problem} explored online, {runs} runs x {episodes} episodes: GDQ minus DARLING "
+          "(paired s.e., p); last 50 episodes: success, median steps of each run")
+    cases = [("DARLING", "darling", {}, "h_add")] + \
+        [(k, "gdq", c, "h_add") for k, c in SETTINGS.items()] + \
+        [("estimate = h_FF", "gdq", {}, "h_FF"), ("DARLING, h_FF", "darling", {}, "h_FF")]
+    with ProcessPoolExecutor(2) as pool:
+        results = {label: list(pool.map(_online_run, [(domain, problem, method, config, h,
+                                                        r, episodes) for r in range(runs)]))
+                   for label, method, config, h in cases}
+    darling = np.array([r[0] for r in results["DARLING"]])
+    for label, rows in results.items():
+        means = np.array([r[0] for r in rows])
+        d = means - darling
+        p = stats.ttest_rel(means, darling).pvalue if label != "DARLING" else np.nan
+        test = f"{d.mean():+7.2f} ({d.std(ddof=1) / np.sqrt(runs):.2f}, p {p:.3f})" \
+            if label != "DARLING" else f"{means.mean():7.2f} (its mean)"
+        steps = " ".join("-" if np.isnan(r[2]) else f"{r[2]:g}" for r in rows)
+        print(f"{label:22s}{test:>28s}  {np.mean([r[1] for r in rows]):.2f}  {steps}",
+              flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", nargs="?", choices=["tasks", "corridor", "losses", "all"],
-                        default="all")
-    parser.add_argument("folder", nargs="?", default="results/pairs",
-                        help="losses: a gdq-pddl pairs output folder")
+    parser.add_argument("what", nargs="?", default="all",
+                        choices=["tasks", "corridor", "losses", "online", "all"])
+    parser.add_argument("files", nargs="*", help="losses: a gdq-pddl pairs output folder "
+                        "(default results/pairs); online: a PPDDL domain and problem")
     parser.add_argument("--runs", type=int, help="runs per setting (tasks 40, corridor 10)")
     parser.add_argument("--episodes", type=int, help="episodes per run (300 / 3000)")
     args = parser.parse_args()
@@ -147,7 +196,11 @@ def main() -> None:
     if args.what in ("corridor", "all"):
         corridor(args.runs or 10, args.episodes or 3000)
     if args.what == "losses":
-        losses(args.folder, args.runs or 10, args.episodes or 300)
+        losses((args.files or ["results/pairs"])[0], args.runs or 10, args.episodes or 300)
+    if args.what == "online":
+        if len(args.files) != 2:
+            parser.error("online takes a PPDDL domain and a problem")
+        online(*args.files, args.runs or 10, args.episodes or 300)
 
 
 if __name__ == "__main__":

@@ -53,7 +53,10 @@ from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, PlanningError
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.planning.base import length_bound
-from gdq_pddl.planning.heuristic import INFINITE, hadd_for
+from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for
+
+ESTIMATES = {"h_add": hadd_for, "h_FF": hff_for}
+"""The distance estimates online exploration can read, by name."""
 
 ESTIMATE = "(estimate)"
 """The name of the estimate action (ground action ``n_ops``: see the module docstring)."""
@@ -71,9 +74,14 @@ class OnlineInstance:
     found as episodes reach them. One per run: the rows depend on what the run visits."""
 
     def __init__(self, base: PDDLInstance, darling_tolerance: float = 0.3,
-                 dynamics: Dynamics | None = None) -> None:
+                 dynamics: Dynamics | None = None, estimate: str = "h_add") -> None:
         """``dynamics``: reality's constants (``r_max``, the step limit); None: the
-        base's, with the default step limit by the estimate from the initial state."""
+        base's, with the default step limit by the estimate from the initial state.
+        ``estimate``: the distance estimate of a state not reached yet, ``"h_add"`` (the
+        default) or ``"h_FF"`` (:data:`ESTIMATES`; why h_add: ``docs/decisions.md``)."""
+        if estimate not in ESTIMATES:
+            raise ConfigError(f"estimate {estimate!r}: expected one of "
+                              f"{', '.join(ESTIMATES)}")
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
@@ -82,7 +90,7 @@ class OnlineInstance:
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
         self.graph = LazyGraph(self.task, gains=self.own)
-        self.heuristic = hadd_for(self.task)
+        self.heuristic = ESTIMATES[estimate](self.task)
         self.darling_tolerance = float(darling_tolerance)
         self.n_ops = len(self.task.ops)
         h0 = int(self.heuristic.many(self.graph.words[:1])[0])

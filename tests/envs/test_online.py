@@ -19,6 +19,7 @@ from gdq_pddl.errors import ConfigError, PlanningError
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.learners.learned_model import new_model, resized
 from gdq_pddl.learners.online import online_context
+from gdq_pddl.planning.heuristic import hff_for
 from gdq_pddl.resources import resolve_pddl
 
 PPDDL = [("keys-ppddl", "keys-ppddl-1"), ("lift", "lift-1"), ("courier", "courier-1"),
@@ -195,6 +196,21 @@ def test_online_refusals() -> None:
     assert learner is not None  # the paper's variants walk plans: refused online
     with pytest.raises(ConfigError, match="no enumerated plans"):
         make_learner("GDQ-literal", online_context(online))
+    with pytest.raises(ConfigError, match="estimate 'h_max': expected one of h_add, h_FF"):
+        OnlineInstance(shipped("lift", "lift-1"), estimate="h_max")
+
+
+def test_h_ff_as_the_estimate() -> None:
+    """The estimate a run reads can be h_FF: its value from the start, and GDQ learns."""
+    base = shipped("courier", "courier-2")
+    online = OnlineInstance(base, estimate="h_FF")
+    assert online.h_start == hff_for(online.task).many(online.graph.words[:1])[0] <= \
+        OnlineInstance(base).h_start
+    env = OnlineEnv(online)
+    env.reset(seed=0)
+    r = run_episodes(make_learner("GDQ", online_context(online)), env, 40,
+                     np.random.default_rng(0))
+    assert r.success[-10:].any()
 
 
 def test_cli_explores_online(tmp_path, capsys) -> None:
