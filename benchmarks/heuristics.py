@@ -13,7 +13,8 @@ actions   the task's ground actions; relaxed: its relaxed actions (what both heu
 hmax      HMax(state, goal): one call per state
 hadd      HAdd(state): one call per state
 hadd-many HAdd.many over all the states' word rows at once, per state (a mean)
-mean hadd, mean hmax   the heuristics' mean values over the states (the same on both tasks)
+hff       HFF(state): one call per state (h_add's search and the relaxed plan's extraction)
+mean hadd, mean hff, mean hmax   the heuristics' mean values over the states
 
 Figures are the median over the states of each state's median of --repeats calls, in
 microseconds (hadd-many: the median of --repeats batches, divided by the number of
@@ -33,7 +34,7 @@ from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ground_ppddl
 from gdq_pddl.pddl.wordrows import words
-from gdq_pddl.planning.heuristic import HAdd, HMax, relaxed_actions
+from gdq_pddl.planning.heuristic import HFF, HAdd, HMax, relaxed_actions
 
 
 def walk_states(task: GroundTask, count: int, rng: np.random.Generator) -> list[int]:
@@ -81,13 +82,14 @@ def main() -> None:
     print(f"blocks {args.blocks}: {len(learner.facts)} facts, {len(states)} states of "
           f"random walks, median us per state")
     print(f"{'task':10} {'actions':>8} {'relaxed':>8} {'hmax':>8} {'hadd':>8} "
-          f"{'hadd-many':>10} {'mean hadd':>10} {'mean hmax':>10}")
+          f"{'hadd-many':>10} {'hff':>8} {'mean hadd':>10} {'mean hff':>9} {'mean hmax':>10}")
     for name, task in (("reality", learner), ("planner", planner)):
-        hmax, hadd = HMax(task), HAdd(task)
+        hmax, hadd, hff = HMax(task), HAdd(task), HFF(task)
         goal = task.goal_pos
-        hmax(task.init, goal), hadd(task.init), hadd.many(block[:1])  # compile or load
+        hmax(task.init, goal), hadd(task.init), hadd.many(block[:1]), hff(task.init)  # compile
         t_max = per_state_us(lambda s, h=hmax, g=goal: h(s, g), states, args.repeats)
         t_add = per_state_us(hadd, states, args.repeats)
+        t_ff = per_state_us(hff, states, args.repeats)
         batches = []
         for _ in range(args.repeats):
             t0 = time.perf_counter_ns()
@@ -96,9 +98,10 @@ def main() -> None:
         assert values.tolist() == [hadd(s) for s in states]
         mean_add = float(np.mean(values))
         mean_max = float(np.mean([hmax(s, goal) for s in states]))
+        mean_ff = float(np.mean([hff(s) for s in states]))
         print(f"{name:10} {len(task.ops):8d} {len(relaxed_actions(task)):8d} {t_max:8.1f} "
-              f"{t_add:8.1f} {statistics.median(batches):10.1f} {mean_add:10.1f} "
-              f"{mean_max:10.1f}")
+              f"{t_add:8.1f} {statistics.median(batches):10.1f} {t_ff:8.1f} {mean_add:10.1f} "
+              f"{mean_ff:9.1f} {mean_max:10.1f}")
 
 
 if __name__ == "__main__":

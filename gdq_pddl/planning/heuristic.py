@@ -1,9 +1,11 @@
 """Delete-relaxation heuristics (Bonet & Geffner 2001) of a grounded task, with unit
 action costs, compiled: h_max (:class:`HMax`, admissible and consistent: a breadth-first
-search over facts) and h_add (:class:`HAdd`, not admissible, but it sums the costs of all
-the goal facts where h_max takes the dearest: a generalized Dijkstra over facts).
+search over facts), h_add (:class:`HAdd`, not admissible, but it sums the costs of all
+the goal facts where h_max takes the dearest: a generalized Dijkstra over facts,
+:mod:`gdq_pddl.planning.relaxed_costs`) and h_FF (:class:`HFF`, Hoffmann & Nebel 2001:
+the size of the relaxed plan h_add's best supporters make).
 
-Both read the same *relaxed actions* of the task (:func:`relaxed_actions`): positive
+All read the same *relaxed actions* of the task (:func:`relaxed_actions`): positive
 preconditions and adds only. A plain :class:`~gdq_pddl.pddl.grounding.GroundOp` is one;
 a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticOp` (reality's ground action of a PPDDL
 problem) gives one per outcome the planner knows (``op.known``) and per conditional
