@@ -37,6 +37,7 @@ from gdq_pddl.errors import TooManyStates
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
+    FILTER_BYTES,
     applicable_rows,
     apply_effect,
     compile_ops,
@@ -57,6 +58,15 @@ peak is GDQ's tables beside the plans), 140 on a one-box, five-truck boxworld (3
 million cells of 245 actions, conditional effects; the peak is the true model's
 compilation), 154 on its two-box, four-truck variant (82 million cells: ``gdq-pddl run``
 of GDQ, DARLING and Q-learning, 12.7 GB); rounded up."""
+
+ROW_COPIES = 4
+"""Copies of each state's row of facts (8 bytes a word of 64 facts) enumeration holds at
+its peak: the rows of the levels, their sorted keys (the rows' bytes), the keys' copy
+while new ones are inserted, the graph's concatenated rows. :data:`PAIR_BYTES` was
+measured on rows of one or a few words; a problem of many facts and few actions a state
+needs more per state than its tables: manytireworld_test problem0 (pddlgym; 2,026 facts,
+32 words, up to 3 actions a state) peaks at 1.0 KB a state enumerating 4 million (4.2 GB,
+``/usr/bin/time``), where its tables count 480 bytes."""
 
 MEMORY_SHARE = 0.75
 """The share of the machine's memory (:func:`~gdq_pddl.limits.physical_memory`,
@@ -171,14 +181,20 @@ def table_budget() -> int:
     return int(MEMORY_SHARE * physical_memory())
 
 
-def state_cap(width: int, budget: int | None = None) -> int:
-    """The most states whose tables of ``width`` actions a state fit ``budget`` bytes
-    (None: :func:`table_budget`)."""
+def state_bytes(width: int, n_words: int = 1) -> int:
+    """The memory a state takes: its tables of ``width`` actions, and the copies of its row
+    of ``n_words`` words past the first (which :data:`PAIR_BYTES` counts)."""
+    return PAIR_BYTES * max(1, width) + ROW_COPIES * 8 * max(0, n_words - 1)
+
+
+def state_cap(width: int, budget: int | None = None, n_words: int = 1) -> int:
+    """The most states whose tables of ``width`` actions a state (and rows of ``n_words``
+    words) fit ``budget`` bytes (None: :func:`table_budget`)."""
     budget = table_budget() if budget is None else budget
-    return budget // (PAIR_BYTES * max(1, width))
+    return budget // state_bytes(width, n_words)
 
 
-def _too_many(source: str, cap: int, budget: bool, width: int,
+def _too_many(source: str, cap: int, budget: bool, width: int, n_words: int,
               levels: list[int]) -> TooManyStates:
     """The refusal past ``cap`` states: the need (of the states found so far, every row as
     wide as the widest), the budget and what sets it, and the breadth-first levels so far
@@ -194,11 +210,13 @@ def _too_many(source: str, cap: int, budget: bool, width: int,
     setting = (f"gdq_pddl.pddl.reachable.TABLE_BUDGET = {limit:,}" if TABLE_BUDGET
                is not None else f"{MEMORY_SHARE:g} of this machine's {human_bytes(have)} "
                "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
+    rows = "" if n_words <= 1 else f" and {ROW_COPIES * 8} bytes a state x 64 facts " \
+        f"past the first, ROW_COPIES: {n_words} words of facts here"
     return TooManyStates(
         f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
         f"{width} applicable ground actions a state): a run would need at least "
-        f"{human_bytes(found * width * PAIR_BYTES)} ({PAIR_BYTES} bytes a state x action "
-        f"cell, gdq_pddl.pddl.reachable.PAIR_BYTES), past the budget of "
+        f"{human_bytes(found * state_bytes(width, n_words))} ({PAIR_BYTES} bytes a state x "
+        f"action cell, gdq_pddl.pddl.reachable.PAIR_BYTES{rows}), past the budget of "
         f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
         "problem smaller (fewer objects), or run it on a machine with more memory")
 
@@ -217,6 +235,11 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     width = max([len(op.known) + len(op.other) for op in ops], default=1)
     reality_rank = reality_ranks(task)
     need = [positive_facts(op.pre) for op in ops]  # each op's facts that must hold
+    # a chunk small enough for fact_rows to list the rows of every needed fact: else each
+    # ground action is tested on every row (manytireworld: 3,299 ground actions, 2,026
+    # facts; 300k states took 60 s instead of 2 s)
+    n_need = len(np.unique(np.concatenate(need))) if need else 0
+    filtered = FILTER_BYTES // max(1, n_need)
     levels = [words(task.init, n_words)[None, :]]
     known_keys, known_ids = row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
     goal, depth, src, op_of, nxt = [], [], [], [], []
@@ -235,7 +258,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
             level_start, next_rows = n, []
             c = 0
             while c < len(parents):  # bounded work arrays: rows of the widest seen
-                step = max(1, min(PARENT_CHUNK, EXPAND_CELLS // width_seen))
+                step = max(1, min(PARENT_CHUNK, EXPAND_CELLS // width_seen, filtered))
                 parent = parents[c:c + step]
                 c += step
                 expand = rows[parent]
@@ -274,9 +297,10 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 width_seen = max(width_seen, int(n_applicable.max(initial=0)))
                 rows_of.append((lo + parent, _row_block(applicable, len(parent), op_type)))
                 del applicable
-                cap = state_cap(width_seen) if max_states is None else max_states
+                cap = state_cap(width_seen, n_words=n_words) if max_states is None \
+                    else max_states
                 if n + len(fresh) > cap:
-                    raise _too_many(source, cap, max_states is None, width_seen,
+                    raise _too_many(source, cap, max_states is None, width_seen, n_words,
                                     [len(level) for level in levels] + [n + len(fresh)
                                                                        - level_start])
                 added = keys[fresh]  # into the sorted known keys, without sorting them all

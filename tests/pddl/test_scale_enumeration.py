@@ -126,6 +126,23 @@ def test_the_budget_is_a_share_of_the_machines_memory(monkeypatch):
     assert reachable_graph(task).n_states == whole  # fits: every state
 
 
+def test_rows_of_many_facts_count_in_the_budget(monkeypatch):
+    # 201 facts: rows of 4 words, whose copies enumeration holds beside the tables
+    task = PlanningProblem.from_texts(SLIPPERY, chain(200, "(at p199)")).learner_task
+    n_words = -(-len(task.facts) // 64)
+    assert n_words == 4
+    per_state = reachable.state_bytes(2, n_words)
+    assert per_state == 2 * reachable.PAIR_BYTES + 3 * 8 * reachable.ROW_COPIES
+    monkeypatch.setattr(reachable, "TABLE_BUDGET", 10 * per_state)
+    assert reachable.TABLE_BUDGET // (2 * reachable.PAIR_BYTES) > 10  # tables alone: more
+    with pytest.raises(PlanningError, match=r"more than 10 reachable states .*ROW_COPIES: 4 "
+                       r"words of facts here"):
+        reachable_graph(task, source="chain.pddl")
+    whole = reachable_graph(task, 10**6).n_states
+    monkeypatch.setattr(reachable, "TABLE_BUDGET", whole * per_state)
+    assert reachable_graph(task).n_states == whole  # fits: every state
+
+
 @pytest.mark.parametrize("gains", [False, True])
 def test_reality_outcomes_merge_as_the_per_state_rule(gains):
     graph = load_instance("courier", "courier-2").graph  # conditional effects, rewards
