@@ -241,7 +241,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     n_need = len(np.unique(np.concatenate(need))) if need else 0
     filtered = FILTER_BYTES // max(1, n_need)
     levels = [words(task.init, n_words)[None, :]]
-    known_keys, known_ids = row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64)
+    known = _KeyIndex(row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64))
     goal, depth, src, op_of, nxt = [], [], [], [], []
     rows_of: list[tuple[np.ndarray, np.ndarray]] = []  # (states, their offered rows)
     op_type = np.int16 if n_ops <= np.iinfo(np.int16).max else np.int32
@@ -292,8 +292,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 cand, who, rank = cand[order], who[order], rank[order]
                 keys = row_keys(cand)
                 uniq, first = np.unique(keys, return_index=True)
-                at = np.minimum(np.searchsorted(known_keys, uniq), len(known_keys) - 1)
-                fresh = np.sort(first[known_keys[at] != uniq])
+                fresh = np.sort(first[known.find(uniq) < 0])
                 width_seen = max(width_seen, int(n_applicable.max(initial=0)))
                 rows_of.append((lo + parent, _row_block(applicable, len(parent), op_type)))
                 del applicable
@@ -303,15 +302,11 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     raise _too_many(source, cap, max_states is None, width_seen, n_words,
                                     [len(level) for level in levels] + [n + len(fresh)
                                                                        - level_start])
-                added = keys[fresh]  # into the sorted known keys, without sorting them all
-                by_key = np.argsort(added, kind="stable")
-                where = np.searchsorted(known_keys, added[by_key])
-                known_keys = np.insert(known_keys, where, added[by_key])
-                known_ids = np.insert(known_ids, where, np.arange(n, n + len(fresh))[by_key])
+                known.add(keys[fresh], np.arange(n, n + len(fresh)))
                 edge = rank < n_ops * width
                 src.append(lo + parent[who[edge]])
                 op_of.append(rank[edge] // width)
-                nxt.append(known_ids[np.searchsorted(known_keys, keys[edge])])
+                nxt.append(known.find(keys[edge]))
                 next_rows.append(cand[fresh])
                 n += len(fresh)
                 bar.update(len(parent))
@@ -334,6 +329,38 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     del nxt
     return StateGraph(task, np.concatenate(levels), ptr, edge_op, edge_next,
                       np.concatenate(goal), np.concatenate(depth), offered)
+
+
+class _KeyIndex:
+    """The states known so far: their row keys and numbers, as sorted runs of decreasing
+    length (a run is merged into the one before once that is at most twice as long), so
+    each key is copied O(log n) times in all, where inserting every chunk's keys into one
+    sorted array copied all n keys a chunk (manytireworld_test problem0: most of the time
+    past 5 million states)."""
+
+    def __init__(self, keys: np.ndarray, ids: np.ndarray) -> None:
+        self.runs: list[tuple[np.ndarray, np.ndarray]] = [(keys, ids)]
+
+    def find(self, keys: np.ndarray) -> np.ndarray:
+        """int64: each key's state number, -1 where it is not known."""
+        out = np.full(len(keys), -1, dtype=np.int64)
+        for have, ids in self.runs:
+            at = np.minimum(np.searchsorted(have, keys), len(have) - 1)
+            hit = have[at] == keys
+            out[hit] = ids[at[hit]]
+        return out
+
+    def add(self, keys: np.ndarray, ids: np.ndarray) -> None:
+        """Known from now: ``keys`` (none known yet, distinct) numbered ``ids``."""
+        if not len(keys):
+            return
+        order = np.argsort(keys, kind="stable")
+        keys, ids = keys[order], ids[order]
+        while self.runs and len(self.runs[-1][0]) <= 2 * len(keys):
+            have, have_ids = self.runs.pop()
+            where = np.searchsorted(have, keys)
+            keys, ids = np.insert(have, where, keys), np.insert(have_ids, where, ids)
+        self.runs.append((keys, ids))
 
 
 def reality_ranks(task: GroundTask) -> np.ndarray:

@@ -175,3 +175,21 @@ def test_a_start_that_is_a_goal_is_a_graph_of_one_state():
     assert graph.n_states == 1 and graph.is_goal.tolist() == [True]
     assert graph.edge_ptr.tolist() == [0, 0] and len(graph.edge_op) == len(graph.edge_next) == 0
     assert graph.offered.tolist() == [[0]]
+
+
+def test_the_known_states_index_finds_what_was_added_in_any_batches():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        rows = rng.integers(0, 50, size=(rng.integers(1, 400), 3)).astype(np.uint64)
+        keys = reachable.row_keys(np.unique(rows, axis=0))
+        keys = keys[rng.permutation(len(keys))]
+        index = reachable._KeyIndex(keys[:1].copy(), np.zeros(1, dtype=np.int64))
+        c = 1
+        while c < len(keys):  # batches of random sizes, as chunks add them
+            step = int(rng.integers(1, 60))
+            index.add(keys[c:c + step], np.arange(c, min(c + step, len(keys))))
+            c += step
+            assert len(index.runs) <= 1 + int(np.log2(c))  # few runs to search
+        assert (index.find(keys) == np.arange(len(keys))).all()
+        absent = reachable.row_keys(np.full((2, 3), 99, dtype=np.uint64))
+        assert (index.find(absent) == -1).all()
