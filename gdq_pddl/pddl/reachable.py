@@ -37,11 +37,12 @@ from gdq_pddl.errors import TooManyStates
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
-    FILTER_BYTES,
+    KeyIndex,
     applicable_rows,
     apply_effect,
     compile_ops,
     fact_rows,
+    filter_chunk,
     goal_rows,
     positive_facts,
     row_keys,
@@ -238,10 +239,9 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     # a chunk small enough for fact_rows to list the rows of every needed fact: else each
     # ground action is tested on every row (manytireworld: 3,299 ground actions, 2,026
     # facts; 300k states took 60 s instead of 2 s)
-    n_need = len(np.unique(np.concatenate(need))) if need else 0
-    filtered = FILTER_BYTES // max(1, n_need)
+    filtered = filter_chunk(need)
     levels = [words(task.init, n_words)[None, :]]
-    known = _KeyIndex(row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64))
+    known = KeyIndex(row_keys(levels[0]).copy(), np.zeros(1, dtype=np.int64))
     goal, depth, src, op_of, nxt = [], [], [], [], []
     rows_of: list[tuple[np.ndarray, np.ndarray]] = []  # (states, their offered rows)
     op_type = np.int16 if n_ops <= np.iinfo(np.int16).max else np.int32
@@ -329,38 +329,6 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     del nxt
     return StateGraph(task, np.concatenate(levels), ptr, edge_op, edge_next,
                       np.concatenate(goal), np.concatenate(depth), offered)
-
-
-class _KeyIndex:
-    """The states known so far: their row keys and numbers, as sorted runs of decreasing
-    length (a run is merged into the one before once that is at most twice as long), so
-    each key is copied O(log n) times in all, where inserting every chunk's keys into one
-    sorted array copied all n keys a chunk (manytireworld_test problem0: most of the time
-    past 5 million states)."""
-
-    def __init__(self, keys: np.ndarray, ids: np.ndarray) -> None:
-        self.runs: list[tuple[np.ndarray, np.ndarray]] = [(keys, ids)]
-
-    def find(self, keys: np.ndarray) -> np.ndarray:
-        """int64: each key's state number, -1 where it is not known."""
-        out = np.full(len(keys), -1, dtype=np.int64)
-        for have, ids in self.runs:
-            at = np.minimum(np.searchsorted(have, keys), len(have) - 1)
-            hit = have[at] == keys
-            out[hit] = ids[at[hit]]
-        return out
-
-    def add(self, keys: np.ndarray, ids: np.ndarray) -> None:
-        """Known from now: ``keys`` (none known yet, distinct) numbered ``ids``."""
-        if not len(keys):
-            return
-        order = np.argsort(keys, kind="stable")
-        keys, ids = keys[order], ids[order]
-        while self.runs and len(self.runs[-1][0]) <= 2 * len(keys):
-            have, have_ids = self.runs.pop()
-            where = np.searchsorted(have, keys)
-            keys, ids = np.insert(have, where, keys), np.insert(have_ids, where, ids)
-        self.runs.append((keys, ids))
 
 
 def reality_ranks(task: GroundTask) -> np.ndarray:

@@ -3,11 +3,12 @@ them: what the enumeration (:mod:`gdq_pddl.pddl.reachable`) and reality's outcom
 (:mod:`gdq_pddl.pddl.outcomes`) apply to a whole block of states at once.
 
 :func:`words` turns a fact bitmask into a row, :func:`holds` tests a condition on rows,
-:func:`row_keys` gives each row a sortable key, :func:`compile_ops` compiles a task's
-ground actions (:class:`CompiledOp`: when one applies, its effects) and
-:func:`apply_effect` applies an effect. :func:`applicable_rows` finds where a ground
-action applies, testing it only on the rows where its rarest precondition fact holds
-(:func:`fact_rows`).
+:func:`row_keys` gives each row a sortable key (:class:`KeyIndex` finds them),
+:func:`compile_ops` compiles a task's ground actions (:class:`CompiledOp`: when one
+applies, its effects) and :func:`apply_effect` applies an effect. :func:`applicable_rows`
+finds where a ground action applies, testing it only on the rows where its rarest
+precondition fact holds (:func:`fact_rows`, on chunks of at most :func:`filter_chunk`
+rows).
 """
 
 from __future__ import annotations
@@ -39,6 +40,38 @@ def row_keys(rows: np.ndarray) -> np.ndarray:
     return rows.view(np.dtype((np.void, 8 * rows.shape[1]))).ravel()
 
 
+class KeyIndex:
+    """Row keys (:func:`row_keys`) and their numbers, as sorted runs of decreasing
+    length (a run is merged into the one before once that is at most twice as long), so
+    each key is copied O(log n) times in all, where inserting every chunk's keys into one
+    sorted array copied all n keys a chunk (the enumeration of manytireworld_test problem0:
+    most of its time past 5 million states)."""
+
+    def __init__(self, keys: np.ndarray, ids: np.ndarray) -> None:
+        self.runs: list[tuple[np.ndarray, np.ndarray]] = [(keys, ids)]
+
+    def find(self, keys: np.ndarray) -> np.ndarray:
+        """int64: each key's state number, -1 where it is not known."""
+        out = np.full(len(keys), -1, dtype=np.int64)
+        for have, ids in self.runs:
+            at = np.minimum(np.searchsorted(have, keys), len(have) - 1)
+            hit = have[at] == keys
+            out[hit] = ids[at[hit]]
+        return out
+
+    def add(self, keys: np.ndarray, ids: np.ndarray) -> None:
+        """Known from now: ``keys`` (none known yet, distinct) numbered ``ids``."""
+        if not len(keys):
+            return
+        order = np.argsort(keys, kind="stable")
+        keys, ids = keys[order], ids[order]
+        while self.runs and len(self.runs[-1][0]) <= 2 * len(keys):
+            have, have_ids = self.runs.pop()
+            where = np.searchsorted(have, keys)
+            keys, ids = np.insert(have, where, keys), np.insert(have_ids, where, ids)
+        self.runs.append((keys, ids))
+
+
 @dataclass(frozen=True)
 class CompiledOp:
     """A ground action on word rows: when it applies, its effects (``known``: the edges,
@@ -60,6 +93,13 @@ class CompiledOp:
 FILTER_BYTES = 1 << 27
 """The most bytes :func:`fact_rows` spends on a chunk's per-fact membership (else every
 ground action is tested on every state of the chunk)."""
+
+
+def filter_chunk(need: list[np.ndarray]) -> int:
+    """The most rows of a chunk :func:`fact_rows` lists the rows of every fact in ``need``
+    for (a larger chunk gets None, and every ground action is tested on every row)."""
+    n_facts = len(np.unique(np.concatenate(need))) if need else 0
+    return FILTER_BYTES // max(1, n_facts)
 
 
 def positive_facts(pre: np.ndarray) -> np.ndarray:

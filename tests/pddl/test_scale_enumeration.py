@@ -13,6 +13,7 @@ from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
 from gdq_pddl.pddl.outcomes import reality_outcomes
 from gdq_pddl.pddl.reachable import distinct, reachable_graph
+from gdq_pddl.pddl.wordrows import KeyIndex
 from gdq_pddl.planning.base import PlanningProblem
 
 SLIPPERY = """(define (domain slip) (:requirements :strips :probabilistic-effects)
@@ -183,7 +184,7 @@ def test_the_known_states_index_finds_what_was_added_in_any_batches():
         rows = rng.integers(0, 50, size=(rng.integers(1, 400), 3)).astype(np.uint64)
         keys = reachable.row_keys(np.unique(rows, axis=0))
         keys = keys[rng.permutation(len(keys))]
-        index = reachable._KeyIndex(keys[:1].copy(), np.zeros(1, dtype=np.int64))
+        index = KeyIndex(keys[:1].copy(), np.zeros(1, dtype=np.int64))
         c = 1
         while c < len(keys):  # batches of random sizes, as chunks add them
             step = int(rng.integers(1, 60))
