@@ -5,9 +5,10 @@ are too many to enumerate (10**10 and more: exploding blocks of 23 blocks, IPPC 
 
 :class:`LazyGraph` holds the states discovered so far (state 0: the initial state) with
 their word rows (:mod:`gdq_pddl.pddl.wordrows`) and goal flags. Expanding a state finds
-the ground actions applicable in it (one vectorised test of every ground action on its
-row), the determinisation's edges and reality's outcomes of each, and gives the
-successors never seen the next ids. The semantics are the enumeration's: the same
+the ground actions applicable in it (one vectorised test of every ground action's
+condition facts on its row: :class:`~gdq_pddl.pddl.wordrows.RowConditions`), the
+determinisation's edges and reality's outcomes of each, and gives the successors never
+seen the next ids. The semantics are the enumeration's: the same
 applicability (negative preconditions, a disjunctive task's alternatives), effects
 (conditional ones included), edges deduplicated per ground action, outcomes of
 probability 0 left out, a failed trial (stuck) staying, equal outcomes of a pair merged
@@ -29,7 +30,7 @@ import numpy as np
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 from gdq_pddl.pddl.reachable import reality_ranks
-from gdq_pddl.pddl.wordrows import compile_ops, goal_rows, holds
+from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 
 _NONE = np.zeros(0, dtype=np.int64)
 
@@ -76,23 +77,19 @@ class LazyGraph:
         self.task = task
         self.gains = gains
         self.n_words = max(1, -(-len(task.facts) // 64))
-        compiled = compile_ops(task, self.n_words)  # the enumeration's applicability rule
-        n_ops, w = len(task.ops), self.n_words
-        self._pre = np.stack([op.pre for op in compiled]) if compiled else \
-            np.zeros((0, w), dtype=np.uint64)
-        self._neg = np.stack([op.neg for op in compiled]) if compiled else self._pre
-        alt = [(k, p, n) for k, op in enumerate(compiled) for p, n in op.alternatives]
+        self._conditions = RowConditions([(op.pre, op.neg) for op in task.ops])
+        alt = [(k, p, n) for k, op in enumerate(task.ops)
+               for p, n in getattr(op, "alternatives", ())]
         self._alt_op = np.array([k for k, _, _ in alt], dtype=np.int64)
-        self._alt_pre = np.stack([p for _, p, _ in alt]) if alt else None
-        self._alt_neg = np.stack([n for _, _, n in alt]) if alt else None
-        self._plain = np.ones(n_ops, dtype=np.bool_)  # no alternatives to meet
+        self._alternatives = RowConditions([(p, n) for _, p, n in alt])
+        self._plain = np.ones(len(task.ops), dtype=np.bool_)  # no alternatives to meet
         self._plain[self._alt_op] = False
         self._rank = reality_ranks(task).tolist()
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
-        self._words = np.zeros((16, w), dtype=np.uint64)
+        self._words = np.zeros((16, self.n_words), dtype=np.uint64)
         self._goal = np.zeros(16, dtype=np.bool_)
         self._expanded = np.zeros(16, dtype=np.bool_)
         self._n = 0
@@ -204,12 +201,12 @@ class LazyGraph:
         return fresh
 
     def _applicable(self, row: np.ndarray) -> np.ndarray:
-        """int64: the ground actions whose precondition holds in ``row``, increasing: every
-        ground action tested at once on its precondition rows."""
-        ok = holds(row[None, :], self._pre, self._neg)
-        if self._alt_pre is not None:  # one alternative of a disjunctive precondition
+        """int64: the ground actions whose precondition holds in ``row``, increasing (the
+        enumeration's rule: :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
+        ok = self._conditions.holds(row)
+        if len(self._alt_op):  # one alternative of a disjunctive precondition
             met = np.zeros(len(ok), dtype=np.bool_)
-            met[self._alt_op[holds(row[None, :], self._alt_pre, self._alt_neg)]] = True
+            met[self._alt_op[self._alternatives.holds(row)]] = True
             ok &= met | self._plain
         return np.flatnonzero(ok)
 
