@@ -95,6 +95,8 @@ def _run_pddl(args: argparse.Namespace) -> int:
             files = (*files, "online")
             instance = OnlineInstance(instance)  # its own checks
         else:
+            if args.explore == "auto" and instance.ppddl:  # it can go online
+                instance.graph_or_give_up()
             instance.model  # noqa: B018
     except (MemoryError, TooManyStates) as exc:  # past the budget, or a `ulimit -v`
         if args.explore == "auto" and load_pddl_instance(files).ppddl and \

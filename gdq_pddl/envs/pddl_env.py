@@ -157,8 +157,20 @@ class PDDLInstance:
     def graph(self) -> StateGraph:
         """Reachable states and successors (refused past ``max_states`` or the table budget,
         and by :func:`check_goal`)."""
+        return self._enumerated(give_up_early=False)
+
+    def graph_or_give_up(self) -> StateGraph:
+        """:attr:`graph`, but refused as soon as the breadth-first levels' steady growth
+        projects past the table budget, not only once past it
+        (:func:`~gdq_pddl.pddl.reachable.projected_states`): what ``gdq-pddl run
+        --explore auto`` asks, which goes online then."""
+        if "graph" not in self.__dict__:  # where cached_property keeps it
+            self.__dict__["graph"] = self._enumerated(give_up_early=True)
+        return self.graph
+
+    def _enumerated(self, give_up_early: bool) -> StateGraph:
         graph = reachable_graph(self.problem.learner_task, self.max_states,
-                                self.problem.problem.source)
+                                self.problem.problem.source, give_up_early)
         check_goal(self.problem, graph)
         return graph
 
