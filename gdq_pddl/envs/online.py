@@ -74,14 +74,17 @@ class OnlineInstance:
     found as episodes reach them. One per run: the rows depend on what the run visits."""
 
     def __init__(self, base: PDDLInstance, darling_tolerance: float = 0.3,
-                 dynamics: Dynamics | None = None, estimate: str = "h_add") -> None:
+                 dynamics: Dynamics | None = None, estimate: str | None = "h_add") -> None:
         """``dynamics``: reality's constants (``r_max``, the step limit); None: the
         base's, with the default step limit by the estimate from the initial state.
         ``estimate``: the distance estimate of a state not reached yet, ``"h_add"`` (the
-        default) or ``"h_FF"`` (:data:`ESTIMATES`; why h_add: ``docs/decisions.md``)."""
-        if estimate not in ESTIMATES:
+        default) or ``"h_FF"`` (:data:`ESTIMATES`; why h_add: ``docs/decisions.md``);
+        None: no state is estimated (the prior and the plans know only the goal states),
+        for a learner that reads no knowledge (Q-learning, Dyna-Q: the estimates were
+        most of their time on large problems); the step limit is h_add's then."""
+        if estimate is not None and estimate not in ESTIMATES:
             raise ConfigError(f"estimate {estimate!r}: expected one of "
-                              f"{', '.join(ESTIMATES)}")
+                              f"{', '.join(ESTIMATES)}, or None")
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
@@ -90,7 +93,8 @@ class OnlineInstance:
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
         self.graph = LazyGraph(self.task, gains=self.own)
-        self.heuristic = ESTIMATES[estimate](self.task)
+        self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
+        self.estimates = estimate is not None
         self.darling_tolerance = float(darling_tolerance)
         self.n_ops = len(self.task.ops)
         h0 = int(self.heuristic.many(self.graph.words[:1])[0])
@@ -298,7 +302,7 @@ class OnlineInstance:
                 setattr(self, name, grown)
         live = states[~g.is_goal[states]]
         self.h_of[states[g.is_goal[states]]] = 0
-        if len(live):
+        if len(live) and self.estimates:  # else left INFINITE: valued as dead ends
             self.h_of[live] = self.heuristic.many(g.words[live])
 
     def _row(self, x: int) -> int:

@@ -31,6 +31,7 @@ class QLearning(TabularLearner):
     kind = KIND_QLEARNING
     name = "Q-learning"
     config_type = QLearningConfig
+    reads_knowledge = False
 
 
 class DynaQ(TabularLearner):
@@ -40,6 +41,7 @@ class DynaQ(TabularLearner):
     kind = KIND_DYNAQ
     name = "Dyna-Q"
     config_type = DynaQConfig
+    reads_knowledge = False
 
 
 class Darling(TabularLearner):
@@ -88,15 +90,27 @@ class and the variant the name stands for (None: the config's default)."""
 _BY_KEY = {name.lower().replace("-", ""): name for name in METHODS}
 
 
+def _method(method: str) -> tuple:
+    """The :data:`METHODS` entry of a name in any case, with or without hyphens and
+    underscores."""
+    key = method.lower().replace("-", "").replace("_", "") if isinstance(method, str) else ""
+    if key not in _BY_KEY:
+        raise ConfigError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
+    return METHODS[_BY_KEY[key]]
+
+
+def reads_knowledge(method: str) -> bool:
+    """Whether the learner of ``method`` (as :func:`make_learner` takes it) reads the
+    planner's knowledge (:attr:`TabularLearner.reads_knowledge`)."""
+    return _method(method)[0].reads_knowledge
+
+
 def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:
     """A fresh learner by name for ``context``, with config overrides, e.g.
     ``make_learner("GDQ-code", ctx, alpha=0.2)``. ``method``: a name of :data:`METHODS`, in
     any case, with or without hyphens and underscores (``gdq``, ``dynaq``, ``q_learning``);
     a name without a variant takes ``variant=...`` among the overrides."""
-    key = method.lower().replace("-", "").replace("_", "") if isinstance(method, str) else ""
-    if key not in _BY_KEY:
-        raise ConfigError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
-    cls, config_type, variant = METHODS[_BY_KEY[key]]
+    cls, config_type, variant = _method(method)
     if variant is not None and config.setdefault("variant", variant) != variant:
         raise ConfigError(f"method {method!r} is variant {variant!r}, and the overrides "
                           f"say variant={config['variant']!r}")

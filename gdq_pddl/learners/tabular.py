@@ -91,6 +91,9 @@ class TabularLearner:
     """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
     """The config class the constructor takes."""
+    reads_knowledge: bool = True
+    """Whether the rule reads the planner's knowledge (the prior, the plans); a problem
+    explored online estimates no state for a learner that does not."""
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext

@@ -17,9 +17,10 @@ from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
 from gdq_pddl.errors import ConfigError, PlanningError
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
+from gdq_pddl.learners.agents import reads_knowledge
 from gdq_pddl.learners.learned_model import new_model, resized
 from gdq_pddl.learners.online import online_context
-from gdq_pddl.planning.heuristic import hff_for
+from gdq_pddl.planning.heuristic import INFINITE, hff_for
 from gdq_pddl.resources import resolve_pddl
 
 PPDDL = [("keys-ppddl", "keys-ppddl-1"), ("lift", "lift-1"), ("courier", "courier-1"),
@@ -77,6 +78,33 @@ def test_q_learning_online_learns_as_on_the_enumerated_problem(domain: str,
         live = online.columns[row] >= 0
         assert np.array_equal(online.columns[row][live], base.columns[s][base.columns[s] >= 0])
         assert np.allclose(found.q[row][live], enumerated.q[s][:live.sum()])
+
+
+@pytest.mark.parametrize("method", ["Q-learning", "Dyna-Q"])
+@pytest.mark.parametrize("domain,problem", [("courier", "courier-2"), ("lift", "lift-2")])
+def test_learners_without_knowledge_learn_the_same_without_estimates(method, domain, problem):
+    """A run of a learner that reads no knowledge estimates no state (the estimates were
+    most of its time on large problems) and learns exactly as with them."""
+    base = shipped(domain, problem)
+    assert not reads_knowledge(method) and reads_knowledge("GDQ") and reads_knowledge("darling")
+    runs = []
+    for estimate in ("h_add", None):
+        online = OnlineInstance(base, estimate=estimate)
+        learner = make_learner(method, online_context(online))
+        env = OnlineEnv(online)
+        env.reset(seed=4)
+        result = run_episodes(learner, env, 40, np.random.default_rng(2))
+        q = {online.graph.mask(x): learner.q[online.row_of_state[x]].copy()
+             for x in range(online.graph.n_states) if online.graph.expanded[x]}
+        runs.append((online, result, q))
+    (with_h, a, qa), (without, b, qb) = runs
+    assert without.h_start == with_h.h_start
+    assert without.dynamics.step_limit == with_h.dynamics.step_limit
+    assert np.array_equal(a.returns, b.returns) and np.array_equal(a.steps, b.steps)
+    assert qa.keys() == qb.keys() and all(np.array_equal(qa[m], qb[m]) for m in qa)
+    found = without.h_of[:without.graph.n_states]
+    assert set(found[~without.graph.is_goal].tolist()) <= {INFINITE}  # none estimated
+    assert (with_h.h_of[:with_h.graph.n_states] > 0).any()
 
 
 def test_own_scale_prior_rewards_are_the_enumerated_ones() -> None:
@@ -196,7 +224,8 @@ def test_online_refusals() -> None:
     assert learner is not None  # the paper's variants walk plans: refused online
     with pytest.raises(ConfigError, match="no enumerated plans"):
         make_learner("GDQ-literal", online_context(online))
-    with pytest.raises(ConfigError, match="estimate 'h_max': expected one of h_add, h_FF"):
+    with pytest.raises(ConfigError, match="estimate 'h_max': expected one of h_add, h_FF, or "
+                       "None"):
         OnlineInstance(shipped("lift", "lift-1"), estimate="h_max")
 
 
