@@ -160,7 +160,7 @@ class PDDLInstance:
         return self._enumerated(give_up_early=False)
 
     def graph_or_give_up(self) -> StateGraph:
-        """:attr:`graph`, but refused as soon as the breadth-first levels' steady growth
+        """:attr:`graph`, but refused as soon as the breadth-first levels' growth
         projects past the table budget, not only once past it
         (:func:`~gdq_pddl.pddl.reachable.projected_states`): what ``gdq-pddl run
         --explore auto`` asks, which goes online then."""

@@ -2,7 +2,8 @@
 them: what the enumeration (:mod:`gdq_pddl.pddl.reachable`) and reality's outcomes
 (:mod:`gdq_pddl.pddl.outcomes`) apply to a whole block of states at once.
 
-:func:`words` turns a fact bitmask into a row, :func:`holds` tests a condition on rows,
+:func:`words` turns a fact bitmask into a row, :func:`holds` tests a condition on rows
+(:class:`RowConditions`: many conditions on one row),
 :func:`row_keys` gives each row a sortable key (:class:`KeyIndex` finds them),
 :func:`compile_ops` compiles a task's ground actions (:class:`CompiledOp`: when one
 applies, its effects) and :func:`apply_effect` applies an effect. :func:`applicable_rows`
@@ -37,7 +38,7 @@ class RowConditions:
     """Conditions ``(must hold, must not hold)`` (fact bitmasks) kept as lists of facts,
     tested on one row at a time (:meth:`holds`): for one state that reads each condition's
     few facts, where :func:`holds` on a stack of every condition's rows reads every word
-    of every row (pddlgym's exploding blocks of 23 blocks: 25 ms a state, 32,004 ground
+    of every row (pddlgym's exploding blocks of 126 blocks: 25 ms a state, 32,004 ground
     actions x 256 words)."""
 
     def __init__(self, conditions: list[tuple[int, int]]) -> None:

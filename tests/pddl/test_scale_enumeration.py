@@ -5,6 +5,8 @@ from collections import deque
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from gdq_pddl.envs.model import merge_outcomes
 from gdq_pddl.envs.pddl_env import load_instance
@@ -13,7 +15,7 @@ from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
 from gdq_pddl.pddl.outcomes import reality_outcomes
 from gdq_pddl.pddl.reachable import distinct, reachable_graph
-from gdq_pddl.pddl.wordrows import KeyIndex
+from gdq_pddl.pddl.wordrows import KeyIndex, RowConditions, holds, words
 from gdq_pddl.planning.base import PlanningProblem
 
 SLIPPERY = """(define (domain slip) (:requirements :strips :probabilistic-effects)
@@ -194,3 +196,28 @@ def test_the_known_states_index_finds_what_was_added_in_any_batches():
         assert (index.find(keys) == np.arange(len(keys))).all()
         absent = reachable.row_keys(np.full((2, 3), 99, dtype=np.uint64))
         assert (index.find(absent) == -1).all()
+
+
+@given(st.integers(1, 200), st.integers(0, 2**31 - 1))
+@settings(max_examples=60, deadline=None)
+def test_row_conditions_hold_where_the_rows_stack_holds(n_facts, seed):
+    """One row against many conditions as fact lists gives what the stack of the
+    conditions' word rows gives (:func:`holds`), and a row is the mask's bits."""
+    rng = np.random.default_rng(seed)
+    n_words = -(-n_facts // 64)
+
+    def mask(p):
+        return sum(1 << f for f in np.flatnonzero(rng.random(n_facts) < p).tolist())
+
+    conditions = [(mask(0.05), mask(0.05)) for _ in range(int(rng.integers(0, 40)))]
+    state = mask(0.5)
+    row = words(state, n_words)
+    assert all((int(row[j]) >> b) & 1 == (state >> (64 * j + b)) & 1
+               for j in range(n_words) for b in range(64))
+    expected = np.array([state & p == p and not state & n for p, n in conditions],
+                        dtype=np.bool_)
+    assert np.array_equal(RowConditions(conditions).holds(row), expected)
+    if conditions:
+        stack = np.stack([words(p, n_words) for p, _ in conditions])
+        neg = np.stack([words(n, n_words) for _, n in conditions])
+        assert np.array_equal(holds(row[None, :], stack, neg), expected)
