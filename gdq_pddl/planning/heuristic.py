@@ -25,7 +25,7 @@ import weakref
 import numba
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundTask
+from gdq_pddl.pddl.grounding import GroundTask, set_bits
 from gdq_pddl.pddl.ppddl import ProbabilisticOp
 from gdq_pddl.planning.relaxed_costs import cheapest_alternative, hadd_costs, relaxed_plan_size
 
@@ -87,14 +87,14 @@ class _Compiled:
         free: list[int] = []
         op_pre: list[np.ndarray] = []
         for i, (pre_mask, add_mask) in enumerate(actions):
-            pre = _bit_list(pre_mask, n_facts)
+            pre = np.array(list(set_bits(pre_mask)), dtype=np.int64)  # a few facts each
             op_pre.append(pre)
             n_pre[i] = len(pre)
             for f in pre.tolist():
                 pre_of[f].append(i)
             if not len(pre):
                 free.append(i)
-            add_idx += _bit_list(add_mask, n_facts).tolist()
+            add_idx += set_bits(add_mask)
             add_ptr.append(len(add_idx))
         self.n_actions = len(actions)
         self.n_pre = n_pre
