@@ -23,7 +23,7 @@ from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.experiments import Experiment, run_experiments
-from gdq_pddl.learners import make_learner, run_episodes
+from gdq_pddl.learners import GDQ, make_learner, run_episodes
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.resources import data_file
 
@@ -31,7 +31,10 @@ from gdq_pddl.resources import data_file
 def main(episodes: int, runs: int) -> str:
     domain = str(data_file("domains", "cracking-blocks.pddl"))
     problem = str(data_file("problems", "cracking-1.pddl"))
-    instance = OnlineInstance(PDDLInstance.from_files(domain, problem))
+    # GDQ reads a state not reached yet as ceil(1.25 h) actions from the goal, as the
+    # experiment runner gives it (GDQ.estimate_weight; DARLING reads h itself)
+    instance = OnlineInstance(PDDLInstance.from_files(domain, problem),
+                              estimate_weight=GDQ.estimate_weight)
     learner = make_learner("GDQ", online_context(instance))
     env = OnlineEnv(instance)
     env.reset(seed=0)

@@ -74,17 +74,22 @@ class OnlineInstance:
     found as episodes reach them. One per run: the rows depend on what the run visits."""
 
     def __init__(self, base: PDDLInstance, darling_tolerance: float = 0.3,
-                 dynamics: Dynamics | None = None, estimate: str | None = "h_add") -> None:
+                 dynamics: Dynamics | None = None, estimate: str | None = "h_add",
+                 estimate_weight: float = 1.0) -> None:
         """``dynamics``: reality's constants (``r_max``, the step limit); None: the
         base's, with the default step limit by the estimate from the initial state.
         ``estimate``: the distance estimate of a state not reached yet, ``"h_add"`` (the
         default) or ``"h_FF"`` (:data:`ESTIMATES`; why h_add: ``docs/decisions.md``);
         None: no state is estimated (the prior and the plans know only the goal states),
         for a learner that reads no knowledge (Q-learning, Dyna-Q: the estimates were
-        most of their time on large problems); the step limit is h_add's then."""
+        most of their time on large problems); the step limit is h_add's then.
+        ``estimate_weight``: a state not reached yet stands ``ceil(w h)`` actions from
+        the goal (the step limit and :attr:`h_start` read ``h`` itself)."""
         if estimate is not None and estimate not in ESTIMATES:
             raise ConfigError(f"estimate {estimate!r}: expected one of "
                               f"{', '.join(ESTIMATES)}, or None")
+        if not math.isfinite(estimate_weight) or estimate_weight < 1.0:
+            raise ConfigError(f"estimate_weight {estimate_weight!r}: expected a number >= 1")
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
@@ -95,6 +100,7 @@ class OnlineInstance:
         self.graph = LazyGraph(self.task, gains=self.own)
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
         self.estimates = estimate is not None
+        self.estimate_weight = float(estimate_weight)
         self.darling_tolerance = float(darling_tolerance)
         self.n_ops = len(self.task.ops)
         h0 = int(self.heuristic.many(self.graph.words[:1])[0])
@@ -303,7 +309,11 @@ class OnlineInstance:
         live = states[~g.is_goal[states]]
         self.h_of[states[g.is_goal[states]]] = 0
         if len(live) and self.estimates:  # else left INFINITE: valued as dead ends
-            self.h_of[live] = self.heuristic.many(g.words[live])
+            h = self.heuristic.many(g.words[live])
+            if self.estimate_weight != 1.0:
+                h = np.where(h == INFINITE, h, np.ceil(self.estimate_weight * h)
+                             .astype(np.int64))
+            self.h_of[live] = h
 
     def _row(self, x: int) -> int:
         """The row of graph state ``x``, made (and ``x`` expanded) on first call: the

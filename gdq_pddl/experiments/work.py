@@ -17,12 +17,13 @@ from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
 from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
 from gdq_pddl.learners import precompile
+from gdq_pddl.learners.agents import learner_class
 from gdq_pddl.learners.agents import make_learner as learner_by_name
-from gdq_pddl.learners.agents import reads_knowledge
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.learners.saving import save_learner
+from gdq_pddl.learners.tabular import TabularLearner
 from gdq_pddl.world_types import Task, World
 
 
@@ -40,17 +41,19 @@ def make_learner(method: str, context, hyper: Hyper):
                            epsilon=hyper.epsilon)
 
 
-def instance_of(exp: Experiment, spec: str,
-                estimates: bool = True) -> PDDLInstance | OfficeInstance:
+def instance_of(exp: Experiment, spec: str, reader: type[TabularLearner] = TabularLearner
+                ) -> PDDLInstance | OfficeInstance:
     """The instance schedule entry ``spec`` of ``exp`` runs on: its PDDL problem
-    (``exp.pddl``), or the task ``spec`` of its world (a name or ``start->goal``).
-    ``estimates``: False for a learner that reads no knowledge, whose problem explored
-    online then estimates no state (:class:`OnlineInstance`)."""
+    (``exp.pddl``), or the task ``spec`` of its world (a name or ``start->goal``). A
+    problem explored online is made for the learner class ``reader``: no estimates for
+    one that reads no knowledge, estimates weighted by its ``estimate_weight``
+    (:class:`OnlineInstance`)."""
     if exp.pddl is not None:
         files = tuple(exp.pddl)
         if files[4:5] == ("online",):  # states found as episodes reach them: one per run
             return OnlineInstance(load_pddl_instance(files[:4]),
-                                  estimate="h_add" if estimates else None)
+                                  estimate="h_add" if reader.reads_knowledge else None,
+                                  estimate_weight=reader.estimate_weight)
         return load_pddl_instance(files)
     world = load_world_named(exp.world)
     return OfficeInstance(world, resolve_task(world, spec))
@@ -72,7 +75,7 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
     rng, env_seed = unit.seeds()
     learner, parts, names = None, [], []
     for i, (spec, episodes) in enumerate(exp.schedule):
-        instance = instance_of(exp, spec, reads_knowledge(unit.method))
+        instance = instance_of(exp, spec, learner_class(unit.method))
         context = context_of(exp, instance)
         if learner is None:
             learner = make_learner(unit.method, context, exp.hyper)

@@ -99,10 +99,11 @@ def _method(method: str) -> tuple:
     return METHODS[_BY_KEY[key]]
 
 
-def reads_knowledge(method: str) -> bool:
-    """Whether the learner of ``method`` (as :func:`make_learner` takes it) reads the
-    planner's knowledge (:attr:`TabularLearner.reads_knowledge`)."""
-    return _method(method)[0].reads_knowledge
+def learner_class(method: str) -> type[TabularLearner]:
+    """The class of the learner of ``method`` (as :func:`make_learner` takes it): what it
+    reads of a problem explored online (:attr:`TabularLearner.reads_knowledge`,
+    :attr:`TabularLearner.estimate_weight`)."""
+    return _method(method)[0]
 
 
 def make_learner(method: str, context: TaskContext, **config: object) -> TabularLearner:

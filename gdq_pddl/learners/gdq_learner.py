@@ -77,6 +77,10 @@ class GDQ(TabularLearner):
     name = "GDQ"
     config: GDQConfig
     config_type = GDQConfig
+    estimate_weight = 1.25
+    """Online, GDQ's prior counts a state not reached yet ``ceil(1.25 h)`` actions from
+    the goal: h_add runs short where goals interact, and each new state valued by it drew
+    GDQ on (``docs/decisions.md``, "GDQ reads the estimates x1.25")."""
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
         if isinstance(config, GDQConfig) and config.variant != "prior":

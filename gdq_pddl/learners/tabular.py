@@ -94,6 +94,10 @@ class TabularLearner:
     reads_knowledge: bool = True
     """Whether the rule reads the planner's knowledge (the prior, the plans); a problem
     explored online estimates no state for a learner that does not."""
+    estimate_weight: float = 1.0
+    """On a problem explored online, a state not reached yet stands ``ceil(w h)`` actions
+    from the goal for this learner, ``h`` its estimate
+    (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext

@@ -16,11 +16,13 @@ from gdq_pddl.envs.online import ESTIMATE, OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
 from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.work import instance_of
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
-from gdq_pddl.learners.agents import reads_knowledge
+from gdq_pddl.learners.agents import learner_class
 from gdq_pddl.learners.learned_model import new_model, resized
 from gdq_pddl.learners.online import online_context
-from gdq_pddl.planning.heuristic import INFINITE, hff_for
+from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for
 from gdq_pddl.resources import resolve_pddl
 
 PPDDL = [("keys-ppddl", "keys-ppddl-1"), ("lift", "lift-1"), ("courier", "courier-1"),
@@ -86,7 +88,8 @@ def test_learners_without_knowledge_learn_the_same_without_estimates(method, dom
     """A run of a learner that reads no knowledge estimates no state (the estimates were
     most of its time on large problems) and learns exactly as with them."""
     base = shipped(domain, problem)
-    assert not reads_knowledge(method) and reads_knowledge("GDQ") and reads_knowledge("darling")
+    assert not learner_class(method).reads_knowledge
+    assert learner_class("GDQ").reads_knowledge and learner_class("darling").reads_knowledge
     runs = []
     for estimate in ("h_add", None):
         online = OnlineInstance(base, estimate=estimate)
@@ -105,6 +108,38 @@ def test_learners_without_knowledge_learn_the_same_without_estimates(method, dom
     found = without.h_of[:without.graph.n_states]
     assert set(found[~without.graph.is_goal].tolist()) <= {INFINITE}  # none estimated
     assert (with_h.h_of[:with_h.graph.n_states] > 0).any()
+
+
+def test_weighted_estimates_stand_further_from_the_goal() -> None:
+    """``estimate_weight`` w: a state not reached yet stands ceil(w h) from the goal; the
+    step limit and the estimate from the start stay h_add's. GDQ reads its estimates so
+    when run_unit makes its instance, DARLING as they are, Q-learning none."""
+    base = shipped("courier", "courier-2")
+    plain, weighted = OnlineInstance(base), OnlineInstance(base, estimate_weight=1.25)
+    assert weighted.h_start == plain.h_start
+    assert weighted.dynamics.step_limit == plain.dynamics.step_limit
+    for online in (plain, weighted):
+        env = OnlineEnv(online)
+        env.reset(seed=1)
+        run_episodes(make_learner("GDQ", online_context(online)), env, 10,
+                     np.random.default_rng(1))
+    h = hadd_for(weighted.task)
+    g = weighted.graph
+    found = np.flatnonzero(~g.is_goal)
+    raw = h.many(g.words[found])
+    assert (raw > 0).any()
+    assert np.array_equal(weighted.h_of[found],
+                          np.where(raw < 0, raw, np.ceil(1.25 * raw).astype(np.int64)))
+    for bad in (0.5, float("nan")):
+        with pytest.raises(ConfigError, match="estimate_weight"):
+            OnlineInstance(base, estimate_weight=bad)
+    domain, problem, _ = resolve_pddl("courier", "courier-2", None)
+    exp = Experiment("run", (("courier-2", 5),), world="pddl",
+                     pddl=(str(domain), str(problem), "", "all-outcomes", "online"))
+    assert instance_of(exp, "courier-2", learner_class("GDQ")).estimate_weight == 1.25
+    darling = instance_of(exp, "courier-2", learner_class("DARLING"))
+    assert darling.estimates and darling.estimate_weight == 1.0
+    assert not instance_of(exp, "courier-2", learner_class("Q-learning")).estimates
 
 
 def test_own_scale_prior_rewards_are_the_enumerated_ones() -> None:
