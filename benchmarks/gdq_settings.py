@@ -22,6 +22,8 @@ and with ``explore_loops = True`` (same seeds as ``tasks``).
 a paired t-test's p), the share of the last 50 episodes that reach the goal and
 the median length of those that do, per run: where GDQ settles on a longer route; last,
 GDQ and DARLING with h_FF in place of h_add as the estimate of states not reached yet.
+Each learner reads the estimates as the command line gives them (GDQ: ``ceil(1.25 h)``,
+``GDQ.estimate_weight``).
 """
 
 from __future__ import annotations
@@ -143,10 +145,12 @@ def _online_run(job: tuple) -> tuple[float, float, float]:
     from gdq_pddl.envs.online import OnlineInstance
     from gdq_pddl.envs.online_env import OnlineEnv
     from gdq_pddl.envs.pddl_env import load_instance
+    from gdq_pddl.learners.agents import learner_class
     from gdq_pddl.learners.online import online_context
 
     domain, problem, method, config, estimate, run, episodes = job
-    instance = OnlineInstance(load_instance(domain, problem), estimate=estimate)
+    instance = OnlineInstance(load_instance(domain, problem), estimate=estimate,
+                              estimate_weight=learner_class(method).estimate_weight)
     env = OnlineEnv(instance)
     env.reset(seed=1000 + run)
     rec = run_episodes(make_learner(method, online_context(instance), **config), env,
