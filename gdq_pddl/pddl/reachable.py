@@ -347,11 +347,11 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                 bar.update(len(parent))
             levels.append(np.concatenate(next_rows) if next_rows else rows[:0])
             lo = level_start
-            sizes = [len(level) for level in levels]
-            if give_up_early and max_states is None and \
-                    projected_states(sizes) > state_cap(width_seen, n_words=n_words):
-                raise _too_many(source, state_cap(width_seen, n_words=n_words), True,
-                                width_seen, n_words, sizes, projected_states(sizes))
+            if give_up_early and max_states is None:
+                sizes = [len(level) for level in levels]
+                projected, cap = projected_states(sizes), state_cap(width_seen, n_words=n_words)
+                if projected > cap:
+                    raise _too_many(source, cap, True, width_seen, n_words, sizes, projected)
     none = np.zeros(0, dtype=np.int64)  # no level expanded (the start is a goal)
     src_all = np.concatenate(src) if src else none
     del src
