@@ -1,7 +1,9 @@
 """The action knowledge as a deterministic model over learner (state, action) pairs:
 GDQ's *prior model*, where each learner action leads if the knowledge is right, or "no
 change" where the knowledge says it does nothing (optimistic: PDDL has no failures or
-costs)."""
+costs). Where the knowledge is a PPDDL domain, the prior also keeps each pair's chance of
+an outcome from which the goal cannot be reached (:func:`dead_chances`): the one thing
+its optimism does not gamble on."""
 
 from __future__ import annotations
 
@@ -28,9 +30,21 @@ class PriorModel:
     A PDDL problem's is over the columns of its states' applicable ground actions
     (:func:`prior_from_graph`), where a padding column is NO_CHANGE."""
 
+    dead: np.ndarray | None = None
+    """float64[n_states, n_actions] or None: the knowledge's probability that the pair
+    ends in a *dead end*, a state from which the goal cannot be reached (1 where every
+    outcome is one: the prior successor is one then too). None: the knowledge never says
+    so (a deterministic one: the office, a STRIPS domain). ``docs/decisions.md``, "the
+    prior does not gamble on dead ends"."""
+
     @property
     def n_states(self) -> int:
         return int(self.next_state.shape[0])
+
+    def rows(self, rows: np.ndarray) -> PriorModel:
+        """The prior of the learner states ``rows`` alone (in that order)."""
+        return PriorModel(self.next_state[rows],
+                          None if self.dead is None else self.dead[rows])
 
     @property
     def n_actions(self) -> int:
@@ -119,6 +133,20 @@ def prior_from_graph(graph) -> PriorModel:
     best %= n + 2
     nxt[src, column_of(graph.offered, src, op)] = best
     return PriorModel(nxt)
+
+
+def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
+                 dead_state: np.ndarray) -> np.ndarray:
+    """float64[n_pairs]: :attr:`PriorModel.dead` of the pairs of a model in CSR form
+    (outcomes of pair ``i`` are ``ptr[i]:ptr[i + 1]``, with probabilities ``prob`` and
+    next states ``nxt``): the probability of the outcomes whose next state is a dead end
+    (``dead_state``, bool by state); 1 where every outcome is one, 0 where there is none."""
+    n_pairs = len(ptr) - 1
+    pair = np.repeat(np.arange(n_pairs), np.diff(ptr))
+    dead = dead_state[nxt]
+    chance = np.bincount(pair, weights=np.where(dead, prob, 0.0), minlength=n_pairs)
+    live = np.bincount(pair, weights=~dead, minlength=n_pairs) > 0
+    return np.where(live, np.minimum(chance, 1.0), (np.diff(ptr) > 0).astype(np.float64))
 
 
 def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,

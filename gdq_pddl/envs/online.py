@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from gdq_pddl.abstraction import PlanTable
-from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, prior_rewards
+from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, dead_chances, prior_rewards
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
@@ -149,7 +149,7 @@ class OnlineInstance:
 
     @property
     def prior(self) -> PriorModel:
-        return PriorModel(self.prior_next)
+        return PriorModel(self.prior_next, self._prior_dead)
 
     @cached_property
     def model(self) -> ModelArrays:
@@ -266,6 +266,7 @@ class OnlineInstance:
         self.first_shortest = grown("first_shortest", False, np.bool_)
         self.first_tolerant = grown("first_tolerant", False, np.bool_)
         self._prior_reward = grown("_prior_reward", 0.0, np.float64)
+        self._prior_dead = grown("_prior_dead", 0.0, np.float64)
         self.goal = grown("goal", True, np.bool_, False)
         self.dist = grown("dist", -1, np.int64, False)
         self.state_of_row = grown("state_of_row", -1, np.int64, False)
@@ -389,10 +390,21 @@ class OnlineInstance:
             bound = length_bound(d, self.darling_tolerance)
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
             self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
+        m, states = self.step_model(x)
+        self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next, self._dead(states, d))
         if self.own:
-            m, _ = self.step_model(x)
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+
+    def _dead(self, states: np.ndarray, d: int) -> np.ndarray:
+        """bool by graph state of ``states`` (the first the state just expanded, whose
+        distance is ``d``): dead ends as far as is known, a reached state's one-step
+        lookahead and a frontier state's estimate (the relaxation cannot reach the goal)."""
+        rows = self.row_of_state[states]
+        own = np.where(rows >= 0, self.dist[np.maximum(rows, 0)] < 0,
+                       (self.h_of[states] == INFINITE) & ~self.graph.is_goal[states])
+        own[0] = d < 0
+        return own
 
 
 def _not_enumerated():

@@ -152,7 +152,7 @@ def row_context(context: TaskContext, rows: np.ndarray) -> TaskContext:
     return replace(
         context, s0=0, goal=context.goal[rows], plans=plans(context.plans),
         darling_plans=plans(context.darling_plans),
-        prior=None if prior is None else PriorModel(prior.next_state[rows]),
+        prior=None if prior is None else prior.rows(rows),
         columns=None if context.columns is None else context.columns[rows],
         prior_reward=None if context.prior_reward is None else context.prior_reward[rows])
 

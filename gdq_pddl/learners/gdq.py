@@ -8,7 +8,8 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
 - **The prior**: ``prior_next[s, a]``, where the knowledge says a pair leads (-1: "no
   change"; :mod:`gdq_pddl.abstraction.prior`), deterministically at cost ``prior_cost``
   (on a problem's own scale besides the most the file pays for a trial of the action,
-  ``Prior.reward``); reaching a goal pays R_max
+  ``Prior.reward``); reaching a goal pays R_max; with the knowledge's chance of a dead end
+  (``Prior.dead``), that share of the backup is a dead end's value
   (:func:`~gdq_pddl.learners.warm_start.prior_backup`).
 - **Known pairs** (:func:`is_known`): an applicable pair after more than m trials, one
   the knowledge says does nothing after its first.
@@ -71,12 +72,14 @@ def after_step(table: QTable, model: Model, prior: Prior, queue: Queue, p: Param
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
 def hybrid_backup(table: QTable, model: Model, prior_next: np.ndarray,
-                  prior_reward: np.ndarray, p: Params, s: int, a: int) -> float:
+                  prior_reward: np.ndarray, prior_dead: np.ndarray, p: Params, s: int,
+                  a: int) -> float:
     """The backup of ``(s, a)`` under the hybrid model, with the current ``v``: its
     :func:`~gdq_pddl.learners.warm_start.prior_backup` while unknown,
     ``(n * learned + w * prior) / (n + w)`` once known."""
-    return _hybrid(table.v, table.goal, prior_next, prior_reward, model.slots, model.stuck,
-                   model.visits, model.cost_sum, model.cost_n, model.cost_all, p, s, a)
+    return _hybrid(table.v, table.goal, prior_next, prior_reward, prior_dead, model.slots,
+                   model.stuck, model.visits, model.cost_sum, model.cost_n, model.cost_all,
+                   p, s, a)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -91,13 +94,13 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
     slots, stuck, visits = model.slots, model.stuck, model.visits
     cost_sum, cost_n, cost_all = model.cost_sum, model.cost_n, model.cost_all
     prior_next, pp_ptr, pp_pair = prior.next_state, prior.pp_ptr, prior.pp_pair
-    prior_reward = prior.reward
+    prior_reward, prior_dead = prior.reward, prior.dead
     rev_head, rev_next, rev_pair = prior.rev_head, prior.rev_next, prior.rev_pair
     heap, pos, prio, heap_n = queue.heap, queue.pos, queue.prio, queue.n
     n_actions = q.shape[1]
     if is_known(visits, prior_next, p.m, s, a):
-        _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
-                 cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, s, a)
+        _revalue(q, v, allowed, goal, prior_next, prior_reward, prior_dead, slots, stuck,
+                 visits, cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, s, a)
     budget = p.n_backups
     while budget > 0 and heap_n[0] > 0:
         x = _pop(queue)
@@ -106,8 +109,8 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps] or is_known(visits, prior_next, p.m, ps, pa):
                 continue  # goal rows keep 0; known pairs are in the reverse index
-            _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
-                     cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, prior_reward, prior_dead, slots, stuck,
+                     visits, cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
         e = rev_head[x]
         while e >= 0:  # known pairs whose backup reads x
@@ -116,33 +119,34 @@ def sweep(table: QTable, model: Model, prior: Prior, queue: Queue, p: Params, s:
             ps, pa = pair // n_actions, pair % n_actions
             if goal[ps]:  # known before a task switch made its state a goal
                 continue
-            _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits,
-                     cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
+            _revalue(q, v, allowed, goal, prior_next, prior_reward, prior_dead, slots, stuck,
+                     visits, cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p, ps, pa)
             budget -= 1
 
 
 # The sweep's inner loop on arrays (the groups' fields, one by one: see sweep).
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _revalue(q, v, allowed, goal, prior_next, prior_reward, slots, stuck, visits, cost_sum,
-             cost_n, cost_all, heap, pos, prio, heap_n, p: Params, s: int, a: int) -> None:
+def _revalue(q, v, allowed, goal, prior_next, prior_reward, prior_dead, slots, stuck, visits,
+             cost_sum, cost_n, cost_all, heap, pos, prio, heap_n, p: Params, s: int,
+             a: int) -> None:
     """``q[s, a] <-`` its hybrid backup; queue ``s`` if that moved its value by more than
     the sweep threshold. (The untried pairs the knowledge says do nothing are not allowed:
     nothing here reads their Q, which :func:`fill_untried` fills in when it is read.)"""
     old = v[s]
-    set_q_arrays(q, v, allowed, s, a, _hybrid(v, goal, prior_next, prior_reward, slots,
-                                              stuck, visits, cost_sum, cost_n, cost_all, p,
-                                              s, a))
+    set_q_arrays(q, v, allowed, s, a, _hybrid(v, goal, prior_next, prior_reward, prior_dead,
+                                              slots, stuck, visits, cost_sum, cost_n,
+                                              cost_all, p, s, a))
     change = abs(v[s] - old)
     if change > p.sweep_threshold:
         _push(heap, pos, prio, heap_n, s, change)
 
 
 @numba.njit(cache=True, inline="always", error_model="numpy")
-def _hybrid(v, goal, prior_next, prior_reward, slots, stuck, visits, cost_sum, cost_n,
-            cost_all, p: Params, s: int, a: int) -> float:
+def _hybrid(v, goal, prior_next, prior_reward, prior_dead, slots, stuck, visits, cost_sum,
+            cost_n, cost_all, p: Params, s: int, a: int) -> float:
     """:func:`hybrid_backup`: the prior backup, mixed with the learned model's once known."""
-    prior = prior_backup(v, goal, prior_next, prior_reward, p, s, a)
+    prior = prior_backup(v, goal, prior_next, prior_reward, prior_dead, p, s, a)
     if is_known(visits, prior_next, p.m, s, a):
         n = visits[s, a]
         learned = learned_value(slots, stuck, visits, cost_sum, cost_n, cost_all, goal, v, p,
@@ -207,7 +211,7 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
             best = -np.inf
             for k in range(ptr[s], ptr[s + 1]):
                 a = pairs[k]
-                x = hybrid_backup(table, model, prior_next, prior.reward, p, s, a)
+                x = hybrid_backup(table, model, prior_next, prior.reward, prior.dead, p, s, a)
                 q[s, a] = x
                 if x > best:
                     best = x
@@ -220,7 +224,7 @@ def value_iteration(table: QTable, model: Model, prior: Prior, queue: Queue, p: 
             continue
         for a in range(n_actions):
             if not allowed[s, a]:
-                q[s, a] = hybrid_backup(table, model, prior_next, prior.reward, p, s, a)
+                q[s, a] = hybrid_backup(table, model, prior_next, prior.reward, prior.dead, p, s, a)
     prior.rev_head[:] = -1
     prior.rev_n[0] = 0
     for s in range(n_states):
@@ -270,7 +274,8 @@ def revalue_rows(table: QTable, model: Model, prior: Prior, queue: Queue, p: Par
             best = -np.inf
             for a in range(q.shape[1]):
                 if allowed[s, a]:
-                    x = hybrid_backup(table, model, prior.next_state, prior.reward, p, s, a)
+                    x = hybrid_backup(table, model, prior.next_state, prior.reward,
+                                      prior.dead, p, s, a)
                     q[s, a] = x
                     best = max(best, x)
             settled = abs(best - v[s]) <= tol

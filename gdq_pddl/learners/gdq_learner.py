@@ -21,7 +21,7 @@ from gdq_pddl.learners.tables import (
     Prior,
     Queue,
 )
-from gdq_pddl.learners.tabular import NO_PRIOR, NO_REWARD, TabularLearner
+from gdq_pddl.learners.tabular import NO_DEAD, NO_PRIOR, NO_REWARD, TabularLearner
 from gdq_pddl.limits import check_count
 
 
@@ -166,7 +166,9 @@ class GDQ(TabularLearner):
                       rev_head=np.full(n_s, -1, dtype=np.int64),
                       rev_next=np.full(capacity, -1, dtype=np.int64),
                       rev_pair=np.zeros(capacity, dtype=np.int64),
-                      rev_n=np.zeros(1, dtype=np.int64), reward=prior_reward(context)),
+                      rev_n=np.zeros(1, dtype=np.int64), reward=prior_reward(context),
+                      dead=NO_DEAD if prior.dead is None else
+                      np.ascontiguousarray(prior.dead, dtype=np.float64)),
                 Queue(np.zeros(n_s, dtype=np.int64), np.full(n_s, -1, dtype=np.int64),
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 

@@ -48,7 +48,8 @@ TABLES: dict[str, dict[str, tuple]] = {
     "prior": {"next_state": (I8, "S A", (-1, "S")), "pp_ptr": (I8, "S+1", (PTR, "E")),
               "pp_pair": (I8, "E", (0, "SA")), "rev_head": (I8, "S", (-1, "C")),
               "rev_next": (I8, "C", (-1, "C")), "rev_pair": (I8, "C", (0, "SA")),
-              "rev_n": (I8, "1", (0, "C+1")), "reward": (F8, "R RA", None)},
+              "rev_n": (I8, "1", (0, "C+1")), "reward": (F8, "R RA", None),
+              "dead": (F8, "D DA", None)},
     "queue": {"heap": (I8, "S", None), "pos": (I8, "S", None), "prio": (F8, "S", None),
               "n": (I8, "1", (0, "S+1"))},
 }
@@ -113,6 +114,8 @@ def _sizes(n_states: int, n_actions: int, plans: object, prior: object = None) -
     sizes["P-1"], sizes["C+1"] = sizes["P"] - 1, sizes["C"] + 1
     own = getattr(getattr(prior, "reward", None), "size", 0) > 0  # else empty: 0 x 0
     sizes["R"], sizes["RA"] = (n_states, n_actions) if own else (0, 0)
+    dead = getattr(getattr(prior, "dead", None), "size", 0) > 0  # else empty: 0 x 0
+    sizes["D"], sizes["DA"] = (n_states, n_actions) if dead else (0, 0)
     return sizes
 
 
@@ -133,6 +136,7 @@ def check_tables(t: Tables, p: Params) -> None:
         check_arrays(f"learner tables ({group})", getattr(t, group), TABLES[group], sizes)
     if p.kind == KIND_GDQ:
         _check_rewards("learner tables (prior): reward", t.prior.reward)
+        _check_chances("learner tables (prior): dead", t.prior.dead)
     if not np.array_equal(t.table.n_guide, t.table.guide.sum(axis=1)):
         raise ConfigError("learner tables: every state must let exploration draw some "
                           "action (guide), and n_guide count them")
@@ -198,6 +202,12 @@ def check_context(context: object, n_states: int | None = None,
     if context.prior is not None:
         check_arrays("TaskContext.prior", context.prior,
                      {"next_state": TABLES["prior"]["next_state"]}, _sizes(*size, None))
+        dead = getattr(context.prior, "dead", None)
+        if dead is not None:
+            if not isinstance(dead, np.ndarray) or dead.dtype != F8 or dead.shape != size:
+                raise ConfigError(f"TaskContext.prior.dead must be a float64 array of shape "
+                                  f"{size}")
+            _check_chances("TaskContext.prior.dead", dead)
     reward = getattr(context, "prior_reward", None)
     if reward is not None:
         if not getattr(context, "own_scale", False):
@@ -207,6 +217,12 @@ def check_context(context: object, n_states: int | None = None,
             raise ConfigError(f"TaskContext.prior_reward must be a float64 array of shape "
                               f"{size}")
         _check_rewards("TaskContext.prior_reward", reward)
+
+
+def _check_chances(where: str, chance: np.ndarray) -> None:
+    """Chances of dead ends the prior reads: each in [0, 1]."""
+    if chance.size and not ((chance >= 0.0) & (chance <= 1.0)).all():
+        raise ConfigError(f"{where} must hold probabilities, each in [0, 1]")
 
 
 def _check_rewards(where: str, reward: np.ndarray) -> None:

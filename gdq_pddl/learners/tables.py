@@ -124,6 +124,8 @@ class Prior(NamedTuple):
     reward: np.ndarray  # float64[S, A] on a problem's own scale, float64[0, 0] else: the
     # most the file pays for a trial of a pair (TaskContext.prior_reward), which a prior
     # step pays besides -Params.prior_cost
+    dead: np.ndarray  # float64[S, A] where the knowledge has dead ends, float64[0, 0] else:
+    # a pair's chance of one (PriorModel.dead), which the prior values as a dead end
 
 
 class Queue(NamedTuple):
@@ -222,24 +224,35 @@ def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
     """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
     DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
     short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost),
-    and, unless ``explore_loops``, loop-free as DARLING's plans are (:func:`_undone`).
-    The state's greedy actions always qualify."""
-    q, v, allowed, n_live = table.q, table.v, table.allowed, table.n_live[s]
-    floor = v[s] - p.explore_band * max(0.0, p.r_max - v[s])
-    loops = p.explore_loops > 0.0
+    and, unless ``explore_loops``, loop-free as DARLING's plans are (:func:`_undone`),
+    and never a move the knowledge says ends in a dead end for certain
+    (``prior.dead`` 1: DARLING's plans never do either). The state's greedy actions
+    always qualify."""
+    floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
     n = 0
-    for a in range(n_live):
-        if allowed[s, a] and q[s, a] >= floor and (
-                loops or q[s, a] >= v[s] or not _undone(table, prior, s, a)):
-            n += 1
+    for a in range(table.n_live[s]):
+        n += _near_best(table, prior, p, s, a, floor)
     k = rng.integers(0, n)
-    for a in range(n_live):
-        if allowed[s, a] and q[s, a] >= floor and (
-                loops or q[s, a] >= v[s] or not _undone(table, prior, s, a)):
+    for a in range(table.n_live[s]):
+        if _near_best(table, prior, p, s, a, floor):
             if k == 0:
                 return a
             k -= 1
     return 0  # unreachable: the greedy actions are counted
+
+
+@numba.njit(cache=True, inline="always")
+def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int, floor: float
+               ) -> bool:
+    """Whether :func:`_draw_near_best` may draw ``a`` in ``s``."""
+    q, v = table.q[s, a], table.v[s]
+    if not table.allowed[s, a] or q < floor:
+        return False
+    if q >= v:  # a greedy action
+        return True
+    if prior.dead.shape[0] and prior.dead[s, a] >= 1.0:
+        return False
+    return p.explore_loops > 0.0 or not _undone(table, prior, s, a)
 
 
 @numba.njit(cache=True)

@@ -41,8 +41,10 @@ MODEL_BASED = (KIND_DYNAQ, KIND_GDQ_PLANS, KIND_GDQ)
 _I0 = np.zeros(0, dtype=np.int64)
 NO_REWARD = np.zeros((0, 0))
 """An empty ``Prior.reward``: the prior charges a flat step cost (or there is no prior)."""
+NO_DEAD = np.zeros((0, 0))
+"""An empty ``Prior.dead``: the knowledge has no dead end (or there is no prior)."""
 NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
-                  np.zeros(1, dtype=np.int64), NO_REWARD),
+                  np.zeros(1, dtype=np.int64), NO_REWARD, NO_DEAD),
             Queue(_I0, _I0, np.zeros(0), np.zeros(1, dtype=np.int64)))
 """The default GDQ's prior and queue, for the other learners (never read or written)."""
 

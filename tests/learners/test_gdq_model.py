@@ -49,7 +49,8 @@ def known_pair(t, p, s, a):
 
 def hybrid(t, p, s, a):
     """gdq.hybrid_backup on a learner's tables."""
-    return gdq.hybrid_backup(t.table, t.model, t.prior.next_state, t.prior.reward, p, s, a)
+    return gdq.hybrid_backup(t.table, t.model, t.prior.next_state, t.prior.reward, t.prior.dead,
+                             p, s, a)
 
 
 def test_the_office_prior_follows_the_knowledge(ctx_c):

@@ -1,0 +1,154 @@
+"""GDQ's prior does not gamble on dead ends: of a PPDDL action's outcomes it keeps the one
+closest to the goal, but the knowledge's chance of an outcome from which the goal cannot
+be reached is valued as that dead end (``PriorModel.dead``,
+:func:`gdq_pddl.learners.warm_start.prior_backup`), enumerated and online alike.
+
+The domain below is derived by hand: from ``bank`` a rope bridge leads to the goal in two
+steps, but the first step drops the walker into the river, where nothing can be done,
+with probability 1/2; the ford is three sure steps; jumping is a dead end for certain. With a flat step cost c = 1,
+gamma = 0.95 and R_max = 20, the prior values the bridge at
+``1/2 (-1 + 0.95 * 20) + 1/2 D = -1`` (``D = -1 / 0.05 = -20``) and the ford at
+``-1 + 0.95 (-1 + 0.95 * 20) = 16.1``: GDQ's first move is into the ford, where a prior
+blind to the river took the bridge (valued 18)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from gdq_pddl.abstraction.prior import PriorModel, dead_chances
+from gdq_pddl.envs.online import OnlineInstance
+from gdq_pddl.envs.pddl_env import PDDLInstance
+from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import GDQ, GDQConfig, pddl_task_context
+from gdq_pddl.learners import gdq, warm_start
+from gdq_pddl.learners.online import online_context
+
+DOMAIN = """(define (domain crossing)
+  (:requirements :strips :probabilistic-effects)
+  (:predicates (at-bank) (on-bridge) (in-river) (ford-1) (ford-2) (across))
+  (:action step-on-bridge
+    :precondition (at-bank)
+    :effect (and (not (at-bank))
+                 (probabilistic 1/2 (on-bridge) 1/2 (in-river))))
+  (:action leave-bridge
+    :precondition (on-bridge)
+    :effect (and (not (on-bridge)) (across)))
+  (:action wade-in
+    :precondition (at-bank)
+    :effect (and (not (at-bank)) (ford-1)))
+  (:action wade-on
+    :precondition (ford-1)
+    :effect (and (not (ford-1)) (ford-2)))
+  (:action wade-out
+    :precondition (ford-2)
+    :effect (and (not (ford-2)) (across)))
+  (:action jump
+    :precondition (at-bank)
+    :effect (and (not (at-bank)) (in-river))))
+"""
+
+PROBLEM = """(define (problem cross) (:domain crossing)
+  (:init (at-bank))
+  (:goal (across)))
+"""
+
+
+@pytest.fixture(scope="module")
+def crossing(tmp_path_factory) -> PDDLInstance:
+    folder = tmp_path_factory.mktemp("crossing")
+    (folder / "domain.pddl").write_text(DOMAIN)
+    (folder / "problem.pddl").write_text(PROBLEM)
+    return PDDLInstance.from_files(folder / "domain.pddl", folder / "problem.pddl")
+
+
+def _column(instance, row: int, name: str) -> int:
+    names = [instance.action_name(int(a)) for a in instance.columns[row] if a >= 0]
+    return [n.strip("()").split()[0] for n in names].index(name)
+
+
+def test_dead_chances_add_up_the_outcomes_into_dead_ends() -> None:
+    # pair 0: 0.3 into dead state 2, 0.7 live; pair 1: every outcome dead; pair 2: none
+    ptr = np.array([0, 2, 4, 4])
+    prob = np.array([0.3, 0.7, 0.5, 0.5])
+    nxt = np.array([2, 1, 2, 3])
+    dead = np.array([False, False, True, True])
+    assert dead_chances(ptr, prob, nxt, dead).tolist() == [0.3, 1.0, 0.0]
+
+
+def test_the_enumerated_prior_keeps_the_chance_of_the_river(crossing: PDDLInstance) -> None:
+    prior = crossing.prior
+    s0 = crossing.learner_start
+    bridge, ford = _column(crossing, s0, "step-on-bridge"), _column(crossing, s0, "wade-in")
+    assert prior.dead is not None
+    assert prior.dead[s0, bridge] == pytest.approx(0.5)
+    assert prior.dead[s0, ford] == 0.0
+    assert prior.dead[s0, _column(crossing, s0, "jump")] == 1.0
+    # in the river nothing can be done: its row's one column (no change) is a dead end
+    river = [s for s in range(crossing.n_states) if "(in-river)" in crossing.atoms(s)]
+    assert prior.dead[river, 0].tolist() == [1.0]
+    others = np.setdiff1d(np.arange(crossing.n_states), [s0, *river])
+    assert (prior.dead[others] == 0).all()
+    # the optimism stays: the bridge's prior successor is the walker on the bridge
+    on_bridge = int(prior.next_state[s0, bridge])
+    assert "(on-bridge)" in crossing.atoms(on_bridge)
+
+
+def test_gdq_values_the_bridge_by_hand_and_takes_the_ford(crossing: PDDLInstance) -> None:
+    ctx = pddl_task_context(crossing)
+    learner = GDQ(ctx)
+    s0 = ctx.s0
+    bridge, ford = _column(crossing, s0, "step-on-bridge"), _column(crossing, s0, "wade-in")
+    assert learner.q[s0, bridge] == pytest.approx(-1.0)
+    assert learner.q[s0, ford] == pytest.approx(16.1)
+    assert learner.v[s0] == pytest.approx(16.1)
+    # blind to the river, the prior took the bridge
+    blind = GDQ(replace(ctx, prior=PriorModel(ctx.prior.next_state)))
+    assert blind.q[s0, bridge] == pytest.approx(18.0)
+    assert int(np.argmax(blind.q[s0])) == bridge
+
+
+def test_the_warm_start_is_the_fixed_point_with_dead_ends(crossing: PDDLInstance) -> None:
+    """Policy iteration on the prior gives OptInit's values: one sweep confirms them."""
+    learner = GDQ(pddl_task_context(crossing))
+    t, p = learner.tables, learner.params
+    init = warm_start.prior_values(t.table, t.prior, p)
+    assert np.allclose(init, learner.v, atol=1e-9)
+    assert gdq.value_iteration(t.table, t.model, t.prior, t.queue, p, 1e-9, 1000) == 1
+
+
+def test_online_exploration_reads_the_same_chance(crossing: PDDLInstance) -> None:
+    online = OnlineInstance(crossing, dynamics=crossing.dynamics)
+    r0 = online.learner_start
+    bridge = _column(online, r0, "step-on-bridge")
+    ford = _column(online, r0, "wade-in")
+    assert online.prior.dead[r0, bridge] == pytest.approx(0.5)
+    assert online.prior.dead[r0, ford] == 0.0
+    learner = GDQ(online_context(online))
+    assert learner.q[r0, bridge] < learner.q[r0, ford]
+
+
+@pytest.mark.parametrize("knows_dead_ends", [True, False])
+def test_exploring_never_jumps_into_a_certain_dead_end(crossing: PDDLInstance,
+                                                       knows_dead_ends: bool) -> None:
+    """Every step explores (epsilon 1) with a band wide enough for every move from the
+    bank; the jump is drawn only by a prior blind to dead ends, the bridge either way."""
+    ctx = pddl_task_context(crossing)
+    if not knows_dead_ends:
+        ctx = replace(ctx, prior=PriorModel(ctx.prior.next_state))
+    learner = GDQ(ctx, GDQConfig(epsilon=1.0, plan_tolerance=30.0))
+    rng = np.random.default_rng(0)
+    drawn = {crossing.action_name(learner.act(ctx.s0, rng)).strip("()")
+             for _ in range(300)}
+    assert {"wade-in", "step-on-bridge"} <= drawn
+    assert ("jump" in drawn) == (not knows_dead_ends)
+
+
+def test_a_chance_outside_zero_one_is_refused(crossing: PDDLInstance) -> None:
+    ctx = pddl_task_context(crossing)
+    bad = ctx.prior.dead.copy()
+    bad[ctx.s0, 0] = 1.5
+    with pytest.raises(ConfigError, match="dead"):
+        GDQ(replace(ctx, prior=replace(ctx.prior, dead=bad)))
