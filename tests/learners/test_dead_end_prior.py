@@ -5,8 +5,8 @@ be reached is valued as that dead end (``PriorModel.dead``,
 
 The domain below is derived by hand: from ``bank`` a rope bridge leads to the goal in two
 steps, but the first step drops the walker into the river, where nothing can be done,
-with probability 1/2; the ford is three sure steps; jumping is a dead end for certain. With a flat step cost c = 1,
-gamma = 0.95 and R_max = 20, the prior values the bridge at
+with probability 1/2; the ford is three sure steps; jumping is a dead end for certain.
+With a flat step cost c = 1, gamma = 0.95 and R_max = 20, the prior values the bridge at
 ``1/2 (-1 + 0.95 * 20) + 1/2 D = -1`` (``D = -1 / 0.05 = -20``) and the ford at
 ``-1 + 0.95 (-1 + 0.95 * 20) = 16.1``: GDQ's first move is into the ford, where a prior
 blind to the river took the bridge (valued 18)."""
@@ -22,8 +22,7 @@ from gdq_pddl.abstraction.prior import PriorModel, dead_chances
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.learners import GDQ, GDQConfig, pddl_task_context
-from gdq_pddl.learners import gdq, warm_start
+from gdq_pddl.learners import GDQ, GDQConfig, gdq, pddl_task_context, warm_start
 from gdq_pddl.learners.online import online_context
 
 DOMAIN = """(define (domain crossing)
