@@ -8,7 +8,7 @@ its optimism does not gamble on."""
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -147,6 +147,20 @@ def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
     chance = np.bincount(pair, weights=np.where(dead, prob, 0.0), minlength=n_pairs)
     live = np.bincount(pair, weights=~dead, minlength=n_pairs) > 0
     return np.where(live, np.minimum(chance, 1.0), (np.diff(ptr) > 0).astype(np.float64))
+
+
+def with_dead_chances(prior: PriorModel, ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
+                      dead_state: np.ndarray) -> PriorModel:
+    """``prior`` with :func:`dead_chances` of a model whose pairs are the prior's, state
+    by state (``ptr`` has a pair per prior entry); unchanged where no pair can end in a
+    dead end."""
+    if len(ptr) != prior.next_state.size + 1:
+        raise AbstractionError(f"a model of {len(ptr) - 1} pairs gives no chances for a "
+                               f"prior of {prior.n_states} x {prior.n_actions}")
+    dead = dead_chances(ptr, prob, nxt, dead_state)
+    if not dead.any():
+        return prior
+    return replace(prior, dead=dead.reshape(prior.next_state.shape))
 
 
 def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,

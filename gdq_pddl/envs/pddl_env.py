@@ -32,7 +32,7 @@ import numpy as np
 from gdq_pddl.abstraction import PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import graph_action_mask
 from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
-from gdq_pddl.abstraction.prior import PriorModel, dead_chances, prior_from_graph
+from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph, with_dead_chances
 from gdq_pddl.dynamics import CostDist, Dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import StateSpace, compile_true_model
@@ -238,15 +238,8 @@ class PDDLInstance:
         prior = prior_from_graph(self.graph)
         if not self.ppddl:
             return prior
-        m = self.model
-        if not np.array_equal(m.obs_of, np.arange(self.n_states)) or \
-                m.acts.shape != prior.next_state.shape:
-            raise AssertionError("a PDDL problem's true model is over its graph's states "
-                                 "and applicable ground actions")
-        dead = dead_chances(m.ptr, m.prob, m.next, self.graph.distances < 0)
-        if not dead.any():  # no dead end in reach of any pair: nothing to keep
-            return prior
-        return replace(prior, dead=dead.reshape(prior.next_state.shape))
+        m = self.model  # over the graph's states and their applicable ground actions
+        return with_dead_chances(prior, m.ptr, m.prob, m.next, self.graph.distances < 0)
 
     @cached_property
     def _tables(self) -> dict[tuple[str, float], PlanTable]:
