@@ -122,7 +122,8 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
         # a file saved before the prior knew the file's rewards has no prior.reward: the
         # context's (empty on the goal scale, where nothing else changed)
         loaded.setdefault("prior.reward", learner.tables.prior.reward)
-        # nor one saved before the prior knew the chances of dead ends prior.dead
+        # and one saved before the prior kept chances of dead ends has no prior.dead: the
+        # context's (empty where the knowledge has no dead end)
         loaded.setdefault("prior.dead", learner.tables.prior.dead)
         tables = Tables(*(type(group)(*(loaded[f"{g}.{field}"] for field in group._fields))
                           for g, group in zip(Tables._fields, learner.tables, strict=True)))

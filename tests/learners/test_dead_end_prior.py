@@ -24,6 +24,7 @@ from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import GDQ, GDQConfig, gdq, pddl_task_context, warm_start
 from gdq_pddl.learners.online import online_context
+from gdq_pddl.learners.saving import load_learner, save_learner
 
 DOMAIN = """(define (domain crossing)
   (:requirements :strips :probabilistic-effects)
@@ -143,6 +144,18 @@ def test_exploring_never_jumps_into_a_certain_dead_end(crossing: PDDLInstance,
              for _ in range(300)}
     assert {"wade-in", "step-on-bridge"} <= drawn
     assert ("jump" in drawn) == (not knows_dead_ends)
+
+
+def test_the_chances_are_saved_and_a_file_from_before_them_loads(crossing: PDDLInstance,
+                                                                  tmp_path) -> None:
+    ctx = pddl_task_context(crossing)
+    learner = GDQ(ctx)
+    path, old = tmp_path / "g.npz", tmp_path / "old.npz"
+    save_learner(path, learner)
+    assert np.array_equal(load_learner(path, ctx).tables.prior.dead, ctx.prior.dead)
+    with np.load(path, allow_pickle=False) as z:  # saved before the prior kept chances
+        np.savez(old, **{k: z[k] for k in z.files if k != "prior.dead"})
+    assert np.array_equal(load_learner(old, ctx).tables.prior.dead, ctx.prior.dead)
 
 
 def test_a_chance_outside_zero_one_is_refused(crossing: PDDLInstance) -> None:
