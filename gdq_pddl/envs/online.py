@@ -149,7 +149,8 @@ class OnlineInstance:
 
     @property
     def prior(self) -> PriorModel:
-        return PriorModel(self.prior_next, self._prior_dead)
+        return PriorModel(self.prior_next,
+                          self._prior_dead if self.base.knows_dead_ends else None)
 
     @cached_property
     def model(self) -> ModelArrays:
@@ -391,7 +392,9 @@ class OnlineInstance:
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
             self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
         m, states = self.step_model(x)
-        self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next, self._dead(states, d))
+        if self.base.knows_dead_ends:
+            self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next,
+                                                   self._dead(states, d))
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]

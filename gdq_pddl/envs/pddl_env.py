@@ -125,6 +125,13 @@ class PDDLInstance:
         """What the planner knows of a PPDDL domain (None: a STRIPS domain)."""
         return getattr(self.problem.learner_task, "determinisation", None)
 
+    @property
+    def knows_dead_ends(self) -> bool:
+        """Whether a state from which the knowledge cannot reach the goal is a dead end in
+        reality: a PPDDL domain known by all its outcomes (most-likely knowledge lacks
+        ways that reality has; a STRIPS domain's reality is its dynamics file)."""
+        return self.ppddl and self.determinisation == DETERMINISATIONS[0]
+
     @cached_property
     def reward_scale(self) -> str:
         """``"problem"``: the file's own rewards, as the IPPC scores them (metric ``maximize
@@ -234,9 +241,10 @@ class PDDLInstance:
     def prior(self) -> PriorModel:
         """The knowledge's deterministic model over the graph (its ground actions); of a
         PPDDL domain, with each pair's chance of a dead end (:attr:`PriorModel.dead`, by
-        the file's outcomes, which the true model samples)."""
+        the file's outcomes, which the true model samples) where the knowledge is every
+        outcome (:attr:`knows_dead_ends`)."""
         prior = prior_from_graph(self.graph)
-        if not self.ppddl:
+        if not self.knows_dead_ends:
             return prior
         m = self.model  # over the graph's states and their applicable ground actions
         return with_dead_chances(prior, m.ptr, m.prob, m.next, self.graph.distances < 0)

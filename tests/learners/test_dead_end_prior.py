@@ -158,6 +158,17 @@ def test_the_chances_are_saved_and_a_file_from_before_them_loads(crossing: PDDLI
     assert np.array_equal(load_learner(old, ctx).tables.prior.dead, ctx.prior.dead)
 
 
+def test_most_likely_knowledge_has_no_dead_ends_to_keep(tmp_path) -> None:
+    """Knowing each action's most likely outcome alone, a state the knowledge cannot lead
+    to the goal may well reach it in reality: no chances are kept, enumerated or online."""
+    (tmp_path / "d.pddl").write_text(DOMAIN)
+    (tmp_path / "p.pddl").write_text(PROBLEM)
+    likely = PDDLInstance.from_files(tmp_path / "d.pddl", tmp_path / "p.pddl",
+                                     determinisation="most-likely")
+    assert not likely.knows_dead_ends and likely.prior.dead is None
+    assert OnlineInstance(likely, dynamics=likely.dynamics).prior.dead is None
+
+
 def test_a_chance_outside_zero_one_is_refused(crossing: PDDLInstance) -> None:
     ctx = pddl_task_context(crossing)
     bad = ctx.prior.dead.copy()
