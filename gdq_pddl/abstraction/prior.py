@@ -135,6 +135,39 @@ def prior_from_graph(graph) -> PriorModel:
     return PriorModel(nxt)
 
 
+def dead_end_states(graph, start: int, step_limit: int) -> np.ndarray:
+    """bool[n_states]: the states of a state graph (a PPDDL problem known by all its
+    outcomes) that no episode from ``start`` can pass through on its way to the goal:
+    those that cannot reach the goal, and those whose fewest actions from ``start`` and
+    fewest to the goal add up to more than the ``step_limit`` (every episode through one
+    runs out of steps first; both counts are the knowledge's, lower bounds on reality's).
+    Goals are never dead ends."""
+    dist = graph.distances
+    dead = dist < 0
+    if step_limit >= 2 * graph.n_states:  # no two paths add up to that: nothing runs out
+        return dead
+    came = distances_from(graph, start)
+    dead |= (came >= 0) & (dist > 0) & (came + dist > step_limit)
+    return dead
+
+
+def distances_from(graph, start: int) -> np.ndarray:
+    """int64[n_states]: the fewest edges of a state graph from ``start`` to each state
+    (breadth-first, a level at a time); -1 where it cannot reach it."""
+    ptr, nxt = graph.edge_ptr, graph.edge_next
+    dist = np.full(graph.n_states, -1, dtype=np.int64)
+    dist[start] = 0
+    level, d = np.array([start], dtype=np.int64), 0
+    while len(level):
+        d += 1
+        lo, n = ptr[level], ptr[level + 1] - ptr[level]
+        first = np.cumsum(n) - n  # each state's edges, laid end to end
+        step = nxt[np.arange(int(n.sum())) - np.repeat(first - lo, n)]
+        level = np.unique(step[dist[step] < 0])
+        dist[level] = d
+    return dist
+
+
 def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
                  dead_state: np.ndarray) -> np.ndarray:
     """float64[n_pairs]: :attr:`PriorModel.dead` of the pairs of a model in CSR form

@@ -32,7 +32,12 @@ import numpy as np
 from gdq_pddl.abstraction import PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import graph_action_mask
 from gdq_pddl.abstraction.pddl import PDDLAbstraction, graph_plan_table
-from gdq_pddl.abstraction.prior import PriorModel, prior_from_graph, with_dead_chances
+from gdq_pddl.abstraction.prior import (
+    PriorModel,
+    dead_end_states,
+    prior_from_graph,
+    with_dead_chances,
+)
 from gdq_pddl.dynamics import CostDist, Dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.model import StateSpace, compile_true_model
@@ -241,13 +246,15 @@ class PDDLInstance:
     def prior(self) -> PriorModel:
         """The knowledge's deterministic model over the graph (its ground actions); of a
         PPDDL domain, with each pair's chance of a dead end (:attr:`PriorModel.dead`, by
-        the file's outcomes, which the true model samples) where the knowledge is every
-        outcome (:attr:`knows_dead_ends`)."""
+        the file's outcomes, which the true model samples; a dead end: no way to the goal,
+        or none that fits the step limit from the start, :func:`dead_end_states`) where
+        the knowledge is every outcome (:attr:`knows_dead_ends`)."""
         prior = prior_from_graph(self.graph)
         if not self.knows_dead_ends:
             return prior
         m = self.model  # over the graph's states and their applicable ground actions
-        return with_dead_chances(prior, m.ptr, m.prob, m.next, self.graph.distances < 0)
+        dead = dead_end_states(self.graph, self.start_state, int(self.dynamics.step_limit))
+        return with_dead_chances(prior, m.ptr, m.prob, m.next, dead)
 
     @cached_property
     def _tables(self) -> dict[tuple[str, float], PlanTable]:
@@ -345,6 +352,7 @@ class PDDLInstance:
             raise ConfigError(f"reset options: start {start!r}: {why}")
         new = copy.copy(self)  # shares the graph, model and plan tables
         object.__setattr__(new, "start_state", int(s))
+        new.__dict__.pop("prior", None)  # its dead ends depend on the start
         return new
 
     def info(self, pos: int) -> dict[str, Any]:

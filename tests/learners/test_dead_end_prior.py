@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gdq_pddl.abstraction.prior import PriorModel, dead_chances
+from gdq_pddl.abstraction.prior import PriorModel, dead_chances, distances_from
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import ConfigError
@@ -156,6 +156,46 @@ def test_the_chances_are_saved_and_a_file_from_before_them_loads(crossing: PDDLI
     with np.load(path, allow_pickle=False) as z:  # saved before the prior kept chances
         np.savez(old, **{k: z[k] for k in z.files if k != "prior.dead"})
     assert np.array_equal(load_learner(old, ctx).tables.prior.dead, ctx.prior.dead)
+
+
+@pytest.mark.parametrize("step_limit,first", [(3, "wade-in"), (2, "step-on-bridge")])
+def test_a_way_that_does_not_fit_the_step_limit_is_a_dead_end(tmp_path, step_limit: int,
+                                                              first: str) -> None:
+    """With two steps, the ford (three) cannot reach the goal in time from the bank: its
+    states are dead ends, wading in is one for certain, and the bridge is GDQ's way."""
+    for name, text in (("d.pddl", DOMAIN), ("p.pddl", PROBLEM)):
+        (tmp_path / name).write_text(text)
+    (tmp_path / "r.toml").write_text(f"[dynamics]\nname = \"r\"\nstep_limit = {step_limit}\n")
+    inst = PDDLInstance.from_files(tmp_path / "d.pddl", tmp_path / "p.pddl", tmp_path / "r.toml")
+    s0 = inst.learner_start
+    wade = inst.prior.dead[s0, _column(inst, s0, "wade-in")]
+    assert wade == (1.0 if step_limit == 2 else 0.0)
+    learner = GDQ(pddl_task_context(inst))
+    best = int(np.argmax(np.where(learner.tables.table.allowed[s0], learner.q[s0], -np.inf)))
+    assert best == _column(inst, s0, first)
+
+
+def test_the_dead_ends_of_the_step_limit_are_the_starts_own(tmp_path) -> None:
+    """Started on the ford, two steps reach the goal: a restarted instance keeps no dead
+    end of the bank's."""
+    for name, text in (("d.pddl", DOMAIN), ("p.pddl", PROBLEM)):
+        (tmp_path / name).write_text(text)
+    (tmp_path / "r.toml").write_text("[dynamics]\nname = \"r\"\nstep_limit = 2\n")
+    bank = PDDLInstance.from_files(tmp_path / "d.pddl", tmp_path / "p.pddl", tmp_path / "r.toml")
+    ford = bank.restarted(start="(ford-1)")
+    s = ford.learner_start
+    wade_on = _column(ford, s, "wade-on")
+    assert bank.prior.dead[s, wade_on] == 1.0  # from the bank, ford-2 is too far
+    assert ford.prior.dead is None or ford.prior.dead[s, wade_on] == 0.0
+    assert bank.prior.dead[s, wade_on] == 1.0  # the bank's own prior is untouched
+
+
+def test_distances_from_a_state_by_breadth_first_search(crossing: PDDLInstance) -> None:
+    came = distances_from(crossing.graph, crossing.learner_start)
+    by_atom = {atom: int(came[s]) for s in range(crossing.n_states)
+               for atom in crossing.atoms(s)}
+    assert by_atom == {"(at-bank)": 0, "(on-bridge)": 1, "(in-river)": 1, "(ford-1)": 1,
+                       "(ford-2)": 2, "(across)": 2}
 
 
 def test_most_likely_knowledge_has_no_dead_ends_to_keep(tmp_path) -> None:
