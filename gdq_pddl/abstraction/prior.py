@@ -32,8 +32,9 @@ class PriorModel:
 
     dead: np.ndarray | None = None
     """float64[n_states, n_actions] or None: the knowledge's probability that the pair
-    ends in a *dead end*, a state from which the goal cannot be reached (1 where every
-    outcome is one: the prior successor is one then too). None: the knowledge never says
+    ends in a *dead end*, a state from which the goal cannot be reached (or not within
+    the step limit: :func:`dead_end_states`; 1 where every outcome is one: the prior
+    successor is one then too). None: the knowledge never says
     so (a deterministic one: the office, a STRIPS domain). ``docs/decisions.md``, "the
     prior does not gamble on dead ends"."""
 

@@ -14,9 +14,13 @@ blind to the river took the bridge (valued 18)."""
 from __future__ import annotations
 
 from dataclasses import replace
+from types import SimpleNamespace
 
+import networkx as nx
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from gdq_pddl.abstraction.prior import PriorModel, dead_chances, distances_from
 from gdq_pddl.envs.online import OnlineInstance
@@ -196,6 +200,24 @@ def test_distances_from_a_state_by_breadth_first_search(crossing: PDDLInstance) 
                for atom in crossing.atoms(s)}
     assert by_atom == {"(at-bank)": 0, "(on-bridge)": 1, "(in-river)": 1, "(ford-1)": 1,
                        "(ford-2)": 2, "(across)": 2}
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 12).flatmap(lambda n: st.tuples(
+    st.just(n), st.lists(st.tuples(st.integers(0, n - 1), st.integers(0, n - 1)),
+                         max_size=3 * n))))
+def test_distances_from_are_networkx_shortest_paths(graph: tuple) -> None:
+    """On random graphs, in the state graph's CSR form (edges grouped by state)."""
+    n, edges = graph
+    edges = sorted(set(edges))
+    ptr = np.searchsorted([a for a, _ in edges], np.arange(n + 1))
+    csr = SimpleNamespace(n_states=n, edge_ptr=ptr,
+                          edge_next=np.array([b for _, b in edges], dtype=np.int64))
+    g = nx.DiGraph()
+    g.add_nodes_from(range(n))
+    g.add_edges_from(edges)
+    want = nx.single_source_shortest_path_length(g, 0)
+    assert distances_from(csr, 0).tolist() == [want.get(x, -1) for x in range(n)]
 
 
 def test_most_likely_knowledge_has_no_dead_ends_to_keep(tmp_path) -> None:
