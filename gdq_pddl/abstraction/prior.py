@@ -175,12 +175,22 @@ def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
     (outcomes of pair ``i`` are ``ptr[i]:ptr[i + 1]``, with probabilities ``prob`` and
     next states ``nxt``): the probability of the outcomes whose next state is a dead end
     (``dead_state``, bool by state); 1 where every outcome is one, 0 where there is none."""
-    n_pairs = len(ptr) - 1
-    pair = np.repeat(np.arange(n_pairs), np.diff(ptr))
-    dead = dead_state[nxt]
-    chance = np.bincount(pair, weights=np.where(dead, prob, 0.0), minlength=n_pairs)
-    live = np.bincount(pair, weights=~dead, minlength=n_pairs) > 0
-    return np.where(live, np.minimum(chance, 1.0), (np.diff(ptr) > 0).astype(np.float64))
+    return _dead_chances(ptr, prob, nxt, dead_state)
+
+
+@numba.njit(cache=True)
+def _dead_chances(ptr, prob, nxt, dead_state):
+    out = np.zeros(len(ptr) - 1)  # a loop: no array per outcome (a model has tens of millions)
+    for i in range(len(ptr) - 1):
+        chance, live = 0.0, False
+        for k in range(ptr[i], ptr[i + 1]):
+            if dead_state[nxt[k]]:
+                chance += prob[k]
+            else:
+                live = True
+        if ptr[i + 1] > ptr[i]:
+            out[i] = min(chance, 1.0) if live else 1.0
+    return out
 
 
 def with_dead_chances(prior: PriorModel, ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
@@ -191,6 +201,8 @@ def with_dead_chances(prior: PriorModel, ptr: np.ndarray, prob: np.ndarray, nxt:
     if len(ptr) != prior.next_state.size + 1:
         raise AbstractionError(f"a model of {len(ptr) - 1} pairs gives no chances for a "
                                f"prior of {prior.n_states} x {prior.n_actions}")
+    if not dead_state.any():
+        return prior
     dead = dead_chances(ptr, prob, nxt, dead_state)
     if not dead.any():
         return prior

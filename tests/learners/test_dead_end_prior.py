@@ -82,6 +82,19 @@ def test_dead_chances_add_up_the_outcomes_into_dead_ends() -> None:
     assert dead_chances(ptr, prob, nxt, dead).tolist() == [0.3, 1.0, 0.0]
 
 
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(st.tuples(st.floats(0.0, 1.0), st.integers(0, 5)), max_size=4),
+                min_size=1, max_size=8), st.lists(st.booleans(), min_size=6, max_size=6))
+def test_dead_chances_are_the_sums_over_the_dead_outcomes(pairs: list, dead: list) -> None:
+    ptr = np.cumsum([0] + [len(p) for p in pairs])
+    prob = np.array([q for p in pairs for q, _ in p], dtype=np.float64)
+    nxt = np.array([x for p in pairs for _, x in p], dtype=np.int64)
+    want = [0.0 if not p else 1.0 if all(dead[x] for _, x in p) else
+            min(1.0, sum(q for q, x in p if dead[x])) for p in pairs]
+    got = dead_chances(ptr, prob, nxt, np.array(dead))
+    assert np.allclose(got, want, rtol=0, atol=1e-12)
+
+
 def test_the_enumerated_prior_keeps_the_chance_of_the_river(crossing: PDDLInstance) -> None:
     prior = crossing.prior
     s0 = crossing.learner_start
