@@ -15,6 +15,7 @@ import numpy as np
 
 from gdq_pddl.errors import AbstractionError
 from gdq_pddl.pddl.offered import column_of
+from gdq_pddl.pddl.reachable import distances_from
 
 NO_CHANGE = -1
 """``PriorModel.next_state`` of a knowledge-inapplicable pair."""
@@ -150,23 +151,6 @@ def dead_end_states(graph, start: int, step_limit: int) -> np.ndarray:
     came = distances_from(graph, start)
     dead |= (came >= 0) & (dist > 0) & (came + dist > step_limit)
     return dead
-
-
-def distances_from(graph, start: int) -> np.ndarray:
-    """int64[n_states]: the fewest edges of a state graph from ``start`` to each state
-    (breadth-first, a level at a time); -1 where it cannot reach it."""
-    ptr, nxt = graph.edge_ptr, graph.edge_next
-    dist = np.full(graph.n_states, -1, dtype=np.int64)
-    dist[start] = 0
-    level, d = np.array([start], dtype=np.int64), 0
-    while len(level):
-        d += 1
-        lo, n = ptr[level], ptr[level + 1] - ptr[level]
-        first = np.cumsum(n) - n  # each state's edges, laid end to end
-        step = nxt[np.arange(int(n.sum())) - np.repeat(first - lo, n)]
-        level = np.unique(step[dist[step] < 0])
-        dist[level] = d
-    return dist
 
 
 def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,

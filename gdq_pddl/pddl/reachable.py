@@ -410,17 +410,28 @@ def goal_distances(graph: StateGraph) -> np.ndarray:
     order = np.argsort(graph.edge_next, kind="stable")
     pred_ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(graph.edge_next, minlength=n), out=pred_ptr[1:])
-    preds = src[order]
+    return _breadth_first(pred_ptr, src[order], np.flatnonzero(graph.is_goal), n)
+
+
+def distances_from(graph: StateGraph, start: int) -> np.ndarray:
+    """Forward BFS from ``start``: the fewest edges to every state (-1: not reachable)."""
+    return _breadth_first(graph.edge_ptr, graph.edge_next,
+                          np.array([start], dtype=np.int64), graph.n_states)
+
+
+def _breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
+                   n: int) -> np.ndarray:
+    """Levels of a breadth-first search from ``frontier`` over the CSR edges ``ptr``,
+    ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``), a level at a time."""
     dist = np.full(n, -1, dtype=np.int64)
-    frontier = np.flatnonzero(graph.is_goal)
     dist[frontier] = 0
     d = 0
     while len(frontier):
         d += 1
-        count = pred_ptr[frontier + 1] - pred_ptr[frontier]
-        at = np.repeat(pred_ptr[frontier] - np.cumsum(count) + count, count) + \
-            np.arange(count.sum())  # the predecessors of every frontier state
-        cand = distinct(preds[at])
+        count = ptr[frontier + 1] - ptr[frontier]
+        at = np.repeat(ptr[frontier] - np.cumsum(count) + count, count) + \
+            np.arange(count.sum())  # the edges of every frontier state
+        cand = distinct(to[at])
         cand = cand[dist[cand] < 0]
         dist[cand] = d
         frontier = cand

@@ -22,13 +22,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gdq_pddl.abstraction.prior import PriorModel, dead_chances, distances_from
+from gdq_pddl.abstraction.prior import PriorModel, dead_chances
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import GDQ, GDQConfig, gdq, pddl_task_context, warm_start
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.learners.saving import load_learner, save_learner
+from gdq_pddl.pddl.reachable import distances_from
 
 DOMAIN = """(define (domain crossing)
   (:requirements :strips :probabilistic-effects)
