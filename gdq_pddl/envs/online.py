@@ -392,22 +392,13 @@ class OnlineInstance:
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
             self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
         m, states = self.step_model(x)
-        if self.base.knows_dead_ends:
-            self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next,
-                                                   self._dead(states, d))
+        if self.base.knows_dead_ends:  # dead ends as the distances above say (-1)
+            dead = np.isin(states, nxt[d_to < 0])
+            dead[0] = d < 0  # x itself
+            self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next, dead)
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
-
-    def _dead(self, states: np.ndarray, d: int) -> np.ndarray:
-        """bool by graph state of ``states`` (the first the state just expanded, whose
-        distance is ``d``): dead ends as far as is known, a reached state's one-step
-        lookahead and a frontier state's estimate (the relaxation cannot reach the goal)."""
-        rows = self.row_of_state[states]
-        own = np.where(rows >= 0, self.dist[np.maximum(rows, 0)] < 0,
-                       (self.h_of[states] == INFINITE) & ~self.graph.is_goal[states])
-        own[0] = d < 0
-        return own
 
 
 def _not_enumerated():
