@@ -14,8 +14,8 @@ import numba
 import numpy as np
 
 from gdq_pddl.errors import AbstractionError
+from gdq_pddl.pddl.distances import distances_from
 from gdq_pddl.pddl.offered import column_of
-from gdq_pddl.pddl.reachable import distances_from
 
 NO_CHANGE = -1
 """``PriorModel.next_state`` of a knowledge-inapplicable pair."""

@@ -20,7 +20,7 @@ from gdq_pddl.envs.model import per_object
 from gdq_pddl.envs.solve import TIE_TOLERANCE, expected_costs, resolve_world_task
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.limits import check_memory
-from gdq_pddl.pddl.reachable import distinct
+from gdq_pddl.pddl.distances import distinct
 from gdq_pddl.world_types import Task, World
 
 

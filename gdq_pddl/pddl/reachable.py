@@ -18,9 +18,10 @@ state's applicable ground actions are the graph's :attr:`StateGraph.offered` tab
 The enumeration stops with an error once the tables over states x offered actions would
 pass the budget (:data:`TABLE_BUDGET`, :func:`table_budget`, :func:`state_cap`).
 
-:func:`goal_distances` is one backward BFS over that graph: every state's shortest
-number of actions to the goal (-1: the goal cannot be reached from it). Together they
-give every state's shortest plans without calling a planner once per state.
+:func:`~gdq_pddl.pddl.distances.goal_distances` is one backward BFS over that graph:
+every state's shortest number of actions to the goal (-1: the goal cannot be reached
+from it). Together they give every state's shortest plans without calling a planner
+once per state.
 
 Reality's outcomes of each (state, offered action) pair of a PPDDL task are in
 :mod:`gdq_pddl.pddl.outcomes`.
@@ -35,6 +36,7 @@ import numpy as np
 
 from gdq_pddl.errors import TooManyStates
 from gdq_pddl.limits import human_bytes, physical_memory, slow_progress
+from gdq_pddl.pddl.distances import goal_distances
 from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
     KeyIndex,
@@ -394,45 +396,3 @@ def _row_block(applicable: list[tuple[int, np.ndarray]], n_rows: int,
         block[at, count[at]] = k
         count[at] += 1
     return block
-
-
-def distinct(a: np.ndarray) -> np.ndarray:
-    """``np.unique(a)`` of an int array by a stable sort (np.unique's hashing takes
-    minutes on 10**7 distinct keys)."""
-    a = np.sort(a, kind="stable")
-    return a[np.r_[True, a[1:] != a[:-1]]] if len(a) else a
-
-
-def goal_distances(graph: StateGraph) -> np.ndarray:
-    """Backward BFS from the goal states: shortest plan length of every state (-1: none)."""
-    n = graph.n_states
-    src = np.repeat(np.arange(n), np.diff(graph.edge_ptr))
-    order = np.argsort(graph.edge_next, kind="stable")
-    pred_ptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(graph.edge_next, minlength=n), out=pred_ptr[1:])
-    return _breadth_first(pred_ptr, src[order], np.flatnonzero(graph.is_goal), n)
-
-
-def distances_from(graph: StateGraph, start: int) -> np.ndarray:
-    """Forward BFS from ``start``: the fewest edges to every state (-1: not reachable)."""
-    return _breadth_first(graph.edge_ptr, graph.edge_next,
-                          np.array([start], dtype=np.int64), graph.n_states)
-
-
-def _breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
-                   n: int) -> np.ndarray:
-    """Levels of a breadth-first search from ``frontier`` over the CSR edges ``ptr``,
-    ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``), a level at a time."""
-    dist = np.full(n, -1, dtype=np.int64)
-    dist[frontier] = 0
-    d = 0
-    while len(frontier):
-        d += 1
-        count = ptr[frontier + 1] - ptr[frontier]
-        at = np.repeat(ptr[frontier] - np.cumsum(count) + count, count) + \
-            np.arange(count.sum())  # the edges of every frontier state
-        cand = distinct(to[at])
-        cand = cand[dist[cand] < 0]
-        dist[cand] = d
-        frontier = cand
-    return dist

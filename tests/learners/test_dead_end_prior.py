@@ -29,7 +29,7 @@ from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import GDQ, GDQConfig, gdq, pddl_task_context, warm_start
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.learners.saving import load_learner, save_learner
-from gdq_pddl.pddl.reachable import distances_from
+from gdq_pddl.pddl.distances import distances_from
 
 DOMAIN = """(define (domain crossing)
   (:requirements :strips :probabilistic-effects)

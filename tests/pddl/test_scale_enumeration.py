@@ -13,8 +13,9 @@ from gdq_pddl.envs.pddl_env import load_instance
 from gdq_pddl.errors import PlanningError
 from gdq_pddl.limits import human_bytes
 from gdq_pddl.pddl import reachable
+from gdq_pddl.pddl.distances import distinct
 from gdq_pddl.pddl.outcomes import reality_outcomes
-from gdq_pddl.pddl.reachable import distinct, reachable_graph
+from gdq_pddl.pddl.reachable import reachable_graph
 from gdq_pddl.pddl.wordrows import KeyIndex, RowConditions, holds, words
 from gdq_pddl.planning.base import PlanningProblem
 
