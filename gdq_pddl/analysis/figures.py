@@ -36,10 +36,19 @@ METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants 
     "Dyna-Q": "#0072B2",  # blue
     "Q-learning": "#000000",  # black
 }
+METHOD_LINES = {"GDQ-literal": (0, (5, 2)), "GDQ-code": (0, (1, 1.5)),
+                "DARLING-code": (0, (5, 2))}
+"""Line styles that tell GDQ's variants (and DARLING's) from the method they read like, on
+top of their colours: solid, unless listed."""
 _EXTRA = ("#F0E442", "#999999", "#8c564b", "#9467bd", "#17becf")
 INTERVAL = "95% t-interval over runs"
 """What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
 x standard error."""
+
+
+def method_line(method: str) -> object:
+    """The line style of ``method``'s curves (:data:`METHOD_LINES`; solid otherwise)."""
+    return METHOD_LINES.get(method, "-")
 
 
 def method_colour(method: str) -> str:
@@ -98,11 +107,13 @@ def grid(n: int, width: float = 5.0, height: float = 3.6, max_cols: int = 2,
 
 def _bands(ax: Axes, study: Study, exp: str, window: int, title: str, task: str | None = None,
            scale: float = 1.0, markers: bool = False, xlabel: str = "episode",
-           ylabel: str = "return (cumulative reward)"
+           ylabel: str = "return (cumulative reward)", restart: int | None = None
            ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per method: each run's return curve smoothed by a trailing average, then their mean
     over runs with its 95% t-interval (:data:`INTERVAL`; ``markers``: also a dot per
-    episode), in a gridded panel titled ``title``; returns (x, low, high) per method."""
+    episode), in a gridded panel titled ``title``; returns (x, low, high) per method.
+    ``restart``: the average starts again at that episode (a goal switch), so no
+    smoothed value mixes episodes of both sides."""
     ax.set_title(title, fontsize=10)
     ax.set(xlabel=xlabel, ylabel=ylabel)
     ax.grid(alpha=0.3)
@@ -112,15 +123,32 @@ def _bands(ax: Axes, study: Study, exp: str, window: int, title: str, task: str 
         if not matrix.size:
             continue
         n, x = matrix.shape[0], np.unique(study.rows(exp, method, task)["episode"])
-        smooth = moving_average(matrix, window, full_only=False) if window > 1 else matrix
+        smooth = _smooth(matrix, x, window, restart)
         mean, se = mean_se(smooth)
         se = se * (sps.t.ppf(0.975, n - 1) if n > 1 else 0.0)
         colour = method_colour(method)
-        ax.plot(x, mean, color=colour, lw=1.4, label=f"{method} (n={n})")
+        ax.plot(x, mean, color=colour, lw=1.4, ls=method_line(method),
+                label=f"{method} (n={n})")
         ax.fill_between(x, mean - se, mean + se, color=colour, alpha=0.2, lw=0)
         if markers:
             ax.plot(x, mean, "o", ms=2.5, color=colour)
         out.append((x, mean - se, mean + se))
+    return out
+
+
+def _smooth(matrix: np.ndarray, x: np.ndarray, window: int, restart: int | None
+            ) -> np.ndarray:
+    """Trailing ``window``-episode average of each row of ``matrix`` (columns: episodes
+    ``x``), started again at episode ``restart`` if there is one."""
+    if window <= 1:
+        return matrix
+    if restart is None:
+        return moving_average(matrix, window, full_only=False)
+    after = x >= restart
+    out = np.empty_like(matrix, dtype=float)
+    for side in (~after, after):
+        if side.any():
+            out[:, side] = moving_average(matrix[:, side], window, full_only=False)
     return out
 
 
@@ -178,7 +206,8 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
             what = f"first {opts.after_switch} episodes after the switch" if zoom else \
                 f"task {' -> '.join(study.tasks(exp))}"
             seen = []
-            for x, low, high in _bands(ax, study, exp, opts.window, f"{exp}: {what}"):
+            for x, low, high in _bands(ax, study, exp, opts.window, f"{exp}: {what}",
+                                       restart=switch):
                 if zoom and switch is not None:
                     near = (x >= switch - 50) & (x <= switch + opts.after_switch)
                     seen += [np.nanmin(low[near]), np.nanmax(high[near])]
@@ -189,8 +218,9 @@ def switch_curves(study: Study, out_dir: Path, opts: FigureOptions = FigureOptio
                     pad = 0.05 * (max(seen) - min(seen)) if seen else 0.0
                     ax.set_ylim(min(seen) - pad, max(seen) + pad) if seen else None
     axes[0].legend(fontsize=7, loc="lower right")
-    fig.suptitle(f"goal change: mean, {INTERVAL}, {opts.window}-episode moving average",
-                 fontsize=11)
+    sep = "\n" if len(exps) == 1 else ": "  # one column is too narrow for one line
+    fig.suptitle(f"goal change{sep}mean, {INTERVAL}, {opts.window}-episode moving average "
+                 "started again at the switch", fontsize=11)
     return save_all(fig, out_dir, "switch_curves", opts)
 
 
@@ -206,6 +236,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
         world = study.world(exp)
         painter = map_painter(world)
         for task in study.tasks(exp):
+            irrelevant = study.truth(exp, task).irrelevant_areas
             means = {m: np.nanmean(np.nansum(v, axis=1), axis=0) for m in study.methods(exp)
                      if (v := study.area_visits(exp, m, task)).size}
             if not means:
@@ -221,17 +252,27 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                                    for p in world.positions])
                 painter.draw_map(ax, cmap(norm(values)), 60 + 400 * np.sqrt(values / top),
                                  ["white" if v > 0.3 * top else "black" for v in values],
-                                 study.task(exp, task), 0.6, areas=True)
+                                 study.task(exp, task), 0.6, areas=True,
+                                 irrelevant=irrelevant)
                 ax.set_title(method, fontsize=10, color=method_colour(method), y=1.0)
             fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), cax=fig.add_axes(
                 (1 - 1.15 / wide, 0.2, 0.15 / wide, 0.55)),
                 label="area visits per run (mean; square-root colour scale)")
             robot = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{robot}{_task_title(study, exp, task)}: visits per area "
-                         "(blue ring start, green ring goal)", fontsize=10)
+                         "(blue ring start, green ring goal; hatched grey: irrelevant areas, "
+                         "which the optimal policy visits with probability < 0.05)",
+                         fontsize=10, wrap=True)
             paths += save_all(fig, out_dir, f"heatmap_{robot.replace(' ', '_')}{slug(task)}",
                               opts)
     return paths
+
+
+EMPTY_ROUTE = {"stuck": "its first action does nothing there",
+               "no-policy": "it has no action there",
+               "loop": "its first action leads back to the start",
+               "limit": "it ran out of steps"}
+"""Why a greedy route has no arrow, by how the walk ended (:class:`Route`'s ``end``)."""
 
 
 def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions(),
@@ -252,6 +293,13 @@ def task_routes(study: Study, out_dir: Path, opts: FigureOptions = FigureOptions
         painter.draw_map(ax, "#eeeeee", 80, ["black"] * len(world.positions),
                          study.task(experiment, task), 0.5)
         painter.draw_route(ax, summary.example.positions, method_colour(method))
+        if len(set(summary.example.positions)) < 2:
+            why = EMPTY_ROUTE.get(summary.end, summary.end)
+            ax.text(0.5, 0.5, f"no arrows: the greedy policy never leaves "
+                    f"{summary.example.positions[0]}\n({why})",
+                    transform=ax.transAxes, ha="center", va="center", fontsize=8,
+                    color=method_colour(method), zorder=7,
+                    bbox={"fc": "white", "ec": method_colour(method), "alpha": 0.9})
         areas = "->".join(map(str, summary.areas)) or "(none)"
         ax.set_title(f"{method}: {summary.count}/{summary.runs} runs take this route",
                      fontsize=9, color=method_colour(method), y=1.0)

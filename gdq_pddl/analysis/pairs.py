@@ -15,7 +15,7 @@ import pandas as pd
 from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.cm import ScalarMappable
-from matplotlib.colors import TwoSlopeNorm
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import MaxNLocator
@@ -112,17 +112,26 @@ def table_markdown(res: PairRuns, diffs: list[Differences]) -> str:
     return md.to_markdown(index=False, disable_numparse=True) + "\n"
 
 
+def symmetric_top(grid: np.ndarray) -> float:
+    """The half-range of the heatmap's colour scale: the largest absolute finite value of
+    ``grid`` (1 where there is none, a tiny positive number where all are 0)."""
+    finite = grid[np.isfinite(grid)]
+    if not finite.size:
+        return 1.0
+    return max(float(np.max(np.abs(finite))), 1e-9)
+
+
 def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
-    """Start (rows) by goal (columns), colour = mean difference, each side of 0 scaled to
-    its own extreme (small losses against large wins still show in full red); ties faded;
-    grey: the diagonal and pairs not run."""
+    """Start (rows) by goal (columns), colour = mean difference on one symmetric scale,
+    ``-top .. +top`` with ``top`` the largest absolute difference (:func:`symmetric_top`), so
+    a loss looks as deep as a win of the same size; ties faded; grey: the diagonal and
+    pairs not run."""
     names = res.positions
     rows, cols = ([names.index(res.facts[p][end]) for p in res.pairs] for end in ("start", "goal"))
     grid = np.full((len(names), len(names)), np.nan)
     grid[rows, cols] = diff.mean
-    finite = np.isfinite(grid).any()
-    norm = TwoSlopeNorm(0.0, min(float(np.nanmin(grid)) if finite else -1.0, -1e-9),
-                        max(float(np.nanmax(grid)) if finite else 1.0, 1e-9))
+    top = symmetric_top(grid)
+    norm = Normalize(-top, top)
     cmap = colormaps["RdBu"].with_extremes(bad="#b0b0b0")
     rgba = cmap(norm(np.ma.masked_invalid(grid)))
     tie = diff.outcome == TIE  # faded: a tie's small mean must not look like a loss
@@ -141,9 +150,8 @@ def heatmap(ax: Axes, res: PairRuns, diff: Differences) -> None:
     ax.set(xlabel="goal", ylabel="start")
     ax.set_title(f"{res.reference} - {diff.baseline}: mean return difference", fontsize=9)
     ax.figure.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8, format="%.3g",
-                       ticks=[t for t in (norm.vmin, norm.vmin / 2, 0, norm.vmax / 2,
-                                          norm.vmax) if t == 0 or abs(t) > 1e-9],
-                       label="each side of 0 scaled to its own extreme; ties faded")
+                       ticks=[-top, -top / 2, 0, top / 2, top],
+                       label="one scale for wins (blue) and losses (red); ties faded")
 
 
 def sorted_differences(ax: Axes, res: PairRuns, diff: Differences) -> None:

@@ -144,23 +144,35 @@ class MapPainter:
         return _pixels(fig)
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
-               norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
+               norm: Normalize | None = None, cmap: str = "viridis",
+               goal: str | None = None) -> ScalarMappable:
         """Draw a Q table (``float[n_states, n_actions]``) on ``ax``: positions coloured by
         ``max_a Q`` (``norm``: default their range), an arrow to where the greedy action
-        leads (:func:`greedy_target`; a cross: nowhere). Returns the mapping for a colorbar."""
+        leads (:func:`greedy_target`; a cross: nowhere). Returns the mapping for a colorbar.
+        ``goal``: the task's goal position, where episodes end and Q stays 0; it is drawn
+        as a gold star outside the colour scale, not as the place worth least."""
         from matplotlib.cm import ScalarMappable  # start-up time, as above
         from matplotlib.colors import Normalize
 
         spaces = LearnerSpaces(self.world)
         values = np.array([max(q[spaces.state(p, is_open)].max() for is_open in (False, True))
                            for p in self.world.positions])
+        scaled = np.array([p != goal for p in self.world.positions])
         if norm is None:
-            low, high = float(values.min()), float(values.max())
+            low, high = float(values[scaled].min()), float(values[scaled].max())
             norm = Normalize(low, high if high > low else low + 1.0)
         mapping = ScalarMappable(norm=norm, cmap=cmap)
-        self.draw_map(ax, mapping.to_rgba(values), 260,
-                      ["white" if v < 0.5 else "black" for v in norm(values)])
+        colours = mapping.to_rgba(values)
+        colours[~scaled] = (1.0, 1.0, 1.0, 1.0)
+        self.draw_map(ax, colours, 260,
+                      ["white" if v < 0.5 and s else "black"
+                       for v, s in zip(norm(values), scaled, strict=True)])
+        if goal is not None:
+            ax.scatter(*self.xy[goal], s=700, marker="*", color="#e6a700", edgecolors="black",
+                       lw=0.8, zorder=5, label="goal (episode ends: no value)")
         for p in self.world.positions:
+            if p == goal:
+                continue
             greedy = greedy_target(spaces, q, p, masks)
             if greedy == "":
                 ax.scatter(*self.xy[p], s=500, marker="x", color="#d62728", lw=1.5, zorder=4)
@@ -168,13 +180,14 @@ class MapPainter:
                 self.draw_route(ax, (p, greedy), "#d62728", 1.8)
         return mapping
 
-
     def draw_map(self, ax: Axes, colours: object, sizes: object, text: Sequence[str],
-                 task: Task | None = None, alpha: float = 1.0, areas: bool = False) -> None:
+                 task: Task | None = None, alpha: float = 1.0, areas: bool = False,
+                 irrelevant: Sequence[int] = ()) -> None:
         """The world on ``ax``: corridors thin grey, doors thick dotted brown with their
         names, each position a marker (``colours``, ``sizes``) with its number in ``text``
         colours, the ``task``'s start ringed blue and its goal green; ``areas``: each area
-        a dashed circle labelled with its number."""
+        a dashed circle labelled with its number, those in ``irrelevant`` shaded grey and
+        labelled so."""
         w, xy = self.world, self.xy
         door_edges = {frozenset(d.sides) for d in w.doors}
         for a, b in w.edges:
@@ -194,12 +207,12 @@ class MapPainter:
             ax.scatter(*np.array([xy[task.start], xy[task.goal]]).T, s=420, facecolors="none",
                        edgecolors=["#1f77b4", "#2ca02c"], lw=2.2, zorder=4)
         if areas:
-            self._outline_areas(ax)
+            self._outline_areas(ax, frozenset(irrelevant))
         ax.set_axis_off()
         ax.set_aspect("equal")
         ax.margins(0.1)
 
-    def _outline_areas(self, ax: Axes) -> None:
+    def _outline_areas(self, ax: Axes, irrelevant: frozenset[int] = frozenset()) -> None:
         from matplotlib.patches import Circle  # start-up time, as above
 
         span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
@@ -209,10 +222,13 @@ class MapPainter:
             pts = np.array([self.xy[p] for p in positions])
             centre = pts.mean(axis=0)
             radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
-            ax.add_patch(Circle(centre, radius, fill=False, ls="--", lw=0.8, ec="#555555",
-                                zorder=2, in_layout=False))
-            ax.text(centre[0], centre[1] + radius, f"area {area}", fontsize=6, ha="center",
-                    va="bottom", color="#333333", zorder=6, in_layout=False)
+            off = area in irrelevant
+            ax.add_patch(Circle(centre, radius, fill=off, fc="#d9d9d9", alpha=0.9 if off else 1,
+                                ls="--", lw=0.8, ec="#555555", hatch="//" if off else None,
+                                zorder=0.5 if off else 2, in_layout=False))
+            ax.text(centre[0], centre[1] + radius,
+                    f"area {area}" + (" (irrelevant)" if off else ""), fontsize=6,
+                    ha="center", va="bottom", color="#333333", zorder=6, in_layout=False)
 
     def draw_route(self, ax: Axes, positions: Sequence[str], colour: str,
                    lw: float = 2.2) -> None:
