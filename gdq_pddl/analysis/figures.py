@@ -260,7 +260,7 @@ def visit_heatmaps(study: Study, out_dir: Path, opts: FigureOptions = FigureOpti
                 label="area visits per run (mean; square-root colour scale)")
             robot = "robot " if exp == ROBOT_EXPERIMENT else ""
             fig.suptitle(f"{robot}{_task_title(study, exp, task)}: visits per area "
-                         "(blue ring start, green ring goal; hatched grey: irrelevant areas, "
+                         "(blue ring start, green ring goal; grey discs: irrelevant areas, "
                          "which the optimal policy visits with probability < 0.05)",
                          fontsize=10, wrap=True)
             paths += save_all(fig, out_dir, f"heatmap_{robot.replace(' ', '_')}{slug(task)}",

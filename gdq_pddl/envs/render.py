@@ -223,9 +223,8 @@ class MapPainter:
             centre = pts.mean(axis=0)
             radius = np.linalg.norm(pts - centre, axis=1).max() + 0.035 * span
             off = area in irrelevant
-            ax.add_patch(Circle(centre, radius, fill=off, fc="#d9d9d9", alpha=0.9 if off else 1,
-                                ls="--", lw=0.8, ec="#555555", hatch="//" if off else None,
-                                zorder=0.5 if off else 2, in_layout=False))
+            ax.add_patch(Circle(centre, radius, fill=off, fc="#e3e3e3", ls="--", lw=0.8,
+                                ec="#555555", zorder=0.5 if off else 2, in_layout=False))
             ax.text(centre[0], centre[1] + radius,
                     f"area {area}" + (" (irrelevant)" if off else ""), fontsize=6,
                     ha="center", va="bottom", color="#333333", zorder=6, in_layout=False)
