@@ -172,7 +172,8 @@ class FactObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
 class DistanceObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
     """The wrapped observation and the knowledge's goal distance, as a ``Dict``:
     ``"observation"`` (the wrapped env's), ``"distance"`` (``float32[1]``, the fewest
-    actions to the goal if the knowledge is right; -1 where it reaches no goal) and, with
+    actions to the goal if the knowledge is right; -1 where it reaches no goal; at most
+    the number of states less one, unbounded on a problem explored online) and, with
     ``plan_action=True``, ``"plan_action"`` (``Discrete(n + 1)``: the first action of a
     shortest plan, or ``n``, one past the last action, where there is none). For a flat
     ``Box``, wrap it in ``gymnasium.wrappers.FlattenObservation`` (a ``Discrete`` entry
@@ -181,13 +182,15 @@ class DistanceObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArg
     def __init__(self, env: gym.Env, plan_action: bool = True) -> None:
         gym.utils.RecordConstructorArgs.__init__(self, plan_action=plan_action)
         super().__init__(env)
-        knowledge_env(env, "DistanceObservation", distances=True)
+        base = knowledge_env(env, "DistanceObservation", distances=True)
         self.plan_action = bool(plan_action)
         """Whether the observation has ``"plan_action"``."""
         self._n = int(env.action_space.n)
+        online = isinstance(base.instance, OnlineInstance)  # its states and estimates grow
+        high = np.inf if online else float(max(base.instance.n_states - 1, 0))
         spaces: dict[str, gym.Space] = {
             "observation": env.observation_space,
-            "distance": Box(-1.0, np.inf, shape=(1,), dtype=np.float32)}
+            "distance": Box(-1.0, high, shape=(1,), dtype=np.float32)}
         if self.plan_action:
             spaces["plan_action"] = Discrete(self._n + 1)
         self.observation_space = Dict(spaces)
