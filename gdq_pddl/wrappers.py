@@ -136,6 +136,7 @@ class KnowledgeShaping(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     def reset(self, *, seed: int | None = None,
               options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        """The env's reset; ``info["potential"]`` is ``phi(s_0)``."""
         obs, info = self.env.reset(seed=seed, options=options)
         s = self.env.unwrapped.learner_state()
         self._plan_length = self.distance(s)
@@ -143,6 +144,9 @@ class KnowledgeShaping(gym.Wrapper, gym.utils.RecordConstructorArgs):
         return obs, {**info, "potential": self._phi}
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """The env's step, its reward shaped; ``info`` says ``shaping``, ``potential``
+        (``phi`` of the state reached, 0 where the episode terminated) and
+        ``unshaped_reward``."""
         obs, reward, terminated, truncated, info = self.env.step(action)
         phi = 0.0 if terminated else self.potential_of(self.env.unwrapped.learner_state())
         shaping = self.gamma * phi - self._phi
@@ -166,6 +170,7 @@ class FactObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
         self.observation_space = MultiBinary(len(self.atom_names))
 
     def observation(self, observation: Any) -> np.ndarray:
+        """The true state's atoms (the env's ``facts()``), whatever ``observation`` is."""
         return self.env.unwrapped.facts()
 
 
@@ -196,6 +201,7 @@ class DistanceObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArg
         self.observation_space = Dict(spaces)
 
     def observation(self, observation: Any) -> dict[str, Any]:
+        """``observation`` with the knowledge's distance (and plan action) of the state."""
         base = self.env.unwrapped
         s = base.learner_state()
         out = {"observation": observation,
