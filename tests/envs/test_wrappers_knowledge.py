@@ -15,7 +15,7 @@ import gymnasium
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import gdq_pddl  # noqa: F401  (registers the envs)
@@ -23,7 +23,7 @@ from gdq_pddl.abstraction.prior import first_plan_columns, prior_distances
 from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
-from gdq_pddl.envs.pddl_env import PDDLInstance, load_instance
+from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import pddl_task_context
 from gdq_pddl.wrappers import DistanceObservation, FactObservation, KnowledgeShaping
@@ -31,6 +31,22 @@ from gdq_pddl.wrappers import DistanceObservation, FactObservation, KnowledgeSha
 ENVS = {"office": ("gdq_pddl/Office-v0", {"task": "C"}),
         "keys": ("gdq_pddl/PDDL-v0", {"domain": "keys", "problem": "keys-2"}),
         "keys-ppddl": ("gdq_pddl/PDDL-v0", {"domain": "keys-ppddl", "problem": "keys-ppddl-1"})}
+
+# A PPDDL problem with a dead end: jumping lands in the pit, where nothing applies and
+# from which the knowledge reaches no goal (the episode runs on to the step limit).
+CLIFF_DOMAIN = """(define (domain cliff)
+  (:requirements :strips :probabilistic-effects)
+  (:predicates (at ?p) (path ?a ?b) (edge ?a ?b))
+  (:action walk :parameters (?a ?b) :precondition (and (at ?a) (path ?a ?b))
+    :effect (probabilistic 0.8 (and (at ?b) (not (at ?a)))))
+  (:action jump :parameters (?a ?b) :precondition (and (at ?a) (edge ?a ?b))
+    :effect (and (at ?b) (not (at ?a)))))
+"""
+CLIFF_PROBLEM = """(define (problem cliff-1) (:domain cliff)
+  (:objects a b c pit)
+  (:init (at a) (path a b) (path b c) (edge a pit) (edge b pit))
+  (:goal (at c)))
+"""
 
 WRAPPERS = {"shaping-distance": KnowledgeShaping,
             "shaping-plan-step": functools.partial(KnowledgeShaping, gamma=0.9,
@@ -41,7 +57,14 @@ WRAPPERS = {"shaping-distance": KnowledgeShaping,
                 DistanceObservation(env, plan_action=False))}
 
 
+@functools.cache
+def cliff() -> PDDLInstance:
+    return PDDLInstance.from_texts(CLIFF_DOMAIN, CLIFF_PROBLEM)
+
+
 def make(name: str, **kw) -> gymnasium.Env:
+    if name == "cliff":
+        return PDDLEnv(instance=cliff(), **kw)
     env_id, args = ENVS[name]
     return gymnasium.make(env_id, **args, **kw)
 
@@ -49,7 +72,7 @@ def make(name: str, **kw) -> gymnasium.Env:
 @functools.cache
 def context(name: str):
     """The learners' context of env ``name`` (what GDQ reads)."""
-    return pddl_task_context(make(name).unwrapped.instance)
+    return pddl_task_context(cliff() if name == "cliff" else make(name).unwrapped.instance)
 
 
 def expected_plan_action(ctx, s: int) -> int:
@@ -59,7 +82,7 @@ def expected_plan_action(ctx, s: int) -> int:
     return min(actions) if actions else -1
 
 
-@pytest.mark.parametrize("name", list(ENVS))
+@pytest.mark.parametrize("name", [*ENVS, "cliff"])
 def test_every_state_plan_action_and_distance_are_the_contexts(name: str) -> None:
     instance, ctx = make(name).unwrapped.instance, context(name)
     for s in range(ctx.n_states):
@@ -73,7 +96,7 @@ def test_every_state_plan_action_and_distance_are_the_contexts(name: str) -> Non
             assert instance.mask_table[s, a] == 1
 
 
-@pytest.mark.parametrize("name", list(ENVS))
+@pytest.mark.parametrize("name", [*ENVS, "cliff"])
 def test_info_says_plan_action_at_reset_and_every_step(name: str) -> None:
     env, ctx = make(name), context(name)
     rng = np.random.default_rng(3)
@@ -130,11 +153,11 @@ def test_vector_env(name: str, wrapper: str) -> None:
 
 
 def discounted_shaping(env: KnowledgeShaping, seed: int, actions: list[int],
-                       follow: list[bool]) -> tuple[float, float, float, int, bool]:
+                       follow: list[bool]) -> tuple[float, float, float, int, list]:
     """One episode of ``env`` (a plan action where ``follow``, else ``actions``):
-    ``(sum gamma^t F_t, phi(s_0), phi(s_T), T, terminated)``."""
+    ``(sum gamma^t F_t, phi(s_0), phi(s_T), T, [(s_t, phi_t, terminated) for t >= 1])``."""
     _, info = env.reset(seed=seed)
-    phi0, total, t, phi, terminated = info["potential"], 0.0, 0, info["potential"], False
+    phi0, total, t, phi, seen = info["potential"], 0.0, 0, info["potential"], []
     done = info["cause"] == "goal"
     while not done:
         a = info["plan_action"] if follow[t % len(follow)] and info["plan_action"] >= 0 \
@@ -143,8 +166,9 @@ def discounted_shaping(env: KnowledgeShaping, seed: int, actions: list[int],
         assert reward == pytest.approx(info["unshaped_reward"] + info["shaping"])
         total += env.gamma ** t * info["shaping"]
         phi, t = info["potential"], t + 1
+        seen.append((env.unwrapped.learner_state(), phi, terminated))
         done = terminated or truncated
-    return total, phi0, phi, t, terminated
+    return total, phi0, phi, t, seen
 
 
 def phi_of(ctx, potential: str, scale: float, s: int, s0: int, step_limit: int,
@@ -159,7 +183,11 @@ def phi_of(ctx, potential: str, scale: float, s: int, s0: int, step_limit: int,
 
 
 @settings(max_examples=40, deadline=None)
-@given(name=st.sampled_from(list(ENVS)), potential=st.sampled_from(["distance", "plan-step"]),
+@example(name="cliff", potential="distance", gamma=0.9, scale=1.0, seed=0, actions=[0, 3],
+         follow=[False])  # walks, then jumps into the pit: a dead end until truncation
+@example(name="cliff", potential="plan-step", gamma=1.0, scale=2.0, seed=1, actions=[2],
+         follow=[False])
+@given(name=st.sampled_from([*ENVS, "cliff"]), potential=st.sampled_from(["distance", "plan-step"]),
        gamma=st.floats(0.5, 1.0), scale=st.floats(0.01, 10.0),
        seed=st.integers(0, 2**16), actions=st.lists(st.integers(0, 10**4), min_size=1,
                                                     max_size=30),
@@ -167,7 +195,7 @@ def phi_of(ctx, potential: str, scale: float, s: int, s0: int, step_limit: int,
 def test_shaping_terms_telescope_on_random_episodes(name, potential, gamma, scale, seed,
                                                     actions, follow) -> None:
     env = KnowledgeShaping(make(name), gamma=gamma, potential=potential, scale=scale)
-    total, phi0, phi_t, t, terminated = discounted_shaping(env, seed, actions, follow)
+    total, phi0, phi_t, t, seen = discounted_shaping(env, seed, actions, follow)
     assert total == pytest.approx(gamma ** t * phi_t - phi0, abs=1e-9 * (1 + abs(phi0)))
     # the potentials are the context's: phi(s_0) at reset, 0 where the episode terminated
     base, ctx = env.unwrapped, context(name)
@@ -175,7 +203,8 @@ def test_shaping_terms_telescope_on_random_episodes(name, potential, gamma, scal
     expect = functools.partial(phi_of, ctx, potential, scale, s0=s0,
                                step_limit=int(base.model.step_limit), r_max=base.r_max)
     assert phi0 == pytest.approx(expect(s0))
-    assert phi_t == (0.0 if terminated else pytest.approx(expect(base.learner_state())))
+    for s, phi, terminated in seen:
+        assert phi == (0.0 if terminated else pytest.approx(expect(s)))
 
 
 def test_unshaped_rewards_are_the_envs() -> None:
@@ -322,3 +351,20 @@ def test_from_files_takes_shipped_names() -> None:
     by_name = PDDLInstance.from_files("keys", "keys-2")
     assert by_name.n_states == context("keys").n_states
     assert by_name.dynamics.source.endswith("keys.toml")
+
+
+def test_a_dead_end_stands_at_the_step_limit() -> None:
+    instance = cliff()
+    pit = next(s for s in range(instance.n_states) if "(at pit)" in instance.atoms(s))
+    assert instance.goal_distance(pit) == -1 and instance.plan_action(pit) == -1
+    env = DistanceObservation(KnowledgeShaping(make("cliff"), gamma=0.9, scale=2.0))
+    obs, info = env.reset(seed=0)
+    assert obs["distance"][0] == 2 and info["potential"] == -4.0
+    jump = next(a for a in range(instance.n_actions)
+                if instance.action_name(a) == "(jump a pit)")
+    obs, _, terminated, truncated, info = env.step(jump)
+    limit = int(instance.model.step_limit)
+    assert not terminated and not truncated
+    assert obs["distance"][0] == -1 and obs["plan_action"] == env.action_space.n
+    assert info["plan_action"] == -1 and info["potential"] == -2.0 * limit
+    assert info["shaping"] == pytest.approx(0.9 * -2.0 * limit + 4.0)
