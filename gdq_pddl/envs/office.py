@@ -12,7 +12,8 @@ observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v
 - Observations: ``Discrete(n_states)`` (31): the position, and whether its door is open.
 - Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck or on the last allowed
   action (truncated after ``step_limit``), else minus the action's cost.
-- ``info``: ``action_mask``, ``position``, ``area`` (0: none), ``cause`` (``""``,
+- ``info``: ``action_mask``, ``plan_action`` (the first action of a shortest plan of the
+  knowledge, -1: none), ``position``, ``area`` (0: none), ``cause`` (``""``,
   ``"goal"``, ``"stuck"``, ``"timeout"``), ``full_state`` (every door) and ``step``.
 - Arguments: ``task`` (default ``"C"``) or ``start`` and ``goal``; ``world`` (a
   :class:`World`, a file or a built-in name); ``render_mode`` (``"ansi"``, ``"rgb_array"``).

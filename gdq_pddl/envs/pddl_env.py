@@ -11,8 +11,9 @@ overlay. The true model is a :class:`~gdq_pddl.envs.step.ModelArrays`, as the of
   states not expanded), breadth first, 0 the initial state (``env.unwrapped.atoms(s)``);
   ``reset(options={"start": "(at c12) (open c11) ..."})`` starts elsewhere.
 - Rewards: as the office's, or the problem's own (:attr:`PDDLInstance.reward_scale`).
-- ``info``: ``action_mask`` (1 where the precondition holds), ``area`` (0), ``cause``,
-  ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
+- ``info``: ``action_mask`` (1 where the precondition holds), ``plan_action`` (the first
+  action of a shortest plan of the knowledge, -1: none; docs/python.md), ``area`` (0),
+  ``cause``, ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
   ``"rgb_array"`` shows the state's atoms.
 """
 

@@ -139,6 +139,8 @@ def test_vector_env(name: str, wrapper: str) -> None:
     obs, info = envs.reset(seed=0)
     assert obs in envs.observation_space
     assert info["plan_action"].shape == (3,)
+    masks = envs.call("action_masks")  # what MaskablePPO asks, through the wrappers
+    assert all(np.array_equal(m, info["action_mask"][i]) for i, m in enumerate(masks))
     ended = 0
     for _ in range(60):
         obs, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
