@@ -7,9 +7,17 @@ the same seeds; every ``--eval-every`` environment steps (GDQ: at the end of the
 that gets there), each one's greedy policy runs
 ``--eval-episodes`` episodes on an evaluation env (the same seed for both), and the
 script prints the environment steps each needed to reach ``--target`` greedy success,
-and its success at the end. Needs ``pip install 'gdq_pddl[sb3]'`` (sb3-contrib, torch).
+and its success at the end. Needs ``pip install 'gdq_pddl[sb3]'`` (sb3-contrib, torch;
+docs/python.md says how to get the CPU-only torch).
+
+``--knowledge`` gives MaskablePPO more of the knowledge through the wrappers of
+:mod:`gdq_pddl.wrappers` (docs/python.md): ``shaping`` (potential-based shaping from the
+goal distance, PPO's gamma), ``facts`` (the true state's atoms as a ``MultiBinary``
+instead of a state index) or ``distance`` (the goal distance and the plan's first
+action beside the state: a ``Dict``, so ``MultiInputPolicy``).
 
     python examples/maskable_ppo.py --steps 30000 --seeds 0 1 2
+    python examples/maskable_ppo.py --steps 30000 --knowledge shaping
 """
 
 from __future__ import annotations
@@ -17,20 +25,34 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
+from typing import Any
 
 import gymnasium
 import numpy as np
 
 import gdq_pddl  # noqa: F401  (registers the envs)
 from gdq_pddl.learners import GDQ, office_task_context, run_episodes
+from gdq_pddl.wrappers import DistanceObservation, FactObservation, KnowledgeShaping
 
 ENV_ID, TASK = "gdq_pddl/Office-v0", "C"
-Policy = Callable[[int, np.ndarray], int]  # (observation, mask) -> action
+Policy = Callable[[Any, np.ndarray], int]  # (observation, mask) -> action
+KNOWLEDGE: dict[str, Callable[[gymnasium.Env], gymnasium.Env]] = {
+    "none": lambda env: env,  # the mask alone (the env's action_masks())
+    "shaping": lambda env: KnowledgeShaping(env, gamma=0.99, potential="distance"),
+    "facts": FactObservation,
+    "distance": DistanceObservation}
+"""What MaskablePPO's env is wrapped in, by ``--knowledge``."""
 
 
-def greedy_success(policy: Policy, episodes: int, seed: int) -> float:
-    """The share of ``episodes`` evaluation episodes in which ``policy`` reaches the goal."""
-    env = gymnasium.make(ENV_ID, task=TASK)
+def make_env(knowledge: str = "none") -> gymnasium.Env:
+    """Task C's env, in the wrapper ``knowledge`` names (:data:`KNOWLEDGE`)."""
+    return KNOWLEDGE[knowledge](gymnasium.make(ENV_ID, task=TASK))
+
+
+def greedy_success(policy: Policy, episodes: int, seed: int, knowledge: str = "none") -> float:
+    """The share of ``episodes`` evaluation episodes in which ``policy`` reaches the goal
+    (its observations as ``knowledge``'s wrapper gives them)."""
+    env = make_env(knowledge)
     obs, _ = env.reset(seed=seed)
     masks, wins = env.get_wrapper_attr("action_masks"), 0
     for _ in range(episodes):
@@ -58,17 +80,19 @@ def learn_gdq(seed: int, steps: int, every: int, evaluate: Callable[[Policy], fl
     return curve
 
 
-def learn_ppo(seed: int, steps: int, every: int, evaluate: Callable[[Policy], float]):
-    """MaskablePPO's (default settings) greedy success every ``every`` steps."""
+def learn_ppo(seed: int, steps: int, every: int, evaluate: Callable[[Policy], float],
+              knowledge: str = "none"):
+    """MaskablePPO's (default settings) greedy success every ``every`` steps, its env
+    wrapped as ``knowledge`` says."""
     import torch  # optional dependency (the [sb3] extra)
     from sb3_contrib import MaskablePPO  # optional dependency (the [sb3] extra)
 
     torch.set_num_threads(1)  # small networks: one core is enough, and fairer to others
-    model = MaskablePPO("MlpPolicy", gymnasium.make(ENV_ID, task=TASK), seed=seed,
-                        device="cpu")
+    policy = "MultiInputPolicy" if knowledge == "distance" else "MlpPolicy"
+    model = MaskablePPO(policy, make_env(knowledge), seed=seed, device="cpu")
     curve: list[tuple[int, float]] = []
 
-    def greedy(obs: int, mask: np.ndarray) -> int:
+    def greedy(obs: Any, mask: np.ndarray) -> int:
         return int(model.predict(obs, action_masks=mask, deterministic=True)[0])
 
     def check(*_) -> bool:  # called after every step of the rollouts
@@ -83,19 +107,24 @@ def learn_ppo(seed: int, steps: int, every: int, evaluate: Callable[[Policy], fl
 
 
 def main(steps: int, eval_every: int, eval_episodes: int, target: float,
-         seeds: list[int]) -> dict[str, list[tuple[int | None, float]]]:
+         seeds: list[int], knowledge: str = "none") -> dict[str, list[tuple[int | None, float]]]:
     try:
         import sb3_contrib  # noqa: F401  optional dependency (the [sb3] extra)
     except ImportError:
         sys.exit("this example needs sb3-contrib and torch: pip install 'gdq_pddl[sb3]'")
-    out: dict[str, list[tuple[int | None, float]]] = {"GDQ": [], "MaskablePPO": []}
+    ppo = "MaskablePPO" if knowledge == "none" else f"MaskablePPO+{knowledge}"
+    out: dict[str, list[tuple[int | None, float]]] = {"GDQ": [], ppo: []}
     print(f"Task C; greedy success over {eval_episodes} episodes every {eval_every} steps; "
           f"steps to {target:.0%}")
     for seed in seeds:
-        def evaluate(policy: Policy, seed: int = seed) -> float:
-            return greedy_success(policy, eval_episodes, 10_000 + seed)
-        for name, learn in (("GDQ", learn_gdq), ("MaskablePPO", learn_ppo)):
-            curve = learn(seed, steps, eval_every, evaluate)
+        for name in ("GDQ", ppo):
+            seen = "none" if name == "GDQ" else knowledge  # what the policy observes
+
+            def evaluate(policy: Policy, seed: int = seed, seen: str = seen) -> float:
+                return greedy_success(policy, eval_episodes, 10_000 + seed, seen)
+
+            curve = (learn_gdq(seed, steps, eval_every, evaluate) if name == "GDQ" else
+                     learn_ppo(seed, steps, eval_every, evaluate, knowledge))
             reached = next((n for n, success in curve if success >= target), None)
             out[name].append((reached, curve[-1][1]))
             print(f"seed {seed} {name:<12} steps to {target:.0%}: "
@@ -111,4 +140,6 @@ if __name__ == "__main__":
     parser.add_argument("--eval-episodes", type=int, default=100)
     parser.add_argument("--target", type=float, default=0.9)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--knowledge", choices=list(KNOWLEDGE), default="none",
+                        help="what MaskablePPO's env is wrapped in (default: the mask only)")
     main(**vars(parser.parse_args()))

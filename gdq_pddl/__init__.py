@@ -25,9 +25,10 @@ register_envs()  # gymnasium.make("gdq_pddl/Office-v0" or "gdq_pddl/PDDL-v0", ..
 _LAZY = {"load_results": "gdq_pddl.experiments.results",
          **dict.fromkeys(("GreedyPolicy", "evaluate_policy", "load_generators", "load_learner",
                           "save_learner"), "gdq_pddl.learners")}
-__all__ = ["__version__", *_LAZY, "envs", "learners", "errors", "resources"]
+__all__ = ["__version__", *_LAZY, "envs", "learners", "wrappers", "errors", "resources"]
 """The API: the envs (ids and docs), the learners (with save, load and evaluate), the
-errors raised on bad input, and the shipped files by name. ``pdoc gdq_pddl -o docs/api``
+wrappers that give any Gymnasium agent the knowledge, the errors raised on bad input,
+and the shipped files by name. ``pdoc gdq_pddl -o docs/api``
 writes its pages."""
 
 load_results: Callable[..., pandas.DataFrame]

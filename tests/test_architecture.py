@@ -34,7 +34,7 @@ LAYERS: dict[str, int] = {
     "abstraction": 3, "spaces": 3,
     "dynamics": 4, "world_types": 4, "world": 4, "buildings": 4,
     "envs": 5,
-    "learners": 6,
+    "learners": 6, "wrappers": 6,
     "experiments": 7,
     "analysis": 8,
     "cli": 9,

@@ -14,7 +14,7 @@ import numba
 import numpy as np
 
 from gdq_pddl.errors import AbstractionError
-from gdq_pddl.pddl.distances import distances_from
+from gdq_pddl.pddl.distances import breadth_first, distances_from
 from gdq_pddl.pddl.offered import column_of
 
 NO_CHANGE = -1
@@ -67,6 +67,29 @@ class PriorModel:
         ptr = np.zeros(self.n_states + 1, dtype=np.int64)
         np.add.at(ptr, succ + 1, 1)
         return np.cumsum(ptr), pairs[order].astype(np.int64)
+
+
+def prior_distances(prior: PriorModel, goal: np.ndarray) -> np.ndarray:
+    """int64[n_states]: the fewest actions from each learner state to one where ``goal``
+    (bool[n_states]) holds if the knowledge is right: backward breadth first over the
+    prior's pairs (0 at a goal state; -1: the knowledge reaches no goal state from there).
+    Of a PDDL problem's prior (:func:`prior_from_graph`) these are the graph's
+    :attr:`~gdq_pddl.pddl.reachable.StateGraph.distances`."""
+    ptr, pairs = prior.predecessors()
+    return breadth_first(ptr, pairs // max(prior.n_actions, 1),
+                         np.flatnonzero(goal).astype(np.int64), prior.n_states)
+
+
+def first_plan_columns(prior: PriorModel, distance: np.ndarray) -> np.ndarray:
+    """int64[n_states]: in each learner state ``s``, the lowest column whose prior
+    successor is one action closer to the goal by ``distance`` (the first action of a
+    shortest plan of the knowledge); -1 at a goal state (distance 0) and where there is
+    no plan (distance -1)."""
+    nxt = prior.next_state
+    d = np.asarray(distance, dtype=np.int64)
+    to = np.where(nxt == NO_CHANGE, -1, d[np.where(nxt == NO_CHANGE, 0, nxt)])
+    closer = (nxt != NO_CHANGE) & (to == (d - 1)[:, None]) & (d > 0)[:, None]
+    return np.where(closer.any(axis=1), closer.argmax(axis=1), -1).astype(np.int64)
 
 
 def prior_from_edges(n_states: int, n_actions: int,

@@ -120,9 +120,21 @@ class CompiledEnv(gym.Env[int, int]):
         """The position index of the hidden state (into ``area_of_pos``)."""
         raise NotImplementedError
 
+    def learner_state(self) -> int:
+        """The current observation (a learner state): what the instance's
+        ``goal_distance`` and ``plan_action`` read."""
+        return self._observe()
+
+    def facts(self) -> np.ndarray:
+        """``int8[len(instance.atom_names)]``: 1 for each atom true in the hidden state."""
+        raise NotImplementedError
+
     def _info(self) -> dict[str, Any]:
-        """The instance's ``info``, ``action_mask`` (a copy), ``area``, ``cause``, ``step``."""
-        pos = self._position()
+        """The instance's ``info``, ``action_mask`` (a copy), ``plan_action`` (the first
+        action of a shortest plan of the knowledge from here, ``instance.plan_action``;
+        -1: none), ``area``, ``cause``, ``step``."""
+        pos, obs = self._position(), self._observe()
         return {**self.instance.info(pos),
-                "action_mask": self.mask_table[self._observe()].copy(),
+                "action_mask": self.mask_table[obs].copy(),
+                "plan_action": self.instance.plan_action(obs),
                 "area": int(self.model.area_of_pos[pos]), "cause": self._cause, "step": self._t}

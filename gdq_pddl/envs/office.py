@@ -12,7 +12,8 @@ observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v
 - Observations: ``Discrete(n_states)`` (31): the position, and whether its door is open.
 - Rewards: ``+r_max`` at the goal, ``-r_max`` on getting stuck or on the last allowed
   action (truncated after ``step_limit``), else minus the action's cost.
-- ``info``: ``action_mask``, ``position``, ``area`` (0: none), ``cause`` (``""``,
+- ``info``: ``action_mask``, ``plan_action`` (the first action of a shortest plan of the
+  knowledge, -1: none), ``position``, ``area`` (0: none), ``cause`` (``""``,
   ``"goal"``, ``"stuck"``, ``"timeout"``), ``full_state`` (every door) and ``step``.
 - Arguments: ``task`` (default ``"C"``) or ``start`` and ``goal``; ``world`` (a
   :class:`World`, a file or a built-in name); ``render_mode`` (``"ansi"``, ``"rgb_array"``).
@@ -30,7 +31,12 @@ import numpy as np
 
 from gdq_pddl.abstraction import OfficeAbstraction, PlanTable, build_plan_table
 from gdq_pddl.abstraction.masks import knowledge_action_mask
-from gdq_pddl.abstraction.prior import PriorModel, prior_from_task
+from gdq_pddl.abstraction.prior import (
+    PriorModel,
+    first_plan_columns,
+    prior_distances,
+    prior_from_task,
+)
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
@@ -214,6 +220,43 @@ class OfficeInstance:
             _PRIORS[key] = prior_from_task(o, task, o.mask_reader(task))
         return _PRIORS[key]
 
+    @cached_property
+    def _plan_knowledge(self) -> tuple[np.ndarray, np.ndarray]:
+        distance = prior_distances(self.prior, self.learner_goal)
+        return distance, first_plan_columns(self.prior, distance)
+
+    def goal_distance(self, s: int) -> int:
+        """The knowledge's fewest actions from learner state ``s`` to the goal, on the
+        prior (:func:`~gdq_pddl.abstraction.prior.prior_distances`; the plan table's
+        ``length[s]``): 0 at the goal, -1 where the knowledge reaches no goal."""
+        return int(self._plan_knowledge[0][s])
+
+    def plan_action(self, s: int) -> int:
+        """The lowest learner action that starts a shortest plan of the knowledge from
+        learner state ``s`` (one of ``plans.first_actions[s]``); -1 at the goal and where
+        there is no plan."""
+        return int(self._plan_knowledge[1][s])
+
+    @cached_property
+    def atom_names(self) -> tuple[str, ...]:
+        """The true state's atoms: ``(at p)`` for every position, then ``(open d)`` for
+        every door (a door not open is closed), in the world's order."""
+        return tuple([f"(at {p})" for p in self.world.positions] +
+                     [f"(open {d.name})" for d in self.world.doors])
+
+    def facts(self, fs: int) -> np.ndarray:
+        """``int8[len(atom_names)]``: the atoms true in full state ``fs``."""
+        pos, mask = divmod(int(fs), 1 << len(self.world.doors))
+        return self.facts_at(pos, [i for i in range(len(self.world.doors)) if mask >> i & 1])
+
+    def facts_at(self, pos: int, open_doors: Any) -> np.ndarray:
+        """:meth:`facts` of the robot at position index ``pos`` with the doors of indices
+        ``open_doors`` open."""
+        out = np.zeros(len(self.atom_names), dtype=np.int8)
+        out[pos] = 1
+        out[len(self.world.positions) + np.asarray(list(open_doors), dtype=np.int64)] = 1
+        return out
+
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
         """The planner's plans to the task's goal (:func:`office_plan_table`)."""
@@ -296,6 +339,11 @@ class CompactEnv(CompiledEnv):
 
     def _position(self) -> int:
         return self._pos
+
+    def facts(self) -> np.ndarray:
+        """The true state's atoms (``instance.atom_names``) as ``int8`` 0/1."""
+        return self.instance.facts_at(self._pos, np.flatnonzero(self.doors[:len(
+            self.instance.world.doors)]))
 
     def _info(self) -> dict[str, Any]:
         return {**super()._info(), "open_doors": tuple(np.flatnonzero(self.doors).tolist())}

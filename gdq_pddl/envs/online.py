@@ -47,7 +47,7 @@ from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
 from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
-from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
+from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance, word_facts
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, PlanningError
@@ -221,6 +221,29 @@ class OnlineInstance:
     def atoms(self, row: int) -> frozenset[str]:
         x = self.state_of(row)
         return frozenset() if x < 0 else self.graph.atoms(x)
+
+    def goal_distance(self, row: int) -> int:
+        """The plans' length from a row (:meth:`plan_table`'s ``length``): a reached
+        state's one-step lookahead over the estimates, fixed when it was expanded (0 at a
+        goal; -1: no successor the estimates reach the goal from)."""
+        return int(self.dist[row])
+
+    def plan_action(self, row: int) -> int:
+        """The lowest ground action starting a shortest plan by the estimates from a row
+        (the first of :meth:`plan_table`'s ``first_actions[row]``); -1 where none."""
+        first = np.flatnonzero(self.first_shortest[row])
+        return int(self.columns[row, first[0]]) if len(first) else -1
+
+    atom_names = property(lambda self: self.task.facts)
+    """The problem's fluent ground atoms, in the order of :meth:`facts`."""
+
+    def facts(self, row: int) -> np.ndarray:
+        """``int8[len(atom_names)]``: the fluent atoms true in a row's state (none: a
+        chain or unused row)."""
+        x = self.state_of(row)
+        if x < 0:
+            return np.zeros(len(self.task.facts), dtype=np.int8)
+        return word_facts(self.graph.words[x], len(self.task.facts))
 
     @property
     def mask_table(self) -> RowMasks:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.pddl_env import GOAL_POS
@@ -40,6 +42,10 @@ class OnlineEnv(CompiledEnv):
 
     def _position(self) -> int:
         return GOAL_POS if self.instance.graph.is_goal[self._x] else 0
+
+    def facts(self) -> np.ndarray:
+        """The true state's atoms (``instance.atom_names``) as ``int8`` 0/1."""
+        return self.instance.facts(self._observe())
 
     def _info(self) -> dict[str, Any]:
         return {**super()._info(), "full_state": self._observe()}

@@ -11,8 +11,9 @@ overlay. The true model is a :class:`~gdq_pddl.envs.step.ModelArrays`, as the of
   states not expanded), breadth first, 0 the initial state (``env.unwrapped.atoms(s)``);
   ``reset(options={"start": "(at c12) (open c11) ..."})`` starts elsewhere.
 - Rewards: as the office's, or the problem's own (:attr:`PDDLInstance.reward_scale`).
-- ``info``: ``action_mask`` (1 where the precondition holds), ``area`` (0), ``cause``,
-  ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
+- ``info``: ``action_mask`` (1 where the precondition holds), ``plan_action`` (the first
+  action of a shortest plan of the knowledge, -1: none; docs/python.md), ``area`` (0),
+  ``cause``, ``full_state`` (the observation) and ``step``; ``render_mode`` ``"ansi"`` or
   ``"rgb_array"`` shows the state's atoms.
 """
 
@@ -86,7 +87,11 @@ class PDDLInstance:
     def from_files(cls, domain: str | Path, problem: str | Path,
                    dynamics: str | Path | None = None, max_states: int | None = MAX_STATES,
                    determinisation: str = DETERMINISATIONS[0]) -> PDDLInstance:
-        """Read and check the files (errors name the file and line or key)."""
+        """Read and check the files (errors name the file and line or key). Each may be a
+        shipped name instead, as ``gymnasium.make`` takes them (``"keys"``, ``"keys-2"``;
+        :func:`~gdq_pddl.resources.resolve`): a shipped domain without ``dynamics`` gets
+        its shipped dynamics file if there is one."""
+        domain, problem, dynamics = resolve_pddl(domain, problem, dynamics)
         planning = PlanningProblem.from_files(domain, problem,
                                               check_determinisation(determinisation))
         overlay = None if dynamics is None else parse_reality(
@@ -304,6 +309,31 @@ class PDDLInstance:
         """The fluent atoms of state ``s``."""
         return self.graph.task.atoms(self.graph.states[s])
 
+    def goal_distance(self, s: int) -> int:
+        """The knowledge's fewest actions from state ``s`` to the goal (the context's
+        ``plans.length[s]``: 0 at a goal, -1 where the knowledge reaches no goal)."""
+        return int(self.graph.distances[s])
+
+    def plan_action(self, s: int) -> int:
+        """The first action of a shortest plan of the knowledge from state ``s``: the
+        lowest ground action with an outcome one action closer to the goal (the lowest
+        column of ``plans.first_actions[s]``); -1 at a goal and where there is no plan."""
+        g = self.graph
+        d = int(g.distances[s])
+        if d <= 0:
+            return -1
+        lo, hi = g.edge_ptr[s], g.edge_ptr[s + 1]
+        return int(g.edge_op[lo:hi][g.distances[g.edge_next[lo:hi]] == d - 1].min())
+
+    @property
+    def atom_names(self) -> tuple[str, ...]:
+        """The problem's fluent ground atoms, in the order of :meth:`facts`."""
+        return self.graph.task.facts
+
+    def facts(self, s: int) -> np.ndarray:
+        """``int8[len(atom_names)]``: 1 for each fluent atom true in state ``s``."""
+        return word_facts(self.graph.words[s], len(self.atom_names))
+
     def optimal(self) -> dict[str, Any]:
         """The ground truth: V* (within :data:`~gdq_pddl.envs.solve.VSTAR_BUDGET`, else a
         bound and why), the shortest plan, the sizes."""
@@ -368,6 +398,14 @@ class PDDLInstance:
         return text_image(f"{self.name}\n" + text.replace(" ", "\u00a0").replace(")\u00a0(", ") ("))
 
 
+def word_facts(words: np.ndarray, n_facts: int) -> np.ndarray:
+    """``int8[n_facts]``: the bits of a state's word row (bit ``j`` of word ``w`` is fact
+    ``64 w + j``)."""
+    bits = np.unpackbits(np.ascontiguousarray(words, dtype="<u8").view(np.uint8),
+                         bitorder="little")
+    return bits[:n_facts].astype(np.int8)
+
+
 def graph_space(graph: StateGraph) -> StateSpace:
     """A PDDL problem's reachable states and ground actions as a ``StateSpace``."""
     n = graph.n_states
@@ -388,8 +426,7 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
         raise PlanningError("a PDDL env needs domain= and problem= (files, or shipped names: "
                             f"domains {', '.join(shipped_names('domain'))}; problems "
                             f"{', '.join(shipped_names('problem'))})")
-    return PDDLInstance.from_files(*resolve_pddl(domain, problem, dynamics),
-                                   determinisation=determinisation)
+    return PDDLInstance.from_files(domain, problem, dynamics, determinisation=determinisation)
 
 
 class PDDLEnv(CompiledEnv):
@@ -429,6 +466,10 @@ class PDDLEnv(CompiledEnv):
 
     def _position(self) -> int:
         return int(self.model.pos_of[self._fs])
+
+    def facts(self) -> np.ndarray:
+        """The true state's atoms (``instance.atom_names``) as ``int8`` 0/1."""
+        return self.instance.facts(self._fs)
 
     def _info(self) -> dict[str, Any]:
         return {**super()._info(), "full_state": self._fs}

@@ -31,6 +31,13 @@ def distances_from(graph, start: int) -> np.ndarray:
                           np.array([start], dtype=np.int64), graph.n_states)
 
 
+def breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
+                  n: int) -> np.ndarray:
+    """The fewest edges from ``frontier`` to each of ``n`` states (-1: none) over the CSR
+    edges ``ptr``, ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``)."""
+    return _breadth_first(ptr, to, frontier, n)
+
+
 def _breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
                    n: int) -> np.ndarray:
     """Levels of a breadth-first search from ``frontier`` over the CSR edges ``ptr``,

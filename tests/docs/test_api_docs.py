@@ -9,7 +9,7 @@ import warnings
 import pytest
 
 PUBLIC = ("gdq_pddl", "gdq_pddl.envs", "gdq_pddl.envs.office", "gdq_pddl.envs.pddl_env",
-          "gdq_pddl.learners", "gdq_pddl.errors",
+          "gdq_pddl.learners", "gdq_pddl.wrappers", "gdq_pddl.errors",
           "gdq_pddl.resources")
 """The modules of the API page: the package and the submodules its ``__all__`` names."""
 

@@ -182,10 +182,13 @@ def test_info_fields() -> None:
     obs, info = env.reset(seed=1)
     mask = info.pop("action_mask")  # tests/envs/test_gym_conventions.py checks its values
     assert mask.dtype == np.int8 and mask.shape == (95,)
+    plan = info.pop("plan_action")  # tests/envs/test_wrappers_knowledge.py checks its values
+    assert mask[plan] == 1
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
                     env.unwrapped.start_state, "step": 0}
     obs, reward, terminated, truncated, info = act(env, "approach", "p15")
-    assert set(info) == {"action_mask", "position", "area", "cause", "full_state", "step"}
+    assert set(info) == {"action_mask", "plan_action", "position", "area", "cause",
+                         "full_state", "step"}
     assert info["step"] == 1 and info["cause"] == ""
     assert info["position"] in ("p15", "p11", "p14")
     assert env.unwrapped.model.obs_of[info["full_state"]] == obs
