@@ -37,6 +37,8 @@ class Frame:
     open_doors: frozenset[str]
     step: int
     cause: str = ""
+    action: str = ""
+    """The action that led to this frame (``""`` at the start of an episode)."""
 
 
 def _label(frame: Frame, p: str) -> str:
@@ -95,6 +97,21 @@ ROBOT, GOAL, FLOOR, DOOR_SIDE = "#d62728", "#2ca02c", "#dddddd", "#bbbbff"
 OPEN, CLOSED = "#2ca02c", "#d62728"
 
 
+def caption(frame: Frame) -> tuple[str, str]:
+    """The title of a frame's image (the task, the step and the action taken, or
+    ``start``; why the episode ended) and its second line, what was just done."""
+    status = f" ({frame.cause})" if frame.cause else ""
+    title = (f"task {frame.task_name}: robot at {frame.robot}, goal {frame.goal}, "
+             f"step {frame.step}/{frame.world.step_limit}{status}")
+    done = f"action taken: {frame.action}" if frame.action else "start of the episode"
+    return title, done
+
+
+LEGEND = [("o", ROBOT, "robot"), ("o", DOOR_SIDE, "door side"), ("o", FLOOR, "position"),
+          ("ring", GOAL, "goal"), ("-", OPEN, "door open"), (":", CLOSED, "door closed")]
+"""The legend of a frame: (marker, colour, label)."""
+
+
 class MapPainter:
     """Draws frames of one world as ``uint8[H, W, 3]`` images with matplotlib (Agg)."""
 
@@ -116,7 +133,7 @@ class MapPainter:
 
         w, xy = self.world, self.xy
         fig = Figure(figsize=self.size, dpi=self.dpi)
-        ax = fig.add_axes((0.02, 0.05, 0.96, 0.87))
+        ax = fig.add_axes((0.02, 0.09, 0.96, 0.81))
         ax.set_axis_off()
         door_edges = {frozenset(d.sides): d for d in w.doors}
         for a, b in w.edges:
@@ -135,13 +152,31 @@ class MapPainter:
             ax.scatter(*xy[p], s=500, c=face, edgecolors=edge, linewidths=lw, zorder=2)
             ax.text(*xy[p], p, fontsize=8, ha="center", va="center", zorder=3,
                     color="white" if p == frame.robot else "black")
-        fig.text(0.5, 0.01, "red: robot   green ring: goal   door: green solid open, "
-                 "red dotted closed", ha="center", fontsize=8)
-        status = f" ({frame.cause})" if frame.cause else ""
-        fig.suptitle(f"task {frame.task_name}: {frame.robot} -> {frame.goal}, "
-                     f"step {frame.step}/{w.step_limit}{status}", fontsize=10)
+        self._legend(fig)
+        title, done = caption(frame)
+        fig.text(0.5, 0.975, title, ha="center", va="top", fontsize=10)
+        fig.text(0.5, 0.935, done, ha="center", va="top", fontsize=10, weight="bold",
+                 color="#1f4e79")
         ax.margins(0.08)
         return _pixels(fig)
+
+    @staticmethod
+    def _legend(fig: Figure) -> None:
+        """:data:`LEGEND` along the bottom of ``fig``."""
+        from matplotlib.lines import Line2D  # start-up time, as above
+
+        handles = []
+        for marker, colour, label in LEGEND:
+            if marker in ("-", ":"):
+                handles.append(Line2D([], [], color=colour, lw=3, ls=marker, label=label))
+            else:
+                ring = marker == "ring"
+                handles.append(Line2D([], [], ls="", marker="o", markersize=9, label=label,
+                                      markerfacecolor="white" if ring else colour,
+                                      markeredgecolor=colour if ring else "#444444",
+                                      markeredgewidth=2.5 if ring else 1.0))
+        fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=7, frameon=False,
+                   bbox_to_anchor=(0.5, 0.0), handlelength=1.6, columnspacing=1.2)
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis") -> ScalarMappable:
