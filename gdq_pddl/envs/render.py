@@ -259,6 +259,49 @@ class MapPainter:
                                         "shrinkA": 7, "shrinkB": 7})
 
 
+    def draw_plans(self, ax: Axes, routes: Sequence[Sequence[str]], task: Task | None = None,
+                   labels: Sequence[str] | None = None) -> None:
+        """The world on ``ax`` with each route of ``routes`` (positions, as
+        :func:`plan_route` gives them) drawn as arrows in a colour of its own, side by side
+        where routes share a corridor, and a legend (``labels``: default "plan k, n
+        moves")."""
+        self.draw_map(ax, FLOOR, 180, ["black"] * len(self.world.positions), task)
+        span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
+        colours = ("#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9")
+        for k, route in enumerate(routes):
+            colour = colours[k % len(colours)]
+            shift = (k - (len(routes) - 1) / 2) * min(0.012, 0.04 / len(routes)) * span
+            for a, b in zip(route[:-1], route[1:], strict=True):
+                if a == b:
+                    continue
+                d = self.xy[b] - self.xy[a]
+                normal = np.array([-d[1], d[0]]) / (np.linalg.norm(d) or 1.0) * shift
+                ax.annotate("", xy=self.xy[b] + normal, xytext=self.xy[a] + normal, zorder=4,
+                            in_layout=False,
+                            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.0,
+                                        "shrinkA": 6, "shrinkB": 6})
+            label = labels[k] if labels is not None else \
+                f"plan {k + 1}: {' > '.join(route)}"
+            ax.plot([], [], color=colour, lw=2.0, label=label)
+        if routes:
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=7,
+                      frameon=False)
+
+
+def plan_route(spaces: LearnerSpaces, plan: Sequence[tuple[int, int]]) -> list[str]:
+    """The positions a plan (learner ``(state, action)`` pairs, as
+    :meth:`~gdq_pddl.abstraction.PlanTable.plans_from` lists them) takes the robot
+    through: where it starts, then where each move goes (opening a door moves nobody)."""
+    if not plan:
+        return []
+    route = [spaces.states[plan[0][0]][0]]
+    for _, a in plan:
+        verb, target = spaces.action_parts(a)
+        if verb in MOVES and target != route[-1]:
+            route.append(target)
+    return route
+
+
 _PAINTERS: dict[int, MapPainter] = {}
 
 

@@ -68,3 +68,28 @@ def test_a_pddl_frame_says_the_action_taken():
     assert not np.array_equal(frames[0], frames[1])  # start vs. after an action
     assert np.array_equal(frames[0], frames[2])
     assert not np.array_equal(frames[1], frames[3])  # after one action vs. another
+
+
+def test_plan_routes_list_where_the_robot_goes_and_are_drawn():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from gdq_pddl.envs.render import MapPainter, plan_route
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.spaces import LearnerSpaces
+
+    world = builtin_world("office")
+    spaces, context = LearnerSpaces(world), office_task_context(world, "C")
+    plan = context.plans.plans_from(context.s0)[0]
+    assert [spaces.action_name(a) for _, a in plan][:3] == \
+        ["approach p1", "opendoor p1", "gothrough p3"]
+    assert plan_route(spaces, plan)[:3] == ["p0", "p1", "p3"]  # opening moves nobody
+    assert plan_route(spaces, []) == []
+    fig, ax = plt.subplots()
+    routes = [plan_route(spaces, p) for p in context.plans.plans_from(context.s0)]
+    MapPainter(world).draw_plans(ax, routes, world.task("C"))
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == [f"plan {k + 1}: {' > '.join(r)}" for k, r in enumerate(routes)]
+    plt.close(fig)
