@@ -265,7 +265,7 @@ class MapPainter:
         :func:`plan_route` gives them) drawn as arrows in a colour of its own, side by side
         where routes share a corridor, and a legend (``labels``: default "plan k, n
         moves")."""
-        self.draw_map(ax, FLOOR, 180, ["black"] * len(self.world.positions), task)
+        self._plain_map(ax, task)
         span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
         colours = ("#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9")
         for k, route in enumerate(routes):
@@ -279,13 +279,40 @@ class MapPainter:
                 ax.annotate("", xy=self.xy[b] + normal, xytext=self.xy[a] + normal, zorder=4,
                             in_layout=False,
                             arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.0,
-                                        "shrinkA": 6, "shrinkB": 6})
+                                        "shrinkA": 9, "shrinkB": 9})
             label = labels[k] if labels is not None else \
                 f"plan {k + 1}: {' > '.join(route)}"
             ax.plot([], [], color=colour, lw=2.0, label=label)
         if routes:
-            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=7,
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=8,
                       frameon=False)
+
+
+    def _plain_map(self, ax: Axes, task: Task | None) -> None:
+        """The world on ``ax`` at a size to read: corridors grey, doors dotted brown with
+        their names, each position by its name, the ``task``'s start ringed blue and its
+        goal green."""
+        w, xy = self.world, self.xy
+        door_of = {frozenset(d.sides): d.name for d in w.doors}
+        for a, b in w.edges:
+            door = door_of.get(frozenset((a, b)))
+            ax.plot(*zip(xy[a], xy[b], strict=True), color="#999999" if door is None else
+                    "#8c564b", lw=1.2 if door is None else 3.0, ls="-" if door is None else ":",
+                    zorder=1)
+            if door is not None:
+                ax.text(*(xy[a] + xy[b]) / 2, door, fontsize=8, ha="center", va="center",
+                        color="#8c564b", zorder=5, in_layout=False,
+                        bbox={"fc": "white", "ec": "none", "pad": 0.5})
+        for p in w.positions:
+            ax.scatter(*xy[p], s=330, c=FLOOR, edgecolors="#333333", linewidths=0.6, zorder=3)
+            ax.text(*xy[p], p, fontsize=7, ha="center", va="center", zorder=6,
+                    in_layout=False)
+        if task is not None:
+            ax.scatter(*np.array([xy[task.start], xy[task.goal]]).T, s=600,
+                       facecolors="none", edgecolors=["#1f77b4", "#2ca02c"], lw=2.5, zorder=4)
+        ax.set_axis_off()
+        ax.set_aspect("equal")
+        ax.margins(0.08)
 
 
 def plan_route(spaces: LearnerSpaces, plan: Sequence[tuple[int, int]]) -> list[str]:
