@@ -267,7 +267,8 @@ class MapPainter:
         moves")."""
         self._plain_map(ax, task)
         span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
-        colours = ("#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9")
+        colours = ("#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9",
+                   "#000000", "#882255", "#999933", "#332288", "#44aa99", "#aa4499")
         for k, route in enumerate(routes):
             colour = colours[k % len(colours)]
             shift = (k - (len(routes) - 1) / 2) * min(0.012, 0.04 / len(routes)) * span
