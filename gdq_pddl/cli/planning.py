@@ -158,7 +158,7 @@ def _plans_figure(path: Path, world, task, plans, abstraction: OfficeAbstraction
     """The planner's ``plans`` drawn on the map of ``world``, as the learner's moves."""
     from matplotlib.figure import Figure  # start-up time: matplotlib loads when drawing
 
-    from gdq_pddl.envs.render import MapPainter, plan_route
+    from gdq_pddl.envs.render import MapPainter, plan_route  # start-up time, as above
 
     routes = [plan_route(abstraction.spaces, [(abstraction.learner_state(s),
                                                abstraction.learner_action(a))
