@@ -142,6 +142,8 @@ def _same_float(got: Any, expected: float, tol: float) -> bool:
 def _float_diff(case: Case, got: Any, tol: float = 1e-9) -> str | None:
     if _same_float(got, case.expected, tol):
         return None
+    if got is None:
+        return f"expected {_num(case.expected)}; the function returned None (a return missing?)"
     return f"expected {_num(case.expected)}, got {_shown(got)}" + _hint(case, got, _same_float,
                                                                     tol)
 
@@ -268,6 +270,8 @@ def _table_diff(spaces: LearnerSpaces, tol: float) -> Callable[[Case, Any], str 
         expected = case.expected
         if _same_table(got, expected, tol):
             return None
+        if got is None:
+            return "the function returned None: return the Q table (a new one, or q changed)"
         try:
             table = np.asarray(got, dtype=float)
         except (TypeError, ValueError):

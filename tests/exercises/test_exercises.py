@@ -209,3 +209,13 @@ def test_init_into_a_file_is_refused(tmp_path):
 
     with pytest.raises(ConfigError, match="is a file"):
         write_stubs(target)
+
+
+def test_a_function_that_returns_nothing_is_told_so():
+    def in_place(q, counts, stuck, cost, goal, pairs, gamma, r_max):
+        q[:] = solutions.dyna_planning(q, counts, stuck, cost, goal, pairs, gamma, r_max)
+
+    message = check(2, function=in_place).message
+    assert "returned None: return the Q table" in message
+    message = check(1, function=lambda **kwargs: None).message
+    assert "returned None (a return missing?)" in message
