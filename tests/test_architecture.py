@@ -36,7 +36,7 @@ LAYERS: dict[str, int] = {
     "envs": 5,
     "learners": 6, "wrappers": 6,
     "experiments": 7,
-    "analysis": 8,
+    "analysis": 8, "exercises": 8,
     "cli": 9,
 }
 """The layer of each top-level module or subpackage of the package, lowest first. A

@@ -23,7 +23,7 @@ from gdq_pddl.cli.common import (
     world_and_task,
 )
 from gdq_pddl.errors import ConfigError, SizeError
-from gdq_pddl.outputs import output_file, output_folder, write_text
+from gdq_pddl.outputs import output_file, output_folder, save_figure, write_text
 from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
 from gdq_pddl.resources import domain_text, problem_domain, resolve, shipped_names
@@ -90,6 +90,9 @@ def register_plan(sub) -> None:
                    help="also every loop-free plan up to (1+T) x the shortest length")
     pddl_args(p, "plan for it (no learner mapping; default domain: office)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--figure", type=Path, metavar="FILE",
+                   help="also draw the plans on the office's map into FILE (.png, .pdf, "
+                        ".svg; an office task only)")
     p.set_defaults(func=cmd_plan)
 
 
@@ -101,7 +104,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
                           "clingo, or no --tolerance")
     abstraction = None
     if args.problem is not None:
-        refuse_given(args, ["--task", "--start", "--goal", "--world"],
+        refuse_given(args, ["--task", "--start", "--goal", "--world", "--figure"],
                      "is for an office task; with --problem the start and goal are the "
                      "problem's own")
         domain, path, _ = pddl_files(args, "office")
@@ -118,6 +121,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
         problem = PlanningProblem.from_texts(dtext, office_problem(world, task), dsrc, source)
         abstraction = OfficeAbstraction(world)
         start, goal = None, abstraction.goal(task.goal)
+        if args.figure is not None:
+            output_file(args.figure, "--figure")
     try:
         result = planner.solve(problem, start, goal, args.tolerance)
     except MemoryError:
@@ -141,10 +146,30 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if result.status is not Status.SOLVED:
         print("gdq-pddl: no plan: the goal cannot be reached from the start", file=sys.stderr)
         return EXIT_NO_PLAN
+    if args.figure is not None:
+        _plans_figure(args.figure, world, task, result.plans, abstraction)
     if result.length == 0:
         print("gdq-pddl: warning: the goal already holds at the start (or is empty): the plan "
               "has no action, and `gdq-pddl run` refuses such a task", file=sys.stderr)
     return 0
+
+
+def _plans_figure(path: Path, world, task, plans, abstraction: OfficeAbstraction) -> None:
+    """The planner's ``plans`` drawn on the map of ``world``, as the learner's moves."""
+    from matplotlib.figure import Figure  # start-up time: matplotlib loads when drawing
+
+    from gdq_pddl.envs.render import MapPainter, plan_route  # start-up time, as above
+
+    routes = [plan_route(abstraction.spaces, [(abstraction.learner_state(s),
+                                               abstraction.learner_action(a))
+                                              for s, a in plan.pairs()]) for plan in plans]
+    fig = Figure(figsize=(6.5, 6.5 + 0.2 * len(routes)), layout="constrained")
+    ax = fig.add_subplot()
+    MapPainter(world).draw_plans(ax, routes, task)
+    ax.set_title(f"task {task.name}: {len(routes)} plan(s) from {task.start} to {task.goal} "
+                 "(blue ring: start, green: goal)", fontsize=10)
+    save_figure(fig, path, dpi=100)
+    print(f"figure: {path}")
 
 
 def _plan_json(plan, abstraction) -> dict:

@@ -43,6 +43,7 @@ class CompiledEnv(gym.Env[int, int]):
         """One action per learner action (the office: 95, verb-major)."""
         self._restart()
         self._t, self._cause, self._done = 0, "", True  # not started
+        self._action = -1  # the last action taken; -1 before the first of an episode
 
     def check_render_mode(self, render_mode: str | None) -> None:
         """Refuse a render mode this env class cannot draw (a :class:`ConfigError`)."""
@@ -87,6 +88,7 @@ class CompiledEnv(gym.Env[int, int]):
         # info's cause says "goal" and step() asks for a new reset.
         at_goal = self._position() == self.instance.goal_pos
         self._t, self._cause, self._done = 0, "goal" if at_goal else "", at_goal
+        self._action = -1
         return self._observe(), self._info()
 
     def step(self, action: int) -> tuple[int, float, bool, bool, dict[str, Any]]:
@@ -100,7 +102,7 @@ class CompiledEnv(gym.Env[int, int]):
             raise ValueError(f"action must be an integer in [0, {self.model.n_actions}), "
                              f"got {action!r}")
         reward, terminated, truncated, cause = self._advance(a)
-        self._t, self._cause = self._t + 1, CAUSES[cause]
+        self._t, self._cause, self._action = self._t + 1, CAUSES[cause], a
         self._done = bool(terminated or truncated)
         return self._observe(), float(reward), bool(terminated), bool(truncated), self._info()
 

@@ -290,10 +290,13 @@ class OfficeInstance:
         """What ``info`` says beyond every env's keys: the ``position``'s name."""
         return {"position": self.world.positions[pos]}
 
-    def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
-        """Full state ``fs`` drawn as text (``"ansi"``) or an RGB array (``"rgb_array"``)."""
+    def render(self, mode: str, fs: int, step: int, cause: str, action: str = ""
+               ) -> str | np.ndarray:
+        """Full state ``fs`` drawn as text (``"ansi"``) or an RGB array (``"rgb_array"``:
+        with the step, the ``action`` that led here and a legend)."""
         robot, opened = self.decode(fs)
-        frame = Frame(self.world, self.task.name, robot, self.task.goal, opened, step, cause)
+        frame = Frame(self.world, self.task.name, robot, self.task.goal, opened, step, cause,
+                      action)
         return ansi(frame) if mode == "ansi" else self._painter(frame)
 
     @cached_property

@@ -389,13 +389,17 @@ class PDDLInstance:
         """What ``info`` says beyond every env's keys (at position ``pos``): nothing."""
         return {}
 
-    def render(self, mode: str, fs: int, step: int, cause: str) -> str | np.ndarray:
-        """The state's fluent atoms as text (``ansi``) or drawn (``rgb_array``, 640 x 480)."""
+    def render(self, mode: str, fs: int, step: int, cause: str, action: str = ""
+               ) -> str | np.ndarray:
+        """The state's fluent atoms as text (``ansi``) or drawn (``rgb_array``, 640 x 480,
+        under the ``action`` that led here)."""
         why = f" ({cause})" if cause else ""
         text = f"step {step}{why}: " + " ".join(sorted(self.atoms(fs)))
         if mode == "ansi":
             return text
-        return text_image(f"{self.name}\n" + text.replace(" ", "\u00a0").replace(")\u00a0(", ") ("))
+        done = f"action taken: {action}" if action else "start of the episode"
+        return text_image(f"{self.name}\n{done}\n"
+                          + text.replace(" ", "\u00a0").replace(")\u00a0(", ") ("))
 
 
 def word_facts(words: np.ndarray, n_facts: int) -> np.ndarray:
@@ -450,7 +454,8 @@ class PDDLEnv(CompiledEnv):
             gym.logger.warn("render() called without a render_mode; pass render_mode="
                             "'ansi' to gymnasium.make")
             return None
-        return self.instance.render(self.render_mode, self._fs, self._t, self._cause)
+        action = self.instance.action_name(self._action) if self._action >= 0 else ""
+        return self.instance.render(self.render_mode, self._fs, self._t, self._cause, action)
 
     def _restart(self) -> None:
         self._fs = self.instance.start_state

@@ -37,6 +37,8 @@ class Frame:
     open_doors: frozenset[str]
     step: int
     cause: str = ""
+    action: str = ""
+    """The action that led to this frame (``""`` at the start of an episode)."""
 
 
 def _label(frame: Frame, p: str) -> str:
@@ -95,6 +97,21 @@ ROBOT, GOAL, FLOOR, DOOR_SIDE = "#d62728", "#2ca02c", "#dddddd", "#bbbbff"
 OPEN, CLOSED = "#2ca02c", "#d62728"
 
 
+def caption(frame: Frame) -> tuple[str, str]:
+    """The title of a frame's image (the task, the step and the action taken, or
+    ``start``; why the episode ended) and its second line, what was just done."""
+    status = f" ({frame.cause})" if frame.cause else ""
+    title = (f"task {frame.task_name}: robot at {frame.robot}, goal {frame.goal}, "
+             f"step {frame.step}/{frame.world.step_limit}{status}")
+    done = f"action taken: {frame.action}" if frame.action else "start of the episode"
+    return title, done
+
+
+LEGEND = [("o", ROBOT, "robot"), ("o", DOOR_SIDE, "door side"), ("o", FLOOR, "position"),
+          ("ring", GOAL, "goal"), ("-", OPEN, "door open"), (":", CLOSED, "door closed")]
+"""The legend of a frame: (marker, colour, label)."""
+
+
 class MapPainter:
     """Draws frames of one world as ``uint8[H, W, 3]`` images with matplotlib (Agg)."""
 
@@ -116,7 +133,7 @@ class MapPainter:
 
         w, xy = self.world, self.xy
         fig = Figure(figsize=self.size, dpi=self.dpi)
-        ax = fig.add_axes((0.02, 0.05, 0.96, 0.87))
+        ax = fig.add_axes((0.02, 0.09, 0.96, 0.81))
         ax.set_axis_off()
         door_edges = {frozenset(d.sides): d for d in w.doors}
         for a, b in w.edges:
@@ -135,13 +152,31 @@ class MapPainter:
             ax.scatter(*xy[p], s=500, c=face, edgecolors=edge, linewidths=lw, zorder=2)
             ax.text(*xy[p], p, fontsize=8, ha="center", va="center", zorder=3,
                     color="white" if p == frame.robot else "black")
-        fig.text(0.5, 0.01, "red: robot   green ring: goal   door: green solid open, "
-                 "red dotted closed", ha="center", fontsize=8)
-        status = f" ({frame.cause})" if frame.cause else ""
-        fig.suptitle(f"task {frame.task_name}: {frame.robot} -> {frame.goal}, "
-                     f"step {frame.step}/{w.step_limit}{status}", fontsize=10)
+        self._legend(fig)
+        title, done = caption(frame)
+        fig.text(0.5, 0.975, title, ha="center", va="top", fontsize=10)
+        fig.text(0.5, 0.935, done, ha="center", va="top", fontsize=10, weight="bold",
+                 color="#1f4e79")
         ax.margins(0.08)
         return _pixels(fig)
+
+    @staticmethod
+    def _legend(fig: Figure) -> None:
+        """:data:`LEGEND` along the bottom of ``fig``."""
+        from matplotlib.lines import Line2D  # start-up time, as above
+
+        handles = []
+        for marker, colour, label in LEGEND:
+            if marker in ("-", ":"):
+                handles.append(Line2D([], [], color=colour, lw=3, ls=marker, label=label))
+            else:
+                ring = marker == "ring"
+                handles.append(Line2D([], [], ls="", marker="o", markersize=9, label=label,
+                                      markerfacecolor="white" if ring else colour,
+                                      markeredgecolor=colour if ring else "#444444",
+                                      markeredgewidth=2.5 if ring else 1.0))
+        fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=7, frameon=False,
+                   bbox_to_anchor=(0.5, 0.0), handlelength=1.6, columnspacing=1.2)
 
     def draw_q(self, ax: Axes, q: np.ndarray, masks: np.ndarray | None = None,
                norm: Normalize | None = None, cmap: str = "viridis",
@@ -237,6 +272,77 @@ class MapPainter:
                 ax.annotate("", xy=self.xy[b], xytext=self.xy[a], zorder=4, in_layout=False,
                             arrowprops={"arrowstyle": "-|>", "color": colour, "lw": lw,
                                         "shrinkA": 7, "shrinkB": 7})
+
+
+    def draw_plans(self, ax: Axes, routes: Sequence[Sequence[str]], task: Task | None = None,
+                   labels: Sequence[str] | None = None) -> None:
+        """The world on ``ax`` with each route of ``routes`` (positions, as
+        :func:`plan_route` gives them) drawn as arrows in a colour of its own, side by side
+        where routes share a corridor, and a legend (``labels``: default "plan k, n
+        moves")."""
+        self._plain_map(ax, task)
+        span = np.ptp(np.array(list(self.xy.values())), axis=0).max() or 1.0
+        colours = ("#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9",
+                   "#000000", "#882255", "#999933", "#332288", "#44aa99", "#aa4499")
+        for k, route in enumerate(routes):
+            colour = colours[k % len(colours)]
+            shift = (k - (len(routes) - 1) / 2) * min(0.012, 0.04 / len(routes)) * span
+            for a, b in zip(route[:-1], route[1:], strict=True):
+                if a == b:
+                    continue
+                d = self.xy[b] - self.xy[a]
+                normal = np.array([-d[1], d[0]]) / (np.linalg.norm(d) or 1.0) * shift
+                ax.annotate("", xy=self.xy[b] + normal, xytext=self.xy[a] + normal, zorder=4,
+                            in_layout=False,
+                            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 2.0,
+                                        "shrinkA": 9, "shrinkB": 9})
+            label = labels[k] if labels is not None else \
+                f"plan {k + 1}: {' > '.join(route)}"
+            ax.plot([], [], color=colour, lw=2.0, label=label)
+        if routes:
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=8,
+                      frameon=False)
+
+
+    def _plain_map(self, ax: Axes, task: Task | None) -> None:
+        """The world on ``ax`` at a size to read: corridors grey, doors dotted brown with
+        their names, each position by its name, the ``task``'s start ringed blue and its
+        goal green."""
+        w, xy = self.world, self.xy
+        door_of = {frozenset(d.sides): d.name for d in w.doors}
+        for a, b in w.edges:
+            door = door_of.get(frozenset((a, b)))
+            ax.plot(*zip(xy[a], xy[b], strict=True), color="#999999" if door is None else
+                    "#8c564b", lw=1.2 if door is None else 3.0, ls="-" if door is None else ":",
+                    zorder=1)
+            if door is not None:
+                ax.text(*(xy[a] + xy[b]) / 2, door, fontsize=8, ha="center", va="center",
+                        color="#8c564b", zorder=5, in_layout=False,
+                        bbox={"fc": "white", "ec": "none", "pad": 0.5})
+        for p in w.positions:
+            ax.scatter(*xy[p], s=330, c=FLOOR, edgecolors="#333333", linewidths=0.6, zorder=3)
+            ax.text(*xy[p], p, fontsize=7, ha="center", va="center", zorder=6,
+                    in_layout=False)
+        if task is not None:
+            ax.scatter(*np.array([xy[task.start], xy[task.goal]]).T, s=600,
+                       facecolors="none", edgecolors=["#1f77b4", "#2ca02c"], lw=2.5, zorder=4)
+        ax.set_axis_off()
+        ax.set_aspect("equal")
+        ax.margins(0.08)
+
+
+def plan_route(spaces: LearnerSpaces, plan: Sequence[tuple[int, int]]) -> list[str]:
+    """The positions a plan (learner ``(state, action)`` pairs, as
+    :meth:`~gdq_pddl.abstraction.PlanTable.plans_from` lists them) takes the robot
+    through: where it starts, then where each move goes (opening a door moves nobody)."""
+    if not plan:
+        return []
+    route = [spaces.states[plan[0][0]][0]]
+    for _, a in plan:
+        verb, target = spaces.action_parts(a)
+        if verb in MOVES and target != route[-1]:
+            route.append(target)
+    return route
 
 
 _PAINTERS: dict[int, MapPainter] = {}

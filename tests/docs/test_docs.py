@@ -89,6 +89,42 @@ def _check_tutorial_claims(ns: dict) -> None:
     assert ns["lengths"] == [8, 9, 10]
     assert route[0] == ns["first"] == "approach p2"
     assert len(route) == 9 and {"gothrough p4", "gothrough p7"} <= set(route)
+    _check_teaching_claims(ns)
+
+
+def _check_teaching_claims(ns: dict) -> None:
+    """What the prose of the class's sections says of the Dyna-Q sweep, the plans on the
+    map, the wrong knowledge, the recorded episode and the older readings' curves."""
+    sweep = ns["sweep"]
+    firsts = {n: [int(np.argmax(r)) + 1 for r in runs] for n, runs in sweep.items()}
+    assert not sweep[0].any()
+    assert min(firsts[5]) >= 120 and max(firsts[5]) <= 180
+    assert min(firsts[50]) >= 35 and max(firsts[50]) <= 115
+    assert round(sweep[5][:, 200:].mean(), 2) == 0.98 and not sweep[5][:, :100].any()
+    assert 0.2 <= sweep[50][:, :100].mean() <= 0.3
+    assert round(sweep[50][:, 200:].mean(), 2) == 0.91
+    assert not ns["curves"]["Dyna-Q"].max() > 0  # no success on task C
+    assert ns["shortest"] == [["p0", "p1", "p3", "p5", "p6", "p7", "p17"],
+                              ["p0", "p2", "p4", "p8", "p9", "p10", "p17"]]
+    found = ns["wrong_knowledge"]
+    locked = {k[1]: v for k, v in found.items() if k[0] == "office:locked-d3"}
+    passage = {k[1]: v for k, v in found.items() if k[0] == "office:passage"}
+    wrong, accurate = locked["GDQ, wrong knowledge"], locked["GDQ, accurate knowledge"]
+    assert all(5 <= n <= 9 for n in wrong[1]) and not any(accurate[1])
+    assert abs(wrong[0] - accurate[0]) < 0.2
+    for learner in wrong[2]:
+        route = ns["greedy_route"](learner)
+        assert "opendoor p6" not in route and "opendoor p12" in route and len(route) == 10
+    wrong, accurate = passage["GDQ, wrong knowledge"], passage["GDQ, accurate knowledge"]
+    dyna = passage["Dyna-Q, no knowledge"]
+    assert not any(wrong[1]) and all(n > 0 for n in accurate[1]) and all(dyna[1])
+    assert 4 < accurate[0] - wrong[0] < 5 and dyna[0] < wrong[0] - 10
+    assert len(ns["frames"]) == ns["steps"] + 1 == 10
+    window = ns["window"]
+    code = np.convolve(ns["curves"]["GDQ-code"], np.ones(window) / window, mode="valid")
+    assert int(np.argmax(code > 0)) + window == 41 and int(np.argmax(code > 9)) + window == 53
+    literal = ns["curves"]["GDQ-literal"]  # an episode at the goal returns more than 0
+    assert (literal[:20] > 0).sum() == 4 and -40 < literal[-100:].mean() < -38
 
 
 def _check_exploring_sets(ns: dict) -> None:
@@ -177,8 +213,9 @@ def test_notebook_runs_with_its_plots_inline(request):
     code = [c for c in nb.cells if c.cell_type == "code"]
     plots = [c.source for c in code
              if any("image/png" in o.get("data", {}) for o in c.outputs)]
-    assert len(plots) == 2
-    assert "draw_q" in plots[0] and "curves.items()" in plots[1]
+    assert len(plots) == 4
+    assert "draw_plans" in plots[0] and "draw_q" in plots[1]
+    assert "curves.items()" in plots[2] and "imshow" in plots[3]
     printed = "".join(o.get("text", "") for c in code for o in c.outputs)
     assert "Discrete(31) Discrete(95)" in printed and "2 plan(s) of length 8" in printed
 
