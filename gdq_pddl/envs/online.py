@@ -51,7 +51,7 @@ from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
-from gdq_pddl.limits import check_real, human_bytes
+from gdq_pddl.limits import MAX_TOLERANCE, check_real, human_bytes
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.pddl.reachable import state_bytes, table_budget
 from gdq_pddl.planning.base import length_bound
@@ -95,6 +95,7 @@ class OnlineInstance:
             raise ConfigError(f"estimate {estimate!r}: expected one of "
                               f"{', '.join(ESTIMATES)}, or None")
         check_real("estimate_weight", estimate_weight, 1.0, MAX_ESTIMATE_WEIGHT)
+        check_real("darling_tolerance", darling_tolerance, 0.0, MAX_TOLERANCE)
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "

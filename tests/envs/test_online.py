@@ -335,6 +335,9 @@ def test_estimate_weight_is_checked(monkeypatch) -> None:
                            r"in \[1, 100\], got"):
             OnlineInstance(base, estimate_weight=bad)
     assert OnlineInstance(base, estimate_weight=np.float64(100.0)).estimate_weight == 100.0
+    for bad in ("0.3", -0.1, float("nan")):
+        with pytest.raises(ConfigError, match="^darling_tolerance must be a finite number"):
+            OnlineInstance(base, darling_tolerance=bad)
     monkeypatch.setattr("gdq_pddl.pddl.reachable.TABLE_BUDGET", 100_000)
     with pytest.raises(ConfigError, match="estimate_weight 100: .* chain rows .*table budget"):
         OnlineInstance(base, estimate_weight=100)
