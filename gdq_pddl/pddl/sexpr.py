@@ -146,7 +146,7 @@ class Reader:
             if label and first_at.setdefault(label, node) is not node:
                 raise self.fail(node.line, f"two {kind}s are named {label!r}, at lines "
                                 f"{first_at[label].line} and {node.line} (names ignore "
-                                "case): rename one, a name must pick one problem")
+                                f"case): rename one, a name must pick one {kind}")
         labels = ", ".join(label for label, _ in found)
         if name is not None:
             chosen = [node for label, node in found if label == name.lower()]
