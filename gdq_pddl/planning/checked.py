@@ -31,6 +31,9 @@ from gdq_pddl.planning.base import (
     length_bound,
 )
 
+CHECKED = "checked"
+"""The option that sets this wrapper's query keys apart from any backend's."""
+
 MAX_SHOWN = 300
 """Characters of a plugin's exception message kept in the one-line error."""
 
@@ -67,7 +70,9 @@ class CheckedPlanner:
     def solve(self, problem: PlanningProblem, start: State | None = None,
               goal: State | None = None, tolerance: float = 0.0) -> PlanResult:
         """The backend's answer for the query, once it has been checked."""
-        q = problem.query(f"{self.name} (checked)", start, goal, tolerance)  # never cached
+        # the key's "checked" keeps it apart from the backend's own (nothing is cached
+        # under it); errors of the query name the planner as the backend's would
+        q = problem.query(self.name, start, goal, tolerance, CHECKED)
         try:
             result = self.backend.solve(problem, start, goal, tolerance)
         except (GdqError, MemoryError):
