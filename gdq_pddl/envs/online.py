@@ -46,20 +46,26 @@ from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, dead_chances, prio
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
-from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
+from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR, limit_key
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance, word_facts
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.errors import ConfigError, PlanningError, WorldError
+from gdq_pddl.limits import MAX_TOLERANCE, check_real, human_bytes
 from gdq_pddl.pddl.lazy import LazyGraph
+from gdq_pddl.pddl.reachable import state_bytes, table_budget
 from gdq_pddl.planning.base import length_bound
-from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for
+from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for, hmax_for
 
 ESTIMATES = {"h_add": hadd_for, "h_FF": hff_for}
 """The distance estimates online exploration can read, by name."""
 
 ESTIMATE = "(estimate)"
 """The name of the estimate action (ground action ``n_ops``: see the module docstring)."""
+
+MAX_ESTIMATE_WEIGHT = 100.0
+"""The largest ``estimate_weight``: a state not reached yet stands at most 100 x its
+estimate from the goal (and no more chain rows than the table budget holds)."""
 
 FIRST_ROWS = 1024
 """Rows allocated at first (doubled when full)."""
@@ -88,8 +94,8 @@ class OnlineInstance:
         if estimate is not None and estimate not in ESTIMATES:
             raise ConfigError(f"estimate {estimate!r}: expected one of "
                               f"{', '.join(ESTIMATES)}, or None")
-        if not math.isfinite(estimate_weight) or estimate_weight < 1.0:
-            raise ConfigError(f"estimate_weight {estimate_weight!r}: expected a number >= 1")
+        check_real("estimate_weight", estimate_weight, 1.0, MAX_ESTIMATE_WEIGHT)
+        check_real("darling_tolerance", darling_tolerance, 0.0, MAX_TOLERANCE)
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
@@ -105,10 +111,11 @@ class OnlineInstance:
         self.n_ops = len(self.task.ops)
         h0 = int(self.heuristic.many(self.graph.words[:1])[0])
         if h0 == INFINITE:
-            raise PlanningError(f"{self.source}: the goal cannot be reached from the initial "
-                                "state even ignoring every delete effect")
+            raise PlanningError(_no_way(base))
         self.h_start = h0
         self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
+        self._check_step_limit(h0)
+        self._check_chain(h0)
         self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]
         self._cost_arrays = cost_arrays(self.costs)
         self.mean_cost = expected_costs(self.model)
@@ -128,6 +135,33 @@ class OnlineInstance:
         self._chain_row(0)
         self._found(np.array([0]))
         self._row(0)
+
+    def _check_step_limit(self, h0: int) -> None:
+        """Refuse, as the enumerated run does (:func:`~gdq_pddl.envs.pddl_checks.
+        check_step_limit`), a step limit below h_max from the initial state, a lower bound
+        on the knowledge's shortest plan (h_add and h_FF are never below h_max: only a
+        limit below ``h0`` needs it computed)."""
+        limit = self.dynamics.step_limit
+        if limit >= h0:
+            return
+        bound = hmax_for(self.task)(self.graph.mask(0), self.task.goal_pos)
+        if bound > limit:
+            raise WorldError(*limit_key(self.base.problem, self.dynamics),
+                             f"{limit} is less than the shortest plan of {self.source} (at "
+                             f"least {bound} actions: h_max from the initial state, a lower "
+                             "bound): no episode can reach the goal")
+
+    def _check_chain(self, h0: int) -> None:
+        """Refuse an ``estimate_weight`` whose chain rows for the initial state's estimate
+        alone (``ceil(w h0)``, each as wide as the actions) pass the table budget."""
+        rows = math.ceil(self.estimate_weight * h0)
+        need = rows * state_bytes(self.n_ops + 1)
+        if need > table_budget():
+            raise ConfigError(f"estimate_weight {self.estimate_weight:g}: the initial state's "
+                              f"estimate ({h0} actions) would stand {rows:,} chain rows from "
+                              f"the goal, {human_bytes(need)} of tables, past the table "
+                              f"budget of {human_bytes(table_budget())}; give a smaller "
+                              "weight (1 reads the estimates as they are)")
 
     # -- what the learners' context reads (the Instance protocol of learners.context) -----
     name = property(lambda self: self.base.name)
@@ -422,6 +456,19 @@ class OnlineInstance:
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+
+
+def _no_way(base: PDDLInstance) -> str:
+    """Why the relaxation from the initial state never reaches the goal, as it is true of
+    the determinisation the knowledge is (the relaxed actions are its outcomes)."""
+    if base.determinisation == "most-likely":
+        return (f"{base.source}: the most-likely determinisation (the knowledge: each "
+                "action's most likely outcome) has no way to the goal from the initial "
+                "state, even ignoring delete effects, so there is no estimate to explore "
+                "online by (reality's less likely outcomes may still reach it); plan on "
+                "every outcome (--determinisation all-outcomes)")
+    return (f"{base.source}: the goal cannot be reached from the initial state by any "
+            "outcome of positive probability, even ignoring every delete effect")
 
 
 def _not_enumerated():

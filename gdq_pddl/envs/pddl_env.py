@@ -369,9 +369,7 @@ class PDDLInstance:
         if start is None:
             return self
         task, graph = self.graph.task, self.graph
-        facts = {"(" + " ".join(str(f).strip("() ").lower().split()) + ")" for f in
-                 (re.findall(r"\([^()]*\)", start) if isinstance(start, str) else start)}
-        facts -= set(task.statics)
+        facts = start_facts(start) - set(task.statics)
         unknown = sorted(facts - set(task.fact_index))
         s = None if unknown else graph.index.get(task.mask(facts))
         if s is None or graph.is_goal[s]:
@@ -408,6 +406,56 @@ def word_facts(words: np.ndarray, n_facts: int) -> np.ndarray:
     bits = np.unpackbits(np.ascontiguousarray(words, dtype="<u8").view(np.uint8),
                          bitorder="little")
     return bits[:n_facts].astype(np.int8)
+
+
+def start_facts(start: object) -> set[str]:
+    """The fluent facts of a ``reset`` option's ``start``, each written ``(name args)``
+    lower-cased: a string of parenthesised facts as ``render()`` lists them, or a list (a
+    tuple, a set) of strings, one fact each (``"(at c12)"`` or ``"at c12"``). Anything
+    else, or text that is not such facts (unbalanced or nested parentheses, words outside
+    them), is refused with a :class:`ConfigError` saying what it takes."""
+    takes = ("a string of fluent facts as render() lists them, \"(at c12) (open c11)\", or "
+             "a list of such facts")
+    if isinstance(start, str):
+        why = _not_facts(start)
+        if why:
+            raise ConfigError(f"reset options: start {start!r}: {why}; expected {takes}")
+        items = re.findall(r"\(([^()]*)\)", start)
+    elif isinstance(start, (list, tuple, set, frozenset)):
+        items = []
+        for fact in start:
+            if not isinstance(fact, str):
+                raise ConfigError(f"reset options: start {start!r}: {fact!r} (of type "
+                                  f"{type(fact).__name__}) is not a fact; expected {takes}")
+            inner = fact.strip()
+            if inner.startswith("(") and inner.endswith(")"):
+                inner = inner[1:-1]
+            if "(" in inner or ")" in inner or not inner.split():
+                raise ConfigError(f"reset options: start {start!r}: {fact!r} is not one "
+                                  f"fact; expected {takes}")
+            items.append(inner)
+    else:
+        raise ConfigError(f"reset options: start {start!r} is of type "
+                          f"{type(start).__name__}; expected {takes}")
+    return {"(" + " ".join(item.lower().split()) + ")" for item in items}
+
+
+def _not_facts(text: str) -> str:
+    """Why ``text`` is not parenthesised facts with blanks between them ("" if it is)."""
+    depth = 0
+    for i, ch in enumerate(text):
+        if ch == "(":
+            depth += 1
+            if depth > 1:
+                return f"nested parentheses at character {i + 1}"
+        elif ch == ")":
+            depth -= 1
+            if depth < 0:
+                return f"unbalanced parentheses: a ')' without its '(' at character {i + 1}"
+        elif depth == 0 and not ch.isspace():
+            word = text[i:].split("(")[0].split()[0]
+            return f"text outside ( ) at character {i + 1}: {word!r}"
+    return "unbalanced parentheses: a '(' never closed" if depth else ""
 
 
 def graph_space(graph: StateGraph) -> StateSpace:

@@ -14,7 +14,7 @@ from typing import NamedTuple, Protocol, runtime_checkable
 
 from gdq_pddl.errors import PlanningError, SizeError
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
-from gdq_pddl.pddl.grounding import GroundTask, ground
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.pddl.parser import parse_domain
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
@@ -127,6 +127,11 @@ class PlanningProblem:
     def task(self) -> GroundTask:
         """The grounded problem the planners search (computed once)."""
         return ground(self.domain, self.problem)
+
+    @cached_property
+    def ops_by_name(self) -> dict[str, GroundOp]:
+        """The grounded task's actions by name (what a plan's steps are looked up in)."""
+        return {op.name: op for op in self.task.ops}
 
     @cached_property
     def learner_task(self) -> GroundTask:
