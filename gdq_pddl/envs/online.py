@@ -97,7 +97,7 @@ class OnlineInstance:
         self.base = base
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
-        self.graph = LazyGraph(self.task, gains=self.own)
+        self.graph = LazyGraph(self.task, gains=True)  # costs inside effects: both scales
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
         self.estimates = estimate is not None
         self.estimate_weight = float(estimate_weight)
@@ -162,7 +162,8 @@ class OnlineInstance:
                            next=np.zeros(0, dtype=np.int64), stuck=np.zeros(0, dtype=np.bool_),
                            **self._cost_arrays, obs_of=np.zeros(0, dtype=np.int64),
                            pos_of=np.zeros(0, dtype=np.int64),
-                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
+                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64),
+                           own_scale=self.own)
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:

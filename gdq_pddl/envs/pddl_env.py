@@ -207,8 +207,8 @@ class PDDLInstance:
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   reality_outcomes(self.graph, own) if self.ppddl else None,
-                                   own and self.ppddl)
+                                   reality_outcomes(self.graph, True) if self.ppddl else None,
+                                   self.ppddl, own)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))
         check_reality(self.problem, self.graph, self.dynamics, model)

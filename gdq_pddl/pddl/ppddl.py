@@ -178,16 +178,21 @@ def ground_ppddl(domain: Domain, problem: Problem,
 
 
 def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[float | None]:
-    """The cost the domain states for each ground action ``"(schema args...)"`` (None: it
-    states none), its terms summed, function terms valued from the problem's ``:init``."""
+    """The cost the domain states for each ground action ``"(schema args...)"`` whatever
+    happens (outside any ``when``, ``forall`` or ``probabilistic``), its terms summed,
+    function terms valued from the problem's ``:init``; 0 for an action whose costs are
+    all its outcomes' (:class:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome` pays them);
+    None: it states no cost anywhere (:meth:`~gdq_pddl.pddl.model.Action.states_cost`)."""
     by_name = {a.name: a for a in domain.actions}
+    stated = {a.name: a.states_cost() for a in domain.actions}
     out: list[float | None] = []
     for name in names:
         atom = Atom.parse(name)
         action = by_name[atom.predicate]
         binding = dict(zip((p for p, _ in action.parameters), atom.args, strict=True))
-        out.append(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
-                       for term in action.cost) if action.cost else None)
+        out.append(float(sum(term_value(term, binding, domain, problem, action,
+                                        f"the cost of {name}") for term in action.cost))
+                   if stated[action.name] else None)
     return out
 
 

@@ -1,0 +1,113 @@
+"""Costs and rewards inside ``forall``, ``when`` and ``probabilistic`` (issue 38): paid on
+both reward scales, by the enumerated env, V* and the env of a problem explored online
+alike. They were dropped on the goal scale (a step paid the default cost 1 instead)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gdq_pddl.envs.online import OnlineInstance
+from gdq_pddl.envs.online_env import OnlineEnv
+from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLEnv, PDDLInstance
+from gdq_pddl.envs.solve import Budget, solve, value_within
+
+DOMAIN = """(define (domain coins) (:requirements :adl :probabilistic-effects :action-costs)
+  (:types coin)
+  (:predicates (a) (b))
+  (:functions (total-cost) - number (fee ?c - coin))
+  (:action first :parameters () :precondition (not (a))
+    :effect (and (a) EFFECT))
+  (:action second :parameters () :precondition (a)
+    :effect (and (b) (increase (total-cost) 1))))
+"""
+PROBLEM = """(define (problem coins-3) (:domain coins) (:objects x y z - coin)
+  (:init (= (fee x) 2) (= (fee y) 2) (= (fee z) 2)) (:goal (b)) METRIC)
+"""
+GOAL_SCALE = "(:metric minimize (total-cost))"
+OWN_SCALE = "(:goal-reward 20) (:metric maximize (reward))"
+
+SIX = {  # ways to write "the first action costs 6" (3 coins of 2) inside a construct
+    "forall": "(forall (?c - coin) (increase (total-cost) 2))",
+    "forall of a function": "(forall (?c - coin) (increase (total-cost) (fee ?c)))",
+    "when": "(when (not (b)) (increase (total-cost) 6))",
+    "probabilistic 1": "(probabilistic 1 (increase (total-cost) 6))",
+    "forall of when of probabilistic": "(forall (?c - coin) (when (not (b)) "
+                                       "(probabilistic 1 (increase (total-cost) 2))))",
+    "probabilistic of forall": "(probabilistic 1/2 (forall (?c - coin) (increase "
+                               "(total-cost) 2)) 1/2 (increase (total-cost) 6))",
+    "decrease reward in when": "(when (not (b)) (decrease (reward) 6))",
+    "and of two": "(and (when (not (b)) (increase (total-cost) 4)) "
+                  "(probabilistic 1 (increase (total-cost) 2)))",
+}
+
+
+def instance(effect: str, metric: str) -> PDDLInstance:
+    return PDDLInstance.from_texts(DOMAIN.replace("EFFECT", effect),
+                                   PROBLEM.replace("METRIC", metric))
+
+
+def first_rewards(inst, online: bool) -> list[float]:
+    """The rewards of the two steps first, second from the initial state."""
+    env = OnlineEnv(OnlineInstance(inst)) if online else PDDLEnv(instance=inst)
+    env.reset(seed=0)
+    names = [inst.action_name(a) for a in range(inst.n_actions)]
+    return [float(env.step(names.index(n))[1]) for n in ("(first)", "(second)")]
+
+
+@pytest.mark.parametrize("effect", SIX.values(), ids=SIX.keys())
+def test_a_cost_inside_a_construct_is_paid_on_the_goal_scale(effect):
+    """V* = 20 - 6: the first step pays 6 (not the default 1: the action states a cost),
+    the second reaches the goal (+20 instead of its cost). Before: V* 19, a step of -1."""
+    inst = instance(effect, GOAL_SCALE)
+    assert inst.reward_scale == "goal"
+    assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(14.0)
+    assert first_rewards(inst, online=False) == [-6.0, 20.0]
+    assert first_rewards(inst, online=True) == [-6.0, 20.0]
+
+
+@pytest.mark.parametrize("effect", SIX.values(), ids=SIX.keys())
+def test_the_same_cost_is_paid_on_the_problems_own_scale(effect):
+    """V* = -6 - 1 + 20: on the file's own scale the goal step pays its cost too."""
+    inst = instance(effect, OWN_SCALE)
+    assert inst.reward_scale == "problem"
+    assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(13.0)
+    assert first_rewards(inst, online=False) == [-6.0, 19.0]
+    assert first_rewards(inst, online=True) == [-6.0, 19.0]
+
+
+def test_a_reward_inside_a_construct_is_earned_on_the_goal_scale():
+    """An action that states no cost costs the default 1 on the goal scale, and earns the
+    reward its effect writes: 3 - 1 on the first step, then +20."""
+    inst = instance("(when (not (b)) (increase (reward) 3))", GOAL_SCALE)
+    assert inst.reward_scale == "goal"
+    assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(22.0)
+    assert first_rewards(inst, online=False) == [2.0, 20.0]
+    assert first_rewards(inst, online=True) == [2.0, 20.0]
+    # a step may pay: no cheap bound on V* when it is not computed
+    assert value_within(inst.model, GOAL_POS, 0, Budget(bytes=0, work=0))[
+        "v_star_upper_bound"] is None
+
+
+def test_a_cost_that_depends_on_the_outcome_and_the_state():
+    """first: with 1/4 the coins cost 2 each where (b) does not hold (always here): 6;
+    else 2. Expected step reward -(1/4 6 + 3/4 2) = -3; V* = 20 - 3."""
+    inst = instance("(probabilistic 1/4 (forall (?c - coin) (when (not (b)) "
+                    "(increase (total-cost) 2))) 3/4 (increase (total-cost) 2))", GOAL_SCALE)
+    assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(17.0)
+    m = inst.model
+    first = [a for a in range(inst.n_actions) if inst.action_name(a) == "(first)"][0]
+    pair = int(np.flatnonzero(m.acts[0] == first)[0])
+    ks = range(m.ptr[pair], m.ptr[pair + 1])
+    assert sorted((m.prob[k], m.gain[k]) for k in ks) == [(0.25, -6.0), (0.75, -2.0)]
+
+
+def test_the_bound_on_v_star_counts_what_an_outcome_earns():
+    """Not computed (budget 0): V* <= r_max - (L - 1) c, c the least a step costs: here
+    1 less the 1/2 the first action earns, so the bound is V* itself, 19.5 (19 without
+    the reward: below V*)."""
+    inst = instance("(increase (total-cost) 1) (when (not (b)) (increase (reward) 0.5))",
+                    GOAL_SCALE)
+    assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(19.5)
+    got = value_within(inst.model, GOAL_POS, 0, Budget(bytes=0, work=0))
+    assert got["v_star"] is None and got["v_star_upper_bound"] == pytest.approx(19.5)
