@@ -46,7 +46,7 @@ from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, dead_chances, prio
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
-from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
+from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR, check_step_rewards
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
@@ -109,6 +109,7 @@ class OnlineInstance:
                                 "state even ignoring every delete effect")
         self.h_start = h0
         self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
+        check_step_rewards(base.problem, base.costs, self.dynamics.r_max, self.own)
         self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]
         self._cost_arrays = cost_arrays(self.costs)
         self.mean_cost = expected_costs(self.model)

@@ -47,6 +47,7 @@ from gdq_pddl.envs.pddl_checks import (
     check_goal,
     check_reality,
     check_step_limit,
+    check_step_rewards,
     default_step_limit,
     limit_key,
     parse_reality,
@@ -206,6 +207,7 @@ class PDDLInstance:
                      f"applicable ground actions",
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
+        check_step_rewards(self.problem, self.costs, self.dynamics.r_max, own)
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
                                    reality_outcomes(self.graph, True) if self.ppddl else None,
                                    self.ppddl, own)

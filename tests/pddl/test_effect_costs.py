@@ -111,3 +111,39 @@ def test_the_bound_on_v_star_counts_what_an_outcome_earns():
     assert solve(inst.model, GOAL_POS).V[0, 0] == pytest.approx(19.5)
     got = value_within(inst.model, GOAL_POS, 0, Budget(bytes=0, work=0))
     assert got["v_star"] is None and got["v_star_upper_bound"] == pytest.approx(19.5)
+
+
+BIG = """(define (domain big) (:requirements :adl :rewards)
+  (:predicates (a) (b))
+  (:action first :parameters () :precondition (not (a))
+    :effect (and (a) (increase (reward) ONE) (when (not (b)) (increase (reward) TWO))))
+  (:action second :parameters () :precondition (a) :effect (b)))
+"""
+BIG_PROBLEM = """(define (problem big-1) (:domain big) (:init) (:goal (b)) (:goal-reward GOAL)
+  (:metric maximize (reward)))"""
+
+
+def big(one: str, two: str, goal: str) -> PDDLInstance:
+    return PDDLInstance.from_texts(BIG.replace("ONE", one).replace("TWO", two),
+                                   BIG_PROBLEM.replace("GOAL", goal))
+
+
+def test_a_step_that_can_pay_past_the_bound_is_refused_up_front_both_ways():
+    """Each reward within 1e15, one step 2e15: refused before any episode, naming the
+    domain and the action, enumerated and online alike. Before: the enumerated run went
+    on, the online one stopped midway with a learner's error naming no file."""
+    from gdq_pddl.errors import PDDLError
+
+    message = (r"^<domain>:3: action first: one step of \(first\) can pay 2e\+15 in size "
+               r".*the rewards and costs of one step, added up, must be at most 1e\+15")
+    with pytest.raises(PDDLError, match=message):
+        big("1e15", "1e15", "10").model  # noqa: B018
+    with pytest.raises(PDDLError, match=message):
+        OnlineInstance(big("1e15", "1e15", "10"))
+
+
+def test_a_step_within_the_bound_runs_both_ways():
+    """5e14 + 4e14 and the goal reward 1e14 add up to 1e15: accepted, and paid."""
+    inst = big("5e14", "4e14", "1e14")
+    assert first_rewards(inst, online=False) == [9e14, 1e14]
+    assert first_rewards(inst, online=True) == [9e14, 1e14]
