@@ -60,7 +60,7 @@ from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.outcomes import reality_outcomes
-from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.reachable import MAX_STATES, PAIR_BYTES, StateGraph, reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
@@ -191,8 +191,8 @@ class PDDLInstance:
     def costs(self) -> list[CostDist]:
         """Every ground action's cost: the dynamics file's, else the domain's, else 1 (0 on
         the problem's own reward scale)."""
-        names = [op.name for op in self.problem.learner_task.ops]  # the graph's task
-        stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
+        ops = self.problem.learner_task.ops  # the graph's task
+        names, stated = [op.name for op in ops], [op.cost for op in ops]
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
         return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
                 or (unstated if cost is None else CostDist("const", cost))

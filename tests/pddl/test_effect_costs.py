@@ -147,3 +147,36 @@ def test_a_step_within_the_bound_runs_both_ways():
     inst = big("5e14", "4e14", "1e14")
     assert first_rewards(inst, online=False) == [9e14, 1e14]
     assert first_rewards(inst, online=True) == [9e14, 1e14]
+
+
+ROUTES = """(define (domain routes) (:requirements :adl :probabilistic-effects :action-costs)
+  (:types coin)
+  (:predicates (got ?c - coin) (done))
+  (:functions (total-cost) - number (fee ?c - coin))
+  (:action take :parameters (?c - coin)
+    :effect (and (got ?c) (increase (total-cost) (fee ?c)) (increase (total-cost) 1)))
+  (:action free :parameters () :effect (done))
+  LAST)
+"""
+
+
+@pytest.mark.parametrize(("last", "route"), [
+    ("", "STRIPS (grounding.ground)"),
+    ("(:action toss :parameters () :effect (probabilistic 1/2 (done)))",
+     "PPDDL, one schema per outcome"),
+    ("(:action toss :parameters () :effect (forall (?c - coin) (when (got ?c) "
+     "(increase (total-cost) 5))))", "PPDDL, normalised"),
+])
+def test_every_grounding_route_gives_each_ground_action_its_cost(last, route):
+    """The ground action carries its cost beside its effect (GroundOp.cost), whichever
+    grounder made it: take a costs its fee (3) plus 1; free states none (None); toss
+    states its costs only inside its effect (0 outside)."""
+    from gdq_pddl.planning.base import PlanningProblem
+
+    problem = PlanningProblem.from_texts(
+        ROUTES.replace("LAST", last), "(define (problem r) (:domain routes) (:objects a - coin)"
+        " (:init (= (fee a) 3)) (:goal (and (got a) (done))))")
+    costs = {op.name: op.cost for op in problem.learner_task.ops}
+    want = {"(take a)": 4.0, "(free)": None} | ({"(toss)": 0.0} if "forall" in last else
+                                                 {"(toss)": None} if last else {})
+    assert costs == want, route
