@@ -180,3 +180,14 @@ def test_every_grounding_route_gives_each_ground_action_its_cost(last, route):
     want = {"(take a)": 4.0, "(free)": None} | ({"(toss)": 0.0} if "forall" in last else
                                                  {"(toss)": None} if last else {})
     assert costs == want, route
+
+
+def test_an_overlay_cost_replaces_the_actions_cost_not_its_outcomes():
+    """An overlay's cost for first (2) is the action's cost; the 6 its effect writes inside
+    a forall stays the outcome's: the step pays 8 on either scale."""
+    overlay = '[dynamics]\nname = "coins"\n\n[actions.first]\ncost = 2.0\n'
+    for metric, first in ((GOAL_SCALE, -8.0), (OWN_SCALE, -8.0)):
+        inst = PDDLInstance.from_texts(DOMAIN.replace("EFFECT", SIX["forall"]),
+                                       PROBLEM.replace("METRIC", metric), overlay)
+        assert first_rewards(inst, online=False)[0] == first
+        assert first_rewards(inst, online=True)[0] == first
