@@ -52,11 +52,11 @@ __all__ = ["MAX_OUTCOMES", "PDDLError", "parse_domain", "parse_problem", "proble
 
 MAX_OUTCOMES = 4096
 """Most outcomes one action's effect may flatten into."""
-SUM_TOLERANCE = 1e-9
+SUM_TOLERANCE = 1e-12
 """How far past 1 the probabilities of one ``(probabilistic ...)`` may sum (they are summed
-exactly, as written): probabilities printed from floats (``0.1 0.2 0.7000000000000001``)
-miss 1 by some 1e-16 each. Such a sum is taken as 1: the likeliest outcome gives up the
-excess."""
+exactly, as written), as a dynamics file's ``success + stuck``: probabilities printed
+from floats (``0.1 0.2 0.7000000000000001``) miss 1 by some 1e-16 each. Such a sum is
+taken as 1: the likeliest outcome gives up the excess."""
 _DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions",
                     ":action")
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",

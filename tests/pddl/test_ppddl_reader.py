@@ -91,7 +91,7 @@ WALK_EFFECT = "(probabilistic 0.9 (and (at ?b) (not (at ?a))))"
        st.booleans())
 def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, scientific):
     """Property: probabilities written as decimals (``0.0000125``) or in scientific
-    notation (``125e-7``) that sum to 1 leave no "no effect" outcome; one more of 1e-12
+    notation (``125e-7``) that sum to 1 leave no "no effect" outcome; one more of 1e-13
     (what floats printed in full miss 1 by) is taken as a sum of 1, one of 1e-8 is too
     much, and one of 10**-MAX_EXPONENT, the smallest a number may be written, underflows
     a float."""
@@ -105,11 +105,11 @@ def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, s
     assert all(o.effect for o in walk.outcomes)
     assert sum(o.probability for o in walk.outcomes) == pytest.approx(1.0)
     close = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs} "
-                                                          "1e-12 (at ?a))")).actions[0]
+                                                          "1e-13 (at ?a))")).actions[0]
     assert sum(o.probability for o in close.outcomes) == pytest.approx(1.0, abs=1e-15)
     assert all(o.effect for o in close.outcomes)
     with pytest.raises(PDDLError, match=r"sum to 1\.00000001, 1e-08 more than 1; they must "
-                                        r"sum to at most 1 \(within 1e-09"):
+                                        r"sum to at most 1 \(within 1e-12"):
         parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs} 1e-8 (at ?a))"))
     tiny = f"(probabilistic {pairs} 1e-{MAX_EXPONENT} (at ?a))"
     with pytest.raises(PDDLError, match=f"the probability 1e-{MAX_EXPONENT} is below the "
