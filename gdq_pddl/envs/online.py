@@ -97,7 +97,7 @@ class OnlineInstance:
         self.base = base
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
-        self.graph = LazyGraph(self.task, gains=True)  # costs inside effects: both scales
+        self.graph = LazyGraph(self.task)  # with gains: costs inside effects, both scales
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
         self.estimates = estimate is not None
         self.estimate_weight = float(estimate_weight)

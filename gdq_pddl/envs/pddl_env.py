@@ -209,7 +209,7 @@ class PDDLInstance:
         own = self.reward_scale == "problem"
         check_step_rewards(self.problem, self.costs, self.dynamics.r_max, own)
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   reality_outcomes(self.graph, True) if self.ppddl else None,
+                                   reality_outcomes(self.graph) if self.ppddl else None,
                                    self.ppddl, own)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))

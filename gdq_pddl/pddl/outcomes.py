@@ -23,13 +23,14 @@ OUTCOME_CHUNK = 1 << 22
 a time: its work arrays (about 200 bytes an outcome) stay near 1 GB."""
 
 
-def reality_outcomes(graph: StateGraph, gains: bool = False
+def reality_outcomes(graph: StateGraph, gains: bool = True
                      ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The outcomes of every ground action applicable in each non-goal state of a PPDDL
     task's graph, as rows in pair order: ``pair`` (``state * width + column`` of the
     graph's :attr:`~StateGraph.offered` rows), probability,
-    and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
-    outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
+    and the fields next state, stuck (a failed trial stays) and, with ``gains`` (the
+    default: what the outcome earns belongs to it on either reward scale), the outcome's
+    reward besides the action's cost. Equal ``(next, stuck[, reward])`` of a pair are one row, their
     probabilities summed in outcome order; outcomes of probability 0 are left out.
 
     Built :data:`OUTCOME_CHUNK` cells of states at a time (pairs of different states
