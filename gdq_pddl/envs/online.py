@@ -46,7 +46,12 @@ from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, dead_chances, prio
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
-from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR, limit_key
+from gdq_pddl.envs.pddl_checks import (
+    MIN_STEP_LIMIT,
+    STEP_LIMIT_FACTOR,
+    check_step_rewards,
+    limit_key,
+)
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance, word_facts
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
@@ -103,7 +108,7 @@ class OnlineInstance:
         self.base = base
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
-        self.graph = LazyGraph(self.task, gains=self.own)
+        self.graph = LazyGraph(self.task)  # with gains: costs inside effects, both scales
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
         self.estimates = estimate is not None
         self.estimate_weight = float(estimate_weight)
@@ -116,6 +121,7 @@ class OnlineInstance:
         self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
         self._check_step_limit(h0)
         self._check_chain(h0)
+        check_step_rewards(base.problem, base.costs, self.dynamics.r_max, self.own)
         self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]
         self._cost_arrays = cost_arrays(self.costs)
         self.mean_cost = expected_costs(self.model)
@@ -196,7 +202,8 @@ class OnlineInstance:
                            next=np.zeros(0, dtype=np.int64), stuck=np.zeros(0, dtype=np.bool_),
                            **self._cost_arrays, obs_of=np.zeros(0, dtype=np.int64),
                            pos_of=np.zeros(0, dtype=np.int64),
-                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
+                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64),
+                           own_scale=self.own)
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:

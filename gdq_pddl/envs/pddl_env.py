@@ -48,6 +48,7 @@ from gdq_pddl.envs.pddl_checks import (
     check_goal,
     check_reality,
     check_step_limit,
+    check_step_rewards,
     default_step_limit,
     limit_key,
     parse_reality,
@@ -60,7 +61,7 @@ from gdq_pddl.errors import ConfigError, PlanningError, WorldError
 from gdq_pddl.inputs import read_text
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.outcomes import reality_outcomes
-from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.reachable import MAX_STATES, PAIR_BYTES, StateGraph, reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
@@ -195,8 +196,8 @@ class PDDLInstance:
     def costs(self) -> list[CostDist]:
         """Every ground action's cost: the dynamics file's, else the domain's, else 1 (0 on
         the problem's own reward scale)."""
-        names = [op.name for op in self.problem.learner_task.ops]  # the graph's task
-        stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
+        ops = self.problem.learner_task.ops  # the graph's task
+        names, stated = [op.name for op in ops], [op.cost for op in ops]
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
         return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
                 or (unstated if cost is None else CostDist("const", cost))
@@ -211,9 +212,10 @@ class PDDLInstance:
                      f"applicable ground actions",
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
+        check_step_rewards(self.problem, self.costs, self.dynamics.r_max, own)
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   reality_outcomes(self.graph, own) if self.ppddl else None,
-                                   own and self.ppddl)
+                                   reality_outcomes(self.graph) if self.ppddl else None,
+                                   self.ppddl, own)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))
         check_reality(self.problem, self.graph, self.dynamics, model)

@@ -11,10 +11,12 @@ An episode lasts at most ``step_limit`` actions and running out of them is a fai
 
 Expected rewards mirror :func:`gdq_pddl.envs.step.env_step` outcome by outcome: a stuck
 outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
-any other outcome of the last allowed action gives -r_max; otherwise the reward is minus
-the mean cost of the action (for a normal cost, the mean of the draw clipped at 0).
-On the problem's own scale (:attr:`~gdq_pddl.envs.step.ModelArrays.gain`), every outcome
-pays its reward minus the cost, and reaching the goal adds r_max once. Returns are
+any other outcome of the last allowed action gives -r_max; otherwise the reward is the
+outcome's gain (:attr:`~gdq_pddl.envs.step.ModelArrays.gain`: a PPDDL file's rewards and
+costs inside its effects) minus the mean cost of the action (for a normal cost, the mean
+of the draw clipped at 0). On the problem's own scale
+(:attr:`~gdq_pddl.envs.step.ModelArrays.own_scale`), every outcome pays its gain minus
+the cost, and reaching the goal adds r_max once. Returns are
 undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
 per episode that the experiments report.
 """
@@ -111,8 +113,9 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
     end_reward = np.where(model.stuck, -r, np.where(at_goal, r, -r))
-    if model.gain.size:  # the problem's own rewards (step.file_step): no penalty
+    if model.gain.size:  # what each outcome earns besides the action's cost
         cost = cost - model.gain
+    if model.own_scale:  # the problem's own rewards (step.file_step): no penalty
         end_reward = -cost + np.where(at_goal & ~model.stuck, r, 0.0)
     goal_states = model.pos_of == goal_pos
 
@@ -155,18 +158,21 @@ def value_within(model: ModelArrays, goal_pos: int, start: int,
     "v_star_upper_bound": a bound on V* when not computed}``. The bound: no episode
     reaches the goal in fewer actions than reality's shortest path L (from
     :func:`reality_distances`) and each action before the last costs at least the least
-    mean cost c, so V* <= max(r_max - (L - 1) c, -r_max). On the problem's own reward
-    scale (``model.gain``) no such bound holds: None."""
+    mean cost c (less the most an outcome earns, ``model.gain``), so V* <= max(r_max -
+    (L - 1) c, -r_max). On the problem's own reward scale, or where a step may pay, no
+    such bound holds: None."""
     need, work = solve_bytes(model, tables=False), model.step_limit * len(model.prob)
     if need <= budget.bytes and work <= budget.work:
         return {"v_star": float(solve(model, goal_pos, tables=False).V[0, start])}
     past = (f"not computed: value iteration would need {human_bytes(need)} and {work:.2g} "
             f"outcome updates, past the budget ({human_bytes(budget.bytes)}, "
             f"{budget.work:.2g}: gdq_pddl.envs.solve.VSTAR_BUDGET)")
-    if model.gain.size:  # rewards of the file's own: a step may pay, no cheap bound
+    paid = float(model.gain.max()) if model.gain.size else 0.0  # the most an outcome pays
+    least = float(expected_costs(model).min())
+    if model.own_scale or paid > least:  # a step may pay: no cheap bound
         return {"v_star": None, "v_star_note": past, "v_star_upper_bound": None}
     fewest = reality_distances(model, start)[model.pos_of == goal_pos].min(initial=np.inf)
-    c = max(0.0, float(expected_costs(model).min()))
+    c = max(0.0, least - paid)
     bound = -model.r_max if np.isinf(fewest) else max(model.r_max - (fewest - 1) * c,
                                                       -model.r_max)
     note = (f"{past}; V* <= {bound:g} "

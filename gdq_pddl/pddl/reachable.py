@@ -41,7 +41,6 @@ from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
     KeyIndex,
     applicable_rows,
-    apply_effect,
     compile_ops,
     fact_rows,
     filter_chunk,
@@ -312,13 +311,13 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     here = expand[at]
                     seen: list[np.ndarray] = []
                     for j, effect in enumerate(op.known):
-                        t = apply_effect(here, effect)
+                        t = effect.apply(here)
                         new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
                             if seen else np.ones(len(t), dtype=np.bool_)
                         seen.append(t)
                         found.append((t[new], at[new], k * width + j))
                     for j, effect in enumerate(op.other):
-                        found.append((apply_effect(here, effect), at,
+                        found.append((effect.apply(here), at,
                                       (n_ops + reality_rank[k]) * width + j))
                 cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
                 who = np.concatenate([f[1] for f in found]) if found else parent[:0]
