@@ -4,8 +4,11 @@ within the step limit, the most any policy has within it, and the most with no l
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
+from gdq_pddl.cli import main
 from gdq_pddl.envs import goal_chance
 from gdq_pddl.envs.goal_chance import best_within_limit, best_without_limit
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
@@ -93,3 +96,52 @@ def test_a_step_limit_that_cuts_the_safe_road_off():
     long = instance(TYRES, TYRES_P, 5).optimal()
     assert long["goal_within_limit"] == pytest.approx(1.0, abs=1e-12)
     assert long["goal_v_star_policy"] <= long["goal_within_limit"] + 1e-12
+
+
+def test_the_report_says_what_v_star_means_and_that_the_limit_cuts_the_goal_off(tmp_path):
+    domain, problem = tmp_path / "tyres.pddl", tmp_path / "tyres-1.pddl"
+    domain.write_text(TYRES)
+    problem.write_text(TYRES_P)
+    (tmp_path / "limit.toml").write_text("[dynamics]\nstep_limit = 2\n")
+    out = tmp_path / "run"
+    assert main(["run", "--domain", str(domain), "--problem", str(problem), "--dynamics",
+                 str(tmp_path / "limit.toml"), "--method", "Q-learning", "--episodes", "5",
+                 "--runs", "2", "--jobs", "1", "--out", str(out)]) == 0
+    facts = next(iter(json.loads((out / "optimal.json").read_text()).values()))
+    assert facts["goal_within_limit"] == pytest.approx(0.5)
+    text = (out / "REPORT.md").read_text()
+    assert "V*'s policy reaches it with probability 0.500 within the step limit of 2 " \
+        "actions, the best policy for the goal with 0.500; with no step limit the goal can " \
+        "be reached with probability 1.000" in text
+    assert "The step limit makes V* far below what the goal is worth: with no limit the " \
+        "goal is reached with probability 1.000, within 2 actions at most 0.500" in text
+
+
+def test_a_limit_that_cuts_nothing_off_is_not_blamed(tmp_path):
+    # ledge-1 with 2 actions: 0.72 within the limit and without it
+    from gdq_pddl.analysis.generic import goal_lines
+    facts = instance(LEDGE, LEDGE_P, 2).optimal()
+    lines = goal_lines(facts)
+    assert len(lines) == 1 and "0.720 within the step limit of 2" in lines[0]
+    assert goal_lines({"v_star": None}) == []
+
+
+def test_an_online_report_says_why_and_bounds_v_star(tmp_path):
+    domain, problem = tmp_path / "tyres.pddl", tmp_path / "tyres-1.pddl"
+    domain.write_text(TYRES)
+    problem.write_text(TYRES_P)
+    out = tmp_path / "run"
+    assert main(["run", "--domain", str(domain), "--problem", str(problem), "--explore",
+                 "online", "--method", "Q-learning", "--episodes", "5", "--runs", "2",
+                 "--jobs", "1", "--out", str(out)]) == 0
+    facts = next(iter(json.loads((out / "optimal.json").read_text()).values()))
+    # h_max of the start is 2 (l0-l1-l2); every action costs 1: V* <= r_max - 1
+    r_max = facts["r_max"]
+    assert facts["v_star"] is None and facts["v_star_upper_bound"] == r_max - 1
+    enumerated = instance(TYRES, TYRES_P, facts["step_limit"]).optimal()
+    assert enumerated["v_star"] <= facts["v_star_upper_bound"]
+    text = (out / "REPORT.md").read_text()
+    assert "- why online: `--explore online` was given" in text
+    assert "V*: not computed: the problem was explored online" in text
+    assert f"V* <= {r_max - 1:g}: r_max {r_max:g} minus the least mean action cost 1 for " \
+        "each action before the goal's, of at least 2 actions (h_max" in text
