@@ -65,18 +65,22 @@ class _Pairs:
         self.goes_on = ~(at_goal | model.stuck)
         self.prob, self.next = model.prob, model.next
         self.goal_states = model.pos_of == goal_pos
+        self.after = np.where(self.goes_on, model.next, self.n)  # n: worth nothing more
+        self.first_pair = np.searchsorted(self.pair_state, np.arange(self.n))
+        self.towards = self.prob * self.success  # the goal reached by the outcome
 
     def backup(self, value: np.ndarray, go_on: bool = True) -> np.ndarray:
         """float64[live pairs]: each pair's probability of the goal when the states after
         it are worth ``value`` (``go_on`` False: the last step, only the goal counts)."""
-        worth = self.success + np.where(self.goes_on, value[self.next], 0.0) if go_on \
-            else self.success
-        return np.add.reduceat(self.prob * worth, self.starts)
+        if not go_on:
+            return np.add.reduceat(self.towards, self.starts)
+        return np.add.reduceat(self.towards + self.prob * np.append(value, 0.0)[self.after],
+                               self.starts)
 
     def best(self, q: np.ndarray) -> np.ndarray:
-        """float64[n]: each state's best pair value (1 at a goal state)."""
-        out = np.zeros(self.n)
-        np.maximum.at(out, self.pair_state, q)
+        """float64[n]: each state's best pair value (1 at a goal state); every state has a
+        pair (:func:`~gdq_pddl.envs.solve.solve` checks as much)."""
+        out = np.maximum.reduceat(q, self.first_pair)
         out[self.goal_states] = 1.0
         return out
 
@@ -100,12 +104,13 @@ def best_without_limit(model: ModelArrays, goal_pos: int,
     value[pairs.goal_states] = 1.0
     reach = _can_reach(pairs)
     sweeps_left = max(SWEEPS, int(work // max(1, len(pairs.prob))))
-    while sweeps_left > 0:
-        for _ in range(min(SWEEPS, sweeps_left)):
-            value = np.where(reach, pairs.best(pairs.backup(value)), 0.0)
-        sweeps_left -= SWEEPS
-        if not (value[reach] > 0).all():  # some state still too far: sweep on
+    since, every = 0, 1  # evaluate as soon as every state that can reach the goal is
+    while sweeps_left > 0:  # valued above 0 (its policy is found), then every SWEEPS
+        value = np.where(reach, pairs.best(pairs.backup(value)), 0.0)
+        sweeps_left, since = sweeps_left - 1, since + 1
+        if since < every or not (value[reach] > 0).all():
             continue
+        since, every = 0, SWEEPS
         policy_value = _evaluate(pairs, _attractor(pairs, value))
         value = np.maximum(value, policy_value)
         improved = pairs.best(pairs.backup(policy_value)) - policy_value

@@ -121,7 +121,6 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     goal_states = model.pos_of == goal_pos
     reached = (at_goal & ~model.stuck).astype(np.float64)  # the goal, by this outcome
     goal = np.zeros(n_full)  # the policy's goal probability from step t + 1 on
-    pq = np.zeros(n_full * width)
 
     V = np.zeros((limit + 1, n_full))
     Q = np.empty((limit if tables else 0, n_full, width))
@@ -140,11 +139,30 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
             Q[t] = by_state
             policy[t] = choice
         V[t] = np.where(goal_states, 0.0, best)
-        chance = reached if t == limit - 1 else np.where(ending, reached, goal[model.next])
-        pq[live] = np.add.reduceat(model.prob * chance, starts)
-        goal = np.where(goal_states, 1.0, pq.reshape(n_full, width)[np.arange(n_full), choice])
+        goal = _chosen_goal(model, choice, width, reached,
+                            None if t == limit - 1 else goal, goal_states)
     return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma),
                     goal=goal if limit else goal_states.astype(np.float64))
+
+
+def _chosen_goal(model: ModelArrays, choice: np.ndarray, width: int, reached: np.ndarray,
+                 later: np.ndarray | None, goal_states: np.ndarray) -> np.ndarray:
+    """float64[n_full]: each state's probability of the goal when it takes its column
+    ``choice`` now: an outcome that reaches the goal (``reached``) counts 1, one that ends
+    the episode otherwise (stuck) 0, any other the ``later`` probability of the state it
+    leads to (None: the last step, when every outcome ends the episode)."""
+    pair = np.arange(len(choice)) * width + choice
+    lo = model.ptr[pair]
+    length = model.ptr[pair + 1] - lo
+    idx = np.repeat(lo - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
+    row = np.repeat(np.arange(len(choice)), length)
+    chance = reached[idx]
+    if later is not None:
+        goes_on = ~model.stuck[idx] & (chance == 0)
+        chance[goes_on] = later[model.next[idx][goes_on]]
+    out = np.bincount(row, weights=model.prob[idx] * chance, minlength=len(choice))
+    out[goal_states] = 1.0
+    return out
 
 
 @dataclass(frozen=True)
