@@ -145,3 +145,15 @@ def test_an_online_report_says_why_and_bounds_v_star(tmp_path):
     assert "V*: not computed: the problem was explored online" in text
     assert f"V* <= {r_max - 1:g}: r_max {r_max:g} minus the least mean action cost 1 for " \
         "each action before the goal's, of at least 2 actions (h_max" in text
+
+
+def test_the_office_tasks_get_them_too_and_keep_their_v_star():
+    from gdq_pddl.envs.office import OfficeInstance
+    from gdq_pddl.envs.solve import optimal_value
+    from gdq_pddl.world import load_world
+    world = load_world()
+    facts = OfficeInstance(world, world.task("C")).optimal()
+    assert facts["v_star"] == optimal_value(world, "C")
+    assert facts["goal_no_limit"] == pytest.approx(1.0, abs=1e-12)
+    assert facts["goal_no_limit_exact"] and facts["step_limit"] == world.step_limit
+    assert 0.999 < facts["goal_v_star_policy"] <= facts["goal_within_limit"] + 1e-12
