@@ -52,7 +52,6 @@ from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, PlanningError
 from gdq_pddl.pddl.lazy import LazyGraph
-from gdq_pddl.pddl.ppddl import ProbabilisticOp
 from gdq_pddl.planning.base import length_bound
 from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for, hmax_for
 
@@ -256,14 +255,15 @@ class OnlineInstance:
         reality: a lower bound on the actions of any outcome sequence that reaches the
         goal), and each action before the goal's costs at least the least mean cost c:
         V* <= max(r_max - (h_max - 1) c, -r_max), and -r_max when h_max passes the step
-        limit. Only where the planner's determinisation keeps every outcome (else h_max
-        ignores some of reality's), and on the library's reward scale (on the problem's
-        own, a step may pay)."""
+        limit. Only with the ``all-outcomes`` determinisation (it leaves out only outcomes
+        that change nothing or fail the trial; ``most-likely`` leaves out outcomes that
+        may lead to the goal), and on the library's reward scale (on the problem's own, a
+        step may pay)."""
         if self.own:
             return None, ("no cheap bound on V* on the problem's own reward scale (a step "
                           "may pay)")
-        if any(isinstance(op, ProbabilisticOp) and len(op.known) < len(op.outcomes)
-               for op in self.task.ops):
+        if self.determinisation != "all-outcomes":  # it leaves out only outcomes that
+            # change nothing or fail the trial, which bring no goal nearer
             return None, (f"no cheap bound on V*: the {self.determinisation} "
                           "determinisation leaves some of reality's outcomes out of h_max")
         h = hmax_for(self.task)(self.task.init, self.task.goal_pos)

@@ -157,3 +157,15 @@ def test_the_office_tasks_get_them_too_and_keep_their_v_star():
     assert facts["goal_no_limit"] == pytest.approx(1.0, abs=1e-12)
     assert facts["goal_no_limit_exact"] and facts["step_limit"] == world.step_limit
     assert 0.999 < facts["goal_v_star_policy"] <= facts["goal_within_limit"] + 1e-12
+
+
+def test_the_online_bound_counts_outcomes_that_change_nothing_and_not_most_likely():
+    from gdq_pddl.envs.online import OnlineInstance
+    retry = OnlineInstance(instance(RETRY, RETRY_P, 5))
+    bound, why = retry.v_star_bound()  # one action to the goal: nothing to pay before it
+    assert bound == retry.dynamics.r_max and "at least 1 actions" in why
+    assert instance(RETRY, RETRY_P, 5).optimal()["v_star"] <= bound
+    likely = OnlineInstance(PDDLInstance.from_texts(
+        TYRES, TYRES_P, "[dynamics]\nstep_limit = 5\n", determinisation="most-likely"))
+    assert likely.v_star_bound()[0] is None
+    assert "most-likely determinisation" in likely.optimal()["v_star_note"]
