@@ -2,7 +2,9 @@
 past the table budget (:func:`~gdq_pddl.pddl.reachable.projected_states`) and goes
 online, where it used to enumerate until past the budget (manytireworld_test problem0:
 12.9 million states and over 3 minutes before going online); ``--explore enumerate``
-never gives up early."""
+never gives up early. It gives up only on a level that grew as the levels before it
+projected (:func:`~gdq_pddl.pddl.reachable.backed_by`): a teleport that fills the space
+at level 2, and bursts followed by plateaus, are enumerated (issue 40 item 5)."""
 
 import json
 from math import comb
