@@ -39,6 +39,11 @@ action improves any state's by more than this."""
 SWEEPS = 64
 """Value-iteration sweeps between two exact evaluations of :func:`best_without_limit`."""
 
+EXACT_STATES = 1_000_000
+"""The most states a policy is evaluated exactly on (one sparse LU factorisation, whose
+fill-in grows faster than the states); past it, or out of memory, value iteration alone
+gives a lower bound."""
+
 
 @dataclass(frozen=True)
 class Unlimited:
@@ -111,7 +116,13 @@ def best_without_limit(model: ModelArrays, goal_pos: int,
         if since < every or not (value[reach] > 0).all():
             continue
         since, every = 0, SWEEPS
-        policy_value = _evaluate(pairs, _attractor(pairs, value))
+        if int(reach.sum()) > EXACT_STATES:
+            continue
+        try:
+            policy_value = _evaluate(pairs, _attractor(pairs, value))
+        except MemoryError:  # the factorisation: value iteration alone, a lower bound
+            every = sweeps_left + 1
+            continue
         value = np.maximum(value, policy_value)
         improved = pairs.best(pairs.backup(policy_value)) - policy_value
         if improved.max(initial=0.0) <= FIXED_POINT_TOLERANCE:

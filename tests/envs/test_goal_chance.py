@@ -42,6 +42,11 @@ def test_without_the_exact_evaluation_the_answer_is_a_lower_bound(monkeypatch):
     monkeypatch.setattr(goal_chance, "FIXED_POINT_TOLERANCE", -1.0)  # never a fixed point
     out = best_without_limit(inst.model, GOAL_POS, work=1000)
     assert not out.exact and 0.99 < out.value[inst.start_state] <= 1.0
+    monkeypatch.setattr(goal_chance, "EXACT_STATES", 0)  # too many states to solve exactly
+    alone = best_without_limit(inst.model, GOAL_POS, work=64)
+    sweeps = goal_chance.SWEEPS  # value iteration alone: 1 - 0.9^k after k sweeps
+    assert not alone.exact
+    assert alone.value[inst.start_state] == pytest.approx(1 - 0.9**sweeps, abs=1e-12)
 
 
 # a gamble (goal 6 in 10, else broken), or a climb to a ledge (8 in 10, else broken), from
