@@ -7,7 +7,10 @@ An episode lasts at most ``step_limit`` actions and running out of them is a fai
 - ``V[t, fs]``: the optimal expected return from full state ``fs`` with ``t`` actions
   already taken (``V[step_limit, :] = 0``; states at the goal are worth 0: the episode
   is over);
-- ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index).
+- ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index);
+- ``goal[fs]``: the probability that this policy reaches the goal within the step limit
+  from ``fs`` at step 0 (what V* means in probabilities: :func:`goal_chances` adds the
+  most any policy has within the limit and with none, :mod:`gdq_pddl.envs.goal_chance`).
 
 Expected rewards mirror :func:`gdq_pddl.envs.step.env_step` outcome by outcome: a stuck
 outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
