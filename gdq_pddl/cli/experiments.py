@@ -7,6 +7,7 @@ import argparse
 import shlex
 import sys
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 from gdq_pddl.cli.common import (
@@ -36,6 +37,7 @@ from gdq_pddl.experiments import (
     robot_experiment,
     switch_experiment,
 )
+from gdq_pddl.experiments.collect import collect
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
 from gdq_pddl.experiments.work import load_pddl_instance
@@ -89,6 +91,7 @@ def _run_pddl(args: argparse.Namespace) -> int:
                        "shipped domain (and --dynamics for a STRIPS domain of your own)")
     files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
              determinisation(args))
+    because = "`--explore online` was given"  # why a problem is explored online
     try:  # check the files (and size) before any worker
         instance = load_pddl_instance(files)
         if args.explore == "online":
@@ -106,6 +109,7 @@ def _run_pddl(args: argparse.Namespace) -> int:
             print(f"gdq-pddl: {exc}\ngdq-pddl: so {problem} is explored online: its states "
                   "are found as episodes reach them, and V* is not computed (--explore)",
                   file=sys.stderr)
+            because = f"`--explore auto` found that its states do not fit: {exc}"
         elif isinstance(exc, (SizeError, TooManyStates)):
             raise
         else:
@@ -117,7 +121,8 @@ def _run_pddl(args: argparse.Namespace) -> int:
               "ends such a round at turn 0", file=sys.stderr)
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
-    return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)
+    return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners,
+                   collect=partial(collect, online_facts={"explored_because": because}))
 
 
 def register_switch(sub) -> None:

@@ -43,7 +43,12 @@ from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, o
 from gdq_pddl.envs.model import compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
-from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
+from gdq_pddl.envs.solve import (
+    expected_area_visits,
+    goal_chances,
+    relevant_areas,
+    solve_task,
+)
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, WorldError
@@ -263,11 +268,16 @@ class OfficeInstance:
         return office_plan_table(self.world, self.task.goal, planner, tolerance, kind)
 
     def optimal(self) -> dict[str, Any]:
-        """The task's ground truth: V*, the relevant areas (visited with probability
-        >= 0.05 by the optimal policy), the paper's irrelevant ones, expected visits."""
+        """The task's ground truth: V* with the goal probabilities that say what it means
+        (:func:`~gdq_pddl.envs.solve.goal_chances`), the relevant areas (visited with
+        probability >= 0.05 by the optimal policy), the paper's irrelevant ones, expected
+        visits."""
         visits = expected_area_visits(self.world, self.task)
+        model = self.model
+        solution, start = solve_task(self.world, self.task, model)
         return {"start": self.task.start, "goal": self.task.goal,
-                "v_star": optimal_value(self.world, self.task),
+                "v_star": float(solution.V[0, start]), "step_limit": model.step_limit,
+                **goal_chances(model, solution.goal_pos, start, solution),
                 "relevant_areas": list(relevant_areas(self.world, self.task, min_visits=0.05)),
                 "irrelevant_areas_paper": list(self.task.irrelevant_areas),
                 "expected_area_visits": {str(a): v for a, v in visits.items()}}

@@ -299,14 +299,50 @@ class OnlineInstance:
                           "state (its states are not enumerated)")
 
     def optimal(self) -> dict[str, Any]:
-        """What is known without enumerating: no V*, the estimate from the start."""
+        """What is known without enumerating: no V* (value iteration needs every state),
+        a bound on it where one is cheap (:meth:`v_star_bound`), the estimate from the
+        start."""
+        bound, why = self.v_star_bound()
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "reward_scale": self.reward_scale, "step_limit": self.dynamics.step_limit,
                 "v_star": None, "v_star_note": "not computed: the problem was explored "
-                "online (its states are not enumerated)", "explored": "online",
+                f"online (its states are not enumerated, and value iteration needs them "
+                f"all); {why}", "v_star_upper_bound": bound, "explored": "online",
                 "estimate_from_start": self.h_start, "shortest_plan": None,
                 "states": None, "actions": self.n_ops, "relevant_areas": [],
                 "irrelevant_areas_paper": [], "expected_area_visits": {}}
+
+    def v_star_bound(self) -> tuple[float | None, str]:
+        """``(bound, what it is)``: an upper bound on V* from the start, or None and why
+        there is none. No episode reaches the goal in fewer actions than h_max of the
+        initial state (the delete relaxation's fewest actions, over every outcome of
+        reality: a lower bound on the actions of any outcome sequence that reaches the
+        goal), and each action before the goal's costs at least the least mean cost c:
+        V* <= max(r_max - (h_max - 1) c, -r_max), and -r_max when h_max passes the step
+        limit. Only with the ``all-outcomes`` determinisation (it leaves out only outcomes
+        that change nothing or fail the trial; ``most-likely`` leaves out outcomes that
+        may lead to the goal), and on the library's reward scale (on the problem's own, a
+        step may pay)."""
+        if self.own:
+            return None, ("no cheap bound on V* on the problem's own reward scale (a step "
+                          "may pay)")
+        if self.determinisation != "all-outcomes":  # it leaves out only outcomes that
+            # change nothing or fail the trial, which bring no goal nearer
+            return None, (f"no cheap bound on V*: the {self.determinisation} "
+                          "determinisation leaves some of reality's outcomes out of h_max")
+        h = hmax_for(self.task)(self.task.init, self.task.goal_pos)
+        r_max, limit = self.dynamics.r_max, self.dynamics.step_limit
+        if h == INFINITE or h > limit:
+            return -r_max, (f"V* <= {-r_max:g}: the goal needs at least {h} actions (h_max "
+                            f"of the initial state), more than the step limit of {limit}"
+                            if h != INFINITE else f"V* <= {-r_max:g}: no action sequence "
+                            "reaches the goal even with deletes ignored")
+        c = max(0.0, float(self.mean_cost[:self.n_ops].min())) if self.n_ops else 0.0
+        bound = max(r_max - (h - 1) * c, -r_max)
+        return bound, (f"V* <= {bound:g}: r_max {r_max:g} minus the least mean action cost "
+                       f"{c:g} for each action before the goal's, of at least {h} actions "
+                       "(h_max of the initial state, the delete relaxation over every "
+                       "outcome of reality: no episode reaches the goal sooner)")
 
     # -- rows ----------------------------------------------------------------------------
     def _allocate(self, rows: int, width: int) -> None:
