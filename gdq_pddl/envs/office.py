@@ -34,6 +34,7 @@ from gdq_pddl.abstraction.prior import PriorModel, prior_from_task
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
+from gdq_pddl.envs.identity import world_entry
 from gdq_pddl.envs.model import compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
@@ -114,6 +115,12 @@ class OfficeInstance:
     def name(self) -> str:
         """The task's name, e.g. ``"C"``."""
         return self.task.name
+
+    def identity(self) -> dict[str, str]:
+        """What this task is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash) and the task."""
+        return {"world": world_entry(self.world.source),
+                "task": f"{self.task.name} ({self.task.start} -> {self.task.goal})"}
 
     @property
     def step_limit_key(self) -> tuple[str, str]:

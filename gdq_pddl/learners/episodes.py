@@ -21,6 +21,7 @@ from numba import types
 from numba.extending import overload
 
 from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
+from gdq_pddl.envs.identity import NUMBERING_KEYS
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv
@@ -34,7 +35,7 @@ from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.rules import observe
-from gdq_pddl.learners.saving import GreedyPolicy
+from gdq_pddl.learners.saving import GreedyPolicy, _identity, check_identity
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
@@ -138,13 +139,21 @@ def evaluate_policy(env: gym.Env, policy: GreedyPolicy | TabularLearner, episode
     """Run ``policy`` (a :class:`~gdq_pddl.learners.saving.GreedyPolicy`, or a learner's
     greedy policy now) for ``episodes`` episodes in ``env`` without learning, stepping
     it through its wrappers, after ``env.reset(seed=seed)``. The records' ``mean_return``
-    and ``success_rate`` summarise them."""
+    and ``success_rate`` summarise them. Refused: ``episodes`` below 1
+    (:class:`~gdq_pddl.errors.ConfigError`), and an env whose states are numbered otherwise
+    than the policy's task (another problem, or another instance of a problem explored
+    online: :class:`~gdq_pddl.errors.ResultsError` naming what differs)."""
     if isinstance(policy, TabularLearner):
         policy = GreedyPolicy.of(policy)
     if not isinstance(policy, GreedyPolicy):
         raise ConfigError(f"evaluate_policy takes a GreedyPolicy or a learner, got "
                           f"{type(policy).__name__}")
+    check_count("episodes", episodes)
+    if episodes < 1:
+        raise ConfigError(f"evaluate_policy: episodes must be at least 1, got {episodes} (a "
+                          "mean return over no episode is undefined)")
     guards.check_env(len(policy.actions), policy.n_actions, env)
+    policy.check_env(env)
     check_count("seed", seed)
     env.reset(seed=seed)
     return _run(policy, env, episodes, np.random.default_rng(seed), False,  # type: ignore
@@ -177,6 +186,9 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     online = isinstance(env.unwrapped, OnlineEnv) and isinstance(learner, TabularLearner)
+    if online:  # its rows must be this instance's (another numbers other states)
+        check_identity("the learner", "learner", _identity(learner.context),
+                       _identity(env.unwrapped.instance), "the env", NUMBERING_KEYS)
     follow = Follower(learner, env.unwrapped.instance) if online else None
     if isinstance(learner, TabularLearner) and not online:
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
