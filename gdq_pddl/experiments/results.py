@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from gdq_pddl.errors import ResultsError
+from gdq_pddl.errors import GdqError, ResultsError
 
 METHOD_ORDER = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
                 "Q-learning")
@@ -85,18 +85,84 @@ class RunConfig:
 
 
 def load_config(folder: str | Path) -> RunConfig:
-    """Read ``config.json`` if present (unreadable or absent: an empty :class:`RunConfig`)."""
+    """Read ``config.json`` if present (absent: an empty :class:`RunConfig`, nothing to
+    check against). A damaged one is refused, a :class:`ResultsError` naming the file and
+    the key: not JSON, not an object, or an experiment entry without a name, a schedule of
+    ``[task, episodes]``, methods and runs (what the runner writes)."""
     path = Path(folder) / "config.json"
     try:
-        raw = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
         return RunConfig()
+    except OSError as exc:
+        raise ResultsError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise _damaged_config(path, f"not UTF-8 text: {exc}") from None
+    try:
+        raw = json.loads(text)
+    except ValueError as exc:
+        raise _damaged_config(path, f"not JSON: {exc}") from None
     if not isinstance(raw, dict):
-        return RunConfig()
-    exps = [e if isinstance(e, dict) else {"name": e} for e in raw.get("experiments") or []
-            if isinstance(e, dict | str)]
+        raise _damaged_config(path, f"a JSON {type(raw).__name__}, not an object")
+    listed = raw.get("experiments", [])
+    if not isinstance(listed, list):
+        raise _damaged_config(path, f"key experiments is {listed!r}, expected a list")
+    exps = []
+    for i, e in enumerate(listed):
+        if isinstance(e, str):  # a bare name: an experiment of defaults, nothing planned
+            exps.append({"name": e})
+            continue
+        _check_entry(path, i, e)
+        exps.append(e)
     versions = raw.get("versions") if isinstance(raw.get("versions"), dict) else {}
     return RunConfig(tuple(exps), versions, raw)
+
+
+def _damaged_config(path: Path, why: str) -> ResultsError:
+    return ResultsError(f"{path} is damaged ({why}); it records what the folder holds, so "
+                        "its results cannot be checked: run the command that made them again "
+                        "into another --out")
+
+
+def _whole(x: object, least: int) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool) and x >= least
+
+
+def _check_entry(path: Path, i: int, e: object) -> None:
+    """Refuse experiment entry ``i`` of ``config.json`` unless it is what the runner writes."""
+    where = f"experiments[{i}]"
+    if not isinstance(e, dict):
+        raise _damaged_config(path, f"{where} is {e!r}, expected an object")
+    expected = {"name": "a name", "schedule": "a list of [task, episodes]",
+                "methods": "a list of method names", "runs": "a whole number >= 1"}
+    sched, methods = e.get("schedule"), e.get("methods")
+    good = {"name": isinstance(e.get("name"), str) and e.get("name") != "",
+            "schedule": isinstance(sched, list) and len(sched) > 0 and all(
+                isinstance(x, list) and len(x) == 2 and isinstance(x[0], str)
+                and _whole(x[1], 1) for x in sched),
+            "methods": isinstance(methods, list) and len(methods) > 0
+            and all(isinstance(m, str) and m for m in methods),
+            "runs": _whole(e.get("runs"), 1)}
+    for key, ok in good.items():
+        if not ok:
+            value = e.get(key, "missing")
+            raise _damaged_config(path, f"{where}.{key} is {value!r}, expected "
+                                  f"{expected[key]}")
+
+
+def unfinished(folder: Path) -> ResultsError | None:
+    """The error of a folder whose run stopped before writing ``episodes.csv`` (its
+    ``config.json`` is there), saying how to finish it; None if it is no such folder."""
+    if not (folder / "config.json").is_file():
+        return None
+    planned = load_config(folder).experiments
+    total = sum(int(e.get("runs", 0)) * len(e.get("methods", ())) for e in planned)
+    units = folder / "units"
+    done = sum(1 for _ in units.glob("*.npz")) if units.is_dir() else 0
+    of = f" of {total}" if total else ""
+    return ResultsError(f"{folder} holds a run that did not finish ({done}{of} runs saved in "
+                        "units/, no episodes.csv yet): finish it by giving the command that "
+                        "started it again with --resume, then report")
 
 
 def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
@@ -108,9 +174,11 @@ def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
     for a problem with areas (visits per area). ``return`` and the areas are float64 (an
     empty area cell is NaN), the other numbers int64.
 
-    With ``check`` (default), a file that contradicts the folder's ``config.json`` (too
-    few or too many episodes, a repeated episode, a method never run, a run beyond its
-    runs) is refused. Raises :class:`~gdq_pddl.errors.ResultsError` naming the file.
+    With ``check`` (default), every row is checked against the folder's ``config.json``
+    (:func:`check_against_config`): a repeated episode, a method, task or run it never
+    scheduled, an episode outside its schedule, a run with too few or too many episodes
+    are refused, and so is a damaged ``config.json`` (:func:`load_config`). Raises
+    :class:`~gdq_pddl.errors.ResultsError` naming the file and the line or key.
     """
     path = Path(folder)
     path = path / "episodes.csv" if path.is_dir() else path
@@ -118,6 +186,9 @@ def load_results(folder: str | Path, check: bool = True) -> pd.DataFrame:
         df = pd.read_csv(path, dtype=dict.fromkeys(TEXT, "category"), keep_default_na=False,
                          na_values=[""])
     except FileNotFoundError:
+        stopped = unfinished(path.parent) if path.name == "episodes.csv" else None
+        if stopped is not None:
+            raise stopped from None
         raise ResultsError(f"{path}: no such file (is this an experiment output "
                            "folder?)") from None
     except OSError as exc:
@@ -168,7 +239,10 @@ def _numbers(path: Path, df: pd.DataFrame, name: str) -> pd.Series:
 
 
 def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
-    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg``."""
+    """Refuse ``df`` (read from ``path``) where it contradicts ``cfg``: every row must be
+    an episode the config scheduled (its experiment ran its method, its run is below the
+    runs, its task is in the schedule and its episode in that task's part of it), once,
+    and every run of every method must have all its episodes."""
     planned = cfg.planned()
     if not planned:
         return
@@ -178,25 +252,85 @@ def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
         raise ResultsError(f"{path}: line {_line(repeated)} repeats an episode (experiment "
                            f"{row.experiment}, method {row.method}, task {row.task}, run "
                            f"{int(row.run)}, episode {int(row.episode)})")
-    counts = df.groupby(["experiment", "method"], observed=True).size()
-    for exp, method in counts.index:
-        if (exp, method) not in planned:
-            ran = ", ".join(m for e, m in planned if e == exp) or "nothing"
-            raise ResultsError(f"{path}: method {method!r} of experiment {exp!r} was never "
-                               f"run (config.json: {exp!r} ran {ran})")
-    for (exp, method), (runs, episodes) in planned.items():
-        n = int(counts.get((exp, method), 0))
-        if n != runs * episodes:
-            raise ResultsError(f"{path}: experiment {exp!r}, method {method!r} has {n} "
-                               f"episodes, config.json says {runs * episodes} ({runs} runs "
-                               f"x {episodes})")
-    runs = df["run"].to_numpy()
-    top = df["experiment"].map({e: r for (e, _), (r, _) in planned.items()}).to_numpy()
-    if (runs >= top).any():
-        i = int(np.flatnonzero(runs >= top)[0])
-        raise ResultsError(f"{path}: line {i + 2}: run {runs[i]} of experiment "
-                           f"{df['experiment'].iloc[i]!r}, config.json says "
-                           f"{top[i]} runs (0 to {top[i] - 1})")
+    segments = _segments(cfg)
+    rows = pd.DataFrame({k: df[k].astype(str) for k in TEXT}).assign(
+        run=df["run"].to_numpy(), episode=df["episode"].to_numpy(), _row=np.arange(len(df)))
+    hits = rows.merge(segments, on=list(TEXT))
+    hits = hits[(hits.episode > hits.lo) & (hits.episode <= hits.hi) & (hits.run < hits.runs)]
+    hits = hits.drop_duplicates("_row")
+    if len(hits) < len(df):
+        first = int(np.setdiff1d(np.arange(len(df)), hits["_row"].to_numpy())[0])
+        raise ResultsError(f"{path}: line {first + 2}: " +
+                           _unscheduled(rows.iloc[first], segments, planned))
+    counts = hits.groupby(["entry", "method", "run"]).size().to_dict()
+    for entry in segments.drop_duplicates(["entry", "method"]).itertuples():
+        for run in range(entry.runs):
+            n = counts.get((entry.entry, entry.method, run), 0)
+            if n != entry.episodes:
+                raise ResultsError(f"{path}: experiment {entry.experiment!r} "
+                                   f"({_schedule_text(cfg.experiments[entry.entry])}), method "
+                                   f"{entry.method!r}, run {run} has {n} episodes, "
+                                   f"config.json says {entry.episodes}")
+
+
+def _segments(cfg: RunConfig) -> pd.DataFrame:
+    """One row per (config entry, method, schedule part): the part's task label and its
+    episodes ``(lo, hi]``, the entry's runs and episodes per run."""
+    out = []
+    for i, e in enumerate(cfg.experiments):
+        sched, methods, runs = e.get("schedule"), e.get("methods"), e.get("runs")
+        if not (isinstance(sched, list) and isinstance(methods, list) and isinstance(runs, int)):
+            continue
+        total, lo = sum(int(n) for _, n in sched), 0
+        for spec, n in sched:
+            label = task_label(cfg, str(e.get("name")), str(spec))
+            out += [(i, str(e.get("name")), str(m), label, lo, lo + int(n), runs, total)
+                    for m in methods]
+            lo += int(n)
+    return pd.DataFrame(out, columns=["entry", "experiment", "method", "task", "lo", "hi",
+                                      "runs", "episodes"])
+
+
+def task_label(cfg: RunConfig, experiment: str, spec: str) -> str:
+    """The ``task`` column of schedule entry ``spec`` (a task's or a problem's name; an
+    office task ``start->goal`` is labelled ``start-goal`` by its positions' names)."""
+    if "->" not in spec:
+        return spec
+    start, goal = spec.split("->", 1)
+    try:  # start-up time: the world is read only for such a task
+        from gdq_pddl.experiments.knowledge import load_world_named
+
+        return load_world_named(cfg.world_spec(experiment)).resolve(
+            start=start, goal=goal).name
+    except GdqError:  # a world no longer there: the names as written
+        return f"{start}-{goal}"
+
+
+def _schedule_text(entry: Mapping[str, Any]) -> str:
+    return " then ".join(f"{t} x {n}" for t, n in entry.get("schedule", ()))
+
+
+def _unscheduled(row: pd.Series, segments: pd.DataFrame,
+                 planned: Mapping[tuple[str, str], tuple[int, int]]) -> str:
+    """Why ``row`` is no episode of ``segments`` (the first reason that holds)."""
+    exp, method, task = row.experiment, row.method, row.task
+    if (exp, method) not in planned:
+        ran = ", ".join(m for e, m in planned if e == exp) or "nothing"
+        return f"method {method!r} of experiment {exp!r} was never run (config.json: " \
+            f"{exp!r} ran {ran})"
+    mine = segments[(segments.experiment == exp) & (segments.method == method)]
+    runs = int(mine.runs.max())
+    if row.run >= runs:
+        return f"run {row.run} of experiment {exp!r}, config.json says {runs} runs " \
+            f"(0 to {runs - 1})"
+    parts = mine[(mine.task == task) & (row.run < mine.runs)]
+    if parts.empty:
+        tasks = ", ".join(dict.fromkeys(mine.task))
+        return f"task {task!r} of experiment {exp!r} was never scheduled (config.json: " \
+            f"{exp!r} scheduled {tasks})"
+    spans = ", ".join(f"{lo + 1} to {hi}" for lo, hi in zip(parts.lo, parts.hi, strict=True))
+    return f"episode {row.episode} of experiment {exp!r}, task {task!r}, run {row.run}: " \
+        f"config.json schedules episodes {spans} of it"
 
 
 def load_policies(folder: str | Path) -> pd.DataFrame | None:
