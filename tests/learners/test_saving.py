@@ -110,8 +110,9 @@ def test_loading_refuses_other_versions_sizes_and_damaged_files(ctx_c, tmp_path)
     delivery = gymnasium.make("gdq_pddl/PDDL-v0", domain="delivery", problem="delivery-2")
     bigger = pddl_task_context(delivery.unwrapped.instance)
     with pytest.raises(ResultsError, match=r"q\.npz: this learner was saved for task C .* of "
-                                           r"world office\.toml \(built in\), the task context is problem "
-                                           r"delivery-2 \(delivery-2\.pddl\)"):
+                                           r"world office\.toml \(built in\), the task "
+                                           r"context is problem delivery-2 "
+                                           r"\(delivery-2\.pddl\)"):
         load_learner(path, bigger)
     with pytest.raises(ResultsError, match=r"q\.npz: saved for 31 states x 95 actions, the "
                                            r"task context has \d+ x \d+"):
