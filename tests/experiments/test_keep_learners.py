@@ -126,3 +126,22 @@ def test_resume_of_an_online_run_with_auto_goes_online_without_enumerating(
         _no_enumeration(monkeypatch)
         refused(*_pddl(capsys, out, None, "--resume"), "--explore auto", "--explore online")
         assert _pddl(capsys, out, "online", "--resume")[0] == 0
+
+
+def test_a_kept_learner_of_an_online_run_is_refused_by_a_fresh_instance(capsys, tmp_path):
+    """Its rows number the states its run reached: a fresh OnlineInstance of the same files
+    numbers others, and loading says so (it failed later, about GreedyPolicy's actions)."""
+    from gdq_pddl.envs.online import OnlineInstance
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+    from gdq_pddl.errors import ResultsError
+    from gdq_pddl.learners.online import online_context
+
+    out = tmp_path / "o"
+    assert _pddl(capsys, out, "online", "--keep-learners")[0] == 0
+    kept = next((out / "learners").glob("*.npz"))
+    domain, problem, _ = resolve_pddl("keys-ppddl", "keys-ppddl-1", None)
+    fresh = online_context(OnlineInstance(PDDLInstance.from_files(domain, problem),
+                                          estimate=None))
+    with pytest.raises(ResultsError, match=r"this learner belongs to another instance "
+                                           r"explored online"):
+        load_learner(kept, fresh)
