@@ -7,7 +7,7 @@ import json
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -253,42 +253,61 @@ def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
                            f"{row.experiment}, method {row.method}, task {row.task}, run "
                            f"{int(row.run)}, episode {int(row.episode)})")
     segments = _segments(cfg)
-    rows = pd.DataFrame({k: df[k].astype(str) for k in TEXT}).assign(
-        run=df["run"].to_numpy(), episode=df["episode"].to_numpy(), _row=np.arange(len(df)))
-    hits = rows.merge(segments, on=list(TEXT))
-    hits = hits[(hits.episode > hits.lo) & (hits.episode <= hits.hi) & (hits.run < hits.runs)]
-    hits = hits.drop_duplicates("_row")
-    if len(hits) < len(df):
-        first = int(np.setdiff1d(np.arange(len(df)), hits["_row"].to_numpy())[0])
+    run, episode = df["run"].to_numpy(), df["episode"].to_numpy()
+    found = np.zeros(len(df), dtype=np.bool_)
+    counts: dict[tuple[int, str, int], int] = {}
+    for key, idx in df.groupby(list(TEXT), observed=True, sort=False).indices.items():
+        for seg in segments.get(tuple(str(k) for k in key), ()):
+            mine = idx[~found[idx]]
+            hit = mine[(episode[mine] > seg.lo) & (episode[mine] <= seg.hi) &
+                       (run[mine] < seg.runs)]
+            found[hit] = True
+            for r, n in enumerate(np.bincount(run[hit], minlength=seg.runs).tolist()):
+                counts[seg.entry, key[1], r] = counts.get((seg.entry, key[1], r), 0) + n
+    if not found.all():
+        first = int(np.flatnonzero(~found)[0])
         raise ResultsError(f"{path}: line {first + 2}: " +
-                           _unscheduled(rows.iloc[first], segments, planned))
-    counts = hits.groupby(["entry", "method", "run"]).size().to_dict()
-    for entry in segments.drop_duplicates(["entry", "method"]).itertuples():
-        for run in range(entry.runs):
-            n = counts.get((entry.entry, entry.method, run), 0)
-            if n != entry.episodes:
-                raise ResultsError(f"{path}: experiment {entry.experiment!r} "
-                                   f"({_schedule_text(cfg.experiments[entry.entry])}), method "
-                                   f"{entry.method!r}, run {run} has {n} episodes, "
-                                   f"config.json says {entry.episodes}")
+                           _unscheduled(df.iloc[first], segments, planned))
+    for seg in dict.fromkeys((s.entry, s.method, s.runs, s.episodes)
+                             for parts in segments.values() for s in parts):
+        entry, method, runs, episodes = seg
+        for r in range(runs):
+            n = counts.get((entry, method, r), 0)
+            if n != episodes:
+                raise ResultsError(f"{path}: experiment {cfg.experiments[entry]['name']!r} "
+                                   f"({_schedule_text(cfg.experiments[entry])}), method "
+                                   f"{method!r}, run {r} has {n} episodes, config.json says "
+                                   f"{episodes}")
 
 
-def _segments(cfg: RunConfig) -> pd.DataFrame:
-    """One row per (config entry, method, schedule part): the part's task label and its
-    episodes ``(lo, hi]``, the entry's runs and episodes per run."""
-    out = []
+class _Part(NamedTuple):
+    """One part of a config entry's schedule, for one of its methods."""
+
+    entry: int
+    method: str
+    lo: int
+    hi: int
+    """Its episodes are ``lo + 1`` to ``hi`` of a run."""
+    runs: int
+    episodes: int
+    """The entry's episodes per run."""
+
+
+def _segments(cfg: RunConfig) -> dict[tuple[str, str, str], list[_Part]]:
+    """``(experiment, method, task label) ->`` the schedule parts that task is run in."""
+    out: dict[tuple[str, str, str], list[_Part]] = {}
     for i, e in enumerate(cfg.experiments):
         sched, methods, runs = e.get("schedule"), e.get("methods"), e.get("runs")
         if not (isinstance(sched, list) and isinstance(methods, list) and isinstance(runs, int)):
             continue
-        total, lo = sum(int(n) for _, n in sched), 0
+        name, total, lo = str(e.get("name")), sum(int(n) for _, n in sched), 0
         for spec, n in sched:
-            label = task_label(cfg, str(e.get("name")), str(spec))
-            out += [(i, str(e.get("name")), str(m), label, lo, lo + int(n), runs, total)
-                    for m in methods]
+            label = task_label(cfg, name, str(spec))
+            for m in methods:
+                out.setdefault((name, str(m), label), []).append(
+                    _Part(i, str(m), lo, lo + int(n), runs, total))
             lo += int(n)
-    return pd.DataFrame(out, columns=["entry", "experiment", "method", "task", "lo", "hi",
-                                      "runs", "episodes"])
+    return out
 
 
 def task_label(cfg: RunConfig, experiment: str, spec: str) -> str:
@@ -310,26 +329,25 @@ def _schedule_text(entry: Mapping[str, Any]) -> str:
     return " then ".join(f"{t} x {n}" for t, n in entry.get("schedule", ()))
 
 
-def _unscheduled(row: pd.Series, segments: pd.DataFrame,
+def _unscheduled(row: pd.Series, segments: Mapping[tuple[str, str, str], list[_Part]],
                  planned: Mapping[tuple[str, str], tuple[int, int]]) -> str:
     """Why ``row`` is no episode of ``segments`` (the first reason that holds)."""
-    exp, method, task = row.experiment, row.method, row.task
+    exp, method, task, run = str(row.experiment), str(row.method), str(row.task), int(row.run)
     if (exp, method) not in planned:
         ran = ", ".join(m for e, m in planned if e == exp) or "nothing"
         return f"method {method!r} of experiment {exp!r} was never run (config.json: " \
             f"{exp!r} ran {ran})"
-    mine = segments[(segments.experiment == exp) & (segments.method == method)]
-    runs = int(mine.runs.max())
-    if row.run >= runs:
-        return f"run {row.run} of experiment {exp!r}, config.json says {runs} runs " \
+    mine = {k[2]: v for k, v in segments.items() if k[:2] == (exp, method)}
+    runs = max(p.runs for parts in mine.values() for p in parts)
+    if run >= runs:
+        return f"run {run} of experiment {exp!r}, config.json says {runs} runs " \
             f"(0 to {runs - 1})"
-    parts = mine[(mine.task == task) & (row.run < mine.runs)]
-    if parts.empty:
-        tasks = ", ".join(dict.fromkeys(mine.task))
+    parts = [p for p in mine.get(task, ()) if run < p.runs]
+    if not parts:
         return f"task {task!r} of experiment {exp!r} was never scheduled (config.json: " \
-            f"{exp!r} scheduled {tasks})"
-    spans = ", ".join(f"{lo + 1} to {hi}" for lo, hi in zip(parts.lo, parts.hi, strict=True))
-    return f"episode {row.episode} of experiment {exp!r}, task {task!r}, run {row.run}: " \
+            f"{exp!r} scheduled {', '.join(mine)})"
+    spans = ", ".join(f"{p.lo + 1} to {p.hi}" for p in parts)
+    return f"episode {int(row.episode)} of experiment {exp!r}, task {task!r}, run {run}: " \
         f"config.json schedules episodes {spans} of it"
 
 
