@@ -43,9 +43,11 @@ def world_entry(source: str) -> str:
 
 
 def compared(key: str, value: object) -> str:
-    """The part of ``value`` compared between identities (a file's hash, else all)."""
+    """The part of ``value`` compared between identities (a file's hash, else all: also
+    where the hash is not known, a text not read from a file)."""
     text = str(value)
-    return text.rsplit(" ", 1)[-1] if key in FILE_KEYS else text
+    digest = text.rsplit(" ", 1)[-1]
+    return digest if key in FILE_KEYS and digest != "sha256:unknown" else text
 
 
 def first_difference(saved: Mapping[str, object], now: Mapping[str, object],

@@ -328,3 +328,20 @@ def test_evaluating_over_no_episode_is_refused(ctx_c, episodes):
     policy = GreedyPolicy.of(make_learner("GDQ", ctx_c))
     with pytest.raises(ConfigError, match=r"episodes must be"):
         evaluate_policy(OfficeEnv(task="C"), policy, episodes)
+
+
+def test_a_policy_runs_where_states_are_numbered_alike(ctx_c, tmp_path):
+    """A policy needs only the state numbering: the office's task C policy runs on task
+    D of the same world; a keys-1 policy is refused on keys-2 (same sizes)."""
+    office = GreedyPolicy.of(make_learner("Q-learning", ctx_c))
+    office.save(tmp_path / "c.npz")
+    assert len(evaluate_policy(OfficeEnv(task="D"), GreedyPolicy.load(tmp_path / "c.npz"),
+                               2)) == 2
+    k1 = pddl_task_context(load_instance("keys", "keys-1"))
+    keys = GreedyPolicy.of(make_learner("Q-learning", k1))
+    keys.save(tmp_path / "k1.npz")
+    assert GreedyPolicy.load(tmp_path / "k1.npz").identity == keys.identity
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
+    with pytest.raises(ResultsError, match=r"this policy was saved for problem keys-1 "
+                                           r"\(keys-1\.pddl\), the env is problem keys-2"):
+        evaluate_policy(env, GreedyPolicy.load(tmp_path / "k1.npz"), 2)
