@@ -35,7 +35,7 @@ from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.rules import observe
-from gdq_pddl.learners.saving import GreedyPolicy, _identity, check_identity
+from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
@@ -187,8 +187,8 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     online = isinstance(env.unwrapped, OnlineEnv) and isinstance(learner, TabularLearner)
     if online:  # its rows must be this instance's (another numbers other states)
-        check_identity("the learner", "learner", _identity(learner.context),
-                       _identity(env.unwrapped.instance), "the env", NUMBERING_KEYS)
+        check_identity("the learner", "learner", identity_of(learner.context),
+                       identity_of(env.unwrapped.instance), "the env", NUMBERING_KEYS)
     follow = Follower(learner, env.unwrapped.instance) if online else None
     if isinstance(learner, TabularLearner) and not online:
         learner.reserve_successors(successor_capacity(env.unwrapped.model))

@@ -67,7 +67,7 @@ def _write(file: File, kind: str, n_states: int, n_actions: int, arrays: dict[st
         np.savez_compressed(file, header=np.array(text), **arrays)
 
 
-def _identity(context: object, rows: int | None = None) -> dict[str, str] | None:
+def identity_of(context: object, rows: int | None = None) -> dict[str, str] | None:
     """The identity of the task ``context`` (or an instance) is of, now (None: not known);
     ``rows``: of a problem explored online, its first ``rows`` rows only."""
     say = getattr(context, "identity", None)
@@ -113,8 +113,7 @@ def check_identity(name: str, what: str, saved: Mapping[str, str] | None,
     diff = first_difference(saved, now, keys)
     if diff is None:
         return
-    key = diff[0]
-    key, was, is_ = key, shown(diff[1]), shown(diff[2])
+    key, was, is_ = diff[0], shown(diff[1]), shown(diff[2])
     if key in ("states", "explored"):
         raise ResultsError(f"{name}: this {what} belongs to another instance explored online "
                            f"({key}: {was}; {against}: {is_}): its rows number the states "
@@ -173,7 +172,7 @@ def save_learner(file: File, learner: TabularLearner, **generators: np.random.Ge
            **{"class": type(learner).__name__}, config=asdict(learner.config),
            params=learner.params._asdict(), aliases=aliases,
            generators={k: g.bit_generator.state for k, g in generators.items()},
-           identity=_identity(learner.context))
+           identity=identity_of(learner.context))
 
 
 def load_learner(file: File, context: TaskContext) -> TabularLearner:
@@ -186,7 +185,7 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
     name = _name(file)
     header, arrays = _read(file, "learner")
     guards.check_context(context)
-    check_identity(name, "learner", _saved_identity(name, header), _identity(context),
+    check_identity(name, "learner", _saved_identity(name, header), identity_of(context),
                    "the task context")
     saved, size = (header.get("n_states"), header.get("n_actions")), \
         (context.n_states, context.n_actions)
@@ -304,7 +303,7 @@ class GreedyPolicy:
     def of(cls, learner: TabularLearner) -> GreedyPolicy:
         """``learner``'s greedy policy now."""
         return cls(np.asarray(learner.greedy_policy(), dtype=np.int64),
-                   learner.context.n_env_actions, _identity(learner.context))
+                   learner.context.n_env_actions, identity_of(learner.context))
 
     def act(self, state: int, rng: np.random.Generator | None = None) -> int:
         """The policy's action in ``state`` (``rng`` unused)."""
@@ -320,10 +319,10 @@ class GreedyPolicy:
         may have found more states since)."""
         instance = getattr(getattr(env, "unwrapped", env), "instance", None)
         saved = None if self.identity is None else dict(self.identity)
-        now = _identity(instance)
+        now = identity_of(instance)
         n, have = _rows(saved), _rows(now)
         if n is not None and have is not None and n < have:  # the env found more since
-            now = _identity(instance, rows=n)
+            now = identity_of(instance, rows=n)
         check_identity(name, "policy", saved, now, "the env", NUMBERING_KEYS)
 
     def save(self, file: File) -> None:
