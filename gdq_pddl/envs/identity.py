@@ -4,8 +4,8 @@ An identity is a flat ``{key: value}`` of strings (``docs/learners.md``). File k
 (:data:`FILE_KEYS`) read ``"<name> sha256:<hex>"``: the name (a path) says which file in
 messages, the hash is what is compared, so a copy of a file elsewhere is the same file.
 Other keys are compared whole. :data:`NUMBERING_KEYS` are those that say what the state
-and action numbers mean (what a greedy policy needs); a learner needs every key (its
-tables hold its task's plans, prior and goal).
+and action numbers mean (what a greedy policy needs); a loaded learner needs every key
+(its tables hold its task's plans, prior and goal).
 """
 
 from __future__ import annotations
@@ -19,8 +19,13 @@ from gdq_pddl.resources import world_text
 
 FILE_KEYS = ("domain", "problem", "dynamics", "world")
 """Keys whose value ends in the hash of a file's text (the part compared)."""
-NUMBERING_KEYS = ("domain", "problem", "problem name", "world", "explored", "states")
-"""The keys that fix what state and action numbers mean."""
+NUMBERING_KEYS = ("domain", "problem", "problem name", "learner states", "explored",
+                  "states")
+"""The keys that fix what state and action numbers mean (a greedy policy's)."""
+PROBLEM_KEYS = ("domain", "problem", "problem name", "explored", "states")
+"""The keys a learner's context and the env it runs in must share (a PDDL problem's: an
+office learner may plan on another world's map, the knowledge experiments' wrong
+knowledge)."""
 
 
 def file_entry(name: str, digest: str | None) -> str:

@@ -21,6 +21,7 @@ observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -118,9 +119,16 @@ class OfficeInstance:
 
     def identity(self) -> dict[str, str]:
         """What this task is, as learner and policy files record it
-        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash) and the task."""
+        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash), the task, and
+        the learner's states and actions (a digest of their names: what numbers mean)."""
+        sp = self.spaces
+        names = [sp.state_name(s) for s in range(sp.n_states)] + \
+            [sp.action_name(a) for a in range(sp.n_actions)]
+        digest = hashlib.sha256("\n".join(names).encode()).hexdigest()
         return {"world": world_entry(self.world.source),
-                "task": f"{self.task.name} ({self.task.start} -> {self.task.goal})"}
+                "task": f"{self.task.name} ({self.task.start} -> {self.task.goal})",
+                "learner states": f"{sp.n_states} states, {sp.n_actions} actions "
+                                  f"sha256:{digest}"}
 
     @property
     def step_limit_key(self) -> tuple[str, str]:

@@ -21,7 +21,7 @@ from numba import types
 from numba.extending import overload
 
 from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
-from gdq_pddl.envs.identity import NUMBERING_KEYS
+from gdq_pddl.envs.identity import PROBLEM_KEYS
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv
@@ -120,7 +120,9 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     and ``env.step`` through every wrapper; ``True`` demands the compiled loop (a
     :class:`~gdq_pddl.errors.ConfigError` says why it cannot run), ``False`` forces the
     Python loop. Raises :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a
-    ``numpy.random.Generator`` or the learner's states and actions are not the env's.
+    ``numpy.random.Generator`` or the learner's states and actions are not the env's, and
+    :class:`~gdq_pddl.errors.ResultsError` when its task context is of another PDDL
+    problem than the env's (same sizes) or of another instance explored online.
     """
     return _run(learner, env, n_episodes, rng, fast, _n_areas(env))
 
@@ -168,6 +170,10 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
                  "episode records", "run fewer episodes at a time")
     if isinstance(learner, TabularLearner):
         guards.check_env(len(learner.q), learner.context.n_env_actions, env)
+        # another problem of the same size, or another instance explored online: refused
+        check_identity("the learner", "learner", identity_of(learner.context),
+                       identity_of(getattr(env.unwrapped, "instance", None)), "the env",
+                       PROBLEM_KEYS)
     reason = why_not_compiled(learner, env)
     if fast and reason is not None:
         raise ConfigError(f"fast=True: {reason}")
@@ -186,9 +192,6 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
 def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
                 rng: np.random.Generator, n_areas: int) -> EpisodeRecords:
     online = isinstance(env.unwrapped, OnlineEnv) and isinstance(learner, TabularLearner)
-    if online:  # its rows must be this instance's (another numbers other states)
-        check_identity("the learner", "learner", identity_of(learner.context),
-                       identity_of(env.unwrapped.instance), "the env", NUMBERING_KEYS)
     follow = Follower(learner, env.unwrapped.instance) if online else None
     if isinstance(learner, TabularLearner) and not online:
         learner.reserve_successors(successor_capacity(env.unwrapped.model))

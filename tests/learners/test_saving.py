@@ -217,6 +217,10 @@ def test_a_learner_of_one_problem_is_refused_by_another_of_the_same_size(tmp_pat
                                            r"problem keys-2 \(keys-2\.pddl\): its problem"):
         load_learner(path, k2)
     assert type(load_learner(path, pddl_task_context(load_instance("keys", "keys-1")))) is GDQ
+    env = gymnasium.make("gdq_pddl/PDDL-v0", domain="keys", problem="keys-2")
+    with pytest.raises(ResultsError, match=r"the learner: this learner was saved for problem "
+                                           r"keys-1 .*, the env is problem keys-2"):
+        run_episodes(make_learner("GDQ", k1), env, 1, np.random.default_rng(0))
     header = _header(path)["identity"]
     assert header["problem name"] == "keys-1" and "sha256:" in header["problem"]
 
