@@ -263,7 +263,7 @@ def check_against_config(path: Path, df: pd.DataFrame, cfg: RunConfig) -> None:
                        (run[mine] < seg.runs)]
             found[hit] = True
             for r, n in enumerate(np.bincount(run[hit], minlength=seg.runs).tolist()):
-                counts[seg.entry, key[1], r] = counts.get((seg.entry, key[1], r), 0) + n
+                counts[seg.entry, seg.method, r] = counts.get((seg.entry, seg.method, r), 0) + n
     if not found.all():
         first = int(np.flatnonzero(~found)[0])
         raise ResultsError(f"{path}: line {first + 2}: " +
