@@ -119,8 +119,13 @@ class OfficeInstance:
 
     def identity(self) -> dict[str, str]:
         """What this task is, as learner and policy files record it
-        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash), the task, and
-        the learner's states and actions (a digest of their names: what numbers mean)."""
+        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash, as first
+        asked), the task, and the learner's states and actions (a digest of their names:
+        what the numbers mean)."""
+        return dict(self._identity)
+
+    @cached_property
+    def _identity(self) -> dict[str, str]:
         sp = self.spaces
         names = [sp.state_name(s) for s in range(sp.n_states)] + \
             [sp.action_name(a) for a in range(sp.n_actions)]
