@@ -152,10 +152,13 @@ def _check_entry(path: Path, i: int, e: object) -> None:
 
 def unfinished(folder: Path) -> ResultsError | None:
     """The error of a folder whose run stopped before writing ``episodes.csv`` (its
-    ``config.json`` is there), saying how to finish it; None if it is no such folder."""
+    ``config.json`` lists the experiments), saying how to finish it; None if it is no
+    such folder (another command's, a ``scale`` folder, or none)."""
     if not (folder / "config.json").is_file():
         return None
     planned = load_config(folder).experiments
+    if not planned:
+        return None
     total = sum(int(e.get("runs", 0)) * len(e.get("methods", ())) for e in planned)
     units = folder / "units"
     done = sum(1 for _ in units.glob("*.npz")) if units.is_dir() else 0
