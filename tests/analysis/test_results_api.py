@@ -160,20 +160,13 @@ def test_every_row_is_checked_against_the_config(tmp_path, change, message):
     assert str(err.value).startswith(str(out / "episodes.csv"))
 
 
-def test_a_run_short_of_episodes_is_named_even_when_the_total_is_right(tmp_path):
-    """One run's episodes 39 and 40 renumbered as another's: both runs are whole numbers of
-    rows short and long, the method's total is right (what the old check compared)."""
+def test_a_missing_episode_names_its_run(tmp_path):
+    """A row deleted: the run short of an episode is named, with the config's count."""
     out = write_folder(tmp_path / "o")
-
-    def swap(lines):
-        i = next(i for i, line in enumerate(lines) if line.startswith("run,GDQ,C,0,40,"))
-        j = next(i for i, line in enumerate(lines) if line.startswith("run,GDQ,C,1,40,"))
-        lines[i] = _cells(lines[i], run=2, episode=1)  # now a repeat of run 2's first
-        del lines[j]
-        return lines
-
-    _rewrite(out / "episodes.csv", swap)
-    with pytest.raises(ResultsError, match=r"repeats an episode"):
+    _rewrite(out / "episodes.csv", lambda lines: [line for line in lines
+                                                  if not line.startswith("run,GDQ,C,1,17,")])
+    with pytest.raises(ResultsError, match=r"experiment 'run' \(C x 40\), method 'GDQ', run "
+                                           r"1 has 39 episodes, config.json says 40"):
         load_results(out)
 
 
