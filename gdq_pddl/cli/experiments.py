@@ -19,6 +19,7 @@ from gdq_pddl.cli.common import (
     execute,
     experiment_kw,
     load_world_checked,
+    out_folder,
     pddl_args,
     pddl_files,
     refuse_given,
@@ -40,6 +41,7 @@ from gdq_pddl.experiments import (
 from gdq_pddl.experiments.collect import collect
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
+from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
 
@@ -91,18 +93,23 @@ def _run_pddl(args: argparse.Namespace) -> int:
                        "shipped domain (and --dynamics for a STRIPS domain of your own)")
     files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
              determinisation(args))
+    explore = args.explore
     because = "`--explore online` was given"  # why a problem is explored online
     try:  # check the files (and size) before any worker
         instance = load_pddl_instance(files)
-        if args.explore == "online":
+        if args.resume:  # as the run went, or refused, before any enumeration
+            explore = resumed_exploration(out_folder(args, f"run-{instance.name}"), explore)
+            if explore != args.explore:
+                because = "the run resumed went online under `--explore auto`"
+        if explore == "online":
             files = (*files, "online")
             instance = OnlineInstance(instance)  # its own checks
         else:
-            if args.explore == "auto" and instance.ppddl:  # it can go online
+            if explore == "auto" and instance.ppddl:  # it can go online
                 instance.graph_or_give_up()
             instance.model  # noqa: B018
     except (MemoryError, TooManyStates) as exc:  # past the budget, or a `ulimit -v`
-        if args.explore == "auto" and load_pddl_instance(files).ppddl and \
+        if explore == "auto" and load_pddl_instance(files).ppddl and \
                 isinstance(exc, (TooManyStates, SizeError)):
             files = (*files, "online")
             instance = OnlineInstance(load_pddl_instance(files[:4]))
@@ -122,7 +129,8 @@ def _run_pddl(args: argparse.Namespace) -> int:
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners,
-                   collect=partial(collect, online_facts={"explored_because": because}))
+                   collect=partial(collect, online_facts={"explored_because": because}),
+                   options={"explore": args.explore})
 
 
 def register_switch(sub) -> None:

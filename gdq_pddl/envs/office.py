@@ -22,6 +22,7 @@ observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -40,6 +41,7 @@ from gdq_pddl.abstraction.prior import (
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
+from gdq_pddl.envs.identity import world_entry
 from gdq_pddl.envs.model import compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
@@ -125,6 +127,24 @@ class OfficeInstance:
     def name(self) -> str:
         """The task's name, e.g. ``"C"``."""
         return self.task.name
+
+    def identity(self) -> dict[str, str]:
+        """What this task is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash, as first
+        asked), the task, and the learner's states and actions (a digest of their names:
+        what the numbers mean)."""
+        return dict(self._identity)
+
+    @cached_property
+    def _identity(self) -> dict[str, str]:
+        sp = self.spaces
+        names = [sp.state_name(s) for s in range(sp.n_states)] + \
+            [sp.action_name(a) for a in range(sp.n_actions)]
+        digest = hashlib.sha256("\n".join(names).encode()).hexdigest()
+        return {"world": world_entry(self.world.source),
+                "task": f"{self.task.name} ({self.task.start} -> {self.task.goal})",
+                "learner states": f"{sp.n_states} states, {sp.n_actions} actions "
+                                  f"sha256:{digest}"}
 
     @property
     def step_limit_key(self) -> tuple[str, str]:

@@ -34,6 +34,7 @@ inert goal rows.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import replace
 from functools import cached_property
@@ -110,6 +111,7 @@ class OnlineInstance:
         self.own = base.reward_scale == "problem"
         self.graph = LazyGraph(self.task)  # with gains: costs inside effects, both scales
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
+        self.heuristic_name = estimate or "h_add"
         self.estimates = estimate is not None
         self.estimate_weight = float(estimate_weight)
         self.darling_tolerance = float(darling_tolerance)
@@ -181,6 +183,24 @@ class OnlineInstance:
     learner_goal = property(lambda self: self.goal)
     r_max = property(lambda self: float(self.dynamics.r_max))
     goal_pos = GOAL_POS
+
+    def identity(self, rows: int | None = None) -> dict[str, str]:
+        """What this instance is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its problem's (:meth:`PDDLInstance.identity`),
+        how it is explored, and the states its rows number now (a digest of each row's
+        state, or of its estimate): another instance of the same files numbers the states
+        its own episodes reached in their order. ``rows``: of its first ``rows`` rows
+        only (rows never move: a policy taken earlier numbers a prefix of them)."""
+        n = self.n_rows if rows is None else min(int(rows), self.n_rows)
+        real = self.state_of_row[:n] >= 0
+        digest = hashlib.sha256(np.packbits(real).tobytes())
+        digest.update(np.ascontiguousarray(self.graph.words[self.state_of_row[:n][real]])
+                      .tobytes())
+        digest.update(np.ascontiguousarray(self.dist[:n][~real]).tobytes())
+        estimate = "none" if not self.estimates else \
+            f"{self.heuristic_name} x {self.estimate_weight:g}"
+        return {**self.base.identity(), "explored": f"online (estimate {estimate})",
+                "states": f"{n} rows sha256:{digest.hexdigest()}"}
 
     @property
     def max_successors(self) -> int:

@@ -41,6 +41,7 @@ from gdq_pddl.abstraction.prior import (
 )
 from gdq_pddl.dynamics import CostDist, Dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
+from gdq_pddl.envs.identity import file_entry
 from gdq_pddl.envs.model import StateSpace, compile_true_model
 from gdq_pddl.envs.pddl_checks import (
     DEFAULT_R_MAX,
@@ -58,7 +59,7 @@ from gdq_pddl.envs.solve import value_within
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import ModelArrays, env_act
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
-from gdq_pddl.inputs import read_text
+from gdq_pddl.inputs import read_text, text_hash
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.outcomes import reality_outcomes
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
@@ -83,6 +84,9 @@ class PDDLInstance:
     """The most reachable states explored before the problem is refused as too large."""
     start_state: int = 0
     """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
+    dynamics_hash: str | None = None
+    """The hash of the dynamics file's text as read (``sha256:<hex>``; None: none given,
+    or an instance not made by :meth:`from_files` or :meth:`from_texts`)."""
 
     @classmethod
     def from_files(cls, domain: str | Path, problem: str | Path,
@@ -95,10 +99,10 @@ class PDDLInstance:
         domain, problem, dynamics = resolve_pddl(domain, problem, dynamics)
         planning = PlanningProblem.from_files(domain, problem,
                                               check_determinisation(determinisation))
-        overlay = None if dynamics is None else parse_reality(
-            read_text(dynamics, lambda src, msg: WorldError(src, "", msg)), planning,
-            str(dynamics))
-        return cls._built(planning, overlay, max_states)
+        text = None if dynamics is None else \
+            read_text(dynamics, lambda src, msg: WorldError(src, "", msg))
+        overlay = None if text is None else parse_reality(text, planning, str(dynamics))
+        return cls._built(planning, overlay, max_states, text)
 
     @classmethod
     def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
@@ -108,23 +112,37 @@ class PDDLInstance:
         planning = PlanningProblem.from_texts(domain, problem,
                                               determinisation=check_determinisation(determinisation))
         overlay = None if dynamics is None else parse_reality(dynamics, planning)
-        return cls._built(planning, overlay, max_states)
+        return cls._built(planning, overlay, max_states, dynamics)
 
     @classmethod
     def _built(cls, planning: PlanningProblem, overlay: Dynamics | None,
-                 max_states: int | None) -> PDDLInstance:
+               max_states: int | None, dynamics_text: str | None = None) -> PDDLInstance:
         domain = planning.source_domain
         if overlay is None and not domain.probabilistic:
             raise PlanningError(f"{domain.source} is a STRIPS domain: it says what actions do "
                                 "when they work, not how often they do; give its dynamics "
                                 "file (--dynamics), or write its outcomes in PPDDL "
                                 "(docs/domains.md)")
-        return cls(planning, overlay, max_states)
+        return cls(planning, overlay, max_states,
+                   dynamics_hash=None if dynamics_text is None else text_hash(dynamics_text))
 
     @property
     def name(self) -> str:
         """The problem's name."""
         return self.problem.problem.name
+
+    def identity(self) -> dict[str, str]:
+        """What this problem is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its domain, problem and dynamics files by the
+        hashes of their texts, the problem's name and the planner's determinisation."""
+        hashes = self.problem.text_hashes or (None, None)
+        out = {"domain": file_entry(self.problem.source_domain.source, hashes[0]),
+               "problem": file_entry(self.source, hashes[1]), "problem name": self.name,
+               "dynamics": "none" if self.overlay is None else
+               file_entry(self.overlay.source or "<dynamics>", self.dynamics_hash)}
+        if self.determinisation is not None:
+            out["determinisation"] = self.determinisation
+        return out
 
     @property
     def ppddl(self) -> bool:
