@@ -280,3 +280,22 @@ def test_paper_experiments_get_no_methods_section(full):
     text = (out / "REPORT.md").read_text()
     assert "Methods compared" not in text
     assert text.count("**Summary.** GDQ, knowledge as a prior model (`GDQ`): ") == 1
+
+
+def test_a_report_of_fewer_runs_than_the_paper_says_so_first(tmp_path, monkeypatch):
+    """`reproduce --quick` (3 runs) must not read as a failed reproduction: the report's
+    first lines say it is a first look and what few runs do to the verdicts."""
+    from gdq_pddl.analysis import report
+
+    out = write_output(tmp_path, switches=False, robot=False)
+    head = write_report(out).read_text().splitlines()[:6]
+    note = next((line for line in head if line.startswith("**A first look")), None)
+    assert note is not None, head
+    assert f"{RUNS} runs**, of {EPISODES} episodes" in note and "little power" in note
+    assert "not a failed reproduction" in note and "`gdq-pddl reproduce`" in note
+    assert head.index(note) < next(i for i, h in enumerate(head) if h.startswith("**Summary"))
+    assert "--quick" not in note  # not the quick protocol's size
+    monkeypatch.setattr(report, "QUICK_SIZE", (EPISODES, RUNS))
+    assert "(`gdq-pddl reproduce --quick`)" in write_report(out).read_text()
+    monkeypatch.setattr(report, "PAPER_SIZE", (EPISODES, RUNS))  # as many runs as the paper
+    assert "A first look" not in write_report(out).read_text()
