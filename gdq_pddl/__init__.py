@@ -27,8 +27,8 @@ _LAZY = {"load_results": "gdq_pddl.experiments.results",
                           "save_learner"), "gdq_pddl.learners")}
 __all__ = ["__version__", *_LAZY, "envs", "learners", "errors", "resources"]
 """The API: the envs (ids and docs), the learners (with save, load and evaluate), the
-errors raised on bad input, and the shipped files by name. ``pdoc gdq_pddl -o docs/api``
-writes its pages."""
+errors raised on bad input, and the shipped files by name. The documentation site renders
+them (docs/reference/api.md: ``pip install '.[docs]' && mkdocs serve``)."""
 
 load_results: Callable[..., pandas.DataFrame]
 """An output folder's episodes as a pandas DataFrame, one row per episode
