@@ -28,6 +28,7 @@ def test_the_site_builds_in_strict_mode(tmp_path):
     assert (site / "index.html").exists()
     api = (site / "reference" / "api" / "index.html").read_text(encoding="utf-8")
     assert "GDQConfig" in api and "run_episodes" in api  # rendered from the docstrings
+    assert ":func:<code>" not in api and ":mod:<code>" not in api  # docs/hooks/roles.py
     cli = (site / "reference" / "cli" / "index.html").read_text(encoding="utf-8")
     assert "gdq-pddl-reproduce" in cli
 
