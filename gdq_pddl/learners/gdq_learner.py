@@ -74,7 +74,6 @@ class GDQ(TabularLearner):
     """
 
     kind = KIND_GDQ
-    name = "GDQ"
     config: GDQConfig
     config_type = GDQConfig
     estimate_weight = 1.25

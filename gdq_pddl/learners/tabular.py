@@ -89,8 +89,6 @@ class TabularLearner:
 
     kind: int = KIND_QLEARNING
     """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
-    name: str = "tabular"
-    """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
     """The config class the constructor takes."""
     reads_knowledge: bool = True
