@@ -413,8 +413,9 @@ def settings_table(found: LearnerEntry) -> list[tuple[str, str, str, str]]:
         if f.name in found.fixed:
             continue
         span = field_range(found.config, f.name)
-        doc = field_doc(found.config, f.name).split(". ")[0].split("\n\n")[0]
+        doc = " ".join(field_doc(found.config, f.name).split(". ")[0].split())
+        doc = doc if len(doc) <= 100 else doc[:97].rsplit(" ", 1)[0] + " ..."
         default = getattr(defaults, f.name)
         rows.append((f.name, type_text(found.config, f.name) + (f" in {span}" if span else ""),
-                     "none" if default is None else str(default), " ".join(doc.split())))
+                     "none" if default is None else str(default), doc))
     return rows

@@ -111,3 +111,57 @@ def test_settings_table_shows_every_setting_with_its_default_and_docs():
     assert "variant" not in rows  # the name sets it
     assert rows["n_backups"][2] == "5" and rows["m"][2] == "5"
     assert rows["alpha"][1] == "a number in (0, 1]" and rows["alpha"][3].startswith("Step size")
+
+
+# --- the command line and the runner -----------------------------------------------------------
+
+def _cli(capsys, *argv):
+    from gdq_pddl.cli import main
+
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_methods_lists_every_learner_with_its_settings(capsys):
+    import json
+
+    code, out, _ = _cli(capsys, "methods", "--json")
+    rows = {d["name"]: d for d in json.loads(out)}
+    assert code == 0 and tuple(rows) == registry.names()
+    dyna = {s["name"]: s for s in rows["Dyna-Q"]["settings"]}
+    assert dyna["n_backups"]["default"] == "3"
+    assert dyna["n_backups"]["type"] == "a whole number in [0, 1_000_000]"
+    assert dyna["n_backups"]["doc"].startswith("N: model backups per real step")
+    code, out, _ = _cli(capsys, "methods", "gdq")
+    assert code == 0 and out.startswith("GDQ: ") and "explore_all" in out
+    code, out, _ = _cli(capsys, "list")
+    assert code == 0 and "methods (--method" in out and "  Dyna-Q " in out
+
+
+@pytest.mark.parametrize("command", [
+    ["run", "--task", "C"], ["switch"], ["robot"], ["knowledge"],
+    ["scale", "--sizes", "40"], ["pairs"]])
+def test_every_command_refuses_a_bad_method_spec_in_one_line(capsys, tmp_path, command):
+    code, out, err = _cli(capsys, *command, "--method", "GDQ:explore_all=2", "--episodes",
+                          "1", "--runs", "1", "--out", str(tmp_path / "out"))
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert "explore_all must be a number or none in [0, 1], got 2.0" in err
+
+
+def test_a_spec_reaches_the_learner_in_the_runner():
+    """The experiment's alpha, gamma and epsilon are defaults a method's settings override."""
+    from gdq_pddl.experiments.protocol import Experiment, Hyper
+    from gdq_pddl.experiments.work import context_of, instance_of, make_learner
+
+    exp = Experiment("t", (("C", 1),), methods=("dyna_q:n_backups=7,alpha=0.3", "q-learning"),
+                     runs=1, hyper=Hyper(alpha=0.5, gamma=0.9, epsilon=0.2))
+    assert exp.methods == ("Dyna-Q:n_backups=7,alpha=0.3", "Q-learning")
+    ctx = context_of(exp, instance_of(exp, "C"))
+    learner = make_learner(exp.methods[0], ctx, exp.hyper)
+    assert (learner.config.n_backups, learner.config.alpha, learner.config.gamma,
+            learner.config.epsilon) == (7, 0.3, 0.9, 0.2)
+    plain = make_learner(exp.methods[1], ctx, exp.hyper)
+    assert (plain.config.alpha, plain.config.gamma, plain.config.epsilon) == (0.5, 0.9, 0.2)
+    with pytest.raises(ConfigError, match="unknown method 'sarsa'"):
+        Experiment("t", (("C", 1),), methods=("sarsa",))
