@@ -33,9 +33,8 @@ from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
-from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy
-from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
+from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
 
@@ -86,8 +85,19 @@ SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
 ``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
 limit (the env ends every episode first, or at the same step)."""
 COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ)
-"""The learner classes the compiled loop runs (exact types: a subclass may override
-``act`` or ``observe``)."""
+"""The built-in learner classes the compiled loop runs (exact types: a subclass may
+override ``act`` or ``observe``); it also runs any learner whose class keeps
+:class:`TabularLearner`'s ``act`` and ``observe``, with its compiled ``act_rule`` and
+``observe_rule`` (:func:`compiled_learner`)."""
+
+
+def compiled_learner(learner: Learner) -> bool:
+    """Whether the compiled loop gives what ``learner``'s methods give: a built-in learner
+    (:data:`COMPILED_LEARNERS`), or one whose class leaves ``act`` and ``observe`` to
+    :class:`TabularLearner`, which call its compiled rules as the loop does."""
+    cls = type(learner)
+    return cls in COMPILED_LEARNERS or issubclass(cls, TabularLearner) and \
+        cls.act is TabularLearner.act and cls.observe is TabularLearner.observe
 
 
 def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
@@ -98,9 +108,10 @@ def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
     base = env.unwrapped
     if type(base) not in (PDDLEnv, CompactEnv):
         return f"the env is a {type(base).__name__}, not a PDDLEnv or CompactEnv"
-    if type(learner) not in COMPILED_LEARNERS:
+    if not compiled_learner(learner):
         return f"the learner is a {type(learner).__name__}, not one of " + \
-            ", ".join(c.__name__ for c in COMPILED_LEARNERS)
+            ", ".join(c.__name__ for c in COMPILED_LEARNERS) + \
+            " nor a TabularLearner that keeps its act and observe"
     while env is not base:
         if type(env) not in SAME_RESULTS_WRAPPERS or type(env) is TimeLimit and \
                 env._max_episode_steps < base.model.step_limit:
@@ -234,7 +245,8 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
         ep = _episodes(dynamics, start, goal_pos, doors, learner.tables, learner.params,
-                       env_rng, rng, returns, steps, success, areas, ep, room)
+                       env_rng, rng, returns, steps, success, areas, ep, room,
+                       learner.act_rule, learner.observe_rule)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
@@ -322,13 +334,15 @@ def _area_impl(m, state):
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
               steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
-              room: int) -> int:
+              room: int, act, observe) -> int:
     """The compiled episode loop (same calls, in the same order, as the Python loop) from
     episode ``first``, over the env's true dynamics ``m``. Returns the number of episodes
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them."""
+    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe``: the learner's
+    compiled rules (``TabularLearner.act_rule``, ``observe_rule``; numba compiles the loop
+    once per pair of them)."""
     table, model, plans, prior, queue = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:

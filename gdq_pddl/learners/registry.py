@@ -161,6 +161,12 @@ def entries() -> tuple[LearnerEntry, ...]:
     return BUILT_IN + tuple(e for e, _ in _plugins() if e is not None)
 
 
+def refresh() -> None:
+    """Read the entry points again (a package installed or removed while running)."""
+    for cached in (entries, _plugins, _by_key):
+        cached.cache_clear()
+
+
 def plugin_problems() -> list[str]:
     """Why each plugin that is left out is left out, one line each."""
     return [why for e, why in _plugins() if e is None]

@@ -98,6 +98,16 @@ class TabularLearner:
     """On a problem explored online, a state not reached yet stands ``ceil(w h)`` actions
     from the goal for this learner, ``h`` its estimate
     (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
+    act_rule = staticmethod(act)
+    """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``
+    (:func:`~gdq_pddl.learners.tables.act`, epsilon-greedy): :meth:`act` and the compiled
+    episode loop call it. A learner from another package may give its own numba function
+    (the loop is compiled for it: ``docs/howto-add-learner.md``)."""
+    observe_rule = staticmethod(rules.observe)
+    """The compiled rule after a real step, ``(table, model, plans, prior, queue, params,
+    s, a, r, s2, terminated, truncated, rng) -> bool`` (:func:`~gdq_pddl.learners.rules.observe`,
+    which runs the built-in learners' rules by ``kind``): :meth:`observe` and the compiled
+    episode loop call it."""
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext
@@ -236,7 +246,7 @@ class TabularLearner:
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
-        column = int(act(t.table, t.model.visits, t.prior, self.params, s, rng))
+        column = int(self.act_rule(t.table, t.model.visits, t.prior, self.params, s, rng))
         return self.context.action_of(s, column)
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
@@ -249,7 +259,7 @@ class TabularLearner:
         a = self._column("a", s, a)
         r = guards.check_reward(r)
         guards.check_generator(rng)
-        if not rules.observe(*self.tables, self.params, s, a, r, s2, bool(terminated),
+        if not self.observe_rule(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
 
