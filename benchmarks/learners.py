@@ -4,8 +4,10 @@
     python benchmarks/learners.py results    # 300 episodes x 5 runs, mean return per method
     python benchmarks/learners.py results --runs 100   # the same, with more runs
     python benchmarks/learners.py            # both
+    python benchmarks/learners.py speed --method Q-learning Expected-SARSA   # any methods
 
-Speed counts env steps (learner + env, compiled loop) after a JIT warm-up run.
+Speed counts env steps (learner + env, compiled loop) after a JIT warm-up run; the methods
+take turns, repeat by repeat, so a loaded machine slows each alike (compare ratios).
 Results use the paper's protocol (alpha 0.1, gamma 0.95, epsilon 0.1, 20 steps, R_max 20)
 with the env seeded 1000 + run and the learner generator seeded 2000 + run.
 """
@@ -21,21 +23,14 @@ import numpy as np
 import gdq_pddl  # noqa: F401  (registers the env)
 from gdq_pddl.learners import make_learner, office_task_context, run_episodes
 
-METHODS: dict[str, tuple[str, dict]] = {
-    "Q-learning": ("qlearning", {}),
-    "Dyna-Q": ("dynaq", {}),
-    "DARLING": ("darling", {}),
-    "GDQ": ("gdq", {}),
-    "GDQ-literal": ("gdq", {"variant": "literal"}),
-    "GDQ-code": ("gdq", {"variant": "code"}),
-}
-DIAGNOSTICS: dict[str, tuple[str, dict]] = {
+METHODS = ("Q-learning", "Dyna-Q", "DARLING", "GDQ", "GDQ-literal", "GDQ-code")
+"""The default methods (any ``--method`` spec, a plugin's included, may be given)."""
+DIAGNOSTICS = (
     # not the paper: optimistic pairs end the episode instead of leading back to s0
-    "GDQ-literal, terminal optimism": ("gdq", {"variant": "literal",
-                                               "optimistic_successor": "terminal"}),
+    "GDQ-literal:optimistic_successor=terminal",
     # DARLING as the GDQ authors' released agent runs it (where the issue's ~231 comes from)
-    "DARLING (released code)": ("darling", {"variant": "code"}),
-}
+    "DARLING-code",
+)
 
 
 def _env_and_context(task: str = "C"):
@@ -44,23 +39,26 @@ def _env_and_context(task: str = "C"):
     return env, ctx
 
 
-def speed(task: str = "C", episodes: int = 2000, repeats: int = 5) -> dict[str, float]:
-    """Median env steps per second of each method (fresh learner per repeat)."""
+def speed(task: str = "C", episodes: int = 2000, repeats: int = 5,
+          methods: tuple[str, ...] = METHODS) -> dict[str, float]:
+    """Median env steps per second of each method (fresh learner per repeat; the methods
+    take turns within each repeat)."""
     env, ctx = _env_and_context(task)
-    out = {}
-    for label, (method, kw) in METHODS.items():
+    for method in methods:  # JIT warm-up
         env.reset(seed=0)
-        run_episodes(make_learner(method, ctx, **kw), env, 5, np.random.default_rng(0))
-        rates = []
-        for r in range(repeats):
-            learner = make_learner(method, ctx, **kw)
+        run_episodes(make_learner(method, ctx), env, 5, np.random.default_rng(0))
+    rates: dict[str, list[float]] = {m: [] for m in methods}
+    for r in range(repeats):
+        for method in methods:
+            learner = make_learner(method, ctx)
             env.reset(seed=r)
             t0 = time.perf_counter()
             rec = run_episodes(learner, env, episodes, np.random.default_rng(r))
-            rates.append(rec.steps.sum() / (time.perf_counter() - t0))
-        out[label] = float(np.median(rates))
-        print(f"{label:12s} {out[label]:>12,.0f} steps/s  (median of {repeats} x "
-              f"{episodes} episodes)", flush=True)
+            rates[method].append(rec.steps.sum() / (time.perf_counter() - t0))
+    out = {m: float(np.median(x)) for m, x in rates.items()}
+    for m in methods:
+        print(f"{m:16s} {out[m]:>12,.0f} steps/s  (median of {repeats} x {episodes} "
+              f"episodes; {out[m] / out[methods[0]]:.2f} x {methods[0]})", flush=True)
     return out
 
 
@@ -73,18 +71,19 @@ def first_positive(returns: np.ndarray, window: int = 50) -> int | None:
     return int(hits[0]) + window if len(hits) else None
 
 
-def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, dict]:
+def results(task: str = "C", episodes: int = 300, runs: int = 5,
+            methods: tuple[str, ...] = METHODS + DIAGNOSTICS) -> dict[str, dict]:
     """Mean return per method over ``runs`` runs of ``episodes`` episodes."""
     env, ctx = _env_and_context(task)
     out = {}
     per_run_means: dict[str, np.ndarray] = {}
     print(f"Task {task}: {runs} runs x {episodes} episodes")
-    print(f"{'method':30s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
+    print(f"{'method':40s} {'mean return':>12s} {'(s.e.)':>8s} {'last 50':>8s} "
           f"{'success':>8s} {'MA50 > 0 at':>12s}")
-    for label, (method, kw) in {**METHODS, **DIAGNOSTICS}.items():
+    for label in methods:
         curves = []
         for run in range(runs):
-            learner = make_learner(method, ctx, **kw)
+            learner = make_learner(label, ctx)
             env.reset(seed=1000 + run)
             rec = run_episodes(learner, env, episodes, np.random.default_rng(2000 + run))
             curves.append(rec)
@@ -98,10 +97,10 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5) -> dict[str, di
                       "last50": float(ret[:, -50:].mean()), "success": float(succ),
                       "first_positive": cross}
         r = out[label]
-        print(f"{label:30s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
+        print(f"{label:40s} {r['mean']:>12.2f} {r['se']:>8.2f} {r['last50']:>8.2f} "
               f"{r['success']:>8.2f} {str(cross) if cross else 'never':>12s}", flush=True)
     if runs > 1:  # run k of every method shares its env and learner seeds: paired
-        for gdq in ("GDQ", "GDQ-code"):
+        for gdq in [m for m in ("GDQ", "GDQ-code") if m in per_run_means]:
             print(f"{gdq} minus each other method, mean over runs (paired s.e.):")
             for label, means in per_run_means.items():
                 if label == gdq:
@@ -118,11 +117,14 @@ def main() -> None:
     parser.add_argument("--task", default="C")
     parser.add_argument("--episodes", type=int, default=300)
     parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--method", nargs="+", help="methods (specs) to measure, the first "
+                        "the reference of the speed ratios (default: the built-in ones)")
     args = parser.parse_args()
     if args.what in ("speed", "all"):
-        speed(args.task)
+        speed(args.task, methods=tuple(args.method or METHODS))
     if args.what in ("results", "all"):
-        results(args.task, args.episodes, args.runs)
+        results(args.task, args.episodes, args.runs,
+                tuple(args.method or METHODS + DIAGNOSTICS))
 
 
 if __name__ == "__main__":

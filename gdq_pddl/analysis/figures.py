@@ -25,22 +25,16 @@ from gdq_pddl.analysis.stats import mean_se, moving_average
 from gdq_pddl.analysis.study import Study, curves_stem, slug
 from gdq_pddl.envs.render import map_painter
 from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
+from gdq_pddl.learners import registry
 from gdq_pddl.outputs import save_figure
 
-METHOD_COLOURS = {  # Okabe and Ito's colour-blind-safe palette; GDQ's variants apart
-    "GDQ": "#D55E00",  # vermillion
-    "GDQ-literal": "#E69F00",  # orange
-    "GDQ-code": "#CC79A7",  # reddish purple
-    "DARLING": "#009E73",  # bluish green
-    "DARLING-code": "#56B4E9",  # sky blue
-    "Dyna-Q": "#0072B2",  # blue
-    "Q-learning": "#000000",  # black
-}
+METHOD_COLOURS = {e.name: e.colour for e in registry.BUILT_IN}
+"""The built-in learners' colours (the registry's: Okabe and Ito's colour-blind-safe
+palette, GDQ's variants apart)."""
 METHOD_LINES = {"GDQ-literal": (0, (5, 2)), "GDQ-code": (0, (1, 1.5)),
                 "DARLING-code": (0, (5, 2))}
 """Line styles that tell GDQ's variants (and DARLING's) from the method they read like, on
 top of their colours: solid, unless listed."""
-_EXTRA = ("#F0E442", "#999999", "#8c564b", "#9467bd", "#17becf")
 INTERVAL = "95% t-interval over runs"
 """What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
 x standard error."""
@@ -52,8 +46,9 @@ def method_line(method: str) -> object:
 
 
 def method_colour(method: str) -> str:
-    """The colour of ``method`` in every figure (unknown methods: a stable extra colour)."""
-    return METHOD_COLOURS.get(method, _EXTRA[sum(map(ord, method)) % len(_EXTRA)])
+    """The colour of ``method`` in every figure (its learner's; a method with settings or
+    an unknown name: a stable extra colour)."""
+    return registry.colour(method)
 
 
 @dataclass(frozen=True)

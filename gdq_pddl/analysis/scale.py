@@ -16,9 +16,10 @@ from gdq_pddl.analysis.figures import method_colour, save_all
 from gdq_pddl.analysis.writer import render, table_text
 from gdq_pddl.experiments import scale
 from gdq_pddl.experiments.results import order_methods
+from gdq_pddl.learners import registry
 from gdq_pddl.outputs import write_text
 
-REFERENCE = "GDQ"  # the method every other one is compared with, run by run
+REFERENCE = registry.REFERENCE  # the method every other one is compared with, run by run
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")  # a building seed's, in every panel
 
 

@@ -43,6 +43,7 @@ from gdq_pddl.analysis.writer import (
 from gdq_pddl.experiments.probes import optinit_values
 from gdq_pddl.experiments.protocol import GDQ_VARIANTS
 from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT, optimal_entry
+from gdq_pddl.learners import registry
 
 __all__ = ["BEST_ROUTE_C", "method_summary", "planner_lines", "say", "setup_lines",
            "write_ground_truth", "write_header", "write_hypothesis_1", "write_hypothesis_2",
@@ -234,7 +235,7 @@ def write_variants(w: Writer) -> None:
 task."""
     study, exp = w.study, TASKS_EXPERIMENT
     methods = study.methods(exp) if study.has(exp) else []
-    others = [m for m in ("GDQ-literal", "GDQ-code") if m in methods]
+    others = [m for m in registry.variants_of(registry.REFERENCE)[1:] if m in methods]
     if not w.section("GDQ vs the paper read literally (GDQ-literal) and the authors' code "
                      "(GDQ-code)", "GDQ" in methods and bool(others), "GDQ vs its variants",
                      "the tasks experiment lacks GDQ or both of its variants"):

@@ -15,6 +15,7 @@ import pandas as pd
 from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, compare, verdict, verdict_reason
 from gdq_pddl.analysis.study import Study
 from gdq_pddl.experiments.results import is_gdq, order_methods
+from gdq_pddl.learners import registry
 
 
 @dataclass(frozen=True)
@@ -73,9 +74,8 @@ def pct(x: float) -> str:
     return "n/a" if math.isnan(x) else f"{x:.1%}"
 
 
-VARIANT_NAMES = {"GDQ": "GDQ, knowledge as a prior model", "GDQ-literal": "paper's GDQ read "
-                 "literally", "GDQ-code": "authors'-code GDQ"}
-"""How the verdict summary names the GDQ variants."""
+VARIANT_NAMES = {e.name: e.label for e in registry.BUILT_IN if e.label}
+"""How the verdict summary names the GDQ variants (the registry's labels)."""
 
 
 def table_text(rows: Sequence[Sequence] | pd.DataFrame, columns: Sequence[str] = (),

@@ -15,7 +15,7 @@ if (_REFUSAL := address_space_refusal()) is not None:  # before numpy's BLAS and
     print(f"gdq-pddl: error: {_REFUSAL}", file=sys.stderr)
     raise SystemExit(2)
 
-from gdq_pddl.cli import exercises, experiments, planning  # noqa: E402 (after the check above)
+from gdq_pddl.cli import exercises, experiments, methods, planning  # noqa: E402 (after the check above)
 from gdq_pddl.cli.common import EXIT_ERROR  # noqa: E402
 from gdq_pddl.errors import GdqError  # noqa: E402
 from gdq_pddl.experiments.interrupts import RunInterrupted  # noqa: E402
@@ -35,7 +35,8 @@ COMMANDS: list[Callable] = [
     experiments.register_switch,
     experiments.register_robot, experiments.register_reproduce, experiments.register_report,
     experiments.register_knowledge, experiments.register_scale,
-    experiments.register_pairs, exercises.register_exercises,
+    experiments.register_pairs, methods.register_methods,
+    exercises.register_exercises,
 ]
 
 

@@ -10,10 +10,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from gdq_pddl.errors import ConfigError, GdqError, SizeError
-from gdq_pddl.experiments import DEFAULT_METHODS, METHODS, Experiment, run_experiments
+from gdq_pddl.experiments import DEFAULT_METHODS, Experiment, run_experiments
 from gdq_pddl.experiments.checks import check_report_size, check_sizes
 from gdq_pddl.experiments.protocol import safe_name
 from gdq_pddl.experiments.runner import saved_units
+from gdq_pddl.learners import registry
+from gdq_pddl.learners.episodes import loop_cached
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.problem_reader import problem_file
@@ -153,7 +155,7 @@ def world_and_task(args: argparse.Namespace) -> tuple[World, Task]:
 def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None = None,
              episodes: int = 2500, runs: int = 10) -> None:
     """The options of a command that runs methods; ``out`` names its default --out."""
-    size_args(p, methods or DEFAULT_METHODS, METHODS, episodes, runs)
+    size_args(p, methods or DEFAULT_METHODS, registry.names(), episodes, runs)
     p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
     exec_args(p, out)
 
@@ -163,8 +165,9 @@ def size_args(p: argparse.ArgumentParser, methods: Sequence[str], known: Sequenc
               ) -> None:
     """--method (default ``methods``, from ``known``), --episodes, --runs and --seed."""
     p.add_argument("--method", nargs="+", metavar="M", default=list(methods),
-                   help=f"methods to compare (default: {' '.join(methods)}; "
-                        f"from: {', '.join(known)})")
+                   help=f"methods to compare (default: {' '.join(methods)}; from: "
+                        f"{', '.join(known)}; any case; NAME:key=value,... sets a "
+                        "learner's settings, `gdq-pddl methods` lists them)")
     p.add_argument("--episodes", type=POSITIVE, default=episodes,
                    help=f"episodes per run (per task; default {episodes})")
     p.add_argument("--runs", type=POSITIVE, default=runs,
@@ -188,11 +191,9 @@ def exec_args(p: argparse.ArgumentParser, out: str) -> None:
 
 
 def checked_methods(args: argparse.Namespace) -> tuple[str, ...]:
-    """The --method names, validated and without repeats."""
-    unknown = [m for m in args.method if m not in METHODS]
-    if unknown:
-        raise GdqError(f"unknown method {unknown[0]!r} (known: {', '.join(METHODS)})")
-    return tuple(dict.fromkeys(args.method))
+    """The --method names (with their settings), checked, canonical (a learner's own name,
+    in any case on input) and without repeats."""
+    return tuple(dict.fromkeys(registry.canonical(m) for m in args.method))
 
 
 def experiment_kw(args: argparse.Namespace) -> dict:
@@ -203,15 +204,15 @@ def experiment_kw(args: argparse.Namespace) -> dict:
             "planner": args.planner}
 
 
-PLAN_METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code")
-"""The methods that learn from plans (what --planner changes)."""
+PLAN_METHODS = tuple(e.name for e in registry.BUILT_IN if e.knowledge != "none")
+"""The built-in methods that read the planner's knowledge (what --planner changes)."""
 
 
 def check_planner(name: str, methods: Sequence[str] = ()) -> None:
     """Fail now, not inside a worker, on an unknown planner; warn when one that returns
     one plan per query is given to methods that learn from every plan."""
     planner = get_planner(name)
-    users = [m for m in methods if m in PLAN_METHODS]
+    users = [m for m in methods if registry.parse_method(m).entry.knowledge != "none"]
     if users and not getattr(planner, "all_plans", True):
         note(f"warning: planner {name} returns one plan per query: {', '.join(users)} "
              "learn from that plan alone where the graph planner gives every shortest plan "
@@ -247,6 +248,9 @@ def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
         check_report_size(experiments)
     before = saved_units(out, experiments) if args.resume else 0
     t0 = time.perf_counter()
+    if not loop_cached():
+        note("compiling the learners' code for its first use (numba caches it for the next "
+             "runs): this takes 10-60 s")
     run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,
                     address=args.address, resume=args.resume, log=note, **run_kw)
     ran = sum(e.runs * len(e.methods) for e in experiments) - before

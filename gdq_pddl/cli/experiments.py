@@ -40,9 +40,10 @@ from gdq_pddl.experiments import (
 )
 from gdq_pddl.experiments.collect import collect
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
-from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
+from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS
 from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
+from gdq_pddl.learners import registry
 from gdq_pddl.outputs import output_folder
 
 EXPLORE = ("auto", "enumerate", "online")
@@ -158,7 +159,7 @@ def register_robot(sub) -> None:
     p = sub.add_parser("robot", help="the paper's real-robot protocol, simulated",
                        description="Task X on the office with area 5 forbidden, 10 actions per "
                                    "trial, R_max 1000, durations as costs, alpha 0.5.")
-    run_args(p, "results/robot", methods=("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"),
+    run_args(p, "results/robot", methods=registry.built_in_names("robot"),
              episodes=30, runs=10)
     p.set_defaults(func=cmd_robot)
 
@@ -192,7 +193,7 @@ def register_knowledge(sub) -> None:
                                    "knowledge (d3, d1), a corridor only reality has, and a "
                                    "control; each also with accurate knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
-    size_args(p, KNOWLEDGE_METHODS, KNOWLEDGE_METHODS, 1500, 10)
+    size_args(p, KNOWLEDGE_METHODS, registry.names(), 1500, 10)
     exec_args(p, "results/knowledge")
     p.set_defaults(func=cmd_knowledge)
 
@@ -242,7 +243,7 @@ def register_scale(sub) -> None:
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
                         "(default 2, at most 1000)")
-    size_args(p, SCALE_DEFAULT_METHODS, SCALE_METHODS, 5000, 5,
+    size_args(p, SCALE_DEFAULT_METHODS, registry.names(), 5000, 5,
               seed="the first building seed (each run derives its own seeds from its "
                    "building, size and run number)")
     p.add_argument("--out", type=Path, help="output folder (default results/scale)")
@@ -257,7 +258,7 @@ def cmd_scale(args: argparse.Namespace) -> int:
     from gdq_pddl.experiments.scale import run_scale  # start-up time: it loads the learners
 
     out = args.out or Path("results/scale")
-    methods = list(dict.fromkeys(args.method))
+    methods = list(checked_methods(args))
     command = shlex.join(["gdq-pddl", "scale", "--sizes", *map(str, args.sizes),
                           "--buildings", str(args.buildings), "--method", *methods,
                           "--runs", str(args.runs), "--episodes", str(args.episodes),

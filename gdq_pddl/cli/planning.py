@@ -23,6 +23,7 @@ from gdq_pddl.cli.common import (
     world_and_task,
 )
 from gdq_pddl.errors import ConfigError, SizeError
+from gdq_pddl.learners import registry
 from gdq_pddl.outputs import output_file, output_folder, save_figure, write_text
 from gdq_pddl.pddl.sexpr import read_pddl_text
 from gdq_pddl.planning import PlanningProblem, Status, get_planner, planners
@@ -220,7 +221,8 @@ def cmd_list(args: argparse.Namespace) -> int:
                      for name in shipped_names("problem")},
         "dynamics": shipped_names("dynamics"),
         "worlds": {name: list(builtin_world(name).tasks) for name in shipped_names("world")},
-        "planners": {i.name: i.reason if not i.usable else "usable" for i in planners()}}
+        "planners": {i.name: i.reason if not i.usable else "usable" for i in planners()},
+        "methods": {e.name: e.description for e in registry.entries()}}
     if args.json:
         print(json.dumps(shipped, indent=2))
         return 0
@@ -235,4 +237,9 @@ def cmd_list(args: argparse.Namespace) -> int:
     print("planners (--planner; entry-point group gdq_pddl.planners):")
     for name, state in shipped["planners"].items():
         print(f"  {name:22s} {state}")
+    print("methods (--method; entry-point group gdq_pddl.learners; settings: gdq-pddl methods):")
+    for name, description in shipped["methods"].items():
+        print(f"  {name:22s} {description}")
+    for why in registry.plugin_problems():
+        print(f"  warning: {why}")
     return 0

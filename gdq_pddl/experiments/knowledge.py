@@ -23,6 +23,7 @@ from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.learners import registry
 from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import builtin_world, load_world
@@ -118,7 +119,8 @@ CASES: tuple[Case, ...] = (
 )
 """The cases of ``gdq-pddl knowledge``."""
 
-KNOWLEDGE_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+KNOWLEDGE_METHODS = registry.built_in_names("default")
+"""What ``gdq-pddl knowledge`` compares unless told otherwise (the commands' default)."""
 
 
 def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,

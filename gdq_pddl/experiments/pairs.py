@@ -27,6 +27,7 @@ from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment, Unit
 from gdq_pddl.experiments.results import load_config, order_methods
 from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
+from gdq_pddl.learners import registry
 from gdq_pddl.outputs import atomic_write
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import WorldError
@@ -131,7 +132,8 @@ class PairRuns:
     @property
     def reference(self) -> str:
         """The method the others are compared with: GDQ if it ran, else the first."""
-        return "GDQ" if "GDQ" in self.methods else self.methods[0]
+        ref = registry.REFERENCE
+        return ref if ref in self.methods else self.methods[0]
 
     @property
     def baselines(self) -> tuple[str, ...]:

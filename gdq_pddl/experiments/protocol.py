@@ -14,35 +14,30 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import registry
 from gdq_pddl.limits import check_count
 
-METHODS = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
-           "Q-learning")
-"""Learning methods by name: ``GDQ`` the library's (SPEC section 4), ``GDQ-literal`` the
+METHODS = registry.built_in_names()
+"""The built-in learning methods by name (:mod:`gdq_pddl.learners.registry` declares them,
+and those of other packages): ``GDQ`` the library's (SPEC section 4), ``GDQ-literal`` the
 paper's Algorithms 1-3 read literally, ``GDQ-code`` and ``DARLING-code`` as the GDQ
 authors' released code runs them (``docs/learners.md``)."""
 
-PAPER_METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
+PAPER_METHODS = registry.built_in_names("paper")
 """The paper's four methods (its GDQ being the library's)."""
 
-GDQ_VARIANTS = ("GDQ", "GDQ-literal", "GDQ-code")
+GDQ_VARIANTS = registry.variants_of(registry.REFERENCE)
 """The library's GDQ and the two readings of the paper it is compared with."""
 
-DEFAULT_METHODS = ("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+DEFAULT_METHODS = registry.built_in_names("default")
 """What the commands compare unless told otherwise (not GDQ-literal: it never learns)."""
 
-SCALE_METHODS: dict[str, tuple[str, dict]] = {
-    "GDQ": ("gdq", {}),
-    "GDQ-literal": ("gdq", {"variant": "literal"}),
-    "GDQ-code": ("gdq", {"variant": "code", "plan_tolerance": 0.3}),
-    "DARLING": ("darling", {"tolerance": 0.3}),
-    "Dyna-Q": ("dynaq", {}),
-    "Q-learning": ("qlearning", {}),
-}
-"""The methods of ``gdq-pddl scale``: name -> (``make_learner`` name, its arguments)."""
+SCALE_METHODS = METHODS
+"""The built-in methods of ``gdq-pddl scale`` (any registered method runs there)."""
 
-SCALE_DEFAULT_METHODS = tuple(m for m in SCALE_METHODS if m != "GDQ-literal")
-"""Every method but GDQ-literal, which never learns (``docs/decisions.md``)."""
+SCALE_DEFAULT_METHODS = DEFAULT_METHODS
+"""What ``gdq-pddl scale`` compares unless told otherwise: every method but GDQ-literal,
+which never learns (``docs/decisions.md``)."""
 
 
 @dataclass(frozen=True)
@@ -89,10 +84,15 @@ class Experiment:
             check_count(f"episodes of {task}", episodes)
             if episodes < 1:
                 raise ConfigError(f"episodes of {task} must be at least 1, got {episodes}")
-        unknown = [m for m in self.methods if m not in METHODS]
-        if unknown or not self.methods:
-            raise ConfigError(f"unknown method {unknown[0] if unknown else None!r} "
-                              f"(known: {', '.join(METHODS)})")
+        if not self.methods:
+            raise ConfigError(f"experiment {self.name}: no method (known: "
+                              f"{', '.join(registry.names())})")
+        methods = tuple(registry.canonical(m) for m in self.methods)  # ConfigError if unknown
+        object.__setattr__(self, "methods", methods)
+        if self.pddl is not None and tuple(self.pddl)[4:5] == ("online",):
+            for m in methods:
+                if not registry.parse_method(m).entry.online:
+                    raise ConfigError(f"method {m} cannot run on a problem explored online")
 
     @property
     def episodes(self) -> int:
@@ -159,7 +159,7 @@ def switch_experiment(first: str, second: str, episodes: int = 2500, **kw) -> Ex
 
 def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
     """SPEC section 6: the real-robot protocol, simulated with durations as costs."""
-    kw.setdefault("methods", ("GDQ", "GDQ-literal", "GDQ-code", "Dyna-Q"))
+    kw.setdefault("methods", registry.built_in_names("robot"))
     return Experiment("robot", (("X", trials),), runs=runs, world="office_robot",
                       hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)
 
@@ -173,7 +173,7 @@ QUICK_SIZE = (300, 3)
 def paper_protocol(quick: bool = False, seed: int = 0) -> list[Experiment]:
     """Everything the paper reports; ``quick`` is a small version for a first look."""
     episodes, runs = QUICK_SIZE if quick else PAPER_SIZE
-    methods = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
+    methods = registry.built_in_names("reproduce")
     out = task_experiments(episodes=episodes, runs=runs, methods=methods, seed=seed)
     out += [switch_experiment("C", "D", episodes, runs=runs, methods=methods, seed=seed),
             switch_experiment("C", "E", episodes, runs=runs, methods=methods, seed=seed),

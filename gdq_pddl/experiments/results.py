@@ -13,10 +13,11 @@ import numpy as np
 import pandas as pd
 
 from gdq_pddl.errors import GdqError, ResultsError
+from gdq_pddl.learners import registry
 
-METHOD_ORDER = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q",
-                "Q-learning")
-"""The order methods are listed in every figure and table (unknown ones follow, sorted)."""
+METHOD_ORDER = registry.built_in_names()
+"""The order the built-in methods are listed in every figure and table (the registry's;
+methods with settings follow their learner, unknown ones follow all, sorted)."""
 TASKS_EXPERIMENT, ROBOT_EXPERIMENT, SWITCH_PREFIX = "tasks", "robot", "switch-"
 TEXT = ("experiment", "method", "task")
 KEYS = (*TEXT, "run", "episode")
@@ -26,15 +27,16 @@ _WHOLE = {"run": 0, "episode": 1, "steps": 0}
 
 
 def order_methods(methods: Iterable[str]) -> list[str]:
-    """``methods`` in :data:`METHOD_ORDER`, unknown names after them in sorted order."""
-    found = set(methods)
-    known = [m for m in METHOD_ORDER if m in found]
-    return known + sorted(found - set(known))
+    """``methods`` in the registry's order (:func:`gdq_pddl.learners.registry.order`:
+    a learner's name, then the same learner with settings), unknown names after them in
+    sorted order."""
+    return registry.order(methods)
 
 
 def is_gdq(method: str) -> bool:
-    """GDQ or one of its variants (``GDQ-literal``, ``GDQ-code``): not a baseline."""
-    return method == "GDQ" or method.startswith("GDQ-")
+    """GDQ or one of its variants (``GDQ-literal``, ``GDQ-code``, with settings or not):
+    not a baseline."""
+    return registry.family(method) == registry.REFERENCE
 
 
 def area_columns(columns: Iterable[str]) -> list[str]:

@@ -43,9 +43,9 @@ from gdq_pddl.experiments.folder import (
 )
 from gdq_pddl.experiments.interrupts import RunInterrupted
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
-from gdq_pddl.experiments.protocol import SCALE_METHODS as METHODS
+from gdq_pddl.experiments.protocol import safe_name
 from gdq_pddl.experiments.runner import atomic_write, save_unit, versions
-from gdq_pddl.learners import make_learner
+from gdq_pddl.learners import make_learner, registry
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.learners.tables import table_bytes
@@ -180,14 +180,13 @@ def run_one(setting: tuple, name: str, key: tuple[int, int, int],
     """The arrays of one run of method ``name`` in ``setting`` (:func:`building_context`),
     seeded by ``key = (building seed, positions, run)`` only (paired runs)."""
     world, ctx, env = setting
-    method, config = METHODS[name]
     env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
     gamma = 1.0 - 1.0 / world.step_limit
     if name not in _WARMED:  # numba loads the compiled loop on first use: not timed
-        run_compact(make_learner(method, ctx, gamma=gamma, **config), env, 1,
+        run_compact(make_learner(name, ctx, defaults={"gamma": gamma}), env, 1,
                     np.random.default_rng(0))
         _WARMED.add(name)
-    learner = make_learner(method, ctx, gamma=gamma, **config)
+    learner = make_learner(name, ctx, defaults={"gamma": gamma})
     env.reset(seed=int(env_seed))  # after the warm-up: the results do not depend on it
     t1 = time.perf_counter()
     records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
@@ -287,9 +286,10 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
                  f"{n_buildings:,} buildings", "give fewer --runs or --buildings")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
-    unknown = [m for m in methods if m not in METHODS]
-    if unknown or len(set(methods)) != len(methods):
-        raise GdqError(f"methods must be different ones of {', '.join(METHODS)}, got {methods}")
+    canonical = [registry.canonical(m) for m in methods]  # a ConfigError if unknown
+    if canonical != list(methods) or len(set(methods)) != len(methods):
+        raise GdqError(f"methods must be different ones of {', '.join(registry.names())} "
+                       f"(with settings, as registry.canonical writes them), got {methods}")
     for n in sizes:
         # a learner's tables: about 1.25 n states x 5 n actions, 8 successor slots
         check_memory(table_bytes(n + n // 4, 5 * n, 8), f"--sizes {n}: a learner's tables "
@@ -338,7 +338,8 @@ def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, metho
     """Run the missing units of building ``(n, seed)``, then read them all."""
     name = building_name(n, seed)
     folder = out / "units" / name
-    paths = {(m, run): folder / f"{m}-{run}.npz" for m in methods for run in range(runs)}
+    paths = {(m, run): folder / f"{safe_name(m)}-{run}.npz" for m in methods
+             for run in range(runs)}
     missing = [key for key, path in paths.items() if not path.exists()]
     header_path = folder / "building.json"
     bar = tqdm(total=len(paths), initial=len(paths) - len(missing), unit="run", desc=name,

@@ -17,11 +17,11 @@ from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
 from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
 from gdq_pddl.learners import precompile
-from gdq_pddl.learners.agents import learner_class
-from gdq_pddl.learners.agents import make_learner as learner_by_name
 from gdq_pddl.learners.context import TaskContext, task_context
 from gdq_pddl.learners.episodes import run_episodes
 from gdq_pddl.learners.online import online_context
+from gdq_pddl.learners.registry import learner_class
+from gdq_pddl.learners.registry import make_learner as learner_by_name
 from gdq_pddl.learners.saving import save_learner
 from gdq_pddl.learners.tabular import TabularLearner
 from gdq_pddl.world_types import Task, World
@@ -36,9 +36,10 @@ def resolve_task(world: World, spec: str) -> Task:
 
 
 def make_learner(method: str, context, hyper: Hyper):
-    """A fresh learner of ``method`` for ``context`` with the experiment's ``hyper``."""
-    return learner_by_name(method, context, alpha=hyper.alpha, gamma=hyper.gamma,
-                           epsilon=hyper.epsilon)
+    """A fresh learner of ``method`` (a name, or a name with settings) for ``context``
+    with the experiment's ``hyper`` where the method does not set them."""
+    return learner_by_name(method, context, defaults={
+        "alpha": hyper.alpha, "gamma": hyper.gamma, "epsilon": hyper.epsilon})
 
 
 def instance_of(exp: Experiment, spec: str, reader: type[TabularLearner] = TabularLearner
@@ -120,7 +121,7 @@ def warm_up(units: list[Unit]) -> int:
             exp = replace(u.experiment, name="warm-up",
                           schedule=((u.experiment.schedule[0][0], 2),), runs=1)
             tiny[u.experiment.world, u.method] = Unit(exp, u.method, 0)
-    loop = precompile.start()
+    loop = precompile.start(sorted({u.method for u in tiny.values()}))
     largest = 0
     try:
         for unit in tiny.values():  # a learner for the first task: its OptInit kernels

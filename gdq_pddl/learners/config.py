@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import ast
 import inspect
+import math
 import sys
-from dataclasses import dataclass, fields
+import typing
+from dataclasses import dataclass, field, fields
 from functools import cache
-from typing import Literal
+from typing import Any, Literal
 
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.limits import MAX_NUMBER, MAX_TOLERANCE, check_count, check_real
+from gdq_pddl.limits import MAX_COUNT, MAX_NUMBER, MAX_TOLERANCE, check_count, check_real
 
 EXPLORE_ALL = 0.1
 """The default GDQ's ``explore_all`` where the knowledge may differ from reality."""
@@ -37,12 +39,72 @@ def check_choice(name: str, value: object, choices: tuple) -> None:
                           f"{value!r}")
 
 
+@dataclass(frozen=True)
+class Range:
+    """The values a number setting may take (a field's ``metadata["range"]``): from ``low``
+    to ``high``, open at the ends ``low_open`` / ``high_open`` say."""
+
+    low: float
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+
+    def __str__(self) -> str:
+        if math.isinf(self.high):
+            return f"{'>' if self.low_open else '>='} {self.low:g}"
+        high = f"{self.high:_}" if isinstance(self.high, int) else f"{self.high:g}"
+        return f"{'(' if self.low_open else '['}{self.low:g}, {high}" \
+            f"{')' if self.high_open else ']'}"
+
+    def check(self, name: str, value: object, whole: bool) -> None:
+        """ConfigError unless ``value`` is in the range (a whole number if ``whole``)."""
+        if whole:
+            check_count(name, value, int(self.high))
+        else:
+            check_real(name, value, self.low, self.high, self.low_open, self.high_open)
+
+
+def real(default: float | None, low: float, high: float = math.inf, *, low_open: bool = False,
+         high_open: bool = False) -> Any:
+    """A number setting with its range (checked by :meth:`LearnerConfig.__post_init__`)."""
+    return field(default=default, metadata={"range": Range(low, high, low_open, high_open)})
+
+
+def count(default: int | None, high: int = MAX_COUNT) -> Any:
+    """A whole-number setting in ``[0, high]``."""
+    return field(default=default, metadata={"range": Range(0, high)})
+
+
+def field_range(cls: type, name: str) -> Range | None:
+    """The range of the setting ``name`` of the config class ``cls`` (None: not a number)."""
+    return next((f.metadata.get("range") for f in fields(cls) if f.name == name), None)
+
+
+def check_fields(config: object) -> None:
+    """Check every field of a config dataclass against its type (a ``Literal``'s choices,
+    a bool) and its :class:`Range`; None passes where the type allows it."""
+    hints = typing.get_type_hints(type(config))
+    for f in fields(config):  # type: ignore[arg-type]
+        value, tp = getattr(config, f.name), hints[f.name]
+        args = typing.get_args(tp)
+        if value is None and type(None) in args:
+            continue
+        kinds = [a for a in args if a is not type(None)] if type(None) in args else [tp]
+        kind = kinds[0]
+        if typing.get_origin(kind) is Literal:
+            check_choice(f.name, value, typing.get_args(kind))
+        elif kind is bool:
+            check_choice(f.name, value, (True, False))
+        elif (span := f.metadata.get("range")) is not None:
+            span.check(f.name, value, kind is int)
+
+
 @cache
-def _field_docs() -> dict[tuple[str, str], str]:
-    """``{(class, field): docstring}`` of this module's source ({} if it has none)."""
+def _module_docs(module: str) -> dict[tuple[str, str], str]:
+    """``{(class, field): docstring}`` of a module's source ({} if it has none)."""
     try:
-        tree = ast.parse(inspect.getsource(sys.modules[__name__]))
-    except (OSError, TypeError):
+        tree = ast.parse(inspect.getsource(sys.modules[module]))
+    except (OSError, TypeError, KeyError):
         return {}
     return {(c.name, f.target.id): inspect.cleandoc(d.value.value)
             for c in tree.body if isinstance(c, ast.ClassDef)
@@ -51,11 +113,18 @@ def _field_docs() -> dict[tuple[str, str], str]:
             and isinstance(d, ast.Expr) and isinstance(d.value, ast.Constant)}
 
 
+def field_doc(cls: type, name: str) -> str:
+    """The docstring under the field ``name`` of ``cls`` or of a base class ("" if none)."""
+    for base in cls.__mro__:
+        if doc := _module_docs(base.__module__).get((base.__name__, name)):
+            return doc
+    return ""
+
+
 def documented(cls: type) -> type:
     """Append each field's docstring (which ``help()`` does not show) to the class
     docstring, as an ``Attributes`` list."""
-    docs = {f.name: doc for f in fields(cls) for base in cls.__mro__[::-1]
-            if (doc := _field_docs().get((base.__name__, f.name)))}
+    docs = {f.name: doc for f in fields(cls) if (doc := field_doc(cls, f.name))}
     items = "\n".join(f"    {name}: " + doc.replace("\n", "\n        ")
                       for name, doc in docs.items())
     cls.__doc__ = f"{inspect.cleandoc(cls.__doc__ or '')}\n\nAttributes:\n{items}"
@@ -67,18 +136,20 @@ def documented(cls: type) -> type:
 class LearnerConfig:
     """Parameters shared by every tabular learner."""
 
-    alpha: float = 0.1
+    alpha: float = real(0.1, 0.0, 1.0, low_open=True)
     """Step size of the temporal-difference update (real experience, and the sample-based
     model backups of GDQ's ``code`` variant)."""
-    gamma: float = 0.95
+    gamma: float = real(0.95, 0.0, 1.0, high_open=True)
     """Discount factor, used in every update and in OptInit's policy iteration."""
-    epsilon: float = 0.1
+    epsilon: float = real(0.1, 0.0, 1.0)
     """Probability of a uniformly random (allowed) action instead of the greedy one."""
 
     def __post_init__(self) -> None:
-        check_real("alpha", self.alpha, 0.0, 1.0, low_open=True)
-        check_real("gamma", self.gamma, 0.0, 1.0, high_open=True)
-        check_real("epsilon", self.epsilon, 0.0, 1.0)
+        self._resolve()
+        check_fields(self)
+
+    def _resolve(self) -> None:
+        """Fill in the defaults that depend on other fields (before the checks)."""
 
 
 @documented
@@ -92,17 +163,12 @@ class QLearningConfig(LearnerConfig):
 class DynaQConfig(LearnerConfig):
     """Dyna-Q: Q-learning plus ``n_backups`` model backups per real step."""
 
-    n_backups: int = 3
+    n_backups: int = count(3, MAX_BACKUPS)
     """N: model backups per real step, each on a uniformly random previously observed
     (state, action) pair (the authors' code used 3 for Dyna-Q)."""
-    m: int = 0
+    m: int = count(0)
     """A pair is used for backups once it has been tried more than ``m`` times (0, "tried
     at least once", is classic Dyna-Q; a larger m only delays planning)."""
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_count("n_backups", self.n_backups, MAX_BACKUPS)
-        check_count("m", self.m)  # at most MAX_COUNT, as int64 holds
 
 
 @documented
@@ -116,17 +182,17 @@ class GDQConfig(LearnerConfig):
 
     variant: GDQVariant = "prior"
     """Which GDQ (above)."""
-    n_backups: int | None = None
+    n_backups: int | None = count(None, MAX_BACKUPS)
     """N: simulated backups per real step (default 5). ``prior``: prioritised sweeping
     recomputes pair values until at least N are done, finishing every state it takes
     from the queue; ``literal`` and ``code``: backups of a random transition of a random
     plan from the current state (the authors' code)."""
-    m: int | None = None
+    m: int | None = count(None)
     """A knowledge-applicable pair is *known* once tried more than ``m`` times: from then
     on its model is learned, before that the optimistic one. Default 0 for ``prior``
     (where a pair the knowledge says does nothing is known after its first trial
     whatever ``m``), 5 for the others (the authors' code)."""
-    prior_weight: float = 1.0
+    prior_weight: float = real(1.0, 0.0, MAX_NUMBER)
     """``prior`` only: a known pair's model is the posterior mean with the prior as this
     many pseudo-observations, ``(w * prior + n * learned) / (w + n)`` after ``n``
     trials; 0 is the plain empirical model."""
@@ -145,7 +211,7 @@ class GDQConfig(LearnerConfig):
     whose greedy action leads straight back (a two-step loop: put a block down, pick it
     up again). False: such moves are left out, as DARLING's plans are loop-free. Why:
     ``docs/decisions.md``."""
-    explore_all: float | None = None
+    explore_all: float | None = real(None, 0.0, 1.0)
     """``prior`` only: this share of exploring steps draws from every action instead,
     one never tried in the current state first (any action once all were). Above 0 the
     knowledge never forbids an action; on accurate knowledge every such step is wasted.
@@ -158,25 +224,24 @@ class GDQConfig(LearnerConfig):
     the knowledge reaches the goal in one action (where an action it lacks cannot
     shorten the route). ``False`` spares most of the cost of ``explore_all`` on short
     tasks; why it is not the default: ``docs/decisions.md``."""
-    prior_cost: float = 1.0
+    prior_cost: float = real(1.0, 0.0, MAX_NUMBER)
     """``prior`` only: the step cost the prior charges (the planner counts actions). On
     a problem's own reward scale at most ``r_max / step_limit``, so that no plan within
     the step limit is worth less to the prior than doing nothing, and charged besides
     the file's rewards (``TaskContext.prior_reward``; ``docs/decisions.md``)."""
-    sweep_threshold: float = 1e-6
+    sweep_threshold: float = real(1e-6, 0.0, MAX_NUMBER)
     """``prior`` only: a state-value change smaller than this is not propagated."""
     optimistic_successor: Literal["start", "terminal"] = "start"
     """``literal`` only: where an optimistic (unknown) pair leads. ``"start"``: to s0, as
     Algorithm 1's ``T(s, a, s0) = 1``. ``"terminal"`` (not in the paper): the optimistic
     reward ends the episode, which shows where the excess optimism comes from."""
-    plan_tolerance: float | None = None
+    plan_tolerance: float | None = real(None, 0.0, MAX_TOLERANCE)
     """H holds every loop-free plan up to ``(1 + plan_tolerance)`` x the shortest length.
     None: 0 for ``"literal"`` (the paper's "shortest plans"), 0.3 for ``"code"`` (the
     authors' planner) and ``"prior"`` (which uses them only to explore). The task context
     must hold a plan table built with that tolerance (its ``darling_plans``)."""
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
+    def _resolve(self) -> None:
         if self.variant == "model":  # the default's former name
             object.__setattr__(self, "variant", "prior")
         check_choice("variant", self.variant, GDQ_VARIANTS)
@@ -185,17 +250,6 @@ class GDQConfig(LearnerConfig):
                               ("plan_tolerance", 0.0 if self.variant == "literal" else 0.3)):
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
-        check_count("n_backups", self.n_backups, MAX_BACKUPS)
-        check_count("m", self.m)
-        check_real("plan_tolerance", self.plan_tolerance, 0.0, MAX_TOLERANCE)
-        check_choice("optimistic_successor", self.optimistic_successor, ("start", "terminal"))
-        check_choice("explore", self.explore, ("values", "plans", "applicable"))
-        if self.explore_all is not None:
-            check_real("explore_all", self.explore_all, 0.0, 1.0)
-        check_choice("explore_all_last_step", self.explore_all_last_step, (True, False))
-        check_choice("explore_loops", self.explore_loops, (True, False))
-        for name in ("prior_weight", "prior_cost", "sweep_threshold"):
-            check_real(name, getattr(self, name), 0.0, MAX_NUMBER)
 
 
 @documented
@@ -203,7 +257,7 @@ class GDQConfig(LearnerConfig):
 class DarlingConfig(LearnerConfig):
     """DARLING (Leonetti, Iocchi & Stone 2016): Q-learning over plan-restricted actions."""
 
-    tolerance: float = 0.3
+    tolerance: float = real(0.3, 0.0, MAX_TOLERANCE)
     """Plans up to (1 + tolerance) x the shortest length define the allowed actions;
     the task context's DARLING plan table must have been built with this tolerance."""
     variant: DarlingVariant = "paper"
@@ -213,7 +267,3 @@ class DarlingConfig(LearnerConfig):
     max range over *all* actions, and a non-plan action is replaced by a random plan
     action."""
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        check_real("tolerance", self.tolerance, 0.0, MAX_TOLERANCE)
-        check_choice("variant", self.variant, ("paper", "code"))

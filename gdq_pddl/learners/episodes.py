@@ -11,6 +11,8 @@ from ``rng``; neither path draws anything else.
 
 from __future__ import annotations
 
+import os
+import types as types_
 from dataclasses import dataclass
 
 import gymnasium as gym
@@ -87,8 +89,19 @@ SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
 ``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
 limit (the env ends every episode first, or at the same step)."""
 COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ)
-"""The learner classes the compiled loop runs (exact types: a subclass may override
-``act`` or ``observe``)."""
+"""The built-in learner classes the compiled loop runs (exact types: a subclass may
+override ``act`` or ``observe``); it also runs any learner whose class keeps
+:class:`TabularLearner`'s ``act`` and ``observe``, with its compiled ``act_rule`` and
+``observe_rule`` (:func:`compiled_learner`)."""
+
+
+def compiled_learner(learner: Learner) -> bool:
+    """Whether the compiled loop gives what ``learner``'s methods give: a built-in learner
+    (:data:`COMPILED_LEARNERS`), or one whose class leaves ``act`` and ``observe`` to
+    :class:`TabularLearner`, which call its compiled rules as the loop does."""
+    cls = type(learner)
+    return cls in COMPILED_LEARNERS or issubclass(cls, TabularLearner) and \
+        cls.act is TabularLearner.act and cls.observe is TabularLearner.observe
 
 
 def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
@@ -99,9 +112,10 @@ def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
     base = env.unwrapped
     if type(base) not in (PDDLEnv, CompactEnv):
         return f"the env is a {type(base).__name__}, not a PDDLEnv or CompactEnv"
-    if type(learner) not in COMPILED_LEARNERS:
+    if not compiled_learner(learner):
         return f"the learner is a {type(learner).__name__}, not one of " + \
-            ", ".join(c.__name__ for c in COMPILED_LEARNERS)
+            ", ".join(c.__name__ for c in COMPILED_LEARNERS) + \
+            " nor a TabularLearner that keeps its act and observe"
     while env is not base:
         if type(env) not in SAME_RESULTS_WRAPPERS or type(env) is TimeLimit and \
                 env._max_episode_steps < base.model.step_limit:
@@ -248,11 +262,53 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        ep = _episodes(dynamics, start, goal_pos, doors, learner.tables, learner.params,
-                       env_rng, rng, returns, steps, success, areas, ep, room)
+        args = (dynamics, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
+                returns, steps, success, areas, ep, room)
+        ep = _loop_of(learner)(*args)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
+
+
+def loop_cached() -> bool:
+    """Whether numba's on-disk cache holds a compiled episode loop (True where it cannot
+    tell): False on a first use, when a run compiles before it starts."""
+    try:
+        return os.path.isfile(_episodes._cache._cache_file._index_path)
+    except AttributeError:  # numba's internals moved: say nothing
+        return True
+
+
+def _loop_of(learner: TabularLearner):
+    """The compiled episode loop of ``learner``: :func:`_episodes` (cached) for a built-in
+    one, else a copy of it calling the learner's own ``act_rule`` and ``observe_rule``
+    (compiled once per process and pair of rules, not cached: numba's cache keys a
+    function by its code and argument types, not by the functions it calls)."""
+    if type(learner) in COMPILED_LEARNERS:
+        return _episodes
+    pair = (learner.act_rule, learner.observe_rule)
+    if pair not in _PLUGIN_LOOPS:
+        code = _episodes.py_func
+        scope = {**code.__globals__, "act": pair[0], "observe": pair[1]}
+        _PLUGIN_LOOPS[pair] = numba.njit(types_.FunctionType(code.__code__, scope,
+                                                             "_plugin_episodes"))
+    return _PLUGIN_LOOPS[pair]
+
+
+_PLUGIN_LOOPS: dict[tuple, object] = {}
+"""The episode loops of learners from other packages, by their pair of rules."""
+
+
+def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
+    """Compile (or load from numba's cache) the episode loop of ``learner`` with the
+    argument types it has in ``env`` (the same for every learner on any ``ModelArrays``
+    env); nothing runs."""
+    base = env.unwrapped
+    records = _empty_records(1, 1)
+    args = (base.model, int(base._given.start_state), int(base._given.goal_pos), _NO_DOORS,
+            learner.tables, learner.params, base.np_random, np.random.default_rng(0),
+            *records, 0, 1)
+    _loop_of(learner).compile(tuple(numba.typeof(x) for x in args))
 
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
@@ -343,7 +399,10 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them."""
+    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe`` are the
+    built-in learners' rules (:func:`~gdq_pddl.learners.tables.act`,
+    :func:`~gdq_pddl.learners.rules.observe`); a learner from another package runs a copy
+    that calls its own (:func:`_loop_of`)."""
     table, model, plans, prior, queue = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
@@ -373,3 +432,4 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
             s = s2
         steps[ep] = step
     return len(returns)
+

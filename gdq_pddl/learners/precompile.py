@@ -1,4 +1,5 @@
-"""Compile the episode loop in a process of its own: ``python -m gdq_pddl.learners.precompile``.
+"""Compile the episode loop in a process of its own: ``python -m gdq_pddl.learners.precompile
+METHOD ...``.
 
 The compiled episode loop is the package's largest kernel. The experiment runner starts
 this module in a second process (:func:`start`) while it compiles the other kernels;
@@ -10,31 +11,32 @@ from __future__ import annotations
 
 import subprocess
 import sys
-
-import numpy as np
+from collections.abc import Sequence
 
 from gdq_pddl.envs.office import OfficeEnv
-from gdq_pddl.learners.agents import make_learner
+from gdq_pddl.learners import episodes
+from gdq_pddl.learners.agents import QLearning
 from gdq_pddl.learners.context import office_task_context
-from gdq_pddl.learners.episodes import run_episodes
 from gdq_pddl.world import builtin_world
 
 
 def compile_loop() -> None:
-    """Run one episode of a Q-learner on the office through the compiled loop (its
-    signature is the same for every learner kind on any ``ModelArrays`` env)."""
+    """Compile the built-in learners' episode loop (or load it from numba's cache), with
+    the argument types of a Q-learner on the office (the same for every built-in learner
+    on any ``ModelArrays`` env); nothing runs."""
     world = builtin_world("office")
     env = OfficeEnv(world=world, task="C")
     env.reset(seed=0)
-    run_episodes(make_learner("Q-learning", office_task_context(world, "C")), env, 1,
-                 np.random.default_rng(0), fast=True)
+    episodes.compile_loop(QLearning(office_task_context(world, "C")), env)
 
 
-def start() -> subprocess.Popen | None:
-    """Start :func:`compile_loop` in a new process (None if it cannot be started)."""
+def start(methods: Sequence[str] = ()) -> subprocess.Popen | None:
+    """Start :func:`compile_loop` in a new process (None if it cannot be started);
+    ``methods``: the run's (the loop is the same for every built-in one)."""
     try:
-        return subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return subprocess.Popen([sys.executable, "-m", __name__],
+                                stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
     except OSError:
         return None
 

@@ -28,15 +28,20 @@ import numpy as np
 
 from gdq_pddl.envs.identity import NUMBERING_KEYS, describe, first_difference, shown
 from gdq_pddl.errors import ConfigError, ResultsError
-from gdq_pddl.learners import guards
-from gdq_pddl.learners.agents import METHODS
+from gdq_pddl.learners import guards, registry
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.tables import Params, Tables
 from gdq_pddl.learners.tabular import TabularLearner
 
 FORMAT_VERSION = 1
 """The version of the file layout (``docs/learners.md``); another is refused on load."""
-_CLASSES = {cls.__name__: cls for cls, _, _ in METHODS.values()}
+
+
+def _classes() -> dict[str, type]:
+    """Every registered learner class by its class name (imported now)."""
+    return {cls.__name__: cls for e in registry.entries() for cls in [e.learner_class()]}
+
+
 _BIT_GENERATORS = ("PCG64", "PCG64DXSM", "Philox", "SFC64", "MT19937")
 
 File = str | Path | IO[bytes]
@@ -153,8 +158,8 @@ def save_learner(file: File, learner: TabularLearner, **generators: np.random.Ge
     ``file`` (module doc; a path is written as given, no ``.npz`` added), with the state
     of each named generator, e.g. ``save_learner("gdq.npz", learner, rng=rng,
     env=env.unwrapped.np_random)`` (:func:`load_generators` gives them back)."""
-    if type(learner) not in _CLASSES.values():
-        raise ConfigError(f"save_learner saves a learner of make_learner ({', '.join(_CLASSES)}"
+    if type(learner) not in _classes().values():
+        raise ConfigError(f"save_learner saves a learner of make_learner ({', '.join(_classes())}"
                           f"), got {type(learner).__name__}")
     for key, rng in generators.items():
         guards.check_generator(rng, f"generator {key!r}")
@@ -193,7 +198,7 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
         raise ResultsError(f"{name}: saved for {saved[0]} states x {saved[1]} actions, the "
                            f"task context has {size[0]} x {size[1]}")
     try:
-        cls = _CLASSES[header["class"]]
+        cls = _classes()[header["class"]]
         config = header["config"]
         if not isinstance(config, dict):
             raise TypeError(f"config is {config!r}, not an object")

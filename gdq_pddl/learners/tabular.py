@@ -30,6 +30,7 @@ from gdq_pddl.learners.tables import (
     Queue,
     Tables,
     act,
+    act_plain,
     greedy,
     recompute_all_v,
 )
@@ -50,6 +51,14 @@ NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
+
+
+def kind_rules(kind: int) -> tuple:
+    """``(act_rule, observe_rule)`` of a built-in kind: GDQ's acting for the GDQs
+    (:func:`~gdq_pddl.learners.tables.act`), plain epsilon-greedy for the others
+    (:func:`~gdq_pddl.learners.tables.act_plain`); the kind's rule after a step
+    (:data:`gdq_pddl.learners.rules.RULES`)."""
+    return (act if kind in (KIND_GDQ, KIND_GDQ_PLANS) else act_plain), rules.RULES[kind]
 
 
 def _capacity(context: TaskContext) -> int:
@@ -89,8 +98,6 @@ class TabularLearner:
 
     kind: int = KIND_QLEARNING
     """Which compiled rule runs after a real step (:mod:`gdq_pddl.learners.rules`)."""
-    name: str = "tabular"
-    """The method's name in results and plots."""
     config_type: type[LearnerConfig] = LearnerConfig
     """The config class the constructor takes."""
     reads_knowledge: bool = True
@@ -100,6 +107,39 @@ class TabularLearner:
     """On a problem explored online, a state not reached yet stands ``ceil(w h)`` actions
     from the goal for this learner, ``h`` its estimate
     (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
+
+    @classmethod
+    def kind_of(cls, config: LearnerConfig) -> int:
+        """The ``kind`` a learner of this class with ``config`` has."""
+        return cls.kind
+
+    @classmethod
+    def rules_for(cls, config: LearnerConfig) -> tuple:
+        """``(act_rule, observe_rule)`` of a learner of this class with ``config``, without
+        making one (what the compiled loop is compiled for)."""
+        own = kind_rules(cls.kind_of(config))
+        given = cls.act_rule, cls.observe_rule  # a plugin's own, or the kind's (properties)
+        return tuple(o if isinstance(g, property) else g for g, o in zip(given, own,
+                                                                          strict=True))
+
+    @property
+    def act_rule(self):
+        """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``:
+        epsilon-greedy, :func:`~gdq_pddl.learners.tables.act` for the GDQs (their exploring
+        rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others (the same draws).
+        :meth:`act` and a plugin's compiled episode loop call it. A learner from another
+        package may give its own numba function as a class attribute
+        (``docs/howto-add-learner.md``)."""
+        return kind_rules(self.kind)[0]
+
+    @property
+    def observe_rule(self):
+        """The compiled rule after a real step, ``(table, model, plans, prior, queue,
+        params, s, a, r, s2, terminated, truncated, rng) -> bool``: its kind's
+        (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` calls it, and the compiled
+        episode loop of a learner from another package (the built-ins' loop calls
+        :func:`~gdq_pddl.learners.rules.observe`, which picks the same function)."""
+        return kind_rules(self.kind)[1]
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext
@@ -238,7 +278,7 @@ class TabularLearner:
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
-        column = int(act(t.table, t.model.visits, t.prior, self.params, s, rng))
+        column = int(self.act_rule(t.table, t.model.visits, t.prior, self.params, s, rng))
         return self.context.action_of(s, column)
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
@@ -251,7 +291,7 @@ class TabularLearner:
         a = self._column("a", s, a)
         r = guards.check_reward(r)
         guards.check_generator(rng)
-        if not rules.observe(*self.tables, self.params, s, a, r, s2, bool(terminated),
+        if not self.observe_rule(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
 

@@ -200,7 +200,7 @@ def test_make_learner_takes_every_name_the_command_line_takes(ctx):
         assert getattr(learner.config, "variant", None) == variant
     assert make_learner("gdq", ctx, variant="code").config.variant == "code"
     assert type(make_learner("q_learning", ctx)) is QLearning
-    with pytest.raises(ConfigError, match="is variant 'code', and the overrides"):
+    with pytest.raises(ConfigError, match="sets variant='code', and the overrides"):
         make_learner("GDQ-code", ctx, variant="literal")
     with pytest.raises(ConfigError, match="unknown method 'sarsa'"):
         make_learner("sarsa", ctx)
