@@ -6,6 +6,8 @@ has one definition and the two loops give the same bits (tested).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
 
@@ -28,10 +30,12 @@ from gdq_pddl.learners.tables import (
 
 
 @numba.njit(cache=True)
-def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, p: Params,
-            s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, own: Any,
+            p: Params, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
             rng: np.random.Generator) -> bool:
-    """Everything a learner does after one real step ``(s, a, r, s2)``. False when the
+    """Everything a learner does after one real step ``(s, a, r, s2)`` (``own``: the
+    learner's own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`, which the
+    built-in learners here have none of). False when the
     learned model had no slot for the transition (no backups then): the callers raise
     ValueError(:data:`gdq_pddl.learners.learned_model.OVERFLOW`)."""
     if p.kind == KIND_GDQ:
