@@ -46,7 +46,7 @@ def no_loop_precompile():
     tests run before, so each such process only imported the package again (about 3 s of
     CPU) to load it. The CLI run in a subprocess still starts one."""
     patch = pytest.MonkeyPatch()
-    patch.setattr(precompile, "start", lambda: None)
+    patch.setattr(precompile, "start", lambda methods=(): None)
     yield
     patch.undo()
 

@@ -121,7 +121,7 @@ def warm_up(units: list[Unit]) -> int:
             exp = replace(u.experiment, name="warm-up",
                           schedule=((u.experiment.schedule[0][0], 2),), runs=1)
             tiny[u.experiment.world, u.method] = Unit(exp, u.method, 0)
-    loop = precompile.start()
+    loop = precompile.start(sorted({u.method for u in tiny.values()}))
     largest = 0
     try:
         for unit in tiny.values():  # a learner for the first task: its OptInit kernels

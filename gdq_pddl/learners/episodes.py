@@ -252,6 +252,19 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
     return EpisodeRecords(returns, steps, success, areas)
 
 
+def compile_loop(learner: TabularLearner, env: PDDLEnv, pairs: set[tuple]) -> None:
+    """Compile (or load from numba's cache) the episode loop for each ``(act_rule,
+    observe_rule)`` of ``pairs``, with the argument types ``learner`` in ``env`` gives it
+    (the same for every learner on any ``ModelArrays`` env); nothing runs."""
+    base = env.unwrapped
+    records = _empty_records(1, 1)
+    args = (base.model, int(base._given.start_state), int(base._given.goal_pos), _NO_DOORS,
+            learner.tables, learner.params, base.np_random, np.random.default_rng(0),
+            *records, 0, 1)
+    for pair in pairs:
+        _episodes.compile(tuple(numba.typeof(x) for x in (*args, *pair)))
+
+
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
 # the dynamics' type (inlined for speed: docs/learners.md): the hidden state an episode
 # starts in, the learner state it shows, whether the goal holds there, one step, the area

@@ -82,9 +82,14 @@ class GDQ(TabularLearner):
     GDQ on (``docs/decisions.md``, "GDQ reads the estimates x1.25")."""
 
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        if isinstance(config, GDQConfig) and config.variant != "prior":
-            self.kind = KIND_GDQ_PLANS
+        if isinstance(config, GDQConfig):
+            self.kind = self.kind_of(config)
         super().__init__(context, config)
+
+    @classmethod
+    def kind_of(cls, config: GDQConfig) -> int:  # type: ignore[override]
+        """``KIND_GDQ`` for the default, ``KIND_GDQ_PLANS`` for the paper's readings."""
+        return KIND_GDQ if config.variant == "prior" else KIND_GDQ_PLANS
 
     @property
     def q(self) -> np.ndarray:

@@ -6,7 +6,8 @@ name and aliases, its config class and the settings its name stands for, the kno
 reads, whether it runs on a problem explored online, its colour and place in figures, a
 one-line description, and where its class is (``"module:Class"``, imported when first
 used). The lists of methods the commands, the protocol, the results and the figures use
-are read from here; no other module names a learner.
+are read from here (the paper's report sections still name the methods they write
+about).
 
 A *method* is a learner's name, optionally with settings: ``GDQ:explore_all=0.5,
 prior_weight=2`` (:func:`parse_method`), checked against the config class's fields.

@@ -330,9 +330,8 @@ def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
     actions near the best (:func:`_draw_near_best`) (for a share ``explore_all`` of those
     steps an untried one, unless ``explore_all_last`` is 0 and the knowledge reaches the
     goal from ``s`` in one action); else a uniform maximiser of Q over ``allowed[s]``,
-    which DARLING replaces by a uniform action of ``guide[s]`` if it is not in it."""
-    q, allowed = table.q, table.allowed
-    n_actions = q.shape[1]
+    which DARLING replaces by a uniform action of ``guide[s]`` if it is not in it
+    (:func:`_greedy_draw`)."""
     if rng.random() < p.epsilon:
         if p.explore_all > 0.0 and rng.random() < p.explore_all and (
                 p.explore_all_last > 0.0 or p.kind != KIND_GDQ
@@ -341,6 +340,26 @@ def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
         if p.explore_band >= 0.0 and p.kind == KIND_GDQ:
             return _draw_near_best(table, prior, p, s, rng)
         return _draw_guided(table, s, rng)
+    return _greedy_draw(table, p, s, rng)
+
+
+@numba.njit(cache=True)
+def act_plain(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
+              rng: np.random.Generator) -> int:
+    """:func:`act` of a learner without GDQ's exploring rules (Q-learning, Dyna-Q,
+    DARLING: ``explore_all`` 0, no ``explore_band``): the same draws, without compiling
+    GDQ's."""
+    if rng.random() < p.epsilon:
+        return _draw_guided(table, s, rng)
+    return _greedy_draw(table, p, s, rng)
+
+
+@numba.njit(cache=True, inline="always")
+def _greedy_draw(table: QTable, p: Params, s: int, rng: np.random.Generator) -> int:
+    """A uniform maximiser of Q over ``allowed[s]``, which DARLING replaces by a uniform
+    action of ``guide[s]`` if it is not in it."""
+    q, allowed = table.q, table.allowed
+    n_actions = q.shape[1]
     best = table.v[s]
     ties = 0
     last = 0

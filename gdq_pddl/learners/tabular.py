@@ -31,6 +31,7 @@ from gdq_pddl.learners.tables import (
     Queue,
     Tables,
     act,
+    act_plain,
     greedy,
     recompute_all_v,
 )
@@ -51,6 +52,14 @@ NO_PRIOR = (Prior(np.zeros((0, 0), dtype=np.int64), _I0, _I0, _I0, _I0, _I0,
 
 MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
+
+
+def kind_rules(kind: int) -> tuple:
+    """``(act_rule, observe_rule)`` of a built-in kind: GDQ's acting for the GDQs
+    (:func:`~gdq_pddl.learners.tables.act`), plain epsilon-greedy for the others
+    (:func:`~gdq_pddl.learners.tables.act_plain`); the kind's rule after a step
+    (:data:`gdq_pddl.learners.rules.RULES`)."""
+    return (act if kind in (KIND_GDQ, KIND_GDQ_PLANS) else act_plain), rules.RULES[kind]
 
 
 def _capacity(context: TaskContext) -> int:
@@ -99,17 +108,37 @@ class TabularLearner:
     """On a problem explored online, a state not reached yet stands ``ceil(w h)`` actions
     from the goal for this learner, ``h`` its estimate
     (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
-    act_rule = staticmethod(act)
-    """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``
-    (:func:`~gdq_pddl.learners.tables.act`, epsilon-greedy): :meth:`act` and the compiled
-    episode loop call it. A learner from another package may give its own numba function
-    (the loop is compiled for it: ``docs/howto-add-learner.md``)."""
-    observe_rule = staticmethod(rules.observe)
-    """The compiled rule after a real step, ``(table, model, plans, prior, queue, own,
-    params, s, a, r, s2, terminated, truncated, rng) -> bool``
-    (:func:`~gdq_pddl.learners.rules.observe`, which runs the built-in learners' rules by
-    ``kind``): :meth:`observe` and the compiled
-    episode loop call it."""
+    @classmethod
+    def kind_of(cls, config: LearnerConfig) -> int:
+        """The ``kind`` a learner of this class with ``config`` has."""
+        return cls.kind
+
+    @classmethod
+    def rules_for(cls, config: LearnerConfig) -> tuple:
+        """``(act_rule, observe_rule)`` of a learner of this class with ``config``, without
+        making one (what the compiled loop is compiled for)."""
+        own = kind_rules(cls.kind_of(config))
+        given = cls.act_rule, cls.observe_rule  # a plugin's own, or the kind's (properties)
+        return tuple(o if isinstance(g, property) else g for g, o in zip(given, own,
+                                                                          strict=True))
+
+    @property
+    def act_rule(self):
+        """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``:
+        epsilon-greedy, :func:`~gdq_pddl.learners.tables.act` for the GDQs (their exploring
+        rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others. :meth:`act`
+        and the compiled episode loop call it. A learner from another package may give
+        its own numba function as a class attribute (``docs/howto-add-learner.md``)."""
+        return kind_rules(self.kind)[0]
+
+    @property
+    def observe_rule(self):
+        """The compiled rule after a real step, ``(table, model, plans, prior, queue, own,
+        params, s, a, r, s2, terminated, truncated, rng) -> bool`` (``own``: the learner's
+        own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`): its kind's
+        (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` and the compiled episode
+        loop call it; only the rules of the learners a run uses are compiled."""
+        return kind_rules(self.kind)[1]
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext
