@@ -11,6 +11,7 @@ from ``rng``; neither path draws anything else.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import gymnasium as gym
@@ -244,9 +245,9 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        ep = _episodes(dynamics, start, goal_pos, doors, learner.tables, learner.params,
-                       env_rng, rng, returns, steps, success, areas, ep, room,
-                       learner.act_rule, learner.observe_rule)
+        ep = _loop(dynamics, start, goal_pos, doors, learner.tables, learner.params,
+                   env_rng, rng, returns, steps, success, areas, ep, room,
+                   learner.act_rule, learner.observe_rule)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
@@ -262,7 +263,20 @@ def compile_loop(learner: TabularLearner, env: PDDLEnv, pairs: set[tuple]) -> No
             learner.tables, learner.params, base.np_random, np.random.default_rng(0),
             *records, 0, 1)
     for pair in pairs:
-        _episodes.compile(tuple(numba.typeof(x) for x in (*args, *pair)))
+        with contextlib.suppress(ReferenceError):  # compiled, not cached: see _loop
+            _episodes.compile(tuple(numba.typeof(x) for x in (*args, *pair)))
+
+
+def _loop(*args: object) -> int:
+    """:func:`_episodes` of ``args``. numba compiles the loop for a new pair of rules,
+    adds it to the dispatcher, then rewrites its on-disk cache index, whose keys name the
+    rules of every loop cached before; a rule this process has not imported (another
+    learner's, a plugin's) comes back from that index as a dead reference, and the
+    rewrite raises ReferenceError. The loop is compiled by then: it runs, uncached."""
+    try:
+        return _episodes(*args)
+    except ReferenceError:
+        return _episodes(*args)
 
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
