@@ -295,3 +295,20 @@ def test_a_cache_index_that_cannot_be_rewritten_does_not_stop_a_run(ctx_c, monke
     learner = make_learner("Q-shaping", ctx_c)
     rec = run(learner, OfficeEnv(task="C"), 5, 1, fast=True)
     assert len(rec) == 5 and len(calls) == 2
+
+
+@pytest.mark.parametrize("method", NEW)
+def test_a_task_switch_rebuilds_the_knowledge(ctx_c, method):
+    from gdq_pddl.learners import office_task_context
+    from tests.learners.learning import WORLD
+
+    learner = make_learner(method, ctx_c)
+    run(learner, OfficeEnv(task="C"), 5, 2, fast=False)
+    ctx_d = office_task_context(WORLD, "D")
+    learner.start_task(ctx_d)
+    if hasattr(learner, "phi"):
+        assert np.array_equal(learner.phi, learner._potential(ctx_d))
+    if isinstance(learner, FFReplan):
+        assert len(learner.plan(ctx_d.s0)) == ctx_d.plans.length[ctx_d.s0]
+    rec = run(learner, OfficeEnv(task="D"), 5, 3, fast=False)
+    assert len(rec) == 5
