@@ -271,11 +271,21 @@ class DarlingConfig(LearnerConfig):
 @documented
 @dataclass(frozen=True)
 class ShapingConfig(LearnerConfig):
-    """Q-learning shaped by a potential from the knowledge (:mod:`gdq_pddl.learners.shaping`)."""
+    """Q-learning shaped by the knowledge's goal distance (:mod:`gdq_pddl.learners.shaping`);
+    the default scale was chosen on tasks A-D (``docs/decisions.md``)."""
+
+    scale: float = real(2.0, 0.0, MAX_NUMBER)
+    """What the potential is multiplied by: ``phi = -scale * d(s)``; 0 is Q-learning."""
+
+
+@documented
+@dataclass(frozen=True)
+class PlanShapingConfig(LearnerConfig):
+    """Q-learning shaped by the plan step (Grzes and Kudenko 2008)."""
 
     scale: float = real(1.0, 0.0, MAX_NUMBER)
-    """What the potential is multiplied by: ``phi = -scale * d(s)`` (Q-shaping), ``phi =
-    scale * (R_max / L) * step(s)`` (Plan-shaping); 0 is the unshaped learner."""
+    """What the potential is multiplied by: ``phi = scale * (R_max / L) * step(s)`` (1:
+    Grzes and Kudenko's ``w = R_max / L``); 0 is Q-learning."""
 
 
 @documented
@@ -295,9 +305,10 @@ class RMaxConfig(LearnerConfig):
     epsilon: float = real(0.0, 0.0, 1.0)
     """Probability of a uniformly random action; 0 (the method's name fixes it)."""
 
-    m: int = field(default=5, metadata={"range": Range(1, MAX_COUNT)})
+    m: int = field(default=1, metadata={"range": Range(1, MAX_COUNT)})
     """A pair is known once tried ``m`` times (at least 1): from then on the learned
-    model values it, before that ``V_max`` (R-max) or the potential (R-max-shaping)."""
+    model values it, before that ``V_max`` (R-max) or the potential (R-max-shaping).
+    Default 1, chosen on tasks A-D (``docs/decisions.md``)."""
     tolerance: float = real(1e-6, 0.0, MAX_NUMBER, low_open=True)
     """Value iteration stops when no value changes by more than this."""
     max_sweeps: int = field(default=1000, metadata={"range": Range(1, MAX_COUNT)})
@@ -316,8 +327,9 @@ class RMaxConfig(LearnerConfig):
 class RMaxShapingConfig(RMaxConfig):
     """R-max with unknown pairs valued by a potential (Asmuth, Littman and Zinkov 2008)."""
 
-    scale: float = real(1.0, 0.0, MAX_NUMBER)
-    """``Phi(s) = V_max - scale * max(0, d(s) - 1)``; 0 is R-max."""
+    scale: float = real(2.0, 0.0, MAX_NUMBER)
+    """``Phi(s) = V_max - scale * max(0, d(s) - 1)``; 0 is R-max. Default 2, chosen on
+    tasks A-D (``docs/decisions.md``)."""
 
 
 @documented

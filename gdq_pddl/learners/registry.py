@@ -32,6 +32,7 @@ from gdq_pddl.learners.config import (
     FFReplanConfig,
     GDQConfig,
     LearnerConfig,
+    PlanShapingConfig,
     QLearningConfig,
     RMaxConfig,
     RMaxShapingConfig,
@@ -136,7 +137,7 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
                  "Dyna-Q shaped by the knowledge's goal distance in real and simulated "
                  "backups", "plans", colour="#6a3d9a",  # purple
                  label="Dyna-Q shaped by the goal distance"),
-    LearnerEntry("Plan-shaping", "gdq_pddl.learners.shaping:PlanShaping", ShapingConfig,
+    LearnerEntry("Plan-shaping", "gdq_pddl.learners.shaping:PlanShaping", PlanShapingConfig,
                  "Q-learning shaped by the plan step reached, phi = R_max / L step(s) "
                  "(Grzes and Kudenko 2008)", "plans", colour="#b15928",  # brown
                  label="Q-learning shaped by the plan step"),

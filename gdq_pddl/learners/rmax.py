@@ -14,8 +14,8 @@ pair valued by a potential instead of ``R_max / (1 - gamma)``). The rule, in thr
 Choices the sources leave open (``docs/decisions.md``, "R-max baselines"):
 
 - *m and the known-pair test*: a pair is known when its trials reach ``m`` (``visits >=
-  m``, Brafman and Tennenholtz's "visited m times"), ``m`` 5 by default (the GDQ authors'
-  code's m; a setting, ``R-max:m=3``). The model goes on counting after that (the
+  m``, Brafman and Tennenholtz's "visited m times"), ``m`` 1 by default (the best of 1,
+  2 and 5 on tasks A-D; a setting, ``R-max:m=3``). The model goes on counting after that (the
   learned model is shared with Dyna-Q and GDQ), but values are planned again only when a
   pair becomes known, as R-max plans.
 - *V_max, the goal-scale R_max/(1-gamma)*: an episode's return here is at most
@@ -26,12 +26,14 @@ Choices the sources leave open (``docs/decisions.md``, "R-max baselines"):
 - *R-max-shaping's potential*: Asmuth et al. need a value-scale ``Phi(s) >= V*(s)``
   (admissible). From the knowledge's distance ``d(s)`` (:func:`~gdq_pddl.learners.shaping.
   goal_distances`): ``Phi(s) = V_max - scale * max(0, d(s) - 1)``, i.e. ``V_max`` plus
-  the distance potential ``-scale * d`` with the goal step free. At ``scale`` no more
-  than the step cost it is admissible where the knowledge's distance is a lower bound on
+  the distance potential ``-scale * d`` with the goal step free; ``scale`` 2 by default
+  (the better of 1 and 2 on tasks A-D, with ``m`` 1). At ``scale`` 1 (the step cost) it
+  is admissible where the knowledge's distance is a lower bound on
   the true one and within a few tens of steps of the goal (``docs/decisions.md`` has the
-  bound); wrong knowledge (a missing action) can make it inadmissible, which is the case
-  Asmuth et al. warn about. A state the knowledge reaches no goal from has ``d`` = the
-  step limit.
+  bound); at the default 2 only within about 3 actions of the goal, so the default
+  trades Asmuth et al.'s guarantee for what was measured; wrong knowledge (a missing
+  action) can make any scale inadmissible, the case Asmuth et al. warn about. A state
+  the knowledge reaches no goal from has ``d`` = the step limit.
 - *Planning*: Gauss-Seidel value iteration over every state and allowed pair, from the
   current values, until no value changes by more than ``tolerance`` or ``max_sweeps``
   sweeps (Brafman and Tennenholtz solve the model exactly; this is that to a tolerance).

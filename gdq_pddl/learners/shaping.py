@@ -23,11 +23,11 @@ knowledge's goal distance (:func:`goal_distances`):
 
 Choices the sources leave open (``docs/decisions.md``, "Shaping baselines"):
 
-- *Scale and sign*: ``phi = -scale * d`` (a state nearer the goal is worth more; the
-  shaped step toward the goal earns ``scale * (1 - gamma * ...)`` more), ``scale`` 1 by
-  default (one unit per action, the office's step cost), a setting
-  (``Q-shaping:scale=0.5``). Plan-shaping's ``scale`` multiplies Grzes and Kudenko's
-  ``w`` (1: their ``w = R_max / L``).
+- *Scale and sign*: ``phi = -scale * d`` (a state nearer the goal is worth more), a
+  setting (``Q-shaping:scale=0.5``): 2 by default for Q-shaping, 1 for Dyna-Q-shaping,
+  each the best of those tried on tasks A-D (``docs/decisions.md``). Plan-shaping's
+  ``scale`` multiplies Grzes and Kudenko's ``w`` (1, the default: their ``w = R_max /
+  L``, also the best tried).
 - *Where the knowledge reaches no goal* (a dead end, a state the knowledge cannot solve
   from, or a state of a problem explored online whose estimates reach no goal): ``d`` is
   the env's step limit (no goal within an episode; the number of states where the limit
@@ -52,7 +52,7 @@ from typing import Any, NamedTuple
 import numba
 import numpy as np
 
-from gdq_pddl.learners.config import DynaQShapingConfig, ShapingConfig
+from gdq_pddl.learners.config import DynaQShapingConfig, PlanShapingConfig, ShapingConfig
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.learned_model import learned_value, record, slot_count, slot_successor
 from gdq_pddl.learners.tables import (
@@ -202,7 +202,7 @@ class PlanShaping(_Shaped):
     """Q-learning shaped by Grzes and Kudenko's plan-step potential."""
 
     kind = KIND_QLEARNING
-    config_type = ShapingConfig
+    config_type = PlanShapingConfig
     observe_rule = staticmethod(observe_q)
 
     def _potential(self, context: TaskContext) -> np.ndarray:
