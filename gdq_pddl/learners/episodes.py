@@ -11,7 +11,8 @@ from ``rng``; neither path draws anything else.
 
 from __future__ import annotations
 
-import contextlib
+import os
+import types as types_
 from dataclasses import dataclass
 
 import gymnasium as gym
@@ -34,8 +35,9 @@ from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
+from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy
-from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables
+from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
 
@@ -245,38 +247,53 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        ep = _loop(dynamics, start, goal_pos, doors, learner.tables, learner.params,
-                   env_rng, rng, returns, steps, success, areas, ep, room,
-                   learner.act_rule, learner.observe_rule)
+        args = (dynamics, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
+                returns, steps, success, areas, ep, room)
+        ep = _loop_of(learner)(*args)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
-def compile_loop(learner: TabularLearner, env: PDDLEnv, pairs: set[tuple]) -> None:
-    """Compile (or load from numba's cache) the episode loop for each ``(act_rule,
-    observe_rule)`` of ``pairs``, with the argument types ``learner`` in ``env`` gives it
-    (the same for every learner on any ``ModelArrays`` env); nothing runs."""
+def loop_cached() -> bool:
+    """Whether numba's on-disk cache holds a compiled episode loop (True where it cannot
+    tell): False on a first use, when a run compiles before it starts."""
+    try:
+        return os.path.isfile(_episodes._cache._cache_file._index_path)
+    except AttributeError:  # numba's internals moved: say nothing
+        return True
+
+
+def _loop_of(learner: TabularLearner):
+    """The compiled episode loop of ``learner``: :func:`_episodes` (cached) for a built-in
+    one, else a copy of it calling the learner's own ``act_rule`` and ``observe_rule``
+    (compiled once per process and pair of rules, not cached: numba's cache keys a
+    function by its code and argument types, not by the functions it calls)."""
+    if type(learner) in COMPILED_LEARNERS:
+        return _episodes
+    pair = (learner.act_rule, learner.observe_rule)
+    if pair not in _PLUGIN_LOOPS:
+        code = _episodes.py_func
+        scope = {**code.__globals__, "act": pair[0], "observe": pair[1]}
+        _PLUGIN_LOOPS[pair] = numba.njit(types_.FunctionType(code.__code__, scope,
+                                                             "_plugin_episodes"))
+    return _PLUGIN_LOOPS[pair]
+
+
+_PLUGIN_LOOPS: dict[tuple, object] = {}
+"""The episode loops of learners from other packages, by their pair of rules."""
+
+
+def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
+    """Compile (or load from numba's cache) the episode loop of ``learner`` with the
+    argument types it has in ``env`` (the same for every learner on any ``ModelArrays``
+    env); nothing runs."""
     base = env.unwrapped
     records = _empty_records(1, 1)
     args = (base.model, int(base._given.start_state), int(base._given.goal_pos), _NO_DOORS,
             learner.tables, learner.params, base.np_random, np.random.default_rng(0),
             *records, 0, 1)
-    for pair in pairs:
-        with contextlib.suppress(ReferenceError):  # compiled, not cached: see _loop
-            _episodes.compile(tuple(numba.typeof(x) for x in (*args, *pair)))
-
-
-def _loop(*args: object) -> int:
-    """:func:`_episodes` of ``args``. numba compiles the loop for a new pair of rules,
-    adds it to the dispatcher, then rewrites its on-disk cache index, whose keys name the
-    rules of every loop cached before; a rule this process has not imported (another
-    learner's, a plugin's) comes back from that index as a dead reference, and the
-    rewrite raises ReferenceError. The loop is compiled by then: it runs, uncached."""
-    try:
-        return _episodes(*args)
-    except ReferenceError:
-        return _episodes(*args)
+    _loop_of(learner).compile(tuple(numba.typeof(x) for x in args))
 
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
@@ -361,15 +378,16 @@ def _area_impl(m, state):
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
               steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
-              room: int, act, observe) -> int:
+              room: int) -> int:
     """The compiled episode loop (same calls, in the same order, as the Python loop) from
     episode ``first``, over the env's true dynamics ``m``. Returns the number of episodes
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe``: the learner's
-    compiled rules (``TabularLearner.act_rule``, ``observe_rule``; numba compiles the loop
-    once per pair of them)."""
+    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe`` are the
+    built-in learners' rules (:func:`~gdq_pddl.learners.tables.act`,
+    :func:`~gdq_pddl.learners.rules.observe`); a learner from another package runs a copy
+    that calls its own (:func:`_loop_of`)."""
     table, model, plans, prior, queue, own = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
@@ -399,3 +417,4 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
             s = s2
         steps[ep] = step
     return len(returns)
+

@@ -1,9 +1,9 @@
 """What a learner does after one real step: one compiled function per kind of learner
 (:func:`observe_td`, :func:`observe_dyna`, :func:`observe_plans`, :func:`observe_gdq`),
 and :func:`observe`, which picks among them by ``kind`` (``docs/learners.md`` has it as a
-table). A learner's ``observe_rule`` is its kind's function: its methods and the compiled
-episode loop both call it, so each rule has one definition and the two loops give the
-same bits (tested), and a run compiles only the rules of the learners it runs.
+table). A learner's ``observe_rule`` is its kind's function, which its methods call; the
+compiled episode loop calls :func:`observe`, which picks the same function, so each rule
+has one definition and the two loops give the same bits (tested).
 """
 
 from __future__ import annotations

@@ -108,6 +108,7 @@ class TabularLearner:
     """On a problem explored online, a state not reached yet stands ``ceil(w h)`` actions
     from the goal for this learner, ``h`` its estimate
     (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
+
     @classmethod
     def kind_of(cls, config: LearnerConfig) -> int:
         """The ``kind`` a learner of this class with ``config`` has."""
@@ -126,9 +127,10 @@ class TabularLearner:
     def act_rule(self):
         """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``:
         epsilon-greedy, :func:`~gdq_pddl.learners.tables.act` for the GDQs (their exploring
-        rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others. :meth:`act`
-        and the compiled episode loop call it. A learner from another package may give
-        its own numba function as a class attribute (``docs/howto-add-learner.md``)."""
+        rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others (the same draws).
+        :meth:`act` and a plugin's compiled episode loop call it. A learner from another
+        package may give its own numba function as a class attribute
+        (``docs/howto-add-learner.md``)."""
         return kind_rules(self.kind)[0]
 
     @property
@@ -136,8 +138,9 @@ class TabularLearner:
         """The compiled rule after a real step, ``(table, model, plans, prior, queue, own,
         params, s, a, r, s2, terminated, truncated, rng) -> bool`` (``own``: the learner's
         own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`): its kind's
-        (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` and the compiled episode
-        loop call it; only the rules of the learners a run uses are compiled."""
+        (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` calls it, and the compiled
+        episode loop of a learner from another package (the built-ins' loop calls
+        :func:`~gdq_pddl.learners.rules.observe`, which picks the same function)."""
         return kind_rules(self.kind)[1]
     config: LearnerConfig
     """The learner's settings (frozen)."""

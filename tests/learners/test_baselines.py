@@ -277,26 +277,6 @@ def test_compiled_loop_equals_python_loop(ctx_c, method):
     assert np.array_equal(out[0][1], out[1][1])
 
 
-def test_a_cache_index_that_cannot_be_rewritten_does_not_stop_a_run(ctx_c, monkeypatch):
-    # numba raises ReferenceError after compiling a new loop when its cache index names a
-    # rule this process never imported (seen with the plugin's and these learners' loops)
-    from gdq_pddl.learners import episodes
-
-    real = episodes._episodes
-    calls = []
-
-    def failing_once(*args):
-        calls.append(1)
-        if len(calls) == 1:
-            raise ReferenceError("underlying object has vanished")
-        return real(*args)
-
-    monkeypatch.setattr(episodes, "_episodes", failing_once)
-    learner = make_learner("Q-shaping", ctx_c)
-    rec = run(learner, OfficeEnv(task="C"), 5, 1, fast=True)
-    assert len(rec) == 5 and len(calls) == 2
-
-
 @pytest.mark.parametrize("method", NEW)
 def test_a_task_switch_rebuilds_the_knowledge(ctx_c, method):
     from gdq_pddl.learners import office_task_context

@@ -165,3 +165,15 @@ def test_a_spec_reaches_the_learner_in_the_runner():
     assert (plain.config.alpha, plain.config.gamma, plain.config.epsilon) == (0.5, 0.9, 0.2)
     with pytest.raises(ConfigError, match="unknown method 'sarsa'"):
         Experiment("t", (("C", 1),), methods=("sarsa",))
+
+
+@pytest.mark.parametrize("cached", [False, True])
+def test_the_command_line_says_once_that_it_compiles_on_first_use(capsys, tmp_path,
+                                                                   monkeypatch, cached):
+    from gdq_pddl.cli import common
+
+    monkeypatch.setattr(common, "loop_cached", lambda: cached)
+    code, _, err = _cli(capsys, "run", "--task", "C", "--method", "q-learning", "--episodes",
+                        "1", "--runs", "1", "--jobs", "1", "--no-report", "--out",
+                        str(tmp_path / "out"))
+    assert code == 0 and err.count("compiling the learners' code") == (0 if cached else 1)

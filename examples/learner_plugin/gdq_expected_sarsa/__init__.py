@@ -8,7 +8,7 @@ the epsilon-greedy policy the learner acts by, instead of Q-learning's max:
 (over the actions allowed in ``s2``; the greedy actions share the max, so ties do not
 change it). Everything else is gdq_pddl's: the arrays, epsilon-greedy acting, the episode
 loop. The rule is a numba function, so the learner runs in gdq_pddl's compiled episode
-loop, which numba compiles once for this rule (``docs/howto-add-learner.md``).
+loop, which numba compiles for this rule once per process (``docs/howto-add-learner.md``).
 """
 
 from __future__ import annotations
