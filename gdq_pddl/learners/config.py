@@ -267,3 +267,81 @@ class DarlingConfig(LearnerConfig):
     max range over *all* actions, and a non-plan action is replaced by a random plan
     action."""
 
+
+@documented
+@dataclass(frozen=True)
+class ShapingConfig(LearnerConfig):
+    """Q-learning shaped by the knowledge's goal distance (:mod:`gdq_pddl.learners.shaping`);
+    the default scale was chosen on tasks A-D (``docs/decisions.md``)."""
+
+    scale: float = real(2.0, 0.0, MAX_NUMBER)
+    """What the potential is multiplied by: ``phi = -scale * d(s)``; 0 is Q-learning."""
+
+
+@documented
+@dataclass(frozen=True)
+class PlanShapingConfig(LearnerConfig):
+    """Q-learning shaped by the plan step (Grzes and Kudenko 2008)."""
+
+    scale: float = real(1.0, 0.0, MAX_NUMBER)
+    """What the potential is multiplied by: ``phi = scale * (R_max / L) * step(s)`` (1:
+    Grzes and Kudenko's ``w = R_max / L``); 0 is Q-learning."""
+
+
+@documented
+@dataclass(frozen=True)
+class DynaQShapingConfig(DynaQConfig):
+    """Dyna-Q shaped by the distance potential, in real and simulated backups."""
+
+    scale: float = real(1.0, 0.0, MAX_NUMBER)
+    """What the potential is multiplied by: ``phi = -scale * d(s)``; 0 is Dyna-Q."""
+
+
+@documented
+@dataclass(frozen=True)
+class RMaxConfig(LearnerConfig):
+    """R-max (Brafman and Tennenholtz 2002): ``epsilon`` is 0 (its name fixes it)."""
+
+    epsilon: float = real(0.0, 0.0, 1.0)
+    """Probability of a uniformly random action; 0 (the method's name fixes it)."""
+
+    m: int = field(default=1, metadata={"range": Range(1, MAX_COUNT)})
+    """A pair is known once tried ``m`` times (at least 1): from then on the learned
+    model values it, before that ``V_max`` (R-max) or the potential (R-max-shaping).
+    Default 1, chosen on tasks A-D (``docs/decisions.md``)."""
+    tolerance: float = real(1e-6, 0.0, MAX_NUMBER, low_open=True)
+    """Value iteration stops when no value changes by more than this."""
+    max_sweeps: int = field(default=1000, metadata={"range": Range(1, MAX_COUNT)})
+    """Value iteration stops after this many sweeps (at least 1) in any case."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name in ("m", "max_sweeps"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"{name} must be a whole number in [1, {MAX_COUNT:_}], "
+                                  f"got {getattr(self, name)}")
+
+
+@documented
+@dataclass(frozen=True)
+class RMaxShapingConfig(RMaxConfig):
+    """R-max with unknown pairs valued by a potential (Asmuth, Littman and Zinkov 2008)."""
+
+    scale: float = real(2.0, 0.0, MAX_NUMBER)
+    """``Phi(s) = V_max - scale * max(0, d(s) - 1)``; 0 is R-max. Default 2, chosen on
+    tasks A-D (``docs/decisions.md``)."""
+
+
+@documented
+@dataclass(frozen=True)
+class FFReplanConfig(LearnerConfig):
+    """FF-Replan (Yoon, Fern and Givan 2007): ``alpha`` and ``gamma`` are not used,
+    ``epsilon`` is 0 (its name fixes it)."""
+
+    epsilon: float = real(0.0, 0.0, 1.0)
+    """Probability of a uniformly random action; 0 (the method's name fixes it)."""
+
+    determinisation: Literal["all-outcomes", "most-likely"] = "all-outcomes"
+    """How a PPDDL problem's probabilistic actions are made deterministic for the
+    planner: ``all-outcomes`` (the paper's), or ``most-likely``; it must be the
+    problem's (``--determinisation``)."""

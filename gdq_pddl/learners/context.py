@@ -113,6 +113,16 @@ class TaskContext:
     problem explored online numbers more states as its episodes reach them. None: not
     known (a context made by hand), nothing is compared."""
 
+    horizon: int | None = None
+    """The env's step limit (actions per episode at most): how far from the goal the
+    knowledge-shaped learners put a state the knowledge reaches no goal from
+    (:func:`~gdq_pddl.learners.shaping.goal_distances`). None: not known (the number of
+    states is used)."""
+    determinisation: str | None = None
+    """The determinisation the planner and the prior read a PPDDL problem by
+    (``"all-outcomes"``, ``"most-likely"``); None where there is no choice (STRIPS, the
+    office)."""
+
     @property
     def n_env_actions(self) -> int:
         """The env's number of actions (its ``action_space.n``)."""
@@ -204,9 +214,27 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),
         identity=getattr(instance, "identity", None),
+        horizon=_horizon(instance), determinisation=_determinisation(instance),
         **({"own_scale": True, "step_limit": int(instance.model.step_limit),
             "prior_reward": own_prior_rewards(instance)}
            if getattr(instance, "reward_scale", "goal") == "problem" else {}))
+
+
+def _horizon(instance: Instance) -> int | None:
+    """The env's step limit of ``instance`` (its dynamics', or its world's), or None."""
+    for owner in ("dynamics", "world"):
+        limit = getattr(getattr(instance, owner, None), "step_limit", None)
+        if isinstance(limit, int | np.integer) and limit > 0:
+            return int(limit)
+    return None
+
+
+def _determinisation(instance: Instance) -> str | None:
+    """The determinisation of a PPDDL instance's knowledge, or None."""
+    if not getattr(instance, "ppddl", False):
+        return None
+    found = getattr(instance, "determinisation", None)
+    return found if isinstance(found, str) else None
 
 
 def own_prior_rewards(instance: Instance) -> np.ndarray:

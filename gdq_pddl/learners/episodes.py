@@ -403,7 +403,7 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     built-in learners' rules (:func:`~gdq_pddl.learners.tables.act`,
     :func:`~gdq_pddl.learners.rules.observe`); a learner from another package runs a copy
     that calls its own (:func:`_loop_of`)."""
-    table, model, plans, prior, queue = t
+    table, model, plans, prior, queue, own = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
             return ep
@@ -418,8 +418,8 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not observe(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
-                           truncated, rng):
+            if not observe(table, model, plans, prior, queue, own, p, s, a, r, s2,
+                           terminated, truncated, rng):
                 return -1
             step += 1
             returns[ep] += r

@@ -106,7 +106,7 @@ def _sizes(n_states: int, n_actions: int, plans: object, prior: object = None) -
     """The sizes :data:`TABLES` names: S states, A actions, and the lengths of the plan
     table (P plans + 1, N pairs) and of the prior's index arrays (E, C)."""
     n_pairs = n_states * n_actions
-    sizes = {"*": -1, "1": 1, "2": 2, "S": n_states, "A": n_actions, "S+1": n_states + 1,
+    sizes = {"*": -1, "0": 0, "1": 1, "2": 2, "S": n_states, "A": n_actions, "S+1": n_states + 1,
              "A+1": n_actions + 1, "SA": n_pairs, "SA+1": n_pairs + 1}
     for key, group, name in (("P", plans, "pair_ptr"), ("N", plans, "pair_state"),
                              ("E", prior, "pp_pair"), ("C", prior, "rev_pair")):
@@ -134,6 +134,15 @@ def check_tables(t: Tables, p: Params) -> None:
     for group in ("table", "model", "plans") + (("prior", "queue") if p.kind == KIND_GDQ
                                                  else ()):
         check_arrays(f"learner tables ({group})", getattr(t, group), TABLES[group], sizes)
+    spec = getattr(type(t.own), "SPEC", None)
+    if not isinstance(spec, dict) or set(spec) != set(getattr(t.own, "_fields", ())):
+        raise ConfigError("learner tables: own must be a NamedTuple of arrays whose class's "
+                          "SPEC gives each field's dtype, shape and values")
+    check_arrays("learner tables (own)", t.own, spec, sizes)
+    for name in spec:
+        x = getattr(t.own, name)
+        if x.dtype == np.float64 and not np.isfinite(x).all():
+            raise ConfigError(f"learner tables (own): {name} must be finite")
     if p.kind == KIND_GDQ:
         _check_rewards("learner tables (prior): reward", t.prior.reward)
         _check_chances("learner tables (prior): dead", t.prior.dead)

@@ -28,9 +28,15 @@ from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners.config import (
     DarlingConfig,
     DynaQConfig,
+    DynaQShapingConfig,
+    FFReplanConfig,
     GDQConfig,
     LearnerConfig,
+    PlanShapingConfig,
     QLearningConfig,
+    RMaxConfig,
+    RMaxShapingConfig,
+    ShapingConfig,
     field_doc,
     field_range,
 )
@@ -122,6 +128,32 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
                  "epsilon-greedy Q-learning: the TD update on each real step",
                  colour="#000000",  # black
                  groups=frozenset({"paper", "default", "reproduce"})),
+    LearnerEntry("Q-shaping", "gdq_pddl.learners.shaping:QShaping", ShapingConfig,
+                 "Q-learning shaped by the knowledge's goal distance, phi = -scale d(s) "
+                 "(Ng et al. 1999)", "plans", colour="#7f7f7f",  # grey
+                 label="Q-learning shaped by the goal distance"),
+    LearnerEntry("Dyna-Q-shaping", "gdq_pddl.learners.shaping:DynaQShaping",
+                 DynaQShapingConfig,
+                 "Dyna-Q shaped by the knowledge's goal distance in real and simulated "
+                 "backups", "plans", colour="#6a3d9a",  # purple
+                 label="Dyna-Q shaped by the goal distance"),
+    LearnerEntry("Plan-shaping", "gdq_pddl.learners.shaping:PlanShaping", PlanShapingConfig,
+                 "Q-learning shaped by the plan step reached, phi = R_max / L step(s) "
+                 "(Grzes and Kudenko 2008)", "plans", colour="#b15928",  # brown
+                 label="Q-learning shaped by the plan step"),
+    LearnerEntry("R-max", "gdq_pddl.learners.rmax:RMax", RMaxConfig,
+                 "R-max: unknown pairs worth V_max, value iteration on the known model "
+                 "(Brafman and Tennenholtz 2002)", fixed={"epsilon": 0.0},
+                 aliases=("Rmax",), colour="#1f78b4"),  # dark blue
+    LearnerEntry("R-max-shaping", "gdq_pddl.learners.rmax:RMaxShaping", RMaxShapingConfig,
+                 "R-max with unknown pairs worth a potential of the goal distance (Asmuth "
+                 "et al. 2008)", "plans", fixed={"epsilon": 0.0}, colour="#33a02c",  # green
+                 label="R-max shaped by the goal distance"),
+    LearnerEntry("FF-Replan", "gdq_pddl.learners.replan:FFReplan", FFReplanConfig,
+                 "no learning: a shortest plan of the determinised knowledge, replanned "
+                 "when an outcome leaves it (Yoon et al. 2007)", "plans",
+                 fixed={"epsilon": 0.0}, colour="#fb9a99",  # pink
+                 label="FF-Replan (the knowledge alone)"),
 )
 """The package's own learners, in the order of every figure and table."""
 

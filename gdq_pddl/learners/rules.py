@@ -8,6 +8,8 @@ has one definition and the two loops give the same bits (tested).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
 
@@ -40,7 +42,7 @@ def _td(table: QTable, p: Params, s: int, a: int, r: float, s2: int, terminated:
 
 @numba.njit(cache=True)
 def observe_td(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue,
-               p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+               own: Any, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
                truncated: bool, rng: np.random.Generator) -> bool:
     """Q-learning and DARLING: the TD update. Always True."""
     _td(table, p, s, a, r, s2, terminated, truncated)
@@ -49,7 +51,7 @@ def observe_td(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Q
 
 @numba.njit(cache=True)
 def observe_dyna(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue,
-                 p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+                 own: Any, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
                  truncated: bool, rng: np.random.Generator) -> bool:
     """Dyna-Q: the TD update, the step recorded, N backups of random known pairs. False
     when the learned model had no slot for the transition (no backups then)."""
@@ -62,7 +64,7 @@ def observe_dyna(table: QTable, model: Model, plans: Plans, prior: Prior, queue:
 
 @numba.njit(cache=True)
 def observe_plans(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue,
-                  p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+                  own: Any, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
                   truncated: bool, rng: np.random.Generator) -> bool:
     """GDQ-literal and GDQ-code: the TD update, the step recorded, N backups along the
     plans from ``s`` (Dyna-Q's where ``s`` has none). False as :func:`observe_dyna`."""
@@ -77,7 +79,7 @@ def observe_plans(table: QTable, model: Model, plans: Plans, prior: Prior, queue
 
 @numba.njit(cache=True)
 def observe_gdq(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue,
-                p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
+                own: Any, p: Params, s: int, a: int, r: float, s2: int, terminated: bool,
                 truncated: bool, rng: np.random.Generator) -> bool:
     """The default GDQ: the step recorded, its hybrid backup, prioritised sweeping (no TD
     update; :func:`gdq_pddl.learners.gdq.after_step`). False as :func:`observe_dyna`."""
@@ -90,21 +92,23 @@ RULES = {KIND_QLEARNING: observe_td, KIND_DARLING: observe_td, KIND_DYNAQ: obser
 
 
 @numba.njit(cache=True)
-def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, p: Params,
-            s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
+def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, own: Any,
+            p: Params, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
             rng: np.random.Generator) -> bool:
     """Everything a learner of any kind does after one real step ``(s, a, r, s2)`` (its
-    kind's rule, :data:`RULES`). False when the learned model had no slot for the
-    transition (no backups then): the callers raise
+    kind's rule, :data:`RULES`; ``own``: the learner's own arrays,
+    :attr:`~gdq_pddl.learners.tables.Tables.own`, which these kinds have none of). False
+    when the learned model had no slot for the transition (no backups then): the callers
+    raise
     ValueError(:data:`gdq_pddl.learners.learned_model.OVERFLOW`)."""
     if p.kind == KIND_GDQ:
-        return observe_gdq(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
+        return observe_gdq(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
                            truncated, rng)
     if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
-        return observe_td(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
+        return observe_td(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
                           truncated, rng)
     if p.kind == KIND_GDQ_PLANS:
-        return observe_plans(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
-                             truncated, rng)
-    return observe_dyna(table, model, plans, prior, queue, p, s, a, r, s2, terminated,
+        return observe_plans(table, model, plans, prior, queue, own, p, s, a, r, s2,
+                             terminated, truncated, rng)
+    return observe_dyna(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
                         truncated, rng)

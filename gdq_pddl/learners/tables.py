@@ -138,14 +138,32 @@ class Queue(NamedTuple):
     n: np.ndarray  # int64[1]: states queued
 
 
+class NoOwn(NamedTuple):
+    """The :attr:`Tables.own` group of a learner with no arrays of its own."""
+
+    none: np.ndarray  # float64[0], never read
+    SPEC = {"none": (np.dtype(np.float64), "0", None)}
+    """Each field's ``(dtype, shape, values)`` as :data:`gdq_pddl.learners.guards.TABLES`
+    writes them (a learner's own group says its own)."""
+
+
+NO_OWN = NoOwn(np.zeros(0))
+"""The own group of the learners that need none."""
+
+
 class Tables(NamedTuple):
-    """All arrays of a learner, S states x A actions, by concern."""
+    """All arrays of a learner, S states x A actions, by concern. ``own``: a learner's own
+    arrays (a NamedTuple of its type, e.g. a shaping potential; :data:`NO_OWN` for most),
+    which its rules read; numba compiles the rules and the episode loop for each type,
+    saving keeps it as ``own.FIELD``, and the guards check it against its class's
+    ``SPEC``."""
 
     table: QTable
     model: Model
     plans: Plans
     prior: Prior
     queue: Queue
+    own: NamedTuple = NO_OWN
 
 
 def table_bytes(n_states: int, n_actions: int, max_successors: int) -> int:

@@ -23,6 +23,7 @@ from gdq_pddl.learners.tables import (
     KIND_GDQ,
     KIND_GDQ_PLANS,
     KIND_QLEARNING,
+    NO_OWN,
     Params,
     Plans,
     Prior,
@@ -134,8 +135,9 @@ class TabularLearner:
 
     @property
     def observe_rule(self):
-        """The compiled rule after a real step, ``(table, model, plans, prior, queue,
-        params, s, a, r, s2, terminated, truncated, rng) -> bool``: its kind's
+        """The compiled rule after a real step, ``(table, model, plans, prior, queue, own,
+        params, s, a, r, s2, terminated, truncated, rng) -> bool`` (``own``: the learner's
+        own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`): its kind's
         (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` calls it, and the compiled
         episode loop of a learner from another package (the built-ins' loop calls
         :func:`~gdq_pddl.learners.rules.observe`, which picks the same function)."""
@@ -182,6 +184,10 @@ class TabularLearner:
         """The :class:`Tables` groups only the default GDQ uses (empty here)."""
         return NO_PRIOR
 
+    def _own_arrays(self, context: TaskContext) -> tuple:
+        """The learner's own group of :class:`Tables` (:data:`NO_OWN`: none)."""
+        return NO_OWN
+
     def _extra_params(self) -> dict[str, float]:
         """:class:`Params` fields beyond the shared ones (their defaults here)."""
         return {"backup": BACKUP_EXPECTED}
@@ -202,7 +208,7 @@ class TabularLearner:
                        context.live.sum(axis=1).astype(np.int64))
         plan_arrays = (np.ascontiguousarray(x, dtype=np.int64) for x in walked)
         tables = Tables(table, self._model, Plans(opt_r, *plan_arrays),
-                        *self._prior_arrays(context))
+                        *self._prior_arrays(context), self._own_arrays(context))
         c = self.config
         params = Params(
             kind=int(self.kind), alpha=float(c.alpha), gamma=float(c.gamma),

@@ -35,6 +35,9 @@ from gdq_pddl.learners import (
     run_episodes,
 )
 from gdq_pddl.learners.episodes import run_compiled
+from gdq_pddl.learners.replan import FFReplan
+from gdq_pddl.learners.rmax import RMax, RMaxShaping
+from gdq_pddl.learners.shaping import DynaQShaping, PlanShaping, QShaping
 from gdq_pddl.limits import MAX_NUMBER
 from gdq_pddl.world import load_world
 from tests.helpers import BACKGROUND
@@ -192,7 +195,10 @@ def test_make_learner_takes_every_name_the_command_line_takes(ctx):
     expected = {"GDQ": (GDQ, "prior"), "GDQ-literal": (GDQ, "literal"),
                 "GDQ-code": (GDQ, "code"), "DARLING": (Darling, "paper"),
                 "DARLING-code": (Darling, "code"), "Dyna-Q": (DynaQ, None),
-                "Q-learning": (QLearning, None)}
+                "Q-learning": (QLearning, None), "Q-shaping": (QShaping, None),
+                "Dyna-Q-shaping": (DynaQShaping, None), "Plan-shaping": (PlanShaping, None),
+                "R-max": (RMax, None), "R-max-shaping": (RMaxShaping, None),
+                "FF-Replan": (FFReplan, None)}
     for name in CLI_METHODS:
         learner = make_learner(name, ctx, alpha=0.2)
         cls, variant = expected[name]

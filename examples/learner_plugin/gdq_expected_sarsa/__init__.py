@@ -49,7 +49,7 @@ def expected_value(table: QTable, epsilon: float, s: int) -> float:
 
 
 @numba.njit(cache=True)
-def observe(table, model, plans, prior, queue, p, s: int, a: int, r: float, s2: int,
+def observe(table, model, plans, prior, queue, own, p, s: int, a: int, r: float, s2: int,
             terminated: bool, truncated: bool, rng: np.random.Generator) -> bool:
     """After a real step: the TD update towards the expected target (``r`` alone at the
     end of an episode, as every gdq_pddl learner). Always True (no learned model)."""
