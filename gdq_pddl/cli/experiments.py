@@ -177,8 +177,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 def register_knowledge(sub) -> None:
     p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
                        description="Task C with a door locked in reality but usable in the "
-                                   "knowledge (d3, d1), a corridor only reality has, and a "
-                                   "control; each also with accurate knowledge. Writes "
+                                   "knowledge (d3, d1), a corridor only reality has, a "
+                                   "corridor only the knowledge has, and a control; each "
+                                   "also with accurate knowledge; by default every method "
+                                   "that reads the knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
     size_args(p, KNOWLEDGE_METHODS, registry.names(), 1500, 10)
     exec_args(p, "results/knowledge")
