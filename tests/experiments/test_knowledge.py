@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from pathlib import Path
 
@@ -251,3 +252,25 @@ def test_knowledge_command_end_to_end(tmp_path):
     assert "wrong knowledge (move c11 c12)\n" in report  # the wrong probabilities' plans
     for stem in ("knowledge_curves", "knowledge_convergence"):
         assert (out / f"{stem}.png").stat().st_size > 0
+
+
+def test_run_takes_a_ppddl_knowledge_domain(tmp_path, capsys):
+    """gdq-pddl run --knowledge-domain: the learners plan on that file, the env simulates
+    --domain; recorded in config.json; one with other outcomes, or online, is refused."""
+    case = next(c for c in CASES if c.name == "wrong-probabilities")
+    out = tmp_path / "r"
+    common = ["run", "--problem", "keys-ppddl-1", "--determinisation", "most-likely",
+              "--episodes", "3", "--runs", "1", "--jobs", "1", "--method", "GDQ-code"]
+    assert main([*common, "--knowledge-domain", case.knowledge, "--out", str(out)]) == 0
+    exp = json.loads((out / "config.json").read_text())["experiments"][0]
+    assert exp["knowledge"] == case.knowledge and exp["pddl"][0].endswith("keys-ppddl.pddl")
+    other = tmp_path / "keys-ppddl.pddl"
+    other.write_text(Path(case.pddl[0]).read_text().replace(
+        "(probabilistic 0.95 (and (at ?to)", "(probabilistic 1.0 (and (at ?to)"))
+    capsys.readouterr()
+    assert main([*common, "--knowledge-domain", str(other), "--out", str(tmp_path / "x")]) == 2
+    assert "does not give the reachable states" in capsys.readouterr().err
+    assert main([*common, "--explore", "online", "--knowledge-domain", case.knowledge,
+                 "--out", str(tmp_path / "y")]) == 2
+    assert main(["run", "--task", "C", "--knowledge-domain", case.knowledge, "--episodes",
+                 "2", "--out", str(tmp_path / "z")]) == 2
