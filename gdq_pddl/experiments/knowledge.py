@@ -11,7 +11,7 @@ the real world's positions and doors, so only the knowledge differs
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cache
 from pathlib import Path
 
@@ -172,12 +172,29 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
     world (``<case>--accurate``) and from the case's knowledge world (``<case>--wrong``)."""
     out = []
     for c in cases:
-        common = {"methods": methods, "runs": runs, "seed": seed, "planner": planner,
+        common = {"methods": tuple(methods) if c.pddl is None else
+                  tuple(reading(m, c.pddl[3]) for m in methods),
+                  "runs": runs, "seed": seed, "planner": planner,
                   "world": "pddl" if c.pddl else c.real, "pddl": c.pddl}
         out.append(Experiment(f"{c.name}--accurate", ((c.task, episodes),), **common))
         out.append(Experiment(f"{c.name}--wrong", ((c.task, episodes),), knowledge=c.knowledge,
                               **common))
     return out
+
+
+def reading(method: str, determinisation: str) -> str:
+    """``method`` set to read a PPDDL problem's knowledge by ``determinisation`` where its
+    config has that setting and the method does not give it (FF-Replan refuses a problem
+    determinised otherwise than it plans)."""
+    parsed = registry.parse_method(method)
+    names = {f.name for f in fields(parsed.entry.config)}
+    if "determinisation" not in names or "determinisation" in parsed.settings or \
+            parsed.entry.fixed.get("determinisation") is not None:
+        return method
+    default = next(f.default for f in fields(parsed.entry.config) if f.name == "determinisation")
+    if default == determinisation:
+        return method
+    return f"{method}{',' if ':' in method else ':'}determinisation={determinisation}"
 
 
 def knowledge_world(real: World, knowledge: str | None) -> World:
