@@ -25,8 +25,10 @@ from gdq_pddl.experiments.knowledge import (
     CHECKS,
     WRONG,
     CaseTruth,
+    ProblemTruth,
     RouteStep,
     case_truth,
+    problem_truth,
 )
 from gdq_pddl.experiments.scale import converged_at
 from gdq_pddl.outputs import write_text
@@ -76,7 +78,7 @@ class CaseResult:
     description: str
     real: str
     knowledge: str
-    truth: CaseTruth
+    truth: CaseTruth | ProblemTruth
     methods: list[str]
     results: dict[str, dict[str, MethodResult]]
 
@@ -98,7 +100,7 @@ def analyse(out: str | Path) -> list[CaseResult]:
         acc, wrong = exps.get(f"{name}--{ACCURATE}"), exps.get(f"{name}--{WRONG}")
         if acc is None or wrong is None:
             continue
-        truth = case_truth(wrong)
+        truth = problem_truth(wrong) if wrong.get("pddl") else case_truth(wrong)
         task, level = truth.task, threshold(truth.v_star)
         methods = [m for m in wrong["methods"] if m in acc["methods"]]
         results: dict[str, dict[str, MethodResult]] = {}
@@ -116,10 +118,23 @@ def analyse(out: str | Path) -> list[CaseResult]:
                     *truth.measure({r: study.policy(exp["name"], m, task.name, r)
                                     for r in range(len(returns))}),
                     moving_average(returns, w)[:, w - 1:].mean(axis=0))
-        cases.append(CaseResult(name, described.get(name, ""), wrong["world"],
-                                str(wrong.get("knowledge") or wrong["world"]), truth, methods,
-                                results))
+        real = _shown(wrong["pddl"][0]) if wrong.get("pddl") else wrong["world"]
+        cases.append(CaseResult(name, described.get(name, ""), real,
+                                _shown(str(wrong.get("knowledge") or wrong["world"])), truth,
+                                methods, results))
     return cases
+
+
+def _shown(name: str) -> str:
+    """A world name, or a file path relative to the package's folder when inside it."""
+    try:
+        return Path(name).resolve().relative_to(PACKAGE_ROOT).as_posix()
+    except ValueError:
+        return name
+
+
+PACKAGE_ROOT = Path(__file__).resolve().parents[2]
+"""The folder holding ``gdq_pddl`` (shipped files are shown relative to it)."""
 
 
 def write_figures(cases: list[CaseResult], out: Path) -> list[Path]:
@@ -188,8 +203,23 @@ def _check(steps: list[RouteStep], attr: str) -> str:
     return "no, not at " + "; ".join(missing) if missing else "yes, at every step"
 
 
+def problem_case_data(case: CaseResult) -> dict:
+    """A PDDL case's table and findings for ``templates/knowledge.md.j2``."""
+    rows = [[m, f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
+             _extra(a, w), f"{w.final_return:.2f} / {a.final_return:.2f}"]
+            for m, a, w in case.paired()]
+    return {"case": case, "pddl": True, "threshold": threshold(case.truth.v_star),
+            "table": table_text(rows, ["method", "converged runs",
+                                       "median convergence episode", "extra episodes",
+                                       "final return"]),
+            "findings": [(m, a, w, f"{_ep(w.median)} vs {_ep(a.median)}: {_extra(a, w)}")
+                         for m, a, w in case.paired()]}
+
+
 def case_data(case: CaseResult) -> dict:
     """A case's tables and findings for ``templates/knowledge.md.j2``."""
+    if isinstance(case.truth, ProblemTruth):
+        return problem_case_data(case)
     rows = [[m, f"{w.on_route}/{w.runs} / {a.on_route}/{a.runs}",
              f"{w.converged} / {a.converged}", f"{_ep(w.median)} / {_ep(a.median)}",
              _extra(a, w), f"{_frac(w.policy_values, case.truth.v_star)} / "
@@ -198,7 +228,8 @@ def case_data(case: CaseResult) -> dict:
              ", ".join(f"{'-'.join(map(str, k)) if k else 'no goal'} x{v}"
                        for k, v in Counter(w.routes).most_common()) or "n/a"]
             for m, a, w in case.paired()]
-    return {"case": case, "threshold": threshold(case.truth.v_star), "table": table_text(rows, [
+    return {"case": case, "pddl": False, "threshold": threshold(case.truth.v_star),
+            "table": table_text(rows, [
         "method", "on route (wrong / accurate)", "converged runs", "median convergence episode",
         "extra episodes", "policy value", "final return", "greedy routes (wrong)"]),
         "checks": table_text([[kind, *(_check(case.truth.checks[kind], a) for a in CHECKS)]

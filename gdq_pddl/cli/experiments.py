@@ -39,7 +39,12 @@ from gdq_pddl.experiments import (
     switch_experiment,
 )
 from gdq_pddl.experiments.collect import collect
-from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
+from gdq_pddl.experiments.knowledge import (
+    KNOWLEDGE_METHODS,
+    knowledge_experiments,
+    knowledge_instance,
+    world_name,
+)
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS
 from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
@@ -63,6 +68,11 @@ def register_run(sub) -> None:
                    help="a PPDDL problem's states: 'enumerate' them all first (V* in the "
                         "report), find them 'online' as episodes reach them (any size; no "
                         "V*), or 'auto' (default): online only where they do not fit")
+    p.add_argument("--knowledge-domain", type=Path, metavar="FILE",
+                   help="a PPDDL run's knowledge: the learners plan on this domain file "
+                        "(with --problem), the env simulates --domain; it must give "
+                        "--domain's states and outcomes, its probabilities may differ "
+                        "(default: --domain itself)")
     p.add_argument("--keep-learners", action="store_true",
                    help="save each run's final learner in --out/learners/<run>.npz "
                         "(gdq_pddl.load_learner reads it)")
@@ -74,6 +84,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         return _run_pddl(args)
     refuse_given(args, ["--determinisation"], "is for a PPDDL domain (with --domain and "
                  "--problem); an office task has no determinisation to choose")
+    refuse_given(args, ["--knowledge-domain"], "is for a PPDDL run (with --problem)")
     if args.explore != "auto":
         raise GdqError("--explore is for a PPDDL problem (with --problem); the office's "
                        "states are always enumerated")
@@ -123,12 +134,20 @@ def _run_pddl(args: argparse.Namespace) -> int:
         else:
             raise SizeError(f"{problem}: grounding the problem ran out of memory; give a "
                             "smaller problem") from None
+    knowledge = None
+    if args.knowledge_domain is not None:
+        if files[4:5] == ("online",):
+            raise GdqError("--knowledge-domain needs the problem's states enumerated "
+                           "(--explore enumerate): online, no knowledge file is read")
+        knowledge = str(args.knowledge_domain.absolute())
+        knowledge_instance(instance, files, knowledge)  # same states and outcomes, or exit 2
     if instance.graph.is_goal[0]:
         print(f"gdq-pddl: warning: {problem}: the goal already holds in the initial state: "
               "every episode ends there before its first action (return 0), as mdpsim "
               "ends such a round at turn 0", file=sys.stderr)
     kw = experiment_kw(args)
-    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
+    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files,
+                     knowledge=knowledge, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners,
                    collect=partial(collect, online_facts={"explored_because": because}),
                    options={"explore": args.explore})
@@ -190,8 +209,10 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 def register_knowledge(sub) -> None:
     p = sub.add_parser("knowledge", help="learn with PDDL knowledge that disagrees with the world",
                        description="Task C with a door locked in reality but usable in the "
-                                   "knowledge (d3, d1), a corridor only reality has, and a "
-                                   "control; each also with accurate knowledge. Writes "
+                                   "knowledge (d3, d1), a corridor only reality has, a "
+                                   "corridor only the knowledge has, and a control; each "
+                                   "also with accurate knowledge; by default every method "
+                                   "that reads the knowledge. Writes "
                                    "episodes.csv, figures and REPORT.md to --out.")
     size_args(p, KNOWLEDGE_METHODS, registry.names(), 1500, 10)
     exec_args(p, "results/knowledge")

@@ -11,7 +11,7 @@ the real world's positions and doors, so only the knowledge differs
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import cache
 from pathlib import Path
 
@@ -19,12 +19,14 @@ import numpy as np
 
 from gdq_pddl.envs.evaluate import Route, RouteSummary, likeliest_next, optimal_route, policy_value
 from gdq_pddl.envs.model import compile_model
+from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.protocol import Experiment
 from gdq_pddl.learners import registry
 from gdq_pddl.learners.context import office_task_context
+from gdq_pddl.resources import data_file
 from gdq_pddl.spaces import LearnerSpaces
 from gdq_pddl.world import builtin_world, load_world
 from gdq_pddl.world_types import Task, World
@@ -36,7 +38,8 @@ DERIVED_PREFIX = "office:"
 """How the names of in-memory worlds derived from the office begin."""
 
 PASSAGE = ("p8", "p17")
-"""The corridor that exists in reality but not in the knowledge (case ``passage``)."""
+"""The corridor that exists in reality but not in the knowledge (case ``passage``), and in
+the knowledge but not in reality (case ``spurious-passage``)."""
 
 
 def is_file_name(name: str) -> bool:
@@ -57,6 +60,16 @@ def load_world_named(name: str) -> World:
     if name.startswith(DERIVED_PREFIX):
         return derived_world(name)
     return load_world(Path(name))
+
+
+@cache
+def load_pddl_instance(files: tuple[str, ...]) -> PDDLInstance:
+    """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``, loaded once
+    per process."""
+    domain, problem, dynamics, *determinisation = files[:4]
+    return PDDLInstance.from_files(domain, problem, dynamics or None,
+                                   determinisation=determinisation[0] if determinisation
+                                   else "all-outcomes")
 
 
 def with_edge(world: World, a: str, b: str) -> World:
@@ -94,13 +107,29 @@ def derived_world(name: str) -> World:
 
 @dataclass(frozen=True)
 class Case:
-    """One knowledge/reality disagreement."""
+    """One knowledge/reality disagreement. An office case names worlds; a PDDL case
+    (``pddl`` given) has ``real`` = its ``pddl[0]`` (the reality domain file) and
+    ``knowledge`` = the knowledge's domain file, which differs from reality in its
+    probabilities only (:func:`knowledge_instance`); ``task`` is then the problem's name."""
 
     name: str  # also the experiment name prefix
     real: str  # the world the env simulates
     knowledge: str  # the world the knowledge (PDDL problem, plans) is built from
     task: str
     description: str
+    pddl: tuple[str, ...] | None = None  # (domain, problem, dynamics, determinisation)
+
+
+def _shipped(*parts: str) -> str:
+    return str(data_file(*parts))
+
+
+KEYS_PDDL = (_shipped("domains", "keys-ppddl.pddl"), _shipped("problems", "keys-ppddl-1.pddl"),
+             _shipped("dynamics", "keys-ppddl.toml"), "most-likely")
+"""Reality of case ``wrong-probabilities``: the shipped keys-ppddl-1, known by the
+most-likely outcomes (under all outcomes no learner reads a probability: docs/decisions.md)."""
+KEYS_SWAPPED = _shipped("knowledge", "keys-ppddl-swapped.pddl")
+"""The knowledge of case ``wrong-probabilities``: keys-ppddl with the locks' chances swapped."""
 
 
 CASES: tuple[Case, ...] = (
@@ -113,14 +142,26 @@ CASES: tuple[Case, ...] = (
     Case("passage", "office:passage", "office", "C",
          f"reality has a corridor {PASSAGE[0]}-{PASSAGE[1]} that the knowledge lacks "
          "(a shorter route through d1 only)"),
+    Case("spurious-passage", "office", "office:passage", "C",
+         f"spurious effect: the knowledge has a corridor {PASSAGE[0]}-{PASSAGE[1]} that "
+         f"reality lacks, so it believes goto {PASSAGE[1]} at {PASSAGE[0]} leads to "
+         f"{PASSAGE[1]} (its shortest plans use it); in reality the robot stays at "
+         f"{PASSAGE[0]}"),
     Case("no-difficulty", "office", "office:deterministic", "C",
          "control: the knowledge cannot express door difficulty (built from a world "
          "where every door always works, it equals the accurate knowledge)"),
+    Case("wrong-probabilities", KEYS_PDDL[0], KEYS_SWAPPED, "keys-ppddl-1",
+         "PPDDL keys-ppddl-1 known by its most-likely outcomes; the knowledge's domain "
+         "file believes the sound blue lock opens with probability 0.3 (reality 0.9) and "
+         "the stiff red lock opens with 0.9 and jams with 0.05 (reality 0.5 and 0.3): its "
+         "plans take the red door only, reality's both doors (8 actions each)",
+         pddl=KEYS_PDDL),
 )
 """The cases of ``gdq-pddl knowledge``."""
 
-KNOWLEDGE_METHODS = registry.built_in_names("default")
-"""What ``gdq-pddl knowledge`` compares unless told otherwise (the commands' default)."""
+KNOWLEDGE_METHODS = tuple(e.name for e in registry.BUILT_IN if e.knowledge != "none")
+"""What ``gdq-pddl knowledge`` compares unless told otherwise: every built-in learner that
+reads the knowledge (the registry's entries whose ``knowledge`` is not ``none``)."""
 
 
 def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
@@ -131,12 +172,29 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
     world (``<case>--accurate``) and from the case's knowledge world (``<case>--wrong``)."""
     out = []
     for c in cases:
-        common = {"methods": methods, "runs": runs, "seed": seed, "planner": planner,
-                  "world": c.real}
+        common = {"methods": tuple(methods) if c.pddl is None else
+                  tuple(reading(m, c.pddl[3]) for m in methods),
+                  "runs": runs, "seed": seed, "planner": planner,
+                  "world": "pddl" if c.pddl else c.real, "pddl": c.pddl}
         out.append(Experiment(f"{c.name}--accurate", ((c.task, episodes),), **common))
         out.append(Experiment(f"{c.name}--wrong", ((c.task, episodes),), knowledge=c.knowledge,
                               **common))
     return out
+
+
+def reading(method: str, determinisation: str) -> str:
+    """``method`` set to read a PPDDL problem's knowledge by ``determinisation`` where its
+    config has that setting and the method does not give it (FF-Replan refuses a problem
+    determinised otherwise than it plans)."""
+    parsed = registry.parse_method(method)
+    names = {f.name for f in fields(parsed.entry.config)}
+    if "determinisation" not in names or "determinisation" in parsed.settings or \
+            parsed.entry.fixed.get("determinisation") is not None:
+        return method
+    default = next(f.default for f in fields(parsed.entry.config) if f.name == "determinisation")
+    if default == determinisation:
+        return method
+    return f"{method}{',' if ':' in method else ':'}determinisation={determinisation}"
 
 
 def knowledge_world(real: World, knowledge: str | None) -> World:
@@ -149,6 +207,22 @@ def knowledge_world(real: World, knowledge: str | None) -> World:
         raise GdqError(f"knowledge world {knowledge!r} does not have the real world's "
                        f"positions and door sides ({real.name}): the learner spaces differ")
     return world
+
+
+def knowledge_instance(real: PDDLInstance, files: tuple[str, ...], domain: str
+                       ) -> PDDLInstance:
+    """The PDDL instance to build the knowledge from: reality's problem, dynamics and
+    determinisation (``files``) with the knowledge's ``domain`` file, which must give the
+    same reachable states and offered actions (other probabilities, the same outcomes)."""
+    known = load_pddl_instance((domain, *tuple(files)[1:4]))
+    if known.graph.states != real.graph.states or \
+            not np.array_equal(known.columns, real.columns) or \
+            not np.array_equal(known.model.ptr, real.model.ptr) or \
+            not np.array_equal(known.model.next, real.model.next):
+        raise GdqError(f"knowledge domain {domain} does not give the reachable states and "
+                       f"actions of {files[0]} on {real.name}: give it the same outcomes "
+                       "(other probabilities only)")
+    return known
 
 
 @dataclass(frozen=True)
@@ -227,3 +301,45 @@ def case_truth(wrong: Mapping) -> CaseTruth:
     return CaseTruth(real, task, float(solution.V[0, s0]), optimal_route(real, task),
                      {ACCURATE: route_check(real, real, task),
                       WRONG: route_check(real, knowledge, task)})
+
+
+@dataclass(frozen=True)
+class ProblemTask:
+    """A PDDL case's task as the report names it."""
+
+    name: str
+    start: str = "initial state"
+    goal: str = "goal"
+
+
+@dataclass(frozen=True)
+class ProblemTruth:
+    """A PDDL case's ground truth: V* of reality, the V* the knowledge believes (its own
+    probabilities), and the first actions of the shortest plans from the start by
+    knowledge (:data:`ACCURATE` / :data:`WRONG`)."""
+
+    task: ProblemTask
+    v_star: float
+    believed_v_star: float
+    first_actions: dict[str, tuple[str, ...]]
+
+    def measure(self, policies: Mapping[int, Mapping[int, int]]
+                ) -> tuple[int, list[float], list[tuple[int, ...]]]:
+        """No route measure on a PDDL problem: ``(0, [], [])``."""
+        return 0, [], []
+
+
+def problem_truth(wrong: Mapping) -> ProblemTruth:
+    """The :class:`ProblemTruth` of a PDDL case from its ``--wrong`` experiment."""
+    files = tuple(wrong["pddl"])
+    real = load_pddl_instance(files)
+    known = knowledge_instance(real, files, wrong["knowledge"])
+
+    def starts(instance: PDDLInstance) -> tuple[str, ...]:
+        s, table = instance.learner_start, instance.plan_table("graph", 0.0)
+        return tuple(instance.action_name(int(a))
+                     for a in instance.columns[s][table.first_actions[s]])
+
+    return ProblemTruth(ProblemTask(real.name), float(real.optimal()["v_star"]),
+                        float(known.optimal()["v_star"]),
+                        {ACCURATE: starts(real), WRONG: starts(known)})

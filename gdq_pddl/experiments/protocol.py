@@ -66,11 +66,14 @@ class Experiment:
     seed: int = 0
     knowledge: str | None = None
     """The world the knowledge is built from, named like ``world`` (also
-    ``office:<variant>``); None: ``world`` itself. Not part of unit keys or seeds."""
+    ``office:<variant>``); of a PDDL experiment, the path of the knowledge's domain file
+    (reality's states and outcomes, other probabilities:
+    :func:`~gdq_pddl.experiments.knowledge.knowledge_instance`); None: reality itself.
+    Not part of unit keys or seeds."""
     pddl: tuple[str, ...] | None = None
     """``(domain, problem, dynamics[, determinisation])`` file paths (dynamics ``""``:
-    none): learn on that PDDL problem instead of an office world (``world`` and
-    ``knowledge`` are then unused; each schedule entry names the problem)."""
+    none): learn on that PDDL problem instead of an office world (``world`` is then
+    unused; each schedule entry names the problem)."""
 
     def __post_init__(self) -> None:
         """Refuse what no run can be made of (a ConfigError naming the field)."""

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import io
 from dataclasses import replace
-from functools import cache
 
 import numpy as np
 
@@ -14,7 +13,12 @@ from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
-from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
+from gdq_pddl.experiments.knowledge import (  # load_pddl_instance: also read from here
+    knowledge_instance,
+    knowledge_world,
+    load_pddl_instance,
+    load_world_named,
+)
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
 from gdq_pddl.learners import precompile
 from gdq_pddl.learners.context import TaskContext, task_context
@@ -61,8 +65,11 @@ def instance_of(exp: Experiment, spec: str, reader: type[TabularLearner] = Tabul
 
 
 def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
-    """The learners' task context of ``instance``, planned on ``exp.knowledge``."""
-    if exp.knowledge is not None:  # the same task, planned on another world's building
+    """The learners' task context of ``instance``, planned on ``exp.knowledge`` (an office
+    world, or of a PDDL experiment the knowledge's domain file)."""
+    if exp.knowledge is not None and isinstance(instance, PDDLInstance):
+        instance = knowledge_instance(instance, exp.pddl, exp.knowledge)
+    elif exp.knowledge is not None:  # the same task, planned on another world's building
         instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
     if isinstance(instance, OnlineInstance):
         return online_context(instance, exp.planner)
@@ -101,15 +108,6 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
         save_learner(buf, learner, rng=rng, env=env.np_random)
         result["learner"] = np.frombuffer(buf.getvalue(), dtype=np.uint8)
     return result
-
-
-@cache
-def load_pddl_instance(files: tuple[str, ...]):
-    """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``."""
-    domain, problem, dynamics, *determinisation = files[:4]
-    return PDDLInstance.from_files(domain, problem, dynamics or None,
-                                   determinisation=determinisation[0] if determinisation
-                                   else "all-outcomes")
 
 
 def warm_up(units: list[Unit]) -> int:

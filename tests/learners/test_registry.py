@@ -26,9 +26,10 @@ def test_every_list_of_methods_reads_the_registry():
     names = tuple(e.name for e in registry.BUILT_IN)
     assert METHODS == protocol.METHODS == METHOD_ORDER == tuple(METHOD_COLOURS) == names
     assert set(protocol.PAPER_METHODS) <= set(protocol.DEFAULT_METHODS) | {"GDQ"}
-    assert protocol.DEFAULT_METHODS == KNOWLEDGE_METHODS == protocol.SCALE_DEFAULT_METHODS
+    assert protocol.DEFAULT_METHODS == protocol.SCALE_DEFAULT_METHODS
     assert tuple(n for n in names if n.startswith("GDQ")) == protocol.GDQ_VARIANTS
     assert set(PLAN_METHODS) == {e.name for e in registry.BUILT_IN if e.knowledge != "none"}
+    assert KNOWLEDGE_METHODS == PLAN_METHODS  # every guided method, in the registry's order
     assert {METHOD_COLOURS[n] for n in names} == {e.colour for e in registry.BUILT_IN}
 
 
