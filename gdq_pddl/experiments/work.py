@@ -14,6 +14,7 @@ from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+from gdq_pddl.errors import ConfigError
 from gdq_pddl.experiments.knowledge import knowledge_world, load_world_named
 from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
 from gdq_pddl.learners import precompile
@@ -97,6 +98,9 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
         "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
     }
     if keep_learner:
+        if not isinstance(learner, TabularLearner):
+            raise ConfigError(f"{unit.method}: --keep-learners saves tabular learners; a "
+                              f"{type(learner).__name__} is not one")
         buf = io.BytesIO()
         save_learner(buf, learner, rng=rng, env=env.np_random)
         result["learner"] = np.frombuffer(buf.getvalue(), dtype=np.uint8)
@@ -117,6 +121,8 @@ def warm_up(units: list[Unit]) -> int:
     bytes of the largest learner's tables (what each worker adds to what it inherits)."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
+        if hasattr(learner_class(u.method), "run_own_episodes"):
+            continue  # a deep-RL agent: no kernel to compile (torch imported in the workers)
         if (u.experiment.world, u.method) not in tiny:
             exp = replace(u.experiment, name="warm-up",
                           schedule=((u.experiment.schedule[0][0], 2),), runs=1)

@@ -132,7 +132,18 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     :class:`~gdq_pddl.errors.ConfigError` says why it cannot run), ``False`` forces the
     Python loop. Raises :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a
     ``numpy.random.Generator`` or the learner's states and actions are not the env's.
+
+    A learner that runs its own episodes (a deep-RL agent, :mod:`gdq_pddl.learners.deep`:
+    its ``run_own_episodes(env, n_episodes, rng)``) runs them so, with the same records.
     """
+    own = getattr(learner, "run_own_episodes", None)
+    if own is not None:
+        check_count("n_episodes", n_episodes)
+        guards.check_generator(rng)
+        if fast:
+            raise ConfigError(f"fast=True: the learner is a {type(learner).__name__}, "
+                              "which runs its own episodes")
+        return own(env, n_episodes, rng)
     return _run(learner, env, n_episodes, rng, fast, _n_areas(env))
 
 
