@@ -60,6 +60,8 @@ class Range:
         """ConfigError unless ``value`` is in the range (a whole number if ``whole``)."""
         if whole:
             check_count(name, value, int(self.high))
+            if value < self.low:  # type: ignore[operator]  # a count from 1 (deep agents)
+                raise ConfigError(f"{name} must be a whole number in {self}, got {value!r}")
         else:
             check_real(name, value, self.low, self.high, self.low_open, self.high_open)
 
