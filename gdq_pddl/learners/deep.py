@@ -17,16 +17,14 @@ whether it reached the goal and its area visits.
 from __future__ import annotations
 
 import importlib
-import importlib.util
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners import registry
 from gdq_pddl.learners.config import (
-    SB3_EXTRA,
-    SB3_MODULES,
     DeepConfig,
     DQNConfig,
     PPOConfig,
@@ -99,10 +97,7 @@ class DeepLearner:
     estimate_weight: float = 1.0
 
     def __init__(self, context: TaskContext, config: DeepConfig | None = None) -> None:
-        missing = [m for m in SB3_MODULES if importlib.util.find_spec(m) is None]
-        if missing:
-            raise ConfigError(f"{self.agent} needs `pip install 'gdq_pddl[{SB3_EXTRA}]'` "
-                              f"(missing: {', '.join(missing)})")
+        registry.check_installed(registry.entry(self.agent), self.agent)
         self.context = context
         self.config = config if config is not None else self.config_type()
         if not isinstance(self.config, self.config_type):

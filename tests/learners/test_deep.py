@@ -6,6 +6,7 @@ and report."""
 from __future__ import annotations
 
 import importlib.util
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -49,6 +50,18 @@ def test_without_the_extra_a_run_is_refused_in_one_line(no_sb3, capsys, tmp_path
     assert code == 2
     assert out.strip().count("\n") == 0 and HINT in out and "Traceback" not in out
     assert not (tmp_path / "out").exists()
+
+
+def test_without_the_extra_the_python_api_refuses_the_agents(no_sb3):
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.learners.deep import PPO
+    from gdq_pddl.world import builtin_world
+
+    ctx = office_task_context(builtin_world("office"), "C")
+    with pytest.raises(ConfigError, match=re.escape(f"method 'MaskablePPO' {HINT}")):
+        registry.make_learner("MaskablePPO", ctx)
+    with pytest.raises(ConfigError, match=re.escape(f"method 'PPO' {HINT}")):
+        PPO(ctx)
 
 
 def test_the_extra_is_found_when_its_modules_are(monkeypatch):
