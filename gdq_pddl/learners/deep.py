@@ -174,7 +174,6 @@ class DeepLearner:
             while len(recorder.rows) < n_episodes:
                 obs, *_ = vec.step(self._predict(obs, vec))
         self._states = int(getattr(env.observation_space, "n", 0))
-        self._obs_space = vec.observation_space
         self._masks = env.unwrapped.mask_table
         rows = recorder.rows[:n_episodes]
         areas = np.zeros((n_episodes, recorder.n_areas), dtype=np.int64)
