@@ -200,6 +200,10 @@ def experiment_kw(args: argparse.Namespace) -> dict:
     """Experiment fields from the run options, the planner checked."""
     methods = checked_methods(args)
     check_planner(args.planner, methods)
+    deep = [m for m in methods if registry.parse_method(m).entry.extra]
+    if getattr(args, "keep_learners", False) and deep:
+        raise GdqError(f"--keep-learners saves tabular learners; {', '.join(deep)} "
+                       "cannot be saved so")
     return {"methods": methods, "runs": args.runs, "seed": args.seed,
             "planner": args.planner}
 

@@ -22,7 +22,9 @@ def register_methods(sub) -> None:
 
 def described() -> list[dict]:
     """Every learner as ``gdq-pddl methods --json`` prints it."""
-    return [{"name": e.name, "aliases": list(e.aliases), "description": e.description,
+    return [{"name": e.name, "aliases": list(e.aliases),
+             "description": e.description + (f" ({need})" if (need := registry.missing(e))
+                                             else ""),
              "knowledge": e.knowledge, "online": e.online, "colour": e.colour,
              "fixed": dict(e.fixed),
              "settings": [{"name": n, "type": t, "default": d, "doc": doc}

@@ -222,7 +222,8 @@ def cmd_list(args: argparse.Namespace) -> int:
         "dynamics": shipped_names("dynamics"),
         "worlds": {name: list(builtin_world(name).tasks) for name in shipped_names("world")},
         "planners": {i.name: i.reason if not i.usable else "usable" for i in planners()},
-        "methods": {e.name: e.description for e in registry.entries()}}
+        "methods": {e.name: e.description + (f" ({need})" if (need := registry.missing(e))
+                                             else "") for e in registry.entries()}}
     if args.json:
         print(json.dumps(shipped, indent=2))
         return 0

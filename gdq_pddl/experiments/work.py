@@ -13,6 +13,7 @@ from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance
+from gdq_pddl.errors import ConfigError
 from gdq_pddl.experiments.knowledge import (  # load_pddl_instance: also read from here
     knowledge_instance,
     knowledge_world,
@@ -104,6 +105,9 @@ def run_unit(unit: Unit, keep_learner: bool = False) -> dict[str, np.ndarray]:
         "policy": np.asarray(learner.greedy_policy(), dtype=np.int64),
     }
     if keep_learner:
+        if not isinstance(learner, TabularLearner):
+            raise ConfigError(f"{unit.method}: --keep-learners saves tabular learners; a "
+                              f"{type(learner).__name__} is not one")
         buf = io.BytesIO()
         save_learner(buf, learner, rng=rng, env=env.np_random)
         result["learner"] = np.frombuffer(buf.getvalue(), dtype=np.uint8)
@@ -115,6 +119,8 @@ def warm_up(units: list[Unit]) -> int:
     bytes of the largest learner's tables (what each worker adds to what it inherits)."""
     tiny: dict[tuple[str, str], Unit] = {}
     for u in units:
+        if hasattr(learner_class(u.method), "run_own_episodes"):
+            continue  # a deep-RL agent: no kernel to compile (torch imported in the workers)
         if (u.experiment.world, u.method) not in tiny:
             exp = replace(u.experiment, name="warm-up",
                           schedule=((u.experiment.schedule[0][0], 2),), runs=1)

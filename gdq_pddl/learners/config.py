@@ -60,6 +60,8 @@ class Range:
         """ConfigError unless ``value`` is in the range (a whole number if ``whole``)."""
         if whole:
             check_count(name, value, int(self.high))
+            if value < self.low:  # type: ignore[operator]  # a count from 1 (deep agents)
+                raise ConfigError(f"{name} must be a whole number in {self}, got {value!r}")
         else:
             check_real(name, value, self.low, self.high, self.low_open, self.high_open)
 
@@ -345,3 +347,111 @@ class FFReplanConfig(LearnerConfig):
     """How a PPDDL problem's probabilistic actions are made deterministic for the
     planner: ``all-outcomes`` (the paper's), or ``most-likely``; it must be the
     problem's (``--determinisation``)."""
+
+
+# -- deep-RL agents (gdq_pddl.learners.deep; the sb3 extra) -------------------------
+
+SB3_EXTRA = "sb3"
+"""The extra that installs the agents' libraries."""
+SB3_MODULES = ("stable_baselines3", "sb3_contrib", "torch")
+"""What the agents import (all in the ``sb3`` extra)."""
+
+Shaping = Literal["none", "distance", "plan-step"]
+Observation = Literal["state", "facts", "distance"]
+
+MAX_HIDDEN = 4096
+"""The most units a hidden layer may have."""
+
+
+def hidden_units(default: int) -> Any:
+    """Units of a hidden layer: a whole number in ``[1, MAX_HIDDEN]``."""
+    return field(default=default, metadata={"range": Range(1, MAX_HIDDEN)})
+
+
+@documented
+@dataclass(frozen=True)
+class DeepConfig:
+    """Settings every deep-RL agent shares (the network, the knowledge, the budget)."""
+
+    gamma: float = real(0.95, 0.0, 1.0, high_open=True)
+    """Discount factor (the experiment's gamma unless set), also the shaping's gamma."""
+    learning_rate: float = real(3e-4, 0.0, 1.0, low_open=True)
+    """The optimiser's step size (Stable-Baselines3's default for PPO)."""
+    hidden: int = hidden_units(64)
+    """Units in each of the two hidden layers of the policy and value networks."""
+    steps: int | None = count(None, 10**12)
+    """The most training steps per task; none: as many as the task's episodes need. The
+    episodes left when it is reached are played by the trained policy (greedy, no
+    learning), one row each, so every run has the experiment's number of rows."""
+    shaping: Shaping = "none"
+    """The reward the agent learns from: the env's (``none``), or shaped by the knowledge's
+    goal distance (``distance``, phi = -scale d(s)) or plan step (``plan-step``):
+    ``gdq_pddl.wrappers.KnowledgeShaping``. The rows' returns are always unshaped."""
+    scale: float = real(1.0, 0.0, MAX_NUMBER, low_open=True)
+    """What the shaping potential is multiplied by."""
+    obs: Observation = "state"
+    """What the agent sees: the learner state's index (``state``, one-hot in the network),
+    the true facts of the state (``facts``, ``gdq_pddl.wrappers.FactObservation``), or
+    the state with the knowledge's goal distance and plan action (``distance``,
+    ``gdq_pddl.wrappers.DistanceObservation``)."""
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+    def agent_kwargs(self) -> dict[str, Any]:
+        """The agent's own keyword arguments (besides the policy, env and seed)."""
+        return {"gamma": self.gamma, "learning_rate": self.learning_rate}
+
+
+@documented
+@dataclass(frozen=True)
+class PPOConfig(DeepConfig):
+    """PPO and MaskablePPO: Stable-Baselines3's defaults but for the discount."""
+
+    n_steps: int = field(default=2048, metadata={"range": Range(1, 10_000_000)})
+    """Steps collected between two updates."""
+    batch_size: int = field(default=64, metadata={"range": Range(1, 10_000_000)})
+    """Minibatch size of an update."""
+    n_epochs: int = field(default=10, metadata={"range": Range(1, 1000)})
+    """Passes over the collected steps in each update."""
+    ent_coef: float = real(0.0, 0.0, 1.0)
+    """Weight of the entropy bonus."""
+
+    def agent_kwargs(self) -> dict[str, Any]:
+        return super().agent_kwargs() | {"n_steps": self.n_steps, "batch_size":
+                                         self.batch_size, "n_epochs": self.n_epochs,
+                                         "ent_coef": self.ent_coef}
+
+
+@documented
+@dataclass(frozen=True)
+class DQNConfig(DeepConfig):
+    """DQN: Stable-Baselines3's defaults but for the discount, the replay buffer and the
+    exploration schedule, which is counted in steps here (SB3 counts it as a share of the
+    training budget)."""
+
+    learning_rate: float = real(1e-4, 0.0, 1.0, low_open=True)
+    """The optimiser's step size (Stable-Baselines3's default for DQN)."""
+    buffer_size: int = field(default=100_000, metadata={"range": Range(1, 10_000_000)})
+    """Transitions the replay buffer holds."""
+    learning_starts: int = count(100)
+    """Steps before the first update."""
+    train_freq: int = field(default=4, metadata={"range": Range(1, 1_000_000)})
+    """Steps between two updates."""
+    target_update_interval: int = field(default=10_000, metadata={"range": Range(1, 10**9)})
+    """Steps between two copies of the network to the target network."""
+    exploration_steps: int = count(10_000)
+    """Steps over which epsilon falls linearly from ``exploration_initial_eps`` to
+    ``exploration_final_eps``."""
+    exploration_initial_eps: float = real(1.0, 0.0, 1.0)
+    """Epsilon at the first step."""
+    exploration_final_eps: float = real(0.05, 0.0, 1.0)
+    """Epsilon after ``exploration_steps`` steps."""
+
+    def agent_kwargs(self) -> dict[str, Any]:
+        return super().agent_kwargs() | {
+            "buffer_size": self.buffer_size, "learning_starts": self.learning_starts,
+            "train_freq": self.train_freq,
+            "target_update_interval": self.target_update_interval,
+            "exploration_initial_eps": self.exploration_initial_eps,
+            "exploration_final_eps": self.exploration_final_eps}

@@ -137,7 +137,18 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     ``numpy.random.Generator`` or the learner's states and actions are not the env's, and
     :class:`~gdq_pddl.errors.ResultsError` when its task context is of another PDDL
     problem than the env's (same sizes) or of another instance explored online.
+
+    A learner that runs its own episodes (a deep-RL agent, :mod:`gdq_pddl.learners.deep`:
+    its ``run_own_episodes(env, n_episodes, rng)``) runs them so, with the same records.
     """
+    own = getattr(learner, "run_own_episodes", None)
+    if own is not None:
+        check_count("n_episodes", n_episodes)
+        guards.check_generator(rng)
+        if fast:
+            raise ConfigError(f"fast=True: the learner is a {type(learner).__name__}, "
+                              "which runs its own episodes")
+        return own(env, n_episodes, rng)
     return _run(learner, env, n_episodes, rng, fast, _n_areas(env))
 
 

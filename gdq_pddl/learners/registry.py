@@ -1,5 +1,5 @@
-"""Every learner, declared once: :data:`BUILT_IN` here, others through the entry-point
-group ``gdq_pddl.learners`` of their own package (:data:`GROUP`).
+"""Every learner, declared once: :data:`BUILT_IN` and :data:`DEEP` here, others through the
+entry-point group ``gdq_pddl.learners`` of their own package (:data:`GROUP`).
 
 A :class:`LearnerEntry` says everything the rest of the package needs of a learner: its
 name and aliases, its config class and the settings its name stands for, the knowledge it
@@ -16,6 +16,8 @@ prior_weight=2`` (:func:`parse_method`), checked against the config class's fiel
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import sys
 import types
 import typing
 from collections.abc import Mapping
@@ -26,13 +28,17 @@ from typing import Any, Literal
 
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners.config import (
+    SB3_EXTRA,
+    SB3_MODULES,
     DarlingConfig,
+    DQNConfig,
     DynaQConfig,
     DynaQShapingConfig,
     FFReplanConfig,
     GDQConfig,
     LearnerConfig,
     PlanShapingConfig,
+    PPOConfig,
     QLearningConfig,
     RMaxConfig,
     RMaxShapingConfig,
@@ -82,6 +88,12 @@ class LearnerEntry:
     """The lists it is in: ``paper`` (the paper's four methods), ``default`` (what the
     commands compare unless told otherwise), ``reproduce`` (what ``gdq-pddl reproduce``
     runs on the tasks and switches), ``robot`` (the robot protocol)."""
+    extra: str = ""
+    """The extra of ``gdq_pddl`` that installs what it needs (``sb3``), if any."""
+    requires: tuple[str, ...] = ()
+    """The modules it imports that the default install lacks (installed by :attr:`extra`);
+    without one of them its name is listed as needing the extra and refused
+    (:func:`missing`)."""
 
     @property
     def base(self) -> str:
@@ -157,6 +169,19 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
 )
 """The package's own learners, in the order of every figure and table."""
 
+DEEP: tuple[LearnerEntry, ...] = tuple(
+    LearnerEntry(name, f"gdq_pddl.learners.deep:{name}", config, description, online=False,
+                 colour=colour, extra=SB3_EXTRA, requires=SB3_MODULES)
+    for name, config, description, colour in (
+        ("MaskablePPO", PPOConfig, "deep RL: sb3-contrib's MaskablePPO, drawing only the "
+         "env's allowed actions", "#a6cee3"),
+        ("PPO", PPOConfig, "deep RL: Stable-Baselines3's PPO, every action open", "#fdbf6f"),
+        ("DQN", DQNConfig, "deep RL: Stable-Baselines3's DQN, every action open", "#cab2d6")))
+"""Deep-RL agents of Stable-Baselines3 and sb3-contrib (:mod:`gdq_pddl.learners.deep`; the
+``sb3`` extra): after the built-in learners in every list, figure and table, and in none of
+the built-in groups (:func:`built_in_names`: what the protocol and the scale experiments
+run by default)."""
+
 REFERENCE = BUILT_IN[0].name
 """The method every other one is compared with (the library's GDQ)."""
 
@@ -188,10 +213,10 @@ def variants_of(name: str) -> tuple[str, ...]:
 
 @cache
 def entries() -> tuple[LearnerEntry, ...]:
-    """Every learner: :data:`BUILT_IN`, then those of the ``gdq_pddl.learners`` entry points
-    by name (a plugin that cannot be loaded, or repeats a name, is left out:
+    """Every learner: :data:`BUILT_IN`, :data:`DEEP`, then those of the ``gdq_pddl.learners``
+    entry points by name (a plugin that cannot be loaded, or repeats a name, is left out:
     :func:`plugin_problems` says why)."""
-    return BUILT_IN + tuple(e for e, _ in _plugins() if e is not None)
+    return BUILT_IN + DEEP + tuple(e for e, _ in _plugins() if e is not None)
 
 
 def refresh() -> None:
@@ -207,7 +232,7 @@ def plugin_problems() -> list[str]:
 
 @cache
 def _plugins() -> tuple[tuple[LearnerEntry | None, str], ...]:
-    taken = {key_of(n) for e in BUILT_IN for n in (e.name, *e.aliases)}
+    taken = {key_of(n) for e in BUILT_IN + DEEP for n in (e.name, *e.aliases)}
     out = []
     for ep in sorted(entry_points(group=GROUP), key=lambda ep: ep.name):
         try:
@@ -232,6 +257,27 @@ def _plugins() -> tuple[tuple[LearnerEntry | None, str], ...]:
 @cache
 def _by_key() -> dict[str, LearnerEntry]:
     return {key_of(n): e for e in entries() for n in (e.name, *e.aliases)}
+
+
+def missing(found: LearnerEntry) -> str:
+    """``needs `pip install 'gdq_pddl[EXTRA]'``` when a module ``found`` requires cannot be
+    imported here; "" when it can run (nothing is imported to tell)."""
+    for module in found.requires:
+        try:
+            absent = sys.modules.get(module, ...) is None or \
+                importlib.util.find_spec(module) is None
+        except (ImportError, ValueError):
+            absent = True
+        if absent:
+            return f"needs `pip install 'gdq_pddl[{found.extra}]'`"
+    return ""
+
+
+def check_installed(found: LearnerEntry, text: str) -> None:
+    """A :class:`~gdq_pddl.errors.ConfigError` when ``found`` cannot run here
+    (:func:`missing`): ``method 'PPO' needs `pip install 'gdq_pddl[sb3]'```."""
+    if need := missing(found):
+        raise ConfigError(f"method {text!r} {need}")
 
 
 def entry(name: str) -> LearnerEntry:
@@ -298,8 +344,11 @@ def parse_method(text: str) -> Method:
 
 
 def canonical(text: str) -> str:
-    """The method as results name it (:attr:`Method.text`), checked."""
-    return parse_method(text).text
+    """The method as results name it (:attr:`Method.text`), checked (and refused where
+    its learner needs an extra that is not installed: :func:`check_installed`)."""
+    parsed = parse_method(text)
+    check_installed(parsed.entry, text)
+    return parsed.text
 
 
 def _field_type(config: type, key: str) -> Any:
@@ -389,6 +438,7 @@ def make_learner(method: str, context: Any, defaults: Mapping[str, Any] | None =
     contradicts them is refused); ``defaults``: settings the method may override (an
     experiment's alpha, gamma and epsilon)."""
     parsed = parse_method(method)
+    check_installed(parsed.entry, method)
     given = {**parsed.entry.fixed, **parsed.settings}
     for key, value in config.items():
         if key in given and given[key] != value:

@@ -22,6 +22,8 @@ import pytest
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import registry
 
+DEEP_NAMES = ("MaskablePPO", "PPO", "DQN")  # registry.DEEP: listed whether sb3 is there or not
+
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "learner_plugin"
 NAME = "Expected-SARSA"
 
@@ -46,7 +48,7 @@ def plugin(monkeypatch):
 
 
 def test_the_plugin_is_listed_after_the_built_in_learners(plugin):
-    assert registry.names() == (*registry.built_in_names(), NAME)
+    assert registry.names() == (*registry.built_in_names(), *DEEP_NAMES, NAME)
     assert registry.canonical("expected_sarsa:alpha=0.2") == "Expected-SARSA:alpha=0.2"
     assert registry.colour(NAME) == "#8c564b"
     with pytest.raises(ConfigError, match="epsilon must be a number in"):
@@ -57,7 +59,7 @@ def test_broken_and_clashing_plugins_are_left_out_with_a_reason(monkeypatch):
     _fake(monkeypatch, ("broken", "gdq_no_such_module:ENTRY"),
           ("Q-learning", "gdq_expected_sarsa:ENTRY"))
     try:
-        assert registry.names() == registry.built_in_names()
+        assert registry.names() == (*registry.built_in_names(), *DEEP_NAMES)
         why = sorted(registry.plugin_problems())
         assert len(why) == 2 and "gdq_no_such_module" in why[1] and "'broken'" in why[1]
         assert "its entry point is 'Q-learning' and its name 'Expected-SARSA'" in why[0]
