@@ -85,6 +85,18 @@ class LazyGraph:
         self._plain = np.ones(len(task.ops), dtype=np.bool_)  # no alternatives to meet
         self._plain[self._alt_op] = False
         self._rank = reality_ranks(task).tolist()
+        # ground actions whose every outcome only has conditional effects (IPPC boxworld:
+        # all of them), and those effects' conditions: in a state where none holds, the
+        # action leaves the state as it is, and its outcomes need not be applied one by one
+        quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
+        for k, op in enumerate(task.ops):
+            outcomes = getattr(op, "outcomes", None)
+            if outcomes is not None and not any(o.add or o.dele for o in outcomes):
+                quiet[k] = True
+                fire += [(k, p, n) for o in outcomes for p, n, _, _ in o.conditional]
+        self._may_stay = quiet
+        self._fire_op = np.array([k for k, _, _ in fire], dtype=np.int64)
+        self._fires = RowConditions([(p, n) for _, p, n in fire])
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
         self._masks: list[int] = [task.init]
@@ -152,9 +164,12 @@ class LazyGraph:
                 fresh.append(t)
             return i
 
-        acts = self._applicable(self._words[x]).tolist()
+        row = self._words[x]
+        acts = self._applicable(row).tolist()
         reality, gains = self._reality, self.gains
-        nexts = [[s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
+        stays = self._stays(row).tolist()
+        nexts = [[s] * len(reality[k]) if stays[k] else
+                 [s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
                  for k in acts]  # each outcome applied once
         edge_op, edge_next = [], []
         for k, ts in zip(acts, nexts, strict=True):  # by ground action, then kept outcome
@@ -166,7 +181,7 @@ class LazyGraph:
                     edge_op.append(k)
                     edge_next.append(id_of(t))
         for k, ts in sorted(((k, ts) for k, ts in zip(acts, nexts, strict=True)
-                             if self._other[k]), key=lambda e: self._rank[e[0]]):
+                             if self._other[k] and not stays[k]), key=lambda e: self._rank[e[0]]):
             for at in self._other[k]:
                 id_of(ts[at])
         column, prob, nxt, stuck, gain = [], [], [], [], []
@@ -199,6 +214,14 @@ class LazyGraph:
                              np.array(gain, dtype=float))
         self._expanded[x] = True
         return fresh
+
+    def _stays(self, row: np.ndarray) -> np.ndarray:
+        """bool[n_ops]: the ground action leaves the state of ``row`` as it is, whatever
+        its outcome (no effect but conditional ones, none of whose conditions holds)."""
+        stays = self._may_stay.copy()
+        if len(self._fire_op):
+            stays[self._fire_op[self._fires.holds(row)]] = False
+        return stays
 
     def _applicable(self, row: np.ndarray) -> np.ndarray:
         """int64: the ground actions whose precondition holds in ``row``, increasing (the
