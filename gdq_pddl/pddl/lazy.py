@@ -99,6 +99,7 @@ class LazyGraph:
         self._fires = RowConditions([(p, n) for _, p, n in fire])
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
+        self._gain_terms()
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
         self._words = np.zeros((16, self.n_words), dtype=np.uint64)
@@ -173,6 +174,11 @@ class LazyGraph:
                  for k in acts]  # each outcome applied once
         edge_op, edge_next = [], []
         for k, ts in zip(acts, nexts, strict=True):  # by ground action, then kept outcome
+            if stays[k]:  # every outcome the planner knows stays in x
+                if self._known[k]:
+                    edge_op.append(k)
+                    edge_next.append(x)
+                continue
             seen: dict[int, None] = {}
             for at in self._known[k]:
                 t = ts[at] if isinstance(at, int) else at(s)
@@ -185,20 +191,21 @@ class LazyGraph:
             for at in self._other[k]:
                 id_of(ts[at])
         column, prob, nxt, stuck, gain = [], [], [], [], []
+        worth, first = self._gains(row) if gains else None, self._first
         for c, (k, ts) in enumerate(zip(acts, nexts, strict=True)):  # reality, merged
             if len(ts) == 1:  # one outcome (most ground actions): nothing to merge
-                p, st, _, fixed, o = reality[k][0]
+                p, st, _, _, _ = reality[k][0]
                 column.append(c)
                 prob.append(p)
                 nxt.append(index[ts[0]])
                 stuck.append(st)
-                gain.append((o.gain(s) if fixed is None else fixed) if gains else 0.0)
+                gain.append(worth[first[k]] if worth is not None else 0.0)
                 continue
             merged: dict[tuple, float] = {}
-            for t, (p, st, _, fixed, o) in zip(ts, reality[k], strict=True):
+            for i, (t, (p, st, _, _, _)) in enumerate(zip(ts, reality[k], strict=True)):
                 key: tuple = (index[t], st)
-                if gains:
-                    key += (o.gain(s) if fixed is None else fixed,)
+                if worth is not None:
+                    key += (worth[first[k] + i],)
                 merged[key] = merged.get(key, 0.0) + p  # summed in outcome order
             for key, p in merged.items():
                 column.append(c)
@@ -214,6 +221,40 @@ class LazyGraph:
                              np.array(gain, dtype=float))
         self._expanded[x] = True
         return fresh
+
+    def _gain_terms(self) -> None:
+        """Reality's outcomes of every ground action as one flat list (ground action
+        ``k``'s from ``_first[k]``), their fixed rewards and their conditional rewards'
+        conditions, so that :meth:`_gains` values them all in a state at once."""
+        first, base, entry, amount, alts, term = [], [], [], [], [], []
+        for outcomes in self._reality:
+            first.append(len(base))
+            for _, _, _, fixed, o in outcomes:
+                base.append(fixed if fixed is not None else o.reward)
+                for alternatives, worth in (o.rewards if fixed is None else ()):
+                    term += [len(entry)] * len(alternatives)
+                    alts += list(alternatives)
+                    entry.append(len(base) - 1)
+                    amount.append(worth)
+        self._first = first
+        self._base_gain = np.array(base, dtype=float)
+        self._term_entry = np.array(entry, dtype=np.int64)
+        self._term_amount = np.array(amount, dtype=float)
+        self._alt_term = np.array(term, dtype=np.int64)
+        self._reward_alts = RowConditions(alts)
+
+    def _gains(self, row: np.ndarray) -> list[float]:
+        """Each outcome's reward in the state of ``row``, by :meth:`_gain_terms`'s flat
+        list: as :meth:`GroundOutcome.gain <gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain>`
+        sums them (the fixed reward plus the amounts of the terms one of whose
+        alternatives holds, in order)."""
+        if not len(self._term_entry):
+            return self._base_gain.tolist()
+        held = np.zeros(len(self._term_entry), dtype=np.bool_)
+        held[self._alt_term[self._reward_alts.holds(row)]] = True
+        extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
+                            minlength=len(self._base_gain))
+        return (self._base_gain + extra).tolist()
 
     def _stays(self, row: np.ndarray) -> np.ndarray:
         """bool[n_ops]: the ground action leaves the state of ``row`` as it is, whatever
