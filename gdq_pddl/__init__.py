@@ -35,11 +35,12 @@ load_results: Callable[..., pandas.DataFrame]
 """An output folder's episodes as a pandas DataFrame, one row per episode
 (:func:`gdq_pddl.experiments.results.load_results`)."""
 save_learner: Callable[..., None]
-"""Save a learner's tables, config and generators to a ``.npz`` file, no pickle
-(:func:`gdq_pddl.learners.saving.save_learner`)."""
+"""Save a learner's tables, config, generators and its task's identity to a ``.npz`` file
+at the path given, no pickle (:func:`gdq_pddl.learners.saving.save_learner`)."""
 load_learner: Callable[..., saving.TabularLearner]
-"""A learner saved by ``save_learner``, ready to continue bit-identically
-(:func:`gdq_pddl.learners.saving.load_learner`)."""
+"""A learner saved by ``save_learner``, ready to continue bit-identically on the task it was
+saved for (another is refused naming what differs;
+:func:`gdq_pddl.learners.saving.load_learner`)."""
 load_generators: Callable[..., dict]
 """The random generators saved beside a learner
 (:func:`gdq_pddl.learners.saving.load_generators`)."""

@@ -54,6 +54,12 @@ def read_text(path: str | Path, fail: Callable[[str, str], GdqError]) -> str:
                    f"offset {exc.start}); save it as UTF-8") from None
 
 
+def text_hash(text: str) -> str:
+    """``sha256:<hex>`` of ``text`` in UTF-8 (what :func:`file_hash` gives of its file, where
+    the file has no byte-order mark)."""
+    return "sha256:" + hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
 def file_hash(path: str | Path) -> str:
     """``sha256:<hex>`` of the file's bytes (``missing`` when it cannot be read)."""
     try:

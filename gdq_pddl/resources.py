@@ -7,12 +7,13 @@ yours wins); any other is a shipped name, an unknown one an error listing them.
 
 from __future__ import annotations
 
+import os
 import re
 from importlib.resources import files
 from importlib.resources.abc import Traversable
 from pathlib import Path
 
-from gdq_pddl.errors import PDDLError, PlanningError
+from gdq_pddl.errors import ConfigError, PDDLError, PlanningError
 from gdq_pddl.inputs import read_text
 
 
@@ -63,8 +64,20 @@ def is_shipped_name(value: str | Path) -> bool:
             and not path.is_file())
 
 
+def check_name_or_path(kind: str, value: object, also: str = "") -> None:
+    """Refuse (:class:`ConfigError`, naming ``kind``) a ``value`` that is neither a string
+    nor a path: ``domain=123`` is a type error of the caller's, said in one line (``also``:
+    what else the caller takes, as ", or a World")."""
+    if not isinstance(value, (str, os.PathLike)) or \
+            not isinstance(os.fspath(value), str):
+        raise ConfigError(f"{kind}={value!r}: expected the name of a shipped {kind} or a "
+                          f"file's path (a str or an os.PathLike){also}, got "
+                          f"{type(value).__name__}")
+
+
 def resolve(kind: str, value: str | Path) -> Path:
     """The file ``value`` means for ``kind`` (PlanningError for an unknown name)."""
+    check_name_or_path(kind, value)
     if not is_shipped_name(value):
         return Path(value)
     found = _shipped_files(kind).get(str(value))
@@ -78,6 +91,9 @@ def resolve_pddl(domain: str | Path, problem: str | Path, dynamics: str | Path |
                  ) -> tuple[Path, Path, Path | None]:
     """:func:`resolve` a domain, a problem and a dynamics file; a shipped domain without
     ``dynamics`` gets the shipped dynamics of its name when there is one."""
+    for kind, value in (("domain", domain), ("problem", problem), ("dynamics", dynamics)):
+        if value is not None or kind != "dynamics":
+            check_name_or_path(kind, value)
     if dynamics is None and is_shipped_name(domain) and str(domain) in _shipped_files(
             "dynamics"):
         dynamics = str(domain)

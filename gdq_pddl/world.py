@@ -16,7 +16,7 @@ from typing import Any
 from gdq_pddl.dynamics import Checks, CostDist, read_toml
 from gdq_pddl.errors import WorldError
 from gdq_pddl.inputs import read_text
-from gdq_pddl.resources import is_shipped_name, resolve, world_text
+from gdq_pddl.resources import check_name_or_path, is_shipped_name, resolve, world_text
 from gdq_pddl.spaces import VERBS
 from gdq_pddl.world_types import DOOR_VERBS, Door, Task, World, component, office_problem
 
@@ -64,6 +64,7 @@ def as_world(world: str | Path | World | None) -> World:
         return load_world(None)
     if isinstance(world, World):
         return world
+    check_name_or_path("world", world, ", or a World")
     if is_shipped_name(world):
         resolve("world", world)  # an unknown name: the error listing the shipped ones
         return builtin_world(str(world))

@@ -133,6 +133,8 @@ def _facts(info: dict) -> list[str]:
                   f"(rows of the learners' tables), the knowledge's distances by the "
                   f"heuristic's estimates (from the start: {info.get('estimate_from_start')} "
                   f"actions); {info.get('actions')} ground actions"]
+        if info.get("explored_because"):
+            states.append(f"- why online: {info['explored_because']}")
     else:
         states = [f"- learner: {info.get('states')} states (every reachable planner state), "
                   f"{info.get('actions')} actions (ground actions)",
@@ -145,6 +147,34 @@ def _facts(info: dict) -> list[str]:
             *(["- returns on the problem's own scale, as the IPPC scores them: its rewards "
                "minus its costs, the goal reward once at the goal, no penalty for a failed "
                "or late end"] if info.get("reward_scale") == "problem" else []), ""]
+
+
+STEP_LIMIT_GAP = 0.1
+"""The report says the step limit makes V* far below what the goal is worth when the
+most probability of reaching the goal with no limit passes the most within the limit
+by at least this."""
+
+
+def goal_lines(info: dict) -> list[str]:
+    """What V* means in probabilities (``optimal.json``'s ``goal_*`` facts, from
+    :func:`~gdq_pddl.envs.solve.goal_chances`), and whether the step limit cuts the goal
+    off; none where they were not computed."""
+    if "goal_within_limit" not in info:
+        return []
+    limit, unlimited = info.get("step_limit"), info["goal_no_limit"]
+    exact = "" if info.get("goal_no_limit_exact") else "at least "
+    lines = [f"The goal: V*'s policy reaches it with probability "
+             f"{info['goal_v_star_policy']:.3f} within the step limit of {limit} actions, "
+             f"the best policy for the goal with {info['goal_within_limit']:.3f}; with no "
+             f"step limit the goal can be reached with probability {exact}{unlimited:.3f} "
+             "(the most any policy has, value iteration on the same true model)."]
+    if unlimited - info["goal_within_limit"] >= STEP_LIMIT_GAP:
+        lines.append(f"The step limit makes V* far below what the goal is worth: with no "
+                     f"limit the goal is reached with probability {exact}{unlimited:.3f}, "
+                     f"within {limit} actions at most {info['goal_within_limit']:.3f}; an "
+                     "episode cut off by the limit counts as a failure (V*, the returns "
+                     "and the success rates all count it so).")
+    return lines
 
 
 def write_task(w: Writer, exp: str, task: str) -> None:
@@ -161,6 +191,9 @@ def write_task(w: Writer, exp: str, task: str) -> None:
     facts += [f"{n} episodes per run, last 10% = the final {t}"
               for n, t in sorted(set(zip(table["episodes"], table["tail"], strict=True)))]
     w.add("; ".join(facts) + ".", "")
+    chances = goal_lines(optimal_entry(study.optimal, task))
+    if chances:
+        w.add(*chances, "")
     best = table["mean"].idxmax() if table["mean"].notna().any() else None
     w.table([[f"**{m}**" if m == best else m, int(s.runs), f"{number(s['mean'])} ({number(s.se)})",
               f"{number(s['last'])} ({number(s.last_se)})", pct(s.success),

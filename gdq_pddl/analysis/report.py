@@ -15,7 +15,7 @@ from gdq_pddl.analysis.tables import make_tables
 from gdq_pddl.analysis.writer import ReportOptions, Writer
 from gdq_pddl.errors import ResultsError
 from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
-from gdq_pddl.experiments.results import load_config
+from gdq_pddl.experiments.results import load_config, unfinished
 from gdq_pddl.outputs import write_text
 
 SECTIONS = (generic.write_header, generic.write_methods, sections.write_ground_truth,
@@ -74,6 +74,9 @@ def make_report(out_dir: str | Path, command: str | None = None) -> list[Path]:
                                   for e in config.experiments):
         return make_pairs_report(out)
     if not (out / "episodes.csv").is_file():
+        stopped = unfinished(out)
+        if stopped is not None:
+            raise stopped
         raise ResultsError(f"{out} has no episodes.csv: is it an output folder of gdq-pddl "
                            "run, switch, robot, reproduce, knowledge or pairs?")
     if any(e.get("knowledge") for e in config.experiments):

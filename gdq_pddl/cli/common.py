@@ -228,6 +228,11 @@ def office_report(out: Path) -> str:
         (f"; read {report}" if report else "")
 
 
+def out_folder(args: argparse.Namespace, name: str) -> Path:
+    """--out, or by default ``results/<safe name>``."""
+    return args.out or Path("results") / safe_name(name)
+
+
 def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
             report: Callable[[Path], str] = office_report, results: str = "episodes.csv",
             **run_kw) -> int:
@@ -236,7 +241,7 @@ def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
     if args.address is not None and args.executor != "ray":
         raise ConfigError("--address is the Ray cluster's address: it needs --executor ray "
                           f"(the executor is {args.executor})")
-    out = args.out or Path("results") / safe_name(name)
+    out = out_folder(args, name)
     check_sizes(experiments, args.jobs or 1)  # the runs first: their message names options
     if not args.no_report:
         check_report_size(experiments)

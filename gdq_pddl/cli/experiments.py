@@ -7,6 +7,7 @@ import argparse
 import shlex
 import sys
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 from gdq_pddl.cli.common import (
@@ -18,6 +19,7 @@ from gdq_pddl.cli.common import (
     execute,
     experiment_kw,
     load_world_checked,
+    out_folder,
     pddl_args,
     pddl_files,
     refuse_given,
@@ -36,8 +38,10 @@ from gdq_pddl.experiments import (
     robot_experiment,
     switch_experiment,
 )
+from gdq_pddl.experiments.collect import collect
 from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS, knowledge_experiments, world_name
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, SCALE_METHODS
+from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.outputs import output_folder
 
@@ -89,23 +93,30 @@ def _run_pddl(args: argparse.Namespace) -> int:
                        "shipped domain (and --dynamics for a STRIPS domain of your own)")
     files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
              determinisation(args))
+    explore = args.explore
+    because = "`--explore online` was given"  # why a problem is explored online
     try:  # check the files (and size) before any worker
         instance = load_pddl_instance(files)
-        if args.explore == "online":
+        if args.resume:  # as the run went, or refused, before any enumeration
+            explore = resumed_exploration(out_folder(args, f"run-{instance.name}"), explore)
+            if explore != args.explore:
+                because = "the run resumed went online under `--explore auto`"
+        if explore == "online":
             files = (*files, "online")
             instance = OnlineInstance(instance)  # its own checks
         else:
-            if args.explore == "auto" and instance.ppddl:  # it can go online
+            if explore == "auto" and instance.ppddl:  # it can go online
                 instance.graph_or_give_up()
             instance.model  # noqa: B018
     except (MemoryError, TooManyStates) as exc:  # past the budget, or a `ulimit -v`
-        if args.explore == "auto" and load_pddl_instance(files).ppddl and \
+        if explore == "auto" and load_pddl_instance(files).ppddl and \
                 isinstance(exc, (TooManyStates, SizeError)):
             files = (*files, "online")
             instance = OnlineInstance(load_pddl_instance(files[:4]))
             print(f"gdq-pddl: {exc}\ngdq-pddl: so {problem} is explored online: its states "
                   "are found as episodes reach them, and V* is not computed (--explore)",
                   file=sys.stderr)
+            because = f"`--explore auto` found that its states do not fit: {exc}"
         elif isinstance(exc, (SizeError, TooManyStates)):
             raise
         else:
@@ -117,7 +128,9 @@ def _run_pddl(args: argparse.Namespace) -> int:
               "ends such a round at turn 0", file=sys.stderr)
     kw = experiment_kw(args)
     exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files, **kw)
-    return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners)
+    return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners,
+                   collect=partial(collect, online_facts={"explored_because": because}),
+                   options={"explore": args.explore})
 
 
 def register_switch(sub) -> None:

@@ -10,6 +10,7 @@ subclasses are the two representations of an instance's true model:
 from __future__ import annotations
 
 import operator
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -78,11 +79,14 @@ class CompiledEnv(gym.Env[int, int]):
         Where the goal holds at the start the episode is already over: ``info["cause"]``
         is ``"goal"`` and :meth:`step` raises ``ResetNeeded``."""
         super().reset(seed=seed)
+        if options is not None and not isinstance(options, Mapping):
+            raise ConfigError(f"reset options: expected a dict such as {{\"start\": ...}}, got "
+                              f"{type(options).__name__} {options!r}")
         unknown = [k for k in options or {} if k not in RESET_OPTIONS]
         if unknown:
             raise ConfigError(f"reset options: unknown key {unknown[0]!r} (known: "
                               f"{', '.join(RESET_OPTIONS)})")
-        self.instance = self._given.restarted(**options) if options else self._given
+        self.instance = self._given.restarted(**dict(options)) if options else self._given
         self._restart()
         # A start where the goal holds is over before its first action, as in mdpsim:
         # info's cause says "goal" and step() asks for a new reset.

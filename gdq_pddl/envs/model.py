@@ -222,13 +222,14 @@ def ground_outcomes(task: GroundTask, dynamics: Dynamics) -> tuple[list[Outcomes
 
 def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDist],
                        pairs: Iterable[tuple[int, dict[tuple, float]]] | tuple | None = None,
-                       gains: bool = False) -> ModelArrays:
+                       gains: bool = False, own_scale: bool = False) -> ModelArrays:
     """The true model of ``space`` under ``dynamics`` as :class:`ModelArrays` (``costs``:
     one per learner action): for each (state, offered action) pair, the outcomes of the
     ground action O maps to it that works there (:func:`slip_outcomes`), else a no-op.
     ``pairs`` replaces them (a PPDDL domain's outcomes are its own; a pair it does not
-    yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, on the
-    problem's own scale), or gives them as rows already merged and in pair order
+    yield is a no-op; ``gains``: their keys are ``(next, stuck, reward)``, the reward
+    each outcome earns besides the action's cost; kept on the goal scale only where one is
+    not 0), or gives them as rows already merged and in pair order
     (``(pair index, probability, [next, stuck, reward...])`` arrays); pair indices are
     ``state * width + column`` (:mod:`gdq_pddl.envs.step`)."""
     outcomes, schema_of = ground_outcomes(space.task, dynamics)
@@ -258,12 +259,14 @@ def compile_true_model(space: StateSpace, dynamics: Dynamics, costs: list[CostDi
             (np.int64, np.bool_, np.float64) if gains else (np.int64, np.bool_))
         row_pair = np.repeat(np.arange(n_pairs), np.diff(ptr))
     ptr, prob, (nxt, stuck, *gain) = with_noops(row_pair, prob, fields, n_pairs, n_a, offered)
+    if gains and not own_scale and not gain[0].any():  # the goal scale's step is -cost
+        gain = []
     model = ModelArrays(
         n_actions=space.n_actions, n_doors=space.n_doors, r_max=float(dynamics.r_max),
         step_limit=int(dynamics.step_limit), ptr=ptr, prob=prob, next=nxt, stuck=stuck,
         **cost_arrays(costs), obs_of=space.obs_of, pos_of=space.pos_of,
-        area_of_pos=space.area_of_pos, **({"gain": gain[0]} if gains else {}),
-        **({} if offered is None else {"acts": offered}))
+        area_of_pos=space.area_of_pos, **({"gain": gain[0]} if gain else {}),
+        **({} if offered is None else {"acts": offered}), own_scale=bool(own_scale))
     for array in model:
         if isinstance(array, np.ndarray):
             array.setflags(write=False)

@@ -22,6 +22,7 @@ observation map O (:class:`~gdq_pddl.abstraction.OfficeAbstraction`). ``Office-v
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -40,10 +41,16 @@ from gdq_pddl.abstraction.prior import (
 from gdq_pddl.abstraction.routes import route_plan_table
 from gdq_pddl.envs.base import CompiledEnv
 from gdq_pddl.envs.compact import CompactModel, compact_step, compile_compact, observe_state
+from gdq_pddl.envs.identity import world_entry
 from gdq_pddl.envs.model import compile_model, full_state, per_object
 from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.render import Frame, MapPainter, ansi
-from gdq_pddl.envs.solve import expected_area_visits, optimal_value, relevant_areas
+from gdq_pddl.envs.solve import (
+    expected_area_visits,
+    goal_chances,
+    relevant_areas,
+    solve_task,
+)
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import ModelArrays
 from gdq_pddl.errors import ConfigError, WorldError
@@ -120,6 +127,24 @@ class OfficeInstance:
     def name(self) -> str:
         """The task's name, e.g. ``"C"``."""
         return self.task.name
+
+    def identity(self) -> dict[str, str]:
+        """What this task is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its world (the file by its hash, as first
+        asked), the task, and the learner's states and actions (a digest of their names:
+        what the numbers mean)."""
+        return dict(self._identity)
+
+    @cached_property
+    def _identity(self) -> dict[str, str]:
+        sp = self.spaces
+        names = [sp.state_name(s) for s in range(sp.n_states)] + \
+            [sp.action_name(a) for a in range(sp.n_actions)]
+        digest = hashlib.sha256("\n".join(names).encode()).hexdigest()
+        return {"world": world_entry(self.world.source),
+                "task": f"{self.task.name} ({self.task.start} -> {self.task.goal})",
+                "learner states": f"{sp.n_states} states, {sp.n_actions} actions "
+                                  f"sha256:{digest}"}
 
     @property
     def step_limit_key(self) -> tuple[str, str]:
@@ -263,11 +288,16 @@ class OfficeInstance:
         return office_plan_table(self.world, self.task.goal, planner, tolerance, kind)
 
     def optimal(self) -> dict[str, Any]:
-        """The task's ground truth: V*, the relevant areas (visited with probability
-        >= 0.05 by the optimal policy), the paper's irrelevant ones, expected visits."""
+        """The task's ground truth: V* with the goal probabilities that say what it means
+        (:func:`~gdq_pddl.envs.solve.goal_chances`), the relevant areas (visited with
+        probability >= 0.05 by the optimal policy), the paper's irrelevant ones, expected
+        visits."""
         visits = expected_area_visits(self.world, self.task)
+        model = self.model
+        solution, start = solve_task(self.world, self.task, model)
         return {"start": self.task.start, "goal": self.task.goal,
-                "v_star": optimal_value(self.world, self.task),
+                "v_star": float(solution.V[0, start]), "step_limit": model.step_limit,
+                **goal_chances(model, solution.goal_pos, start, solution),
                 "relevant_areas": list(relevant_areas(self.world, self.task, min_visits=0.05)),
                 "irrelevant_areas_paper": list(self.task.irrelevant_areas),
                 "expected_area_visits": {str(a): v for a, v in visits.items()}}

@@ -19,8 +19,10 @@ def one_state_model(graph: LazyGraph, x: int, offered: np.ndarray, constants: Mo
     """The true model of expanded state ``x`` alone: its row is full state 0, its
     successors 1, 2, ...; ``offered`` its columns' ground actions (``[0]`` at a dead end,
     whose column changes nothing, as an enumerated model's no-op); costs, ``r_max`` and
-    the step limit from ``constants``; ``own``: with the outcomes' rewards. Returns it and
-    the graph states of its full states."""
+    the step limit from ``constants`` (and its scale, :attr:`ModelArrays.own_scale`);
+    ``own``: with the outcomes' rewards even where all are 0 (on the goal scale they are
+    kept only where one is not, as :func:`~gdq_pddl.envs.model.compile_true_model` keeps
+    them). Returns it and the graph states of its full states."""
     column, prob, nxt, stuck, gain = graph.outcomes(x)
     states, local = np.unique(np.r_[x, nxt], return_inverse=True)
     order = np.r_[np.flatnonzero(states == x), np.flatnonzero(states != x)]
@@ -36,7 +38,7 @@ def one_state_model(graph: LazyGraph, x: int, offered: np.ndarray, constants: Mo
         ptr=ptr, prob=prob, next=nxt, stuck=stuck,
         obs_of=np.zeros(len(states), dtype=np.int64),
         pos_of=np.where(graph.is_goal[states], GOAL_POS, 0).astype(np.int64),
-        **({"gain": gain} if own else {}), acts=offered[None, :]), states
+        **({"gain": gain} if own or gain.any() else {}), acts=offered[None, :]), states
 
 
 class RowMasks:

@@ -34,6 +34,7 @@ inert goal rows.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import replace
 from functools import cached_property
@@ -46,20 +47,31 @@ from gdq_pddl.abstraction.prior import NO_CHANGE, PriorModel, dead_chances, prio
 from gdq_pddl.dynamics import CostDist, Dynamics
 from gdq_pddl.envs.model import cost_arrays
 from gdq_pddl.envs.one_state import RowMasks, one_state_model
-from gdq_pddl.envs.pddl_checks import MIN_STEP_LIMIT, STEP_LIMIT_FACTOR
+from gdq_pddl.envs.pddl_checks import (
+    MIN_STEP_LIMIT,
+    STEP_LIMIT_FACTOR,
+    check_step_rewards,
+    limit_key,
+)
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance, word_facts
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.errors import ConfigError, PlanningError, WorldError
+from gdq_pddl.limits import MAX_TOLERANCE, check_real, human_bytes
 from gdq_pddl.pddl.lazy import LazyGraph
+from gdq_pddl.pddl.reachable import state_bytes, table_budget
 from gdq_pddl.planning.base import length_bound
-from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for
+from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for, hmax_for
 
 ESTIMATES = {"h_add": hadd_for, "h_FF": hff_for}
 """The distance estimates online exploration can read, by name."""
 
 ESTIMATE = "(estimate)"
 """The name of the estimate action (ground action ``n_ops``: see the module docstring)."""
+
+MAX_ESTIMATE_WEIGHT = 100.0
+"""The largest ``estimate_weight``: a state not reached yet stands at most 100 x its
+estimate from the goal (and no more chain rows than the table budget holds)."""
 
 FIRST_ROWS = 1024
 """Rows allocated at first (doubled when full)."""
@@ -88,8 +100,8 @@ class OnlineInstance:
         if estimate is not None and estimate not in ESTIMATES:
             raise ConfigError(f"estimate {estimate!r}: expected one of "
                               f"{', '.join(ESTIMATES)}, or None")
-        if not math.isfinite(estimate_weight) or estimate_weight < 1.0:
-            raise ConfigError(f"estimate_weight {estimate_weight!r}: expected a number >= 1")
+        check_real("estimate_weight", estimate_weight, 1.0, MAX_ESTIMATE_WEIGHT)
+        check_real("darling_tolerance", darling_tolerance, 0.0, MAX_TOLERANCE)
         if not base.ppddl:
             raise PlanningError(f"{base.problem.source_domain.source}: online exploration "
                                 "reads a PPDDL domain's own outcomes; a STRIPS domain with a "
@@ -97,18 +109,21 @@ class OnlineInstance:
         self.base = base
         self.task = base.problem.learner_task
         self.own = base.reward_scale == "problem"
-        self.graph = LazyGraph(self.task, gains=self.own)
+        self.graph = LazyGraph(self.task)  # with gains: costs inside effects, both scales
         self.heuristic = ESTIMATES[estimate or "h_add"](self.task)
+        self.heuristic_name = estimate or "h_add"
         self.estimates = estimate is not None
         self.estimate_weight = float(estimate_weight)
         self.darling_tolerance = float(darling_tolerance)
         self.n_ops = len(self.task.ops)
         h0 = int(self.heuristic.many(self.graph.words[:1])[0])
         if h0 == INFINITE:
-            raise PlanningError(f"{self.source}: the goal cannot be reached from the initial "
-                                "state even ignoring every delete effect")
+            raise PlanningError(_no_way(base))
         self.h_start = h0
         self.dynamics = _dynamics(base, h0) if dynamics is None else dynamics
+        self._check_step_limit(h0)
+        self._check_chain(h0)
+        check_step_rewards(base.problem, base.costs, self.dynamics.r_max, self.own)
         self.costs = base.costs + [CostDist("const", 0.0 if self.own else 1.0)]
         self._cost_arrays = cost_arrays(self.costs)
         self.mean_cost = expected_costs(self.model)
@@ -129,6 +144,33 @@ class OnlineInstance:
         self._found(np.array([0]))
         self._row(0)
 
+    def _check_step_limit(self, h0: int) -> None:
+        """Refuse, as the enumerated run does (:func:`~gdq_pddl.envs.pddl_checks.
+        check_step_limit`), a step limit below h_max from the initial state, a lower bound
+        on the knowledge's shortest plan (h_add and h_FF are never below h_max: only a
+        limit below ``h0`` needs it computed)."""
+        limit = self.dynamics.step_limit
+        if limit >= h0:
+            return
+        bound = hmax_for(self.task)(self.graph.mask(0), self.task.goal_pos)
+        if bound > limit:
+            raise WorldError(*limit_key(self.base.problem, self.dynamics),
+                             f"{limit} is less than the shortest plan of {self.source} (at "
+                             f"least {bound} actions: h_max from the initial state, a lower "
+                             "bound): no episode can reach the goal")
+
+    def _check_chain(self, h0: int) -> None:
+        """Refuse an ``estimate_weight`` whose chain rows for the initial state's estimate
+        alone (``ceil(w h0)``, each as wide as the actions) pass the table budget."""
+        rows = math.ceil(self.estimate_weight * h0)
+        need = rows * state_bytes(self.n_ops + 1)
+        if need > table_budget():
+            raise ConfigError(f"estimate_weight {self.estimate_weight:g}: the initial state's "
+                              f"estimate ({h0} actions) would stand {rows:,} chain rows from "
+                              f"the goal, {human_bytes(need)} of tables, past the table "
+                              f"budget of {human_bytes(table_budget())}; give a smaller "
+                              "weight (1 reads the estimates as they are)")
+
     # -- what the learners' context reads (the Instance protocol of learners.context) -----
     name = property(lambda self: self.base.name)
     source = property(lambda self: self.base.source)
@@ -141,6 +183,24 @@ class OnlineInstance:
     learner_goal = property(lambda self: self.goal)
     r_max = property(lambda self: float(self.dynamics.r_max))
     goal_pos = GOAL_POS
+
+    def identity(self, rows: int | None = None) -> dict[str, str]:
+        """What this instance is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its problem's (:meth:`PDDLInstance.identity`),
+        how it is explored, and the states its rows number now (a digest of each row's
+        state, or of its estimate): another instance of the same files numbers the states
+        its own episodes reached in their order. ``rows``: of its first ``rows`` rows
+        only (rows never move: a policy taken earlier numbers a prefix of them)."""
+        n = self.n_rows if rows is None else min(int(rows), self.n_rows)
+        real = self.state_of_row[:n] >= 0
+        digest = hashlib.sha256(np.packbits(real).tobytes())
+        digest.update(np.ascontiguousarray(self.graph.words[self.state_of_row[:n][real]])
+                      .tobytes())
+        digest.update(np.ascontiguousarray(self.dist[:n][~real]).tobytes())
+        estimate = "none" if not self.estimates else \
+            f"{self.heuristic_name} x {self.estimate_weight:g}"
+        return {**self.base.identity(), "explored": f"online (estimate {estimate})",
+                "states": f"{n} rows sha256:{digest.hexdigest()}"}
 
     @property
     def max_successors(self) -> int:
@@ -162,7 +222,8 @@ class OnlineInstance:
                            next=np.zeros(0, dtype=np.int64), stuck=np.zeros(0, dtype=np.bool_),
                            **self._cost_arrays, obs_of=np.zeros(0, dtype=np.int64),
                            pos_of=np.zeros(0, dtype=np.int64),
-                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64))
+                           area_of_pos=np.zeros(GOAL_POS + 1, dtype=np.int64),
+                           own_scale=self.own)
 
     def plan_table(self, planner: str = "graph", tolerance: float = 0.0,
                    kind: str = "all") -> PlanTable:
@@ -258,14 +319,50 @@ class OnlineInstance:
                           "state (its states are not enumerated)")
 
     def optimal(self) -> dict[str, Any]:
-        """What is known without enumerating: no V*, the estimate from the start."""
+        """What is known without enumerating: no V* (value iteration needs every state),
+        a bound on it where one is cheap (:meth:`v_star_bound`), the estimate from the
+        start."""
+        bound, why = self.v_star_bound()
         return {"determinisation": self.determinisation, "r_max": self.dynamics.r_max,
                 "reward_scale": self.reward_scale, "step_limit": self.dynamics.step_limit,
                 "v_star": None, "v_star_note": "not computed: the problem was explored "
-                "online (its states are not enumerated)", "explored": "online",
+                f"online (its states are not enumerated, and value iteration needs them "
+                f"all); {why}", "v_star_upper_bound": bound, "explored": "online",
                 "estimate_from_start": self.h_start, "shortest_plan": None,
                 "states": None, "actions": self.n_ops, "relevant_areas": [],
                 "irrelevant_areas_paper": [], "expected_area_visits": {}}
+
+    def v_star_bound(self) -> tuple[float | None, str]:
+        """``(bound, what it is)``: an upper bound on V* from the start, or None and why
+        there is none. No episode reaches the goal in fewer actions than h_max of the
+        initial state (the delete relaxation's fewest actions, over every outcome of
+        reality: a lower bound on the actions of any outcome sequence that reaches the
+        goal), and each action before the goal's costs at least the least mean cost c:
+        V* <= max(r_max - (h_max - 1) c, -r_max), and -r_max when h_max passes the step
+        limit. Only with the ``all-outcomes`` determinisation (it leaves out only outcomes
+        that change nothing or fail the trial; ``most-likely`` leaves out outcomes that
+        may lead to the goal), and on the library's reward scale (on the problem's own, a
+        step may pay)."""
+        if self.own:
+            return None, ("no cheap bound on V* on the problem's own reward scale (a step "
+                          "may pay)")
+        if self.determinisation != "all-outcomes":  # it leaves out only outcomes that
+            # change nothing or fail the trial, which bring no goal nearer
+            return None, (f"no cheap bound on V*: the {self.determinisation} "
+                          "determinisation leaves some of reality's outcomes out of h_max")
+        h = hmax_for(self.task)(self.task.init, self.task.goal_pos)
+        r_max, limit = self.dynamics.r_max, self.dynamics.step_limit
+        if h == INFINITE or h > limit:
+            return -r_max, (f"V* <= {-r_max:g}: the goal needs at least {h} actions (h_max "
+                            f"of the initial state), more than the step limit of {limit}"
+                            if h != INFINITE else f"V* <= {-r_max:g}: no action sequence "
+                            "reaches the goal even with deletes ignored")
+        c = max(0.0, float(self.mean_cost[:self.n_ops].min())) if self.n_ops else 0.0
+        bound = max(r_max - (h - 1) * c, -r_max)
+        return bound, (f"V* <= {bound:g}: r_max {r_max:g} minus the least mean action cost "
+                       f"{c:g} for each action before the goal's, of at least {h} actions "
+                       "(h_max of the initial state, the delete relaxation over every "
+                       "outcome of reality: no episode reaches the goal sooner)")
 
     # -- rows ----------------------------------------------------------------------------
     def _allocate(self, rows: int, width: int) -> None:
@@ -424,6 +521,19 @@ class OnlineInstance:
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+
+
+def _no_way(base: PDDLInstance) -> str:
+    """Why the relaxation from the initial state never reaches the goal, as it is true of
+    the determinisation the knowledge is (the relaxed actions are its outcomes)."""
+    if base.determinisation == "most-likely":
+        return (f"{base.source}: the most-likely determinisation (the knowledge: each "
+                "action's most likely outcome) has no way to the goal from the initial "
+                "state, even ignoring delete effects, so there is no estimate to explore "
+                "online by (reality's less likely outcomes may still reach it); plan on "
+                "every outcome (--determinisation all-outcomes)")
+    return (f"{base.source}: the goal cannot be reached from the initial state by any "
+            "outcome of positive probability, even ignoring every delete effect")
 
 
 def _not_enumerated():

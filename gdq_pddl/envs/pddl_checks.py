@@ -12,11 +12,12 @@ import math
 import tomllib
 from dataclasses import replace
 
-from gdq_pddl.dynamics import Dynamics, parse_dynamics
+from gdq_pddl.dynamics import CostDist, Dynamics, parse_dynamics
 from gdq_pddl.envs.solve import reality_distances
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.errors import PlanningError, WorldError
-from gdq_pddl.pddl.model import Problem
+from gdq_pddl.errors import PDDLError, PlanningError, WorldError
+from gdq_pddl.limits import MAX_NUMBER
+from gdq_pddl.pddl.model import Atom, Problem
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.reachable import StateGraph
 from gdq_pddl.planning.base import PlanningProblem
@@ -164,3 +165,35 @@ def contradiction(problem: Problem) -> str:
             return f"{lit.atom} and (not {lit.atom})"
     return ""
 
+
+
+NORMAL_SPREAD = 10.0
+"""Standard deviations past its mean that :func:`check_step_rewards` counts a normal cost
+as drawing at most."""
+
+
+def check_step_rewards(problem: PlanningProblem, costs: list[CostDist], r_max: float,
+                       own: bool) -> None:
+    """Refuse, naming the domain file, its action and the bound, a problem one step of
+    which can pay more than :data:`~gdq_pddl.limits.MAX_NUMBER` in size: an outcome's
+    rewards and costs (each within it, all counted: :meth:`~gdq_pddl.pddl.ppddl_effects.
+    GroundOutcome.largest_gain`), the action's cost (``costs``: one per ground action; a
+    uniform one's larger end, a normal one's mean plus :data:`NORMAL_SPREAD` deviations)
+    and, on the problem's own scale (``own``), the goal reward ``r_max`` the step that
+    reaches the goal adds. What the learners take (each reward within that bound) holds
+    then wherever the states are found, enumerated or online."""
+    domain = problem.source_domain
+    for op, cost in zip(problem.learner_task.ops, costs, strict=True):
+        top = max(abs(cost.a), abs(cost.b)) if cost.kind == "uniform" else \
+            abs(cost.a) + NORMAL_SPREAD * abs(cost.b) if cost.kind == "normal" else abs(cost.a)
+        earned = max((o.largest_gain() for o in getattr(op, "outcomes", ())), default=0.0)
+        goal = r_max if own else 0.0
+        if earned + top + goal > MAX_NUMBER:
+            schema = Atom.parse(op.name).predicate
+            line = next((a.line for a in domain.actions if a.name == schema), None)
+            raise PDDLError(domain.source, line or None, f"action {schema}: one step of "
+                            f"{op.name} can pay {earned + top + goal:g} in size (its outcomes' "
+                            f"rewards and costs {earned:g}, its cost {top:g}"
+                            + (f", the goal reward {goal:g}" if own else "") + f"), past "
+                            f"{MAX_NUMBER:g}: the rewards and costs of one step, added up, "
+                            f"must be at most {MAX_NUMBER:g} in size (docs/domains.md)")

@@ -41,6 +41,7 @@ from gdq_pddl.abstraction.prior import (
 )
 from gdq_pddl.dynamics import CostDist, Dynamics, split_action
 from gdq_pddl.envs.base import CompiledEnv
+from gdq_pddl.envs.identity import file_entry
 from gdq_pddl.envs.model import StateSpace, compile_true_model
 from gdq_pddl.envs.pddl_checks import (
     DEFAULT_R_MAX,
@@ -48,6 +49,7 @@ from gdq_pddl.envs.pddl_checks import (
     check_goal,
     check_reality,
     check_step_limit,
+    check_step_rewards,
     default_step_limit,
     limit_key,
     parse_reality,
@@ -57,10 +59,10 @@ from gdq_pddl.envs.solve import value_within
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import ModelArrays, env_act
 from gdq_pddl.errors import ConfigError, PlanningError, WorldError
-from gdq_pddl.inputs import read_text
+from gdq_pddl.inputs import read_text, text_hash
 from gdq_pddl.limits import check_memory
 from gdq_pddl.pddl.outcomes import reality_outcomes
-from gdq_pddl.pddl.ppddl import DETERMINISATIONS, ground_costs
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.reachable import MAX_STATES, PAIR_BYTES, StateGraph, reachable_graph
 from gdq_pddl.planning import get_planner
 from gdq_pddl.planning.base import PlanningProblem
@@ -82,6 +84,9 @@ class PDDLInstance:
     """The most reachable states explored before the problem is refused as too large."""
     start_state: int = 0
     """Where episodes start (0: the problem's initial state; see :meth:`restarted`)."""
+    dynamics_hash: str | None = None
+    """The hash of the dynamics file's text as read (``sha256:<hex>``; None: none given,
+    or an instance not made by :meth:`from_files` or :meth:`from_texts`)."""
 
     @classmethod
     def from_files(cls, domain: str | Path, problem: str | Path,
@@ -94,10 +99,10 @@ class PDDLInstance:
         domain, problem, dynamics = resolve_pddl(domain, problem, dynamics)
         planning = PlanningProblem.from_files(domain, problem,
                                               check_determinisation(determinisation))
-        overlay = None if dynamics is None else parse_reality(
-            read_text(dynamics, lambda src, msg: WorldError(src, "", msg)), planning,
-            str(dynamics))
-        return cls._built(planning, overlay, max_states)
+        text = None if dynamics is None else \
+            read_text(dynamics, lambda src, msg: WorldError(src, "", msg))
+        overlay = None if text is None else parse_reality(text, planning, str(dynamics))
+        return cls._built(planning, overlay, max_states, text)
 
     @classmethod
     def from_texts(cls, domain: str, problem: str, dynamics: str | None = None,
@@ -107,23 +112,37 @@ class PDDLInstance:
         planning = PlanningProblem.from_texts(domain, problem,
                                               determinisation=check_determinisation(determinisation))
         overlay = None if dynamics is None else parse_reality(dynamics, planning)
-        return cls._built(planning, overlay, max_states)
+        return cls._built(planning, overlay, max_states, dynamics)
 
     @classmethod
     def _built(cls, planning: PlanningProblem, overlay: Dynamics | None,
-                 max_states: int | None) -> PDDLInstance:
+               max_states: int | None, dynamics_text: str | None = None) -> PDDLInstance:
         domain = planning.source_domain
         if overlay is None and not domain.probabilistic:
             raise PlanningError(f"{domain.source} is a STRIPS domain: it says what actions do "
                                 "when they work, not how often they do; give its dynamics "
                                 "file (--dynamics), or write its outcomes in PPDDL "
                                 "(docs/domains.md)")
-        return cls(planning, overlay, max_states)
+        return cls(planning, overlay, max_states,
+                   dynamics_hash=None if dynamics_text is None else text_hash(dynamics_text))
 
     @property
     def name(self) -> str:
         """The problem's name."""
         return self.problem.problem.name
+
+    def identity(self) -> dict[str, str]:
+        """What this problem is, as learner and policy files record it
+        (:mod:`~gdq_pddl.envs.identity`): its domain, problem and dynamics files by the
+        hashes of their texts, the problem's name and the planner's determinisation."""
+        hashes = self.problem.text_hashes or (None, None)
+        out = {"domain": file_entry(self.problem.source_domain.source, hashes[0]),
+               "problem": file_entry(self.source, hashes[1]), "problem name": self.name,
+               "dynamics": "none" if self.overlay is None else
+               file_entry(self.overlay.source or "<dynamics>", self.dynamics_hash)}
+        if self.determinisation is not None:
+            out["determinisation"] = self.determinisation
+        return out
 
     @property
     def ppddl(self) -> bool:
@@ -195,8 +214,8 @@ class PDDLInstance:
     def costs(self) -> list[CostDist]:
         """Every ground action's cost: the dynamics file's, else the domain's, else 1 (0 on
         the problem's own reward scale)."""
-        names = [op.name for op in self.problem.learner_task.ops]  # the graph's task
-        stated = ground_costs(self.problem.source_domain, self.problem.problem, names)
+        ops = self.problem.learner_task.ops  # the graph's task
+        names, stated = [op.name for op in ops], [op.cost for op in ops]
         unstated = CostDist("const", 0.0) if self.reward_scale == "problem" else CostDist()
         return [(self.overlay.outcomes(*split_action(name)).cost if self.overlay else None)
                 or (unstated if cost is None else CostDist("const", cost))
@@ -211,9 +230,10 @@ class PDDLInstance:
                      f"applicable ground actions",
                      "make the problem smaller (fewer objects)")
         own = self.reward_scale == "problem"
+        check_step_rewards(self.problem, self.costs, self.dynamics.r_max, own)
         model = compile_true_model(graph_space(self.graph), self.dynamics, self.costs,
-                                   reality_outcomes(self.graph, own) if self.ppddl else None,
-                                   own and self.ppddl)
+                                   reality_outcomes(self.graph) if self.ppddl else None,
+                                   self.ppddl, own)
         if own and not self.ppddl:  # a STRIPS domain's outcomes earn no reward of their own
             model = model._replace(gain=np.zeros(len(model.prob)))
         check_reality(self.problem, self.graph, self.dynamics, model)
@@ -369,9 +389,7 @@ class PDDLInstance:
         if start is None:
             return self
         task, graph = self.graph.task, self.graph
-        facts = {"(" + " ".join(str(f).strip("() ").lower().split()) + ")" for f in
-                 (re.findall(r"\([^()]*\)", start) if isinstance(start, str) else start)}
-        facts -= set(task.statics)
+        facts = start_facts(start) - set(task.statics)
         unknown = sorted(facts - set(task.fact_index))
         s = None if unknown else graph.index.get(task.mask(facts))
         if s is None or graph.is_goal[s]:
@@ -408,6 +426,56 @@ def word_facts(words: np.ndarray, n_facts: int) -> np.ndarray:
     bits = np.unpackbits(np.ascontiguousarray(words, dtype="<u8").view(np.uint8),
                          bitorder="little")
     return bits[:n_facts].astype(np.int8)
+
+
+def start_facts(start: object) -> set[str]:
+    """The fluent facts of a ``reset`` option's ``start``, each written ``(name args)``
+    lower-cased: a string of parenthesised facts as ``render()`` lists them, or a list (a
+    tuple, a set) of strings, one fact each (``"(at c12)"`` or ``"at c12"``). Anything
+    else, or text that is not such facts (unbalanced or nested parentheses, words outside
+    them), is refused with a :class:`ConfigError` saying what it takes."""
+    takes = ("a string of fluent facts as render() lists them, \"(at c12) (open c11)\", or "
+             "a list of such facts")
+    if isinstance(start, str):
+        why = _not_facts(start)
+        if why:
+            raise ConfigError(f"reset options: start {start!r}: {why}; expected {takes}")
+        items = re.findall(r"\(([^()]*)\)", start)
+    elif isinstance(start, (list, tuple, set, frozenset)):
+        items = []
+        for fact in start:
+            if not isinstance(fact, str):
+                raise ConfigError(f"reset options: start {start!r}: {fact!r} (of type "
+                                  f"{type(fact).__name__}) is not a fact; expected {takes}")
+            inner = fact.strip()
+            if inner.startswith("(") and inner.endswith(")"):
+                inner = inner[1:-1]
+            if "(" in inner or ")" in inner or not inner.split():
+                raise ConfigError(f"reset options: start {start!r}: {fact!r} is not one "
+                                  f"fact; expected {takes}")
+            items.append(inner)
+    else:
+        raise ConfigError(f"reset options: start {start!r} is of type "
+                          f"{type(start).__name__}; expected {takes}")
+    return {"(" + " ".join(item.lower().split()) + ")" for item in items}
+
+
+def _not_facts(text: str) -> str:
+    """Why ``text`` is not parenthesised facts with blanks between them ("" if it is)."""
+    depth = 0
+    for i, ch in enumerate(text):
+        if ch == "(":
+            depth += 1
+            if depth > 1:
+                return f"nested parentheses at character {i + 1}"
+        elif ch == ")":
+            depth -= 1
+            if depth < 0:
+                return f"unbalanced parentheses: a ')' without its '(' at character {i + 1}"
+        elif depth == 0 and not ch.isspace():
+            word = text[i:].split("(")[0].split()[0]
+            return f"text outside ( ) at character {i + 1}: {word!r}"
+    return "unbalanced parentheses: a '(' never closed" if depth else ""
 
 
 def graph_space(graph: StateGraph) -> StateSpace:

@@ -7,21 +7,26 @@ An episode lasts at most ``step_limit`` actions and running out of them is a fai
 - ``V[t, fs]``: the optimal expected return from full state ``fs`` with ``t`` actions
   already taken (``V[step_limit, :] = 0``; states at the goal are worth 0: the episode
   is over);
-- ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index).
+- ``Q[t, fs, a]`` and ``policy[t, fs]`` (greedy action, ties to the lowest index);
+- ``goal[fs]``: the probability that this policy reaches the goal within the step limit
+  from ``fs`` at step 0 (what V* means in probabilities: :func:`goal_chances` adds the
+  most any policy has within the limit and with none, :mod:`gdq_pddl.envs.goal_chance`).
 
 Expected rewards mirror :func:`gdq_pddl.envs.step.env_step` outcome by outcome: a stuck
 outcome gives -r_max and ends the episode; reaching the goal gives +r_max and ends it;
-any other outcome of the last allowed action gives -r_max; otherwise the reward is minus
-the mean cost of the action (for a normal cost, the mean of the draw clipped at 0).
-On the problem's own scale (:attr:`~gdq_pddl.envs.step.ModelArrays.gain`), every outcome
-pays its reward minus the cost, and reaching the goal adds r_max once. Returns are
+any other outcome of the last allowed action gives -r_max; otherwise the reward is the
+outcome's gain (:attr:`~gdq_pddl.envs.step.ModelArrays.gain`: a PPDDL file's rewards and
+costs inside its effects) minus the mean cost of the action (for a normal cost, the mean
+of the draw clipped at 0). On the problem's own scale
+(:attr:`~gdq_pddl.envs.step.ModelArrays.own_scale`), every outcome pays its gain minus
+the cost, and reaching the goal adds r_max once. Returns are
 undiscounted by default (``gamma=1``), i.e. the expected cumulative reward
 per episode that the experiments report.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -29,6 +34,7 @@ from scipy.sparse.csgraph import shortest_path
 from scipy.special import ndtr  # the normal CDF (scipy.stats costs 0.6 s of import)
 
 from gdq_pddl.dynamics import COST_KINDS
+from gdq_pddl.envs.goal_chance import best_within_limit, best_without_limit
 from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.step import ModelArrays, width_of
 from gdq_pddl.limits import check_memory, human_bytes, slow_progress
@@ -47,6 +53,9 @@ class Solution:
     policy: np.ndarray  # int64[step_limit, n_full]
     goal_pos: int
     gamma: float
+    goal: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """float64[n_full]: the probability that the policy (``policy``, ties to the lowest
+    index) reaches the goal within the step limit from each full state at step 0."""
 
 
 def expected_costs(model: ModelArrays) -> np.ndarray:
@@ -111,10 +120,13 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
     # Reward of ending outcomes (stuck, goal), and of the rest on the last allowed step.
     ending = model.stuck | at_goal
     end_reward = np.where(model.stuck, -r, np.where(at_goal, r, -r))
-    if model.gain.size:  # the problem's own rewards (step.file_step): no penalty
+    if model.gain.size:  # what each outcome earns besides the action's cost
         cost = cost - model.gain
+    if model.own_scale:  # the problem's own rewards (step.file_step): no penalty
         end_reward = -cost + np.where(at_goal & ~model.stuck, r, 0.0)
     goal_states = model.pos_of == goal_pos
+    reached = (at_goal & ~model.stuck).astype(np.float64)  # the goal, by this outcome
+    goal = np.zeros(n_full)  # the policy's goal probability from step t + 1 on
 
     V = np.zeros((limit + 1, n_full))
     Q = np.empty((limit if tables else 0, n_full, width))
@@ -128,11 +140,35 @@ def solve(model: ModelArrays, goal_pos: int, gamma: float = 1.0,
         q[live] = np.add.reduceat(model.prob * value, starts)
         by_state = q.reshape(n_full, width)
         best = by_state.max(axis=1)
+        choice = np.argmax(by_state >= best[:, None] - TIE_TOLERANCE, axis=1)
         if tables:
             Q[t] = by_state
-            policy[t] = np.argmax(by_state >= best[:, None] - TIE_TOLERANCE, axis=1)
+            policy[t] = choice
         V[t] = np.where(goal_states, 0.0, best)
-    return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma))
+        goal = _chosen_goal(model, choice, width, reached,
+                            None if t == limit - 1 else goal, goal_states)
+    return Solution(V=V, Q=Q, policy=policy, goal_pos=int(goal_pos), gamma=float(gamma),
+                    goal=goal if limit else goal_states.astype(np.float64))
+
+
+def _chosen_goal(model: ModelArrays, choice: np.ndarray, width: int, reached: np.ndarray,
+                 later: np.ndarray | None, goal_states: np.ndarray) -> np.ndarray:
+    """float64[n_full]: each state's probability of the goal when it takes its column
+    ``choice`` now: an outcome that reaches the goal (``reached``) counts 1, one that ends
+    the episode otherwise (stuck) 0, any other the ``later`` probability of the state it
+    leads to (None: the last step, when every outcome ends the episode)."""
+    pair = np.arange(len(choice)) * width + choice
+    lo = model.ptr[pair]
+    length = model.ptr[pair + 1] - lo
+    idx = np.repeat(lo - np.cumsum(length) + length, length) + np.arange(int(length.sum()))
+    row = np.repeat(np.arange(len(choice)), length)
+    chance = reached[idx]
+    if later is not None:
+        goes_on = ~model.stuck[idx] & (chance == 0)
+        chance[goes_on] = later[model.next[idx][goes_on]]
+    out = np.bincount(row, weights=model.prob[idx] * chance, minlength=len(choice))
+    out[goal_states] = 1.0
+    return out
 
 
 @dataclass(frozen=True)
@@ -155,24 +191,44 @@ def value_within(model: ModelArrays, goal_pos: int, start: int,
     "v_star_upper_bound": a bound on V* when not computed}``. The bound: no episode
     reaches the goal in fewer actions than reality's shortest path L (from
     :func:`reality_distances`) and each action before the last costs at least the least
-    mean cost c, so V* <= max(r_max - (L - 1) c, -r_max). On the problem's own reward
-    scale (``model.gain``) no such bound holds: None."""
+    mean cost c (less the most an outcome earns, ``model.gain``), so V* <= max(r_max -
+    (L - 1) c, -r_max). On the problem's own reward scale, or where a step may pay, no
+    such bound holds: None."""
     need, work = solve_bytes(model, tables=False), model.step_limit * len(model.prob)
     if need <= budget.bytes and work <= budget.work:
-        return {"v_star": float(solve(model, goal_pos, tables=False).V[0, start])}
+        solution = solve(model, goal_pos, tables=False)
+        return {"v_star": float(solution.V[0, start]),
+                **goal_chances(model, goal_pos, start, solution, budget)}
     past = (f"not computed: value iteration would need {human_bytes(need)} and {work:.2g} "
             f"outcome updates, past the budget ({human_bytes(budget.bytes)}, "
             f"{budget.work:.2g}: gdq_pddl.envs.solve.VSTAR_BUDGET)")
-    if model.gain.size:  # rewards of the file's own: a step may pay, no cheap bound
+    paid = float(model.gain.max()) if model.gain.size else 0.0  # the most an outcome pays
+    least = float(expected_costs(model).min())
+    if model.own_scale or paid > least:  # a step may pay: no cheap bound
         return {"v_star": None, "v_star_note": past, "v_star_upper_bound": None}
     fewest = reality_distances(model, start)[model.pos_of == goal_pos].min(initial=np.inf)
-    c = max(0.0, float(expected_costs(model).min()))
+    c = max(0.0, least - paid)
     bound = -model.r_max if np.isinf(fewest) else max(model.r_max - (fewest - 1) * c,
                                                       -model.r_max)
     note = (f"{past}; V* <= {bound:g} "
             f"(r_max minus the least cost of the {int(fewest) if np.isfinite(fewest) else 'no'}"
             " actions of reality's shortest path to the goal)")
     return {"v_star": None, "v_star_note": note, "v_star_upper_bound": float(bound)}
+
+
+def goal_chances(model: ModelArrays, goal_pos: int, start: int, solution: Solution,
+                 budget: Budget = VSTAR_BUDGET) -> dict[str, float | bool]:
+    """What V* means in probabilities, from ``start``
+    (:mod:`~gdq_pddl.envs.goal_chance`): ``goal_v_star_policy``, the probability that
+    V*'s policy (``solution``) reaches the goal within the step limit;
+    ``goal_within_limit``, the most any policy has; ``goal_no_limit``, the most with no
+    step limit (exact when ``goal_no_limit_exact``, else a lower bound: ``budget.work``
+    ran out)."""
+    unlimited = best_without_limit(model, goal_pos, budget.work)
+    return {"goal_v_star_policy": float(solution.goal[start]),
+            "goal_within_limit": float(best_within_limit(model, goal_pos)[start]),
+            "goal_no_limit": float(unlimited.value[start]),
+            "goal_no_limit_exact": unlimited.exact}
 
 
 def reality_distances(model: ModelArrays, start: int = 0) -> np.ndarray:

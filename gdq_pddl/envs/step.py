@@ -44,12 +44,17 @@ class ModelArrays(NamedTuple):
     obs_of: np.ndarray  # int64[n_full], learner state of a full state
     pos_of: np.ndarray  # int64[n_full], position index of a full state
     area_of_pos: np.ndarray  # int64[n_positions], area number (0: none)
-    gain: np.ndarray = np.zeros(0)  # float64[n_outcomes]: the problem's own rewards
-    """Empty: the library's rewards (:func:`finish_step`). Else the problem's own, as the
-    IPPC scores them (:func:`file_step`): each outcome's reward besides the action's
-    cost, and ``r_max`` once on reaching the goal; no penalty for a stuck or late end."""
+    gain: np.ndarray = np.zeros(0)  # float64[n_outcomes]: the outcomes' rewards
+    """What each outcome earns besides the action's cost: the rewards of a PPDDL file's
+    effects, less its costs inside ``when``, ``forall`` or ``probabilistic``
+    (:meth:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain`). Empty: none earns anything
+    (on the goal scale only)."""
     acts: np.ndarray = np.zeros((0, 0), dtype=np.int64)  # int64[n_full, width]
     """The action of each column (module docstring); empty: every action, column = action."""
+    own_scale: bool = False
+    """The problem's own rewards, as the IPPC scores them (:func:`file_step`): each
+    outcome's :attr:`gain` less the action's cost, and ``r_max`` once on reaching the goal;
+    no penalty for a stuck or late end. False: the goal scale (:func:`finish_step`)."""
 
 
 def width_of(model: ModelArrays | tuple) -> int:
@@ -100,10 +105,14 @@ def draw_outcome(ptr: np.ndarray, prob: np.ndarray, i: int, rng: np.random.Gener
 
 @numba.njit(cache=True, inline="always")
 def finish_step(m, action: int, nxt: int, stuck: bool, at_goal: bool, t: int,
-                rng: np.random.Generator) -> tuple[int, float, bool, bool, int]:
+                rng: np.random.Generator, gain: float = 0.0
+                ) -> tuple[int, float, bool, bool, int]:
     """Draw the cost of ``action`` and return ``(nxt, reward, terminated, truncated, cause)``
-    for a step that led to ``nxt``: the reward and episode-end rule of both model kinds
-    (``m``: :class:`ModelArrays` or :class:`~gdq_pddl.envs.compact.CompactModel`)."""
+    for a step that led to ``nxt``: the reward and episode-end rule of the goal scale, of
+    both model kinds (``m``: :class:`ModelArrays` or
+    :class:`~gdq_pddl.envs.compact.CompactModel`): the outcome's ``gain`` less the cost
+    (``-(cost - gain)``: exactly ``-cost`` where the gain is 0), or ``r_max`` at the goal
+    and ``-r_max`` on a failed trial or the last allowed step instead."""
     cost = sample_cost(m.cost_kind[action], m.cost_a[action], m.cost_b[action], rng)
     if stuck:
         return nxt, -m.r_max, True, False, CAUSE_STUCK
@@ -111,7 +120,7 @@ def finish_step(m, action: int, nxt: int, stuck: bool, at_goal: bool, t: int,
         return nxt, m.r_max, True, False, CAUSE_GOAL
     if t + 1 >= m.step_limit:
         return nxt, -m.r_max, False, True, CAUSE_TIMEOUT
-    return nxt, -cost, False, False, CAUSE_NONE
+    return nxt, -(cost - gain), False, False, CAUSE_NONE
 
 
 @numba.njit(cache=True, inline="always")
@@ -130,10 +139,10 @@ def env_step(m: ModelArrays, fs: int, column: int, t: int, goal_pos: int,
         action = column
         k = draw_outcome(m.ptr, m.prob, fs * m.n_actions + column, rng)  # never -1 here
     nxt = m.next[k]
-    if m.gain.shape[0]:
-        return file_step(m, action, m.gain[k], nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t,
-                         rng)
-    return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)
+    gain = m.gain[k] if m.gain.shape[0] else 0.0
+    if m.own_scale:
+        return file_step(m, action, gain, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng)
+    return finish_step(m, action, nxt, m.stuck[k], m.pos_of[nxt] == goal_pos, t, rng, gain)
 
 
 @numba.njit(cache=True)
@@ -148,9 +157,9 @@ def env_act(m: ModelArrays, fs: int, action: int, t: int, goal_pos: int,
         if m.acts[fs, j] == action:
             return env_step(m, fs, j, t, goal_pos, rng)
     rng.random()
-    if m.gain.shape[0]:
+    if m.own_scale:
         return file_step(m, action, 0.0, fs, False, False, t, rng)
-    return finish_step(m, action, fs, False, False, t, rng)
+    return finish_step(m, action, fs, False, False, t, rng, 0.0)
 
 
 @numba.njit(cache=True, inline="always")

@@ -9,8 +9,9 @@ import csv
 import io
 import json
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,8 +38,11 @@ def csv_field(text: str) -> str:
     return buffer.getvalue().removesuffix("\n")
 
 
-def collect(out: Path, experiments: list[Experiment]) -> None:
-    """Write episodes.csv, policies.csv and optimal.json from ``out/units``."""
+def collect(out: Path, experiments: list[Experiment],
+            online_facts: Mapping[str, Any] | None = None) -> None:
+    """Write episodes.csv, policies.csv and optimal.json from ``out/units``;
+    ``online_facts`` join the optimal.json entry of every problem explored online (why
+    it was: what the command line knows, no worker does)."""
     units = [u for e in experiments for u in e.units()]
     n_areas = max(int(instance_of(e, spec).model.area_of_pos.max())
                   for e in experiments for spec, _ in e.schedule)
@@ -86,7 +90,7 @@ def collect(out: Path, experiments: list[Experiment]) -> None:
                       "(gdq_pddl.experiments.collect.MAX_POLICY_ROWS); each run's greedy "
                       f"policy is in its unit file, {out / 'units'}/*.npz (array 'policy')",
                       stacklevel=2)
-    optimal = optimal_summary(experiments)
+    optimal = optimal_summary(experiments, online_facts)
     atomic_write(out / "optimal.json", lambda tmp: tmp.write_text(json.dumps(optimal, indent=2)))
 
 
@@ -116,9 +120,11 @@ def _episode_rows(experiment: str, method: str, run: int, data, n_areas: int):
         yield "\n".join(rows) + "\n"
 
 
-def optimal_summary(experiments: list[Experiment]) -> dict:
-    """Each task's ground truth (its instance's ``optimal()``), keyed ``<task>`` (the
-    office), ``<task>@<world>`` or ``<task>@<problem file>``."""
+def optimal_summary(experiments: list[Experiment],
+                    online_facts: Mapping[str, Any] | None = None) -> dict:
+    """Each task's ground truth (its instance's ``optimal()``, and ``online_facts`` for a
+    problem explored online), keyed ``<task>`` (the office), ``<task>@<world>`` or
+    ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
         files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))
@@ -128,4 +134,6 @@ def optimal_summary(experiments: list[Experiment]) -> dict:
             key = instance.name if place == "office" else f"{instance.name}@{place}"
             if key not in out:
                 out[key] = {"world": exp.world, **files, **instance.optimal()}
+                if out[key].get("explored") == "online":
+                    out[key].update(online_facts or {})
     return out

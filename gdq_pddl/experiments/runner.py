@@ -22,10 +22,11 @@ import os
 import signal
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -99,16 +100,83 @@ def _difference(old: object, new: list) -> str:
     return "the experiments differ"
 
 
+OPTION_FLAGS = {"keep_learners": "--keep-learners", "explore": "--explore"}
+"""The options config.json records under ``options`` (what ``--resume`` compares), and
+the command-line flag that sets each."""
+
+
+def _flag(key: str, value: object) -> str:
+    """An option's value as the command line says it."""
+    flag = OPTION_FLAGS.get(key, key)
+    if isinstance(value, bool):
+        return flag if value else f"no {flag}"
+    return f"{flag} {value}"
+
+
+def recorded_options(out: Path, old: Mapping[str, Any]) -> dict[str, Any]:
+    """The options of the run ``old`` (its config.json) began with; where it predates
+    their record: ``keep_learners`` as its saved units say (None: nothing saved)."""
+    options = old.get("options")
+    if isinstance(options, dict):
+        return dict(options)
+    units = out / "units"
+    if not (units.is_dir() and any(units.glob("*.npz"))):
+        return {}
+    learners = out / "learners"
+    return {"keep_learners": learners.is_dir() and any(learners.glob("*.npz"))}
+
+
+def check_options(out: Path, old: Mapping[str, Any], options: Mapping[str, Any]) -> None:
+    """Refuse to resume the run of ``old`` (its config.json) with other ``options``,
+    naming the option, what the run began with and what the command gives."""
+    recorded = recorded_options(out, old)
+    for key, value in options.items():
+        if key in recorded and recorded[key] != value:
+            said = f"config.json options.{key}" if isinstance(old.get("options"), dict) \
+                else "its saved units/ and learners/: its config.json predates options"
+            raise ResultsError(f"{_flag(key, value)}: the run in {out} began with "
+                               f"{_flag(key, recorded[key])} ({said}); "
+                               "--resume needs the same command line, so that every run of "
+                               "it is done alike")
+
+
+def resumed_exploration(out: Path, explore: str) -> str:
+    """How ``--explore explore`` goes on with the run in ``out`` (``--resume``), read from
+    its config.json before any work: ``online`` or ``enumerate`` as the run went (for
+    ``auto``: what it chose then, so it is not chosen again by enumerating first), or
+    ``explore`` itself where the folder holds no run. Refuses another ``--explore`` than
+    the run began with (or, where it predates that record, than the way it went)."""
+    path = out / "config.json"
+    if not path.is_file():
+        return explore  # nothing to continue: resume_config says so
+    old = read_config(path)
+    went = "online" if any(isinstance(e, dict) and isinstance(e.get("pddl"), list) and
+                           e["pddl"][4:5] == ["online"] for e in old.get("experiments") or []
+                           if isinstance(old.get("experiments"), list)) else "enumerate"
+    recorded = recorded_options(out, old).get("explore")
+    if recorded is not None:
+        check_options(out, old, {"explore": explore})
+    elif explore != "auto" and explore != went:
+        raise ResultsError(f"--explore {explore}: the run in {out} explored its problem "
+                           f"{'online' if went == 'online' else 'by enumerating its states'} "
+                           "(config.json); --resume needs the same command line")
+    return went if explore == "auto" else explore
+
+
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
-            arrays: tuple[str, ...] = UNIT_ARRAYS) -> list[Unit]:
+            arrays: tuple[str, ...] = UNIT_ARRAYS,
+            options: Mapping[str, Any] | None = None) -> list[Unit]:
     """Check or create ``out``; return the units still to run (saved ones are reused on
-    ``resume`` when ``config.json`` says they are of the same experiments and inputs)."""
+    ``resume`` when ``config.json`` says they are of the same experiments, inputs and
+    ``options``: :data:`OPTION_FLAGS`)."""
     units = [u for e in experiments for u in e.units()]
     check_unit_keys(units)
+    options = dict(options or {})
     config = {"experiments": [asdict(e) for e in experiments],  # what --resume compares
-              "inputs": input_hashes(input_files(experiments))}
+              "inputs": input_hashes(input_files(experiments)), "options": options}
     old = resume_config(out, _held(out), resume, "units/*.npz or episodes.csv")
     if old is not None:
+        check_options(out, old, options)
         new = json.loads(json.dumps(config["experiments"]))
         if old.get("experiments") != new:
             raise ResultsError(f"{out} holds results of a different configuration "
@@ -129,6 +197,12 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     if resume:
         for u in done:  # a damaged unit file: say which, before running the others
             read_unit(out, u, arrays)
+            if options.get("keep_learners") and not (out / "learners" / f"{u.key}.npz"
+                                                     ).exists():
+                raise ResultsError(f"{unit_path(out, u)} has no learner in "
+                                   f"{out / 'learners'} (saved without --keep-learners): "
+                                   "delete it and run the same command with --resume to "
+                                   "rerun that run alone, its learner kept")
     return [u for u in units if not unit_path(out, u).exists()]
 
 
@@ -175,15 +249,17 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                     resume: bool = False, progress: bool = True, work: Work | None = None,
                     collect: Callable[[Path, list[Experiment]], None] | None = None,
                     log: Callable[[str], None] | None = None,
-                    unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False
-                    ) -> Path:
+                    unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False,
+                    options: Mapping[str, Any] | None = None) -> Path:
     """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
     :func:`run_unit`), then ``collect`` the results (default:
     :func:`gdq_pddl.experiments.collect.collect`).
 
     ``log`` is told how many runs are left; ``unit_arrays`` are what ``work`` saves (what
     ``--resume`` checks); ``keep_learners`` saves each run's final learner in
-    ``learners/``. Ctrl-C, SIGTERM and SIGHUP end the workers and raise
+    ``learners/``. ``keep_learners`` and ``options`` (the command-line options that shape
+    the runs but not the experiments, :data:`OPTION_FLAGS`) are recorded in config.json;
+    ``resume`` refuses other values. Ctrl-C, SIGTERM and SIGHUP end the workers and raise
     :class:`RunInterrupted`, saying what is saved and how to go on.
     """
     # read at call time: tests replace run_unit
@@ -194,7 +270,8 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
     preflight(experiments, wanted)
     output_folder(out)
     with FolderLock(out), stop_on_signals():
-        pending = prepare(out, experiments, resume, unit_arrays)
+        pending = prepare(out, experiments, resume, unit_arrays,
+                          {"keep_learners": bool(keep_learners), **(options or {})})
         processes = min(wanted, max(1, len(pending)))
         if log is not None and not pending:
             log(f"nothing to run: all {sum(len(e.units()) for e in experiments)} runs are "

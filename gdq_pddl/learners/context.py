@@ -9,6 +9,7 @@ between them, each instance says through :class:`Instance`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Protocol
 
@@ -105,6 +106,12 @@ class TaskContext:
     and outcomes the env samples, leaving their probabilities and costs to learn. False
     where reality may differ (the office, a STRIPS domain with a dynamics file); GDQ
     then tries untried actions (:attr:`~gdq_pddl.learners.config.GDQConfig.explore_all`)."""
+    identity: Callable[[], dict[str, str]] | None = None
+    """What the task is, said now (the instance's ``identity``:
+    :mod:`~gdq_pddl.envs.identity`): what :func:`~gdq_pddl.learners.saving.save_learner`
+    records and :func:`~gdq_pddl.learners.saving.load_learner` compares. A call, since a
+    problem explored online numbers more states as its episodes reach them. None: not
+    known (a context made by hand), nothing is compared."""
 
     @property
     def n_env_actions(self) -> int:
@@ -196,6 +203,7 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),
+        identity=getattr(instance, "identity", None),
         **({"own_scale": True, "step_limit": int(instance.model.step_limit),
             "prior_reward": own_prior_rewards(instance)}
            if getattr(instance, "reward_scale", "goal") == "problem" else {}))

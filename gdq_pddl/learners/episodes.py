@@ -21,6 +21,7 @@ from numba import types
 from numba.extending import overload
 
 from gdq_pddl.envs.compact import CompactModel, compact_step, observe_state
+from gdq_pddl.envs.identity import PROBLEM_KEYS
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv
@@ -34,7 +35,7 @@ from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.rules import observe
-from gdq_pddl.learners.saving import GreedyPolicy
+from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory
@@ -119,7 +120,9 @@ def run_episodes(learner: Learner, env: gym.Env, n_episodes: int,
     and ``env.step`` through every wrapper; ``True`` demands the compiled loop (a
     :class:`~gdq_pddl.errors.ConfigError` says why it cannot run), ``False`` forces the
     Python loop. Raises :class:`~gdq_pddl.errors.ConfigError` when ``rng`` is not a
-    ``numpy.random.Generator`` or the learner's states and actions are not the env's.
+    ``numpy.random.Generator`` or the learner's states and actions are not the env's, and
+    :class:`~gdq_pddl.errors.ResultsError` when its task context is of another PDDL
+    problem than the env's (same sizes) or of another instance explored online.
     """
     return _run(learner, env, n_episodes, rng, fast, _n_areas(env))
 
@@ -138,13 +141,21 @@ def evaluate_policy(env: gym.Env, policy: GreedyPolicy | TabularLearner, episode
     """Run ``policy`` (a :class:`~gdq_pddl.learners.saving.GreedyPolicy`, or a learner's
     greedy policy now) for ``episodes`` episodes in ``env`` without learning, stepping
     it through its wrappers, after ``env.reset(seed=seed)``. The records' ``mean_return``
-    and ``success_rate`` summarise them."""
+    and ``success_rate`` summarise them. Refused: ``episodes`` below 1
+    (:class:`~gdq_pddl.errors.ConfigError`), and an env whose states are numbered otherwise
+    than the policy's task (another problem, or another instance of a problem explored
+    online: :class:`~gdq_pddl.errors.ResultsError` naming what differs)."""
     if isinstance(policy, TabularLearner):
         policy = GreedyPolicy.of(policy)
     if not isinstance(policy, GreedyPolicy):
         raise ConfigError(f"evaluate_policy takes a GreedyPolicy or a learner, got "
                           f"{type(policy).__name__}")
+    check_count("episodes", episodes)
+    if episodes < 1:
+        raise ConfigError(f"evaluate_policy: episodes must be at least 1, got {episodes} (a "
+                          "mean return over no episode is undefined)")
     guards.check_env(len(policy.actions), policy.n_actions, env)
+    policy.check_env(env)
     check_count("seed", seed)
     env.reset(seed=seed)
     return _run(policy, env, episodes, np.random.default_rng(seed), False,  # type: ignore
@@ -159,6 +170,10 @@ def _run(learner: Learner, env: gym.Env, n_episodes: int, rng: np.random.Generat
                  "episode records", "run fewer episodes at a time")
     if isinstance(learner, TabularLearner):
         guards.check_env(len(learner.q), learner.context.n_env_actions, env)
+        # another problem of the same size, or another instance explored online: refused
+        check_identity("the learner", "learner", identity_of(learner.context),
+                       identity_of(getattr(env.unwrapped, "instance", None)), "the env",
+                       PROBLEM_KEYS)
     reason = why_not_compiled(learner, env)
     if fast and reason is not None:
         raise ConfigError(f"fast=True: {reason}")

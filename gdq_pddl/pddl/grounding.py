@@ -7,12 +7,14 @@ from __future__ import annotations
 
 import itertools
 from collections import Counter, defaultdict
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
+from gdq_pddl.errors import PDDLError
 from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.formulas import is_subtype
-from gdq_pddl.pddl.model import Action, Atom, Domain, Literal, Problem
+from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Problem
 
 
 @dataclass(frozen=True)
@@ -24,6 +26,12 @@ class GroundOp:
     neg: int
     add: int
     dele: int
+    cost: float | None = field(default=None, kw_only=True)
+    """What the action costs whatever happens (the costs it writes outside every
+    ``when``, ``forall`` and ``probabilistic``, function terms valued: :func:`action_cost`);
+    costs and rewards inside them are its outcomes'
+    (:class:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome`). None: it states no cost
+    anywhere (the goal scale's default applies)."""
 
     def applicable(self, state: int) -> bool:
         return state & self.pre == self.pre and not state & self.neg
@@ -101,6 +109,35 @@ def set_bits(mask: int):
         mask ^= low
 
 
+def term_value(term: CostTerm, binding: Mapping[str, str], domain: Domain, problem: Problem,
+               action: Action, what: str) -> float:
+    """A cost or reward term under ``binding``: a number, or a function term valued in
+    the problem's ``:init`` (refused, naming it, where it has no value or a negative one)."""
+    if not isinstance(term, Atom):
+        return term
+    key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
+    if key not in problem.values:
+        raise PDDLError(problem.source, None, f"no value for {key} in :init ({what}, "
+                        f"{domain.source}:{action.line})")
+    value = problem.values[key]
+    if value < 0:
+        raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: {what} must be "
+                        ">= 0")
+    return value
+
+
+def action_cost(action: Action, args: tuple[str, ...], domain: Domain,
+                problem: Problem) -> float | None:
+    """:attr:`GroundOp.cost` of ``action`` with parameters ``args``: its terms outside every
+    construct summed, 0 where it states costs only inside them, None where none at all."""
+    if not action.states_cost():
+        return None
+    binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
+    name = str(Atom(action.name, args))
+    return float(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
+                     for term in action.cost))
+
+
 def ground(domain: Domain, problem: Problem) -> GroundTask:
     """Ground ``problem``; see the module docstring for how."""
     if any(a.outcomes for a in domain.actions):
@@ -120,8 +157,9 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
         return sum(1 << index[a] for a in atoms if a in index)
 
     with slow_progress("grounding", " actions", len(live), live) as bar:
-        ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add))
-                    for name, pre, neg, add, dele in bar)
+        ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add),
+                             cost=action_cost(action, args, domain, problem))
+                    for name, pre, neg, add, dele, action, args in bar)
     static_strs = {str(a) for a in problem.init if a.predicate not in fluent}
     return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
                       fact_index=index, **goal_masks(problem, fluent, static_strs, index))
@@ -129,7 +167,7 @@ def ground(domain: Domain, problem: Problem) -> GroundTask:
 
 def relaxed_reachable(pending: list[tuple], init: set[str]) -> tuple[set[str], list[tuple]]:
     """The facts reachable from ``init`` with deletes ignored, and the ground actions
-    ``(name, pre, neg, add, dele)`` of ``pending`` whose positive preconditions they hold
+    ``(name, pre, neg, add, dele, ...)`` of ``pending`` whose positive preconditions they hold
     (in the order they were found); a bar counts those actions past 2 s."""
     reached = set(init)
     live: list[tuple] = []
@@ -215,9 +253,10 @@ def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
         return {s(lit.atom) for lit in lits
                 if lit.positive == positive and lit.atom.predicate in fluent}
 
-    name = "(" + " ".join((action.name, *(b[p] for p, _ in action.parameters))) + ")"
+    args = tuple(b[p] for p, _ in action.parameters)
+    name = "(" + " ".join((action.name, *args)) + ")"
     return (name, part(action.precondition, True), part(action.precondition, False),
-            part(action.effect, True), part(action.effect, False))
+            part(action.effect, True), part(action.effect, False), action, args)
 
 
 def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:

@@ -66,14 +66,15 @@ class LazyGraph:
     asked.
 
     State 0 is ``task.init``, discovered, not expanded. Ids are given in discovery order
-    and never change. ``gains``: also compute each outcome's reward on the problem's own
-    scale, as ``reality_outcomes(graph, gains=True)`` does.
+    and never change. ``gains`` (the default): also compute what each outcome earns
+    besides the action's cost (its rewards, less its costs inside effects: on either
+    reward scale), as :func:`~gdq_pddl.pddl.outcomes.reality_outcomes` does.
 
     For a STRIPS task (no outcomes) reality's outcome of a ground action is its one
     effect, probability 1 and gain 0: the task's own dynamics, not a dynamics file's.
     """
 
-    def __init__(self, task: GroundTask, gains: bool = False) -> None:
+    def __init__(self, task: GroundTask, gains: bool = True) -> None:
         self.task = task
         self.gains = gains
         self.n_words = max(1, -(-len(task.facts) // 64))

@@ -137,6 +137,16 @@ class Action:
     """The rest of the precondition beyond its literals (quantifiers, disjunction); such an
     action, or one with conditional effects, has ``outcomes`` even if deterministic."""
 
+    def states_cost(self) -> bool:
+        """Whether the action states a cost anywhere (``(increase (total-cost) X)`` or
+        ``(decrease (reward) X)``): outside any construct (:attr:`cost`) or inside ``when``,
+        ``forall`` or ``probabilistic`` (a :class:`Reward` of sign -1 of an outcome). One
+        that states none costs the goal scale's default."""
+        def inside(outcomes: tuple[Outcome, ...]) -> bool:
+            return any(r.sign < 0 for o in outcomes for r in o.rewards) or any(
+                inside(c.outcomes) for o in outcomes for c in o.choices)
+        return bool(self.cost) or inside(self.outcomes)
+
 
 @dataclass(frozen=True)
 class Domain:

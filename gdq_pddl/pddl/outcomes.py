@@ -16,20 +16,21 @@ import numpy as np
 from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.offered import columns_in
 from gdq_pddl.pddl.reachable import StateGraph
-from gdq_pddl.pddl.wordrows import CompiledOp, apply_effect, compile_ops, holds, words
+from gdq_pddl.pddl.wordrows import CompiledOp, compile_ops
 
 OUTCOME_CHUNK = 1 << 22
 """Cells (states x row width) whose outcomes :func:`reality_outcomes` sorts and merges at
 a time: its work arrays (about 200 bytes an outcome) stay near 1 GB."""
 
 
-def reality_outcomes(graph: StateGraph, gains: bool = False
+def reality_outcomes(graph: StateGraph, gains: bool = True
                      ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     """The outcomes of every ground action applicable in each non-goal state of a PPDDL
     task's graph, as rows in pair order: ``pair`` (``state * width + column`` of the
     graph's :attr:`~StateGraph.offered` rows), probability,
-    and the fields next state, stuck (a failed trial stays) and, with ``gains``, the
-    outcome's reward. Equal ``(next, stuck[, reward])`` of a pair are one row, their
+    and the fields next state, stuck (a failed trial stays) and, with ``gains`` (the
+    default: what the outcome earns belongs to it on either reward scale), the outcome's
+    reward besides the action's cost. Equal ``(next, stuck[, reward])`` of a pair are one row, their
     probabilities summed in outcome order; outcomes of probability 0 are left out.
 
     Built :data:`OUTCOME_CHUNK` cells of states at a time (pairs of different states
@@ -39,7 +40,7 @@ def reality_outcomes(graph: StateGraph, gains: bool = False
     task = graph.task
     width = graph.offered.shape[1]
     n_words = graph.words.shape[1]
-    ops = compile_ops(task, n_words)
+    ops = compile_ops(task, n_words, every=True)
     live = np.flatnonzero(~graph.is_goal)
     column = columns_in(graph.offered)
     step = max(1, OUTCOME_CHUNK // width)
@@ -66,7 +67,6 @@ def _outcomes_of(graph: StateGraph, ops: list[CompiledOp], live: np.ndarray, col
     """:func:`reality_outcomes` of the states ``live`` (increasing), as a list ``[pair,
     probability, next, stuck(, reward)]``."""
     task, width = graph.task, graph.offered.shape[1]
-    n_words = graph.words.shape[1]
     rows = graph.words[live]
     parts: list[tuple] = []
     for k, (op, ground) in enumerate(zip(ops, task.ops, strict=True)):
@@ -75,19 +75,12 @@ def _outcomes_of(graph: StateGraph, ops: list[CompiledOp], live: np.ndarray, col
             continue
         here = graph.words[at]
         pair = at * width + column(at, np.full(len(at), k))
-        for j, o in enumerate(ground.outcomes):
+        for j, (o, effect) in enumerate(zip(ground.outcomes, op.outcomes, strict=True)):
             if o.probability > 0:
                 same = not (o.add or o.dele or o.conditional)
-                nxt = at if o.stuck or same else graph.lookup(apply_effect(here, (
-                    words(o.add, n_words), words(o.dele, n_words),
-                    tuple(tuple(words(m, n_words) for m in c) for c in o.conditional))))
-                earned = np.zeros(len(at))  # o.gain: reward + the sum of those that hold
-                for alts, amount in o.rewards:
-                    earned = earned + np.where(np.logical_or.reduce([holds(
-                        here, words(p, n_words), words(n, n_words)) for p, n in alts]),
-                        amount, 0.0)
+                nxt = at if o.stuck or same else graph.lookup(effect.apply(here))
                 parts.append((pair, j, o.probability, nxt, o.stuck,
-                              o.reward + earned if gains else None))
+                              effect.gain(here) if gains else None))
     if not parts:  # no ground action applies in these states (dead ends)
         return [np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64),
                 np.zeros(0, dtype=np.bool_)] + ([np.zeros(0)] if gains else [])

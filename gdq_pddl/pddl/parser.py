@@ -12,6 +12,7 @@ imported from here too."""
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 from functools import partial
 from pathlib import Path
@@ -51,6 +52,11 @@ __all__ = ["MAX_OUTCOMES", "PDDLError", "parse_domain", "parse_problem", "proble
 
 MAX_OUTCOMES = 4096
 """Most outcomes one action's effect may flatten into."""
+SUM_TOLERANCE = 1e-12
+"""How far past 1 the probabilities of one ``(probabilistic ...)`` may sum (they are summed
+exactly, as written), as a dynamics file's ``success + stuck``: probabilities printed
+from floats (``0.1 0.2 0.7000000000000001``) miss 1 by some 1e-16 each. Such a sum is
+taken as 1: the likeliest outcome gives up the excess."""
 _DOMAIN_SECTIONS = (":requirements", ":types", ":constants", ":predicates", ":functions",
                     ":action")
 _CONNECTIVES = ("or", "imply", "forall", "exists", "when", "oneof", "probabilistic",
@@ -172,7 +178,8 @@ def _action(r: Reader, node: Node, constants: dict[str, str]) -> tuple[Action, b
     if not reader.probabilistic and not reader.conditional and rest is None:
         return Action(name, tuple(params), pre, branches[0][1], node.line,  # type: ignore
                       cost=tuple(reader.costs)), reader.reward_effects
-    return Action(name, tuple(params), pre, (), node.line, _outcomes(branches, r.stuck_domain),
+    return Action(name, tuple(params), pre, (), node.line,
+                  _outcomes(branches, r.stuck_domain, r, node.line, ctx),
                   tuple(reader.costs), rest), reader.reward_effects
 
 
@@ -296,7 +303,7 @@ class _Effects:
         branches = self.effect(items[2], inside=True)  # a cost in it is paid per binding
         self.scope = saved
         self.conditional = True
-        outcomes = _outcomes(branches, self.r.stuck_domain)
+        outcomes = _outcomes(branches, self.r.stuck_domain, self.r, node.line, self.ctx)
         return [(Fraction(1), (Choice(variables, outcomes, node.line),))]
 
     def probabilistic_effect(self, node: Node, items: tuple[Node, ...]) -> Branches:
@@ -307,16 +314,18 @@ class _Effects:
         if not pairs or len(pairs) % 2:
             raise r.fail(node.line, f"{ctx}: expected (probabilistic p1 e1 p2 e2 ...): pairs "
                          "of a probability and an effect")
-        out: Branches = []
-        total = Fraction(0)
-        for p_node, e_node in zip(pairs[::2], pairs[1::2], strict=True):
-            p = _probability(r, p_node, ctx)
-            total += p
-            out += [(p * q, lits) for q, lits in self.effect(e_node, inside=True)]
-        if total > 1:
+        probs = [_probability(r, p_node, ctx) for p_node in pairs[::2]]
+        total = sum(probs, Fraction(0))
+        if total > 1 + Fraction(SUM_TOLERANCE):
             raise r.fail(node.line, f"{ctx}: the probabilities of (probabilistic ...) sum to "
-                         f"{float(total):g}; they must sum to at most 1 (the rest means no "
-                         "effect)")
+                         f"{float(total)!r}, {float(total - 1):.3g} more than 1; they must sum "
+                         f"to at most 1 (within {SUM_TOLERANCE:g}; the rest means no effect)")
+        if total > 1:  # past 1 by what printing floats leaves: off the likeliest, the sum 1
+            big = max(range(len(probs)), key=lambda i: (probs[i], -i))
+            probs[big] -= total - 1
+        out: Branches = []
+        for p, e_node in zip(probs, pairs[1::2], strict=True):
+            out += [(p * q, lits) for q, lits in self.effect(e_node, inside=True)]
         if total < 1:
             out.append((1 - total, ()))
         return out
@@ -353,14 +362,22 @@ class _Effects:
         return read_term(r, value, fname, r.functions[fname], self.scope, ctx), sign
 
 
-def _outcomes(branches: Branches, stuck_domain: bool) -> tuple[Outcome, ...]:
+def _outcomes(branches: Branches, stuck_domain: bool, r: Reader | None = None,
+              line: int = 0, ctx: str = "") -> tuple[Outcome, ...]:
     """Flattened branches as outcomes: equal effects merged (first appearance first), those
-    of probability 0 dropped, every outcome that makes (stuck) true one stuck outcome."""
+    of probability 0 dropped, every outcome that makes (stuck) true one stuck outcome; an
+    outcome whose probability (a product of nested ones) underflows a float is refused
+    at ``line`` (with ``r``)."""
     stuck = Literal(Atom(STUCK, ()), True)
     merged: dict[tuple, Fraction] = {}
     for p, effects in branches:
         if p == 0:
             continue
+        if not float(p) and r is not None:
+            size = math.log10(p.numerator) - math.log10(p.denominator)
+            raise r.fail(line, f"{ctx}: an outcome's probability, the product of nested "
+                         f"(probabilistic ...) ones, is about 1e{size:.0f}: below the smallest "
+                         "positive float (about 5e-324), it would underflow to 0")
         lits = tuple(dict.fromkeys(e for e in effects if isinstance(e, Literal)))
         conds = tuple(dict.fromkeys(e for e in effects if isinstance(e, CondEffect)))
         rewards = tuple(e for e in effects if isinstance(e, Reward))  # two add up: no merge
@@ -384,6 +401,10 @@ def _probability(r: Reader, node: Node, ctx: str) -> Fraction:
                      f"1/4), found {node.text()}")
     if not 0 <= value <= 1:
         raise r.fail(node.line, f"{ctx}: a probability must be in [0, 1], got {node.symbol}")
+    if value and not float(value):
+        raise r.fail(node.line, f"{ctx}: the probability {node.symbol} is below the smallest "
+                     "positive float (about 5e-324): it would underflow to 0; write 0 for an "
+                     "outcome that never happens")
     return value
 
 

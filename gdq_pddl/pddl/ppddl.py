@@ -19,10 +19,12 @@ from gdq_pddl.pddl.grounding import (
     GroundOp,
     GroundTask,
     action_bindings,
+    action_cost,
     goal_masks,
     ground,
     index_problem,
     set_bits,
+    term_value,
 )
 from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Problem
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
@@ -166,7 +168,9 @@ def ground_ppddl(domain: Domain, problem: Problem,
         outcomes = tuple(GroundOutcome(o.probability, op.add, op.dele, o.stuck)
                          for o, op in zip(outcomes_of(action), ops, strict=True))
         known = kept_outcomes(action, determinisation)
-        learner_ops.append(ProbabilisticOp(name, ops[0].pre, ops[0].neg, 0, 0, outcomes, known))
+        learner_ops.append(ProbabilisticOp(name, ops[0].pre, ops[0].neg, 0, 0, outcomes, known,
+                                           cost=action_cost(action, tuple(args), domain,
+                                                            problem)))
         for k in known:
             pname = "(" + " ".join((names[(action.name, k)], *args)) + ")"
             planner_ops.append(GroundOp(pname, ops[0].pre, ops[0].neg, outcomes[k].add,
@@ -178,34 +182,12 @@ def ground_ppddl(domain: Domain, problem: Problem,
 
 
 def ground_costs(domain: Domain, problem: Problem, names: list[str]) -> list[float | None]:
-    """The cost the domain states for each ground action ``"(schema args...)"`` (None: it
-    states none), its terms summed, function terms valued from the problem's ``:init``."""
+    """:attr:`GroundOp.cost <gdq_pddl.pddl.grounding.GroundOp.cost>` of each ground action
+    ``"(schema args...)"`` (:func:`~gdq_pddl.pddl.grounding.action_cost`, which the
+    grounders give every ground action)."""
     by_name = {a.name: a for a in domain.actions}
-    out: list[float | None] = []
-    for name in names:
-        atom = Atom.parse(name)
-        action = by_name[atom.predicate]
-        binding = dict(zip((p for p, _ in action.parameters), atom.args, strict=True))
-        out.append(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
-                       for term in action.cost) if action.cost else None)
-    return out
-
-
-def term_value(term, binding: Mapping[str, str], domain: Domain, problem: Problem,
-               action: Action, what: str) -> float:
-    """A cost or reward term under ``binding``: a number, or a function term valued in
-    the problem's ``:init``."""
-    if not isinstance(term, Atom):
-        return term
-    key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
-    if key not in problem.values:
-        raise PDDLError(problem.source, None, f"no value for {key} in :init ({what}, "
-                        f"{domain.source}:{action.line})")
-    value = problem.values[key]
-    if value < 0:
-        raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: {what} must be "
-                        ">= 0")
-    return value
+    return [action_cost(by_name[(atom := Atom.parse(name)).predicate], atom.args, domain,
+                        problem) for name in names]
 
 
 MAX_VARIANTS = 4096
@@ -274,7 +256,8 @@ def _ground_normalised(domain: Domain, problem: Problem, determinisation: str,
             for _, p, (add, dele, conds, reward, rewards, stuck) in outs)
         known, kept_names = _kept(action, outs, outcomes, determinisation, names)
         learner_ops.append(ProbabilisticOp(name, common_pos, common_neg, 0, 0, outcomes, known,
-                                           tuple(alts) if len(alts) > 1 else ()))
+                                           tuple(alts) if len(alts) > 1 else (),
+                                           cost=action_cost(action, args, domain, problem)))
         try:  # the STRIPS variants of each kept outcome, for the per-query planners
             variants = [(base, _variants(alts, outcomes[k], name, domain, action))
                         for k, base in zip(known, kept_names, strict=True)]

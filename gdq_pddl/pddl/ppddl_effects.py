@@ -38,6 +38,10 @@ class GroundOutcome:
         return self.reward + sum(amount for alts, amount in self.rewards
                                  if any(state & p == p and not state & n for p, n in alts))
 
+    def largest_gain(self) -> float:
+        """The most :meth:`gain` can be in size in any state: every reward counted."""
+        return abs(self.reward) + sum(abs(amount) for _, amount in self.rewards)
+
     def apply(self, state: int) -> int:
         add, dele = self.add, self.dele
         for pos, neg, a, d in self.conditional:

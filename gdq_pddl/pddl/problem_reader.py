@@ -171,6 +171,10 @@ def problem_file(path: str | Path) -> tuple[str | Path, str | None]:
     that exists, or whose part before the last ``:`` does not, is a path."""
     text = str(path)
     head, sep, name = text.rpartition(":")
-    if not sep or not name or Path(text).exists() or not Path(head).is_file():
+    if not sep or Path(text).exists() or not Path(head).is_file():
         return path, None
+    if not name.strip():
+        raise PDDLError(text, None, f"the problem name after {head}: is empty; give "
+                        f"{head}:NAME, NAME one of the file's problems, or {head} alone for "
+                        "a file that holds one problem")
     return head, name

@@ -41,7 +41,6 @@ from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.wordrows import (
     KeyIndex,
     applicable_rows,
-    apply_effect,
     compile_ops,
     fact_rows,
     filter_chunk,
@@ -200,41 +199,68 @@ def state_cap(width: int, budget: int | None = None, n_words: int = 1) -> int:
 GROWTH_LEVELS = 3
 """Levels :func:`projected_states` projects ahead."""
 
+PROJECTION_SLACK = 2.0
+"""A breadth-first level grew as projected when it holds within this factor, either way,
+of the states :func:`projected_levels` projected for it from the levels before it; only
+a projection from such a level is evidence enough to give up on (:func:`backed_by`)."""
+
+
+def projected_levels(levels: list[int], ahead: int) -> list[float]:
+    """The sizes of the ``ahead`` breadth-first levels after ``levels`` (the sizes of the
+    complete levels so far), if each grows on the last's growth times the rate at which
+    growth slowed from the level before (never faster than the last growth; with only
+    two levels, on the last growth); [] with fewer than 2 levels or an empty one among
+    the last three."""
+    if len(levels) < 2 or min(levels[-3:]) == 0:
+        return []
+    growth = levels[-1] / levels[-2]
+    slowing = min(1.0, growth * levels[-3] / levels[-2]) if len(levels) >= 3 else 1.0
+    size, out = float(levels[-1]), []
+    for _ in range(ahead):
+        growth *= slowing
+        size *= growth
+        out.append(size)
+    return out
+
 
 def projected_states(levels: list[int]) -> int:
     """The states the enumeration would know :data:`GROWTH_LEVELS` levels on (``levels``:
-    the sizes of the complete breadth-first levels), if each level grows on the last's
-    growth times the rate at which growth slowed from the level before (never faster
-    than the last growth); 0 with fewer than 3 levels. A breadth-first search nears its
-    widest level as its growth slows: ``n`` independent switches grow x(n-k)/(k+1) from
-    level k, and are never projected more than 2% past their 2**n states (n = 6 to 33);
-    manytireworld_test problem0 (pddlgym) grows x1.83 a level from level 16 to 24 and
-    passes a 24 GB machine's budget in level 24; pddlgym's exploding blocks of 126
-    blocks grow about x100 a level from the start."""
-    if len(levels) < 3 or min(levels[-3:]) == 0:
-        return 0
-    before, last = levels[-2] / levels[-3], levels[-1] / levels[-2]
-    slowing = min(1.0, last / before)
-    size, growth, ahead = float(levels[-1]), last, 0.0
-    for _ in range(GROWTH_LEVELS):
-        growth *= slowing
-        size *= growth
-        ahead += size
-    return sum(levels) + round(ahead)
+    the sizes of the complete breadth-first levels), by :func:`projected_levels`; 0 with
+    fewer than 3 levels or an empty one among the last three. A breadth-first search
+    nears its widest level as its growth slows: ``n`` independent switches grow
+    x(n-k)/(k+1) from level k, and are never projected more than 2% past their 2**n
+    states (n = 6 to 33); manytireworld_test problem0 (pddlgym) grows x1.83 a level from
+    level 16 to 24 and passes a 24 GB machine's budget in level 24; pddlgym's exploding
+    blocks of 126 blocks grow about x100 a level from the start."""
+    ahead = projected_levels(levels, GROWTH_LEVELS) if len(levels) >= 3 else []
+    return sum(levels) + round(sum(ahead)) if ahead else 0
+
+
+def backed_by(levels: list[int]) -> float | None:
+    """The states the levels before the last projected for it (:func:`projected_levels`),
+    where the last level holds within :data:`PROJECTION_SLACK` of that; None where it
+    did not grow as projected (a burst: a teleport that reaches every cell at once; a
+    plateau after one), or with fewer than 3 levels. A projection from a level that did
+    not grow as projected is no evidence, and the enumeration goes on."""
+    if len(levels) < 3:
+        return None
+    before = projected_levels(levels[:-1], 1)
+    if not before or before[0] < 1 or not (
+            before[0] / PROJECTION_SLACK <= levels[-1] <= PROJECTION_SLACK * before[0]):
+        return None
+    return before[0]
 
 
 def _too_many(source: str, cap: int, budget: bool, width: int, n_words: int,
-              levels: list[int], projected: int = 0) -> TooManyStates:
+              levels: list[int], projected: int = 0, backed: float = 0.0) -> TooManyStates:
     """The refusal past ``cap`` states: the need (of the states found so far, every row as
     wide as the widest), the budget and what sets it, and the breadth-first levels so far
-    (``levels``: states a level, the last unfinished; ``projected``: a refusal before
-    the cap, by :func:`projected_states`, the levels all complete)."""
+    (``levels``: states a level, the last unfinished). A refusal before the cap
+    (``projected``, by :func:`projected_states`, the levels all complete) says its
+    evidence: the last level held about the ``backed`` states projected for it."""
     shown = ", ".join(f"{n:,}" for n in levels[-6:])
     grown = f"; states of breadth-first levels {max(0, len(levels) - 6)} to " \
         f"{len(levels) - 1}{'' if projected else ' (the last unfinished)'}: {shown}"
-    if projected:
-        grown += f", {GROWTH_LEVELS} more levels growing as these did would make " \
-            f"{projected:,} (given up early: gdq_pddl.pddl.reachable.projected_states)"
     if not budget:
         return TooManyStates(f"{source}: more than {cap:,} reachable states: past the cap "
                              f"given{grown}; the learners are tabular, so make the problem "
@@ -245,13 +271,23 @@ def _too_many(source: str, cap: int, budget: bool, width: int, n_words: int,
                "(gdq_pddl.pddl.reachable.MEMORY_SHARE, or TABLE_BUDGET in bytes)")
     rows = "" if n_words <= 1 else f" and {ROW_COPIES * 8} bytes a state x 64 facts " \
         f"past the first, ROW_COPIES: {n_words} words of facts here"
-    need = f"about {human_bytes(projected * state_bytes(width, n_words))}" if projected \
-        else f"at least {human_bytes(found * state_bytes(width, n_words))}"
+    cell = f"{PAIR_BYTES} bytes a state x action cell, gdq_pddl.pddl.reachable.PAIR_BYTES{rows}"
+    if projected:
+        return TooManyStates(
+            f"{source}: likely more than {cap:,} reachable states, the budget's cap (given "
+            f"up early after breadth-first level {len(levels) - 1}, {found:,} states found, "
+            f"up to {width} applicable ground actions a state){grown}; level "
+            f"{len(levels) - 1} grew as projected ({levels[-1]:,} states against "
+            f"{round(backed):,} projected from the levels before it), and {GROWTH_LEVELS} "
+            f"more levels growing as these did would make {projected:,} states, whose "
+            f"tables would need about {human_bytes(projected * state_bytes(width, n_words))}"
+            f" ({cell}), past the budget of {human_bytes(limit)}: {setting} "
+            "(gdq_pddl.pddl.reachable.projected_states); `--explore enumerate` lists the "
+            "states anyway, until they pass the budget")
     return TooManyStates(
-        f"{source}: {'likely ' if projected else ''}more than {cap:,} reachable states "
-        f"({found:,} found so far, up to {width} applicable ground actions a state): a run "
-        f"would need {need} ({PAIR_BYTES} bytes a state x "
-        f"action cell, gdq_pddl.pddl.reachable.PAIR_BYTES{rows}), past the budget of "
+        f"{source}: more than {cap:,} reachable states ({found:,} found so far, up to "
+        f"{width} applicable ground actions a state): a run would need at least "
+        f"{human_bytes(found * state_bytes(width, n_words))} ({cell}), past the budget of "
         f"{human_bytes(limit)}: {setting}{grown}; the learners are tabular, so make the "
         "problem smaller (fewer objects), or run it on a machine with more memory")
 
@@ -263,9 +299,10 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
 
     Raises :class:`TooManyStates` naming ``source`` when more than ``max_states`` states
     are reachable (None: more than :func:`state_cap` of the table budget); with the
-    budget and ``give_up_early``, also once a complete level's :func:`projected_states`
-    passes it (what ``--explore auto`` asks: it goes online then, and a doomed
-    enumeration of millions of states took minutes).
+    budget and ``give_up_early``, also once a complete level grew as projected
+    (:func:`backed_by`) and its :func:`projected_states` passes it (what ``--explore
+    auto`` asks: it goes online then, and a doomed enumeration of millions of states took
+    minutes).
     """
     n_ops = len(task.ops)
     n_words = max(1, -(-len(task.facts) // 64))
@@ -312,13 +349,13 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                     here = expand[at]
                     seen: list[np.ndarray] = []
                     for j, effect in enumerate(op.known):
-                        t = apply_effect(here, effect)
+                        t = effect.apply(here)
                         new = np.logical_and.reduce([(t != s).any(axis=1) for s in seen]) \
                             if seen else np.ones(len(t), dtype=np.bool_)
                         seen.append(t)
                         found.append((t[new], at[new], k * width + j))
                     for j, effect in enumerate(op.other):
-                        found.append((apply_effect(here, effect), at,
+                        found.append((effect.apply(here), at,
                                       (n_ops + reality_rank[k]) * width + j))
                 cand = np.concatenate([f[0] for f in found]) if found else rows[:0]
                 who = np.concatenate([f[1] for f in found]) if found else parent[:0]
@@ -352,8 +389,10 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
             if give_up_early and max_states is None:
                 sizes = [len(level) for level in levels]
                 projected, cap = projected_states(sizes), state_cap(width_seen, n_words=n_words)
-                if projected > cap:
-                    raise _too_many(source, cap, True, width_seen, n_words, sizes, projected)
+                backed = backed_by(sizes) if projected > cap else None
+                if backed is not None:
+                    raise _too_many(source, cap, True, width_seen, n_words, sizes, projected,
+                                    backed)
     none = np.zeros(0, dtype=np.int64)  # no level expanded (the start is a goal)
     src_all = np.concatenate(src) if src else none
     del src

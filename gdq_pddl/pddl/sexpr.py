@@ -141,6 +141,12 @@ class Reader:
         if not found:
             raise self.fail(None, f"expected a (define ({kind} NAME) ...) form; this file "
                             f"has only {'problem' if kind == 'domain' else 'domain'}s")
+        first_at: dict[str, Node] = {}
+        for label, node in found:  # symbols are read lower-cased: ONE and one are one name
+            if label and first_at.setdefault(label, node) is not node:
+                raise self.fail(node.line, f"two {kind}s are named {label!r}, at lines "
+                                f"{first_at[label].line} and {node.line} (names ignore "
+                                f"case): rename one, a name must pick one {kind}")
         labels = ", ".join(label for label, _ in found)
         if name is not None:
             chosen = [node for label, node in found if label == name.lower()]
@@ -150,8 +156,7 @@ class Reader:
             top = chosen[0]
         elif len(found) > 1:
             raise self.fail(found[1][1].line, f"this file has {len(found)} {kind}s "
-                            f"({labels}): pick one by name"
-                            + (f" ({self.source}:{found[0][0]})" if kind == "problem" else ""))
+                            f"({labels}): pick one by name" + self._pick_advice(kind, found))
         else:
             top = found[0][1]
         items = self.lst(top, "(define ...)")
@@ -160,6 +165,16 @@ class Reader:
             raise self.fail(items[1].line, f"expected ({kind} NAME), found {items[1].text()}")
         grammar = _PROBLEM_NAME if kind == "problem" else _NAME
         return top, self.name(head[1], f"a {kind} name", grammar=grammar), items[2:]
+
+    def _pick_advice(self, kind: str, found: list[tuple[str, Node]]) -> str:
+        """How to name one of the problems ``found`` (the first named one), as the place the
+        text came from takes it: ``FILE:NAME`` for a file, the name alone for a text."""
+        named = next((label for label, _ in found if label), None)
+        if kind != "problem" or named is None:
+            return ""
+        if not self.source.startswith("<"):  # a file's name, not a label like <problem>
+            return f" ({self.source}:{named})"
+        return f" (its name, such as {named!r})"
 
     def checked(self, tok: str, line: int) -> str:
         """``tok`` lower-cased, or a :class:`PDDLError` naming its first character that

@@ -6,7 +6,8 @@ them: what the enumeration (:mod:`gdq_pddl.pddl.reachable`) and reality's outcom
 (:class:`RowConditions`: many conditions on one row),
 :func:`row_keys` gives each row a sortable key (:class:`KeyIndex` finds them),
 :func:`compile_ops` compiles a task's ground actions (:class:`CompiledOp`: when one
-applies, its effects) and :func:`apply_effect` applies an effect. :func:`applicable_rows`
+applies, its outcomes' effects as :class:`RowEffect`, which applies one and says what it
+earns). :func:`applicable_rows`
 finds where a ground action applies, testing it only on the rows where its rarest
 precondition fact holds (:func:`fact_rows`, on chunks of at most :func:`filter_chunk`
 rows).
@@ -105,15 +106,66 @@ class KeyIndex:
 
 
 @dataclass(frozen=True)
+class RowEffect:
+    """What one outcome of a ground action does (a
+    :class:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome`, or a STRIPS action's one effect),
+    on word rows: its adds, deletes and conditional effects (:meth:`apply`), and what it
+    earns besides the action's cost (:meth:`gain`), as ``GroundOutcome.apply`` and
+    ``GroundOutcome.gain`` do on one state's bitmask."""
+
+    add: np.ndarray
+    dele: np.ndarray
+    conditional: tuple[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], ...] = ()
+    reward: float = 0.0
+    rewards: tuple[tuple[tuple[tuple[np.ndarray, np.ndarray], ...], float], ...] = ()
+
+    @classmethod
+    def of(cls, outcome, n_words: int, zero: np.ndarray | None = None) -> RowEffect:
+        """``outcome`` (a ``GroundOutcome`` or a STRIPS ``GroundOp``) on rows of
+        ``n_words`` words (``zero``: the row of no fact, shared by every empty mask)."""
+        def w(mask: int) -> np.ndarray:
+            return zero if not mask and zero is not None else words(mask, n_words)
+
+        return cls(w(outcome.add), w(outcome.dele),
+                   tuple(tuple(map(w, c)) for c in getattr(outcome, "conditional", ())),
+                   float(getattr(outcome, "reward", 0.0)),
+                   tuple((tuple((w(p), w(n)) for p, n in alts), amount)
+                         for alts, amount in getattr(outcome, "rewards", ())))
+
+    def apply(self, rows: np.ndarray) -> np.ndarray:
+        """The rows after the effect (adds win)."""
+        add, dele = self.add, self.dele
+        if self.conditional:
+            add, dele = np.broadcast_to(add, rows.shape), np.broadcast_to(dele, rows.shape)
+            for pos, neg, a, d in self.conditional:
+                fire = holds(rows, pos, neg)[:, None]
+                add, dele = add | np.where(fire, a, 0), dele | np.where(fire, d, 0)
+        return (rows & ~dele) | add
+
+    def gain(self, rows: np.ndarray) -> np.ndarray:
+        """float64[n]: what the outcome earns taken in each row (its rewards less its
+        costs inside ``when``, ``forall`` and ``probabilistic``)."""
+        earned = np.zeros(len(rows))
+        for alts, amount in self.rewards:
+            earned = earned + np.where(np.logical_or.reduce(
+                [holds(rows, p, n) for p, n in alts]), amount, 0.0)
+        return self.reward + earned
+
+
+@dataclass(frozen=True)
 class CompiledOp:
     """A ground action on word rows: when it applies, its effects (``known``: the edges,
-    ``other``: the states only reality reaches) and their ranks in a state's order."""
+    ``other``: the states only reality reaches, both in ``outcomes``) and their ranks in a
+    state's order."""
 
     pre: np.ndarray
     neg: np.ndarray
     alternatives: tuple[tuple[np.ndarray, np.ndarray], ...]
-    known: tuple
-    other: tuple
+    known: tuple[RowEffect, ...]
+    other: tuple[RowEffect, ...]
+    outcomes: tuple[RowEffect, ...] = ()
+    """Every outcome of the ground action, in its order (a STRIPS action: its effect);
+    empty unless compiled so (``compile_ops(..., every=True)``)."""
 
     def applies(self, rows: np.ndarray) -> np.ndarray:
         ok = holds(rows, self.pre, self.neg)
@@ -161,38 +213,35 @@ def applicable_rows(op: CompiledOp, rows: np.ndarray, holding: dict[int, np.ndar
     return cand[op.applies(rows[cand])] if len(cand) else cand
 
 
-def apply_effect(rows: np.ndarray, effect: tuple) -> np.ndarray:
-    """The rows after an effect ``(add, delete, conditional effects)`` (adds win)."""
-    add, dele, conditional = effect
-    if conditional:
-        add, dele = np.broadcast_to(add, rows.shape), np.broadcast_to(dele, rows.shape)
-        for pos, neg, a, d in conditional:
-            fire = holds(rows, pos, neg)[:, None]
-            add, dele = add | np.where(fire, a, 0), dele | np.where(fire, d, 0)
-    return (rows & ~dele) | add
+def compile_ops(task: GroundTask, n_words: int, every: bool = False) -> list[CompiledOp]:
+    """Every ground action of ``task`` on rows of ``n_words`` words; ``every``: with all
+    its outcomes (:attr:`CompiledOp.outcomes`, what reality's outcomes read), not only
+    those that lead somewhere new (the enumeration's)."""
+    zero = words(0, n_words)
+    zero.setflags(write=False)
 
-
-def compile_ops(task: GroundTask, n_words: int) -> list[CompiledOp]:
-    """Every ground action of ``task`` on rows of ``n_words`` words."""
     def w(mask: int) -> np.ndarray:
         return words(mask, n_words)
 
-    def effect(o) -> tuple:
-        return w(o.add), w(o.dele), tuple(tuple(map(w, c)) for c in
-                                         getattr(o, "conditional", ()))
+    def effect(o) -> RowEffect:
+        return RowEffect.of(o, n_words, zero)
 
     out = []
     for op in task.ops:
         alts = tuple((w(p), w(n)) for p, n in op.alternatives) \
             if getattr(task, "disjunctive", False) else ()
         if isinstance(op, ProbabilisticOp):
-            known = tuple(effect(op.outcomes[k]) for k in op.known)
-            other = tuple(effect(o) for j, o in enumerate(op.outcomes)
-                          if o.probability > 0 and not o.stuck and j not in op.known
-                          and (o.add or o.dele or o.conditional))
+            lead = [j for j, o in enumerate(op.outcomes) if o.probability > 0 and not o.stuck
+                    and j not in op.known and (o.add or o.dele or o.conditional)]
+            need = range(len(op.outcomes)) if every else (*op.known, *lead)
+            made = {j: effect(op.outcomes[j]) for j in need}
+            known = tuple(made[k] for k in op.known)
+            other = tuple(made[j] for j in lead)
+            effects = tuple(made[j] for j in range(len(op.outcomes))) if every else ()
         else:
-            known, other = (effect(op),), ()
-        out.append(CompiledOp(w(op.pre), w(op.neg), alts, known, other))
+            known = (effect(op),)
+            other, effects = (), known if every else ()
+        out.append(CompiledOp(w(op.pre), w(op.neg), alts, known, other, effects))
     return out
 
 

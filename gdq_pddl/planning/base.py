@@ -13,8 +13,9 @@ from pathlib import Path
 from typing import NamedTuple, Protocol, runtime_checkable
 
 from gdq_pddl.errors import PlanningError, SizeError
+from gdq_pddl.inputs import text_hash
 from gdq_pddl.limits import MAX_INIT_ATOMS, MAX_TOLERANCE
-from gdq_pddl.pddl.grounding import GroundTask, ground
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask, ground
 from gdq_pddl.pddl.model import Domain, Problem
 from gdq_pddl.pddl.parser import parse_domain
 from gdq_pddl.pddl.ppddl import determinise, ground_ppddl
@@ -94,6 +95,9 @@ class PlanningProblem:
             self.__dict__["learner_task"], self.__dict__["task"] = tasks
         self._results: dict[tuple, PlanResult] = {}
         self.text_gap = ""  # why the text cannot carry the domain (writer.untold)
+        self.text_hashes: tuple[str, str] | None = None
+        """The hashes of the domain's and the problem's texts as read (:meth:`from_texts`):
+        what learner and policy files record of the problem (``docs/learners.md``)."""
 
     @classmethod
     def from_texts(cls, domain_text: str, problem_text: str, domain_source: str = "<domain>",
@@ -104,15 +108,18 @@ class PlanningProblem:
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
+        hashes = text_hash(domain_text), text_hash(problem_text)
         if not domain.probabilistic:
             out = cls(domain, problem, domain_text, problem_text)
             out.text_gap = untold(domain, problem)  # a goal with alternatives
+            out.text_hashes = hashes
             return out
         det, gap = determinise(domain, determinisation), untold(domain, problem)
         out = cls(det, problem, "" if gap else write_domain(det),
                   write_parsed_problem(problem, domain), domain,
                   ground_ppddl(domain, problem, determinisation))
         out.text_gap = gap
+        out.text_hashes = hashes
         return out
 
     @classmethod
@@ -127,6 +134,11 @@ class PlanningProblem:
     def task(self) -> GroundTask:
         """The grounded problem the planners search (computed once)."""
         return ground(self.domain, self.problem)
+
+    @cached_property
+    def ops_by_name(self) -> dict[str, GroundOp]:
+        """The grounded task's actions by name (what a plan's steps are looked up in)."""
+        return {op.name: op for op in self.task.ops}
 
     @cached_property
     def learner_task(self) -> GroundTask:

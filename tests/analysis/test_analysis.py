@@ -280,3 +280,17 @@ def test_paper_experiments_get_no_methods_section(full):
     text = (out / "REPORT.md").read_text()
     assert "Methods compared" not in text
     assert text.count("**Summary.** GDQ, knowledge as a prior model (`GDQ`): ") == 1
+
+
+def test_the_ground_truth_table_gives_the_goal_probabilities_beside_v_star(tmp_path):
+    out = write_output(tmp_path, switches=False, robot=False)
+    optimal = json.loads((out / "optimal.json").read_text())
+    optimal["A"] |= {"goal_v_star_policy": 0.95, "goal_within_limit": 0.96,
+                     "goal_no_limit": 1.0, "goal_no_limit_exact": True}
+    (out / "optimal.json").write_text(json.dumps(optimal))
+    make_all(out)
+    text = (out / "REPORT.md").read_text()
+    truth = text[text.index("## Ground truth"):]
+    assert "| V* | goal: V*'s policy / no limit |" in truth
+    assert re.search(r"^\| A \| .+? \| [\d.]+ \| 0\.950 / 1\.000 \|", truth, re.M)
+    assert re.search(r"^\| B \| .+? \| [\d.]+ \| – \|", truth, re.M)

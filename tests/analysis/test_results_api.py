@@ -95,8 +95,8 @@ def _rewrite(path: Path, change) -> None:
 
 
 @pytest.mark.parametrize(("name", "change", "message"), [
-    ("truncated", lambda lines: lines[:-7], r"method 'Q-learning' has 233 episodes, "
-     r"config.json says 240 \(3 runs x 80\)"),
+    ("truncated", lambda lines: lines[:-7], r"experiment 'run' \(D x 40\), method "
+     r"'Q-learning', run 2 has 33 episodes, config.json says 40"),
     ("duplicated", lambda lines: [*lines, lines[5]], r"line 482 repeats an episode "
      r"\(experiment run, method GDQ, task C, run 0, episode 5\)"),
     ("renamed", lambda lines: [lines[0]] + [line.replace(",Q-learning,", ",Dyna-Q,")
@@ -120,6 +120,90 @@ def test_results_that_contradict_the_config_are_refused(tmp_path, capsys, name, 
     assert text.count("\n") == 1 and "Traceback" not in text and str(out) in text
     assert not (out / "REPORT.md").exists()
     assert len(load_results(out, check=False))  # the unchecked read still works
+
+
+def _cells(line: str, **change) -> str:
+    """A CSV line of episodes.csv with some of its first five cells changed."""
+    cells = line.rstrip("\n").split(",")
+    for name, value in change.items():
+        cells[("experiment", "method", "task", "run", "episode").index(name)] = str(value)
+    return ",".join(cells) + "\n"
+
+
+def _moved(lines: list[str]) -> list[str]:
+    """Run 0's last episode of task C (GDQ) moved to run 1 as its 41st: 39 and 41."""
+    i = next(i for i, line in enumerate(lines) if line.startswith("run,GDQ,C,0,40,"))
+    return lines[:i] + [_cells(lines[i], run=1, episode=41)] + lines[i + 1:]
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda lines: lines[:5] + [_cells(lines[5], episode=99999)] + lines[6:],
+     r"line 6: episode 99999 of experiment 'run', task 'C', run 0: config.json schedules "
+     r"episodes 1 to 40 of it"),
+    (_moved, r"line \d+: episode 41 of experiment 'run', task 'C', run 1: config.json "
+             r"schedules episodes 1 to 40"),
+    (lambda lines: lines[:5] + [_cells(lines[5], task="E")] + lines[6:],
+     r"line 6: task 'E' of experiment 'run' was never scheduled \(config.json: 'run' "
+     r"scheduled C, D\)"),
+    (lambda lines: [*lines, _cells(lines[5], task="E")],
+     r"line 482: task 'E' of experiment 'run' was never scheduled"),
+    (lambda lines: [*lines, _cells(lines[5], experiment="other")],
+     r"line 482: method 'GDQ' of experiment 'other' was never run"),
+])
+def test_every_row_is_checked_against_the_config(tmp_path, change, message):
+    """An episode outside its run's schedule, a row moved to another run, a task the run
+    never scheduled (in place of another, or added): refused naming the line."""
+    out = write_folder(tmp_path / "o", tasks=("C", "D"))
+    _rewrite(out / "episodes.csv", change)
+    with pytest.raises(ResultsError, match=message) as err:
+        load_results(out)
+    assert str(err.value).startswith(str(out / "episodes.csv"))
+
+
+def test_a_missing_episode_names_its_run(tmp_path):
+    """A row deleted: the run short of an episode is named, with the config's count."""
+    out = write_folder(tmp_path / "o")
+    _rewrite(out / "episodes.csv", lambda lines: [line for line in lines
+                                                  if not line.startswith("run,GDQ,C,1,17,")])
+    with pytest.raises(ResultsError, match=r"experiment 'run' \(C x 40\), method 'GDQ', run "
+                                           r"1 has 39 episodes, config.json says 40"):
+        load_results(out)
+
+
+@pytest.mark.parametrize(("content", "key"), [
+    ("{not json", "not JSON"), ("[1, 2]", "a JSON list"), ('{"experiments": 3}', "experiments"),
+    ('{"experiments": [{"name": "run", "schedule": [["C", 40]], "methods": ["GDQ"]}]}',
+     "experiments[0].runs is 'missing'"),
+    ('{"experiments": [{"name": "run", "schedule": [["C", "x"]], "methods": ["GDQ"], '
+     '"runs": 3}]}', "experiments[0].schedule"),
+    ('{"experiments": [{"name": "run", "schedule": [["C", 40]], "methods": "GDQ", '
+     '"runs": 3}]}', "experiments[0].methods"),
+    ('{"experiments": [7]}', "experiments[0] is 7"),
+])
+def test_a_damaged_config_is_refused_not_ignored(tmp_path, capsys, content, key):
+    """A config.json that cannot be read turned every check off: now it is refused, by
+    load_results and report, naming the file and the key."""
+    out = write_folder(tmp_path / "o")
+    (out / "config.json").write_text(content)
+    with pytest.raises(ResultsError, match="damaged") as err:
+        load_results(out)
+    assert str(out / "config.json") in str(err.value) and key in str(err.value)
+    assert main(["report", str(out)]) == 2
+    text = capsys.readouterr().err
+    assert text.count("\n") == 1 and key in text and "Traceback" not in text
+
+
+def test_report_on_a_killed_run_says_how_to_finish_it(tmp_path, capsys):
+    """A run killed before it wrote episodes.csv: config.json and some units."""
+    out = write_folder(tmp_path / "o")
+    (out / "episodes.csv").unlink()
+    (out / "units").mkdir()
+    (out / "units" / "run__C__GDQ__run0.npz").write_bytes(b"")
+    assert main(["report", str(out)]) == 2
+    text = capsys.readouterr().err
+    assert "did not finish" in text and "1 of 6 runs saved" in text and "--resume" in text
+    with pytest.raises(ResultsError, match="did not finish"):
+        load_results(out)
 
 
 def test_iqm_is_the_mean_of_the_middle_half():

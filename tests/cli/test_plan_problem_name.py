@@ -5,6 +5,7 @@ import json
 
 import pytest
 
+from tests.cli.hostile import refused
 from tests.helpers import cli
 
 DOMAIN = """(define (domain switches) (:requirements :typing :probabilistic-effects)
@@ -56,3 +57,35 @@ def test_run_reads_the_domain_from_the_problems_file(capsys, tmp_path):
                     "--out", tmp_path / "out")
     assert code == 0, out
     assert (tmp_path / "out" / "episodes.csv").read_text().count("\n") == 3  # header, 2
+
+
+@pytest.mark.parametrize("second", ["one", "ONE"])
+def test_two_problems_of_one_name_are_refused_naming_both_lines(capsys, tmp_path, second):
+    """``FILE:one`` ran the first of two problems named one; without a name, the advice
+    named that spelling. Both now say which lines hold the name twice (issue 38)."""
+    (tmp_path / "d.pddl").write_text(DOMAIN)
+    text = PROBLEMS.replace("(problem two)", f"(problem {second})")
+    (tmp_path / "p.pddl").write_text(text)
+    lines = [i for i, line in enumerate(text.splitlines(), 1) if "(define (problem" in line]
+    for problem in (f"{tmp_path / 'p.pddl'}:one", str(tmp_path / "p.pddl")):
+        code, out = cli(capsys, "plan", "--domain", tmp_path / "d.pddl", "--problem", problem)
+        refused(code, out, "two problems are named 'one'", f"lines {lines[0]} and {lines[1]}")
+        assert code == 2 and ":one)" not in out, out
+
+
+def test_an_empty_problem_name_is_said_to_be_empty(capsys, tmp_path):
+    (tmp_path / "d.pddl").write_text(DOMAIN)
+    (tmp_path / "p.pddl").write_text(PROBLEMS)
+    code, out = cli(capsys, "plan", "--domain", tmp_path / "d.pddl", "--problem",
+                    f"{tmp_path / 'p.pddl'}:")
+    refused(code, out, "name after", "is empty")
+    assert code == 2 and "cannot be read" not in out
+
+
+def test_the_advice_for_a_text_without_a_file_is_the_name():
+    from gdq_pddl.errors import PDDLError
+    from gdq_pddl.planning import PlanningProblem
+
+    with pytest.raises(PDDLError, match=r"pick one by name \(its name, such as 'one'\)"):
+        PlanningProblem.from_texts(DOMAIN, PROBLEMS)
+    assert PlanningProblem.from_texts(DOMAIN, PROBLEMS, problem_name="two").problem.name == "two"

@@ -161,3 +161,52 @@ def test_pddl_rgb_array_draws_the_facts_at_one_size():
     second = env.render()
     assert first.shape == second.shape == (480, 640, 3) and first.dtype == np.uint8
     assert first.min() < 128 and not np.array_equal(first, second)
+
+
+@pytest.mark.parametrize("start,message", [
+    (3, r"start 3 is of type int; expected a string of fluent facts"),
+    (b"(at c11)", r"is of type bytes"),
+    ([3], r"3 \(of type int\) is not a fact"),
+    (["(at c11) (open c11)"], r"'\(at c11\) \(open c11\)' is not one fact"),
+    ({"(at c11)": 1}, r"is of type dict"),
+    ("at c11", r"text outside \( \) at character 1: 'at'"),
+    ("(at c11) (open c11", r"unbalanced parentheses: a '\(' never closed"),
+    ("(at c11)) (open c11", r"unbalanced parentheses: a '\)' without its '\(' at character 9"),
+    ("(at (c11))", r"nested parentheses at character 5"),
+])
+def test_a_start_that_is_not_facts_is_refused(start, message):
+    """Issue 38: an int was a TypeError, bytes and lists of non-strings became facts such
+    as ``(116)``, and text outside ``( )`` was dropped."""
+    with pytest.raises(ConfigError, match=message):
+        make(PDDL_ID).reset(options={"start": start})
+
+
+@pytest.mark.parametrize("extra", [" (", ")", " x", " (open c11"])
+def test_a_start_with_more_than_its_facts_is_not_read_as_them(extra):
+    """Unbalanced parentheses or words around a right start were dropped, so that the text
+    was silently read as that start."""
+    env = make(PDDL_ID, render_mode="ansi")
+    env.reset(seed=0)
+    facts = env.render().split(": ", 1)[1]  # the start, as render() lists it
+    assert env.reset(options={"start": facts})[0] == 0
+    with pytest.raises(ConfigError, match="unbalanced parentheses|text outside"):
+        env.reset(options={"start": facts + extra})
+
+
+@pytest.mark.parametrize("options", [3, ["start"], "start"])
+def test_reset_options_that_are_not_a_dict_are_refused(options):
+    with pytest.raises(ConfigError, match="reset options: expected a dict"):
+        make(PDDL_ID).reset(options=options)
+
+
+@pytest.mark.parametrize("env_id,kwargs,name", [
+    (PDDL_ID, {"domain": 123, "problem": "keys-2"}, "domain=123"),
+    (PDDL_ID, {"domain": "keys", "problem": ["keys-2"]}, r"problem=\['keys-2'\]"),
+    (PDDL_ID, {"domain": "keys", "problem": "keys-2", "dynamics": 1.5}, "dynamics=1.5"),
+    (PDDL_ID, {"domain": b"keys", "problem": "keys-2"}, "domain=b'keys'"),
+    (OFFICE_ID, {"world": 3}, "world=3"),
+])
+def test_make_names_a_parameter_of_the_wrong_type(env_id, kwargs, name):
+    with pytest.raises(ConfigError, match=f"^{name}: expected the name of a shipped .* or a "
+                       r"file's path \(a str or an os.PathLike\).*, got "):
+        gymnasium.make(env_id, **kwargs)

@@ -7,6 +7,7 @@ online exploration where the states do not fit."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -301,3 +302,60 @@ def test_cli_falls_back_to_online_past_the_budget(tmp_path, capsys, monkeypatch)
     assert main(["run", "--task", "C", "--explore", "online", "--out",
                  str(tmp_path / "x")]) != 0
     assert "--explore is for a PPDDL problem" in capsys.readouterr().err
+
+
+def test_a_step_limit_below_h_max_is_refused_online_as_enumerated(tmp_path, capsys) -> None:
+    """keys-ppddl-2: the shortest plan has 7 actions (h_max from the start: 7); a step limit
+    of 5 is refused by the enumerated run, and now online too, naming the same key
+    (issue 38: online ran every episode into the wall and wrote a report)."""
+    from tests.cli.hostile import refused
+    from tests.helpers import cli
+
+    shipped_toml = resolve_pddl("keys-ppddl", "keys-ppddl-2", None)[2]
+    short = tmp_path / "short.toml"
+    short.write_text(shipped_toml.read_text().replace("step_limit = 25", "step_limit = 5"))
+    for explore in ("enumerate", "online"):
+        code, text = cli(capsys, "run", "--domain", "keys-ppddl", "--problem", "keys-ppddl-2",
+                         "--dynamics", short, "--explore", explore, "--method", "Q-learning",
+                         "--episodes", 2, "--runs", 1, "--jobs", 1, "--no-report", "--out",
+                         tmp_path / explore)
+        refused(code, text, "dynamics.step_limit", "5 is less than the shortest plan",
+                "no episode can reach the goal")
+        assert code == 2 and not (tmp_path / explore / "episodes.csv").exists()
+    base = shipped("keys-ppddl", "keys-ppddl-2")
+    assert OnlineInstance(base, dynamics=replace(base.dynamics, step_limit=7)).h_start == 9
+
+
+def test_estimate_weight_is_checked(monkeypatch) -> None:
+    """A weight is a finite real in [1, 100] whose chain rows fit the table budget (1e6
+    built 3e7 chain rows until memory ran out; 1e300 overflowed; a string was a TypeError)."""
+    base = shipped("lift", "lift-1")
+    for bad in (1e6, 1e300, 101, "2", None, True, float("inf"), 0.99):
+        with pytest.raises(ConfigError, match=r"^estimate_weight must be a finite number "
+                           r"in \[1, 100\], got"):
+            OnlineInstance(base, estimate_weight=bad)
+    assert OnlineInstance(base, estimate_weight=np.float64(100.0)).estimate_weight == 100.0
+    for bad in ("0.3", -0.1, float("nan")):
+        with pytest.raises(ConfigError, match="^darling_tolerance must be a finite number"):
+            OnlineInstance(base, darling_tolerance=bad)
+    monkeypatch.setattr("gdq_pddl.pddl.reachable.TABLE_BUDGET", 100_000)
+    with pytest.raises(ConfigError, match="estimate_weight 100: .* chain rows .*table budget"):
+        OnlineInstance(base, estimate_weight=100)
+
+
+MOST_LIKELY_NOWHERE = ("""(define (domain rare) (:requirements :probabilistic-effects)
+  (:predicates (on))
+  (:action flip :parameters () :precondition (not (on))
+    :effect (probabilistic 0.1 (on))))""", """(define (problem p) (:domain rare)
+  (:init) (:goal (on)))""")
+
+
+def test_most_likely_knowledge_without_a_way_says_so() -> None:
+    """The most likely outcome of the one action does nothing: the knowledge has no way
+    to the goal, though reality reaches it (issue 38: online said "unreachable even
+    ignoring delete effects", which is false of reality)."""
+    base = PDDLInstance.from_texts(*MOST_LIKELY_NOWHERE, determinisation="most-likely")
+    with pytest.raises(PlanningError, match="most-likely determinisation .* has no way to the "
+                       "goal .*less likely outcomes may still reach it.*all-outcomes"):
+        OnlineInstance(base)
+    assert OnlineInstance(PDDLInstance.from_texts(*MOST_LIKELY_NOWHERE)).h_start == 1

@@ -44,7 +44,10 @@ def test_an_area_number_past_the_positions_names_its_key(number):
 
 def _digest(model) -> str:
     h = hashlib.sha256()
-    for x in model:
+    for name, x in zip(model._fields, model, strict=True):
+        if name == "own_scale":  # added after the pins (issue 38): the office's is False
+            assert x is False
+            continue
         h.update(np.ascontiguousarray(x).tobytes() if isinstance(x, np.ndarray)
                  else repr(x).encode())
     return h.hexdigest()[:16]

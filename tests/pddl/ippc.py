@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+import numpy as np
 import pytest
 
 from gdq_pddl.pddl import parse_domain, parse_problem
@@ -260,3 +261,173 @@ def interpreted_model_agrees(domain_text: str, problem_text: str) -> None:
             assert got.keys() == want.keys(), (domain_text, name, sorted(state))
             for t, p in want.items():
                 assert got[t] == pytest.approx(p), (domain_text, name)
+
+
+# --- the interpreter's rewards and costs: what each outcome pays, on either scale ---------
+
+def cost_effect(rng, depth: int, variables: list[str]) -> str:
+    """A random effect of rewards and costs (``(increase (reward) k)``, ``(decrease
+    (reward) k)``, ``(increase (total-cost) k)``) beside literals, nested in ``and``,
+    ``when``, ``forall`` and ``probabilistic``, a forall's body any of them (a forall of a
+    ``probabilistic``: one draw per binding)."""
+    k = int(rng.integers(1, 9))
+    kind = int(rng.integers(0, 7)) if depth > 0 else int(rng.integers(0, 3))
+    if kind <= 2:
+        return ("(increase (reward) {k})", "(decrease (reward) {k})",
+                "(increase (total-cost) {k})")[kind].format(k=k)
+    if kind == 3:
+        return f"(when {random_condition(rng, 2, variables)} " \
+               f"{cost_effect(rng, depth - 1, variables)})"
+    if kind == 4:
+        v = f"?c{depth}"
+        return f"(forall ({v} - t) {cost_effect(rng, depth - 1, [*variables, v])})"
+    if kind == 5:
+        return f"(probabilistic 1/3 {cost_effect(rng, depth - 1, variables)} " \
+               f"1/2 (and {random_effect(rng, 1, variables)} " \
+               f"{cost_effect(rng, depth - 1, variables)}))"
+    return f"(and {cost_effect(rng, depth - 1, variables)} " \
+           f"{cost_effect(rng, depth - 1, variables)})"
+
+
+def costed_domain(rng) -> tuple[str, str]:
+    """:func:`random_domain` with costs and rewards (:func:`cost_effect`) beside each
+    action's effect, some at its top (the action's cost), some inside constructs, and an
+    action ``finish`` that reaches the goal (a goal no action reaches is refused)."""
+    domain_text, problem_text = random_domain(rng)
+    lines = domain_text.split("\n")
+    for i, line in enumerate(lines):
+        if line.strip().startswith(":effect"):
+            closers = ")" * (line.count(")") - line.count("("))
+            top = "(increase (total-cost) 2)" if rng.random() < 0.5 else ""
+            lines[i] = f"    :effect (and {random_effect(rng, 2, ['?x'])} {top} " \
+                f"{cost_effect(rng, 3, ['?x'])}){closers}"
+    finish = "  (:action finish :parameters (?x - t) :precondition (and) :effect (g)))\n"
+    return "\n".join(lines).rstrip()[:-1] + "\n" + finish, problem_text
+
+
+def _amount(e) -> float | None:
+    """The signed amount of a reward or cost effect (None: another effect)."""
+    if e and e[0] in ("increase", "decrease") and e[1] in (["reward"], ["total-cost"]):
+        return float(e[2]) * (1.0 if e[0] == "increase" and e[1] == ["reward"] else -1.0)
+    return None
+
+
+def action_cost(e) -> tuple[float, bool]:
+    """The cost effect ``e`` states whatever happens (its negative amounts reached through
+    ``and`` alone) and whether it states one anywhere (a negative amount, at any depth)."""
+    def anywhere(x) -> bool:
+        amount = _amount(x)
+        return (amount is not None and amount < 0) or \
+            any(isinstance(y, list) and anywhere(y) for y in x)
+
+    def top(x) -> float:
+        amount = _amount(x)
+        if amount is not None:
+            return -amount if amount < 0 else 0.0
+        return sum(top(y) for y in x[1:]) if x and x[0] == "and" else 0.0
+
+    return top(e), anywhere(e)
+
+
+def paying_outcomes(e, b: dict[str, str], state: frozenset[str],
+                    at_top: bool = True) -> list[tuple[float, frozenset, frozenset, float]]:
+    """``[(probability, adds, deletes, reward)]`` of effect ``e`` in ``state``: the reward
+    its rewards and costs pay, those of :func:`action_cost` (the action's) left out."""
+    head = e[0] if e else "and"
+    amount = _amount(e)
+    if amount is not None:
+        paid = 0.0 if at_top and amount < 0 else amount
+        return [(1.0, frozenset(), frozenset(), paid)]
+
+    def both(out, more):
+        return [(p * q, a | a2, d | d2, r + r2) for p, a, d, r in out for q, a2, d2, r2 in more]
+
+    nothing = [(1.0, frozenset(), frozenset(), 0.0)]
+    if head == "and":
+        out = nothing
+        for x in e[1:]:
+            out = both(out, paying_outcomes(x, b, state, at_top))
+        return out
+    if head == "forall":
+        out = nothing
+        for o in OBJECTS:
+            out = both(out, paying_outcomes(e[2], {**b, e[1][0]: o}, state, False))
+        return out
+    if head == "when":
+        return paying_outcomes(e[2], b, state, False) if holds(e[1], b, state) else nothing
+    if head == "probabilistic":
+        out, total = [], 0.0
+        for p_text, sub in zip(e[1::2], e[2::2], strict=True):
+            p = float(Fraction(p_text))
+            total += p
+            out += [(p * q, a, d, r) for q, a, d, r in paying_outcomes(sub, b, state, False)]
+        return out + [(1.0 - total, frozenset(), frozenset(), 0.0)]
+    return [(p, a, d, 0.0) for p, a, d in effect(e, b, state)]
+
+
+def interpreted_rewards_agree(domain_text: str, problem_text: str, own: bool,
+                              online: bool) -> None:
+    """In every reachable state, each ground action's outcomes as the true model has them
+    (next state and what the step pays besides the action's cost, probabilities merged)
+    and the action's cost are the interpreter's, on the problem's own scale (``own``) or
+    the goal scale (an action stating no cost costs 1 there); ``online``: as a problem
+    explored online finds them (every state expanded), else enumerated."""
+    from gdq_pddl.envs.online import OnlineInstance
+    from gdq_pddl.envs.pddl_env import PDDLInstance
+
+    metric = "(:metric maximize (reward))" if own else "(:metric minimize (total-cost))"
+    inst = PDDLInstance.from_texts(domain_text, problem_text.rstrip()[:-1] + f" {metric})")
+    assert inst.reward_scale == ("problem" if own else "goal")
+    schemas = {a[1]: a[7] for a in sexp(domain_text)[0]
+               if isinstance(a, list) and a[0] == ":action"}
+    task = inst.problem.learner_task
+    statics = frozenset(task.statics)
+    for a, cost in enumerate(inst.costs):
+        schema = task.ops[a].name.strip("()").split()[0]
+        top, stated = action_cost(schemas[schema])
+        assert (cost.kind, cost.a) == ("const", top if stated or own else 1.0), \
+            (domain_text, task.ops[a].name)
+
+    def expected(state: frozenset[str], name: str) -> dict[tuple, float]:
+        schema, arg = name.strip("()").split()
+        out: dict[tuple, float] = {}
+        for p, adds, dels, r in paying_outcomes(schemas[schema], {"?x": arg}, state):
+            key = ((state - dels) | adds, round(r, 9))
+            out[key] = out.get(key, 0.0) + p
+        return {k: p for k, p in out.items() if p > 1e-12}
+
+    def compare(state, name, rows) -> None:
+        got: dict[tuple, float] = {}
+        for p, t, r in rows:
+            key = (t, round(r, 9))
+            got[key] = got.get(key, 0.0) + p
+        want = expected(state, name)
+        assert got.keys() == want.keys(), (domain_text, name, sorted(state), own, online)
+        for k, p in want.items():
+            assert got[k] == pytest.approx(p), (domain_text, name, own, online)
+
+    if online:
+        graph = OnlineInstance(inst).graph
+        x = 0
+        while x < graph.n_states:  # (g) never holds: every state is expanded
+            graph.expand([x])
+            state = graph.atoms(x) | statics
+            offered = graph.offered(x)
+            column, prob, nxt, _, gain = graph.outcomes(x)
+            for j, k in enumerate(offered.tolist()):
+                rows = [(p, graph.atoms(int(t)) | statics, g) for c, p, t, g in
+                        zip(column, prob, nxt, gain, strict=True) if c == j]
+                compare(state, task.ops[k].name, rows)
+            x += 1
+        return
+    m = inst.model
+    gains = m.gain if m.gain.size else np.zeros(len(m.prob))
+    for s in np.flatnonzero(~inst.learner_goal).tolist():  # goal states: not expanded
+        state = inst.atoms(s) | statics
+        for j, k in enumerate(m.acts[s].tolist()):
+            if k < 0:
+                continue
+            i = s * m.acts.shape[1] + j
+            rows = [(m.prob[o], inst.atoms(int(m.next[o])) | statics, gains[o])
+                    for o in range(m.ptr[i], m.ptr[i + 1])]
+            compare(state, task.ops[k].name, rows)

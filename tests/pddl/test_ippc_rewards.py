@@ -7,13 +7,17 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.ppddl import ground_costs, ground_ppddl
 from tests.pddl.ippc import (
     OBJECTS,
+    costed_domain,
     holds,
+    interpreted_rewards_agree,
     random_condition,
     random_domain,
     random_effect,
@@ -151,3 +155,15 @@ def test_rewards_agree_with_an_independent_interpreter(seed):
                 (costs[op.name] or 0.0)
             assert ours == pytest.approx(expected_reward(schemas[schema], {"?x": arg}, atoms),
                                          abs=1e-9), (op.name, learner.atoms(state))
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), own=st.booleans(), online=st.booleans())
+def test_costs_and_rewards_in_every_construct_agree_with_the_interpreter(seed, own, online):
+    """Property (issue 38): costs and rewards at the top of an effect and inside ``and``,
+    ``when``, ``forall`` (of a ``probabilistic`` too) and ``probabilistic``, nested, on
+    the goal scale and the problem's own, enumerated and online: every outcome pays what
+    an interpreter of the text pays, and each action costs what it states whatever
+    happens (1 on the goal scale where it states no cost anywhere). On the goal scale the
+    costs inside constructs were dropped before."""
+    interpreted_rewards_agree(*costed_domain(np.random.default_rng(seed)), own, online)

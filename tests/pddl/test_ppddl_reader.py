@@ -91,8 +91,10 @@ WALK_EFFECT = "(probabilistic 0.9 (and (at ?b) (not (at ?a))))"
        st.booleans())
 def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, scientific):
     """Property: probabilities written as decimals (``0.0000125``) or in scientific
-    notation (``125e-7``) that sum to 1 leave no "no effect" outcome, and one more of
-    10**-MAX_EXPONENT, the smallest a number may be written, makes the sum too large."""
+    notation (``125e-7``) that sum to 1 leave no "no effect" outcome; one more of 1e-13
+    (what floats printed in full miss 1 by) is taken as a sum of 1, one of 1e-8 is too
+    much, and one of 10**-MAX_EXPONENT, the smallest a number may be written, underflows
+    a float."""
     from gdq_pddl.pddl.formulas import MAX_EXPONENT
 
     ks = [*weights, 10**digits - sum(weights)]
@@ -102,8 +104,16 @@ def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, s
     walk = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs})")).actions[0]
     assert all(o.effect for o in walk.outcomes)
     assert sum(o.probability for o in walk.outcomes) == pytest.approx(1.0)
+    close = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs} "
+                                                          "1e-13 (at ?a))")).actions[0]
+    assert sum(o.probability for o in close.outcomes) == pytest.approx(1.0, abs=1e-15)
+    assert all(o.effect for o in close.outcomes)
+    with pytest.raises(PDDLError, match=r"sum to 1\.00000001, 1e-08 more than 1; they must "
+                                        r"sum to at most 1 \(within 1e-12"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, f"(probabilistic {pairs} 1e-8 (at ?a))"))
     tiny = f"(probabilistic {pairs} 1e-{MAX_EXPONENT} (at ?a))"
-    with pytest.raises(PDDLError, match="they must sum to at most 1"):
+    with pytest.raises(PDDLError, match=f"the probability 1e-{MAX_EXPONENT} is below the "
+                                        "smallest positive float"):
         parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny))
     with pytest.raises(PDDLError, match=f"1e-{MAX_EXPONENT + 1}: an exponent past"):
         parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, tiny.replace(f"e-{MAX_EXPONENT}",
@@ -111,7 +121,8 @@ def test_decimal_probabilities_sum_exactly_in_either_notation(weights, digits, s
 
 
 @pytest.mark.parametrize(("old", "new", "line", "expected"), [
-    ("0.5 (and (at ?b)", "0.7 (and (at ?b)", 15, "sum to 1.1; they must sum to at most 1"),
+    ("0.5 (and (at ?b)", "0.7 (and (at ?b)", 15,
+     "sum to 1.1, 0.1 more than 1; they must sum to at most 1"),
     ("0.3 (and (at ?down)", "-0.3 (and (at ?down)", 16, "a probability must be in [0, 1]"),
     ("0.9 (and", "1.5 (and", 10, "a probability must be in [0, 1], got 1.5"),
     ("0.9 (and", "most (and", 10, "expected a probability"),
@@ -172,3 +183,26 @@ def test_costs_from_functions_valued_in_the_problem():
     assert costs[action(inst, "(walk w1 w2)")] == 4.0
     assert costs[action(inst, "(walk w2 w1)")] == 1.0
     assert costs[action(inst, "(wade w2 e2 e3)")] == 2.0
+
+
+def test_a_sum_past_1_by_float_printing_is_1_and_the_likeliest_outcome_gives_it_up():
+    """0.1 + 0.2 + 0.7000000000000001 (as a float sum prints it) is 1 + 1e-16: read as 1,
+    the excess taken off the likeliest outcome, so the probabilities are as meant."""
+    effect = "(probabilistic 0.1 (at ?b) 0.2 (trail ?b ?a) 0.7000000000000001 (at ?a))"
+    walk = parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, effect)).actions[0]
+    assert [o.probability for o in walk.outcomes] == [0.1, 0.2, 0.7]
+
+
+@pytest.mark.parametrize(("effect", "expected"), [
+    ("(probabilistic 1e-400 (at ?b) 0.5 (at ?a))",
+     r"hike.pddl:10: action walk: the probability 1e-400 is below the smallest positive "
+     r"float \(about 5e-324\): it would underflow to 0"),
+    ("(probabilistic 1e-200 (probabilistic 1e-200 (at ?b)))",
+     r"hike.pddl:6: action walk: an outcome's probability, the product of nested "
+     r"\(probabilistic ...\) ones, is about 1e-400: below the smallest positive float"),
+])
+def test_a_probability_that_underflows_a_float_is_refused_saying_so(effect, expected):
+    """Before: 1e-400 was read as an outcome of probability 0.0, and refused later for
+    another reason (or run with an outcome that never happens)."""
+    with pytest.raises(PDDLError, match=f"^{expected}"):
+        parse_domain(HIKE_DOMAIN.replace(WALK_EFFECT, effect), "hike.pddl")

@@ -201,7 +201,7 @@ def test_registry_lists_the_builtin_backends():
     found = {info.name: info for info in planners()}
     assert found["graph"].usable and found["pyperplan"].usable
     assert found["clingo"].usable == (ClingoPlanner.unusable_reason() is None)
-    assert isinstance(get_planner("pyperplan"), PyperplanPlanner)
+    assert isinstance(get_planner("pyperplan").backend, PyperplanPlanner)
 
 
 def test_clingo_says_how_to_install_it(monkeypatch):
