@@ -7,6 +7,8 @@ Both give what the plain way gives."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from gdq_pddl.pddl import ppddl_effects
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.pddl.ppddl_effects import GroundOutcome
@@ -104,3 +106,40 @@ def test_an_action_that_changes_nothing_is_not_applied(tmp_path, monkeypatch):
     assert 0 < applied[0] <= 2 * moving  # outcomes and the edges' own applies
     monkeypatch.setattr(GroundOutcome, "apply", plain)
     assert_same_graph(task, "id order")
+
+
+def test_an_online_run_shows_its_episodes_and_the_states_found(monkeypatch):
+    """A run on a problem explored online reports each episode to a progress bar (shown
+    after 2 s on a terminal: slow_progress), with the states found so far."""
+    from gdq_pddl.envs.online import OnlineInstance
+    from gdq_pddl.envs.online_env import OnlineEnv
+    from gdq_pddl.learners import episodes, make_learner, run_episodes
+    from gdq_pddl.learners.online import online_context
+    from tests.envs.test_online import shipped
+
+    bars = []
+
+    class Bar:
+        def __init__(self, desc, unit, total):
+            self.desc, self.total, self.n, self.states, self.closed = desc, total, 0, [], False
+            bars.append(self)
+
+        def update(self, k):
+            self.n += k
+
+        def set_postfix(self, states, refresh):
+            self.states.append(states)
+
+        def close(self):
+            self.closed = True
+
+    monkeypatch.setattr(episodes, "slow_progress", Bar)
+    online = OnlineInstance(shipped("keys-ppddl", "keys-ppddl-1"))
+    env = OnlineEnv(online)
+    env.reset(seed=0)
+    run_episodes(make_learner("Q-learning", online_context(online)), env, 5,
+                 np.random.default_rng(0))
+    [bar] = bars
+    assert (bar.total, bar.n, bar.closed) == (5, 5, True)
+    assert "online" in bar.desc and bar.states[0] >= 1
+    assert bar.states == sorted(bar.states) and bar.states[-1] <= online.graph.n_states
