@@ -50,15 +50,17 @@ print(f"{t2 - t1:.2f} {t3 - t2:.2f} {len(online.task.ops)}")
 
 def environment(code: str | None) -> dict[str, str]:
     env = dict(os.environ, TQDM_DISABLE="1")
-    if code is not None:
-        env["PYTHONPATH"] = str(Path(code).resolve())
+    env["PYTHONPATH"] = str(Path(code).resolve()) if code is not None else \
+        str(Path(__file__).resolve().parents[1])
     return env
 
 
 def setup_seconds(code: str | None, domain: str, problem: str) -> tuple[float, float, int]:
     """``(grounding s, online store s, ground actions)`` in a fresh process."""
-    out = subprocess.run([sys.executable, "-c", SETUP, domain, problem], check=True,
-                         capture_output=True, text=True, env=environment(code))
+    with tempfile.TemporaryDirectory() as here:  # not the working folder's package
+        out = subprocess.run([sys.executable, "-P", "-c", SETUP, domain, problem],
+                             check=True, capture_output=True, text=True,
+                             env=environment(code), cwd=here)
     ground, store, ops = out.stdout.split()
     return float(ground), float(store), int(ops)
 
@@ -68,12 +70,12 @@ def run_seconds(code: str | None, domain: str, problem: str, args) -> tuple[floa
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "gdq_pddl.cli", "run", "--domain", domain,
+        subprocess.run([sys.executable, "-P", "-m", "gdq_pddl.cli", "run", "--domain", domain,
                         "--problem", problem, "--method", "GDQ", "DARLING", "Q-learning",
                         "--episodes", str(args.episodes), "--runs", str(args.runs),
                         "--jobs", str(args.jobs), "--explore", "online", "--no-report",
                         "--out", out], check=True, capture_output=True,
-                       env=environment(code))
+                       env=environment(code), cwd=out)
         wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
