@@ -28,8 +28,8 @@ _LAZY = {"load_results": "gdq_pddl.experiments.results",
 __all__ = ["__version__", *_LAZY, "envs", "learners", "wrappers", "errors", "resources"]
 """The API: the envs (ids and docs), the learners (with save, load and evaluate), the
 wrappers that give any Gymnasium agent the knowledge, the errors raised on bad input,
-and the shipped files by name. ``pdoc gdq_pddl -o docs/api``
-writes its pages."""
+and the shipped files by name. The documentation site renders them
+(docs/reference/api.md: ``pip install '.[docs]' && mkdocs serve``)."""
 
 load_results: Callable[..., pandas.DataFrame]
 """An output folder's episodes as a pandas DataFrame, one row per episode

@@ -15,6 +15,7 @@ from gdq_pddl.analysis.tables import make_tables
 from gdq_pddl.analysis.writer import ReportOptions, Writer
 from gdq_pddl.errors import ResultsError
 from gdq_pddl.experiments.pairs import PAIRS_EXPERIMENT
+from gdq_pddl.experiments.protocol import PAPER_SIZE, QUICK_SIZE
 from gdq_pddl.experiments.results import load_config, unfinished
 from gdq_pddl.outputs import write_text
 
@@ -40,9 +41,31 @@ def report_text(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,
         section(w)
     # a one-line count under the title, the verdicts after the method paragraph
     head_end = next(i for i, line in enumerate(w.lines) if line.startswith("**Method.**")) + 2
-    top = [f"**Summary.** {w.verdicts.counts()}", ""]
+    top = [*first_look_lines(study), f"**Summary.** {w.verdicts.counts()}", ""]
     return "\n".join(w.lines[:2] + top + w.lines[2:head_end] + w.verdicts.section(w.notes)
                      + w.lines[head_end:]) + "\n"
+
+
+def first_look_lines(study: Study) -> list[str]:
+    """A warning for the first lines of a report whose paper experiments ran fewer runs
+    than the paper's protocol (``reproduce --quick``): what that means for the verdicts.
+    None for the full protocol."""
+    runs = [e.get("runs") for e in study.config.experiments
+            if e.get("name") not in study.uncovered and isinstance(e.get("runs"), int)]
+    full_episodes, full_runs = PAPER_SIZE
+    if not runs or max(runs) >= full_runs:
+        return []
+    episodes = max((n for e in study.config.experiments if e.get("name") not in
+                    study.uncovered for _, n in (e.get("schedule") or []) if isinstance(n, int)),
+                   default=0)
+    quick = " (`gdq-pddl reproduce --quick`)" if (episodes, max(runs)) == QUICK_SIZE else ""
+    return [f"**A first look: {max(runs)} runs**, of {episodes} episodes a task{quick}, "
+            f"where the paper's protocol has {full_runs} runs of {full_episodes}. With so "
+            "few runs the tests have little power: a difference the full protocol finds "
+            "significant often is not here, so a case reads \"mixed\" or \"does not "
+            "hold\" where the full run says it holds, and fewer cases hold below. A failed "
+            "case here is not a failed reproduction; `gdq-pddl reproduce` runs the paper's "
+            "protocol.", ""]
 
 
 def write_report(out_dir: str | Path, opts: ReportOptions = DEFAULT_OPTIONS,

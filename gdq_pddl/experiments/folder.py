@@ -110,10 +110,11 @@ def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | N
     if held and not resume:
         if cfg_path.exists():
             raise ResultsError(f"{out} already holds results: continue them with --resume, "
-                               "or choose another --out")
+                               f"start again beside them with --out {free_folder(out)}, or "
+                               f"delete {out} to replace them")
         raise ResultsError(f"{out} holds results ({results}) but no config.json saying of "
-                           "what: they cannot be checked, so they are not reused; choose "
-                           "another --out, or delete them")
+                           "what: they cannot be checked, so they are not reused; start "
+                           f"again with --out {free_folder(out)}, or delete them")
     if not resume:
         return None
     if not cfg_path.exists():
@@ -122,6 +123,18 @@ def resume_config(out: Path, held: bool, resume: bool, results: str) -> dict | N
         raise ResultsError(f"--resume: {out} holds no run to continue (no config.json "
                            "there); to start one, give the same command without --resume")
     return read_config(cfg_path)
+
+
+def free_folder(out: Path) -> Path:
+    """``out`` with the first suffix ``-2``, ``-3``, ... that names nothing yet: the folder
+    the message of a rerun suggests."""
+    base = out if out.name else out.resolve()
+    if not base.name:  # the root folder
+        return Path("results-2")
+    k = 2
+    while (found := base.with_name(f"{base.name}-{k}")).exists():
+        k += 1
+    return found
 
 
 def input_hashes(files: Iterable[str]) -> dict[str, str]:

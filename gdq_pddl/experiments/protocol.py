@@ -164,9 +164,15 @@ def robot_experiment(trials: int = 30, runs: int = 10, **kw) -> Experiment:
                       hyper=Hyper(alpha=0.5, gamma=0.95, epsilon=0.1), **kw)
 
 
+PAPER_SIZE = (2500, 10)
+"""Episodes per task and runs of ``gdq-pddl reproduce``: the paper's protocol."""
+QUICK_SIZE = (300, 3)
+"""Episodes per task and runs of ``gdq-pddl reproduce --quick``: a first look."""
+
+
 def paper_protocol(quick: bool = False, seed: int = 0) -> list[Experiment]:
     """Everything the paper reports; ``quick`` is a small version for a first look."""
-    episodes, runs = (300, 3) if quick else (2500, 10)
+    episodes, runs = QUICK_SIZE if quick else PAPER_SIZE
     methods = ("GDQ", "GDQ-literal", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning")
     out = task_experiments(episodes=episodes, runs=runs, methods=methods, seed=seed)
     out += [switch_experiment("C", "D", episodes, runs=runs, methods=methods, seed=seed),

@@ -294,3 +294,22 @@ def test_the_ground_truth_table_gives_the_goal_probabilities_beside_v_star(tmp_p
     assert "| V* | goal: V*'s policy / no limit |" in truth
     assert re.search(r"^\| A \| .+? \| [\d.]+ \| 0\.950 / 1\.000 \|", truth, re.M)
     assert re.search(r"^\| B \| .+? \| [\d.]+ \| – \|", truth, re.M)
+
+
+def test_a_report_of_fewer_runs_than_the_paper_says_so_first(tmp_path, monkeypatch):
+    """`reproduce --quick` (3 runs) must not read as a failed reproduction: the report's
+    first lines say it is a first look and what few runs do to the verdicts."""
+    from gdq_pddl.analysis import report
+
+    out = write_output(tmp_path, switches=False, robot=False)
+    head = write_report(out).read_text().splitlines()[:6]
+    note = next((line for line in head if line.startswith("**A first look")), None)
+    assert note is not None, head
+    assert f"{RUNS} runs**, of {EPISODES} episodes" in note and "little power" in note
+    assert "not a failed reproduction" in note and "`gdq-pddl reproduce`" in note
+    assert head.index(note) < next(i for i, h in enumerate(head) if h.startswith("**Summary"))
+    assert "--quick" not in note  # not the quick protocol's size
+    monkeypatch.setattr(report, "QUICK_SIZE", (EPISODES, RUNS))
+    assert "(`gdq-pddl reproduce --quick`)" in write_report(out).read_text()
+    monkeypatch.setattr(report, "PAPER_SIZE", (EPISODES, RUNS))  # as many runs as the paper
+    assert "A first look" not in write_report(out).read_text()

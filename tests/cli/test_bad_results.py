@@ -105,6 +105,20 @@ def test_problem_out_in_a_new_folder_is_written(capsys, tmp_path):
 
 # --- --resume and damaged results folders ----------------------------------------------
 
+def test_a_rerun_into_a_folder_with_results_names_a_new_folder(capsys, tmp_path):
+    """Rerunning a command refuses to mix results and says the three ways on: --resume,
+    a new folder that does not exist yet (named), or deleting the old one."""
+    out = tmp_path / "run-C"
+    args = ["run", "--task", "C", *FAST, "--no-report", "--out", out]
+    assert cli(capsys, *args)[0] == 0
+    code, text = cli(capsys, *args)
+    refused(code, text, "--resume", f"--out {out}-2", f"delete {out}")
+    (tmp_path / "run-C-2").mkdir()  # taken: the next free name is suggested
+    code, text = cli(capsys, *args)
+    refused(code, text, f"--out {out}-3")
+    code, text = cli(capsys, *args[:-1], f"{out}-3")  # the suggestion works as given
+    assert code == 0, text
+
 def _run(capsys, out, *extra, world=None):
     w = ["--world", world] if world else []
     return cli(capsys, "run", "--task", "C", *w, "--episodes", "4", "--runs", "2", "--method",

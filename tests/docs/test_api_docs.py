@@ -1,5 +1,6 @@
-"""The API page builds from the docstrings (``pdoc gdq_pddl -o docs/api``), without a
-warning, and every public name on it has a docstring: the docs cannot rot."""
+"""Every public name has a docstring, and pdoc reads them all without a warning (the
+site's API page, docs/reference/api.md, renders the same docstrings with mkdocstrings;
+tests/docs/test_site.py builds it): the docs cannot rot."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Every ``gdq-pddl`` command of README.md runs from an empty directory, as after
+"""Every ``gdq-pddl`` command of README.md (and of the expected-times page,
+docs/reference/times.md) runs from an empty directory, as after
 ``pip install .`` outside a checkout: the README names shipped files by name, not by
 paths of a checkout.
 
@@ -42,18 +43,27 @@ switch, the robot's): 10 s to a minute each even so, run with the slow tests
 (``pytest -m slow``); ``tests/experiments`` covers them in the default suite."""
 
 
+PAGES = ("README.md", "docs/reference/times.md")
+"""The pages whose commands a newcomer runs first: the README and the page of every
+command's expected time."""
+
+
 def readme_commands() -> list[str]:
-    """The ``gdq-pddl ...`` commands of README.md, in order, without repeats."""
-    text = re.sub(r"```.*?```", "", (REPO_ROOT / "README.md").read_text(encoding="utf-8"),
-                  flags=re.S)
+    """The ``gdq-pddl ...`` commands of :data:`PAGES`, in order, without repeats."""
+    text = re.sub(r"```.*?```", "", "\n".join(
+        (REPO_ROOT / page).read_text(encoding="utf-8") for page in PAGES), flags=re.S)
     blocks = [line.split("#")[0].strip() for line in text.splitlines()
               if line.startswith("    ")]
     inline = [" ".join(span.split()) for span in re.findall(r"`([^`]+)`", text)]
+    tables = [" ".join(span.split()) for line in text.splitlines() if line.startswith("|")
+              for span in re.findall(r"`([^`]+)`", line)]
     found = [[m.group(1).strip() for c in lines
               if (m := re.search(r"(?:^|&& |time )(gdq-pddl\b.*)", c))]
-             for lines in (blocks, inline)]
-    # inline code without options (`gdq-pddl run`) is prose naming a command
-    return list(dict.fromkeys(found[0] + [c for c in found[1] if len(c.split()) > 2]))
+             for lines in (blocks, inline, tables)]
+    # inline code without options (`gdq-pddl run`) is prose naming a command, except in
+    # a table of commands
+    return list(dict.fromkeys(found[0] + [c for c in found[1] if len(c.split()) > 2]
+                              + found[2]))
 
 
 def argv_of(command: str) -> list[str]:
