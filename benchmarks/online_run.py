@@ -70,13 +70,16 @@ def run_seconds(code: str | None, domain: str, problem: str, args) -> tuple[floa
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-P", "-m", "gdq_pddl.cli", "run", "--domain", domain,
-                        "--problem", problem, "--method", "GDQ", "DARLING", "Q-learning",
-                        "--episodes", str(args.episodes), "--runs", str(args.runs),
-                        "--jobs", str(args.jobs), "--explore", "online", "--no-report",
-                        "--out", out], check=True, capture_output=True,
-                       env=environment(code), cwd=out)
+        done = subprocess.run(
+            [sys.executable, "-P", "-m", "gdq_pddl.cli", "run", "--domain", domain,
+             "--problem", problem, "--method", "GDQ", "DARLING", "Q-learning",
+             "--episodes", str(args.episodes), "--runs", str(args.runs),
+             "--jobs", str(args.jobs), "--explore", "online", "--no-report", "--out", out],
+            capture_output=True, text=True, env=environment(code), cwd=out)
         wall = time.perf_counter() - t0
+    if done.returncode:  # say why, and go on with the other copies
+        print(f"{code}: gdq-pddl run failed: {done.stderr.strip().splitlines()[-1:]}")
+        return float("nan"), float("nan")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
