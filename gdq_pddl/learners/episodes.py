@@ -11,6 +11,7 @@ from ``rng``; neither path draws anything else.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import types as types_
 from dataclasses import dataclass
@@ -40,7 +41,7 @@ from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
 from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
 from gdq_pddl.learners.tabular import Learner, TabularLearner
-from gdq_pddl.limits import check_count, check_memory
+from gdq_pddl.limits import check_count, check_memory, slow_progress
 
 
 @dataclass(frozen=True)
@@ -221,7 +222,11 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
     if isinstance(learner, TabularLearner) and not online:
         learner.reserve_successors(successor_capacity(env.unwrapped.model))
     returns, steps, success, areas = _empty_records(n_episodes, n_areas)
+    bar = _online_progress(env, n_episodes) if online else None
     for ep in range(n_episodes):
+        if bar is not None:
+            bar.update(ep - bar.n)
+            bar.set_postfix(states=env.unwrapped.instance.graph.n_states, refresh=False)
         s, info = env.reset()
         done = success[ep] = info["cause"] == "goal"  # over before any action
         while not done:
@@ -240,7 +245,20 @@ def _run_python(learner: Learner, env: gym.Env, n_episodes: int,
             s = s2
         if follow is not None:
             follow.episode_end()
+    if bar is not None:
+        bar.update(n_episodes - bar.n)
+        bar.close()
     return EpisodeRecords(returns, steps, success, areas)
+
+
+def _online_progress(env: gym.Env, n_episodes: int):
+    """A run's episodes on a problem explored online, with the states found so far
+    (:func:`~gdq_pddl.limits.slow_progress`: after 2 s, on a terminal), in the main
+    process only (workers' bars would draw over each other); None in a worker."""
+    if multiprocessing.parent_process() is not None:
+        return None
+    name = env.unwrapped.instance.name
+    return slow_progress(f"{name} (online)", " episodes", n_episodes)
 
 
 _NO_DOORS = np.zeros(1, dtype=np.uint8)  # a ModelArrays state carries its doors itself

@@ -86,8 +86,21 @@ class LazyGraph:
         self._plain = np.ones(len(task.ops), dtype=np.bool_)  # no alternatives to meet
         self._plain[self._alt_op] = False
         self._rank = reality_ranks(task).tolist()
+        # ground actions whose every outcome only has conditional effects (IPPC boxworld:
+        # all of them), and those effects' conditions: in a state where none holds, the
+        # action leaves the state as it is, and its outcomes need not be applied one by one
+        quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
+        for k, op in enumerate(task.ops):
+            outcomes = getattr(op, "outcomes", None)
+            if outcomes is not None and not any(o.add or o.dele for o in outcomes):
+                quiet[k] = True
+                fire += [(k, p, n) for o in outcomes for p, n, _, _ in o.conditional]
+        self._may_stay = quiet
+        self._fire_op = np.array([k for k, _, _ in fire], dtype=np.int64)
+        self._fires = RowConditions([(p, n) for _, p, n in fire])
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
+        self._gain_terms()
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
         self._words = np.zeros((16, self.n_words), dtype=np.uint64)
@@ -153,12 +166,20 @@ class LazyGraph:
                 fresh.append(t)
             return i
 
-        acts = self._applicable(self._words[x]).tolist()
+        row = self._words[x]
+        acts = self._applicable(row).tolist()
         reality, gains = self._reality, self.gains
-        nexts = [[s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
+        stays = self._stays(row).tolist()
+        nexts = [[s] * len(reality[k]) if stays[k] else
+                 [s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
                  for k in acts]  # each outcome applied once
         edge_op, edge_next = [], []
         for k, ts in zip(acts, nexts, strict=True):  # by ground action, then kept outcome
+            if stays[k]:  # every outcome the planner knows stays in x
+                if self._known[k]:
+                    edge_op.append(k)
+                    edge_next.append(x)
+                continue
             seen: dict[int, None] = {}
             for at in self._known[k]:
                 t = ts[at] if isinstance(at, int) else at(s)
@@ -167,24 +188,25 @@ class LazyGraph:
                     edge_op.append(k)
                     edge_next.append(id_of(t))
         for k, ts in sorted(((k, ts) for k, ts in zip(acts, nexts, strict=True)
-                             if self._other[k]), key=lambda e: self._rank[e[0]]):
+                             if self._other[k] and not stays[k]), key=lambda e: self._rank[e[0]]):
             for at in self._other[k]:
                 id_of(ts[at])
         column, prob, nxt, stuck, gain = [], [], [], [], []
+        worth, first = self._gains(row) if gains else None, self._first
         for c, (k, ts) in enumerate(zip(acts, nexts, strict=True)):  # reality, merged
             if len(ts) == 1:  # one outcome (most ground actions): nothing to merge
-                p, st, _, fixed, o = reality[k][0]
+                p, st, _, _, _ = reality[k][0]
                 column.append(c)
                 prob.append(p)
                 nxt.append(index[ts[0]])
                 stuck.append(st)
-                gain.append((o.gain(s) if fixed is None else fixed) if gains else 0.0)
+                gain.append(worth[first[k]] if worth is not None else 0.0)
                 continue
             merged: dict[tuple, float] = {}
-            for t, (p, st, _, fixed, o) in zip(ts, reality[k], strict=True):
+            for i, (t, (p, st, _, _, _)) in enumerate(zip(ts, reality[k], strict=True)):
                 key: tuple = (index[t], st)
-                if gains:
-                    key += (o.gain(s) if fixed is None else fixed,)
+                if worth is not None:
+                    key += (worth[first[k] + i],)
                 merged[key] = merged.get(key, 0.0) + p  # summed in outcome order
             for key, p in merged.items():
                 column.append(c)
@@ -200,6 +222,48 @@ class LazyGraph:
                              np.array(gain, dtype=float))
         self._expanded[x] = True
         return fresh
+
+    def _gain_terms(self) -> None:
+        """Reality's outcomes of every ground action as one flat list (ground action
+        ``k``'s from ``_first[k]``), their fixed rewards and their conditional rewards'
+        conditions, so that :meth:`_gains` values them all in a state at once."""
+        first, base, entry, amount, alts, term = [], [], [], [], [], []
+        for outcomes in self._reality:
+            first.append(len(base))
+            for _, _, _, fixed, o in outcomes:
+                base.append(fixed if fixed is not None else o.reward)
+                for alternatives, worth in (o.rewards if fixed is None else ()):
+                    term += [len(entry)] * len(alternatives)
+                    alts += list(alternatives)
+                    entry.append(len(base) - 1)
+                    amount.append(worth)
+        self._first = first
+        self._base_gain = np.array(base, dtype=float)
+        self._term_entry = np.array(entry, dtype=np.int64)
+        self._term_amount = np.array(amount, dtype=float)
+        self._alt_term = np.array(term, dtype=np.int64)
+        self._reward_alts = RowConditions(alts)
+
+    def _gains(self, row: np.ndarray) -> list[float]:
+        """Each outcome's reward in the state of ``row``, by :meth:`_gain_terms`'s flat
+        list: as :meth:`GroundOutcome.gain <gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain>`
+        sums them (the fixed reward plus the amounts of the terms one of whose
+        alternatives holds, in order)."""
+        if not len(self._term_entry):
+            return self._base_gain.tolist()
+        held = np.zeros(len(self._term_entry), dtype=np.bool_)
+        held[self._alt_term[self._reward_alts.holds(row)]] = True
+        extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
+                            minlength=len(self._base_gain))
+        return (self._base_gain + extra).tolist()
+
+    def _stays(self, row: np.ndarray) -> np.ndarray:
+        """bool[n_ops]: the ground action leaves the state of ``row`` as it is, whatever
+        its outcome (no effect but conditional ones, none of whose conditions holds)."""
+        stays = self._may_stay.copy()
+        if len(self._fire_op):
+            stays[self._fire_op[self._fires.holds(row)]] = False
+        return stays
 
     def _applicable(self, row: np.ndarray) -> np.ndarray:
         """int64: the ground actions whose precondition holds in ``row``, increasing (the

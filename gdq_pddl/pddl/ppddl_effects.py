@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.limits import slow_progress
-from gdq_pddl.pddl.model import Action, Atom, Choice, Literal, Outcome
+from gdq_pddl.pddl.model import Action, Atom, Choice, Junction, Literal, Outcome
 from gdq_pddl.pddl.normalise import MAX_ATOMS, TRUE, extend, ground_dnf
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
@@ -91,6 +91,8 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
     def fact(lit: Literal, binding: Mapping[str, str]) -> str:
         return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
 
+    if _guarded_off(o, b, static):  # it sets nothing under b: skip its choices' bindings
+        return [(o.probability, (frozenset(), frozenset(), (), 0.0, (), False))]
     add = frozenset(fact(lit, b) for lit in o.effect
                     if lit.positive and lit.atom.predicate in fluent)
     dele = frozenset(fact(lit, b) for lit in o.effect
@@ -123,6 +125,54 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
             if len(out) > MAX_OUTCOMES:
                 raise past(choice)
     return out
+
+
+def _conjuncts(cond) -> tuple[Literal, ...]:
+    """The literals ``cond`` requires at its top: itself, or those of (nested) ``and``s."""
+    if isinstance(cond, Literal):
+        return (cond,)
+    if isinstance(cond, Junction) and cond.kind == "and":
+        return tuple(lit for part in cond.parts for lit in _conjuncts(part))
+    return ()
+
+
+_GUARDS: dict[int, tuple[Outcome, frozenset[Literal]]] = {}
+
+
+def _guards(o: Outcome) -> frozenset[Literal]:
+    """Literals every effect of ``o`` is conditioned on (its every conditional effect's
+    condition, through its choices' outcomes, requires each of them; no variable a forall
+    inside binds), so that where one is false ``o`` sets nothing; empty where ``o`` has an
+    unconditional effect, a reward or a failed trial (cached by identity)."""
+    hit = _GUARDS.get(id(o))
+    if hit is not None and hit[0] is o:
+        return hit[1]
+    if o.effect or o.rewards or o.stuck or not (o.conditional or o.choices):
+        out: frozenset[Literal] = frozenset()
+    else:
+        sets = [frozenset(lit for lit in _conjuncts(ce.condition)
+                          if not {v for v, _ in ce.variables} & set(lit.atom.args))
+                for ce in o.conditional]
+        for choice in o.choices:
+            bound = {v for v, _ in choice.variables}
+            sets += [frozenset(lit for lit in _guards(inner) if not bound & set(lit.atom.args))
+                     for inner in choice.outcomes]
+        out = frozenset.intersection(*sets)
+    _GUARDS[id(o)] = (o, out)
+    return out
+
+
+def _guarded_off(o: Outcome, b: Mapping[str, str], static) -> bool:
+    """Whether a literal of :func:`_guards` is false under ``b`` in every state (a static
+    atom, or an equality): ``o`` then sets nothing, and grounding its choices' bindings
+    one by one (IPPC boxworld's drive: 1,000 bindings of three nested foralls per ground
+    action, all but one under a static ``when`` that fails) would find only that."""
+    for lit in _guards(o):
+        atom = Atom(lit.atom.predicate, tuple(b.get(a, a) for a in lit.atom.args))
+        truth = atom.args[0] == atom.args[1] if atom.predicate == "=" else static(atom)
+        if truth is not None and truth != lit.positive:
+            return True
+    return False
 
 
 def _both(x: Ground, y: Ground) -> Ground:
