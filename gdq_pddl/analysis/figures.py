@@ -31,18 +31,16 @@ from gdq_pddl.outputs import save_figure
 METHOD_COLOURS = {e.name: e.colour for e in registry.BUILT_IN}
 """The built-in learners' colours (the registry's: Okabe and Ito's colour-blind-safe
 palette, GDQ's variants apart)."""
-METHOD_LINES = {"GDQ-literal": (0, (5, 2)), "GDQ-code": (0, (1, 1.5)),
-                "DARLING-code": (0, (5, 2))}
-"""Line styles that tell GDQ's variants (and DARLING's) from the method they read like, on
-top of their colours: solid, unless listed."""
 INTERVAL = "95% t-interval over runs"
 """What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
 x standard error."""
 
 
 def method_line(method: str) -> object:
-    """The line style of ``method``'s curves (:data:`METHOD_LINES`; solid otherwise)."""
-    return METHOD_LINES.get(method, "-")
+    """The line style of ``method``'s curves: its learner's dashes in the registry (GDQ's
+    and DARLING's variants apart from the learner they read like), solid otherwise."""
+    pattern = registry.dashes(method)
+    return (0, pattern) if pattern else "-"
 
 
 def method_colour(method: str) -> str:

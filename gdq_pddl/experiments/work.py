@@ -67,10 +67,14 @@ def instance_of(exp: Experiment, spec: str, reader: type[TabularLearner] = Tabul
 
 def context_of(exp: Experiment, instance: PDDLInstance | OfficeInstance) -> TaskContext:
     """The learners' task context of ``instance``, planned on ``exp.knowledge`` (an office
-    world, or of a PDDL experiment the knowledge's domain file)."""
+    world, or of a PDDL experiment the knowledge's domain file). Its identity is
+    ``instance``'s, what the learner acts in, whatever knowledge it planned on: a learner
+    of a PDDL problem with a knowledge domain file belongs to the problem's env."""
     if exp.knowledge is not None and isinstance(instance, PDDLInstance):
-        instance = knowledge_instance(instance, exp.pddl, exp.knowledge)
-    elif exp.knowledge is not None:  # the same task, planned on another world's building
+        known = knowledge_instance(instance, exp.pddl, exp.knowledge)
+        return replace(task_context(known, exp.planner),
+                       identity=getattr(instance, "identity", None))
+    if exp.knowledge is not None:  # the same task, planned on another world's building
         instance = replace(instance, world=knowledge_world(instance.world, exp.knowledge))
     if isinstance(instance, OnlineInstance):
         return online_context(instance, exp.planner)

@@ -80,6 +80,9 @@ class LearnerEntry:
     them, ``gdq-pddl run --explore online``)."""
     colour: str = DEFAULT_COLOUR
     """Its colour in every figure."""
+    dashes: tuple[float, ...] = ()
+    """Its curves' dash pattern (on, off, ... in points; empty: solid), which tells a
+    variant from the learner it reads like where colours alone are close."""
     family: str = ""
     """The learner it is a variant of (``GDQ`` for ``GDQ-code``); itself when empty."""
     label: str = ""
@@ -117,12 +120,12 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
     LearnerEntry("GDQ-literal", "gdq_pddl.learners.gdq_learner:GDQ", GDQConfig,
                  "the paper's GDQ read literally: optimistic plan model, backups along "
                  "plans", "plans", {"variant": "literal"}, colour="#E69F00",  # orange
-                 label="paper's GDQ read literally",
+                 label="paper's GDQ read literally", dashes=(5, 2),
                  family="GDQ", groups=frozenset({"reproduce", "robot"})),
     LearnerEntry("GDQ-code", "gdq_pddl.learners.gdq_learner:GDQ", GDQConfig,
                  "the paper's GDQ as the authors' code runs it: optimistic initial Q, "
                  "sampled backups along plans", "plans", {"variant": "code"},
-                 colour="#CC79A7", label="authors'-code GDQ",  # reddish purple
+                 colour="#CC79A7", label="authors'-code GDQ", dashes=(1, 1.5),  # purple
                  family="GDQ", groups=frozenset({"default", "reproduce", "robot"})),
     LearnerEntry("DARLING", "gdq_pddl.learners.agents:Darling", DarlingConfig,
                  "Q-learning restricted to the actions that start a plan within the "
@@ -131,7 +134,7 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
     LearnerEntry("DARLING-code", "gdq_pddl.learners.agents:Darling", DarlingConfig,
                  "DARLING as the GDQ authors' agent runs it: non-plan actions replaced by "
                  "random plan actions", "plans", {"variant": "code"},
-                 colour="#56B4E9", family="DARLING"),  # sky blue
+                 colour="#56B4E9", family="DARLING", dashes=(5, 2)),  # sky blue
     LearnerEntry("Dyna-Q", "gdq_pddl.learners.agents:DynaQ", DynaQConfig,
                  "Q-learning plus a learned model and N backups of random known pairs per "
                  "step", colour="#0072B2",  # blue
@@ -467,6 +470,16 @@ def colour(method: str) -> str:
     if parsed is not None and not parsed.settings:
         return parsed.entry.colour
     return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
+
+
+def dashes(method: str) -> tuple[float, ...]:
+    """The dash pattern of ``method``'s curves: its learner's (empty, solid, for a method
+    with settings or a name no learner has)."""
+    try:
+        parsed = parse_method(method)
+    except ConfigError:
+        return ()
+    return parsed.entry.dashes if not parsed.settings else ()
 
 
 def order(methods: typing.Iterable[str]) -> list[str]:

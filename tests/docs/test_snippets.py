@@ -43,12 +43,16 @@ SLOW_PAGES = {"tutorial.md"}
 ``tests/docs/test_docs.py`` runs the tutorial's from an empty directory by default."""
 
 RUNNER = r"""
-import json, sys, traceback
+import json, pathlib, sys, traceback
 blocks = json.loads(sys.argv[1])
 namespace = {"__name__": "__main__"}
-for where, code in blocks:
+for i, (where, code) in enumerate(blocks):
+    # each block from a file of its own, as a reader's copy would be: numba's cache=True
+    # (the "Add a learner" page's rules) needs a source file to key its cache by
+    path = pathlib.Path(f"snippet_{i + 1}.py").absolute()
+    path.write_text(code, encoding="utf-8")
     try:
-        exec(compile(code, where, "exec"), namespace)
+        exec(compile(code, str(path), "exec"), namespace)
     except BaseException:
         print(f"{where} failed:", file=sys.stderr)
         traceback.print_exc()
