@@ -111,7 +111,7 @@ def _run_pddl(args: argparse.Namespace) -> int:
         instance = load_pddl_instance(files)
         if args.resume:  # as the run went, or refused, before any enumeration
             explore = resumed_exploration(out_folder(args, f"run-{instance.name}"), explore)
-            if explore != args.explore:
+            if explore == "online" and args.explore == "auto":
                 because = "the run resumed went online under `--explore auto`"
         if explore == "online":
             files = (*files, "online")
