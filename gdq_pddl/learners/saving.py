@@ -27,7 +27,7 @@ from typing import IO, Any
 import numpy as np
 
 from gdq_pddl.envs.identity import NUMBERING_KEYS, describe, first_difference, shown
-from gdq_pddl.errors import ConfigError, ResultsError
+from gdq_pddl.errors import ConfigError, OutputError, ResultsError
 from gdq_pddl.learners import guards, registry
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.tables import Params, Tables
@@ -66,7 +66,12 @@ def _write(file: File, kind: str, n_states: int, n_actions: int, arrays: dict[st
               "versions": _versions(), "n_states": n_states, "n_actions": n_actions, **header}
     text = json.dumps(header, default=lambda x: x.tolist())  # a generator state's arrays
     if isinstance(file, str | Path):  # numpy would add ".npz" to a name without it
-        with open(file, "wb") as fh:
+        try:
+            fh = open(file, "wb")
+        except OSError as exc:  # a missing folder, a folder given as the file, no rights
+            raise OutputError(f"{file}: cannot write the {kind} file here "
+                              f"({exc.strerror or exc})") from None
+        with fh:
             np.savez_compressed(fh, header=np.array(text), **arrays)
     else:
         np.savez_compressed(file, header=np.array(text), **arrays)

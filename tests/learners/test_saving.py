@@ -17,7 +17,7 @@ from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import load_instance
-from gdq_pddl.errors import ConfigError, ResultsError
+from gdq_pddl.errors import ConfigError, OutputError, ResultsError
 from gdq_pddl.learners import (
     GreedyPolicy,
     evaluate_policy,
@@ -319,6 +319,18 @@ def test_save_and_load_read_the_same_path(ctx_c, tmp_path, name):
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([name, f"p-{name}"])
     assert np.array_equal(load_learner(str(tmp_path / name), ctx_c).q, learner.q)
     assert GreedyPolicy.load(str(tmp_path / f"p-{name}")).n_actions == 95
+
+
+@pytest.mark.parametrize("where", ["missing/x.npz", "."])
+def test_saving_where_no_file_can_be_written_is_refused_naming_it(ctx_c, tmp_path, where):
+    """A missing folder, or a folder given as the file: an OutputError naming the path,
+    not a bare OSError (the learner and the policy alike)."""
+    learner = make_learner("Q-learning", ctx_c)
+    target = tmp_path / where
+    with pytest.raises(OutputError, match=r"cannot write the learner file here"):
+        save_learner(target, learner)
+    with pytest.raises(OutputError, match=r"cannot write the policy file here"):
+        GreedyPolicy.of(learner).save(target)
 
 
 def test_a_file_an_older_version_named_npz_is_pointed_to(ctx_c, tmp_path):
