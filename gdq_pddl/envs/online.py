@@ -56,7 +56,7 @@ from gdq_pddl.envs.pddl_checks import (
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance, word_facts
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.errors import ConfigError, PlanningError, WorldError
+from gdq_pddl.errors import ConfigError, PlanningError, SizeError, WorldError
 from gdq_pddl.limits import MAX_TOLERANCE, check_real, human_bytes
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.pddl.reachable import state_bytes, table_budget
@@ -399,7 +399,16 @@ class OnlineInstance:
             self._allocate(max(n, 1 << max(0, rows - 1).bit_length()), max(w, width))
 
     def _chain_row(self, k: int) -> int:
-        """The row "k actions from the goal by the estimate", made with those below it."""
+        """The row "k actions from the goal by the estimate", made with those below it;
+        SizeError up front if the rows still to make pass the table budget (a state found
+        late whose weighted estimate is far larger than the initial state's)."""
+        more = k + 1 - len(self.chain)
+        if more > 0 and more * state_bytes(self.columns.shape[1]) > table_budget():
+            raise SizeError(f"{self.source}: a state found online stands {k + 1:,} actions "
+                            f"from the goal by the estimate ({self.heuristic_name} x "
+                            f"{self.estimate_weight:g}): {more:,} more chain rows would pass "
+                            f"the table budget of {human_bytes(table_budget())}; give a "
+                            "smaller estimate_weight (1 reads the estimates as they are)")
         while len(self.chain) <= k:
             j = len(self.chain)
             r = self._take_row()

@@ -16,7 +16,7 @@ from gdq_pddl.cli import main
 from gdq_pddl.envs.online import ESTIMATE, OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
-from gdq_pddl.errors import ConfigError, PlanningError
+from gdq_pddl.errors import ConfigError, PlanningError, SizeError
 from gdq_pddl.experiments.protocol import Experiment
 from gdq_pddl.experiments.work import instance_of
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
@@ -341,6 +341,15 @@ def test_estimate_weight_is_checked(monkeypatch) -> None:
     monkeypatch.setattr("gdq_pddl.pddl.reachable.TABLE_BUDGET", 100_000)
     with pytest.raises(ConfigError, match="estimate_weight 100: .* chain rows .*table budget"):
         OnlineInstance(base, estimate_weight=100)
+    # a state found later, with an estimate far past the initial state's: refused up
+    # front by the rows still to make, before any is allocated
+    monkeypatch.undo()
+    online = OnlineInstance(base, estimate_weight=100)
+    rows = online.n_rows
+    with pytest.raises(SizeError, match=r"stands 1,000,000,000 actions from the goal .*"
+                       r"estimate_weight"):
+        online._chain_row(999_999_999)
+    assert online.n_rows == rows
 
 
 MOST_LIKELY_NOWHERE = ("""(define (domain rare) (:requirements :probabilistic-effects)
