@@ -67,12 +67,11 @@ def _write(file: File, kind: str, n_states: int, n_actions: int, arrays: dict[st
     text = json.dumps(header, default=lambda x: x.tolist())  # a generator state's arrays
     if isinstance(file, str | Path):  # numpy would add ".npz" to a name without it
         try:
-            fh = open(file, "wb")
-        except OSError as exc:  # a missing folder, a folder given as the file, no rights
+            with open(file, "wb") as fh:
+                np.savez_compressed(fh, header=np.array(text), **arrays)
+        except OSError as exc:  # a missing folder, a folder given as the file, a full disk
             raise OutputError(f"{file}: cannot write the {kind} file here "
                               f"({exc.strerror or exc})") from None
-        with fh:
-            np.savez_compressed(fh, header=np.array(text), **arrays)
     else:
         np.savez_compressed(file, header=np.array(text), **arrays)
 
