@@ -156,7 +156,10 @@ def run_args(p: argparse.ArgumentParser, out: str, methods: Sequence[str] | None
              episodes: int = 2500, runs: int = 10) -> None:
     """The options of a command that runs methods; ``out`` names its default --out."""
     size_args(p, methods or DEFAULT_METHODS, registry.names(), episodes, runs)
-    p.add_argument("--planner", default="graph", help="planner backend for GDQ and DARLING")
+    readers = ", ".join(e.name for e in registry.BUILT_IN if e.knowledge == "plans")
+    p.add_argument("--planner", default="graph",
+                   help=f"planner backend of the methods that read plans ({readers}); the "
+                   "default GDQ reads the knowledge as a prior and never asks a planner")
     exec_args(p, out)
 
 
