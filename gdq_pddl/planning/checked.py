@@ -12,10 +12,12 @@ Any package can register a backend, so nothing a backend returns is used on trus
   task applicable where it is taken, every state must be the one its action leads to,
   the last state must be a goal state and no earlier one, and no plan may be longer than
   the tolerance allows. A bad plan is refused naming the planner, the plan and the step.
+  A plugin's "no plan" is confirmed by the built-in complete search before it is used.
 """
 
 from __future__ import annotations
 
+import warnings
 import weakref
 from collections.abc import Mapping
 
@@ -30,6 +32,7 @@ from gdq_pddl.planning.base import (
     Status,
     length_bound,
 )
+from gdq_pddl.planning.graph import GraphPlanner
 
 CHECKED = "checked"
 """The option that sets this wrapper's query keys apart from any backend's."""
@@ -82,8 +85,25 @@ class CheckedPlanner:
         seen = self._checked.setdefault(problem, {})
         if q.key not in seen or seen[q.key] is not result:
             check_result(self.name, problem, q, result, tolerance)
+            if result.status is Status.NO_PLAN and self.name != GraphPlanner.name:
+                _confirm_no_plan(self.name, problem, start, goal)
             seen[q.key] = result
         return result
+
+
+def _confirm_no_plan(name: str, problem: PlanningProblem, start: State | None,
+                     goal: State | None) -> None:
+    """A backend's "no plan" is checked by the built-in complete search (A* with h_max,
+    whose answer the problem caches): a plugin that misses a plan would otherwise make
+    every method that reads plans learn as if the goal could not be reached."""
+    with warnings.catch_warnings():  # "kept the first 1 of more plans": one is enough
+        warnings.simplefilter("ignore", UserWarning)
+        found = GraphPlanner(max_plans=1).solve(problem, start, goal)
+    if found.plans:
+        shown = " ".join(found.plans[0].actions[:3]) + \
+            (" ..." if len(found.plans[0]) > 3 else "")
+        raise PlanningError(f"planner {name!r} says there is no plan, but the built-in "
+                            f"planner 'graph' finds one of {found.length} actions: {shown}")
 
 
 def check_result(name: str, problem: PlanningProblem, q: Query, result: object,

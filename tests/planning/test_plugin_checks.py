@@ -67,6 +67,11 @@ class Mismatch(Base):  # states that are not the ones the actions lead through
         return Plan(p.actions, p.states[:1] + p.states[:-1])
 
 
+class Blind(Base):  # says there is no plan where there is one
+    def solve(self, problem, start=None, goal=None, tolerance=0.0):
+        return PlanResult(Status.NO_PLAN, (), self.name, {})
+
+
 class Raises(Base):
     def solve(self, problem, start=None, goal=None, tolerance=0.0):
         raise RuntimeError("boom\\non two lines")
@@ -88,7 +93,7 @@ class Shadow(Base):  # registered as "graph": must not replace the built-in
 '''
 
 NAMES = {"good": "Good", "swapped": "Swapped", "short": "Short", "unknown": "Unknown",
-         "mismatch": "Mismatch", "raises": "Raises", "none": "ReturnsNone",
+         "mismatch": "Mismatch", "blind": "Blind", "raises": "Raises", "none": "ReturnsNone",
          "badreason": "BadReason"}
 
 
@@ -135,6 +140,7 @@ def test_a_good_plugin_passes_the_checks(plugins, office_c):
     ("short", ["'short'", "stops short of the goal after 7 step(s)"]),
     ("unknown", ["'unknown'", "step 1 (fly p0 p17)", "not an action"]),
     ("mismatch", ["'mismatch'", "step 1", "not the one it leads to"]),
+    ("blind", ["'blind'", "says there is no plan", "'graph' finds one of 8 actions"]),
     ("raises", ["'raises'", "RuntimeError: boom on two lines"]),
     ("none", ["'none'", "returned NoneType where a PlanResult was expected"]),
     ("badreason", ["'badreason'", "unusable_reason()", "ValueError: cannot tell"]),
