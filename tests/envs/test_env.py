@@ -185,7 +185,7 @@ def test_info_fields() -> None:
     plan = info.pop("plan_action")  # tests/envs/test_wrappers_knowledge.py checks its values
     assert mask[plan] == 1
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
-                    env.unwrapped.start_state, "step": 0}
+                    env.unwrapped.instance.start_state, "step": 0}
     obs, reward, terminated, truncated, info = act(env, "approach", "p15")
     assert set(info) == {"action_mask", "plan_action", "position", "area", "cause",
                          "full_state", "step"}
