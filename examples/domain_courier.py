@@ -19,7 +19,7 @@ from pathlib import Path
 
 from gdq_pddl.analysis import report_text
 from gdq_pddl.envs.pddl_env import PDDLInstance
-from gdq_pddl.experiments import Experiment, run_experiments
+from gdq_pddl.experiments import Experiment, ProblemSpec, run_experiments
 from gdq_pddl.resources import data_file
 
 METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
@@ -28,14 +28,14 @@ METHODS = ("GDQ", "DARLING", "Dyna-Q", "Q-learning")
 def main(episodes: int, runs: int) -> str:
     experiments = []
     for domain, problem in (("courier", "courier-2"), ("lift", "lift-2")):
-        files = (str(data_file("domains", f"{domain}.pddl")),
-                 str(data_file("problems", f"{problem}.pddl")), "", "all-outcomes")
-        instance = PDDLInstance.from_files(*files[:2])
+        spec = ProblemSpec(str(data_file("domains", f"{domain}.pddl")),
+                           str(data_file("problems", f"{problem}.pddl")))
+        instance = PDDLInstance.from_files(spec.domain, spec.problem)
         print(f"{problem}: {instance.n_states} states, {instance.n_actions} ground actions, "
               f"returns on the {instance.reward_scale} scale, V* = "
               f"{instance.optimal()['v_star']:.4f}")
         experiments.append(Experiment(problem, ((instance.name, episodes),), runs=runs,
-                                      world="pddl", pddl=files, methods=METHODS))
+                                      world="pddl", pddl=spec, methods=METHODS))
     with tempfile.TemporaryDirectory() as tmp:
         report = report_text(run_experiments(experiments, Path(tmp), jobs=1, progress=False))
     print(report)

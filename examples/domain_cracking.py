@@ -22,7 +22,7 @@ from gdq_pddl.analysis import report_text
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLInstance
-from gdq_pddl.experiments import Experiment, run_experiments
+from gdq_pddl.experiments import Experiment, ProblemSpec, run_experiments
 from gdq_pddl.learners import GDQ, make_learner, run_episodes
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.resources import data_file
@@ -45,7 +45,7 @@ def main(episodes: int, runs: int) -> str:
           f"{instance.graph.n_states} found (the estimate from the start: "
           f"{instance.h_start} actions, step limit {instance.dynamics.step_limit})")
     exp = Experiment("cracking", ((instance.name, episodes),), runs=runs, world="pddl",
-                     pddl=(domain, problem, "", "all-outcomes", "online"),
+                     pddl=ProblemSpec(domain, problem, exploration="online"),
                      methods=("GDQ", "DARLING", "Q-learning"))
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)

@@ -1,6 +1,6 @@
 """A grid with keys and locked doors, run through the command line's machinery.
 
-What it shows: an `Experiment` with `pddl=(domain, problem, dynamics)` runs on any PDDL
+What it shows: an `Experiment` with `pddl=ProblemSpec(domain, problem, dynamics)` runs on any PDDL
 problem through the same runner as the office (parallel, resumable, one seed per run),
 and `report_text` summarises it. The red door is nearer, but its lock jams
 and can end the trial; the best route fetches the blue key (on keys-2 that is not a
@@ -16,7 +16,7 @@ import tempfile
 from pathlib import Path
 
 from gdq_pddl.analysis import report_text
-from gdq_pddl.experiments import Experiment, run_experiments
+from gdq_pddl.experiments import Experiment, ProblemSpec, run_experiments
 from gdq_pddl.resources import data_file
 
 
@@ -25,9 +25,9 @@ def shipped(*parts: str) -> str:
 
 
 def main(episodes: int, runs: int, problem: str) -> str:
-    files = (shipped("domains", "keys.pddl"), shipped("problems", f"{problem}.pddl"),
-             shipped("dynamics", "keys.toml"))
-    exp = Experiment("keys", ((problem, episodes),), runs=runs, world="pddl", pddl=files,
+    spec = ProblemSpec(shipped("domains", "keys.pddl"), shipped("problems", f"{problem}.pddl"),
+                       shipped("dynamics", "keys.toml"))
+    exp = Experiment("keys", ((problem, episodes),), runs=runs, world="pddl", pddl=spec,
                      methods=("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning"))
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)

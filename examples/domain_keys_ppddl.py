@@ -19,7 +19,7 @@ from pathlib import Path
 from gdq_pddl.analysis import report_text
 from gdq_pddl.envs.pddl_env import GOAL_POS, PDDLInstance
 from gdq_pddl.envs.solve import solve
-from gdq_pddl.experiments import DEFAULT_METHODS, Experiment, run_experiments
+from gdq_pddl.experiments import DEFAULT_METHODS, Experiment, ProblemSpec, run_experiments
 from gdq_pddl.resources import data_file
 
 
@@ -42,7 +42,8 @@ def main(episodes: int, runs: int, determinisation: str) -> str:
     print(f"V*: PPDDL alone {v_star(alone):.4f} (step limit {alone.dynamics.step_limit}), "
           f"with the overlay {v_star(exact):.10f}, keys.pddl + keys.toml {v_star(toml):.10f}")
     exp = Experiment("keys-ppddl", ((alone.name, episodes),), runs=runs, world="pddl",
-                     pddl=(domain, problem, "", determinisation), methods=DEFAULT_METHODS)
+                     pddl=ProblemSpec(domain, problem, determinisation=determinisation),
+                     methods=DEFAULT_METHODS)
     with tempfile.TemporaryDirectory() as tmp:
         out = run_experiments([exp], Path(tmp), jobs=1, progress=False)
         report = report_text(out)

@@ -23,14 +23,14 @@ from gdq_pddl.learners import GDQ, office_task_context, run_episodes
 def likely_route(env, choose) -> list[str]:
     """Positions visited when each action has its most likely outcome."""
     office = env.unwrapped
-    m, fs = office.model, office.start_state
+    m, fs = office.model, office.instance.start_state
     route = [office.world.positions[m.pos_of[fs]]]
     for t in range(office.world.step_limit):
         i = fs * m.n_actions + choose(t, fs)
         lo, hi = m.ptr[i], m.ptr[i + 1]
         fs = m.next[lo + int(np.argmax(m.prob[lo:hi]))]
         route.append(office.world.positions[m.pos_of[fs]])
-        if m.pos_of[fs] == office.goal_pos:
+        if m.pos_of[fs] == office.instance.goal_pos:
             break
     return route
 

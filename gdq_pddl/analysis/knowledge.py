@@ -30,6 +30,7 @@ from gdq_pddl.experiments.knowledge import (
     case_truth,
     problem_truth,
 )
+from gdq_pddl.experiments.protocol import ProblemSpec
 from gdq_pddl.experiments.scale import converged_at
 from gdq_pddl.outputs import write_text
 
@@ -118,7 +119,8 @@ def analyse(out: str | Path) -> list[CaseResult]:
                     *truth.measure({r: study.policy(exp["name"], m, task.name, r)
                                     for r in range(len(returns))}),
                     moving_average(returns, w)[:, w - 1:].mean(axis=0))
-        real = _shown(wrong["pddl"][0]) if wrong.get("pddl") else wrong["world"]
+        real = _shown(ProblemSpec.from_record(wrong["pddl"]).domain) if wrong.get("pddl") \
+            else wrong["world"]
         cases.append(CaseResult(name, described.get(name, ""), real,
                                 _shown(str(wrong.get("knowledge") or wrong["world"])), truth,
                                 methods, results))

@@ -4,7 +4,6 @@ report."""
 from __future__ import annotations
 
 import argparse
-import shlex
 import sys
 from dataclasses import replace
 from functools import partial
@@ -45,7 +44,7 @@ from gdq_pddl.experiments.knowledge import (
     knowledge_instance,
     world_name,
 )
-from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS
+from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, ProblemSpec
 from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.learners import registry
@@ -103,28 +102,28 @@ def _run_pddl(args: argparse.Namespace) -> int:
     if domain is None or problem is None:
         raise GdqError("a PDDL run needs --problem, and --domain unless the problem names a "
                        "shipped domain (and --dynamics for a STRIPS domain of your own)")
-    files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
-             determinisation(args))
+    spec = ProblemSpec(str(domain), str(problem), "" if dynamics is None else str(dynamics),
+                       determinisation(args))
     explore = args.explore
     because = "`--explore online` was given"  # why a problem is explored online
     try:  # check the files (and size) before any worker
-        instance = load_pddl_instance(files)
+        instance = load_pddl_instance(spec)
         if args.resume:  # as the run went, or refused, before any enumeration
             explore = resumed_exploration(out_folder(args, f"run-{instance.name}"), explore)
             if explore == "online" and args.explore == "auto":
                 because = "the run resumed went online under `--explore auto`"
         if explore == "online":
-            files = (*files, "online")
+            spec = replace(spec, exploration="online")
             instance = OnlineInstance(instance)  # its own checks
         else:
             if explore == "auto" and instance.ppddl:  # it can go online
                 instance.graph_or_give_up()
             instance.model  # noqa: B018
     except (MemoryError, TooManyStates) as exc:  # past the budget, or a `ulimit -v`
-        if explore == "auto" and load_pddl_instance(files).ppddl and \
+        if explore == "auto" and load_pddl_instance(spec).ppddl and \
                 isinstance(exc, (TooManyStates, SizeError)):
-            files = (*files, "online")
-            instance = OnlineInstance(load_pddl_instance(files[:4]))
+            spec = replace(spec, exploration="online")
+            instance = OnlineInstance(load_pddl_instance(spec))
             print(f"gdq-pddl: {exc}\ngdq-pddl: so {problem} is explored online: its states "
                   "are found as episodes reach them, and V* is not computed (--explore)",
                   file=sys.stderr)
@@ -136,17 +135,17 @@ def _run_pddl(args: argparse.Namespace) -> int:
                             "smaller problem") from None
     knowledge = None
     if args.knowledge_domain is not None:
-        if files[4:5] == ("online",):
+        if spec.online:
             raise GdqError("--knowledge-domain needs the problem's states enumerated "
                            "(--explore enumerate): online, no knowledge file is read")
         knowledge = str(args.knowledge_domain.absolute())
-        knowledge_instance(instance, files, knowledge)  # same states and outcomes, or exit 2
+        knowledge_instance(instance, spec, knowledge)  # same states and outcomes, or exit 2
     if instance.graph.is_goal[0]:
         print(f"gdq-pddl: warning: {problem}: the goal already holds in the initial state: "
               "every episode ends there before its first action (return 0), as mdpsim "
               "ends such a round at turn 0", file=sys.stderr)
     kw = experiment_kw(args)
-    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=files,
+    exp = Experiment("run", ((instance.name, args.episodes),), world="pddl", pddl=spec,
                      knowledge=knowledge, **kw)
     return execute([exp], args, f"run-{instance.name}", keep_learners=args.keep_learners,
                    collect=partial(collect, online_facts={"explored_because": because}),
@@ -256,9 +255,8 @@ def register_scale(sub) -> None:
                                    "each size (building seeds --seed, --seed + 1, ...) and "
                                    "write scale.png/pdf and REPORT.md (episodes to "
                                    "convergence, mean returns, GDQ minus each method, env "
-                                   "steps/s). Each finished run is saved in --out as it ends "
-                                   "(units/building-N-sS/), so an interrupted run goes on "
-                                   "with --resume.")
+                                   "steps/s). Each finished run is saved in --out as it ends, "
+                                   "so an interrupted run goes on with --resume.")
     p.add_argument("--sizes", type=POSITIVE, nargs="+", default=[100, 300, 1000],
                    help="building sizes in positions (default 100 300 1000)")
     p.add_argument("--buildings", type=POSITIVE, default=2,
@@ -267,29 +265,28 @@ def register_scale(sub) -> None:
     size_args(p, SCALE_DEFAULT_METHODS, registry.names(), 5000, 5,
               seed="the first building seed (each run derives its own seeds from its "
                    "building, size and run number)")
-    p.add_argument("--out", type=Path, help="output folder (default results/scale)")
-    p.add_argument("--resume", action="store_true",
-                   help="continue an interrupted run in --out (same command line; sizes, "
-                        "buildings and methods cannot be added)")
+    exec_args(p, "results/scale")
     p.set_defaults(func=cmd_scale)
 
 
 def cmd_scale(args: argparse.Namespace) -> int:
-    from gdq_pddl.analysis.scale import make_scale_report  # start-up time: matplotlib
-    from gdq_pddl.experiments.scale import run_scale  # start-up time: it loads the learners
+    from gdq_pddl.experiments import scale  # start-up time: it loads the learners
 
-    out = args.out or Path("results/scale")
-    methods = list(checked_methods(args))
-    command = shlex.join(["gdq-pddl", "scale", "--sizes", *map(str, args.sizes),
-                          "--buildings", str(args.buildings), "--method", *methods,
-                          "--runs", str(args.runs), "--episodes", str(args.episodes),
-                          "--seed", str(args.seed), "--out", str(out), "--resume"])
-    results = run_scale(out, args.sizes, args.runs, args.episodes, args.seed,
-                        buildings=args.buildings, methods=methods, resume=args.resume,
-                        command=command)
-    make_scale_report(results, args.runs, args.episodes, out)
-    print(out / "REPORT.md")
-    return 0
+    exps = scale.scale_experiments(args.sizes, args.runs, args.episodes, args.seed,
+                                   args.buildings, list(checked_methods(args)))
+    return execute(exps, args, "scale", partial(scale_report, experiments=exps),
+                   results="building-*.npz", **scale.runner_kw())
+
+
+def scale_report(out: Path, experiments: list[Experiment]) -> str:
+    """Figure and REPORT.md of the scale ``experiments`` in ``out``; returns what was
+    written."""
+    from gdq_pddl.analysis.scale import make_scale_report  # start-up time: matplotlib
+    from gdq_pddl.experiments.scale import assemble  # start-up time, as above
+
+    paths = make_scale_report([assemble(out, e) for e in experiments], experiments[0].runs,
+                              experiments[0].episodes, out)
+    return f"wrote {', '.join(p.name for p in paths)}; read {paths[-1]}"
 
 
 def register_pairs(sub) -> None:

@@ -29,7 +29,8 @@ RESET_OPTIONS = ("start", "goal")
 
 class CompiledEnv(gym.Env[int, int]):
     """Base class: subclasses implement :meth:`_restart`, :meth:`_advance`,
-    :meth:`_observe` and :meth:`_position`; the instance's attributes are the env's."""
+    :meth:`_observe` and :meth:`_position`; what the instance says is reached through
+    the named properties below, the rest through ``env.unwrapped.instance``."""
 
     model: tuple
     """The compiled true model (``ModelArrays``, for ``envs.solve.solve``, or ``CompactModel``)."""
@@ -53,11 +54,24 @@ class CompiledEnv(gym.Env[int, int]):
             raise ConfigError(f"render_mode {render_mode!r}: this env draws only "
                               f"{', '.join(map(repr, modes)) or 'nothing'} (or None)")
 
-    def __getattr__(self, name: str) -> Any:
-        instance = self.__dict__.get("instance")
-        if instance is None or name.startswith("_"):
-            raise AttributeError(name)
-        return getattr(instance, name)
+    # What the instance says, named (the rest: ``env.unwrapped.instance``): the table of
+    # learner actions that may change each learner state, the names of the atoms facts()
+    # gives; of an office task its World, Task, LearnerSpaces and full states' decode.
+    mask_table = property(lambda self: self.instance.mask_table)
+    atom_names = property(lambda self: self.instance.atom_names)
+    world = property(lambda self: self.instance.world)
+    task = property(lambda self: self.instance.task)
+    spaces = property(lambda self: self.instance.spaces)
+
+    def action_name(self, a: int) -> str:
+        return self.instance.action_name(a)
+
+    def decode(self, fs: int) -> tuple[str, frozenset[str]]:
+        return self.instance.decode(fs)
+
+    def atoms(self, s: int) -> frozenset[str]:
+        """The atoms true in state ``s`` of a PDDL problem."""
+        return self.instance.atoms(s)
 
     def action_masks(self) -> np.ndarray:
         """``bool[n_actions]``: the current state's row of ``mask_table`` (for ``MaskablePPO``)."""

@@ -359,11 +359,12 @@ class CompactEnv(CompiledEnv):
 
     def _restart(self) -> None:
         self.doors[:] = 0
-        self._pos = self.start_pos
+        self._pos = self.instance.start_pos
 
     def _advance(self, a: int) -> tuple[float, bool, bool, int]:
         pos, reward, terminated, truncated, cause = compact_step(
-            self.model, self._pos, self.doors, a, self._t, self.goal_pos, self.np_random)
+            self.model, self._pos, self.doors, a, self._t, self.instance.goal_pos,
+            self.np_random)
         self._pos = int(pos)
         return reward, terminated, truncated, cause
 

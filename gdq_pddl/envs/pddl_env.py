@@ -503,7 +503,9 @@ def load_instance(domain: str | Path | None, problem: str | Path | None,
 
 class PDDLEnv(CompiledEnv):
     """The env of an instance over its full true model (a PDDL problem, or a world's task:
-    ``Office-v0``); the instance's attributes are the env's (``env.unwrapped.atoms(s)``)."""
+    ``Office-v0``); what the instance says through named properties
+    (``env.unwrapped.atoms(s)``, :class:`~gdq_pddl.envs.base.CompiledEnv`), the rest
+    through ``env.unwrapped.instance``."""
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 4}
     """Both kinds of instance draw both modes (their ``render``)."""

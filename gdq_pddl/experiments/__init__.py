@@ -7,6 +7,7 @@ from gdq_pddl.experiments.protocol import (
     PAPER_METHODS,
     Experiment,
     Hyper,
+    ProblemSpec,
     Unit,
     paper_protocol,
     robot_experiment,
@@ -15,6 +16,6 @@ from gdq_pddl.experiments.protocol import (
 )
 from gdq_pddl.experiments.runner import ResultsError, run_experiments
 
-__all__ = ["DEFAULT_METHODS", "METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ResultsError",
-           "RunInterrupted", "Unit", "paper_protocol", "robot_experiment", "run_experiments",
-           "switch_experiment", "task_experiments"]
+__all__ = ["DEFAULT_METHODS", "METHODS", "PAPER_METHODS", "Experiment", "Hyper", "ProblemSpec",
+           "ResultsError", "RunInterrupted", "Unit", "paper_protocol", "robot_experiment",
+           "run_experiments", "switch_experiment", "task_experiments"]

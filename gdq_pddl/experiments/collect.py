@@ -64,7 +64,7 @@ def collect(out: Path, experiments: list[Experiment],
             writer.writerow(POLICY_COLUMNS)
             for unit in units:
                 exp = unit.experiment
-                key = (exp.world, exp.pddl and tuple(exp.pddl))
+                key = (exp.world, exp.pddl)
                 if key not in namers:  # learner indices named in exp's world or problem
                     instance = instance_of(exp, exp.schedule[0][0])
                     namers[key] = instance.state_name, instance.action_name
@@ -76,7 +76,7 @@ def collect(out: Path, experiments: list[Experiment],
                                  for s, a in enumerate(data["policy"].tolist()))
 
     atomic_write(out / "episodes.csv", write_episodes)
-    online = any(e.pddl and tuple(e.pddl)[4:5] == ("online",) for e in experiments)
+    online = any(e.pddl is not None and e.pddl.online for e in experiments)
     rows = 0 if online else sum(len(e.units()) * instance_of(e, e.schedule[-1][0]).n_states
                                 for e in experiments)  # a policy: an action per state
     if online:  # each run numbered the states it found in its own order
@@ -127,7 +127,8 @@ def optimal_summary(experiments: list[Experiment],
     ``<task>@<problem file>``."""
     out: dict = {}
     for exp in experiments:
-        files = dict(zip(("domain", "problem", "dynamics"), exp.pddl or (), strict=False))
+        files = {} if exp.pddl is None else \
+            dict(zip(("domain", "problem", "dynamics"), exp.pddl.files, strict=True))
         for spec, _ in exp.schedule:
             instance = instance_of(exp, spec)
             place = files.get("problem", exp.world)

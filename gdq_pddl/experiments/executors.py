@@ -26,10 +26,12 @@ Work = Callable[[Unit], dict[str, np.ndarray]]
 
 
 def execute(units: list[Unit], jobs: int | None, executor: str, address: str | None,
-            work: Work) -> Iterable[tuple[Unit, dict[str, np.ndarray]]]:
+            work: Work, warm: Callable[[list[Unit]], int] = warm_up
+            ) -> Iterable[tuple[Unit, dict[str, np.ndarray]]]:
     """``(unit, work(unit))`` for each of ``units``, in the order they finish: on
-    ``executor`` ``"local"`` (``jobs`` processes; one runs them here) or ``"ray"`` (at
-    ``address``, or a local instance of ``jobs`` CPUs)."""
+    ``executor`` ``"local"`` (``jobs`` processes, forked after ``warm``, which returns the
+    bytes each adds; one runs them here) or ``"ray"`` (at ``address``, or a local instance
+    of ``jobs`` CPUs)."""
     if not units:
         return iter(())
     if executor == "ray":
@@ -39,7 +41,7 @@ def execute(units: list[Unit], jobs: int | None, executor: str, address: str | N
     jobs = jobs or os.cpu_count() or 1
     if jobs == 1 or len(units) == 1:
         return ((u, work(u)) for u in units)
-    return _processes(units, jobs, work)
+    return _processes(units, jobs, work, warm)
 
 
 def _run_indexed(job: tuple[int, Unit, Work]) -> tuple[int, dict[str, np.ndarray]]:
@@ -64,9 +66,10 @@ def _resident_bytes() -> int:
         return 0
 
 
-def _processes(units: list[Unit], jobs: int, work: Work):
+def _processes(units: list[Unit], jobs: int, work: Work,
+               warm: Callable[[list[Unit]], int]):
     # fork after a warm-up: workers inherit the compiled kernels instead of compiling again
-    per_run = warm_up(units)
+    per_run = warm(units)
     fit = memory_jobs(jobs, per_run, physical_memory(), _resident_bytes())
     if fit < jobs:  # each worker's tables on top: more would be killed for memory
         warnings.warn(f"{jobs} worker processes (--jobs) capped at {fit}: each run's "

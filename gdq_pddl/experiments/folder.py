@@ -1,4 +1,4 @@
-"""An output folder as both runners use it: locked, its ``config.json`` read back, its
+"""An output folder as the runner uses it: locked, its ``config.json`` read back, its
 input files fingerprinted and its unit files read back or named as damaged."""
 
 from __future__ import annotations
@@ -147,30 +147,30 @@ def changed_input(old: Mapping, new: Mapping[str, str]) -> str | None:
     return next((f for f, h in new.items() if f in old and old[f] != h), None)
 
 
-def load_unit(path: Path, what: str, expect: Mapping[str, int],
-              rerun: str = "the same command with --resume") -> dict[str, np.ndarray]:
+def load_unit(path: Path, what: str, expect: Mapping[str, int]) -> dict[str, np.ndarray]:
     """The arrays of the unit file ``path``; :class:`ResultsError` naming ``what`` if it
     is damaged. ``expect``: each array the unit must hold -> its length (-1: any)."""
     try:
         with np.load(path) as saved:
             data = {k: saved[k] for k in saved.files}
     except FileNotFoundError:
-        raise ResultsError(f"{path} ({what}) is missing: rerun it with {rerun}") from None
+        raise ResultsError(f"{path} ({what}) is missing: rerun it with the same command "
+                           "and --resume") from None
     except Exception as exc:  # zipfile, numpy format and OS errors of a damaged file
-        raise _damaged(path, what, f"{type(exc).__name__}: {exc}", rerun) from None
+        raise _damaged(path, what, f"{type(exc).__name__}: {exc}") from None
     for key, length in expect.items():
         if key not in data:
-            raise _damaged(path, what, f"no array {key!r}", rerun)
+            raise _damaged(path, what, f"no array {key!r}")
         shape = data[key].shape
         if length >= 0 and (not shape or shape[0] != length):
             raise _damaged(path, what, f"{key} has {shape[0] if shape else 0} entries, "
-                           f"expected {length}", rerun)
+                           f"expected {length}")
     return data
 
 
-def _damaged(path: Path, what: str, why: str, rerun: str) -> ResultsError:
-    return ResultsError(f"{path} ({what}) is damaged ({why}): delete it and run {rerun} to "
-                        "rerun that run alone")
+def _damaged(path: Path, what: str, why: str) -> ResultsError:
+    return ResultsError(f"{path} ({what}) is damaged ({why}): delete it and run the same "
+                        "command with --resume to rerun that run alone")
 
 
 UNIT_ARRAYS = ("returns", "steps", "success", "areas", "tasks", "counts", "policy")

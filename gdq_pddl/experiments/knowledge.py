@@ -2,9 +2,10 @@
 knowledge (the PDDL) disagrees with reality (the world).
 
 A world name is told apart by its form alone: ``office`` or ``office_robot`` (shipped);
-``office:<variant>`` (derived from the office in memory, :data:`WORLDS`); anything else
-is the path of a world file (:func:`world_name`). An experiment's ``knowledge`` world has
-the real world's positions and doors, so only the knowledge differs
+``office:<variant>`` (derived from the office in memory, :data:`WORLDS`);
+``building:<positions>:<seed>`` (a generated building, :func:`building_of`); anything
+else is the path of a world file (:func:`world_name`). An experiment's ``knowledge``
+world has the real world's positions and doors, so only the knowledge differs
 (``docs/decisions.md``); :func:`case_truth` measures a case against the real world.
 """
 
@@ -17,13 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
+from gdq_pddl.buildings import building_world
 from gdq_pddl.envs.evaluate import Route, RouteSummary, likeliest_next, optimal_route, policy_value
 from gdq_pddl.envs.model import compile_model
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.envs.solve import solve_task
 from gdq_pddl.envs.variants import deterministic_world, with_door
 from gdq_pddl.errors import GdqError
-from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.protocol import Experiment, ProblemSpec
 from gdq_pddl.learners import registry
 from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.resources import data_file
@@ -42,9 +44,20 @@ PASSAGE = ("p8", "p17")
 the knowledge but not in reality (case ``spurious-passage``)."""
 
 
+BUILDING_PREFIX = "building:"
+"""How the names of generated buildings begin (:func:`building_of`)."""
+
+
 def is_file_name(name: str) -> bool:
     """Whether the world name ``name`` is the path of a world file (not built in)."""
-    return name not in BUILTIN and not name.startswith(DERIVED_PREFIX)
+    return name not in BUILTIN and not name.startswith((DERIVED_PREFIX, BUILDING_PREFIX))
+
+
+def building_of(name: str) -> tuple[int, int]:
+    """``(positions, seed)`` of the world name ``building:N:S``: the building of
+    ``gdq-pddl building --positions N --seed S``."""
+    positions, seed = name.removeprefix(BUILDING_PREFIX).split(":")
+    return int(positions), int(seed)
 
 
 def world_name(path: Path | None) -> str:
@@ -59,17 +72,23 @@ def load_world_named(name: str) -> World:
         return builtin_world(name)
     if name.startswith(DERIVED_PREFIX):
         return derived_world(name)
+    if name.startswith(BUILDING_PREFIX):
+        return building_world(*building_of(name))
     return load_world(Path(name))
 
 
+def load_pddl_instance(spec: ProblemSpec) -> PDDLInstance:
+    """The PDDLInstance of ``spec``'s files and determinisation (its states enumerated
+    where they are used; of a problem explored online, the base of its
+    :class:`~gdq_pddl.envs.online.OnlineInstance`), loaded once per process."""
+    return _pddl_instance(spec.domain, spec.problem, spec.dynamics, spec.determinisation)
+
+
 @cache
-def load_pddl_instance(files: tuple[str, ...]) -> PDDLInstance:
-    """The PDDLInstance of ``(domain, problem, dynamics[, determinisation])``, loaded once
-    per process."""
-    domain, problem, dynamics, *determinisation = files[:4]
+def _pddl_instance(domain: str, problem: str, dynamics: str, determinisation: str
+                   ) -> PDDLInstance:
     return PDDLInstance.from_files(domain, problem, dynamics or None,
-                                   determinisation=determinisation[0] if determinisation
-                                   else "all-outcomes")
+                                   determinisation=determinisation)
 
 
 def with_edge(world: World, a: str, b: str) -> World:
@@ -108,7 +127,7 @@ def derived_world(name: str) -> World:
 @dataclass(frozen=True)
 class Case:
     """One knowledge/reality disagreement. An office case names worlds; a PDDL case
-    (``pddl`` given) has ``real`` = its ``pddl[0]`` (the reality domain file) and
+    (``pddl`` given) has ``real`` = its ``pddl.domain`` (the reality domain file) and
     ``knowledge`` = the knowledge's domain file, which differs from reality in its
     probabilities only (:func:`knowledge_instance`); ``task`` is then the problem's name."""
 
@@ -117,15 +136,16 @@ class Case:
     knowledge: str  # the world the knowledge (PDDL problem, plans) is built from
     task: str
     description: str
-    pddl: tuple[str, ...] | None = None  # (domain, problem, dynamics, determinisation)
+    pddl: ProblemSpec | None = None
 
 
 def _shipped(*parts: str) -> str:
     return str(data_file(*parts))
 
 
-KEYS_PDDL = (_shipped("domains", "keys-ppddl.pddl"), _shipped("problems", "keys-ppddl-1.pddl"),
-             _shipped("dynamics", "keys-ppddl.toml"), "most-likely")
+KEYS_PDDL = ProblemSpec(_shipped("domains", "keys-ppddl.pddl"),
+                        _shipped("problems", "keys-ppddl-1.pddl"),
+                        _shipped("dynamics", "keys-ppddl.toml"), "most-likely")
 """Reality of case ``wrong-probabilities``: the shipped keys-ppddl-1, known by the
 most-likely outcomes (under all outcomes no learner reads a probability: docs/decisions.md)."""
 KEYS_SWAPPED = _shipped("knowledge", "keys-ppddl-swapped.pddl")
@@ -150,7 +170,7 @@ CASES: tuple[Case, ...] = (
     Case("no-difficulty", "office", "office:deterministic", "C",
          "control: the knowledge cannot express door difficulty (built from a world "
          "where every door always works, it equals the accurate knowledge)"),
-    Case("wrong-probabilities", KEYS_PDDL[0], KEYS_SWAPPED, "keys-ppddl-1",
+    Case("wrong-probabilities", KEYS_PDDL.domain, KEYS_SWAPPED, "keys-ppddl-1",
          "PPDDL keys-ppddl-1 known by its most-likely outcomes; the knowledge's domain "
          "file believes the sound blue lock opens with probability 0.3 (reality 0.9) and "
          "the stiff red lock opens with 0.9 and jams with 0.05 (reality 0.5 and 0.3): its "
@@ -173,7 +193,7 @@ def knowledge_experiments(episodes: int = 1500, runs: int = 10, seed: int = 0,
     out = []
     for c in cases:
         common = {"methods": tuple(methods) if c.pddl is None else
-                  tuple(reading(m, c.pddl[3]) for m in methods),
+                  tuple(reading(m, c.pddl.determinisation) for m in methods),
                   "runs": runs, "seed": seed, "planner": planner,
                   "world": "pddl" if c.pddl else c.real, "pddl": c.pddl}
         out.append(Experiment(f"{c.name}--accurate", ((c.task, episodes),), **common))
@@ -209,18 +229,17 @@ def knowledge_world(real: World, knowledge: str | None) -> World:
     return world
 
 
-def knowledge_instance(real: PDDLInstance, files: tuple[str, ...], domain: str
-                       ) -> PDDLInstance:
+def knowledge_instance(real: PDDLInstance, spec: ProblemSpec, domain: str) -> PDDLInstance:
     """The PDDL instance to build the knowledge from: reality's problem, dynamics and
-    determinisation (``files``) with the knowledge's ``domain`` file, which must give the
+    determinisation (``spec``) with the knowledge's ``domain`` file, which must give the
     same reachable states and offered actions (other probabilities, the same outcomes)."""
-    known = load_pddl_instance((domain, *tuple(files)[1:4]))
+    known = load_pddl_instance(replace(spec, domain=domain))
     if known.graph.states != real.graph.states or \
             not np.array_equal(known.columns, real.columns) or \
             not np.array_equal(known.model.ptr, real.model.ptr) or \
             not np.array_equal(known.model.next, real.model.next):
         raise GdqError(f"knowledge domain {domain} does not give the reachable states and "
-                       f"actions of {files[0]} on {real.name}: give it the same outcomes "
+                       f"actions of {spec.domain} on {real.name}: give it the same outcomes "
                        "(other probabilities only)")
     return known
 
@@ -331,9 +350,9 @@ class ProblemTruth:
 
 def problem_truth(wrong: Mapping) -> ProblemTruth:
     """The :class:`ProblemTruth` of a PDDL case from its ``--wrong`` experiment."""
-    files = tuple(wrong["pddl"])
-    real = load_pddl_instance(files)
-    known = knowledge_instance(real, files, wrong["knowledge"])
+    spec = ProblemSpec.from_record(wrong["pddl"])
+    real = load_pddl_instance(spec)
+    known = knowledge_instance(real, spec, wrong["knowledge"])
 
     def starts(instance: PDDLInstance) -> tuple[str, ...]:
         s, table = instance.learner_start, instance.plan_table("graph", 0.0)

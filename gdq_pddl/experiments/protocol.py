@@ -16,6 +16,7 @@ import numpy as np
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import registry
 from gdq_pddl.limits import check_count
+from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 
 METHODS = registry.built_in_names()
 """The built-in learning methods by name (:mod:`gdq_pddl.learners.registry` declares them,
@@ -32,9 +33,6 @@ GDQ_VARIANTS = registry.variants_of(registry.REFERENCE)
 DEFAULT_METHODS = registry.built_in_names("default")
 """What the commands compare unless told otherwise (not GDQ-literal: it never learns)."""
 
-SCALE_METHODS = METHODS
-"""The built-in methods of ``gdq-pddl scale`` (any registered method runs there)."""
-
 SCALE_DEFAULT_METHODS = DEFAULT_METHODS
 """What ``gdq-pddl scale`` compares unless told otherwise: every method but GDQ-literal,
 which never learns (``docs/decisions.md``)."""
@@ -47,6 +45,55 @@ class Hyper:
     alpha: float = 0.1  # step size of the TD update
     gamma: float = 0.95  # discount factor
     epsilon: float = 0.1  # probability of a uniformly random (allowed) action
+
+
+EXPLORATIONS = ("enumerate", "online")
+"""How a problem's states are found: all enumerated first, or as episodes reach them."""
+
+
+@dataclass(frozen=True)
+class ProblemSpec:
+    """A PDDL problem an experiment learns on: its files and how its states are found."""
+
+    domain: str
+    """The domain file (the knowledge; of a PPDDL domain, reality too)."""
+    problem: str
+    """The problem file."""
+    dynamics: str = ""
+    """The dynamics file (a STRIPS domain's reality, a PPDDL domain's overlay); ``""``: none."""
+    determinisation: str = DETERMINISATIONS[0]
+    """What the planner knows of a PPDDL domain (``all-outcomes`` or ``most-likely``)."""
+    exploration: str = EXPLORATIONS[0]
+    """``enumerate``: every reachable state first; ``online``: states found as episodes
+    reach them, a fresh instance per run (:class:`~gdq_pddl.envs.online.OnlineInstance`)."""
+
+    def __post_init__(self) -> None:
+        """Refuse a value no run can be made of (a ConfigError naming the field)."""
+        for name, known in (("determinisation", DETERMINISATIONS),
+                            ("exploration", EXPLORATIONS)):
+            if getattr(self, name) not in known:
+                raise ConfigError(f"ProblemSpec.{name}: expected one of {', '.join(known)}, "
+                                  f"got {getattr(self, name)!r}")
+
+    online = property(lambda self: self.exploration == "online")
+    files = property(lambda self: (self.domain, self.problem, self.dynamics))
+
+    @classmethod
+    def from_record(cls, value: object) -> ProblemSpec:
+        """The spec config.json records: its fields, or the list of earlier versions
+        (``[domain, problem, dynamics[, determinisation[, "online"]]]``); a ConfigError
+        for anything else."""
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, dict):
+            try:
+                return cls(**value)
+            except TypeError:
+                pass
+        elif isinstance(value, list) and 3 <= len(value) <= 5 and value[4:] in ([], ["online"]):
+            return cls(*value[:4], exploration="online" if value[4:] else EXPLORATIONS[0])
+        raise ConfigError(f"a recorded problem must be the fields of a ProblemSpec, got "
+                          f"{value!r}")
 
 
 @dataclass(frozen=True)
@@ -70,10 +117,9 @@ class Experiment:
     (reality's states and outcomes, other probabilities:
     :func:`~gdq_pddl.experiments.knowledge.knowledge_instance`); None: reality itself.
     Not part of unit keys or seeds."""
-    pddl: tuple[str, ...] | None = None
-    """``(domain, problem, dynamics[, determinisation])`` file paths (dynamics ``""``:
-    none): learn on that PDDL problem instead of an office world (``world`` is then
-    unused; each schedule entry names the problem)."""
+    pddl: ProblemSpec | None = None
+    """Learn on this PDDL problem instead of an office world (``world`` is then unused;
+    each schedule entry names the problem)."""
 
     def __post_init__(self) -> None:
         """Refuse what no run can be made of (a ConfigError naming the field)."""
@@ -92,7 +138,10 @@ class Experiment:
                               f"{', '.join(registry.names())})")
         methods = tuple(registry.canonical(m) for m in self.methods)  # ConfigError if unknown
         object.__setattr__(self, "methods", methods)
-        if self.pddl is not None and tuple(self.pddl)[4:5] == ("online",):
+        if self.pddl is not None and not isinstance(self.pddl, ProblemSpec):
+            raise ConfigError(f"experiment {self.name}: pddl must be a ProblemSpec(domain=..., "
+                              f"problem=...), got {type(self.pddl).__name__} {self.pddl!r}")
+        if self.pddl is not None and self.pddl.online:
             for m in methods:
                 if not registry.parse_method(m).entry.online:
                     raise ConfigError(f"method {m} cannot run on a problem explored online")

@@ -48,8 +48,8 @@ from gdq_pddl.experiments.folder import (
 )
 from gdq_pddl.experiments.interrupts import RunInterrupted, stop_on_signals
 from gdq_pddl.experiments.knowledge import is_file_name
-from gdq_pddl.experiments.protocol import Experiment, Unit
-from gdq_pddl.experiments.work import run_unit
+from gdq_pddl.experiments.protocol import Experiment, ProblemSpec, Unit
+from gdq_pddl.experiments.work import run_unit, warm_up
 from gdq_pddl.limits import check_count
 from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
 
@@ -78,7 +78,8 @@ def save_unit(path: Path, result: dict[str, np.ndarray], compressed: bool = Fals
 
 def input_files(experiments: list[Experiment]) -> list[str]:
     """The input files the experiments name (PDDL files, world files)."""
-    named = [f for e in experiments for f in (*(e.pddl or ())[:3], e.world, e.knowledge)]
+    named = [f for e in experiments
+             for f in (*(e.pddl.files if e.pddl else ()), e.world, e.knowledge)]
     return [f for f in named if f and is_file_name(f)]
 
 
@@ -150,9 +151,10 @@ def resumed_exploration(out: Path, explore: str) -> str:
     if not path.is_file():
         return explore  # nothing to continue: resume_config says so
     old = read_config(path)
-    went = "online" if any(isinstance(e, dict) and isinstance(e.get("pddl"), list) and
-                           e["pddl"][4:5] == ["online"] for e in old.get("experiments") or []
-                           if isinstance(old.get("experiments"), list)) else "enumerate"
+    exps = upgraded(old.get("experiments"))
+    went = "online" if isinstance(exps, list) and any(
+        isinstance(e, dict) and isinstance(e.get("pddl"), dict) and
+        e["pddl"].get("exploration") == "online" for e in exps) else "enumerate"
     recorded = recorded_options(out, old).get("explore")
     if recorded is not None:
         check_options(out, old, {"explore": explore})
@@ -161,6 +163,15 @@ def resumed_exploration(out: Path, explore: str) -> str:
                            f"{'online' if went == 'online' else 'by enumerating its states'} "
                            "(config.json); --resume needs the same command line")
     return went if explore == "auto" else explore
+
+
+def upgraded(old: object) -> object:
+    """A config.json's ``experiments`` as this version records them: a problem recorded
+    as the list of earlier versions becomes its :class:`ProblemSpec`'s fields (so
+    ``--resume`` continues those folders); anything else as it is."""
+    return [e | {"pddl": asdict(ProblemSpec.from_record(e["pddl"]))}
+            if isinstance(e, dict) and isinstance(e.get("pddl"), list) else e
+            for e in old] if isinstance(old, list) else old
 
 
 def prepare(out: Path, experiments: list[Experiment], resume: bool,
@@ -178,9 +189,10 @@ def prepare(out: Path, experiments: list[Experiment], resume: bool,
     if old is not None:
         check_options(out, old, options)
         new = json.loads(json.dumps(config["experiments"]))
-        if old.get("experiments") != new:
+        recorded = upgraded(old.get("experiments"))
+        if recorded != new:
             raise ResultsError(f"{out} holds results of a different configuration "
-                               f"({_difference(old.get('experiments'), new)}); --resume "
+                               f"({_difference(recorded, new)}); --resume "
                                "needs the same command line")
         inputs = old.get("inputs") if isinstance(old.get("inputs"), dict) else {}
         changed = changed_input(inputs, config["inputs"])
@@ -250,10 +262,16 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
                     collect: Callable[[Path, list[Experiment]], None] | None = None,
                     log: Callable[[str], None] | None = None,
                     unit_arrays: tuple[str, ...] = UNIT_ARRAYS, keep_learners: bool = False,
-                    options: Mapping[str, Any] | None = None) -> Path:
+                    options: Mapping[str, Any] | None = None,
+                    check: Callable[[list[Experiment], int], None] = preflight,
+                    warm: Callable[[list[Unit]], int] = warm_up) -> Path:
     """Run every unit of ``experiments`` not yet in ``out`` with ``work`` (default:
     :func:`run_unit`), then ``collect`` the results (default:
-    :func:`gdq_pddl.experiments.collect.collect`).
+    :func:`gdq_pddl.experiments.collect.collect`); ``check`` refuses, before the folder
+    is touched, experiments that cannot run on that many processes (default:
+    :func:`~gdq_pddl.experiments.checks.preflight`), ``warm`` compiles what forked workers
+    inherit and says the bytes each adds (default: :func:`~gdq_pddl.experiments.work.warm_up`;
+    both replaced by ``gdq-pddl scale``, whose units are not :func:`run_unit`'s).
 
     ``log`` is told how many runs are left; ``unit_arrays`` are what ``work`` saves (what
     ``--resume`` checks); ``keep_learners`` saves each run's final learner in
@@ -267,7 +285,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
     collect = collect or collect_episodes
     out = Path(out)
     wanted = check_jobs(jobs)
-    preflight(experiments, wanted)
+    check(experiments, wanted)
     output_folder(out)
     with FolderLock(out), stop_on_signals():
         pending = prepare(out, experiments, resume, unit_arrays,
@@ -284,7 +302,7 @@ def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None =
             try:
                 _run_pending(out, experiments, pending,
                              processes if executor == "local" else jobs, executor, address,
-                             progress, work)
+                             progress, work, warm)
                 _check_unchanged(out, experiments)
                 collect(out, experiments)
             except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM / SIGHUP (stop_on_signals)
@@ -327,7 +345,8 @@ def _interrupted(out: Path, experiments: list[Experiment], resume: bool,
 
 def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
                  jobs: int | None, executor: str, address: str | None, progress: bool,
-                 work: Work = run_unit) -> None:
+                 work: Work = run_unit, warm: Callable[[list[Unit]], int] = warm_up
+                 ) -> None:
     total = sum(e.runs * len(e.methods) for e in experiments)
     # the longest units first, so the last ones to finish are short
     pending.sort(key=lambda u: -u.experiment.episodes)
@@ -335,7 +354,7 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
                dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
     units_dir = out / "units"
     try:
-        for unit, result in execute(pending, jobs, executor, address, work):
+        for unit, result in execute(pending, jobs, executor, address, work, warm):
             learner = result.pop("learner", None)
             if learner is not None:  # before its unit: a saved unit has its learner
                 atomic_write(out / "learners" / f"{unit.key}.npz",

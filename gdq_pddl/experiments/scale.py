@@ -1,56 +1,47 @@
 """Learning against building size (``gdq-pddl scale``): every method on generated buildings.
 
 For each size N and each building seed ``S = seed, seed + 1, ...``, task A of the building
-of ``gdq-pddl building --positions N --seed S``: each method runs ``runs`` times for
-``episodes`` episodes over the compact model (:mod:`gdq_pddl.envs.compact`), run ``r``
-seeded by ``(S, N, r)`` only (paired runs, the same whether or not resumed).
-:func:`run_scale` writes::
+of ``gdq-pddl building --positions N --seed S`` is one
+:class:`~gdq_pddl.experiments.protocol.Experiment` named ``building-N-sS`` (world
+``building:N:S``, gamma ``1 - 1 / step limit``), run by the experiment runner with its own
+work and collect, as ``gdq-pddl pairs`` is (so ``--jobs``, Ray and ``--resume`` as every
+command has them). Each method runs ``runs`` times for ``episodes`` episodes over the
+compact model (:mod:`gdq_pddl.envs.compact`), run ``r`` seeded by ``(S, N, r)`` only
+(paired runs, the same whether or not resumed, whatever the jobs)::
 
-    config.json           sizes, buildings, runs, episodes, seed, methods, package versions
-    units/building-N-sS/building.json     the building, learner tables, plan-table time
-    units/building-N-sS/<method>-<run>.npz   one finished run, written atomically
+    config.json           the experiments (one per building), package versions
+    units/building-N-sS__A__<method>__run<r>.npz   one finished run (:data:`SCALE_ARRAYS`)
     building-N-sS.npz     every run on that building (:func:`save_building`)
 
 The measures and why: ``docs/decisions.md``, "Generated buildings".
 """
-
 from __future__ import annotations
 
-import json
 import numbers
-import sys
 import time
-from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import lru_cache
 from itertools import groupby
 from pathlib import Path
 
 import numpy as np
 import scipy.stats as sps
-from tqdm import tqdm
 
-from gdq_pddl.buildings import building_world, generate
+from gdq_pddl.buildings import building_world
 from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.solve_compact import reference_value
 from gdq_pddl.errors import GdqError
-from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES
-from gdq_pddl.experiments.folder import (
-    FolderLock,
-    ResultsError,
-    load_unit,
-    read_config,
-    resume_config,
-)
-from gdq_pddl.experiments.interrupts import RunInterrupted
+from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES, check_sizes
+from gdq_pddl.experiments.folder import read_unit
+from gdq_pddl.experiments.knowledge import BUILDING_PREFIX, building_of, load_world_named
 from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
-from gdq_pddl.experiments.protocol import safe_name
-from gdq_pddl.experiments.runner import atomic_write, save_unit, versions
-from gdq_pddl.learners import make_learner, registry
+from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
+from gdq_pddl.experiments.runner import run_experiments, save_unit
+from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import check_count, check_memory
-from gdq_pddl.outputs import output_folder
 
 WINDOW = 50
 """Episodes of the moving average of the return that decides convergence."""
@@ -155,63 +146,136 @@ def paired_interval(r: BuildingResult, a: str, b: str) -> tuple[float, float]:
     return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
 
 
-def building_context(positions: int, seed: int) -> tuple[dict, tuple]:
-    """The building's description and what a run needs: ``(world, context, env)``."""
-    world = building_world(positions, seed)
+HEADER = ("positions", "seed", "doors", "n_states", "n_actions", "plan_length", "step_limit",
+          "r_max", "v_ref", "context_s")
+"""A building's figures, as :class:`BuildingResult` names them (saved with every run)."""
+SCALE_ARRAYS = ("returns", "success", "steps", "wall_s", "table_mb", *HEADER)
+"""What :func:`run_scale_unit` saves of a run (what ``--resume`` checks)."""
+
+
+def scale_experiments(sizes: list[int], runs: int, episodes: int, seed: int = 0,
+                      buildings: int = 2, methods: list[str] | None = None
+                      ) -> list[Experiment]:
+    """One experiment per building, by size then building seed; bad arguments fail here,
+    before anything is written or run."""
+    methods = list(methods or DEFAULT_METHODS)
+    _check_buildings(seed, buildings)  # before the list of seeds is made
+    _check(sizes, runs, episodes, buildings, methods)
+    out = []
+    for n in sizes:
+        for s in range(seed, seed + buildings):
+            world = building_world(n, s)  # a WorldError says what is wrong with the size
+            out.append(Experiment(building_name(n, s), (("A", episodes),),
+                                  methods=tuple(methods), runs=runs, seed=s,
+                                  world=f"{BUILDING_PREFIX}{n}:{s}",
+                                  hyper=Hyper(gamma=1.0 - 1.0 / world.step_limit)))
+    return out
+
+
+@lru_cache(maxsize=1)  # a process runs the units of one building one after the other
+def building_context(world_name: str) -> tuple[dict, tuple]:
+    """The building's figures (:data:`HEADER`) and what a run needs: ``(context, env)``."""
+    positions, seed = building_of(world_name)
+    world = load_world_named(world_name)
     t0 = time.perf_counter()
     ctx = task_context(OfficeInstance.of("A", world=world), darling_tolerance=TOLERANCE,
                        darling_kind="routes")
     context_s = time.perf_counter() - t0
-    env = CompactEnv(task="A", world=world)
     header = {"positions": positions, "seed": seed, "doors": len(world.doors),
               "n_states": int(ctx.n_states), "n_actions": int(ctx.n_actions),
               "plan_length": int(ctx.plans.length[ctx.s0]),
               "step_limit": int(world.step_limit), "r_max": float(world.r_max),
               "v_ref": float(reference_value(world, "A")), "context_s": context_s}
-    return header, (world, ctx, env)
+    return header, (ctx, CompactEnv(task="A", world=world))
 
 
 _WARMED: set[str] = set()
 """Methods whose compiled episode loop this process has already run once."""
 
 
-def run_one(setting: tuple, name: str, key: tuple[int, int, int],
-            episodes: int) -> dict[str, np.ndarray]:
-    """The arrays of one run of method ``name`` in ``setting`` (:func:`building_context`),
-    seeded by ``key = (building seed, positions, run)`` only (paired runs)."""
-    world, ctx, env = setting
-    env_seed, learner_seed = np.random.SeedSequence(list(key)).generate_state(2)
-    gamma = 1.0 - 1.0 / world.step_limit
-    if name not in _WARMED:  # numba loads the compiled loop on first use: not timed
-        run_compact(make_learner(name, ctx, defaults={"gamma": gamma}), env, 1,
-                    np.random.default_rng(0))
-        _WARMED.add(name)
-    learner = make_learner(name, ctx, defaults={"gamma": gamma})
+def _warm(exp: Experiment, method: str) -> None:
+    """Run ``method``'s compiled loop once in this process (numba loads it then: the time
+    of a run does not count it); forked workers inherit it."""
+    if method not in _WARMED:
+        _, (ctx, env) = building_context(exp.world)
+        run_compact(make_learner(method, ctx, exp.hyper), env, 1, np.random.default_rng(0))
+        _WARMED.add(method)
+
+
+def run_scale_unit(unit: Unit) -> dict[str, np.ndarray]:
+    """One run (the runner's ``work``): its returns, successes and steps per episode, the
+    wall time of its compiled loop, its learner's tables (MB) and the building's figures;
+    seeded by ``(building seed, positions, run)`` only (paired runs)."""
+    exp = unit.experiment
+    positions, seed = building_of(exp.world)
+    _warm(exp, unit.method)
+    header, (ctx, env) = building_context(exp.world)
+    env_seed, learner_seed = np.random.SeedSequence([seed, positions, unit.run]
+                                                    ).generate_state(2)
+    learner = make_learner(unit.method, ctx, exp.hyper)
     env.reset(seed=int(env_seed))  # after the warm-up: the results do not depend on it
     t1 = time.perf_counter()
-    records = run_compact(learner, env, episodes, np.random.default_rng(learner_seed))
+    records = run_compact(learner, env, exp.episodes, np.random.default_rng(learner_seed))
     wall = time.perf_counter() - t1
     return {"returns": np.asarray(records.returns, dtype=np.float64),
             "success": np.asarray(records.success, dtype=np.bool_),
-            "steps": np.int64(records.steps.sum()), "wall_s": np.float64(wall),
-            "table_mb": np.float64(learner.nbytes / 1e6)}
+            "steps": np.asarray(records.steps, dtype=np.int64), "wall_s": np.float64(wall),
+            "table_mb": np.float64(learner.nbytes / 1e6),
+            **{k: np.asarray(v) for k, v in header.items()}}
 
 
-def assemble(header: dict, units: dict[tuple[str, int], dict], methods: list[str],
-             runs: int, log: Callable[[str], None]) -> BuildingResult:
-    """A building's :class:`BuildingResult` from its description and its units."""
-    out = BuildingResult(**header)
-    for name in methods:
-        done = [units[name, run] for run in range(runs)]
-        out.returns[name] = np.stack([u["returns"] for u in done])
-        out.success[name] = np.stack([u["success"] for u in done]).astype(np.bool_)
-        out.steps[name] = sum(int(u["steps"]) for u in done)
-        out.wall_s[name] = sum(float(u["wall_s"]) for u in done)
-        out.table_mb[name] = float(done[-1]["table_mb"])
-        log(f"  {name}: {steps_per_s([out], name):,.0f} steps/s, tables "
-            f"{out.table_mb[name]:,.0f} MB, converged at "
-            f"{[converged_at(x, out.threshold) for x in out.returns[name]]}")
-    return out
+def warm_scale(units: list[Unit]) -> int:
+    """Before forking workers: compile every method's loop here on the first unit's
+    building; returns the bytes of a learner's tables on the largest building."""
+    for method in dict.fromkeys(u.method for u in units):
+        _warm(units[0].experiment, method)
+    n = max(building_of(u.experiment.world)[0] for u in units)
+    return _table_bytes(n)
+
+
+def check_scale(experiments: list[Experiment], jobs: int) -> None:
+    """The runner's check: the runs' records, and ``jobs`` learners' tables on the largest
+    building, fit in memory."""
+    check_sizes(experiments, jobs)
+    n = max(building_of(e.world)[0] for e in experiments)
+    check_memory(min(jobs, sum(e.runs * len(e.methods) for e in experiments)) *
+                 _table_bytes(n), f"--sizes {n}: a learner's tables at {n:,} positions in "
+                 f"each of {jobs} process(es)", "give smaller --sizes or fewer --jobs")
+
+
+def _table_bytes(n: int) -> int:
+    """A learner's tables at ``n`` positions: about 1.25 n states x 5 n actions, 8
+    successor slots."""
+    return table_bytes(n + n // 4, 5 * n, 8)
+
+
+def runner_kw() -> dict:
+    """What :func:`~gdq_pddl.experiments.runner.run_experiments` needs to run scale
+    experiments besides them (read at call time: tests replace :func:`run_scale_unit`)."""
+    return {"work": run_scale_unit, "collect": collect_scale, "unit_arrays": SCALE_ARRAYS,
+            "check": check_scale, "warm": warm_scale}
+
+
+def collect_scale(out: Path, experiments: list[Experiment]) -> None:
+    """Write ``building-N-sS.npz`` of every building from ``out/units``."""
+    for exp in experiments:
+        save_building(assemble(out, exp), out / f"{exp.name}.npz")
+
+
+def assemble(out: Path, exp: Experiment) -> BuildingResult:
+    """A building's :class:`BuildingResult` from its saved units (its figures: the first
+    run's, so a resumed report is the same)."""
+    units = {(u.method, u.run): read_unit(out, u, SCALE_ARRAYS) for u in exp.units()}
+    first = units[exp.methods[0], 0]
+    result = BuildingResult(**{k: first[k].item() for k in HEADER})
+    for name in exp.methods:
+        done = [units[name, run] for run in range(exp.runs)]
+        result.returns[name] = np.stack([u["returns"] for u in done])
+        result.success[name] = np.stack([u["success"] for u in done]).astype(np.bool_)
+        result.steps[name] = sum(int(u["steps"].sum()) for u in done)
+        result.wall_s[name] = sum(float(u["wall_s"]) for u in done)
+        result.table_mb[name] = float(done[-1]["table_mb"])
+    return result
 
 
 def save_building(result: BuildingResult, path) -> None:
@@ -227,37 +291,15 @@ def save_building(result: BuildingResult, path) -> None:
 
 def run_scale(out: Path, sizes: list[int], runs: int, episodes: int, seed: int = 0,
               buildings: int = 2, methods: list[str] | None = None, resume: bool = False,
-              progress: bool = True, log: Callable[[str], None] | None = None,
-              command: str | None = None) -> list[BuildingResult]:
-    """Run every building of every size into ``out`` and return their results, by size then
-    seed; Ctrl-C raises :class:`RunInterrupted` naming ``command`` (with ``--resume``)."""
-    log = log or tqdm.write  # clears the progress bar, writes, draws it again
-    methods = list(methods or DEFAULT_METHODS)
-    _check_buildings(seed, buildings)  # before the list of seeds is made
-    seeds = list(range(seed, seed + buildings))
-    _check(sizes, runs, episodes, seeds, methods)
-    out = output_folder(out)
-    rerun = command or "the same command and --resume"
-    with FolderLock(out):
-        _prepare(out, {"sizes": list(sizes), "buildings": buildings, "runs": runs,
-                       "episodes": episodes, "seed": seed, "methods": methods}, resume)
-        results = []
-        try:
-            for n in sizes:
-                for s in seeds:
-                    results.append(_building_into(out, n, s, runs, episodes, methods,
-                                                  progress, log, rerun))
-                    save_building(results[-1], out / f"{results[-1].name}.npz")
-        except KeyboardInterrupt:
-            done = len(list((out / "units").glob("building-*/*.npz")))
-            total = len(sizes) * buildings * len(methods) * runs
-            raise RunInterrupted(f"interrupted: {done} of {total} runs are saved in {out}; "
-                                 f"continue with: {rerun}") from None
-        except Exception:
-            if not resume and not any((out / "units").glob("building-*/*.npz")):
-                (out / "config.json").unlink(missing_ok=True)  # nothing saved: no blocker
-            raise
-    return results
+              progress: bool = True, jobs: int | None = 1, executor: str = "local",
+              address: str | None = None) -> list[BuildingResult]:
+    """Run every building of every size into ``out`` (the experiment runner: ``jobs``
+    processes, or Ray; ``resume`` goes on with a stopped run) and return their results,
+    by size then seed."""
+    experiments = scale_experiments(sizes, runs, episodes, seed, buildings, methods)
+    run_experiments(experiments, out, jobs=jobs, executor=executor, address=address,
+                    resume=resume, progress=progress, **runner_kw())
+    return [assemble(Path(out), e) for e in experiments]
 
 
 def _check_buildings(seed: int, buildings: int) -> None:
@@ -271,7 +313,7 @@ def _check_buildings(seed: int, buildings: int) -> None:
     check_count("the last building seed (--seed + --buildings - 1)", seed + buildings - 1)
 
 
-def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
+def _check(sizes: list[int], runs: int, episodes: int, buildings: int,
            methods: list[str]) -> None:
     """Bad arguments fail before anything is written or run."""
     check_count("runs", runs)
@@ -280,87 +322,12 @@ def _check(sizes: list[int], runs: int, episodes: int, seeds: list[int],
         raise GdqError("--runs and --episodes must be at least 1")
     check_memory(episodes * EPISODE_BYTES, f"--episodes {episodes:,}", "give fewer --episodes")
     # every run's returns and successes are held until the report
-    n_buildings = len(sizes) * len(seeds)
+    n_buildings = len(sizes) * buildings
     check_memory(n_buildings * len(methods) * runs * (episodes * 9 * 2 + UNIT_BYTES),
                  f"--runs {runs:,} x --episodes {episodes:,} x {len(methods)} methods x "
                  f"{n_buildings:,} buildings", "give fewer --runs or --buildings")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
-    canonical = [registry.canonical(m) for m in methods]  # a ConfigError if unknown
-    if canonical != list(methods) or len(set(methods)) != len(methods):
-        raise GdqError(f"methods must be different ones of {', '.join(registry.names())} "
-                       f"(with settings, as registry.canonical writes them), got {methods}")
     for n in sizes:
-        # a learner's tables: about 1.25 n states x 5 n actions, 8 successor slots
-        check_memory(table_bytes(n + n // 4, 5 * n, 8), f"--sizes {n}: a learner's tables "
-                     f"at {n:,} positions", "give smaller --sizes")
-        for s in seeds:
-            generate(n, s)  # a WorldError says what is wrong with the size
-
-
-def _prepare(out: Path, config: dict, resume: bool) -> None:
-    """Check ``out`` against ``config`` (see :func:`resume_config`); write ``config.json``."""
-    cfg_path = out / "config.json"
-    held = cfg_path.exists() or (out / "units").exists() or any(out.glob("building-*.npz"))
-    old = resume_config(out, held, resume, "units/ or building-*.npz")
-    if old is not None:
-        differ = [f"{k} {old.get(k)} there, {v} now" for k, v in config.items()
-                  if old.get(k) != v]
-        if differ:
-            grown = [k for k in ("sizes", "buildings", "methods") if old.get(k) != config[k]]
-            hint = (f"; --resume cannot add or drop {', '.join(grown)}: run them into "
-                    "another --out" if grown else "")
-            raise ResultsError(f"{out} holds results of a different configuration "
-                               f"({'; '.join(differ)}): --resume needs the same command "
-                               f"line{hint}")
-    # what a write killed midway left (never a unit file: those appear by atomic rename)
-    for stale in out.glob("**/.*.tmp"):
-        stale.unlink(missing_ok=True)
-    if old is not None:  # keep the record of the run being continued (its versions, start)
-        return
-    config = config | {"versions": versions(), "started": time.strftime("%Y-%m-%d %H:%M:%S")}
-    atomic_write(cfg_path, lambda tmp: tmp.write_text(json.dumps(config, indent=2)))
-
-
-def _read_header(path: Path, rerun: str) -> dict:
-    """A building's ``building.json``; :class:`ResultsError` naming it if it is damaged."""
-    header = read_config(path)
-    missing = [k for k in ("positions", "doors", "n_states", "n_actions", "plan_length",
-                           "step_limit", "r_max", "v_ref", "context_s") if k not in header]
-    if missing:
-        raise ResultsError(f"{path} is damaged (no {missing[0]!r}): delete it and run "
-                           f"{rerun} to measure the building again")
-    return header
-
-
-def _building_into(out: Path, n: int, seed: int, runs: int, episodes: int, methods: list[str],
-                   progress: bool, log: Callable[[str], None], rerun: str) -> BuildingResult:
-    """Run the missing units of building ``(n, seed)``, then read them all."""
-    name = building_name(n, seed)
-    folder = out / "units" / name
-    paths = {(m, run): folder / f"{safe_name(m)}-{run}.npz" for m in methods
-             for run in range(runs)}
-    missing = [key for key, path in paths.items() if not path.exists()]
-    header_path = folder / "building.json"
-    bar = tqdm(total=len(paths), initial=len(paths) - len(missing), unit="run", desc=name,
-               dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
-    try:
-        header = _read_header(header_path, rerun) if header_path.exists() else None
-        if missing or header is None:
-            built, setting = building_context(n, seed)
-            if header is None:  # the first measurement stays, so a resumed report is the same
-                header = built
-                atomic_write(header_path, lambda tmp: tmp.write_text(json.dumps(header)))
-        log(f"{name}: {header['doors']} doors, {header['n_states']} states x "
-            f"{header['n_actions']} actions, L = {header['plan_length']}, V_ref = "
-            f"{header['v_ref']:.1f}, plans for every state in {header['context_s']:.1f} s")
-        for m, run in missing:
-            save_unit(paths[m, run], run_one(setting, m, (seed, n, run), episodes))
-            bar.update(1)
-    finally:
-        bar.close()
-    expect = {"returns": episodes, "success": episodes, "steps": -1, "wall_s": -1,
-              "table_mb": -1}
-    units = {(m, run): load_unit(path, f"{m}, run {run} of {name}", expect, rerun)
-             for (m, run), path in paths.items()}
-    return assemble(header, units, methods, runs, log)
+        check_memory(_table_bytes(n), f"--sizes {n}: a learner's tables at {n:,} positions",
+                     "give smaller --sizes")

@@ -55,12 +55,11 @@ def instance_of(exp: Experiment, spec: str, reader: type[TabularLearner] = Tabul
     one that reads no knowledge, estimates weighted by its ``estimate_weight``
     (:class:`OnlineInstance`)."""
     if exp.pddl is not None:
-        files = tuple(exp.pddl)
-        if files[4:5] == ("online",):  # states found as episodes reach them: one per run
-            return OnlineInstance(load_pddl_instance(files[:4]),
+        if exp.pddl.online:  # states found as episodes reach them: one per run
+            return OnlineInstance(load_pddl_instance(exp.pddl),
                                   estimate="h_add" if reader.reads_knowledge else None,
                                   estimate_weight=reader.estimate_weight)
-        return load_pddl_instance(files)
+        return load_pddl_instance(exp.pddl)
     world = load_world_named(exp.world)
     return OfficeInstance(world, resolve_task(world, spec))
 

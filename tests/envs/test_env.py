@@ -185,7 +185,7 @@ def test_info_fields() -> None:
     plan = info.pop("plan_action")  # tests/envs/test_wrappers_knowledge.py checks its values
     assert mask[plan] == 1
     assert info == {"position": "p14", "area": 4, "cause": "", "full_state":
-                    env.unwrapped.start_state, "step": 0}
+                    env.unwrapped.instance.start_state, "step": 0}
     obs, reward, terminated, truncated, info = act(env, "approach", "p15")
     assert set(info) == {"action_mask", "plan_action", "position", "area", "cause",
                          "full_state", "step"}
@@ -284,3 +284,22 @@ def test_draw_q_draws_one_arrow_per_greedy_move(office) -> None:
     # p0 -> p1, through d0 to p3, p3 -> p5, p5 -> p6, through d3 to p7, p7 -> p17
     assert len(arrows) == 6
     assert mapping.norm.vmin == 0.0 and mapping.norm.vmax == 1.0
+
+
+def test_the_env_names_what_it_says_of_its_instance_and_forwards_nothing_else():
+    """An env used to forward any unknown attribute to its instance (34 members): now its
+    named properties read the instance, and anything else is ``env.unwrapped.instance``'s."""
+    from gdq_pddl.envs.pddl_env import PDDLEnv
+
+    office = OfficeEnv(task="C")
+    inst = office.instance
+    assert office.world is inst.world and office.task.name == "C"
+    assert office.mask_table is inst.mask_table and office.spaces is inst.spaces
+    assert office.action_name(0) == inst.action_name(0)
+    assert office.decode(inst.start_state) == inst.decode(inst.start_state)
+    keys = PDDLEnv("keys", "keys-1")
+    assert keys.atoms(0) == keys.instance.atoms(0) and keys.atom_names == keys.instance.atom_names
+    for name in ("prior", "goal_pos", "start_state", "plan_table", "r_max", "graph"):
+        assert hasattr(keys.instance, name) and not hasattr(keys, name), name
+    with pytest.raises(AttributeError):
+        keys.world  # noqa: B018  (a PDDL problem has no office world)

@@ -17,7 +17,7 @@ from gdq_pddl.envs.online import ESTIMATE, OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLEnv, PDDLInstance, load_instance
 from gdq_pddl.errors import ConfigError, PlanningError, SizeError
-from gdq_pddl.experiments.protocol import Experiment
+from gdq_pddl.experiments.protocol import Experiment, ProblemSpec
 from gdq_pddl.experiments.work import instance_of
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.learners.agents import learner_class
@@ -136,7 +136,7 @@ def test_weighted_estimates_stand_further_from_the_goal() -> None:
             OnlineInstance(base, estimate_weight=bad)
     domain, problem, _ = resolve_pddl("courier", "courier-2", None)
     exp = Experiment("run", (("courier-2", 5),), world="pddl",
-                     pddl=(str(domain), str(problem), "", "all-outcomes", "online"))
+                     pddl=ProblemSpec(str(domain), str(problem), exploration="online"))
     assert instance_of(exp, "courier-2", learner_class("GDQ")).estimate_weight == 1.25
     darling = instance_of(exp, "courier-2", learner_class("DARLING"))
     assert darling.estimates and darling.estimate_weight == 1.0

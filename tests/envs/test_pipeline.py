@@ -15,7 +15,7 @@ from gdq_pddl.envs.model import compile_model, full_state
 from gdq_pddl.envs.pddl_env import GOAL_POS, load_instance
 from gdq_pddl.envs.solve import solve
 from gdq_pddl.errors import WorldError
-from gdq_pddl.experiments.protocol import Experiment, Unit
+from gdq_pddl.experiments.protocol import Experiment, ProblemSpec, Unit
 from gdq_pddl.experiments.work import run_unit
 from gdq_pddl.learners.context import office_task_context
 from gdq_pddl.resources import data_file, world_text
@@ -110,9 +110,9 @@ def _run_digest(exp: Experiment, method: str) -> str:
 # its applicable ground actions (docs/decisions.md, "Tables sized by what is applicable").
 OFFICE_RUN = Experiment("pin", (("C", 40), ("D", 20)), methods=("GDQ", "DARLING"), runs=1)
 KEYS_RUN = Experiment("pin", (("keys-1", 40),), methods=("GDQ", "Dyna-Q"), runs=1,
-                      world="pddl", pddl=(str(data_file("domains", "keys.pddl")),
-                                          str(data_file("problems", "keys-1.pddl")),
-                                          str(data_file("dynamics", "keys.toml"))))
+                      world="pddl", pddl=ProblemSpec(str(data_file("domains", "keys.pddl")),
+                                                     str(data_file("problems", "keys-1.pddl")),
+                                                     str(data_file("dynamics", "keys.toml"))))
 
 
 @pytest.mark.parametrize("exp,method,pinned", [

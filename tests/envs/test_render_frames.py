@@ -33,7 +33,7 @@ def test_frames_differ_by_the_action_taken_alone():
         _, info = env.reset(seed=0)
         spaces, start = env.unwrapped.spaces, info["position"]
         env.step(spaces.action(verb, start if verb == "stay" else "p17"))  # neither moves
-        assert env.unwrapped.info(env.unwrapped._position())["position"] == start
+        assert env.unwrapped.instance.info(env.unwrapped._position())["position"] == start
         frames.append(env.render())
     first, second = frames
     assert first.shape == second.shape

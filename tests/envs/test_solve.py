@@ -133,7 +133,7 @@ def monte_carlo(episodes: int, seed: int, **make_kwargs) -> tuple[float, float, 
     """V*[0, s0], and the mean return and its standard error of the optimal policy."""
     env = gymnasium.make(ENV_ID, **make_kwargs)
     u = env.unwrapped
-    solution = solve(u.model, u.goal_pos)
+    solution = solve(u.model, u.instance.goal_pos)
     returns = np.empty(episodes)
     _, info = env.reset(seed=seed)
     for e in range(episodes):
@@ -145,7 +145,8 @@ def monte_carlo(episodes: int, seed: int, **make_kwargs) -> tuple[float, float, 
             done = terminated or truncated
         returns[e] = total
         _, info = env.reset()
-    return solution.V[0, u.start_state], returns.mean(), returns.std(ddof=1) / np.sqrt(episodes)
+    return (solution.V[0, u.instance.start_state], returns.mean(),
+            returns.std(ddof=1) / np.sqrt(episodes))
 
 
 @pytest.mark.parametrize(("task", "seed"), [("C", 11), ("A", 12)])

@@ -182,7 +182,7 @@ def test_policy_in_reality_does_at_least_as_well() -> None:
     :class:`CompactEnv` (the real dynamics) is at least ``value`` - 4 standard errors."""
     world = building_world(40, 0)
     env = CompactEnv(task="A", world=world)
-    solution = solve_compact(env.model, env.start_pos, env.goal_pos)
+    solution = solve_compact(env.model, env.instance.start_pos, env.instance.goal_pos)
     returns = []
     for episode in range(1500):
         s, _ = env.reset(seed=episode)

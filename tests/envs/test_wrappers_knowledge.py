@@ -203,7 +203,7 @@ def test_shaping_terms_telescope_on_random_episodes(name, potential, gamma, scal
     base, ctx = env.unwrapped, context(name)
     s0 = base.instance.learner_start
     expect = functools.partial(phi_of, ctx, potential, scale, s0=s0,
-                               step_limit=int(base.model.step_limit), r_max=base.r_max)
+                               step_limit=int(base.model.step_limit), r_max=base.instance.r_max)
     assert phi0 == pytest.approx(expect(s0))
     for s, phi, terminated in seen:
         assert phi == (0.0 if terminated else pytest.approx(expect(s)))

@@ -300,3 +300,26 @@ def test_results_are_arrays_of_the_right_shape(tmp_path):
     data = np.load(next((tmp_path / "units").glob("*.npz")))
     assert data["returns"].shape == (7,) and data["areas"].shape == (7, 7)
     assert data["policy"].shape == (31,)
+
+
+def test_a_problem_is_a_problem_spec_not_a_positional_tuple():
+    """``pddl`` was ``(domain, problem, dynamics[, determinisation[, "online"]])``: now a
+    ProblemSpec, checked; config.json's old lists read as the same spec."""
+    from gdq_pddl.errors import ConfigError
+    from gdq_pddl.experiments import Experiment, ProblemSpec
+
+    with pytest.raises(ConfigError, match=r"pddl must be a ProblemSpec\(domain=.*got tuple"):
+        Experiment("x", (("keys-1", 3),), world="pddl", pddl=("d.pddl", "p.pddl", ""))
+    with pytest.raises(ConfigError, match=r"ProblemSpec.exploration: expected one of "
+                                          r"enumerate, online, got 'lazy'"):
+        ProblemSpec("d.pddl", "p.pddl", exploration="lazy")
+    spec = ProblemSpec("d.pddl", "p.pddl", "", "most-likely", "online")
+    assert spec.online and spec.files == ("d.pddl", "p.pddl", "")
+    assert ProblemSpec.from_record(["d.pddl", "p.pddl", "", "most-likely", "online"]) == spec
+    assert ProblemSpec.from_record(["d.pddl", "p.pddl", "k.toml"]) == \
+        ProblemSpec("d.pddl", "p.pddl", "k.toml", "all-outcomes", "enumerate")
+    assert ProblemSpec.from_record({"domain": "d.pddl", "problem": "p.pddl", "dynamics": "",
+                                    "determinisation": "most-likely",
+                                    "exploration": "online"}) == spec
+    with pytest.raises(ConfigError, match="a recorded problem"):
+        ProblemSpec.from_record(["d.pddl", "p.pddl", "", "all-outcomes", "lazy"])

@@ -145,3 +145,28 @@ def test_a_kept_learner_of_an_online_run_is_refused_by_a_fresh_instance(capsys, 
     with pytest.raises(ResultsError, match=r"this learner belongs to another instance "
                                            r"explored online"):
         load_learner(kept, fresh)
+
+
+@pytest.mark.parametrize("explore", ["online", "enumerate"])
+def test_resume_reads_a_problem_recorded_as_a_list_by_earlier_versions(capsys, tmp_path,
+                                                                       monkeypatch, explore):
+    """config.json of earlier versions recorded the problem as ``[domain, problem,
+    dynamics, determinisation(, "online")]``: ``--resume`` reads it as its ProblemSpec,
+    goes on as the run went (online: without enumerating) and records the fields."""
+    out = tmp_path / "o"
+    assert _pddl(capsys, out, explore)[0] == 0
+    config = json.loads((out / "config.json").read_text())
+    spec = config["experiments"][0]["pddl"]
+    assert spec["exploration"] == explore
+    config["experiments"][0]["pddl"] = [spec["domain"], spec["problem"], spec["dynamics"],
+                                        spec["determinisation"],
+                                        *(["online"] if explore == "online" else [])]
+    del config["options"]  # as old as that: before --explore was recorded
+    (out / "config.json").write_text(json.dumps(config))
+    (out / "episodes.csv").unlink()
+    if explore == "online":
+        _no_enumeration(monkeypatch)
+    code, text = _pddl(capsys, out, None, "--resume")
+    assert code == 0, text
+    assert json.loads((out / "config.json").read_text())["experiments"][0]["pddl"] == spec
+    assert (out / "episodes.csv").exists()

@@ -129,7 +129,7 @@ def test_experiments_pair_each_case_with_accurate_knowledge():
         if c.pddl is None:
             assert acc.world == wrong.world == c.real
         else:  # a PDDL case: reality is its files, the knowledge another domain file
-            assert acc.pddl == wrong.pddl == c.pddl and c.pddl[0] == c.real
+            assert acc.pddl == wrong.pddl == c.pddl and c.pddl.domain == c.real
         assert acc.knowledge is None and wrong.knowledge == c.knowledge
 
 
@@ -188,7 +188,7 @@ def test_a_knowledge_domain_with_other_outcomes_is_refused(tmp_path):
     """Moves that always work: the same states, but no 'nothing happens' outcome."""
     case = next(c for c in CASES if c.name == "wrong-probabilities")
     real = load_pddl_instance(case.pddl)
-    text = Path(case.pddl[0]).read_text()
+    text = Path(case.pddl.domain).read_text()
     assert "(probabilistic 0.95 (and (at ?to)" in text
     other = tmp_path / "keys-ppddl.pddl"
     other.write_text(text.replace("(probabilistic 0.95 (and (at ?to)",
@@ -270,9 +270,9 @@ def test_run_takes_a_ppddl_knowledge_domain(tmp_path, capsys):
               "--episodes", "3", "--runs", "1", "--jobs", "1", "--method", "GDQ-code"]
     assert main([*common, "--knowledge-domain", case.knowledge, "--out", str(out)]) == 0
     exp = json.loads((out / "config.json").read_text())["experiments"][0]
-    assert exp["knowledge"] == case.knowledge and exp["pddl"][0].endswith("keys-ppddl.pddl")
+    assert exp["knowledge"] == case.knowledge and exp["pddl"]["domain"].endswith("keys-ppddl.pddl")
     other = tmp_path / "keys-ppddl.pddl"
-    other.write_text(Path(case.pddl[0]).read_text().replace(
+    other.write_text(Path(case.pddl.domain).read_text().replace(
         "(probabilistic 0.95 (and (at ?to)", "(probabilistic 1.0 (and (at ?to)"))
     capsys.readouterr()
     assert main([*common, "--knowledge-domain", str(other), "--out", str(tmp_path / "x")]) == 2

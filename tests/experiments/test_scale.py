@@ -15,7 +15,7 @@ def test_learning_smoke_on_100_positions(tmp_path):
     from gdq_pddl.experiments.scale import converged_at, run_scale, save_building, steps_per_s
 
     [result] = run_scale(tmp_path / "scale", [100], 1, 60, buildings=1,
-                         methods=["DARLING", "Q-learning"], progress=False, log=lambda *a: None)
+                         methods=["DARLING", "Q-learning"], progress=False)
     assert set(result.returns) == {"DARLING", "Q-learning"}
     assert all(steps_per_s([result], m) > 0 for m in result.returns)
     assert result.returns["DARLING"].shape == (1, 60)
@@ -105,26 +105,27 @@ def test_scale_report_gives_each_building_and_each_size_over_its_buildings(tmp_p
     assert len(opened) == 3 + 1  # Q-learning on all three, DARLING on seed 1
 
 
-QUIET = {"log": lambda *a: None, "progress": False}
+QUIET = {"progress": False}
 SMALL = {"sizes": [40], "buildings": 2, "runs": 2, "episodes": 30,
          "methods": ["DARLING", "Q-learning"]}
 
 
 def _interrupt_after(monkeypatch, k: int) -> list:
     """Make the scale runs raise KeyboardInterrupt (as Ctrl-C) once ``k`` units are done;
-    returns the list of the units started."""
+    returns the list of the units started, as ``(method, (building seed, size, run))``."""
     from gdq_pddl.experiments import scale
 
-    real, started = getattr(scale.run_one, "real", scale.run_one), []
+    real, started = getattr(scale.run_scale_unit, "real", scale.run_scale_unit), []
 
-    def run_one(setting, name, key, episodes):
+    def run_scale_unit(unit):
         if len(started) == k:
             raise KeyboardInterrupt
-        started.append((name, key))
-        return real(setting, name, key, episodes)
+        positions, seed = scale.building_of(unit.experiment.world)
+        started.append((unit.method, (seed, positions, unit.run)))
+        return real(unit)
 
-    run_one.real = real
-    monkeypatch.setattr(scale, "run_one", run_one)
+    run_scale_unit.real = real
+    monkeypatch.setattr(scale, "run_scale_unit", run_scale_unit)
     return started
 
 
@@ -139,20 +140,20 @@ def test_an_interrupted_scale_run_resumes_to_the_same_results(tmp_path, monkeypa
     _interrupt_after(monkeypatch, 5)
     with pytest.raises(RunInterrupted, match=r"5 of 8 runs are saved .*--resume"):
         run_scale(cut, **SMALL, **QUIET)
-    assert len(list((cut / "units" / "building-40-s1").glob("*.npz"))) == 1
-    assert (cut / "building-40-s0.npz").exists() and not (cut / "building-40-s1.npz").exists()
+    assert len(list((cut / "units").glob("building-40-s1__*.npz"))) == 1
+    assert not list(cut.glob("building-*.npz"))  # collected when every run is saved
     started = _interrupt_after(monkeypatch, 99)
     resumed = run_scale(cut, **SMALL, resume=True, **QUIET)
     # only the missing units ran, seeded by (building seed, size, run): paired methods
     assert started == [("DARLING", (1, 40, 1)), ("Q-learning", (1, 40, 0)),
                        ("Q-learning", (1, 40, 1))]
     for r, f in zip(resumed, fresh, strict=True):
-        units = cut / "units" / r.name
         for name in SMALL["methods"]:
             assert np.array_equal(r.returns[name], f.returns[name])
             assert np.array_equal(r.success[name], f.success[name])
-            saved = [np.load(units / f"{name}-{run}.npz") for run in range(2)]
-            steps = sum(int(u["steps"]) for u in saved)
+            saved = [np.load(cut / "units" / f"{r.name}__A__{name}__run{run}.npz")
+                     for run in range(2)]
+            steps = sum(int(u["steps"].sum()) for u in saved)
             assert steps_per_s([r], name) == steps / sum(float(u["wall_s"]) for u in saved)
         a, b = np.load(cut / f"{r.name}.npz"), np.load(tmp_path / "fresh" / f"{r.name}.npz")
         assert sorted(a.files) == sorted(b.files)
@@ -173,6 +174,20 @@ def test_a_run_depends_on_its_building_and_number_only(tmp_path):
     assert not np.array_equal(*both.returns["DARLING"])  # runs differ from each other
 
 
+def test_scale_runs_on_two_processes_give_the_same_results(tmp_path):
+    """``--jobs 2``: forked workers (after the driver compiled the loops), each building's
+    context made once per process, the same returns as one process."""
+    from gdq_pddl.experiments.scale import run_scale
+
+    one = run_scale(tmp_path / "one", **SMALL, **QUIET)
+    two = run_scale(tmp_path / "two", **SMALL, jobs=2, **QUIET)
+    for a, b in zip(one, two, strict=True):
+        assert (a.name, a.n_states, a.v_ref) == (b.name, b.n_states, b.v_ref)
+        for name in SMALL["methods"]:
+            assert np.array_equal(a.returns[name], b.returns[name])
+            assert a.steps[name] == b.steps[name]
+
+
 def test_scale_results_need_resume_and_the_same_configuration(tmp_path):
     from gdq_pddl.experiments.runner import ResultsError
     from gdq_pddl.experiments.scale import run_scale
@@ -182,42 +197,55 @@ def test_scale_results_need_resume_and_the_same_configuration(tmp_path):
     run_scale(tmp_path, **kw)
     with pytest.raises(ResultsError, match="holds results: continue them with --resume"):
         run_scale(tmp_path, **kw)
-    with pytest.raises(ResultsError, match=r"different configuration \(episodes 5 there, 6 now"):
+    with pytest.raises(ResultsError, match=r"different configuration \(experiment "
+                                           r"building-40-s0: schedule was \[\['A', 5\]\]"):
         run_scale(tmp_path, **kw | {"episodes": 6}, resume=True)
-    with pytest.raises(ResultsError, match="cannot add or drop sizes"):
-        run_scale(tmp_path, **kw | {"sizes": [40, 60]}, resume=True)
-    with pytest.raises(ResultsError, match="cannot add or drop buildings"):
-        run_scale(tmp_path, **kw | {"buildings": 2}, resume=True)
-    with pytest.raises(ResultsError, match="cannot add or drop methods"):
-        run_scale(tmp_path, **kw | {"methods": ["Q-learning", "DARLING"]}, resume=True)
-    unit = tmp_path / "units" / "building-40-s0" / "Q-learning-0.npz"
+    for other in ({"sizes": [40, 60]}, {"buildings": 2}, {"methods": ["Q-learning", "DARLING"]}):
+        with pytest.raises(ResultsError, match="different configuration"):
+            run_scale(tmp_path, **kw | other, resume=True)
+    unit = tmp_path / "units" / "building-40-s0__A__Q-learning__run0.npz"
     before = unit.stat().st_mtime_ns
-    run_scale(tmp_path, **kw, resume=True)  # nothing left to run: redraws the report
+    run_scale(tmp_path, **kw, resume=True)  # nothing left to run: collects again
     assert unit.stat().st_mtime_ns == before
+
+
+def test_a_scale_folder_of_the_earlier_layout_is_refused_in_one_line(tmp_path, capsys):
+    """Before the runner ran it, scale recorded its own config.json (sizes, buildings ...)
+    and units/building-N-sS/: --resume says it cannot go on with it."""
+    import json
+
+    out = tmp_path / "old"
+    (out / "units" / "building-40-s0").mkdir(parents=True)
+    (out / "units" / "building-40-s0" / "Q-learning-0.npz").write_bytes(b"")
+    (out / "config.json").write_text(json.dumps({"sizes": [40], "buildings": 1, "runs": 1,
+                                                 "episodes": 5, "seed": 0,
+                                                 "methods": ["Q-learning"]}))
+    code = main(["scale", "--sizes", "40", "--buildings", "1", "--runs", "1", "--episodes",
+                 "5", "--method", "Q-learning", "--jobs", "1", "--out", str(out), "--resume"])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "different configuration" in err and "--resume" in err
 
 
 def test_scale_cli_says_how_to_resume_without_a_traceback(tmp_path, monkeypatch, capsys):
     import json
-    import shlex
 
-    out = tmp_path / "a folder"  # the command it prints must survive the shell
+    out = tmp_path / "a folder"
     argv = ["scale", "--sizes", "40", "--buildings", "1", "--method", "DARLING", "Q-learning",
-            "DARLING", "--runs", "2", "--episodes", "5", "--out", str(out)]
+            "DARLING", "--runs", "2", "--episodes", "5", "--jobs", "1", "--out", str(out)]
     _interrupt_after(monkeypatch, 2)
     assert main(argv) == 130
     err = capsys.readouterr().err
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
-    assert err.startswith("gdq-pddl: interrupted: 2 of 4 runs are saved in")
-    command = err.split("continue with: ")[1].strip()
-    assert command == shlex.join(["gdq-pddl", "scale", "--sizes", "40", "--buildings", "1",
-                                  "--method", "DARLING", "Q-learning", "--runs", "2",
-                                  "--episodes", "5", "--seed", "0", "--out", str(out),
-                                  "--resume"])
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith(
+        "gdq-pddl: interrupted: 2 of 4 runs are saved in"), err
+    assert err.strip().endswith("continue with the same command and --resume")
     started = _interrupt_after(monkeypatch, 99)
-    assert main(shlex.split(command)[1:]) == 0
+    assert main([*argv, "--resume"]) == 0
     assert [name for name, _ in started] == ["Q-learning", "Q-learning"]
-    assert json.loads((out / "config.json").read_text())["methods"] == ["DARLING", "Q-learning"]
-    assert (out / "REPORT.md").exists()
+    exps = json.loads((out / "config.json").read_text())["experiments"]
+    assert exps[0]["methods"] == ["DARLING", "Q-learning"]
+    assert exps[0]["world"] == "building:40:0"
+    assert (out / "REPORT.md").exists() and (out / "building-40-s0.npz").exists()
     assert main(argv) == 2  # without --resume: refused
     assert "continue them with --resume" in capsys.readouterr().err
     # any registered method runs (DARLING-code too, since the registry); an unknown is refused

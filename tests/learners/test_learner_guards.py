@@ -78,17 +78,17 @@ def test_the_compiled_loop_checks_the_dynamics_it_is_given(ctx):
     env = big.unwrapped
     learner = QLearning(ctx)
     with pytest.raises(ConfigError, match="learner states|actions"):
-        run_compiled(env.model, env.start_pos, env.goal_pos, env.doors, learner,
+        run_compiled(env.model, env.instance.start_pos, env.instance.goal_pos, env.doors, learner,
                      env.np_random, 2, np.random.default_rng(0), 8)
     with pytest.raises(ConfigError, match="states x 95 actions, the env has"):
         run_compact(learner, big, 2, np.random.default_rng(0))
     office = OfficeEnv(task="C")
     office.reset(seed=0)
     with pytest.raises(ConfigError, match="start state"):
-        run_compiled(office.model, 10**9, office.goal_pos, np.zeros(1, np.uint8), learner,
+        run_compiled(office.model, 10**9, office.instance.goal_pos, np.zeros(1, np.uint8), learner,
                      office.np_random, 2, np.random.default_rng(0), 7)
     with pytest.raises(ConfigError, match="n_areas"):
-        run_compiled(office.model, office.start_state, office.goal_pos,
+        run_compiled(office.model, office.instance.start_state, office.instance.goal_pos,
                      np.zeros(1, np.uint8), learner, office.np_random, 2,
                      np.random.default_rng(0), 3)
 
