@@ -277,6 +277,9 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
     def static(atom: Atom) -> bool | None:
         return None if atom.predicate in fluent else str(atom) in statics
 
+    plain = not any(a.condition is not None or any(o.conditional or o.rewards or o.choices
+                                                   for o in a.outcomes)
+                    for a in domain.actions)
     raw = []
     with slow_progress("grounding", " actions") as bar:
         for action in domain.actions:
@@ -294,15 +297,15 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                                                            if action.condition else ()))
             for b in action_bindings(action, static_tuples, by_type, typed, fluent):
                 bar.update()
-                pre = ground_dnf(whole, b, objects, static, too_many)
+                # a plain domain's precondition is its fluent literals as written (one that
+                # contradicts itself stays, a ground action that never applies, as always)
+                pre = [_literals(action.precondition, b, fluent)] if plain else \
+                    ground_dnf(whole, b, objects, static, too_many)
                 if pre:
                     args = tuple(b[p] for p, _ in action.parameters)
                     outs = ground_outcomes(action, args, b, objects, static, fluent,
                                            too_many, value, domain.source)
                     raw.append((action, args, pre, outs))
-    plain = not any(a.condition is not None or any(o.conditional or o.rewards or o.choices
-                                                   for o in a.outcomes)
-                    for a in domain.actions)
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, found = relaxed_reachability(raw, init, plain)
     facts = tuple(sorted(reached))
@@ -335,6 +338,16 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                       disjunctive=any(op.alternatives for op in ops),
                       **goal_masks(problem, fluent, statics, index))
     return task, kept
+
+
+def _literals(literals, b: Mapping[str, str], fluent: frozenset[str]
+              ) -> tuple[frozenset[str], frozenset[str]]:
+    """The fluent atoms of ``literals`` under ``b`` that must hold, and must not."""
+    def part(positive: bool) -> frozenset[str]:
+        return frozenset(str(Atom(lit.atom.predicate, tuple(b.get(x, x) for x in lit.atom.args)))
+                         for lit in literals
+                         if lit.positive == positive and lit.atom.predicate in fluent)
+    return part(True), part(False)
 
 
 def relaxed_reachability(raw: list, init: set[str], by_outcome: bool

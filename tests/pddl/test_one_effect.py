@@ -89,3 +89,18 @@ def test_a_domain_with_conditional_effects_keeps_binding_order():
                         "(and (at ?b) (not (at ?a)) (when (at ?a) (at ?a)))")
     learner, _ = ground_ppddl(*grounded(text, RING_PROBLEM))
     assert [op.name for op in learner.ops] == ["(go a b)", "(go b c)", "(go c a)"]
+
+
+def test_a_plain_domain_keeps_a_ground_action_whose_precondition_contradicts_itself():
+    """(go ?a ?b) needs (at ?a) and not (at ?b): (go a a) never applies, and stays a ground
+    action (an action number) as it always was; a domain that normalises its conditions
+    (here, for a `when`) has none such."""
+    text = RING.replace("(and (at ?a) (road ?a ?b))", "(and (at ?a) (not (at ?b)))")
+    plain = ground(*grounded(text, RING_PROBLEM))
+    assert len(plain.ops) == 9 and "(go a a)" in {op.name for op in plain.ops}
+    never = next(op for op in plain.ops if op.name == "(go a a)")
+    assert never.pre & never.neg and not any(never.holds(s) for s in range(8))
+    when = text.replace("(and (at ?b) (not (at ?a)))",
+                        "(and (at ?b) (not (at ?a)) (when (at ?a) (at ?a)))")
+    learner, _ = ground_ppddl(*grounded(when, RING_PROBLEM))
+    assert len(learner.ops) == 6 and "(go a a)" not in {op.name for op in learner.ops}
