@@ -176,7 +176,7 @@ def check_step_rewards(problem: PlanningProblem, costs: list[CostDist], r_max: f
                        own: bool) -> None:
     """Refuse, naming the domain file, its action and the bound, a problem one step of
     which can pay more than :data:`~gdq_pddl.limits.MAX_NUMBER` in size: an outcome's
-    rewards and costs (each within it, all counted: :meth:`~gdq_pddl.pddl.ppddl_effects.
+    rewards and costs (each within it, all counted: :meth:`~gdq_pddl.pddl.grounding.
     GroundOutcome.largest_gain`), the action's cost (``costs``: one per ground action; a
     uniform one's larger end, a normal one's mean plus :data:`NORMAL_SPREAD` deviations)
     and, on the problem's own scale (``own``), the goal reward ``r_max`` the step that
@@ -186,7 +186,7 @@ def check_step_rewards(problem: PlanningProblem, costs: list[CostDist], r_max: f
     for op, cost in zip(problem.learner_task.ops, costs, strict=True):
         top = max(abs(cost.a), abs(cost.b)) if cost.kind == "uniform" else \
             abs(cost.a) + NORMAL_SPREAD * abs(cost.b) if cost.kind == "normal" else abs(cost.a)
-        earned = max((o.largest_gain() for o in getattr(op, "outcomes", ())), default=0.0)
+        earned = max((o.largest_gain() for o in op.outcomes), default=0.0)
         goal = r_max if own else 0.0
         if earned + top + goal > MAX_NUMBER:
             schema = Atom.parse(op.name).predicate

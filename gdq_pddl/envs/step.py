@@ -47,7 +47,7 @@ class ModelArrays(NamedTuple):
     gain: np.ndarray = np.zeros(0)  # float64[n_outcomes]: the outcomes' rewards
     """What each outcome earns besides the action's cost: the rewards of a PPDDL file's
     effects, less its costs inside ``when``, ``forall`` or ``probabilistic``
-    (:meth:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain`). Empty: none earns anything
+    (:meth:`~gdq_pddl.pddl.grounding.GroundOutcome.gain`). Empty: none earns anything
     (on the goal scale only)."""
     acts: np.ndarray = np.zeros((0, 0), dtype=np.int64)  # int64[n_full, width]
     """The action of each column (module docstring); empty: every action, column = action."""

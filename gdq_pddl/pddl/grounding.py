@@ -1,7 +1,21 @@
-"""Ground a typed STRIPS problem into bitmask operators (states: ``int`` bitmasks over
-the fluent facts). Parameters are bound by joining the static preconditions against the
-initial state, most constrained first; operators unreachable with deletes ignored are
-dropped."""
+"""The one grounder and the ground effect: a typed PDDL or PPDDL problem grounded into
+bitmask operators (states: ``int`` bitmasks over the fluent facts).
+
+:class:`GroundOutcome` is what one outcome of a ground action does: adds, deletes,
+conditional effects, the rewards and costs inside effects. :class:`GroundOp` is a ground
+action: a precondition and its outcomes (a STRIPS action: one unconditional outcome of
+probability 1, :meth:`GroundOp.strips`). Every consumer reads these: the true model
+(:mod:`gdq_pddl.pddl.outcomes`), the enumeration and the online store
+(:mod:`gdq_pddl.pddl.wordrows`, :mod:`gdq_pddl.pddl.lazy`), the planner's
+determinisation (:mod:`gdq_pddl.pddl.ppddl`) and the relaxed forms
+(:mod:`gdq_pddl.planning.heuristic`).
+
+:func:`ground` is the one route from a parsed domain and problem to them: conditions
+normalised once (:func:`~gdq_pddl.pddl.normalise.ground_dnf`), each schema's outcomes
+expanded per binding (:func:`~gdq_pddl.pddl.ppddl_effects.ground_outcomes`); parameters
+are bound by joining the static preconditions against the initial state, most
+constrained first, and ground actions unreachable with deletes ignored are dropped.
+"""
 
 from __future__ import annotations
 
@@ -14,30 +28,112 @@ from functools import cached_property
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.formulas import is_subtype
-from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Literal, Problem
+from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Junction, Problem
+from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
+from gdq_pddl.pddl.ppddl_effects import (
+    DETERMINISATIONS,
+    ground_outcomes,
+    kept_ground,
+    planner_names,
+)
+
+
+@dataclass(frozen=True)
+class GroundOutcome:
+    """What one outcome of a ground action does: its probability, add and delete masks,
+    whether it is a failed trial, its conditional effects and what it earns."""
+
+    probability: float
+    add: int
+    dele: int
+    stuck: bool = False
+    conditional: tuple[tuple[int, int, int, int], ...] = ()
+    """Conditional effects ``(must hold, must not hold, add, delete)`` (adds win)."""
+    reward: float = 0.0
+    """The reward the outcome always earns besides the action's cost."""
+    rewards: tuple[tuple[tuple[tuple[int, int], ...], float], ...] = ()
+    """``(alternatives (must hold, must not hold), amount)``: earned where one holds."""
+
+    def gain(self, state: int) -> float:
+        """The outcome's reward when the action is taken in ``state``."""
+        return self.reward + sum(amount for alts, amount in self.rewards
+                                 if any(state & p == p and not state & n for p, n in alts))
+
+    def largest_gain(self) -> float:
+        """The most :meth:`gain` can be in size in any state: every reward counted."""
+        return abs(self.reward) + sum(abs(amount) for _, amount in self.rewards)
+
+    def moves(self) -> bool:
+        """Whether the outcome may change a state (it adds, deletes or has a conditional
+        effect)."""
+        return bool(self.add or self.dele or self.conditional)
+
+    def apply(self, state: int) -> int:
+        """The state after the outcome (adds win)."""
+        add, dele = self.add, self.dele
+        for pos, neg, a, d in self.conditional:
+            if state & pos == pos and not state & neg:
+                add, dele = add | a, dele | d
+        return (state & ~dele) | add
 
 
 @dataclass(frozen=True)
 class GroundOp:
-    """A ground action: its name and precondition/effect bitmasks."""
+    """A ground action: its name, precondition and outcomes. ``known``: the outcomes the
+    planner's determinisation keeps (a STRIPS action: its one). The outcomes are a flat
+    distribution (a ``forall`` of probabilistic effects is their product, drawn once); a
+    factored form would replace :attr:`outcomes` by independent parts whose product it is,
+    read through the same methods."""
 
     name: str
     pre: int
     neg: int
-    add: int
-    dele: int
+    outcomes: tuple[GroundOutcome, ...]
+    known: tuple[int, ...] = (0,)
+    alternatives: tuple[tuple[int, int], ...] = ()
+    """A disjunctive precondition: ``(must hold, must not hold)`` pairs, one of which must
+    be met besides ``pre``/``neg`` (what all share); empty: ``pre``/``neg`` alone."""
     cost: float | None = field(default=None, kw_only=True)
     """What the action costs whatever happens (the costs it writes outside every
     ``when``, ``forall`` and ``probabilistic``, function terms valued: :func:`action_cost`);
-    costs and rewards inside them are its outcomes'
-    (:class:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome`). None: it states no cost
-    anywhere (the goal scale's default applies)."""
+    costs and rewards inside them are its outcomes' (:class:`GroundOutcome`). None: it
+    states no cost anywhere (the goal scale's default applies)."""
+
+    @classmethod
+    def strips(cls, name: str, pre: int, neg: int, add: int, dele: int,
+               cost: float | None = None) -> GroundOp:
+        """The STRIPS action: one unconditional outcome, for sure."""
+        return cls(name, pre, neg, (GroundOutcome(1.0, add, dele),), cost=cost)
+
+    @cached_property
+    def _single(self) -> GroundOutcome:
+        if len(self.outcomes) != 1 or self.outcomes[0].conditional:
+            raise TypeError(f"{self.name} has no single unconditional effect (see its "
+                            "outcomes)")
+        return self.outcomes[0]
+
+    @property
+    def add(self) -> int:
+        """A STRIPS action's adds (a TypeError for any other)."""
+        return self._single.add
+
+    @property
+    def dele(self) -> int:
+        """A STRIPS action's deletes (a TypeError for any other)."""
+        return self._single.dele
 
     def applicable(self, state: int) -> bool:
+        """Whether ``pre``/``neg`` hold in ``state`` (not the :attr:`alternatives`)."""
         return state & self.pre == self.pre and not state & self.neg
 
+    def holds(self, state: int) -> bool:
+        """Whether the precondition holds in ``state``."""
+        return self.applicable(state) and (not self.alternatives or any(
+            state & p == p and not state & n for p, n in self.alternatives))
+
     def apply(self, state: int) -> int:
-        return (state & ~self.dele) | self.add
+        """A STRIPS action's successor of ``state`` (a TypeError for any other)."""
+        return self._single.apply(state)
 
 
 @dataclass(frozen=True)
@@ -59,6 +155,8 @@ class GroundTask:
     """Why some ground actions have no planner action here (a PPDDL action whose
     conditional effects need too many STRIPS variants); planners asked a query on such a
     task refuse with it. Empty: every ground action is here."""
+    disjunctive: bool = False
+    """Some op has a disjunctive precondition (:attr:`GroundOp.alternatives`)."""
 
     @cached_property
     def ops_by_fact(self) -> dict[int, tuple[GroundOp, ...]]:
@@ -72,16 +170,28 @@ class GroundTask:
     def applicable(self, state: int) -> list[GroundOp]:
         """Every operator whose precondition holds in ``state``."""
         table = self.ops_by_fact
-        return [op for key in (-1, *set_bits(state)) for op in table.get(key, ())
-                if state & op.pre == op.pre and not state & op.neg]
+        ops = [op for key in (-1, *set_bits(state)) for op in table.get(key, ())
+               if state & op.pre == op.pre and not state & op.neg]
+        return [op for op in ops if op.holds(state)] if self.disjunctive else ops
 
     def successors(self, state: int) -> list[tuple[GroundOp, int]]:
-        """``(op, next state)`` for every operator applicable in ``state``."""
-        return [(op, (state & ~op.dele) | op.add) for op in self.applicable(state)]
+        """``(op, next state)`` for every operator applicable in ``state`` and outcome the
+        planner knows (:attr:`GroundOp.known`), each distinct state once per op."""
+        out = []
+        for op in self.applicable(state):
+            if len(op.known) == 1:  # most: one outcome known (every STRIPS action)
+                o = op.outcomes[op.known[0]]
+                out.append((op, o.apply(state) if o.conditional
+                            else (state & ~o.dele) | o.add))
+            else:
+                out += [(op, t) for t in dict.fromkeys(op.outcomes[k].apply(state)
+                                                       for k in op.known)]
+        return out
 
     def outcome_states(self, state: int) -> list[int]:
-        """States reality can reach from ``state`` besides :meth:`successors`' (none here)."""
-        return []
+        """Every state reality may reach from ``state`` (failed trials aside)."""
+        return [o.apply(state) for op in self.applicable(state)
+                for o in op.outcomes if o.probability > 0 and not o.stuck]
 
     def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
         """Whether ``goal`` (default: the problem's) holds in ``state``; never, for a
@@ -138,53 +248,155 @@ def action_cost(action: Action, args: tuple[str, ...], domain: Domain,
                      for term in action.cost))
 
 
-def ground(domain: Domain, problem: Problem) -> GroundTask:
-    """Ground ``problem``; see the module docstring for how."""
-    if any(a.outcomes for a in domain.actions):
-        raise ValueError("a PPDDL domain has no single effect per action: ground it with "
-                         "gdq_pddl.pddl.ppddl.ground_ppddl")
+def ground(domain: Domain, problem: Problem,
+           determinisation: str = DETERMINISATIONS[0]) -> GroundTask:
+    """Ground ``problem``: every ground action with all its outcomes, ``known`` the
+    outcomes ``determinisation`` keeps (:func:`ground_kept`; the module docstring)."""
+    return ground_kept(domain, problem, determinisation)[0]
+
+
+def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMINISATIONS[0]
+                ) -> tuple[GroundTask, list[tuple[str, ...]]]:
+    """The one grounder: the task of every ground action of ``problem`` (all its outcomes;
+    ``known``: those the planner's ``determinisation`` keeps), and for each ground action
+    the planner schema names of its kept outcomes
+    (:func:`~gdq_pddl.pddl.ppddl_effects.kept_ground`).
+
+    Ground actions come in the order their bindings are found, but for a domain without
+    quantified or disjunctive conditions, conditional effects or rewards inside effects
+    (a *plain* one: every STRIPS domain), whose come in the order relaxed reachability
+    finds them, outcome by outcome (:func:`relaxed_reachability`): the order, and so the
+    action numbers, each has always had."""
+    names = planner_names(domain, determinisation)
     fluent, static_tuples, by_type, typed = index_problem(domain, problem)
-    bindings = ((action, b) for action in domain.actions
-                for b in action_bindings(action, static_tuples, by_type, typed, fluent))
-    with slow_progress("grounding", " actions", iterable=bindings) as bar:
-        pending = [_instantiate(action, b, fluent) for action, b in bar]
-    init_fluents = {str(a) for a in problem.init if a.predicate in fluent}
-    reached, live = relaxed_reachable(pending, init_fluents)
+    statics = frozenset(str(a) for a in problem.init if a.predicate not in fluent)
+
+    def objects(t: str) -> list[str]:
+        return by_type.get(t, [])
+
+    def static(atom: Atom) -> bool | None:
+        return None if atom.predicate in fluent else str(atom) in statics
+
+    plain = not any(a.condition is not None or any(o.conditional or o.rewards or o.choices
+                                                   for o in a.outcomes)
+                    for a in domain.actions)
+    raw = []
+    with slow_progress("grounding", " actions") as bar:
+        for action in domain.actions:
+            def too_many(action: Action = action) -> PDDLError:
+                return PDDLError(domain.source, action.line or None, f"action {action.name}: a "
+                                 f"condition or forall effect grows past {MAX_DISJUNCTS} "
+                                 f"alternatives or {MAX_ATOMS} atoms once grounded over the "
+                                 "problem's objects")
+
+            def value(term, binding, action: Action = action) -> float:
+                return term_value(term, binding, domain, problem, action,
+                                  f"a reward of {action.name}")
+
+            whole = Junction("and", action.precondition + ((action.condition,)
+                                                           if action.condition else ()))
+            for b in action_bindings(action, static_tuples, by_type, typed, fluent):
+                bar.update()
+                # a plain domain's precondition is its fluent literals as written (one that
+                # contradicts itself stays, a ground action that never applies, as always)
+                pre = [_literals(action.precondition, b, fluent)] if plain else \
+                    ground_dnf(whole, b, objects, static, too_many)
+                if pre:
+                    args = tuple(b[p] for p, _ in action.parameters)
+                    outs = ground_outcomes(action, args, b, objects, static, fluent,
+                                           too_many, value, domain.source)
+                    raw.append((action, args, pre, outs))
+    init = {str(a) for a in problem.init if a.predicate in fluent}
+    reached, found = relaxed_reachability(raw, init, plain)
     facts = tuple(sorted(reached))
     index = {f: i for i, f in enumerate(facts)}
 
-    def m(atoms: set[str]) -> int:
+    def m(atoms) -> int:
         return sum(1 << index[a] for a in atoms if a in index)
 
-    with slow_progress("grounding", " actions", len(live), live) as bar:
-        ops = tuple(GroundOp(name, m(pre), m(neg), m(add), m(dele - add),
-                             cost=action_cost(action, args, domain, problem))
-                    for name, pre, neg, add, dele, action, args in bar)
-    static_strs = {str(a) for a in problem.init if a.predicate not in fluent}
-    return GroundTask(facts, ops, m(init_fluents), statics=frozenset(static_strs),
-                      fact_index=index, **goal_masks(problem, fluent, static_strs, index))
+    ops, kept = [], []
+    with slow_progress("grounding", " actions", len(found), found) as bar:
+        for i in bar:
+            action, args, pre, outs = raw[i]
+            alts = [(m(p), m(n)) for p, n in pre if p <= reached]
+            common_pos = common_neg = -1
+            for p, n in alts:
+                common_pos, common_neg = common_pos & p, common_neg & n
+            outcomes = tuple(GroundOutcome(
+                p, m(add), m(dele - add), stuck,
+                tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached),
+                reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts
+                                                 if cp <= reached), amount)
+                                          for alts, amount in rewards) if r[0]))
+                for _, p, (add, dele, conds, reward, rewards, stuck) in outs)
+            known, kept_names = kept_ground(action, outs, outcomes, determinisation, names)
+            ops.append(GroundOp(str(Atom(action.name, args)), common_pos, common_neg, outcomes,
+                                known, tuple(alts) if len(alts) > 1 else (),
+                                cost=action_cost(action, args, domain, problem)))
+            kept.append(kept_names)
+    task = GroundTask(facts, tuple(ops), m(init), statics=statics, fact_index=index,
+                      disjunctive=any(op.alternatives for op in ops),
+                      **goal_masks(problem, fluent, statics, index))
+    return task, kept
 
 
-def relaxed_reachable(pending: list[tuple], init: set[str]) -> tuple[set[str], list[tuple]]:
-    """The facts reachable from ``init`` with deletes ignored, and the ground actions
-    ``(name, pre, neg, add, dele, ...)`` of ``pending`` whose positive preconditions they hold
-    (in the order they were found); a bar counts those actions past 2 s."""
+def _literals(literals, b: Mapping[str, str], fluent: frozenset[str]
+              ) -> tuple[frozenset[str], frozenset[str]]:
+    """The fluent atoms of ``literals`` under ``b`` that must hold, and must not."""
+    def part(positive: bool) -> frozenset[str]:
+        return frozenset(str(Atom(lit.atom.predicate, tuple(b.get(x, x) for x in lit.atom.args)))
+                         for lit in literals
+                         if lit.positive == positive and lit.atom.predicate in fluent)
+    return part(True), part(False)
+
+
+def relaxed_reachability(raw: list, init: set[str], by_outcome: bool
+                         ) -> tuple[set[str], list[int]]:
+    """Relaxed reachability (deletes ignored) from ``init`` over the ground actions ``raw``
+    (``(action, args, precondition alternatives, ground outcomes)``, in binding order):
+    the facts some sequence of them may make true, and those that may ever apply (a bar
+    counts them past 2 s), in binding order; ``by_outcome`` (a plain domain: one
+    alternative, no conditional effect): in the order found when the outcomes are tried
+    schema by schema, outcome by outcome, binding by binding."""
     reached = set(init)
-    live: list[tuple] = []
-    with slow_progress("relaxed reachability", " actions", len(pending)) as bar:
+    with slow_progress("relaxed reachability", " actions", len(raw)) as bar:
+        if by_outcome:
+            items = []
+            for _, block in itertools.groupby(range(len(raw)), key=lambda i: id(raw[i][0])):
+                block = list(block)
+                for k in range(len(raw[block[0]][3])):
+                    items += [(i, raw[i][2][0][0], raw[i][3][k][2][0]) for i in block]
+            found: dict[int, None] = {}
+            changed = True
+            while changed:
+                changed, rest = False, []
+                for item in items:
+                    if item[1] <= reached:
+                        if item[0] not in found:
+                            found[item[0]] = None
+                            bar.update()
+                        reached |= item[2]
+                        changed = True
+                    else:
+                        rest.append(item)
+                items = rest
+            return reached, list(found)
+        live = [False] * len(raw)
         changed = True
         while changed:
-            changed, rest = False, []
-            for op in pending:
-                if op[1] <= reached:
-                    live.append(op)
-                    reached |= op[3]
-                    changed = True
+            changed = False
+            for i, (_, _, pre, outs) in enumerate(raw):
+                if not live[i]:
+                    if not any(p <= reached for p, _ in pre):
+                        continue
+                    live[i] = changed = True
                     bar.update()
-                else:
-                    rest.append(op)
-            pending = rest
-    return reached, live
+                for _, _, (add, _, conds, *_) in outs:
+                    new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
+                    if new:
+                        reached |= new
+                        changed = True
+    return reached, [i for i, ok in enumerate(live) if ok]
 
 
 def index_problem(domain: Domain, problem: Problem) -> tuple[
@@ -243,20 +455,6 @@ def action_bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]
                              == full.get(e.atom.args[1], e.atom.args[1])) == e.positive
                             for e in equalities)):
                 yield full
-
-
-def _instantiate(action: Action, b: dict[str, str], fluent: frozenset[str]):
-    def s(atom: Atom) -> str:
-        return str(Atom(atom.predicate, tuple(b.get(x, x) for x in atom.args)))
-
-    def part(lits: tuple[Literal, ...], positive: bool) -> set[str]:
-        return {s(lit.atom) for lit in lits
-                if lit.positive == positive and lit.atom.predicate in fluent}
-
-    args = tuple(b[p] for p, _ in action.parameters)
-    name = "(" + " ".join((action.name, *args)) + ")"
-    return (name, part(action.precondition, True), part(action.precondition, False),
-            part(action.effect, True), part(action.effect, False), action, args)
 
 
 def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:

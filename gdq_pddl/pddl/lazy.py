@@ -17,8 +17,8 @@ every state in id order numbers them exactly as the enumeration does; in any oth
 the graph is the same up to renaming states.
 
 A state's effects are applied on its Python int bitmask by the ground task's own
-outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.ppddl_effects.GroundOutcome.apply>`,
-:meth:`GroundOutcome.gain <gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain>`): for one
+outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`,
+:meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`): for one
 state that is some microseconds an outcome, where a numpy call on a one-row array costs
 more than the whole effect.
 """
@@ -27,15 +27,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundTask
-from gdq_pddl.pddl.ppddl import ProbabilisticOp
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask
 from gdq_pddl.pddl.reachable import reality_ranks
 from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 
 _NONE = np.zeros(0, dtype=np.int64)
 
 
-def _compiled(op) -> tuple[tuple, tuple, tuple]:
+def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
     """A ground action for one state at a time: reality's outcomes ``(probability, stuck,
     apply or None (the state stays), gain or None (it depends on the state: see
     GroundOutcome.gain), outcome)`` of probability > 0, in outcome order; the edges'
@@ -43,19 +42,16 @@ def _compiled(op) -> tuple[tuple, tuple, tuple]:
     out); the places of the outcomes only reality reaches (those with an effect that are
     not the edges', failed trials aside), as :func:`~gdq_pddl.pddl.wordrows.compile_ops`
     sorts them."""
-    if not isinstance(op, ProbabilisticOp):  # STRIPS: its one effect, for sure
-        return ((1.0, False, op.apply, 0.0, None),), (0,), ()
     place, reality = {}, []
     for j, o in enumerate(op.outcomes):
         if o.probability > 0:
             place[j] = len(reality)
-            effect = bool(o.add or o.dele or o.conditional)
-            reality.append((o.probability, bool(o.stuck), o.apply if effect and not o.stuck
+            reality.append((o.probability, bool(o.stuck), o.apply if o.moves() and not o.stuck
                             else None, None if o.rewards else o.reward + 0.0, o))
     known = tuple(place[j] if j in place and not op.outcomes[j].stuck
                   else op.outcomes[j].apply for j in op.known)
     other = tuple(place[j] for j, o in enumerate(op.outcomes) if o.probability > 0
-                  and not o.stuck and j not in op.known and (o.add or o.dele or o.conditional))
+                  and not o.stuck and j not in op.known and o.moves())
     return tuple(reality), known, other
 
 
@@ -70,8 +66,8 @@ class LazyGraph:
     besides the action's cost (its rewards, less its costs inside effects: on either
     reward scale), as :func:`~gdq_pddl.pddl.outcomes.reality_outcomes` does.
 
-    For a STRIPS task (no outcomes) reality's outcome of a ground action is its one
-    effect, probability 1 and gain 0: the task's own dynamics, not a dynamics file's.
+    For a STRIPS task reality's outcome of a ground action is its one effect,
+    probability 1 and gain 0: the task's own dynamics, not a dynamics file's.
     """
 
     def __init__(self, task: GroundTask, gains: bool = True) -> None:
@@ -79,8 +75,7 @@ class LazyGraph:
         self.gains = gains
         self.n_words = max(1, -(-len(task.facts) // 64))
         self._conditions = RowConditions([(op.pre, op.neg) for op in task.ops])
-        alt = [(k, p, n) for k, op in enumerate(task.ops)
-               for p, n in getattr(op, "alternatives", ())]
+        alt = [(k, p, n) for k, op in enumerate(task.ops) for p, n in op.alternatives]
         self._alt_op = np.array([k for k, _, _ in alt], dtype=np.int64)
         self._alternatives = RowConditions([(p, n) for _, p, n in alt])
         self._plain = np.ones(len(task.ops), dtype=np.bool_)  # no alternatives to meet
@@ -91,10 +86,9 @@ class LazyGraph:
         # action leaves the state as it is, and its outcomes need not be applied one by one
         quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
         for k, op in enumerate(task.ops):
-            outcomes = getattr(op, "outcomes", None)
-            if outcomes is not None and not any(o.add or o.dele for o in outcomes):
+            if not any(o.add or o.dele for o in op.outcomes):
                 quiet[k] = True
-                fire += [(k, p, n) for o in outcomes for p, n, _, _ in o.conditional]
+                fire += [(k, p, n) for o in op.outcomes for p, n, _, _ in o.conditional]
         self._may_stay = quiet
         self._fire_op = np.array([k for k, _, _ in fire], dtype=np.int64)
         self._fires = RowConditions([(p, n) for _, p, n in fire])
@@ -246,7 +240,7 @@ class LazyGraph:
 
     def _gains(self, row: np.ndarray) -> list[float]:
         """Each outcome's reward in the state of ``row``, by :meth:`_gain_terms`'s flat
-        list: as :meth:`GroundOutcome.gain <gdq_pddl.pddl.ppddl_effects.GroundOutcome.gain>`
+        list: as :meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`
         sums them (the fixed reward plus the amounts of the terms one of whose
         alternatives holds, in order)."""
         if not len(self._term_entry):

@@ -77,8 +77,7 @@ def _outcomes_of(graph: StateGraph, ops: list[CompiledOp], live: np.ndarray, col
         pair = at * width + column(at, np.full(len(at), k))
         for j, (o, effect) in enumerate(zip(ground.outcomes, op.outcomes, strict=True)):
             if o.probability > 0:
-                same = not (o.add or o.dele or o.conditional)
-                nxt = at if o.stuck or same else graph.lookup(effect.apply(here))
+                nxt = at if o.stuck or not o.moves() else graph.lookup(effect.apply(here))
                 parts.append((pair, j, o.probability, nxt, o.stuck,
                               effect.gain(here) if gains else None))
     if not parts:  # no ground action applies in these states (dead ends)

@@ -1,54 +1,25 @@
-"""The ground effects of a PPDDL action, before a problem's facts are indexed: each
+"""The ground effects of an action schema, before a problem's facts are indexed: each
 outcome of a schema under one binding of its parameters as fact sets (:data:`Ground`),
-its choices drawn side by side and equal effects merged (:func:`ground_outcomes`); the
-relaxed reachability over ground actions with such outcomes
-(:func:`relaxed_reachability`); and a ground outcome as bitmasks over the facts
-(:class:`GroundOutcome`), as reality's ops in :mod:`gdq_pddl.pddl.ppddl` carry it.
+its choices drawn side by side and equal effects merged (:func:`ground_outcomes`; a
+STRIPS action's effect is its one outcome, :func:`outcomes_of`); and which of them the
+planner's determinisation keeps and under what names (:data:`DETERMINISATIONS`,
+:func:`kept_outcomes`, :func:`planner_names`, :func:`kept_ground`). The one grounder,
+:func:`gdq_pddl.pddl.grounding.ground`, turns them into
+:class:`~gdq_pddl.pddl.grounding.GroundOutcome` bitmasks.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.limits import slow_progress
-from gdq_pddl.pddl.model import Action, Atom, Choice, Junction, Literal, Outcome
+from gdq_pddl.pddl.model import Action, Atom, Choice, Domain, Junction, Literal, Outcome
 from gdq_pddl.pddl.normalise import MAX_ATOMS, TRUE, extend, ground_dnf
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
-
-@dataclass(frozen=True)
-class GroundOutcome:
-    """One outcome of a ground action: probability, add and delete masks, failed trial."""
-
-    probability: float
-    add: int
-    dele: int
-    stuck: bool = False
-    conditional: tuple[tuple[int, int, int, int], ...] = ()
-    """Conditional effects ``(must hold, must not hold, add, delete)`` (adds win)."""
-    reward: float = 0.0
-    """The reward the outcome always earns besides the action's cost."""
-    rewards: tuple[tuple[tuple[tuple[int, int], ...], float], ...] = ()
-    """``(alternatives (must hold, must not hold), amount)``: earned where one holds."""
-
-    def gain(self, state: int) -> float:
-        """The outcome's reward when the action is taken in ``state``."""
-        return self.reward + sum(amount for alts, amount in self.rewards
-                                 if any(state & p == p and not state & n for p, n in alts))
-
-    def largest_gain(self) -> float:
-        """The most :meth:`gain` can be in size in any state: every reward counted."""
-        return abs(self.reward) + sum(abs(amount) for _, amount in self.rewards)
-
-    def apply(self, state: int) -> int:
-        add, dele = self.add, self.dele
-        for pos, neg, a, d in self.conditional:
-            if state & pos == pos and not state & neg:
-                add, dele = add | a, dele | d
-        return (state & ~dele) | add
-
+DETERMINISATIONS = ("all-outcomes", "most-likely")
+"""What the planner knows of a PPDDL domain (``docs/domains.md``): every outcome of an
+action is a planner action, or only its most likely one; first: the default."""
 
 
 def outcomes_of(action: Action) -> tuple[Outcome, ...]:
@@ -191,24 +162,65 @@ def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
     return [(p, g) for g, p in out.items()]
 
 
-def relaxed_reachability(raw: list, init: set[str]) -> tuple[set[str], list[bool]]:
-    """Relaxed reachability (deletes ignored) from ``init``: the facts some sequence of
-    ground actions may make true, and which ground actions may ever apply (a bar counts
-    those past 2 s)."""
-    reached, live = set(init), [False] * len(raw)
-    changed = True
-    with slow_progress("relaxed reachability", " actions", len(raw)) as bar:
-        while changed:
-            changed = False
-            for i, (_, _, pre, outs) in enumerate(raw):
-                if not live[i]:
-                    if not any(p <= reached for p, _ in pre):
-                        continue
-                    live[i] = changed = True
-                    bar.update()
-                for _, _, (add, _, conds, *_) in outs:
-                    new = add.union(*(a for cp, _, a, _ in conds if cp <= reached)) - reached
-                    if new:
-                        reached |= new
-                        changed = True
-    return reached, live
+def kept_outcomes(action: Action, determinisation: str) -> tuple[int, ...]:
+    """Indices of ``action``'s outcomes that are planner actions (a STRIPS action: 0);
+    ``determinisation`` is checked by :func:`planner_names`."""
+    if not action.outcomes:
+        return (0,)
+    useful = [k for k, o in enumerate(action.outcomes)
+              if o.probability > 0 and not o.stuck and (o.effect or o.conditional or o.choices)]
+    if determinisation == "all-outcomes":
+        return tuple(useful)
+    best = max(range(len(action.outcomes)), key=lambda k: (action.outcomes[k].probability, -k))
+    return (best,) if best in useful else ()
+
+
+def planner_names(domain: Domain, determinisation: str) -> dict[tuple[str, int], str]:
+    """``(schema, outcome index) -> planner schema name`` of every kept outcome."""
+    if determinisation not in DETERMINISATIONS:
+        raise ValueError(f"unknown determinisation {determinisation!r} (known: "
+                         f"{', '.join(DETERMINISATIONS)})")
+    taken = {a.name for a in domain.actions}
+    out: dict[tuple[str, int], str] = {}
+    for action in domain.actions:
+        kept = kept_outcomes(action, determinisation)
+        for k in kept:
+            name = action.name if len(kept) == 1 else f"{action.name}_o{k + 1}"
+            if name != action.name and name in taken:
+                raise PDDLError(domain.source, action.line, f"action {action.name}: its "
+                                f"outcome {k + 1} would be the planner action {name}, which is "
+                                "already an action of the domain; rename one of them")
+            out[(action.name, k)] = name
+    return out
+
+
+def kept_ground(action: Action, outs: list[tuple[int, float, Ground]], outcomes: tuple,
+                determinisation: str, names: dict[tuple[str, int], str]
+                ) -> tuple[tuple[int, ...], tuple[str, ...]]:
+    """The ground outcomes ``outs`` (:func:`ground_outcomes`; ``outcomes``: the same as
+    :class:`~gdq_pddl.pddl.grounding.GroundOutcome`) the planner keeps and their
+    planner schema names: those of :func:`kept_outcomes` where each schema outcome is one
+    ground outcome; where a choice expands one into several, each that does something
+    (``_c<j>`` after the schema outcome's name), or the most likely (named as the action)."""
+    if len(outs) == len(outcomes_of(action)):
+        known = kept_outcomes(action, determinisation)
+        return known, tuple(names[(action.name, k)] for k in known)
+
+    def useful(i: int) -> bool:
+        o = outcomes[i]
+        return o.probability > 0 and not o.stuck and bool(o.add or o.dele or o.conditional)
+
+    if determinisation != "all-outcomes":
+        best = max(range(len(outs)), key=lambda i: (outs[i][1], -i))
+        return ((best,), (action.name,)) if useful(best) else ((), ())
+    schema = kept_outcomes(action, determinisation)
+    count = {k: sum(1 for kk, _, _ in outs if kk == k) for k in schema}
+    known: list[int] = []
+    kept: list[str] = []
+    seen: dict[int, int] = {}
+    for i, (k, _, _) in enumerate(outs):
+        seen[k] = seen.get(k, 0) + 1
+        if k in count and useful(i):
+            known.append(i)
+            kept.append(names[(action.name, k)] + (f"_c{seen[k]}" if count[k] > 1 else ""))
+    return tuple(known), tuple(kept)

@@ -19,8 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundTask, set_bits
-from gdq_pddl.pddl.ppddl import ProbabilisticOp
+from gdq_pddl.pddl.grounding import GroundOutcome, GroundTask, set_bits
 
 
 def words(mask: int, n_words: int) -> np.ndarray:
@@ -108,10 +107,10 @@ class KeyIndex:
 @dataclass(frozen=True)
 class RowEffect:
     """What one outcome of a ground action does (a
-    :class:`~gdq_pddl.pddl.ppddl_effects.GroundOutcome`, or a STRIPS action's one effect),
-    on word rows: its adds, deletes and conditional effects (:meth:`apply`), and what it
-    earns besides the action's cost (:meth:`gain`), as ``GroundOutcome.apply`` and
-    ``GroundOutcome.gain`` do on one state's bitmask."""
+    :class:`~gdq_pddl.pddl.grounding.GroundOutcome`) on word rows: its adds, deletes and
+    conditional effects (:meth:`apply`), and what it earns besides the action's cost
+    (:meth:`gain`), as ``GroundOutcome.apply`` and ``GroundOutcome.gain`` do on one
+    state's bitmask."""
 
     add: np.ndarray
     dele: np.ndarray
@@ -120,17 +119,17 @@ class RowEffect:
     rewards: tuple[tuple[tuple[tuple[np.ndarray, np.ndarray], ...], float], ...] = ()
 
     @classmethod
-    def of(cls, outcome, n_words: int, zero: np.ndarray | None = None) -> RowEffect:
-        """``outcome`` (a ``GroundOutcome`` or a STRIPS ``GroundOp``) on rows of
-        ``n_words`` words (``zero``: the row of no fact, shared by every empty mask)."""
+    def of(cls, outcome: GroundOutcome, n_words: int,
+           zero: np.ndarray | None = None) -> RowEffect:
+        """``outcome`` on rows of ``n_words`` words (``zero``: the row of no fact, shared
+        by every empty mask)."""
         def w(mask: int) -> np.ndarray:
             return zero if not mask and zero is not None else words(mask, n_words)
 
         return cls(w(outcome.add), w(outcome.dele),
-                   tuple(tuple(map(w, c)) for c in getattr(outcome, "conditional", ())),
-                   float(getattr(outcome, "reward", 0.0)),
+                   tuple(tuple(map(w, c)) for c in outcome.conditional), float(outcome.reward),
                    tuple((tuple((w(p), w(n)) for p, n in alts), amount)
-                         for alts, amount in getattr(outcome, "rewards", ())))
+                         for alts, amount in outcome.rewards))
 
     def apply(self, rows: np.ndarray) -> np.ndarray:
         """The rows after the effect (adds win)."""
@@ -164,8 +163,8 @@ class CompiledOp:
     known: tuple[RowEffect, ...]
     other: tuple[RowEffect, ...]
     outcomes: tuple[RowEffect, ...] = ()
-    """Every outcome of the ground action, in its order (a STRIPS action: its effect);
-    empty unless compiled so (``compile_ops(..., every=True)``)."""
+    """Every outcome of the ground action, in its order (a STRIPS action: its one); empty
+    unless compiled so (``compile_ops(..., every=True)``)."""
 
     def applies(self, rows: np.ndarray) -> np.ndarray:
         ok = holds(rows, self.pre, self.neg)
@@ -228,19 +227,14 @@ def compile_ops(task: GroundTask, n_words: int, every: bool = False) -> list[Com
 
     out = []
     for op in task.ops:
-        alts = tuple((w(p), w(n)) for p, n in op.alternatives) \
-            if getattr(task, "disjunctive", False) else ()
-        if isinstance(op, ProbabilisticOp):
-            lead = [j for j, o in enumerate(op.outcomes) if o.probability > 0 and not o.stuck
-                    and j not in op.known and (o.add or o.dele or o.conditional)]
-            need = range(len(op.outcomes)) if every else (*op.known, *lead)
-            made = {j: effect(op.outcomes[j]) for j in need}
-            known = tuple(made[k] for k in op.known)
-            other = tuple(made[j] for j in lead)
-            effects = tuple(made[j] for j in range(len(op.outcomes))) if every else ()
-        else:
-            known = (effect(op),)
-            other, effects = (), known if every else ()
+        alts = tuple((w(p), w(n)) for p, n in op.alternatives) if task.disjunctive else ()
+        lead = [j for j, o in enumerate(op.outcomes) if o.probability > 0 and not o.stuck
+                and j not in op.known and o.moves()]
+        need = range(len(op.outcomes)) if every else (*op.known, *lead)
+        made = {j: effect(op.outcomes[j]) for j in need}
+        known = tuple(made[k] for k in op.known)
+        other = tuple(made[j] for j in lead)
+        effects = tuple(made[j] for j in range(len(op.outcomes))) if every else ()
         out.append(CompiledOp(w(op.pre), w(op.neg), alts, known, other, effects))
     return out
 

@@ -6,11 +6,10 @@ the goal facts where h_max takes the dearest: a generalized Dijkstra over facts,
 the size of the relaxed plan h_add's best supporters make).
 
 All read the same *relaxed actions* of the task (:func:`relaxed_actions`): positive
-preconditions and adds only. A plain :class:`~gdq_pddl.pddl.grounding.GroundOp` is one;
-a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticOp` (reality's ground action of a PPDDL
-problem) gives one per outcome the planner knows (``op.known``) and per conditional
-effect of such an outcome, times each alternative of a disjunctive precondition: a
-:class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask` is relaxed as the planner's
+preconditions and adds only. A ground action (:class:`~gdq_pddl.pddl.grounding.GroundOp`)
+gives one per outcome the planner knows (``op.known``; a STRIPS action: its one effect)
+and per conditional effect of such an outcome, times each alternative of a disjunctive
+precondition: a :class:`~gdq_pddl.pddl.ppddl.ProbabilisticTask` is relaxed as the planner's
 determinisation of it (the same values where no action has a conditional effect; where
 one has, each conditional effect is its own relaxed action, while the determinisation's
 STRIPS variants join them, so its values are never lower). Every state is a Python-int
@@ -26,7 +25,6 @@ import numba
 import numpy as np
 
 from gdq_pddl.pddl.grounding import GroundTask, set_bits
-from gdq_pddl.pddl.ppddl import ProbabilisticOp
 from gdq_pddl.planning.relaxed_costs import cheapest_alternative, hadd_costs, relaxed_plan_size
 
 INFINITE = -1
@@ -45,20 +43,18 @@ def relaxed_actions(task: GroundTask) -> list[tuple[int, int]]:
     (negative preconditions and deletes ignored), in the order of ``task.ops``, those that
     add nothing left out and each distinct pair once.
 
-    A plain ground action is ``(pre, add)``. A :class:`ProbabilisticOp` gives, for each
-    alternative ``(must hold, must not hold)`` of its precondition (``op.alternatives``;
-    none: ``(pre, neg)`` alone) and each outcome the planner knows (``op.known``, what
-    its determinisation keeps: reality's other outcomes are no knowledge to plan with),
+    A ground action gives, for each alternative ``(must hold, must not hold)`` of its
+    precondition (``op.alternatives``; none: ``(pre, neg)`` alone) and each outcome the
+    planner knows (``op.known``, what its determinisation keeps: reality's other outcomes
+    are no knowledge to plan with),
     ``(pre | alternative, outcome.add)``, and for each conditional effect ``(cp, cn, a,
     d)`` of that outcome ``(pre | alternative | cp, a)`` -- but for a conditional effect
     whose condition contradicts that alternative (a fact both required and excluded),
-    which can never fire there (the planner's determinisation drops it too).
+    which can never fire there (the planner's determinisation drops it too). A STRIPS
+    action is ``(pre, add)``.
     """
     out: dict[tuple[int, int], None] = {}
     for op in task.ops:
-        if not isinstance(op, ProbabilisticOp):
-            out[(op.pre, op.add)] = None
-            continue
         for p, n in op.alternatives or ((op.pre, op.neg),):
             p, n = p | op.pre, n | op.neg
             for k in op.known:

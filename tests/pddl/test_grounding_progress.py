@@ -33,7 +33,7 @@ def test_relaxed_reachability_counts_the_reachable_ground_actions(bars):
 
 
 def test_a_bar_is_closed_before_an_error_leaves_grounding(bars, monkeypatch):
-    real, calls = grounding._instantiate, []
+    real, calls = grounding.ground_outcomes, []
 
     def failing(*args):
         calls.append(args)
@@ -41,7 +41,7 @@ def test_a_bar_is_closed_before_an_error_leaves_grounding(bars, monkeypatch):
             raise RuntimeError("mid-way")
         return real(*args)
 
-    monkeypatch.setattr(grounding, "_instantiate", failing)
+    monkeypatch.setattr(grounding, "ground_outcomes", failing)
     domain = parse_domain(ROAD)
     with pytest.raises(RuntimeError, match="mid-way") as error:
         grounding.ground(domain, parse_problem(PROBLEM, domain))

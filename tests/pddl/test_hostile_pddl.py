@@ -5,8 +5,6 @@ byte-order mark. Each is refused with one line naming the file and the line (a
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import pytest
 
 from gdq_pddl.cli import main
@@ -216,16 +214,6 @@ def test_an_object_that_repeats_a_constant_is_refused():
                   "(:types lamp switch)\n  (:constants s1 - switch)")
     problem_refused(LAMP_PROBLEM, 2, "object s1 is declared twice", "as a constant",
                     domain=domain)
-
-
-def test_a_domain_built_in_python_with_a_hash_in_an_action_name_is_refused():
-    """The grounder joins a schema and an outcome with '#': a name with one would be
-    split wrongly, so it is refused, not misread."""
-    domain = parse_domain(LAMP_DOMAIN, "d.pddl")
-    hashed = replace(domain, actions=tuple(replace(a, name=a.name + "#1") if a.name == "press"
-                                           else a for a in domain.actions))
-    problem = parse_problem(LAMP_PROBLEM, domain)
-    refused_at(lambda: ground_ppddl(hashed, problem), "d.pddl", 9, "'#'")
 
 
 # --- byte-order mark ---------------------------------------------------------------------

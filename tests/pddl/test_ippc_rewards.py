@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
-from gdq_pddl.pddl.ppddl import ground_costs, ground_ppddl
+from gdq_pddl.pddl.ppddl import ground_ppddl
 from tests.pddl.ippc import (
     OBJECTS,
     costed_domain,
@@ -138,9 +138,7 @@ def test_rewards_agree_with_an_independent_interpreter(seed):
     domain_text = "\n".join(lines)
     domain = parse_domain(domain_text)
     learner, _ = ground_ppddl(domain, parse_problem(problem_text, domain))
-    costs = dict(zip((op.name for op in learner.ops),
-                     ground_costs(domain, parse_problem(problem_text, domain),
-                                  [op.name for op in learner.ops]), strict=True))
+    costs = {op.name: op.cost for op in learner.ops}
     schemas = {a[1]: a[7] for a in sexp(domain_text)[0]
                if isinstance(a, list) and a[0] == ":action"}
     statics = frozenset(learner.statics)

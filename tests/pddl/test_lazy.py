@@ -11,10 +11,10 @@ import pytest
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
+from gdq_pddl.pddl.grounding import GroundOutcome
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.pddl.outcomes import reality_outcomes
 from gdq_pddl.pddl.ppddl import ProbabilisticTask, ground_ppddl
-from gdq_pddl.pddl.ppddl_effects import GroundOutcome
 from gdq_pddl.pddl.reachable import reachable_graph
 from gdq_pddl.pddl.wordrows import words
 from gdq_pddl.planning.base import PlanningProblem

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from gdq_pddl.pddl import ppddl_effects
+from gdq_pddl.pddl.grounding import GroundOutcome
 from gdq_pddl.pddl.lazy import LazyGraph
-from gdq_pddl.pddl.ppddl_effects import GroundOutcome
 from gdq_pddl.planning.base import PlanningProblem
 from tests.pddl.test_lazy import assert_same_graph
 

@@ -11,9 +11,8 @@ import numpy as np
 import pytest
 
 from gdq_pddl.pddl import ground, parse_domain, parse_problem
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask, set_bits
-from gdq_pddl.pddl.ppddl import ProbabilisticOp, ProbabilisticTask, ground_ppddl
-from gdq_pddl.pddl.ppddl_effects import GroundOutcome
+from gdq_pddl.pddl.grounding import GroundOp, GroundOutcome, GroundTask, set_bits
+from gdq_pddl.pddl.ppddl import ProbabilisticTask, ground_ppddl
 from gdq_pddl.pddl.wordrows import words
 from gdq_pddl.planning.heuristic import INFINITE, HAdd, HMax, hadd_for, hmax_for
 from tests.pddl.ippc import random_domain
@@ -169,7 +168,7 @@ def test_a_disjunctive_precondition_by_hand():
     crowbar: 1 + min(3, 0 + 1) = 2."""
     learner, planner = ppddl(DOOR)
     opener = next(op for op in learner.ops if op.name == "(open)")
-    assert isinstance(opener, ProbabilisticOp) and len(opener.alternatives) == 2
+    assert len(opener.alternatives) == 2
     for task in (learner, planner):
         h, hm = HAdd(task), HMax(task)
         key, crowbar = task.mask({"(key)"}), task.mask({"(crowbar)"})
@@ -214,10 +213,7 @@ def rules(task: GroundTask) -> list[tuple[int, int]]:
     """The relaxed actions ``(positive preconditions, adds)``, read from the ground
     actions as the semantics in HAdd's docstring states them."""
     out = []
-    for op in task.ops:
-        if not isinstance(op, ProbabilisticOp):
-            out.append((op.pre, op.add))
-            continue
+    for op in task.ops:  # a STRIPS action: (pre, add)
         for p, n in op.alternatives or ((0, 0),):
             pos, neg = op.pre | p, op.neg | n
             for k in op.known:
@@ -295,7 +291,7 @@ def relaxed_goal(task: GroundTask, state: int) -> bool:
 
 @pytest.mark.parametrize("seed", range(30))
 def test_random_tasks_agree_with_the_fixpoints(seed):
-    """Reality's task (ProbabilisticOps: outcomes, conditional effects, disjunctive
+    """Reality's task (ground actions: outcomes, conditional effects, disjunctive
     preconditions) and the planner's (plain GroundOps), on random states: HAdd equals
     the fixpoint's h_add, one state or many; HMax equals the fixpoint's h_max (with
     alternatives: of the cheapest); h_add >= h_max, both 0 exactly where the relaxed goal
@@ -345,15 +341,15 @@ def random_task(rng: np.random.Generator, n_facts: int = 14,
     for i in range(n_ops):
         pre, neg = some(0.15), some(0.05)
         if rng.random() < 0.3:
-            ops.append(GroundOp(f"(plain{i})", pre, neg & ~pre, some(0.15), some(0.1)))
+            ops.append(GroundOp.strips(f"(plain{i})", pre, neg & ~pre, some(0.15), some(0.1)))
             continue
         outcomes = tuple(GroundOutcome(0.5, some(0.12), some(0.1), conditional=tuple(
             (some(0.15), some(0.1), some(0.15), some(0.05)) for _ in range(rng.integers(0, 3))))
             for _ in range(rng.integers(1, 4)))
         known = tuple(k for k in range(len(outcomes)) if rng.random() < 0.6)
         alternatives = tuple((some(0.15), some(0.05)) for _ in range(rng.integers(0, 3)))
-        ops.append(ProbabilisticOp(f"(prob{i})", pre, neg & ~pre, 0, 0, outcomes, known,
-                                   tuple((p, n & ~p) for p, n in alternatives)))
+        ops.append(GroundOp(f"(prob{i})", pre, neg & ~pre, outcomes, known,
+                            tuple((p, n & ~p) for p, n in alternatives)))
     facts = tuple(f"(f{i})" for i in range(n_facts))
     return ProbabilisticTask(facts, tuple(ops), some(0.2), some(0.25), 0, True, frozenset(),
                              {f: i for i, f in enumerate(facts)},
