@@ -162,7 +162,7 @@ def measure(case: Case, args: argparse.Namespace) -> tuple[str, str, float]:
         else:
             v_star = facts.get("v_star")
             how = f"enumerated, {facts.get('states', 0):,} states" + (
-                f", V* {v_star:.2f}" if v_star is not None else "")
+                f", V\\* {v_star:.2f}" if v_star is not None else "")
         episodes = pd.read_csv(out / "episodes.csv")
         per = episodes.groupby("method", sort=False).agg(ret=("return", "mean"),
                                                          success=("success", "mean"))

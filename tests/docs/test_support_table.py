@@ -68,6 +68,6 @@ def test_a_measured_row_reads_the_runs_output(tmp_path):
     (tmp_path / "p01.pddl").write_text(COMBINED)
     args = argparse.Namespace(method=["Q-learning"], episodes=3, runs=1, seed=1, budget=300.0)
     how, figures, wall = support_table.measure(support_table.find_case(str(tmp_path)), args)
-    assert how.startswith("enumerated, ") and "V* " in how
+    assert how.startswith("enumerated, ") and "V\\* " in how
     assert figures.startswith("Q-learning ") and "%)" in figures
     assert wall > 0
