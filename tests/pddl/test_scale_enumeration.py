@@ -222,3 +222,23 @@ def test_row_conditions_hold_where_the_rows_stack_holds(n_facts, seed):
         stack = np.stack([words(p, n_words) for p, _ in conditions])
         neg = np.stack([words(n, n_words) for _, n in conditions])
         assert np.array_equal(holds(row[None, :], stack, neg), expected)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 6), st.integers(1, 7), st.integers(1, 3), st.integers(0, 2**32 - 1))
+def test_first_seen_keeps_each_parents_first_outcome_of_a_successor(n_out, n_rows, n_words,
+                                                                     seed):
+    """`first_seen` (one sort) marks what comparing each outcome's successor with every
+    earlier outcome's, row by row, marks: the first outcome of each distinct successor of
+    a parent (values from a small range, so that successors repeat)."""
+    rng = np.random.default_rng(seed)
+    after = [rng.integers(0, 3, size=(n_rows, n_words)).astype(np.uint64)
+             for _ in range(n_out)]
+    expected = []
+    for j, t in enumerate(after):
+        expected.append(np.array([all((t[r] != s[r]).any() for s in after[:j])
+                                  for r in range(n_rows)], dtype=np.bool_))
+    got = reachable.first_seen(after)
+    assert len(got) == n_out
+    for g, e in zip(got, expected, strict=True):
+        np.testing.assert_array_equal(g, e)
