@@ -12,9 +12,10 @@ from ``rng``; neither path draws anything else.
 from __future__ import annotations
 
 import multiprocessing
-import os
 import types as types_
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import gymnasium as gym
 import numba
@@ -31,15 +32,14 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.learners import guards
+from gdq_pddl.learners import guards, registry
 from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
 from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
-from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
-from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
+from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory, slow_progress
 
@@ -291,41 +291,91 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        args = (dynamics, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
-                returns, steps, success, areas, ep, room)
-        ep = _loop_of(learner)(*args)
+        loop, rules = _loop_of(learner)
+        ep = loop(dynamics, start, goal_pos, doors, learner.tables, learner.params, rules,
+                  env_rng, rng, returns, steps, success, areas, ep, room)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
-def loop_cached() -> bool:
-    """Whether numba's on-disk cache holds a compiled episode loop (True where it cannot
-    tell): False on a first use, when a run compiles before it starts."""
+def loop_cached(markers: Iterable[type]) -> bool:
+    """Whether numba's on-disk cache holds the compiled episode loop of each rules class of
+    ``markers`` (:meth:`TabularLearner.loop_marker
+    <gdq_pddl.learners.tabular.TabularLearner.loop_marker>`; True where it cannot tell):
+    False on a first use, when a run compiles before it starts."""
     try:
-        return os.path.isfile(_episodes._cache._cache_file._index_path)
-    except AttributeError:  # numba's internals moved: say nothing
+        index = _episodes._cache._cache_file._load_index()
+        held = {t for key in index for t in key[0]}  # the argument types of each loop
+    except Exception:  # numba's internals moved, or an unreadable index: say nothing
         return True
+    return all(numba.typeof(marker()) in held for marker in markers)
 
 
-def _loop_of(learner: TabularLearner):
-    """The compiled episode loop of ``learner``: :func:`_episodes` (cached) for a built-in
-    one, else a copy of it calling the learner's own ``act_rule`` and ``observe_rule``
-    (compiled once per process and pair of rules, not cached: numba's cache keys a
-    function by its code and argument types, not by the functions it calls)."""
-    if type(learner) in COMPILED_LEARNERS:
-        return _episodes
+def loops_cached(methods: Iterable[str]) -> bool:
+    """:func:`loop_cached` for the learners of ``methods`` (``--method`` specs) that run in
+    the package's cached loop (a deep-RL agent, or a learner of another package with rules
+    of its own, runs none)."""
+    markers = set()
+    for method in methods:
+        parsed = registry.parse_method(method)
+        if parsed.entry.requires:  # a deep-RL agent: no loop (nor its extra imported here)
+            continue
+        cls = parsed.entry.learner_class()
+        if isinstance(cls, type) and issubclass(cls, TabularLearner):
+            marker = cls.loop_marker(parsed.entry.config(**parsed.config_kwargs()))
+            if marker is not None and marker.__module__.startswith(__package__ + "."):
+                markers.add(marker)
+    return loop_cached(markers)
+
+
+def _loop_of(learner: TabularLearner) -> tuple:
+    """The compiled episode loop of ``learner`` and the rules argument it takes:
+    :func:`_episodes` (cached) with the learner's rules class (:meth:`TabularLearner.
+    loop_marker`) for a learner whose rules are this package's, else a copy of it calling
+    the learner's own ``act_rule`` and ``observe_rule`` (compiled once per process and
+    pair of rules, not cached: numba's cache keys a function by its code and argument
+    types, not by the functions it calls, nor by the source of another package)."""
+    marker = type(learner).loop_marker(learner.config)
+    if marker is not None and marker.__module__.startswith(__package__ + "."):
+        return _episodes, marker()
     pair = (learner.act_rule, learner.observe_rule)
     if pair not in _PLUGIN_LOOPS:
         code = _episodes.py_func
-        scope = {**code.__globals__, "act": pair[0], "observe": pair[1]}
+        scope = {**code.__globals__, **dict(zip(("_act", "_observe_step"), _calling(*pair),
+                                                strict=True))}
         _PLUGIN_LOOPS[pair] = numba.njit(types_.FunctionType(code.__code__, scope,
                                                              "_plugin_episodes"))
-    return _PLUGIN_LOOPS[pair]
+    return _PLUGIN_LOOPS[pair], _ANY_RULES
 
 
 _PLUGIN_LOOPS: dict[tuple, object] = {}
 """The episode loops of learners from other packages, by their pair of rules."""
+
+
+class _AnyRules(NamedTuple):
+    """The rules argument of a loop copy of :data:`_PLUGIN_LOOPS` (unread: the copy calls
+    its rules by name)."""
+
+
+_ANY_RULES = _AnyRules()
+
+
+def _calling(act, observe) -> tuple:
+    """``_act`` and ``_observe`` of a loop copy: ``act`` and ``observe``, the rules
+    argument left out."""
+
+    @numba.njit
+    def act_of(rules, table, visits, prior, p, s, rng):
+        return act(table, visits, prior, p, s, rng)
+
+    @numba.njit
+    def observe_of(rules, table, model, plans, prior, queue, own, p, s, a, r, s2,
+                   terminated, truncated, rng):
+        return observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
+                       truncated, rng)
+
+    return act_of, observe_of
 
 
 def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
@@ -334,10 +384,11 @@ def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
     env); nothing runs."""
     base = env.unwrapped
     records = _empty_records(1, 1)
+    loop, rules = _loop_of(learner)
     args = (base.model, int(base._given.start_state), int(base._given.goal_pos), _NO_DOORS,
-            learner.tables, learner.params, base.np_random, np.random.default_rng(0),
+            learner.tables, learner.params, rules, base.np_random, np.random.default_rng(0),
             *records, 0, 1)
-    _loop_of(learner).compile(tuple(numba.typeof(x) for x in args))
+    loop.compile(tuple(numba.typeof(x) for x in args))
 
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
@@ -361,6 +412,15 @@ def _step(m, state, doors, action, t, goal_pos, rng):
 
 
 def _area(m, state):
+    raise NotImplementedError
+
+
+def _act(rules, table, visits, prior, p, s, rng):
+    raise NotImplementedError
+
+
+def _observe_step(rules, table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
+                  truncated, rng):
     raise NotImplementedError
 
 
@@ -418,20 +478,40 @@ def _area_impl(m, state):
     return None
 
 
+# A learner's rules, picked by numba from the type of the loop's rules argument (a rules
+# class, gdq_pddl.learners.rules): a loop is compiled, and cached, for one learner's code.
+@overload(_act, inline="always")
+def _act_impl(rules, table, visits, prior, p, s, rng):
+    act = _kind(rules).act
+    return lambda rules, table, visits, prior, p, s, rng: act(table, visits, prior, p, s, rng)
+
+
+@overload(_observe_step, inline="always")
+def _observe_step_impl(rules, table, model, plans, prior, queue, own, p, s, a, r, s2,
+                       terminated, truncated, rng):
+    observe = _kind(rules).observe
+
+    def impl(rules, table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
+             truncated, rng):
+        return observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
+                       truncated, rng)
+    return impl
+
+
 @numba.njit(cache=True)
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
-              env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
-              steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
-              room: int) -> int:
+              rules: NamedTuple, env_rng: np.random.Generator, rng: np.random.Generator,
+              returns: np.ndarray, steps: np.ndarray, success: np.ndarray, areas: np.ndarray,
+              first: int, room: int) -> int:
     """The compiled episode loop (same calls, in the same order, as the Python loop) from
     episode ``first``, over the env's true dynamics ``m``. Returns the number of episodes
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe`` are the
-    built-in learners' rules (:func:`~gdq_pddl.learners.tables.act`,
-    :func:`~gdq_pddl.learners.rules.observe`); a learner from another package runs a copy
-    that calls its own (:func:`_loop_of`)."""
+    its arguments: :func:`run_compiled` checks them. ``rules``: the learner's rules class
+    (:data:`gdq_pddl.learners.rules.KIND_RULES`), whose ``act`` and ``observe`` the loop
+    calls, compiled for it alone; a learner from another package runs a copy that calls
+    its own (:func:`_loop_of`)."""
     table, model, plans, prior, queue, own = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
@@ -443,12 +523,12 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = act(table, model.visits, prior, p, s, rng)
+            a = _act(rules, table, model.visits, prior, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not observe(table, model, plans, prior, queue, own, p, s, a, r, s2,
-                           terminated, truncated, rng):
+            if not _observe_step(rules, table, model, plans, prior, queue, own, p, s, a, r,
+                                 s2, terminated, truncated, rng):
                 return -1
             step += 1
             returns[ep] += r
