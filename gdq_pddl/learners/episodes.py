@@ -12,10 +12,10 @@ from ``rng``; neither path draws anything else.
 from __future__ import annotations
 
 import multiprocessing
+import os
 import types as types_
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import gymnasium as gym
 import numba
@@ -35,7 +35,7 @@ from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards, registry
 from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
-from gdq_pddl.learners.gdq_learner import GDQ
+from gdq_pddl.learners.gdq_learner import GDQ, PaperGDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
@@ -89,7 +89,7 @@ SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
 """The wrappers the compiled loop may look through (exact types, not subclasses):
 ``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
 limit (the env ends every episode first, or at the same step)."""
-COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ)
+COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ, PaperGDQ)
 """The built-in learner classes the compiled loop runs (exact types: a subclass may
 override ``act`` or ``observe``); it also runs any learner whose class keeps
 :class:`TabularLearner`'s ``act`` and ``observe``, with its compiled ``act_rule`` and
@@ -291,9 +291,9 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        loop, rules = _loop_of(learner)
-        ep = loop(dynamics, start, goal_pos, doors, learner.tables, learner.params, rules,
-                  env_rng, rng, returns, steps, success, areas, ep, room)
+        ep = _loop_of(learner)(dynamics, start, goal_pos, doors, learner.tables,
+                               learner.params, env_rng, rng, returns, steps, success, areas,
+                               ep, room)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
@@ -305,17 +305,16 @@ def loop_cached(markers: Iterable[type]) -> bool:
     <gdq_pddl.learners.tabular.TabularLearner.loop_marker>`; True where it cannot tell):
     False on a first use, when a run compiles before it starts."""
     try:
-        index = _episodes._cache._cache_file._load_index()
-        held = {t for key in index for t in key[0]}  # the argument types of each loop
-    except Exception:  # numba's internals moved, or an unreadable index: say nothing
+        return all(os.path.isfile(_cached_loop(m)._cache._cache_file._index_path)
+                   for m in markers)
+    except AttributeError:  # numba's internals moved: say nothing
         return True
-    return all(numba.typeof(marker()) in held for marker in markers)
 
 
 def loops_cached(methods: Iterable[str]) -> bool:
     """:func:`loop_cached` for the learners of ``methods`` (``--method`` specs) that run in
-    the package's cached loop (a deep-RL agent, or a learner of another package with rules
-    of its own, runs none)."""
+    one of the package's cached loops (a deep-RL agent, or a learner of another package
+    with rules of its own, runs none)."""
     markers = set()
     for method in methods:
         parsed = registry.parse_method(method)
@@ -329,53 +328,44 @@ def loops_cached(methods: Iterable[str]) -> bool:
     return loop_cached(markers)
 
 
-def _loop_of(learner: TabularLearner) -> tuple:
-    """The compiled episode loop of ``learner`` and the rules argument it takes:
-    :func:`_episodes` (cached) with the learner's rules class (:meth:`TabularLearner.
-    loop_marker`) for a learner whose rules are this package's, else a copy of it calling
-    the learner's own ``act_rule`` and ``observe_rule`` (compiled once per process and
-    pair of rules, not cached: numba's cache keys a function by its code and argument
-    types, not by the functions it calls, nor by the source of another package)."""
+def _loop_of(learner: TabularLearner):
+    """The compiled episode loop of ``learner``: :func:`_episodes` calling its rules. For a
+    learner whose rules are this package's, the copy of its rules class
+    (:meth:`TabularLearner.loop_marker`), cached by numba under the class's name; else a
+    copy calling the learner's own ``act_rule`` and ``observe_rule``, compiled once per
+    process and pair of rules, not cached (numba's cache keys a function by its code and
+    argument types, not by the functions it calls, nor by another package's source)."""
     marker = type(learner).loop_marker(learner.config)
     if marker is not None and marker.__module__.startswith(__package__ + "."):
-        return _episodes, marker()
+        return _cached_loop(marker)
     pair = (learner.act_rule, learner.observe_rule)
     if pair not in _PLUGIN_LOOPS:
-        code = _episodes.py_func
-        scope = {**code.__globals__, **dict(zip(("_act", "_observe_step"), _calling(*pair),
-                                                strict=True))}
-        _PLUGIN_LOOPS[pair] = numba.njit(types_.FunctionType(code.__code__, scope,
-                                                             "_plugin_episodes"))
-    return _PLUGIN_LOOPS[pair], _ANY_RULES
+        _PLUGIN_LOOPS[pair] = numba.njit(_loop_copy(*pair, "_plugin_episodes"))
+    return _PLUGIN_LOOPS[pair]
 
 
 _PLUGIN_LOOPS: dict[tuple, object] = {}
 """The episode loops of learners from other packages, by their pair of rules."""
+_LOOPS: dict[type, object] = {}
+"""The cached episode loops of this package's rules classes, by class."""
 
 
-class _AnyRules(NamedTuple):
-    """The rules argument of a loop copy of :data:`_PLUGIN_LOOPS` (unread: the copy calls
-    its rules by name)."""
+def _cached_loop(marker: type):
+    """The loop of the rules class ``marker``: a copy of :func:`_episodes` whose ``act``
+    and ``observe`` are the class's, named ``_episodes_<class>`` (numba's cache file and
+    index are by name: one per rules class, holding one learner's code)."""
+    if marker not in _LOOPS:
+        name = f"_episodes_{marker.__module__.rpartition('.')[2]}_{marker.__name__}"
+        _LOOPS[marker] = numba.njit(cache=True)(_loop_copy(marker.act, marker.observe, name))
+    return _LOOPS[marker]
 
 
-_ANY_RULES = _AnyRules()
-
-
-def _calling(act, observe) -> tuple:
-    """``_act`` and ``_observe`` of a loop copy: ``act`` and ``observe``, the rules
-    argument left out."""
-
-    @numba.njit
-    def act_of(rules, table, visits, prior, p, s, rng):
-        return act(table, visits, prior, p, s, rng)
-
-    @numba.njit
-    def observe_of(rules, table, model, plans, prior, queue, own, p, s, a, r, s2,
-                   terminated, truncated, rng):
-        return observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                       truncated, rng)
-
-    return act_of, observe_of
+def _loop_copy(act, observe, name: str) -> types_.FunctionType:
+    """:func:`_episodes` (its Python code) as a function ``name`` calling ``act`` and
+    ``observe``."""
+    code = _episodes.__code__.replace(co_name=name, co_qualname=name)
+    scope = {**_episodes.__globals__, "act": act, "observe": observe}
+    return types_.FunctionType(code, scope, name)
 
 
 def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
@@ -384,11 +374,10 @@ def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
     env); nothing runs."""
     base = env.unwrapped
     records = _empty_records(1, 1)
-    loop, rules = _loop_of(learner)
     args = (base.model, int(base._given.start_state), int(base._given.goal_pos), _NO_DOORS,
-            learner.tables, learner.params, rules, base.np_random, np.random.default_rng(0),
+            learner.tables, learner.params, base.np_random, np.random.default_rng(0),
             *records, 0, 1)
-    loop.compile(tuple(numba.typeof(x) for x in args))
+    _loop_of(learner).compile(tuple(numba.typeof(x) for x in args))
 
 
 # What the loop needs of a kind of dynamics, one overload per kind, picked by numba from
@@ -415,12 +404,12 @@ def _area(m, state):
     raise NotImplementedError
 
 
-def _act(rules, table, visits, prior, p, s, rng):
-    raise NotImplementedError
+def act(table, visits, prior, p, s, rng):
+    raise NotImplementedError  # each copy of _episodes calls a learner's own (_loop_copy)
 
 
-def _observe_step(rules, table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                  truncated, rng):
+def observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated, truncated,
+            rng):
     raise NotImplementedError
 
 
@@ -478,40 +467,20 @@ def _area_impl(m, state):
     return None
 
 
-# A learner's rules, picked by numba from the type of the loop's rules argument (a rules
-# class, gdq_pddl.learners.rules): a loop is compiled, and cached, for one learner's code.
-@overload(_act, inline="always")
-def _act_impl(rules, table, visits, prior, p, s, rng):
-    act = _kind(rules).act
-    return lambda rules, table, visits, prior, p, s, rng: act(table, visits, prior, p, s, rng)
-
-
-@overload(_observe_step, inline="always")
-def _observe_step_impl(rules, table, model, plans, prior, queue, own, p, s, a, r, s2,
-                       terminated, truncated, rng):
-    observe = _kind(rules).observe
-
-    def impl(rules, table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-             truncated, rng):
-        return observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                       truncated, rng)
-    return impl
-
-
-@numba.njit(cache=True)
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
-              rules: NamedTuple, env_rng: np.random.Generator, rng: np.random.Generator,
-              returns: np.ndarray, steps: np.ndarray, success: np.ndarray, areas: np.ndarray,
-              first: int, room: int) -> int:
+              env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
+              steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
+              room: int) -> int:
     """The compiled episode loop (same calls, in the same order, as the Python loop) from
     episode ``first``, over the env's true dynamics ``m``. Returns the number of episodes
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them. ``rules``: the learner's rules class
-    (:data:`gdq_pddl.learners.rules.KIND_RULES`), whose ``act`` and ``observe`` the loop
-    calls, compiled for it alone; a learner from another package runs a copy that calls
-    its own (:func:`_loop_of`)."""
+    its arguments: :func:`run_compiled` checks them. Not compiled itself: ``act`` and
+    ``observe`` are a learner's rules, and each rules class
+    (:data:`gdq_pddl.learners.rules.KIND_RULES`) runs a copy calling its own, compiled
+    and cached for it alone (:func:`_loop_of`), as a learner from another package runs a
+    copy calling its own."""
     table, model, plans, prior, queue, own = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:
@@ -523,12 +492,12 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
         s = _observe(m, state, doors)
         step = 0
         while True:
-            a = _act(rules, table, model.visits, prior, p, s, rng)
+            a = act(table, model.visits, prior, p, s, rng)
             state, r, terminated, truncated, cause = _step(m, state, doors, a, step, goal_pos,
                                                            env_rng)
             s2 = _observe(m, state, doors)
-            if not _observe_step(rules, table, model, plans, prior, queue, own, p, s, a, r,
-                                 s2, terminated, truncated, rng):
+            if not observe(table, model, plans, prior, queue, own, p, s, a, r, s2,
+                           terminated, truncated, rng):
                 return -1
             step += 1
             returns[ep] += r
