@@ -2,9 +2,9 @@
 (:func:`observe_td`, :func:`observe_dyna`, :func:`observe_plans`, :func:`observe_gdq`),
 and each kind's *rules class* (:data:`KIND_RULES`: its acting rule and this one;
 ``docs/learners.md`` has them as a table). A learner's ``act_rule`` and ``observe_rule``
-are its kind's, which its methods call; the compiled episode loop is compiled for the
-rules class and calls the same two functions, so each rule has one definition, the two
-loops give the same bits (tested), and a loop holds the code of one kind only.
+are its kind's, which its methods call; the compiled episode loop has a copy per rules
+class calling the same two functions, so each rule has one definition, the two loops
+give the same bits (tested), and a loop holds the code of one kind only.
 """
 
 from __future__ import annotations
@@ -91,9 +91,10 @@ def observe_gdq(table: QTable, model: Model, plans: Plans, prior: Prior, queue: 
 
 class TDRules(NamedTuple):
     """Q-learning's and DARLING's rules: plain epsilon-greedy, the TD update. A rules class
-    has no fields: its type picks, when numba compiles it, the rules the compiled episode
-    loop calls (:func:`gdq_pddl.learners.episodes._episodes`), so a loop holds one
-    learner's code and numba caches one loop per rules class."""
+    is a NamedTuple without fields whose ``act`` and ``observe`` are a learner's two rules:
+    the compiled episode loop has one copy per rules class calling them
+    (:func:`gdq_pddl.learners.episodes._loop_of`), so a loop holds one learner's code and
+    numba caches it under the class's name."""
 
     act = act_plain
     observe = observe_td
