@@ -1,13 +1,18 @@
 """Sizes checked before anything is allocated (:func:`check_memory`), numbers checked
 before they are used (:func:`check_real`, :func:`check_count`), and progress shown on
-work that size makes slow (:func:`slow_progress`)."""
+work that size makes slow (:func:`slow_progress`) and on the runs of an experiment
+(:class:`Progress`)."""
 
 from __future__ import annotations
 
 import math
 import numbers
 import os
+import sys
+import threading
+import time
 from collections.abc import Iterable
+from typing import TextIO
 
 from tqdm import tqdm
 
@@ -151,3 +156,50 @@ def slow_progress(desc: str, unit: str, total: int | None = None,
     (``TQDM_DISABLE=1`` silences it): grounding, state enumeration, models, value iteration."""
     return tqdm(iterable, total=total, desc=desc, unit=unit, delay=2.0, disable=None,
                 leave=False)
+
+
+PROGRESS_EVERY = 30.0
+"""Seconds between the progress lines of :class:`Progress` where stderr is no terminal."""
+
+
+class Progress:
+    """How far ``total`` units of work are, on stderr: a tqdm bar on a terminal; elsewhere
+    (a log file, CI) the line ``DESC: k of N UNIT done (T s)`` every
+    :data:`PROGRESS_EVERY` seconds, from a timer thread, until :meth:`close` (a
+    compiled call that holds the interpreter delays a line until it returns).
+    ``enabled=False`` shows nothing; ``TQDM_DISABLE=1`` silences the bar, not the lines."""
+
+    def __init__(self, total: int, initial: int = 0, desc: str = "runs", unit: str = "run",
+                 enabled: bool = True, stream: TextIO | None = None) -> None:
+        self.total, self.n, self.desc, self.unit = total, initial, desc, unit
+        self._stream = stream or sys.stderr
+        self._t0 = time.monotonic()
+        self._stop = threading.Event()
+        terminal = self._stream.isatty()
+        self._bar = tqdm(total=total, initial=initial, unit=unit, desc=desc,
+                         dynamic_ncols=True, file=self._stream,
+                         disable=not enabled or not terminal)
+        self._thread = None
+        if enabled and not terminal:
+            self._thread = threading.Thread(target=self._lines, name="gdq-pddl progress",
+                                            daemon=True)
+            self._thread.start()
+
+    def line(self) -> str:
+        """The progress line: ``runs: 3 of 10 runs done (95 s)``."""
+        return f"{self.desc}: {self.n} of {self.total} {self.unit}s done " \
+            f"({time.monotonic() - self._t0:.0f} s)"
+
+    def _lines(self) -> None:
+        while not self._stop.wait(PROGRESS_EVERY):
+            print(self.line(), file=self._stream, flush=True)
+
+    def update(self, k: int = 1) -> None:
+        """``k`` more units are done."""
+        self.n += k
+        self._bar.update(k)
+
+    def close(self) -> None:
+        """Stop showing progress (the bar is closed, the lines end)."""
+        self._stop.set()
+        self._bar.close()

@@ -15,7 +15,7 @@ from gdq_pddl.experiments.checks import check_report_size, check_sizes
 from gdq_pddl.experiments.protocol import safe_name
 from gdq_pddl.experiments.runner import saved_units
 from gdq_pddl.learners import registry
-from gdq_pddl.learners.episodes import loop_cached
+from gdq_pddl.learners.episodes import loops_cached
 from gdq_pddl.limits import MAX_COUNT, MAX_TOLERANCE, MAX_WORLD_POSITIONS
 from gdq_pddl.pddl.ppddl import DETERMINISATIONS
 from gdq_pddl.pddl.problem_reader import problem_file
@@ -255,7 +255,7 @@ def execute(experiments: list[Experiment], args: argparse.Namespace, name: str,
         check_report_size(experiments)
     before = saved_units(out, experiments) if args.resume else 0
     t0 = time.perf_counter()
-    if not loop_cached():
+    if not loops_cached({m for e in experiments for m in e.methods}):
         note("compiling the learners' code for its first use (numba caches it for the next "
              "runs): this takes 10-60 s")
     run_experiments(experiments, out, jobs=args.jobs, executor=args.executor,

@@ -29,7 +29,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from tqdm import tqdm
 
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.experiments.checks import preflight
@@ -50,7 +49,7 @@ from gdq_pddl.experiments.interrupts import RunInterrupted, stop_on_signals
 from gdq_pddl.experiments.knowledge import is_file_name
 from gdq_pddl.experiments.protocol import Experiment, ProblemSpec, Unit
 from gdq_pddl.experiments.work import run_unit, warm_up
-from gdq_pddl.limits import check_count
+from gdq_pddl.limits import Progress, check_count
 from gdq_pddl.outputs import atomic_write, output_folder, remove_temporary
 
 __all__ = ["ResultsError", "RunInterrupted", "atomic_write", "read_unit", "run_experiments"]
@@ -350,8 +349,8 @@ def _run_pending(out: Path, experiments: list[Experiment], pending: list[Unit],
     total = sum(e.runs * len(e.methods) for e in experiments)
     # the longest units first, so the last ones to finish are short
     pending.sort(key=lambda u: -u.experiment.episodes)
-    bar = tqdm(total=total, initial=total - len(pending), unit="run", desc="runs",
-               dynamic_ncols=True, disable=not progress or not sys.stderr.isatty())
+    # a bar on a terminal, else a line at least every 30 s (a log shows the run is alive)
+    bar = Progress(total, total - len(pending), enabled=progress)
     units_dir = out / "units"
     try:
         for unit, result in execute(pending, jobs, executor, address, work, warm):

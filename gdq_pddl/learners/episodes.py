@@ -14,6 +14,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import types as types_
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import gymnasium as gym
@@ -31,15 +32,14 @@ from gdq_pddl.envs.pddl_env import PDDLEnv
 from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.learners import guards
+from gdq_pddl.learners import guards, registry
 from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
-from gdq_pddl.learners.gdq_learner import GDQ
+from gdq_pddl.learners.gdq_learner import GDQ, PaperGDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
-from gdq_pddl.learners.rules import observe
 from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
-from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables, act
+from gdq_pddl.learners.tables import KIND_GDQ, Params, Tables
 from gdq_pddl.learners.tabular import Learner, TabularLearner
 from gdq_pddl.limits import check_count, check_memory, slow_progress
 
@@ -89,7 +89,7 @@ SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
 """The wrappers the compiled loop may look through (exact types, not subclasses):
 ``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
 limit (the env ends every episode first, or at the same step)."""
-COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ)
+COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ, PaperGDQ)
 """The built-in learner classes the compiled loop runs (exact types: a subclass may
 override ``act`` or ``observe``); it also runs any learner whose class keeps
 :class:`TabularLearner`'s ``act`` and ``observe``, with its compiled ``act_rule`` and
@@ -291,41 +291,81 @@ def run_compiled(dynamics: ModelArrays | CompactModel, start: int, goal_pos: int
         if reserve is not None:
             reserve(room)
         guards.check_tables(learner.tables, learner.params)
-        args = (dynamics, start, goal_pos, doors, learner.tables, learner.params, env_rng, rng,
-                returns, steps, success, areas, ep, room)
-        ep = _loop_of(learner)(*args)
+        ep = _loop_of(learner)(dynamics, start, goal_pos, doors, learner.tables,
+                               learner.params, env_rng, rng, returns, steps, success, areas,
+                               ep, room)
         if ep < 0:
             raise ValueError(OVERFLOW)
     return EpisodeRecords(returns, steps, success, areas)
 
 
-def loop_cached() -> bool:
-    """Whether numba's on-disk cache holds a compiled episode loop (True where it cannot
-    tell): False on a first use, when a run compiles before it starts."""
+def loop_cached(markers: Iterable[type]) -> bool:
+    """Whether numba's on-disk cache holds the compiled episode loop of each rules class of
+    ``markers`` (:meth:`TabularLearner.loop_marker
+    <gdq_pddl.learners.tabular.TabularLearner.loop_marker>`; True where it cannot tell):
+    False on a first use, when a run compiles before it starts."""
     try:
-        return os.path.isfile(_episodes._cache._cache_file._index_path)
+        return all(os.path.isfile(_cached_loop(m)._cache._cache_file._index_path)
+                   for m in markers)
     except AttributeError:  # numba's internals moved: say nothing
         return True
 
 
+def loops_cached(methods: Iterable[str]) -> bool:
+    """:func:`loop_cached` for the learners of ``methods`` (``--method`` specs) that run in
+    one of the package's cached loops (a deep-RL agent, or a learner of another package
+    with rules of its own, runs none)."""
+    markers = set()
+    for method in methods:
+        parsed = registry.parse_method(method)
+        if parsed.entry.requires:  # a deep-RL agent: no loop (nor its extra imported here)
+            continue
+        cls = parsed.entry.learner_class()
+        if isinstance(cls, type) and issubclass(cls, TabularLearner):
+            marker = cls.loop_marker(parsed.entry.config(**parsed.config_kwargs()))
+            if marker is not None and marker.__module__.startswith(__package__ + "."):
+                markers.add(marker)
+    return loop_cached(markers)
+
+
 def _loop_of(learner: TabularLearner):
-    """The compiled episode loop of ``learner``: :func:`_episodes` (cached) for a built-in
-    one, else a copy of it calling the learner's own ``act_rule`` and ``observe_rule``
-    (compiled once per process and pair of rules, not cached: numba's cache keys a
-    function by its code and argument types, not by the functions it calls)."""
-    if type(learner) in COMPILED_LEARNERS:
-        return _episodes
+    """The compiled episode loop of ``learner``: :func:`_episodes` calling its rules. For a
+    learner whose rules are this package's, the copy of its rules class
+    (:meth:`TabularLearner.loop_marker`), cached by numba under the class's name; else a
+    copy calling the learner's own ``act_rule`` and ``observe_rule``, compiled once per
+    process and pair of rules, not cached (numba's cache keys a function by its code and
+    argument types, not by the functions it calls, nor by another package's source)."""
+    marker = type(learner).loop_marker(learner.config)
+    if marker is not None and marker.__module__.startswith(__package__ + "."):
+        return _cached_loop(marker)
     pair = (learner.act_rule, learner.observe_rule)
     if pair not in _PLUGIN_LOOPS:
-        code = _episodes.py_func
-        scope = {**code.__globals__, "act": pair[0], "observe": pair[1]}
-        _PLUGIN_LOOPS[pair] = numba.njit(types_.FunctionType(code.__code__, scope,
-                                                             "_plugin_episodes"))
+        _PLUGIN_LOOPS[pair] = numba.njit(_loop_copy(*pair, "_plugin_episodes"))
     return _PLUGIN_LOOPS[pair]
 
 
 _PLUGIN_LOOPS: dict[tuple, object] = {}
 """The episode loops of learners from other packages, by their pair of rules."""
+_LOOPS: dict[type, object] = {}
+"""The cached episode loops of this package's rules classes, by class."""
+
+
+def _cached_loop(marker: type):
+    """The loop of the rules class ``marker``: a copy of :func:`_episodes` whose ``act``
+    and ``observe`` are the class's, named ``_episodes_<class>`` (numba's cache file and
+    index are by name: one per rules class, holding one learner's code)."""
+    if marker not in _LOOPS:
+        name = f"_episodes_{marker.__module__.rpartition('.')[2]}_{marker.__name__}"
+        _LOOPS[marker] = numba.njit(cache=True)(_loop_copy(marker.act, marker.observe, name))
+    return _LOOPS[marker]
+
+
+def _loop_copy(act, observe, name: str) -> types_.FunctionType:
+    """:func:`_episodes` (its Python code) as a function ``name`` calling ``act`` and
+    ``observe``."""
+    code = _episodes.__code__.replace(co_name=name, co_qualname=name)
+    scope = {**_episodes.__globals__, "act": act, "observe": observe}
+    return types_.FunctionType(code, scope, name)
 
 
 def compile_loop(learner: TabularLearner, env: PDDLEnv) -> None:
@@ -361,6 +401,15 @@ def _step(m, state, doors, action, t, goal_pos, rng):
 
 
 def _area(m, state):
+    raise NotImplementedError
+
+
+def act(table, visits, prior, p, s, rng):
+    raise NotImplementedError  # each copy of _episodes calls a learner's own (_loop_copy)
+
+
+def observe(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated, truncated,
+            rng):
     raise NotImplementedError
 
 
@@ -418,7 +467,6 @@ def _area_impl(m, state):
     return None
 
 
-@numba.njit(cache=True)
 def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Params,
               env_rng: np.random.Generator, rng: np.random.Generator, returns: np.ndarray,
               steps: np.ndarray, success: np.ndarray, areas: np.ndarray, first: int,
@@ -428,10 +476,11 @@ def _episodes(m, start: int, goal_pos: int, doors: np.ndarray, t: Tables, p: Par
     when all are done; -1 when the learner's model ran out of successor slots (the loop
     stops there); an episode index when GDQ's reverse index has less than ``room`` free
     entries before that episode (the caller grows it and calls again from there). Trusts
-    its arguments: :func:`run_compiled` checks them. ``act`` and ``observe`` are the
-    built-in learners' rules (:func:`~gdq_pddl.learners.tables.act`,
-    :func:`~gdq_pddl.learners.rules.observe`); a learner from another package runs a copy
-    that calls its own (:func:`_loop_of`)."""
+    its arguments: :func:`run_compiled` checks them. Not compiled itself: ``act`` and
+    ``observe`` are a learner's rules, and each rules class
+    (:data:`gdq_pddl.learners.rules.KIND_RULES`) runs a copy calling its own, compiled
+    and cached for it alone (:func:`_loop_of`), as a learner from another package runs a
+    copy calling its own."""
     table, model, plans, prior, queue, own = t
     for ep in range(first, len(returns)):
         if p.kind == KIND_GDQ and len(prior.rev_pair) - prior.rev_n[0] < room:

@@ -25,7 +25,7 @@ Read in this order: :func:`after_step` (what GDQ does after each real step),
   the allowed actions whose value is near the state's (``explore_band``) but for a move
   the next greedy step would undo (``explore_loops``), a share
   ``explore_all`` of them an untried action instead where the knowledge may lack
-  actions (:func:`gdq_pddl.learners.tables.act`).
+  actions (:func:`act`, the acting rule of this learner alone).
 
 ``docs/learners.md`` explains the rule, ``docs/decisions.md`` measures its settings.
 """
@@ -41,7 +41,16 @@ from gdq_pddl.learners.learned_model import (
     record,
     slot_successor,
 )
-from gdq_pddl.learners.tables import Model, Params, Prior, QTable, Queue, set_q_arrays
+from gdq_pddl.learners.tables import (
+    Model,
+    Params,
+    Prior,
+    QTable,
+    Queue,
+    draw_guided,
+    greedy_draw,
+    set_q_arrays,
+)
 from gdq_pddl.learners.warm_start import prior_backup, prior_successor, prior_values
 
 # --- the rule --------------------------------------------------------------------------------
@@ -392,3 +401,158 @@ def _pop(queue: Queue) -> int:
         heap[0] = heap[n]
         _sift_down(heap, pos, queue.prio, n, 0)
     return x
+
+
+# --- acting: GDQ's exploring rules ------------------------------------------------------------
+
+@numba.njit(cache=True)
+def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
+        rng: np.random.Generator) -> int:
+    """The default GDQ's acting rule: epsilon-greedy as every learner
+    (:func:`~gdq_pddl.learners.tables.act_plain`), but an exploring step draws, for a share
+    ``explore_all`` of them, an untried action (unless ``explore_all_last`` is 0 and the
+    knowledge reaches the goal from ``s`` in one action), else, with ``explore_band`` at
+    least 0, among the actions near the best (:func:`_draw_near_best`), else from
+    ``guide[s]``. :func:`act_reference` is the same rule in plain Python."""
+    if rng.random() < p.epsilon:
+        if p.explore_all > 0.0 and rng.random() < p.explore_all and (
+                p.explore_all_last > 0.0
+                or not _one_step_from_goal(table.goal, prior.next_state, s)):
+            return _draw_untried(visits, table.n_live, s, rng)
+        if p.explore_band >= 0.0:
+            return _draw_near_best(table, prior, p, s, rng)
+        return draw_guided(table, s, rng)
+    return greedy_draw(table, p, s, rng)
+
+
+@numba.njit(cache=True)
+def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
+                    rng: np.random.Generator) -> int:
+    """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
+    DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
+    short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost),
+    and, unless ``explore_loops``, loop-free as DARLING's plans are (:func:`_undone`),
+    and never a move the knowledge says ends in a dead end for certain
+    (``prior.dead`` 1: DARLING's plans never do either). The state's greedy actions
+    always qualify."""
+    floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
+    n = 0
+    for a in range(table.n_live[s]):
+        n += _near_best(table, prior, p, s, a, floor)
+    k = rng.integers(0, n)
+    for a in range(table.n_live[s]):
+        if _near_best(table, prior, p, s, a, floor):
+            if k == 0:
+                return a
+            k -= 1
+    return 0  # unreachable: the greedy actions are counted
+
+
+@numba.njit(cache=True, inline="always")
+def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int, floor: float
+               ) -> bool:
+    """Whether :func:`_draw_near_best` may draw ``a`` in ``s``."""
+    q, v = table.q[s, a], table.v[s]
+    if not table.allowed[s, a] or q < floor:
+        return False
+    if q >= v:  # a greedy action
+        return True
+    if prior.dead.shape[0] and prior.dead[s, a] >= 1.0:
+        return False
+    return p.explore_loops > 0.0 or not _undone(table, prior, s, a)
+
+
+@numba.njit(cache=True)
+def _undone(table: QTable, prior: Prior, s: int, a: int) -> bool:
+    """Whether the next greedy step would undo the move ``a`` in ``s``: the prior leads it
+    to ``x`` and a greedy action of ``x`` leads straight back to ``s`` (the pairs the
+    prior leads to ``s`` are ``prior.pp_*``'s, a handful). Far from the goal the band is
+    wide enough for such a two-step loop (put a block down, pick it up again), which
+    makes no way and, where moves are risky, adds the risk of two. A move into a goal is
+    none: the episode ends there. Called only for the few actions in the band."""
+    x = prior.next_state[s, a]
+    if x < 0 or x == s or table.goal[x]:
+        return False
+    q, v, allowed = table.q, table.v, table.allowed
+    n_actions = q.shape[1]
+    for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
+        b = prior.pp_pair[k] - x * n_actions
+        if 0 <= b < n_actions and allowed[x, b] and q[x, b] >= v[x]:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _draw_untried(visits: np.ndarray, n_live: np.ndarray, s: int,
+                  rng: np.random.Generator) -> int:
+    """A uniformly random action never tried in ``s``; any action once all were."""
+    n_actions = n_live[s]
+    n = 0
+    for a in range(n_actions):
+        n += visits[s, a] == 0
+    if n == 0:
+        return rng.integers(0, n_actions)
+    k = rng.integers(0, n)
+    for a in range(n_actions):
+        if visits[s, a] == 0:
+            if k == 0:
+                return a
+            k -= 1
+    return 0
+
+
+@numba.njit(cache=True, inline="always")
+def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> bool:
+    """Whether the knowledge reaches the goal from ``s`` in one action."""
+    for a in range(prior_next.shape[1]):
+        s2 = prior_next[s, a]
+        if s2 >= 0 and goal[s2]:
+            return True
+    return False
+
+
+# --- the acting rule in plain Python (the reference the tests hold the compiled one to) ----
+
+def act_reference(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
+                  rng: np.random.Generator) -> int:
+    """:func:`act` written out in plain Python and numpy, drawing from ``rng`` in the same
+    order: the rule to read, and what ``tests/learners/test_gdq_exploring.py`` holds the
+    compiled one to, draw for draw."""
+    q, v, allowed = table.q[s], table.v[s], table.allowed[s]
+    if rng.random() >= p.epsilon:  # greedy: a uniform maximiser of Q over allowed
+        best = np.flatnonzero(allowed & (q == v))
+        if len(best) < 2:
+            return int(best[0]) if len(best) else 0
+        return int(best[rng.integers(0, len(best))])
+    ends_next = bool(np.any(table.goal[prior.next_state[s][prior.next_state[s] >= 0]]))
+    if p.explore_all > 0.0 and rng.random() < p.explore_all and (
+            p.explore_all_last > 0.0 or not ends_next):  # explore_all, last-step sparing
+        live = np.arange(table.n_live[s])
+        untried = live[visits[s, live] == 0]
+        pool = untried if len(untried) else live
+        return int(pool[rng.integers(0, len(pool))])
+    if p.explore_band < 0.0:  # the guide's actions
+        guide = np.flatnonzero(table.guide[s])
+        return int(guide[rng.integers(0, len(guide))])
+    floor = v - p.explore_band * max(0.0, p.r_max - v)  # the band
+    band = [a for a in range(table.n_live[s]) if allowed[a] and q[a] >= floor and (
+        q[a] >= v or not _ends_for_certain(prior, s, a) and (
+            p.explore_loops > 0.0 or not _undone_reference(table, prior, s, a)))]
+    return band[rng.integers(0, len(band))]
+
+
+def _ends_for_certain(prior: Prior, s: int, a: int) -> bool:
+    """Whether the knowledge says ``a`` in ``s`` ends in a dead end for certain."""
+    return bool(prior.dead.shape[0]) and prior.dead[s, a] >= 1.0
+
+
+def _undone_reference(table: QTable, prior: Prior, s: int, a: int) -> bool:
+    """:func:`_undone` in plain Python: a greedy action of the prior's successor ``x`` of
+    ``(s, a)`` leads straight back to ``s`` (a goal ``x`` ends the episode: never)."""
+    x = prior.next_state[s, a]
+    if x < 0 or x == s or table.goal[x]:
+        return False
+    n_actions = table.q.shape[1]
+    back = prior.pp_pair[prior.pp_ptr[s]:prior.pp_ptr[s + 1]] - x * n_actions
+    back = back[(back >= 0) & (back < n_actions)]
+    return bool(np.any(table.allowed[x, back] & (table.q[x, back] >= table.v[x])))

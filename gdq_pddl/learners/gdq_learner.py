@@ -1,6 +1,7 @@
-"""Guided Dyna-Q's learner class, :class:`GDQ` (all three variants), and what it derives
-from the task context: the prior's step cost and rewards, the plans within a tolerance.
-Its rules are :mod:`gdq_pddl.learners.gdq` (the default) and
+"""Guided Dyna-Q's two learners, the default :class:`GDQ` and the paper's :class:`PaperGDQ`
+(GDQ-literal and GDQ-code), and what they derive from the task context: the prior's step
+cost and rewards, the plans within a tolerance. Their rules are
+:mod:`gdq_pddl.learners.gdq` (the default's acting and update) and
 :mod:`gdq_pddl.learners.gdq_paper` (the paper's two readings).
 """
 
@@ -21,7 +22,7 @@ from gdq_pddl.learners.tables import (
     Prior,
     Queue,
 )
-from gdq_pddl.learners.tabular import NO_DEAD, NO_PRIOR, NO_REWARD, TabularLearner
+from gdq_pddl.learners.tabular import NO_DEAD, NO_REWARD, TabularLearner
 from gdq_pddl.limits import check_count
 
 
@@ -58,19 +59,21 @@ def _tolerant_plans(context: TaskContext, tolerance: float) -> PlanTable:
 
 
 class GDQ(TabularLearner):
-    """Guided Dyna-Q. The default (``variant="prior"``) takes the action knowledge as an
+    """Guided Dyna-Q, the default (``variant="prior"``): it takes the action knowledge as an
     optimistic prior over every (state, action) pair and plans on it.
 
-    Its update rule is one module, :mod:`gdq_pddl.learners.gdq`. After each real step,
-    :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned model and
-    calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets each
-    pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
+    Its rules are one module, :mod:`gdq_pddl.learners.gdq`: its acting,
+    :func:`~gdq_pddl.learners.gdq.act` (its exploring rules), and its update. After each
+    real step, :func:`~gdq_pddl.learners.gdq.after_step` records the step in the learned
+    model and calls :func:`~gdq_pddl.learners.gdq.sweep` (prioritised sweeping), which sets
+    each pair it revisits to :func:`~gdq_pddl.learners.gdq.hybrid_backup`: the pair's
     :func:`~gdq_pddl.learners.warm_start.prior_backup` until tried more than ``m`` times, then
     the learned model's backup with the prior as ``prior_weight`` pseudo-trials. OptInit
     is :func:`~gdq_pddl.learners.gdq.value_iteration` on the same hybrid model.
 
-    ``variant="literal"`` (GDQ-literal) and ``"code"`` (GDQ-code) are the paper's two
-    readings, in :mod:`gdq_pddl.learners.gdq_paper`; ``docs/learners.md`` compares them.
+    The paper's two readings, ``variant="literal"`` (GDQ-literal) and ``"code"``
+    (GDQ-code), are another learner, :class:`PaperGDQ`; a ``GDQ(context, config)`` with
+    one of those variants makes one (``docs/learners.md`` compares them).
     """
 
     kind = KIND_GDQ
@@ -81,23 +84,32 @@ class GDQ(TabularLearner):
     the goal: h_add runs short where goals interact, and each new state valued by it drew
     GDQ on (``docs/decisions.md``, "GDQ reads the estimates x1.25")."""
 
+    def __new__(cls, context: TaskContext | None = None, config: GDQConfig | None = None):
+        if cls is GDQ and isinstance(config, GDQConfig) and config.variant != "prior":
+            learner = object.__new__(PaperGDQ)  # the paper's readings are their own learner
+            learner.__init__(context, config)
+            return learner
+        return super().__new__(cls)
+
     def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
-        if isinstance(config, GDQConfig):
-            self.kind = self.kind_of(config)
+        if isinstance(config, GDQConfig) and config.variant != "prior":  # a subclass's
+            raise ConfigError(f"{type(self).__name__} is the default GDQ (variant 'prior'); "
+                              f"variant {config.variant!r} is the paper's, PaperGDQ")
         super().__init__(context, config)
 
     @classmethod
     def kind_of(cls, config: GDQConfig) -> int:  # type: ignore[override]
-        """``KIND_GDQ`` for the default, ``KIND_GDQ_PLANS`` for the paper's readings."""
+        """``KIND_GDQ`` for the default, ``KIND_GDQ_PLANS`` for the paper's readings (what
+        ``GDQ(context, config)`` makes for them, :class:`PaperGDQ`)."""
         return KIND_GDQ if config.variant == "prior" else KIND_GDQ_PLANS
 
     @property
     def q(self) -> np.ndarray:
-        """The Q table, float64[n_states, n_actions]. In the default variant an untried
-        action the knowledge says does nothing is worth its prior backup, one step that
-        changes nothing (``-prior_cost + gamma * v[s]``); the sweeps never read those
-        entries, so they are filled in here, when the table is read."""
-        if self.kind == KIND_GDQ and hasattr(self, "tables"):
+        """The Q table, float64[n_states, n_actions]. An untried action the knowledge says
+        does nothing is worth its prior backup, one step that changes nothing
+        (``-prior_cost + gamma * v[s]``); the sweeps never read those entries, so they are
+        filled in here, when the table is read."""
+        if hasattr(self, "tables"):
             gdq.fill_untried(self.tables.table, self.tables.prior.reward, self.params)
         return self._q
 
@@ -105,21 +117,14 @@ class GDQ(TabularLearner):
     def q(self, value: np.ndarray) -> None:
         self._q = value
 
-    def _plans(self, context: TaskContext) -> PlanTable:
-        if self.config.variant == "prior":
-            return context.plans
-        return _tolerant_plans(context, self.config.plan_tolerance)
-
     def _extra_params(self) -> dict[str, float]:
         c = self.config
-        shared = {"backup": BACKUP_SAMPLE if c.variant == "code" else BACKUP_EXPECTED,
-                  "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
-        if self.kind != KIND_GDQ:
-            return shared
         explore_all = c.explore_all
         if explore_all is None:
             explore_all = 0.0 if self.context.exact_knowledge else EXPLORE_ALL
-        return {**shared, "explore_all": float(explore_all),
+        return {"backup": BACKUP_EXPECTED,
+                "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0,
+                "explore_all": float(explore_all),
                 "explore_all_last": float(c.explore_all_last_step),
                 "prior_cost": prior_step_cost(c.prior_cost, self.context),
                 "sweep_threshold": float(c.sweep_threshold),
@@ -128,13 +133,9 @@ class GDQ(TabularLearner):
                 "explore_loops": float(c.explore_loops)}
 
     def _allowed(self, context: TaskContext) -> np.ndarray:
-        if self.kind != KIND_GDQ:
-            return super()._allowed(context)
         return self._prior(context).applicable  # OptInit adds the known pairs
 
     def _guide(self, context: TaskContext, allowed: np.ndarray) -> np.ndarray:
-        if self.kind != KIND_GDQ:
-            return allowed
         if self.config.explore == "values":  # draws near the best of allowed, not guide:
             return context.live  # no plan mask is built for nothing (every row has one)
         if self.config.explore == "plans":
@@ -154,8 +155,6 @@ class GDQ(TabularLearner):
         return context.prior  # its shape and values: guards.check_context
 
     def _prior_arrays(self, context: TaskContext) -> tuple[Prior, Queue]:
-        if self.kind != KIND_GDQ:
-            return NO_PRIOR
         prior = self._prior(context)
         n_s = context.n_states
         pp_ptr, pp_pair = prior.predecessors()
@@ -177,33 +176,29 @@ class GDQ(TabularLearner):
                       np.zeros(n_s), np.zeros(1, dtype=np.int64)))
 
     def _revalue_rows(self, rows: np.ndarray) -> None:
-        if self.kind != KIND_GDQ:
-            return super()._revalue_rows(rows)
         t = self.tables
         none = ~t.table.allowed[rows].any(axis=1)  # nothing applicable: every action
         t.table.allowed[rows[none]] = self.context.live[rows[none]]
         gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params, rows)
 
     def prior_changed(self, rows: np.ndarray) -> None:
-        if self.kind == KIND_GDQ:
-            t = self.tables
-            gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params,
-                             np.asarray(rows, dtype=np.int64))
+        t = self.tables
+        gdq.revalue_rows(t.table, t.model, t.prior, t.queue, self.params,
+                         np.asarray(rows, dtype=np.int64))
 
     def refresh_predecessors(self) -> None:
         """Index the prior's pairs by successor again (a problem explored online added
         pairs since the task started: until this, sweeps do not reach them)."""
-        if self.kind == KIND_GDQ:
-            pp_ptr, pp_pair = self._prior(self.context).predecessors()
-            self.tables = self.tables._replace(
-                prior=self.tables.prior._replace(pp_ptr=pp_ptr, pp_pair=pp_pair))
+        pp_ptr, pp_pair = self._prior(self.context).predecessors()
+        self.tables = self.tables._replace(
+            prior=self.tables.prior._replace(pp_ptr=pp_ptr, pp_pair=pp_pair))
 
     def reserve_reverse(self, entries: int) -> None:
-        """Make room for ``entries`` more reverse-index entries (the default GDQ)."""
+        """Make room for ``entries`` more reverse-index entries."""
         check_count("entries", entries)
         prior = self.tables.prior
         used = int(prior.rev_n[0])
-        if self.kind != KIND_GDQ or len(prior.rev_pair) - used >= entries:
+        if len(prior.rev_pair) - used >= entries:
             return
         grow = (0, max(len(prior.rev_pair), used + entries - len(prior.rev_pair)))
         self.tables = self.tables._replace(prior=prior._replace(
@@ -212,23 +207,67 @@ class GDQ(TabularLearner):
 
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
-        """:meth:`TabularLearner.observe`, then a sweep (the default variant) or N backups
-        along plans (``literal``, ``code``)."""
-        if self.kind == KIND_GDQ:
-            self.reserve_reverse(gdq.reverse_room(self.max_successors))
+        """:meth:`TabularLearner.observe` (its rule records the step, then sweeps), with
+        room in the reverse index first."""
+        self.reserve_reverse(gdq.reverse_room(self.max_successors))
         super().observe(s, a, r, s2, terminated, truncated, rng)
 
     def _init_task(self) -> None:
-        """OptInit: value iteration on the hybrid model (``prior``), Algorithm 1 read
-        literally (``literal``) or the authors' code's shortcut (``code``)."""
+        """OptInit: value iteration on the hybrid model."""
         self._q[:, :] = 0.0  # not self.q, whose getter first fills every untried pair
         t = self.tables
-        if self.kind == KIND_GDQ:
-            tol = 1e-9 * max(1.0, self.params.r_max)
-            if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
-                                   1_000_000) < 0:
-                raise AssertionError("reverse index sized too small")  # _prior_arrays
-        elif self.config.variant == "literal":
+        tol = 1e-9 * max(1.0, self.params.r_max)
+        if gdq.value_iteration(t.table, t.model, t.prior, t.queue, self.params, tol,
+                               1_000_000) < 0:
+            raise AssertionError("reverse index sized too small")  # _prior_arrays
+
+    @property
+    def optimistic_pairs(self) -> np.ndarray:
+        """bool[S, A]: OptInit's plan pairs of the paper's readings (:class:`PaperGDQ`);
+        the default plans on the prior, whose optimism is in its values."""
+        return self.tables.plans.opt_r
+
+
+class PaperGDQ(TabularLearner):
+    """The paper's GDQ, read two ways (:mod:`gdq_pddl.learners.gdq_paper`): Q-learning, the
+    learned model and N backups per real step along the plans H from the current state.
+    ``variant="literal"`` (GDQ-literal: Algorithms 1-3 read literally; OptInit is policy
+    iteration on an optimistic plan model, backups assign the expected value) or
+    ``"code"`` (GDQ-code: the authors' released code; OptInit seeds the plan pairs with
+    R_max, backups are TD updates on replayed outcomes). Plain epsilon-greedy acting."""
+
+    kind = KIND_GDQ_PLANS
+    config: GDQConfig
+    config_type = GDQConfig
+    estimate_weight = GDQ.estimate_weight
+    """Online, the same reading of the estimates as :class:`GDQ`'s."""
+
+    def __init__(self, context: TaskContext, config: GDQConfig | None = None) -> None:
+        config = GDQConfig(variant="code") if config is None else config
+        if isinstance(config, GDQConfig) and config.variant == "prior":
+            raise ConfigError("the paper's GDQ is variant 'literal' or 'code'; variant "
+                              "'prior' is the default GDQ (GDQ)")
+        super().__init__(context, config)
+
+    @classmethod
+    def kind_of(cls, config: GDQConfig) -> int:  # type: ignore[override]
+        """``KIND_GDQ_PLANS``."""
+        return KIND_GDQ_PLANS
+
+    def _plans(self, context: TaskContext) -> PlanTable:
+        return _tolerant_plans(context, self.config.plan_tolerance)
+
+    def _extra_params(self) -> dict[str, float]:
+        c = self.config
+        return {"backup": BACKUP_SAMPLE if c.variant == "code" else BACKUP_EXPECTED,
+                "opt_continue": 1.0 if c.optimistic_successor == "start" else 0.0}
+
+    def _init_task(self) -> None:
+        """OptInit: Algorithm 1 read literally (``literal``) or the authors' code's shortcut
+        (``code``)."""
+        self.q[:, :] = 0.0
+        t = self.tables
+        if self.config.variant == "literal":
             gdq_paper.policy_iteration(t.table, t.model, t.plans.opt_r, self.params)
         else:
             gdq_paper.seed_plan_pairs(t.table, t.plans.opt_r, self.params.r_max)

@@ -44,7 +44,7 @@ COUNT_MASK = (1 << SLOT_SHIFT) - 1
 
 OVERFLOW = ("a (state, action) pair has more distinct successors than the learner's model "
             "has slots (TaskContext.max_successors); give it more with reserve_successors")
-"""Why :func:`record` or :func:`gdq_pddl.learners.rules.observe` returned False."""
+"""Why :func:`record` or a learner's ``observe_rule`` returned False."""
 
 
 def new_model(n_states: int, n_actions: int, max_successors: int) -> Model:

@@ -117,12 +117,12 @@ BUILT_IN: tuple[LearnerEntry, ...] = (
                  "sweeping", "prior", colour="#D55E00",  # vermillion
                  label="GDQ, knowledge as a prior model",
                  groups=frozenset({"paper", "default", "reproduce", "robot"})),
-    LearnerEntry("GDQ-literal", "gdq_pddl.learners.gdq_learner:GDQ", GDQConfig,
+    LearnerEntry("GDQ-literal", "gdq_pddl.learners.gdq_learner:PaperGDQ", GDQConfig,
                  "the paper's GDQ read literally: optimistic plan model, backups along "
                  "plans", "plans", {"variant": "literal"}, colour="#E69F00",  # orange
                  label="paper's GDQ read literally", dashes=(5, 2),
                  family="GDQ", groups=frozenset({"reproduce", "robot"})),
-    LearnerEntry("GDQ-code", "gdq_pddl.learners.gdq_learner:GDQ", GDQConfig,
+    LearnerEntry("GDQ-code", "gdq_pddl.learners.gdq_learner:PaperGDQ", GDQConfig,
                  "the paper's GDQ as the authors' code runs it: optimistic initial Q, "
                  "sampled backups along plans", "plans", {"variant": "code"},
                  colour="#CC79A7", label="authors'-code GDQ", dashes=(1, 1.5),  # purple

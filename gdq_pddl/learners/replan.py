@@ -94,6 +94,14 @@ def observe(table: QTable, model: Model, plans: Any, prior: Any, queue: Any,
     return True
 
 
+class ReplanRules(NamedTuple):
+    """FF-Replan's rules class (:mod:`gdq_pddl.learners.rules`): :func:`act`,
+    :func:`observe`."""
+
+    act = act
+    observe = observe
+
+
 class FFReplan(TabularLearner):
     """Acts by a shortest plan of the knowledge, replanning when an outcome leaves it."""
 
@@ -102,6 +110,7 @@ class FFReplan(TabularLearner):
     config_type = FFReplanConfig
     act_rule = staticmethod(act)
     observe_rule = staticmethod(observe)
+    loop_rules = ReplanRules
 
     def _expected(self, context: TaskContext) -> np.ndarray:
         """int64[S, A]: the knowledge's successor of each pair (the state itself where it

@@ -55,7 +55,7 @@ from gdq_pddl.learners.config import RMaxConfig, RMaxShapingConfig
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.learned_model import learned_value, record
 from gdq_pddl.learners.shaping import goal_distances
-from gdq_pddl.learners.tables import KIND_DYNAQ, Model, Params, QTable
+from gdq_pddl.learners.tables import KIND_DYNAQ, Model, Params, QTable, act_plain
 from gdq_pddl.learners.tabular import TabularLearner
 
 __all__ = ["Optimism", "RMax", "RMaxConfig", "RMaxShaping", "RMaxShapingConfig",
@@ -129,6 +129,14 @@ def v_max(context: TaskContext, gamma: float) -> float:
     return top
 
 
+class RMaxRules(NamedTuple):
+    """R-max's rules class (:mod:`gdq_pddl.learners.rules`): epsilon-greedy (its epsilon
+    is 0), :func:`observe`."""
+
+    act = act_plain
+    observe = observe
+
+
 class RMax(TabularLearner):
     """R-max: unknown pairs worth ``V_max``, value iteration on the known model after each
     newly known pair, greedy acting."""
@@ -138,6 +146,7 @@ class RMax(TabularLearner):
     config_type = RMaxConfig
     reads_knowledge = False
     observe_rule = staticmethod(observe)
+    loop_rules = RMaxRules
 
     def _unknown(self, context: TaskContext) -> np.ndarray:
         """U(s) per learner state."""

@@ -1,18 +1,20 @@
 """What a learner does after one real step: one compiled function per kind of learner
 (:func:`observe_td`, :func:`observe_dyna`, :func:`observe_plans`, :func:`observe_gdq`),
-and :func:`observe`, which picks among them by ``kind`` (``docs/learners.md`` has it as a
-table). A learner's ``observe_rule`` is its kind's function, which its methods call; the
-compiled episode loop calls :func:`observe`, which picks the same function, so each rule
-has one definition and the two loops give the same bits (tested).
+and each kind's *rules class* (:data:`KIND_RULES`: its acting rule and this one;
+``docs/learners.md`` has them as a table). A learner's ``act_rule`` and ``observe_rule``
+are its kind's, which its methods call; the compiled episode loop has a copy per rules
+class calling the same two functions, so each rule has one definition, the two loops
+give the same bits (tested), and a loop holds the code of one kind only.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 
+from gdq_pddl.learners.gdq import act as act_gdq
 from gdq_pddl.learners.gdq import after_step
 from gdq_pddl.learners.gdq_paper import backup_plans
 from gdq_pddl.learners.learned_model import backup_known, record
@@ -28,6 +30,7 @@ from gdq_pddl.learners.tables import (
     Prior,
     QTable,
     Queue,
+    act_plain,
     td_update,
 )
 
@@ -86,29 +89,41 @@ def observe_gdq(table: QTable, model: Model, plans: Plans, prior: Prior, queue: 
     return after_step(table, model, prior, queue, p, s, a, r, s2, terminated, truncated)
 
 
-RULES = {KIND_QLEARNING: observe_td, KIND_DARLING: observe_td, KIND_DYNAQ: observe_dyna,
-         KIND_GDQ_PLANS: observe_plans, KIND_GDQ: observe_gdq}
-"""Each kind's rule after a real step (a learner's ``observe_rule``)."""
+class TDRules(NamedTuple):
+    """Q-learning's and DARLING's rules: plain epsilon-greedy, the TD update. A rules class
+    is a NamedTuple without fields whose ``act`` and ``observe`` are a learner's two rules:
+    the compiled episode loop has one copy per rules class calling them
+    (:func:`gdq_pddl.learners.episodes._loop_of`), so a loop holds one learner's code and
+    numba caches it under the class's name."""
+
+    act = act_plain
+    observe = observe_td
 
 
-@numba.njit(cache=True)
-def observe(table: QTable, model: Model, plans: Plans, prior: Prior, queue: Queue, own: Any,
-            p: Params, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
-            rng: np.random.Generator) -> bool:
-    """Everything a learner of any kind does after one real step ``(s, a, r, s2)`` (its
-    kind's rule, :data:`RULES`; ``own``: the learner's own arrays,
-    :attr:`~gdq_pddl.learners.tables.Tables.own`, which these kinds have none of). False
-    when the learned model had no slot for the transition (no backups then): the callers
-    raise
-    ValueError(:data:`gdq_pddl.learners.learned_model.OVERFLOW`)."""
-    if p.kind == KIND_GDQ:
-        return observe_gdq(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                           truncated, rng)
-    if p.kind == KIND_QLEARNING or p.kind == KIND_DARLING:
-        return observe_td(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                          truncated, rng)
-    if p.kind == KIND_GDQ_PLANS:
-        return observe_plans(table, model, plans, prior, queue, own, p, s, a, r, s2,
-                             terminated, truncated, rng)
-    return observe_dyna(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
-                        truncated, rng)
+class DynaRules(NamedTuple):
+    """Dyna-Q's rules: plain epsilon-greedy, :func:`observe_dyna`."""
+
+    act = act_plain
+    observe = observe_dyna
+
+
+class PlanRules(NamedTuple):
+    """The paper's GDQs' rules (GDQ-literal, GDQ-code): plain epsilon-greedy,
+    :func:`observe_plans`."""
+
+    act = act_plain
+    observe = observe_plans
+
+
+class GDQRules(NamedTuple):
+    """The default GDQ's rules: its own exploring (:func:`gdq_pddl.learners.gdq.act`),
+    :func:`observe_gdq`."""
+
+    act = act_gdq
+    observe = observe_gdq
+
+
+KIND_RULES = {KIND_QLEARNING: TDRules, KIND_DARLING: TDRules, KIND_DYNAQ: DynaRules,
+              KIND_GDQ_PLANS: PlanRules, KIND_GDQ: GDQRules}
+"""Each kind's rules class: its ``act`` and ``observe`` are a learner's ``act_rule`` and
+``observe_rule``."""

@@ -61,6 +61,7 @@ from gdq_pddl.learners.tables import (
     Model,
     Params,
     QTable,
+    act_plain,
     set_q,
     td_update,
 )
@@ -168,6 +169,21 @@ def observe_dyna(table: QTable, model: Model, plans: Any, prior: Any, queue: Any
     return True
 
 
+class QShapingRules(NamedTuple):
+    """Q-shaping's and Plan-shaping's rules class (:mod:`gdq_pddl.learners.rules`): plain
+    epsilon-greedy, :func:`observe_q`."""
+
+    act = act_plain
+    observe = observe_q
+
+
+class DynaShapingRules(NamedTuple):
+    """Dyna-Q-shaping's rules class: plain epsilon-greedy, :func:`observe_dyna`."""
+
+    act = act_plain
+    observe = observe_dyna
+
+
 class _Shaped(TabularLearner):
     """A learner whose rule reads a potential of the knowledge in its own group."""
 
@@ -196,6 +212,7 @@ class QShaping(_Shaped):
     kind = KIND_QLEARNING
     config_type = ShapingConfig
     observe_rule = staticmethod(observe_q)
+    loop_rules = QShapingRules
 
 
 class PlanShaping(_Shaped):
@@ -204,6 +221,7 @@ class PlanShaping(_Shaped):
     kind = KIND_QLEARNING
     config_type = PlanShapingConfig
     observe_rule = staticmethod(observe_q)
+    loop_rules = QShapingRules
 
     def _potential(self, context: TaskContext) -> np.ndarray:
         return plan_step_potential(context, self.config.scale)
@@ -215,3 +233,4 @@ class DynaQShaping(_Shaped):
     kind = KIND_DYNAQ
     config_type = DynaQShapingConfig
     observe_rule = staticmethod(observe_dyna)
+    loop_rules = DynaShapingRules

@@ -2,7 +2,7 @@
 
 Every learner is the same data, :class:`Tables` (five groups, one per concern; a compiled
 function takes the groups it touches), plus scalar :class:`Params` whose ``kind`` says
-which rules run after a real step (:func:`gdq_pddl.learners.rules.observe`).
+which rules run after a real step (:data:`gdq_pddl.learners.rules.KIND_RULES`).
 
 ``allowed`` is what the max ranges over (the update's target and the greedy choice);
 ``guide`` is what exploration draws from. They differ for DARLING-code (a greedy action
@@ -224,7 +224,7 @@ def td_update(table: QTable, s: int, a: int, target: float, alpha: float) -> Non
 # --- acting --------------------------------------------------------------------------------
 
 @numba.njit(cache=True, inline="always")
-def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
+def draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
     """A uniformly random action of ``guide[s]``."""
     k = rng.integers(0, table.n_guide[s])
     guide = table.guide
@@ -237,125 +237,21 @@ def _draw_guided(table: QTable, s: int, rng: np.random.Generator) -> int:
 
 
 @numba.njit(cache=True)
-def _draw_near_best(table: QTable, prior: Prior, p: Params, s: int,
-                    rng: np.random.Generator) -> int:
-    """A uniformly random allowed action whose Q is within ``explore_band`` of ``v[s]``:
-    DARLING's length tolerance carried to values (a plan ``1 + band`` times as long falls
-    short of ``r_max`` by ``1 + band`` times as much, undiscounted at a unit step cost),
-    and, unless ``explore_loops``, loop-free as DARLING's plans are (:func:`_undone`),
-    and never a move the knowledge says ends in a dead end for certain
-    (``prior.dead`` 1: DARLING's plans never do either). The state's greedy actions
-    always qualify."""
-    floor = table.v[s] - p.explore_band * max(0.0, p.r_max - table.v[s])
-    n = 0
-    for a in range(table.n_live[s]):
-        n += _near_best(table, prior, p, s, a, floor)
-    k = rng.integers(0, n)
-    for a in range(table.n_live[s]):
-        if _near_best(table, prior, p, s, a, floor):
-            if k == 0:
-                return a
-            k -= 1
-    return 0  # unreachable: the greedy actions are counted
-
-
-@numba.njit(cache=True, inline="always")
-def _near_best(table: QTable, prior: Prior, p: Params, s: int, a: int, floor: float
-               ) -> bool:
-    """Whether :func:`_draw_near_best` may draw ``a`` in ``s``."""
-    q, v = table.q[s, a], table.v[s]
-    if not table.allowed[s, a] or q < floor:
-        return False
-    if q >= v:  # a greedy action
-        return True
-    if prior.dead.shape[0] and prior.dead[s, a] >= 1.0:
-        return False
-    return p.explore_loops > 0.0 or not _undone(table, prior, s, a)
-
-
-@numba.njit(cache=True)
-def _undone(table: QTable, prior: Prior, s: int, a: int) -> bool:
-    """Whether the next greedy step would undo the move ``a`` in ``s``: the prior leads it
-    to ``x`` and a greedy action of ``x`` leads straight back to ``s`` (the pairs the
-    prior leads to ``s`` are ``prior.pp_*``'s, a handful). Far from the goal the band is
-    wide enough for such a two-step loop (put a block down, pick it up again), which
-    makes no way and, where moves are risky, adds the risk of two. A move into a goal is
-    none: the episode ends there. Called only for the few actions in the band."""
-    x = prior.next_state[s, a]
-    if x < 0 or x == s or table.goal[x]:
-        return False
-    q, v, allowed = table.q, table.v, table.allowed
-    n_actions = q.shape[1]
-    for k in range(prior.pp_ptr[s], prior.pp_ptr[s + 1]):
-        b = prior.pp_pair[k] - x * n_actions
-        if 0 <= b < n_actions and allowed[x, b] and q[x, b] >= v[x]:
-            return True
-    return False
-
-
-@numba.njit(cache=True)
-def _draw_untried(visits: np.ndarray, n_live: np.ndarray, s: int,
-                  rng: np.random.Generator) -> int:
-    """A uniformly random action never tried in ``s``; any action once all were."""
-    n_actions = n_live[s]
-    n = 0
-    for a in range(n_actions):
-        n += visits[s, a] == 0
-    if n == 0:
-        return rng.integers(0, n_actions)
-    k = rng.integers(0, n)
-    for a in range(n_actions):
-        if visits[s, a] == 0:
-            if k == 0:
-                return a
-            k -= 1
-    return 0
-
-
-@numba.njit(cache=True, inline="always")
-def _one_step_from_goal(goal: np.ndarray, prior_next: np.ndarray, s: int) -> bool:
-    """Whether the knowledge reaches the goal from ``s`` in one action (``KIND_GDQ``)."""
-    for a in range(prior_next.shape[1]):
-        s2 = prior_next[s, a]
-        if s2 >= 0 and goal[s2]:
-            return True
-    return False
-
-
-@numba.njit(cache=True)
-def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
-        rng: np.random.Generator) -> int:
-    """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a
-    uniform action of ``guide[s]``, or for the default GDQ (``explore_band >= 0``) of the
-    actions near the best (:func:`_draw_near_best`) (for a share ``explore_all`` of those
-    steps an untried one, unless ``explore_all_last`` is 0 and the knowledge reaches the
-    goal from ``s`` in one action); else a uniform maximiser of Q over ``allowed[s]``,
-    which DARLING replaces by a uniform action of ``guide[s]`` if it is not in it
-    (:func:`_greedy_draw`)."""
-    if rng.random() < p.epsilon:
-        if p.explore_all > 0.0 and rng.random() < p.explore_all and (
-                p.explore_all_last > 0.0 or p.kind != KIND_GDQ
-                or not _one_step_from_goal(table.goal, prior.next_state, s)):
-            return _draw_untried(visits, table.n_live, s, rng)
-        if p.explore_band >= 0.0 and p.kind == KIND_GDQ:
-            return _draw_near_best(table, prior, p, s, rng)
-        return _draw_guided(table, s, rng)
-    return _greedy_draw(table, p, s, rng)
-
-
-@numba.njit(cache=True)
 def act_plain(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
               rng: np.random.Generator) -> int:
-    """:func:`act` of a learner without GDQ's exploring rules (Q-learning, Dyna-Q,
-    DARLING: ``explore_all`` 0, no ``explore_band``): the same draws, without compiling
-    GDQ's."""
+    """Epsilon-greedy, ties broken uniformly at random: with probability epsilon a uniform
+    action of ``guide[s]``, else a uniform maximiser of Q over ``allowed[s]``, which
+    DARLING replaces by a uniform action of ``guide[s]`` if it is not in it
+    (:func:`greedy_draw`). The acting rule of every built-in learner but the default GDQ,
+    whose exploring rules are its own (:func:`gdq_pddl.learners.gdq.act`); ``visits`` and
+    ``prior`` are unread (every acting rule takes the same arguments)."""
     if rng.random() < p.epsilon:
-        return _draw_guided(table, s, rng)
-    return _greedy_draw(table, p, s, rng)
+        return draw_guided(table, s, rng)
+    return greedy_draw(table, p, s, rng)
 
 
 @numba.njit(cache=True, inline="always")
-def _greedy_draw(table: QTable, p: Params, s: int, rng: np.random.Generator) -> int:
+def greedy_draw(table: QTable, p: Params, s: int, rng: np.random.Generator) -> int:
     """A uniform maximiser of Q over ``allowed[s]``, which DARLING replaces by a uniform
     action of ``guide[s]`` if it is not in it."""
     q, allowed = table.q, table.allowed
@@ -376,7 +272,7 @@ def _greedy_draw(table: QTable, p: Params, s: int, rng: np.random.Generator) -> 
                     break
                 k -= 1
     if p.kind == KIND_DARLING and not table.guide[s, last]:
-        return _draw_guided(table, s, rng)
+        return draw_guided(table, s, rng)
     return last
 
 

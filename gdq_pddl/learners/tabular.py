@@ -30,8 +30,6 @@ from gdq_pddl.learners.tables import (
     QTable,
     Queue,
     Tables,
-    act,
-    act_plain,
     greedy,
     recompute_all_v,
 )
@@ -54,12 +52,12 @@ MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
 
 
-def kind_rules(kind: int) -> tuple:
-    """``(act_rule, observe_rule)`` of a built-in kind: GDQ's acting for the GDQs
-    (:func:`~gdq_pddl.learners.tables.act`), plain epsilon-greedy for the others
-    (:func:`~gdq_pddl.learners.tables.act_plain`); the kind's rule after a step
-    (:data:`gdq_pddl.learners.rules.RULES`)."""
-    return (act if kind in (KIND_GDQ, KIND_GDQ_PLANS) else act_plain), rules.RULES[kind]
+def kind_rules(kind: int) -> type:
+    """The rules class of a built-in kind (:data:`gdq_pddl.learners.rules.KIND_RULES`): its
+    ``act`` is the default GDQ's own for ``KIND_GDQ`` (:func:`gdq_pddl.learners.gdq.act`),
+    plain epsilon-greedy for the others (:func:`~gdq_pddl.learners.tables.act_plain`); its
+    ``observe`` the kind's rule after a step."""
+    return rules.KIND_RULES[kind]
 
 
 def _capacity(context: TaskContext) -> int:
@@ -114,34 +112,48 @@ class TabularLearner:
         """The ``kind`` a learner of this class with ``config`` has."""
         return cls.kind
 
+    loop_rules: type | None = None
+    """A learner of this package whose rules are not its kind's: its rules class (a
+    NamedTuple without fields whose ``act`` and ``observe`` are :attr:`act_rule` and
+    :attr:`observe_rule`, as :mod:`gdq_pddl.learners.rules` has them), so numba caches its
+    compiled episode loop; None: its kind's."""
+
     @classmethod
     def rules_for(cls, config: LearnerConfig) -> tuple:
         """``(act_rule, observe_rule)`` of a learner of this class with ``config``, without
         making one (what the compiled loop is compiled for)."""
         own = kind_rules(cls.kind_of(config))
         given = cls.act_rule, cls.observe_rule  # a plugin's own, or the kind's (properties)
-        return tuple(o if isinstance(g, property) else g for g, o in zip(given, own,
-                                                                          strict=True))
+        return tuple(o if isinstance(g, property) else g for g, o in zip(
+            given, (own.act, own.observe), strict=True))
+
+    @classmethod
+    def loop_marker(cls, config: LearnerConfig) -> type | None:
+        """The rules class the compiled episode loop of a learner of this class with
+        ``config`` is compiled for (:attr:`loop_rules`, else its kind's), or None when its
+        rules are neither (a learner of another package with rules of its own: the loop
+        is a copy calling them, :func:`gdq_pddl.learners.episodes._loop_of`)."""
+        marker = cls.loop_rules or kind_rules(cls.kind_of(config))
+        return marker if (marker.act, marker.observe) == cls.rules_for(config) else None
 
     @property
     def act_rule(self):
         """The compiled acting rule, ``(table, visits, prior, params, s, rng) -> column``:
-        epsilon-greedy, :func:`~gdq_pddl.learners.tables.act` for the GDQs (their exploring
-        rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others (the same draws).
-        :meth:`act` and a plugin's compiled episode loop call it. A learner from another
-        package may give its own numba function as a class attribute
+        epsilon-greedy, the default GDQ's own (:func:`gdq_pddl.learners.gdq.act`: its
+        exploring rules), :func:`~gdq_pddl.learners.tables.act_plain` for the others.
+        :meth:`act` and the compiled episode loop call it. A learner from another package
+        may give its own numba function as a class attribute
         (``docs/howto-add-learner.md``)."""
-        return kind_rules(self.kind)[0]
+        return kind_rules(self.kind).act
 
     @property
     def observe_rule(self):
         """The compiled rule after a real step, ``(table, model, plans, prior, queue, own,
         params, s, a, r, s2, terminated, truncated, rng) -> bool`` (``own``: the learner's
         own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`): its kind's
-        (:data:`gdq_pddl.learners.rules.RULES`). :meth:`observe` calls it, and the compiled
-        episode loop of a learner from another package (the built-ins' loop calls
-        :func:`~gdq_pddl.learners.rules.observe`, which picks the same function)."""
-        return kind_rules(self.kind)[1]
+        (:data:`gdq_pddl.learners.rules.KIND_RULES`). :meth:`observe` calls it, and the
+        compiled episode loop."""
+        return kind_rules(self.kind).observe
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext
@@ -280,7 +292,7 @@ class TabularLearner:
 
     def act(self, state: int, rng: np.random.Generator) -> int:
         """The epsilon-greedy action (the env's index) to take in learner state ``state``,
-        drawing from ``rng`` (:func:`~gdq_pddl.learners.tables.act`)."""
+        drawing from ``rng`` (:attr:`act_rule`)."""
         s = guards.check_state("state", state, len(self.q))
         guards.check_generator(rng)
         t = self.tables
@@ -291,7 +303,7 @@ class TabularLearner:
                 rng: np.random.Generator) -> None:
         """Learn from one real step ``(s, a, r, s2)`` as Gymnasium's step gave it (``a``:
         the env's action index); backups draw from ``rng``
-        (:func:`~gdq_pddl.learners.rules.observe`)."""
+        (:attr:`observe_rule`)."""
         n_s, n_a = self.q.shape
         s, s2 = guards.check_state("s", s, n_s), guards.check_state("s2", s2, n_s)
         a = self._column("a", s, a)

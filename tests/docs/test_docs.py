@@ -132,7 +132,7 @@ def _check_exploring_sets(ns: dict) -> None:
     formula, are the actions the learner's own exploring step draws, right after OptInit
     (a fresh learner) and after the 300 episodes (section 6's learner at p8)."""
     from gdq_pddl.learners import GDQ
-    from gdq_pddl.learners.tables import _draw_near_best
+    from gdq_pddl.learners.gdq import _draw_near_best
 
     spaces, context, gdq = ns["spaces"], ns["context"], ns["gdq"]
     fresh = GDQ(context)

@@ -19,7 +19,8 @@ SCRIPTS = sorted(p.name for p in [*EXAMPLES.glob("task_*.py"), *EXAMPLES.glob("d
 RUN_EXAMPLES = """
 import json, os, runpy, sys, tempfile, traceback
 from gdq_pddl.learners.precompile import compile_loop
-compile_loop()  # the package imported and the episode loop loaded once, before the forks
+# the package imported and the episode loops the examples run loaded once, before the forks
+compile_loop(("GDQ", "GDQ-code", "DARLING", "Dyna-Q", "Q-learning"))
 done = {}
 for script, *argv in json.loads(sys.argv[1]):
     out, err = tempfile.TemporaryFile("w+"), tempfile.TemporaryFile("w+")

@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 
 from gdq_pddl.abstraction.prior import NO_CHANGE
+from gdq_pddl.envs.office import OfficeEnv
 from gdq_pddl.learners import GDQ, GDQConfig
+from gdq_pddl.learners.gdq import act, act_reference
+from tests.helpers import run
 
 
 def test_exploration_of_every_action_tries_the_untried_ones_first(ctx_c):
@@ -137,3 +140,27 @@ def test_exploration_of_every_action_can_spare_the_last_step(ctx_c):
     assert not explored(both, last[0]) <= set(np.flatnonzero(guide[last[0]]))
     with pytest.raises(ValueError, match="explore_all_last_step"):
         GDQConfig(explore_all_last_step=0)
+
+
+@pytest.mark.parametrize("settings", [
+    {"explore_all": 0.0}, {"explore_all": 0.5}, {"explore_all": 0.5, "explore_all_last": 0.0},
+    {"explore_loops": 0.0}, {"explore_loops": 0.0, "explore_band": 2.0},
+    {"explore_band": -1.0}, {"epsilon": 1.0, "explore_all": 1.0, "explore_all_last": 0.0}])
+def test_the_compiled_acting_rule_equals_its_plain_python_reference(ctx_c, settings):
+    """GDQ's ``act`` (compiled) and ``act_reference`` (plain Python) draw the same action
+    from the same generator, and leave it in the same state, in every state of a learner
+    part-way through learning (ties, tried and untried pairs), with the band, loop-free
+    draws, ``explore_all``, last-step sparing and dead ends (a third of the pairs made
+    certain dead ends in the prior) each on and off."""
+    learner = GDQ(ctx_c)
+    run(learner, OfficeEnv(task="C"), 15, 3)
+    t = learner.tables
+    p = learner.params._replace(**({"epsilon": 0.5} | settings))
+    dead = np.where(np.random.default_rng(1).random(t.table.q.shape) < 0.3, 1.0, 0.0)
+    for prior in (t.prior, t.prior._replace(dead=dead)):
+        for seed in range(6):
+            fast, plain = np.random.default_rng(seed), np.random.default_rng(seed)
+            for s in np.flatnonzero(~t.table.goal):
+                a = act(t.table, t.model.visits, prior, p, int(s), fast)
+                assert a == act_reference(t.table, t.model.visits, prior, p, int(s), plain)
+            assert fast.bit_generator.state == plain.bit_generator.state

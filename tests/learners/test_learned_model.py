@@ -108,7 +108,7 @@ def test_a_pair_beyond_the_models_capacity_fails_loudly(ctx_c):
 
 
 def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
-    from gdq_pddl.learners.episodes import _episodes
+    from gdq_pddl.learners.episodes import _loop_of
 
     env = OfficeEnv(task="C")
     tight = replace(ctx_c, max_successors=1)
@@ -121,9 +121,10 @@ def test_both_episode_loops_stop_with_an_error_when_a_pair_overflows(ctx_c):
     n = 50
     records = (np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
                np.zeros((n, 7), dtype=np.int64))
-    assert _episodes(office.model, int(office.instance.start_state), int(office.instance.goal_pos),
-                     np.zeros(1, dtype=np.uint8), learner.tables, learner.params,
-                     office.np_random, np.random.default_rng(1), *records, 0, 0) == -1
+    assert _loop_of(learner)(office.model, int(office.instance.start_state),
+                             int(office.instance.goal_pos), np.zeros(1, dtype=np.uint8),
+                             learner.tables, learner.params, office.np_random,
+                             np.random.default_rng(1), *records, 0, 0) == -1
     assert learner.visits.sum() == learner.counts.sum() + learner.tables.model.stuck.sum()
 
 

@@ -173,8 +173,55 @@ def test_the_command_line_says_once_that_it_compiles_on_first_use(capsys, tmp_pa
                                                                    monkeypatch, cached):
     from gdq_pddl.cli import common
 
-    monkeypatch.setattr(common, "loop_cached", lambda: cached)
+    monkeypatch.setattr(common, "loops_cached", lambda methods: cached)
     code, _, err = _cli(capsys, "run", "--task", "C", "--method", "q-learning", "--episodes",
                         "1", "--runs", "1", "--jobs", "1", "--no-report", "--out",
                         str(tmp_path / "out"))
     assert code == 0 and err.count("compiling the learners' code") == (0 if cached else 1)
+
+
+def test_the_cache_is_asked_for_the_loop_of_each_rules_class_a_run_uses(ctx_c):
+    """The compiled loop is cached per rules class: one a run compiled is found, one no
+    learner has is not (its first use would compile), and the methods of a run are asked
+    by their rules classes (Q-learning and DARLING share one)."""
+    from typing import NamedTuple
+
+    from gdq_pddl.envs.office import OfficeEnv
+    from gdq_pddl.learners import make_learner
+    from gdq_pddl.learners.episodes import loop_cached, loops_cached
+    from gdq_pddl.learners.rules import TDRules
+    from tests.helpers import run
+
+    class NoLearnersRules(NamedTuple):
+        """A rules class no loop was compiled for (Q-learning's rules, another class)."""
+
+        act = TDRules.act
+        observe = TDRules.observe
+
+    run(make_learner("Q-learning", ctx_c), OfficeEnv(task="C"), 2, 0, fast=True)
+    assert loop_cached({TDRules}) and loops_cached({"q-learning", "DARLING"})
+    assert not loop_cached({TDRules, NoLearnersRules})
+
+
+def test_the_default_gdq_and_the_papers_gdq_are_separate_learners(ctx_c):
+    """GDQ-literal and GDQ-code are registered with their own class, PaperGDQ, whose rules
+    are the paper's (plain epsilon-greedy acting, backups along plans); a GDQ made with a
+    paper variant is one, and neither class takes the other's variant."""
+    from gdq_pddl.learners import GDQ, GDQConfig, PaperGDQ, make_learner
+    from gdq_pddl.learners.gdq import act as gdq_act
+    from gdq_pddl.learners.tables import act_plain
+
+    assert registry.entry("GDQ").learner_class() is GDQ
+    assert {registry.entry(n).learner_class() for n in ("GDQ-literal", "GDQ-code")} == {PaperGDQ}
+    assert not issubclass(PaperGDQ, GDQ) and not issubclass(GDQ, PaperGDQ)
+    code = make_learner("gdq:variant=code", ctx_c)
+    assert type(code) is PaperGDQ and type(GDQ(ctx_c, GDQConfig(variant="literal"))) is PaperGDQ
+    assert code.act_rule is act_plain and make_learner("GDQ", ctx_c).act_rule is gdq_act
+    with pytest.raises(ConfigError, match="variant 'prior' is the default GDQ"):
+        PaperGDQ(ctx_c, GDQConfig())
+
+    class MyGDQ(GDQ):
+        """A subclass of the default GDQ."""
+
+    with pytest.raises(ConfigError, match="is the default GDQ"):
+        MyGDQ(ctx_c, GDQConfig(variant="code"))
