@@ -1,0 +1,128 @@
+"""GDQ minus each other method, paired over runs, on many ``gdq-pddl run`` folders.
+
+    python benchmarks/baselines.py results/run-A results/run-B ...          # Markdown
+    python benchmarks/baselines.py FOLDERS --csv out.csv --reference GDQ
+
+``--last 0.1`` compares over each run's last 10% of episodes instead of all of them.
+Each folder is the output of one ``gdq-pddl run`` (one problem or task; its methods ran
+with the same seeds, so run ``i`` of every method saw the same env seed). Per folder,
+experiment and task: each method's mean return per episode (the mean over runs of each
+run's mean over its episodes), and for each other method the reference minus it, paired
+by run: the mean of the per-run differences with its 95% t-interval (n - 1 degrees of
+freedom), ``win`` when the interval lies above 0, ``loss`` below, ``tie`` otherwise (the
+rule of ``gdq-pddl pairs``, :mod:`gdq_pddl.analysis.pairs`). The last row counts wins,
+ties and losses over the rows. ``gdq-pddl run``'s own report tests GDQ against each
+baseline with Welch's test on unpaired runs; ``gdq-pddl pairs`` pairs, but only on office
+pairs: this script is the paired table for single problems.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats as sps
+
+from gdq_pddl.analysis.pairs import LEVEL, LOSS, TIE, WIN, over_runs
+from gdq_pddl.analysis.study import Study
+from gdq_pddl.analysis.writer import number
+
+
+def per_run_means(study: Study, experiment: str, method: str, task: str,
+                  last: float = 1.0) -> np.ndarray:
+    """Each run's mean return per episode (runs ascending), over the last ``last`` share
+    of its episodes (at least one)."""
+    returns = study.returns(experiment, method, task)
+    keep = max(1, int(round(returns.shape[1] * last)))
+    return np.nanmean(returns[:, -keep:], axis=1)
+
+
+def paired(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float, str]:
+    """``a - b`` paired by run: mean, interval low and high, outcome."""
+    d = a - b
+    mean, se = over_runs(d)
+    n = d.size
+    half = float(sps.t.ppf((1 + LEVEL) / 2, n - 1) * se) if n > 1 else math.nan
+    if n > 1 and se == 0:
+        half = 0.0
+    mean = float(mean)
+    outcome = WIN if mean - half > 0 else LOSS if mean + half < 0 else TIE
+    return mean, mean - half, mean + half, outcome
+
+
+def rows(folders: list[Path], reference: str, last: float = 1.0) -> pd.DataFrame:
+    """One row per (folder, experiment, task, method other than the reference)."""
+    out = []
+    for folder in folders:
+        study = Study.open(folder)
+        for exp in study.experiments:
+            methods = study.methods(exp)
+            if reference not in methods:
+                continue
+            for task in study.tasks(exp):
+                ref = per_run_means(study, exp, reference, task, last)
+                label = folder.name
+                if len(study.experiments) > 1:
+                    label += f":{exp}"
+                if len(study.tasks(exp)) > 1:
+                    label += f":{task}"
+                for m in methods:
+                    if m == reference:
+                        continue
+                    other = per_run_means(study, exp, m, task, last)
+                    mean, low, high, outcome = paired(ref, other)
+                    out.append({"problem": label, "v_star": study.v_star(exp, task),
+                                "runs": ref.size, "reference": reference,
+                                "reference_mean": float(ref.mean()), "method": m,
+                                "method_mean": float(other.mean()), "diff": mean,
+                                "low": low, "high": high, "outcome": outcome})
+    return pd.DataFrame(out)
+
+
+def markdown(df: pd.DataFrame) -> str:
+    """Problems down, methods across: each cell the method's mean, then the reference
+    minus it with its 95% interval and outcome; a last row of wins / ties / losses."""
+    methods = list(dict.fromkeys(df["method"]))
+    reference = df["reference"].iloc[0]
+    head = ["problem", "V*", reference, *(f"{reference} - {m}" for m in methods)]
+    lines = ["| " + " | ".join(head) + " |", "|---|--:|--:|" + "--:|" * len(methods)]
+    for problem, g in df.groupby("problem", sort=False):
+        g = g.set_index("method")
+        first = g.iloc[0]
+        cells = [problem, number(first.v_star), number(first.reference_mean)]
+        for m in methods:
+            if m not in g.index:
+                cells.append("")
+                continue
+            r = g.loc[m]
+            cells.append(f"{number(r['diff'], sign=True)} [{number(r.low, sign=True)}, "
+                         f"{number(r.high, sign=True)}] {r.outcome} ({number(r.method_mean)})")
+        lines.append("| " + " | ".join(cells) + " |")
+    counts = []
+    for m in methods:
+        o = df.loc[df["method"] == m, "outcome"]
+        counts.append(f"{(o == WIN).sum()} / {(o == TIE).sum()} / {(o == LOSS).sum()}")
+    lines.append("| **wins / ties / losses** | | | " + " | ".join(counts) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folders", nargs="+", type=Path)
+    parser.add_argument("--reference", default="GDQ")
+    parser.add_argument("--last", type=float, default=1.0,
+                        help="compare over this share of each run's last episodes "
+                             "(default 1: all; 0.1: the last 10%%)")
+    parser.add_argument("--csv", type=Path, help="also write every digit here")
+    args = parser.parse_args()
+    df = rows(args.folders, args.reference, args.last)
+    if args.csv:
+        df.to_csv(args.csv, index=False)
+    print(markdown(df), end="")
+
+
+if __name__ == "__main__":
+    main()
