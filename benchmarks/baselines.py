@@ -3,7 +3,6 @@
     python benchmarks/baselines.py results/run-A results/run-B ...          # Markdown
     python benchmarks/baselines.py FOLDERS --csv out.csv --reference GDQ
 
-``--last 0.1`` compares over each run's last 10% of episodes instead of all of them.
 Each folder is the output of one ``gdq-pddl run`` (one problem or task; its methods ran
 with the same seeds, so run ``i`` of every method saw the same env seed). Per folder,
 experiment and task: each method's mean return per episode (the mean over runs of each
@@ -13,7 +12,10 @@ freedom), ``win`` when the interval lies above 0, ``loss`` below, ``tie`` otherw
 rule of ``gdq-pddl pairs``, :mod:`gdq_pddl.analysis.pairs`). The last row counts wins,
 ties and losses over the rows. ``gdq-pddl run``'s own report tests GDQ against each
 baseline with Welch's test on unpaired runs; ``gdq-pddl pairs`` pairs, but only on office
-pairs: this script is the paired table for single problems.
+pairs: this script is the paired table for single problems. ``--last 0.1`` compares
+over each run's last 10% of episodes instead of all of them. A ``gdq-pddl scale`` folder
+(its ``building-N-sS.npz`` files) gives a row per building, with the building's
+reference value V_ref (a lower bound on V*) in the V* column.
 """
 
 from __future__ import annotations
@@ -57,6 +59,9 @@ def rows(folders: list[Path], reference: str, last: float = 1.0) -> pd.DataFrame
     """One row per (folder, experiment, task, method other than the reference)."""
     out = []
     for folder in folders:
+        if not (folder / "episodes.csv").is_file() and any(folder.glob("building-*.npz")):
+            out += building_rows(folder, reference, last)
+            continue
         study = Study.open(folder)
         for exp in study.experiments:
             methods = study.methods(exp)
@@ -80,6 +85,32 @@ def rows(folders: list[Path], reference: str, last: float = 1.0) -> pd.DataFrame
                                 "method_mean": float(other.mean()), "diff": mean,
                                 "low": low, "high": high, "outcome": outcome})
     return pd.DataFrame(out)
+
+
+def building_rows(folder: Path, reference: str, last: float = 1.0) -> list[dict]:
+    """The rows of a ``gdq-pddl scale`` folder: one per building (its
+    ``building-N-sS.npz``), V* the building's reference value V_ref (a lower bound)."""
+    out = []
+    for path in sorted(folder.glob("building-*.npz"),
+                       key=lambda p: tuple(int(x.lstrip("s")) for x in p.stem.split("-")[1:])):
+        with np.load(path) as data:
+            returns = {k.split("/", 1)[1]: data[k] for k in data.files
+                       if k.startswith("returns/")}
+            v_ref = float(data["v_ref"])
+        if reference not in returns:
+            continue
+        keep = max(1, int(round(returns[reference].shape[1] * last)))
+        means = {m: r[:, -keep:].mean(axis=1) for m, r in returns.items()}
+        ref = means[reference]
+        for m, other in means.items():
+            if m == reference:
+                continue
+            mean, low, high, outcome = paired(ref, other)
+            out.append({"problem": path.stem, "v_star": v_ref, "runs": ref.size,
+                        "reference": reference, "reference_mean": float(ref.mean()),
+                        "method": m, "method_mean": float(other.mean()), "diff": mean,
+                        "low": low, "high": high, "outcome": outcome})
+    return out
 
 
 def markdown(df: pd.DataFrame) -> str:
