@@ -15,7 +15,8 @@ baseline with Welch's test on unpaired runs; ``gdq-pddl pairs`` pairs, but only 
 pairs: this script is the paired table for single problems. ``--last 0.1`` compares
 over each run's last 10% of episodes instead of all of them. A ``gdq-pddl scale`` folder
 (its ``building-N-sS.npz`` files) gives a row per building, with the building's
-reference value V_ref (a lower bound on V*) in the V* column.
+reference value V_ref (a lower bound on V*) in the V* column; a building folder of an
+unfinished one (``units/building-N-sS``), a row per method on the runs it saved.
 """
 
 from __future__ import annotations
@@ -61,6 +62,9 @@ def rows(folders: list[Path], reference: str, last: float = 1.0) -> pd.DataFrame
     for folder in folders:
         if not (folder / "episodes.csv").is_file() and any(folder.glob("building-*.npz")):
             out += building_rows(folder, reference, last)
+            continue
+        if folder.name.startswith("building-") and any(folder.glob("*-[0-9]*.npz")):
+            out += unit_rows(folder, reference, last)
             continue
         study = Study.open(folder)
         for exp in study.experiments:
@@ -110,6 +114,36 @@ def building_rows(folder: Path, reference: str, last: float = 1.0) -> list[dict]
                         "reference": reference, "reference_mean": float(ref.mean()),
                         "method": m, "method_mean": float(other.mean()), "diff": mean,
                         "low": low, "high": high, "outcome": outcome})
+    return out
+
+
+def unit_rows(folder: Path, reference: str, last: float = 1.0) -> list[dict]:
+    """The rows of one building of an unfinished ``gdq-pddl scale`` run, from the runs
+    it saved (``units/building-N-sS/METHOD-RUN.npz``): each method against the reference
+    on the runs both finished; V* unknown (NaN: the building's V_ref is written at its
+    end)."""
+    runs: dict[str, dict[int, np.ndarray]] = {}
+    for path in folder.glob("*-[0-9]*.npz"):
+        method, run = path.stem.rsplit("-", 1)
+        with np.load(path) as data:
+            returns = data["returns"]
+        keep = max(1, int(round(returns.size * last)))
+        runs.setdefault(method, {})[int(run)] = returns[-keep:].mean()
+    if reference not in runs:
+        return []
+    out = []
+    for m, by_run in sorted(runs.items()):
+        if m == reference:
+            continue
+        common = sorted(set(by_run) & set(runs[reference]))
+        ref = np.array([runs[reference][r] for r in common])
+        other = np.array([by_run[r] for r in common])
+        mean, low, high, outcome = paired(ref, other) if common else (math.nan,) * 3 + (TIE,)
+        out.append({"problem": f"{folder.name} ({len(common)} runs)", "v_star": math.nan,
+                    "runs": len(common), "reference": reference,
+                    "reference_mean": float(ref.mean()) if common else math.nan,
+                    "method": m, "method_mean": float(other.mean()) if common else math.nan,
+                    "diff": mean, "low": low, "high": high, "outcome": outcome})
     return out
 
 
