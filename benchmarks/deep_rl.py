@@ -13,10 +13,12 @@ the runs that are there), then ``summary.csv``, ``deep-rl.md`` (the table) and
 from it.
 
 Per problem and method: the steps to ``--target`` greedy success (the first checkpoint at
-or above it; a run that never gets there counts as ``--steps``, censored: the table says
-how many runs got there), and the greedy success after ``--steps`` steps; the IQM over
-runs (interquartile mean: the mean of the middle 50%, Agarwal et al. 2021) with a 95%
-percentile bootstrap interval over runs (numpy; :func:`iqm`, :func:`bootstrap_ci`).
+or above it; a run that never gets there counts as its last checkpoint, at least
+``--steps``, censored: the table says how many runs got there, and marks an IQM that
+censored runs enter with ``≥``, a lower bound), and the greedy success after ``--steps``
+steps; the IQM over runs (interquartile mean: the mean of the middle 50%, Agarwal et al.
+2021) with a 95% percentile bootstrap interval over runs (numpy; :func:`iqm`,
+:func:`bootstrap_ci`).
 
 Needs the ``sb3`` extra for the deep agents (docs/python.md: the CPU-only torch)::
 
@@ -127,21 +129,38 @@ class Summary:
 
 def summarise(curves: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]],
               target: float, budget: int, n_boot: int = 2000) -> list[Summary]:
-    """Per problem and method, the steps to ``target`` (unreached: ``budget``, censored)
+    """Per problem and method, the steps to ``target`` (unreached: censored at the run's
+    last checkpoint, at least ``budget``)
     and the success after ``budget`` steps: IQM and 95% bootstrap interval over runs."""
     groups: dict[tuple[str, str], list[tuple[np.ndarray, np.ndarray]]] = {}
-    for (problem, method, _run), curve in sorted(curves.items()):
+    for (problem, method, _run), curve in sorted(curves.items(), key=_order(curves)):
         groups.setdefault((problem, method), []).append(curve)
     out = []
     for (problem, method), runs in groups.items():
         reached = [steps_to_threshold(s, v, target) for s, v in runs]
-        to_target = np.array([budget if r is None else r for r in reached], dtype=np.float64)
+        # a run that never got there: censored at its last checkpoint (at least the budget)
+        to_target = np.array([max(budget, int(s[-1])) if r is None else r
+                              for r, (s, _) in zip(reached, runs, strict=True)],
+                             dtype=np.float64)
         final = np.array([success_at(s, v, budget) for s, v in runs])
         rng = np.random.default_rng(0)
         out.append(Summary(problem, method, len(runs), sum(r is not None for r in reached),
                            iqm(to_target), bootstrap_ci(to_target, iqm, n_boot, rng=rng),
                            iqm(final), bootstrap_ci(final, iqm, n_boot, rng=rng)))
     return out
+
+
+def _order(curves: dict[tuple[str, str, int], Any]) -> Callable[[tuple], tuple]:
+    """A sort key of ``curves``' items: problems as they first come, methods in the
+    order of :data:`METHODS` (others after, by name), then runs."""
+    problems = list(dict.fromkeys(p for p, _, _ in curves))
+
+    def key(item: tuple) -> tuple:
+        problem, method, run = item[0]
+        rank = METHODS.index(method) if method in METHODS else len(METHODS)
+        return problems.index(problem), rank, method, run
+
+    return key
 
 
 def band(curves: list[tuple[np.ndarray, np.ndarray]], grid: np.ndarray, n_boot: int = 1000
@@ -178,7 +197,8 @@ def table(summaries: list[Summary], target: float, budget: int) -> str:
              f"| runs there | greedy success after {budget:,} steps, IQM [95% CI] |",
              "|---|---|---:|---:|---:|"]
     for s in summaries:
-        censored = ">" if s.reached < s.runs and s.steps_iqm >= budget else ""
+        # past a quarter of the runs censored, some enter the IQM: it is a lower bound
+        censored = "≥" if s.runs - s.reached > s.runs / 4 else ""
         lines.append(f"| {s.problem} | {s.method} | {censored}{s.steps_iqm:,.0f} "
                      f"[{s.steps_ci[0]:,.0f}, {s.steps_ci[1]:,.0f}] | {s.reached}/{s.runs} "
                      f"| {s.final_iqm:.2f} [{s.final_ci[0]:.2f}, {s.final_ci[1]:.2f}] |")
@@ -195,6 +215,7 @@ def figure(curves: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]], bu
 
     from gdq_pddl.learners.registry import colour
 
+    colours = {"MaskablePPO": "#1f78b4", "PPO": "#33a02c", "DQN": "#6a3d9a"}  # darker
     problems = list(dict.fromkeys(p for p, _, _ in curves))
     methods = list(dict.fromkeys(m for _, m, _ in curves))
     grid = np.linspace(0, budget, 41)
@@ -209,16 +230,18 @@ def figure(curves: dict[tuple[str, str, int], tuple[np.ndarray, np.ndarray]], bu
             mid, low, high = band(runs, grid)
             base, _, setting = method.partition(":")
             style = styles.get(f":{setting}" if setting else "", "-")
-            line, = ax.plot(grid, mid, style, label=method, color=colour(base), lw=1.4)
+            line, = ax.plot(grid, mid, style, label=method, lw=1.4,
+                            color=colours.get(base) or colour(base))
             ax.fill_between(grid, low, high, color=line.get_color(), alpha=0.12, lw=0)
         ax.set_title(problem)
         ax.set_xlabel("env steps")
         ax.set_ylim(-0.03, 1.03)
     axes[0][0].set_ylabel("greedy success (IQM, 95% band)")
     handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=6, fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.12, 1, 1))
-    fig.savefig(path, dpi=110)
+    fig.tight_layout()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=4,
+               fontsize=7, frameon=False)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -356,10 +379,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = args.out / "curves.csv"
     if not args.report:
         done = set(read_curves(path))
-        problems = [_Problem(label, PROBLEMS[label]) for label in args.problems]
-        for run in range(args.runs):  # runs outermost: a cut keeps whole runs everywhere
-            for problem in problems:
-                label = problem.label
+        for label in args.problems:  # a cut keeps the problems done with all their runs
+            problem = _Problem(label, PROBLEMS[label])
+            for run in range(args.runs):  # then whole runs: every method of a seed
                 for method in args.methods:
                     if (label, method, run) in done:
                         continue

@@ -75,8 +75,22 @@ def test_summary_censors_unreached_runs_at_the_budget(bench):
     assert (by["B"].reached, by["B"].steps_iqm) == (0, 2000)
     assert by["B"].final_iqm == pytest.approx(0.5)  # the middle half: three 0.5s
     text = bench.table(list(by.values()), 0.9, 2000)
-    assert "| p | B | >2,000 [2,000, 2,000] | 0/4 |" in text
+    assert "| p | B | ≥2,000 [2,000, 2,000] | 0/4 |" in text
     assert "| p | A | 1,000 [1,000, 1,000] | 4/4 | 1.00 [1.00, 1.00] |" in text
+    assert text.index("| p | A |") < text.index("| p | B |")
+
+
+def test_a_censored_run_counts_as_its_last_checkpoint_and_marks_a_lower_bound(bench):
+    reach = (np.array([0, 500, 1000]), np.array([0.0, 1.0, 1.0]))
+    never = (np.array([0, 500, 1040]), np.array([0.0, 0.0, 0.0]))  # an episode past 1000
+    one = {("p", "GDQ", 0): never} | {("p", "GDQ", r): reach for r in (1, 2, 3)}
+    two = {("p", "PPO", r): never for r in (0, 1)} | {("p", "PPO", r): reach for r in (2, 3)}
+    by = {s.method: s for s in bench.summarise(one | two, 0.9, 1000, n_boot=100)}
+    assert by["GDQ"].reached == 3 and by["GDQ"].steps_iqm == 500  # the 1040 is trimmed
+    assert by["PPO"].steps_iqm == pytest.approx((500 + 1040) / 2)
+    text = bench.table([by["GDQ"], by["PPO"]], 0.9, 1000)
+    assert "| p | GDQ | 500 " in text and "| p | PPO | ≥770 " in text
+    assert text.index("| p | GDQ |") < text.index("| p | PPO |")  # METHODS' order
 
 
 def test_band_of_equal_runs_is_their_curve(bench):
