@@ -365,7 +365,11 @@ def report(out: Path, target: float, budget: int) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("results/deep-rl"))
-    parser.add_argument("--problems", nargs="+", default=list(PROBLEMS), choices=list(PROBLEMS))
+    parser.add_argument("--problems", nargs="*", default=list(PROBLEMS), choices=list(PROBLEMS))
+    parser.add_argument("--pddl", nargs=3, action="append", default=[],
+                        metavar=("LABEL", "DOMAIN", "PROBLEM"),
+                        help="a PPDDL problem of your own (files), e.g. one of pddlgym's, "
+                             "measured after --problems (repeatable)")
     parser.add_argument("--methods", nargs="+", default=list(METHODS))
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--steps", type=int, default=4_096, help="env steps per run")
@@ -379,8 +383,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = args.out / "curves.csv"
     if not args.report:
         done = set(read_curves(path))
-        for label in args.problems:  # a cut keeps the problems done with all their runs
-            problem = _Problem(label, PROBLEMS[label])
+        specs = [(label, PROBLEMS[label]) for label in args.problems] + \
+            [(label, (domain, problem, "")) for label, domain, problem in args.pddl]
+        for label, spec in specs:  # a cut keeps the problems done with all their runs
+            problem = _Problem(label, spec)
             for run in range(args.runs):  # then whole runs: every method of a seed
                 for method in args.methods:
                     if (label, method, run) in done:
