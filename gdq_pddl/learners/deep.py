@@ -17,6 +17,7 @@ whether it reached the goal and its area visits.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -147,10 +148,14 @@ class DeepLearner:
         if isinstance(self.config, DQNConfig):
             self.model.exploration_schedule = _Epsilon(self.model, self.config)
 
-    def run_own_episodes(self, env: gym.Env, n_episodes: int,
-                         rng: np.random.Generator) -> EpisodeRecords:
-        """Train on ``env`` (seeded by ``env.reset(seed=...)`` before) until
-        ``n_episodes`` episodes have finished; the agent's seed is drawn from ``rng``."""
+    def wrap(self, env: gym.Env) -> gym.Env:
+        """``env`` in the knowledge wrappers of the settings (``shaping``, ``obs``): what
+        the agent sees, for an evaluation env (:meth:`greedy_actions`)."""
+        return self._wrap(env)[1]
+
+    def _start(self, env: gym.Env, rng: np.random.Generator) -> tuple[_Recorder, Any, bool]:
+        """The recorder and vector env of ``env``, the network built on the first one
+        (its seed drawn from ``rng``); whether it was built now."""
         from stable_baselines3.common.vec_env import DummyVecEnv  # optional (sb3 extra)
 
         recorder, wrapped = self._wrap(env)
@@ -164,6 +169,37 @@ class DeepLearner:
                 raise ConfigError(f"{self.agent}: the next task's env has other observation "
                                   "or action spaces than the network was built for")
             self.model.set_env(vec)
+        return recorder, vec, first
+
+    def train_steps(self, env: gym.Env, steps: int, rng: np.random.Generator,
+                    every: int = 0, checkpoint: Callable[[int], None] | None = None
+                    ) -> EpisodeRecords:
+        """Train on ``env`` (seeded by ``env.reset(seed=...)`` before) for ``steps`` env
+        steps (PPO: rounded up to whole rollouts of ``n_steps``), calling
+        ``checkpoint(steps_done)`` after every ``every`` steps (0: never); the records of
+        the training episodes that finished. What benchmarks/deep_rl.py measures with."""
+        recorder, _, first = self._start(env, rng)
+        if every and checkpoint is not None:
+            checkpoint(int(self.model.num_timesteps))
+        self.model.learn(total_timesteps=steps, reset_num_timesteps=first,
+                         callback=_every(every, checkpoint), progress_bar=False)
+        self._states = int(getattr(env.observation_space, "n", 0))
+        self._masks = env.unwrapped.mask_table
+        return _records(recorder, len(recorder.rows))
+
+    def greedy_actions(self, obs: Any, masks: np.ndarray | None = None) -> np.ndarray:
+        """The network's greedy actions for a batch of observations ``obs`` (as
+        :meth:`wrap` gives them), drawn among ``masks`` (bool[batch, actions]) by
+        MaskablePPO; the others ignore ``masks``."""
+        if self.agent == "MaskablePPO" and masks is not None:
+            return self.model.predict(obs, deterministic=True, action_masks=masks)[0]
+        return self.model.predict(obs, deterministic=True)[0]
+
+    def run_own_episodes(self, env: gym.Env, n_episodes: int,
+                         rng: np.random.Generator) -> EpisodeRecords:
+        """Train on ``env`` (seeded by ``env.reset(seed=...)`` before) until
+        ``n_episodes`` episodes have finished; the agent's seed is drawn from ``rng``."""
+        recorder, vec, first = self._start(env, rng)
         budget = self.config.steps if self.config.steps is not None else \
             n_episodes * int(env.unwrapped.model.step_limit)
         if n_episodes and budget:
@@ -175,13 +211,7 @@ class DeepLearner:
                 obs, *_ = vec.step(self._predict(obs, vec))
         self._states = int(getattr(env.observation_space, "n", 0))
         self._masks = env.unwrapped.mask_table
-        rows = recorder.rows[:n_episodes]
-        areas = np.zeros((n_episodes, recorder.n_areas), dtype=np.int64)
-        for i, row in enumerate(rows):
-            areas[i] = row[3]
-        return EpisodeRecords(np.array([r[0] for r in rows], dtype=np.float64),
-                              np.array([r[1] for r in rows], dtype=np.int64),
-                              np.array([r[2] for r in rows], dtype=np.bool_), areas)
+        return _records(recorder, n_episodes)
 
     def _predict(self, obs: Any, vec: Any) -> np.ndarray:
         if self.agent == "MaskablePPO":
@@ -216,6 +246,46 @@ class _Epsilon:
             if c.exploration_steps else 1.0
         return c.exploration_initial_eps + done * (c.exploration_final_eps -
                                                    c.exploration_initial_eps)
+
+
+def _records(recorder: _Recorder, n_episodes: int) -> EpisodeRecords:
+    """The first ``n_episodes`` rows of ``recorder`` as records."""
+    rows = recorder.rows[:n_episodes]
+    areas = np.zeros((n_episodes, recorder.n_areas), dtype=np.int64)
+    for i, row in enumerate(rows):
+        areas[i] = row[3]
+    return EpisodeRecords(np.array([r[0] for r in rows], dtype=np.float64),
+                          np.array([r[1] for r in rows], dtype=np.int64),
+                          np.array([r[2] for r in rows], dtype=np.bool_), areas)
+
+
+def _every(every: int, checkpoint: Callable[[int], None] | None) -> Any:
+    """A callback that calls ``checkpoint(steps done)`` after every ``every`` steps, at
+    the start of the next rollout or the end of training: after the update that ends the
+    step's rollout (PPO's ``n_steps``, DQN's ``train_freq``), so the last checkpoint sees
+    the trained network."""
+    from stable_baselines3.common.callbacks import BaseCallback  # optional (sb3 extra)
+
+    class Every(BaseCallback):
+        pending: int | None = None
+
+        def _on_step(self) -> bool:
+            if every and checkpoint is not None and self.num_timesteps % every == 0:
+                self.pending = self.num_timesteps
+            return True
+
+        def _flush(self) -> None:
+            if self.pending is not None and checkpoint is not None:
+                checkpoint(self.pending)
+            self.pending = None
+
+        def _on_rollout_start(self) -> None:
+            self._flush()
+
+        def _on_training_end(self) -> None:
+            self._flush()
+
+    return Every()
 
 
 def _stopper(recorder: _Recorder, n_episodes: int) -> Any:

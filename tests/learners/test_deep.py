@@ -163,3 +163,28 @@ def test_run_resume_and_report_compare_deep_agents_like_the_others(capsys, tmp_p
     assert code == 0, text
     report = (out / "REPORT.md").read_text()
     assert "MaskablePPO" in report and "| PPO |" in report
+
+
+def test_train_steps_calls_checkpoints_after_each_update():
+    """benchmarks/deep_rl.py's path: a step budget, checkpoints every ``every`` steps,
+    each after the update of its rollout (the last one sees the trained network)."""
+    pytest.importorskip("sb3_contrib")
+    import gymnasium
+
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.learners.registry import make_learner
+
+    env = gymnasium.make("gdq_pddl/Office-v0", task="C").unwrapped
+    agent = make_learner("MaskablePPO:n_steps=32,batch_size=16", office_task_context(
+        env.world, "C"))
+    seen: list[tuple[int, int]] = []  # (steps, updates so far)
+    env.reset(seed=0)
+    records = agent.train_steps(env, 64, np.random.default_rng(0), every=32,
+                                checkpoint=lambda n: seen.append((n, agent.model._n_updates)))
+    assert [n for n, _ in seen] == [0, 32, 64]
+    assert [u for _, u in seen] == [0, 10, 20]  # PPO counts its 10 epochs per update
+    assert records.steps.sum() <= 64
+    obs = np.arange(5)
+    masks = env.mask_table[:5].astype(bool)
+    actions = agent.greedy_actions(obs, masks)
+    assert actions.shape == (5,) and masks[np.arange(5), actions].all()
