@@ -253,7 +253,7 @@ class _Problem:
 
     def __init__(self, label: str, spec: tuple[str, ...]) -> None:
         from gdq_pddl.envs.pddl_env import PDDLEnv
-        from gdq_pddl.experiments.protocol import Experiment
+        from gdq_pddl.experiments.protocol import Experiment, ProblemSpec
         from gdq_pddl.experiments.work import context_of, instance_of
 
         if len(spec) == 2:  # the office: world and task
@@ -264,8 +264,8 @@ class _Problem:
             from gdq_pddl.experiments.knowledge import load_pddl_instance
 
             domain, problem, dynamics = resolve_pddl(spec[0], spec[1], spec[2] or None)
-            files = (str(domain), str(problem), "" if dynamics is None else str(dynamics),
-                     "all-outcomes")
+            files = ProblemSpec(str(domain), str(problem),
+                                "" if dynamics is None else str(dynamics))
             task = load_pddl_instance(files).name
             self.exp = Experiment("run", ((task, 1),), world="pddl", pddl=files)
         self.label = label

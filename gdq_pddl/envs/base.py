@@ -54,19 +54,25 @@ class CompiledEnv(gym.Env[int, int]):
             raise ConfigError(f"render_mode {render_mode!r}: this env draws only "
                               f"{', '.join(map(repr, modes)) or 'nothing'} (or None)")
 
-    # What the instance says, named (the rest: ``env.unwrapped.instance``): the table of
-    # learner actions that may change each learner state, the names of the atoms facts()
-    # gives; of an office task its World, Task, LearnerSpaces and full states' decode.
-    mask_table = property(lambda self: self.instance.mask_table)
-    atom_names = property(lambda self: self.instance.atom_names)
-    world = property(lambda self: self.instance.world)
-    task = property(lambda self: self.instance.task)
-    spaces = property(lambda self: self.instance.spaces)
+    # What the instance says, named (the rest: ``env.unwrapped.instance``).
+    mask_table = property(lambda self: self.instance.mask_table,
+                          doc="``bool[n_states, n_actions]``: the learner actions that may "
+                          "change each learner state (``action_masks`` reads its row).")
+    atom_names = property(lambda self: self.instance.atom_names,
+                          doc="The names of the ground atoms, in the order of ``facts()``.")
+    world = property(lambda self: self.instance.world,
+                     doc="Of an office task: its :class:`~gdq_pddl.world_types.World`.")
+    task = property(lambda self: self.instance.task,
+                    doc="Of an office task: its :class:`~gdq_pddl.world_types.Task`.")
+    spaces = property(lambda self: self.instance.spaces,
+                      doc="Of an office task: its learner spaces (positions and doors).")
 
     def action_name(self, a: int) -> str:
+        """The name of learner action ``a``."""
         return self.instance.action_name(a)
 
     def decode(self, fs: int) -> tuple[str, frozenset[str]]:
+        """Of an office task: full state ``fs`` as its position and its open doors."""
         return self.instance.decode(fs)
 
     def atoms(self, s: int) -> frozenset[str]:

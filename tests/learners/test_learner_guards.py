@@ -27,6 +27,7 @@ from gdq_pddl.learners import (
     DynaQ,
     DynaQConfig,
     GDQConfig,
+    PaperGDQ,
     QLearning,
     QLearningConfig,
     make_learner,
@@ -192,8 +193,8 @@ def test_a_context_whose_arrays_leave_the_spaces_is_refused(ctx):
 
 def test_make_learner_takes_every_name_the_command_line_takes(ctx):
     assert tuple(METHODS) == CLI_METHODS
-    expected = {"GDQ": (GDQ, "prior"), "GDQ-literal": (GDQ, "literal"),
-                "GDQ-code": (GDQ, "code"), "DARLING": (Darling, "paper"),
+    expected = {"GDQ": (GDQ, "prior"), "GDQ-literal": (PaperGDQ, "literal"),
+                "GDQ-code": (PaperGDQ, "code"), "DARLING": (Darling, "paper"),
                 "DARLING-code": (Darling, "code"), "Dyna-Q": (DynaQ, None),
                 "Q-learning": (QLearning, None), "Q-shaping": (QShaping, None),
                 "Dyna-Q-shaping": (DynaQShaping, None), "Plan-shaping": (PlanShaping, None),
