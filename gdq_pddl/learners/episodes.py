@@ -33,9 +33,8 @@ from gdq_pddl.envs.solve_compact import successor_capacity
 from gdq_pddl.envs.step import CAUSE_GOAL, ModelArrays, env_step
 from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners import guards, registry
-from gdq_pddl.learners.agents import Darling, DynaQ, QLearning
 from gdq_pddl.learners.gdq import reverse_room
-from gdq_pddl.learners.gdq_learner import GDQ, PaperGDQ
+from gdq_pddl.learners.gdq_learner import GDQ
 from gdq_pddl.learners.learned_model import OVERFLOW
 from gdq_pddl.learners.online import Follower
 from gdq_pddl.learners.saving import GreedyPolicy, check_identity, identity_of
@@ -89,17 +88,18 @@ SAME_RESULTS_WRAPPERS = (PassiveEnvChecker, OrderEnforcing, TimeLimit)
 """The wrappers the compiled loop may look through (exact types, not subclasses):
 ``gymnasium.make``'s own checkers, and a ``TimeLimit`` no shorter than the env's own step
 limit (the env ends every episode first, or at the same step)."""
-COMPILED_LEARNERS = (QLearning, DynaQ, Darling, GDQ, PaperGDQ)
-"""The built-in learner classes the compiled loop runs (exact types: a subclass may
-override ``act`` or ``observe``); it also runs any learner whose class keeps
-:class:`TabularLearner`'s ``act`` and ``observe``, with its compiled ``act_rule`` and
-``observe_rule`` (:func:`compiled_learner`)."""
+COMPILED_LEARNERS = (GDQ,)
+"""The learner classes the compiled loop runs although they override ``observe`` (exact
+types): GDQ's only reserves room in its reverse index first, which the loop does itself.
+Every other learner runs in it when its class keeps :class:`TabularLearner`'s ``act`` and
+``observe``, which call its compiled ``act_rule`` and ``observe_rule`` as the loop does
+(:func:`compiled_learner`)."""
 
 
 def compiled_learner(learner: Learner) -> bool:
-    """Whether the compiled loop gives what ``learner``'s methods give: a built-in learner
-    (:data:`COMPILED_LEARNERS`), or one whose class leaves ``act`` and ``observe`` to
-    :class:`TabularLearner`, which call its compiled rules as the loop does."""
+    """Whether the compiled loop gives what ``learner``'s methods give: its class leaves
+    ``act`` and ``observe`` to :class:`TabularLearner`, which call its compiled rules as
+    the loop does, or is one of :data:`COMPILED_LEARNERS`."""
     cls = type(learner)
     return cls in COMPILED_LEARNERS or issubclass(cls, TabularLearner) and \
         cls.act is TabularLearner.act and cls.observe is TabularLearner.observe
@@ -108,15 +108,14 @@ def compiled_learner(learner: Learner) -> bool:
 def why_not_compiled(learner: Learner, env: gym.Env) -> str | None:
     """None when the compiled loop gives exactly what stepping ``env`` gives: ``env`` is a
     :class:`~gdq_pddl.envs.pddl_env.PDDLEnv` or :class:`~gdq_pddl.envs.office.CompactEnv`,
-    bare or wrapped only in :data:`SAME_RESULTS_WRAPPERS`, and ``learner`` is one of
-    :data:`COMPILED_LEARNERS`; otherwise the reason, in words."""
+    bare or wrapped only in :data:`SAME_RESULTS_WRAPPERS`, and ``learner`` runs in the
+    loop (:func:`compiled_learner`); otherwise the reason, in words."""
     base = env.unwrapped
     if type(base) not in (PDDLEnv, CompactEnv):
         return f"the env is a {type(base).__name__}, not a PDDLEnv or CompactEnv"
     if not compiled_learner(learner):
-        return f"the learner is a {type(learner).__name__}, not one of " + \
-            ", ".join(c.__name__ for c in COMPILED_LEARNERS) + \
-            " nor a TabularLearner that keeps its act and observe"
+        return f"the learner is a {type(learner).__name__}, not a TabularLearner that " \
+            "keeps its act and observe"
     while env is not base:
         if type(env) not in SAME_RESULTS_WRAPPERS or type(env) is TimeLimit and \
                 env._max_episode_steps < base.model.step_limit:
@@ -322,10 +321,19 @@ def loops_cached(methods: Iterable[str]) -> bool:
             continue
         cls = parsed.entry.learner_class()
         if isinstance(cls, type) and issubclass(cls, TabularLearner):
-            marker = cls.loop_marker(parsed.entry.config(**parsed.config_kwargs()))
-            if marker is not None and marker.__module__.startswith(__package__ + "."):
+            marker = _cached_marker(cls, parsed.entry.config(**parsed.config_kwargs()))
+            if marker is not None:
                 markers.add(marker)
     return loop_cached(markers)
+
+
+def _cached_marker(cls: type[TabularLearner], config) -> type | None:
+    """The rules class whose cached loop runs a learner of ``cls`` with ``config``: one of
+    this package's (:meth:`TabularLearner.loop_marker`), else None (its own rules: an
+    uncached copy)."""
+    marker = cls.loop_marker(config)
+    return marker if marker is not None and \
+        marker.__module__.startswith(__package__ + ".") else None
 
 
 def _loop_of(learner: TabularLearner):
@@ -335,8 +343,8 @@ def _loop_of(learner: TabularLearner):
     copy calling the learner's own ``act_rule`` and ``observe_rule``, compiled once per
     process and pair of rules, not cached (numba's cache keys a function by its code and
     argument types, not by the functions it calls, nor by another package's source)."""
-    marker = type(learner).loop_marker(learner.config)
-    if marker is not None and marker.__module__.startswith(__package__ + "."):
+    marker = _cached_marker(type(learner), learner.config)
+    if marker is not None:
         return _cached_loop(marker)
     pair = (learner.act_rule, learner.observe_rule)
     if pair not in _PLUGIN_LOOPS:

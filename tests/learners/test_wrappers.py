@@ -11,8 +11,8 @@ from gymnasium.wrappers import RecordEpisodeStatistics, TimeLimit, TransformRewa
 
 from gdq_pddl.envs.office import CompactEnv
 from gdq_pddl.errors import ConfigError
-from gdq_pddl.learners import QLearning, make_learner, run_compact
-from gdq_pddl.learners.episodes import why_not_compiled
+from gdq_pddl.learners import QLearning, make_learner, registry, run_compact
+from gdq_pddl.learners.episodes import compiled_learner, why_not_compiled
 from tests.helpers import run
 
 
@@ -97,3 +97,12 @@ def test_a_reset_with_options_does_not_move_the_compiled_loops_start(ctx_c):
         recs.append(run(QLearning(ctx_c), env, 30, 2, fast=fast))
     for f in ("returns", "steps", "success", "area_visits"):
         assert np.array_equal(getattr(recs[0], f), getattr(recs[1], f)), f
+
+
+def test_every_built_in_tabular_learner_runs_in_the_compiled_loop(ctx_c):
+    """Each keeps TabularLearner's act and observe (or is one of COMPILED_LEARNERS, whose
+    override the loop does itself): none falls back to the Python loop unnoticed."""
+    names = [n for n in registry.built_in_names() if not registry.entry(n).requires]
+    assert len(names) >= 13
+    for name in names:
+        assert compiled_learner(make_learner(name, ctx_c)), name
