@@ -2,7 +2,7 @@
 its hypotheses on its ``tasks``, ``switch-*`` and ``robot`` experiments, the ground truth,
 Task C's routes and GDQ against its variants. The sections any folder gets (the header,
 *Methods compared* for any other experiment, the IQM table) are in
-:mod:`gdq_pddl.analysis.generic` and importable from here too."""
+:mod:`gdq_pddl.analysis.generic`."""
 
 from __future__ import annotations
 
@@ -10,16 +10,7 @@ import math
 
 import numpy as np
 
-from gdq_pddl.analysis.generic import (
-    method_summary,
-    planner_lines,
-    say,
-    setup_lines,
-    write_header,
-    write_iqm,
-    write_methods,
-    write_task,
-)
+from gdq_pddl.analysis.generic import say, write_iqm
 from gdq_pddl.analysis.stats import (
     compare,
     first_positive,
@@ -45,10 +36,9 @@ from gdq_pddl.experiments.protocol import GDQ_VARIANTS
 from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT, optimal_entry
 from gdq_pddl.learners import registry
 
-__all__ = ["BEST_ROUTE_C", "method_summary", "planner_lines", "say", "setup_lines",
-           "write_ground_truth", "write_header", "write_hypothesis_1", "write_hypothesis_2",
-           "write_hypothesis_3", "write_iqm", "write_methods", "write_robot", "write_route_c",
-           "write_task", "write_variants", "write_why_gdq_fails"]
+__all__ = ["BEST_ROUTE_C", "write_ground_truth", "write_hypothesis_1", "write_hypothesis_2",
+           "write_hypothesis_3", "write_robot", "write_route_c", "write_variants",
+           "write_why_gdq_fails"]
 
 
 def write_ground_truth(w: Writer) -> None:
