@@ -28,9 +28,6 @@ from gdq_pddl.experiments.results import ROBOT_EXPERIMENT, TASKS_EXPERIMENT
 from gdq_pddl.learners import registry
 from gdq_pddl.outputs import save_figure
 
-METHOD_COLOURS = {e.name: e.colour for e in registry.BUILT_IN}
-"""The built-in learners' colours (the registry's: Okabe and Ito's colour-blind-safe
-palette, GDQ's variants apart)."""
 INTERVAL = "95% t-interval over runs"
 """What the curves' bands are: over the runs' smoothed curves, mean +- t(0.975, runs - 1)
 x standard error."""
@@ -44,8 +41,9 @@ def method_line(method: str) -> object:
 
 
 def method_colour(method: str) -> str:
-    """The colour of ``method`` in every figure (its learner's; a method with settings or
-    an unknown name: a stable extra colour)."""
+    """The colour of ``method`` in every figure (its learner's in the registry: Okabe and
+    Ito's colour-blind-safe palette, GDQ's variants apart; a method with settings or an
+    unknown name: a stable extra colour)."""
     return registry.colour(method)
 
 

@@ -16,7 +16,6 @@ PACKAGE = Path(registry.__file__).resolve().parents[1]
 
 
 def test_every_list_of_methods_reads_the_registry():
-    from gdq_pddl.analysis.figures import METHOD_COLOURS
     from gdq_pddl.cli.common import PLAN_METHODS
     from gdq_pddl.experiments import protocol
     from gdq_pddl.experiments.knowledge import KNOWLEDGE_METHODS
@@ -24,13 +23,12 @@ def test_every_list_of_methods_reads_the_registry():
     from gdq_pddl.learners.agents import METHODS
 
     names = tuple(e.name for e in registry.BUILT_IN)
-    assert METHODS == protocol.METHODS == METHOD_ORDER == tuple(METHOD_COLOURS) == names
+    assert METHODS == protocol.METHODS == METHOD_ORDER == names
     assert set(protocol.PAPER_METHODS) <= set(protocol.DEFAULT_METHODS) | {"GDQ"}
     assert protocol.DEFAULT_METHODS == protocol.SCALE_DEFAULT_METHODS
     assert tuple(n for n in names if n.startswith("GDQ")) == protocol.GDQ_VARIANTS
     assert set(PLAN_METHODS) == {e.name for e in registry.BUILT_IN if e.knowledge != "none"}
     assert KNOWLEDGE_METHODS == PLAN_METHODS  # every guided method, in the registry's order
-    assert {METHOD_COLOURS[n] for n in names} == {e.colour for e in registry.BUILT_IN}
 
 
 def test_no_module_but_the_registry_declares_a_learner():
