@@ -316,13 +316,6 @@ class RMaxConfig(LearnerConfig):
     max_sweeps: int = field(default=1000, metadata={"range": Range(1, MAX_COUNT)})
     """Value iteration stops after this many sweeps (at least 1) in any case."""
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        for name in ("m", "max_sweeps"):
-            if getattr(self, name) < 1:
-                raise ConfigError(f"{name} must be a whole number in [1, {MAX_COUNT:_}], "
-                                  f"got {getattr(self, name)}")
-
 
 @documented
 @dataclass(frozen=True)
