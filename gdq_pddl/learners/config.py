@@ -72,9 +72,9 @@ def real(default: float | None, low: float, high: float = math.inf, *, low_open:
     return field(default=default, metadata={"range": Range(low, high, low_open, high_open)})
 
 
-def count(default: int | None, high: int = MAX_COUNT) -> Any:
-    """A whole-number setting in ``[0, high]``."""
-    return field(default=default, metadata={"range": Range(0, high)})
+def count(default: int | None, high: int = MAX_COUNT, low: int = 0) -> Any:
+    """A whole-number setting in ``[low, high]``."""
+    return field(default=default, metadata={"range": Range(low, high)})
 
 
 def field_range(cls: type, name: str) -> Range | None:
@@ -307,13 +307,13 @@ class RMaxConfig(LearnerConfig):
     epsilon: float = real(0.0, 0.0, 1.0)
     """Probability of a uniformly random action; 0 (the method's name fixes it)."""
 
-    m: int = field(default=1, metadata={"range": Range(1, MAX_COUNT)})
+    m: int = count(1, low=1)
     """A pair is known once tried ``m`` times (at least 1): from then on the learned
     model values it, before that ``V_max`` (R-max) or the potential (R-max-shaping).
     Default 1, chosen on tasks A-D (``docs/decisions.md``)."""
     tolerance: float = real(1e-6, 0.0, MAX_NUMBER, low_open=True)
     """Value iteration stops when no value changes by more than this."""
-    max_sweeps: int = field(default=1000, metadata={"range": Range(1, MAX_COUNT)})
+    max_sweeps: int = count(1000, low=1)
     """Value iteration stops after this many sweeps (at least 1) in any case."""
 
 
@@ -356,11 +356,6 @@ MAX_HIDDEN = 4096
 """The most units a hidden layer may have."""
 
 
-def hidden_units(default: int) -> Any:
-    """Units of a hidden layer: a whole number in ``[1, MAX_HIDDEN]``."""
-    return field(default=default, metadata={"range": Range(1, MAX_HIDDEN)})
-
-
 @documented
 @dataclass(frozen=True)
 class DeepConfig:
@@ -370,7 +365,7 @@ class DeepConfig:
     """Discount factor (the experiment's gamma unless set), also the shaping's gamma."""
     learning_rate: float = real(3e-4, 0.0, 1.0, low_open=True)
     """The optimiser's step size (Stable-Baselines3's default for PPO)."""
-    hidden: int = hidden_units(64)
+    hidden: int = count(64, MAX_HIDDEN, low=1)
     """Units in each of the two hidden layers of the policy and value networks."""
     steps: int | None = count(None, 10**12)
     """The most training steps per task; none: as many as the task's episodes need. The
@@ -401,11 +396,11 @@ class DeepConfig:
 class PPOConfig(DeepConfig):
     """PPO and MaskablePPO: Stable-Baselines3's defaults but for the discount."""
 
-    n_steps: int = field(default=2048, metadata={"range": Range(1, 10_000_000)})
+    n_steps: int = count(2048, 10_000_000, low=1)
     """Steps collected between two updates."""
-    batch_size: int = field(default=64, metadata={"range": Range(1, 10_000_000)})
+    batch_size: int = count(64, 10_000_000, low=1)
     """Minibatch size of an update."""
-    n_epochs: int = field(default=10, metadata={"range": Range(1, 1000)})
+    n_epochs: int = count(10, 1000, low=1)
     """Passes over the collected steps in each update."""
     ent_coef: float = real(0.0, 0.0, 1.0)
     """Weight of the entropy bonus."""
@@ -425,13 +420,13 @@ class DQNConfig(DeepConfig):
 
     learning_rate: float = real(1e-4, 0.0, 1.0, low_open=True)
     """The optimiser's step size (Stable-Baselines3's default for DQN)."""
-    buffer_size: int = field(default=100_000, metadata={"range": Range(1, 10_000_000)})
+    buffer_size: int = count(100_000, 10_000_000, low=1)
     """Transitions the replay buffer holds."""
     learning_starts: int = count(100)
     """Steps before the first update."""
-    train_freq: int = field(default=4, metadata={"range": Range(1, 1_000_000)})
+    train_freq: int = count(4, 1_000_000, low=1)
     """Steps between two updates."""
-    target_update_interval: int = field(default=10_000, metadata={"range": Range(1, 10**9)})
+    target_update_interval: int = count(10_000, 10**9, low=1)
     """Steps between two copies of the network to the target network."""
     exploration_steps: int = count(10_000)
     """Steps over which epsilon falls linearly from ``exploration_initial_eps`` to
