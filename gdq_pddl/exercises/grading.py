@@ -190,27 +190,35 @@ def dyna_planning_cases() -> list[Case]:
             draws = np.random.default_rng(seed)
             pairs = [divmod(int(known[draws.integers(0, len(known))]), context.n_actions)
                      for _ in range(n)]
-            q = learner.q.copy()
-            backup_known(t.table, t.model, t.plans.opt_r, p._replace(n_backups=n),
-                         np.random.default_rng(seed))
-            expected = learner.q.copy()
-            learner.q[:] = q
-            recompute_all_v(t.table)
-            args = {"q": q, **_model_arrays(learner), "goal": context.goal.copy(),
-                    "pairs": pairs, "gamma": p.gamma, "r_max": p.r_max}
             first = ", ".join(_pair(spaces, s, a).split(" [")[0] for s, a in pairs[:3])
             words = (f"a Dyna-Q learner after {'40' if task == 'B' else '15'} episodes of "
                      f"task {task}; {n} backup(s), of {first}{', ...' if n > 3 else ''}; "
                      f"gamma = {p.gamma}, r_max = {p.r_max:g}")
-            slips = (_slip_table(solutions.dyna_planning, args, stuck=np.zeros_like(
-                args["stuck"])), "the stuck trials are left out: each is worth -R_max "
-                "and counts in n"), \
-                (_parallel_backups(args), "every backup reads the Q table as it was before "
-                 "the first: back the pairs up one after the other, each reading the "
-                 "values the earlier ones wrote")
-            cases.append(Case(args, expected, words, slips))
+            q = learner.q.copy()
+            backup_known(t.table, t.model, t.plans.opt_r, p._replace(n_backups=n),
+                         np.random.default_rng(seed))
+            cases.append(_backups_case(task, learner, q, pairs, words))
     cases.append(_picked_pairs_case(*learners[0]))
     return cases
+
+
+def _backups_case(task: str, learner: TabularLearner, q: np.ndarray,
+                  pairs: list[tuple[int, int]], words: str) -> Case:
+    """The case of ``pairs`` just backed up in ``learner`` from the table ``q`` (its Q
+    now, the expected table; ``q`` is put back), with the two slips of exercise 2."""
+    context, _ = _office(task)
+    p = learner.params
+    expected = learner.q.copy()
+    learner.q[:] = q
+    recompute_all_v(learner.tables.table)
+    args = {"q": q, **_model_arrays(learner), "goal": context.goal.copy(), "pairs": pairs,
+            "gamma": p.gamma, "r_max": p.r_max}
+    slips = ((_slip_table(solutions.dyna_planning, args, stuck=np.zeros_like(args["stuck"])),
+              "the stuck trials are left out: each is worth -R_max and counts in n"),
+             (_parallel_backups(args), "every backup reads the Q table as it was before "
+              "the first: back the pairs up one after the other, each reading the values "
+              "the earlier ones wrote"))
+    return Case(args, expected, words, slips)
 
 
 def _picked_pairs_case(task: str, learner: TabularLearner) -> Case:
@@ -228,20 +236,10 @@ def _picked_pairs_case(task: str, learner: TabularLearner) -> Case:
     rng = np.random.default_rng(SEED)
     for s, a in pairs:
         model_backup(t.table, t.model, t.plans.opt_r, p, s, a, rng)
-    expected = learner.q.copy()
-    learner.q[:] = q
-    recompute_all_v(t.table)
-    args = {"q": q, **_model_arrays(learner), "goal": context.goal.copy(), "pairs": pairs,
-            "gamma": p.gamma, "r_max": p.r_max}
     words = (f"the Dyna-Q learner after 40 episodes of task {task}; {len(pairs)} backups: "
              "first the pairs that got stuck or reached the goal, then pairs leading to "
              f"their states; gamma = {p.gamma}, r_max = {p.r_max:g}")
-    slips = ((_slip_table(solutions.dyna_planning, args, stuck=np.zeros_like(args["stuck"])),
-              "the stuck trials are left out: each is worth -R_max and counts in n"),
-             (_parallel_backups(args), "every backup reads the Q table as it was before "
-              "the first: back the pairs up one after the other, each reading the values "
-              "the earlier ones wrote"))
-    return Case(args, expected, words, slips)
+    return _backups_case(task, learner, q, pairs, words)
 
 
 def _slip_table(solution: Callable, args: dict[str, Any], **changed: Any) -> np.ndarray:
@@ -353,29 +351,11 @@ def hybrid_backup_cases() -> list[Case]:
             if not len(pairs):
                 continue
             s, a = (int(x) for x in pairs[rng.integers(len(pairs))])
-            n = int(visits[s, a])
-            learned = float(learned_value(t.model.slots, t.model.stuck, visits,
-                                          t.model.cost_sum, t.model.cost_n, t.model.cost_all,
-                                          t.table.goal, t.table.v, params, s, a)) if n else 0.0
-            expected = float(hybrid_backup(t.table, t.model, prior_next, t.prior.reward,
-                                           t.prior.dead, params, s, a))
-            args = {"s": s, "a": a, "v": t.table.v.copy(), "goal": context.goal.copy(),
-                    "prior_next": prior_next.copy(), "visits": visits.copy(),
-                    "learned": learned, "m": m, "w": w, "gamma": p.gamma, "r_max": p.r_max,
-                    "prior_cost": p.prior_cost}
             x = int(prior_next[s, a])
             leads = "does nothing (-1)" if x < 0 else f"leads to {spaces.state_name(x)}"
-            words = (f"the pair {_pair(spaces, s, a)} ({label}): by the knowledge it "
-                     f"{leads}; tried {n} time(s), learned = {_num(learned)}; m = {m}, "
-                     f"w = {w:g}, gamma = {p.gamma}, r_max = {p.r_max:g}")
-            wrong_rule = solutions.hybrid_backup(**{**args, "prior_next": np.where(
-                prior_next < 0, s, prior_next)}) if x < 0 else math.nan
-            no_gamma = _no_gamma_prior(args)
-            slips = ((wrong_rule, "a pair the knowledge says does nothing waits for m "
-                      "trials too: it is known after its first trial"),
-                     (no_gamma, "the prior's backup lacks the discount: it is -prior_cost + "
-                      "gamma * V(x)"))
-            cases.append(Case(args, expected, words, slips))
+            cases.append(_hybrid_case(learner, params, s, a, f"the pair {_pair(spaces, s, a)} "
+                                      f"({label}): by the knowledge it {leads}; tried "
+                                      f"{int(visits[s, a])} time(s), ", no_gamma=True))
     return cases + _passage_cases()
 
 
@@ -388,29 +368,38 @@ def _passage_cases() -> list[Case]:
     s, a = spaces.state("p8"), spaces.action("goto", "p17")
     s2 = spaces.state("p17")
     learner.observe(s, a, context.r_max, s2, True, False, np.random.default_rng(SEED))
+    head = (f"the pair {_pair(spaces, s, a)}: the knowledge says it does nothing (-1), but "
+            "reality has a corridor p8-p17 and its one trial reached the goal, ")
+    return [_hybrid_case(learner, learner.params._replace(m=m), s, a, head, no_gamma=False)
+            for m in (0, 2)]
+
+
+def _hybrid_case(learner: TabularLearner, params: Any, s: int, a: int, head: str,
+                 no_gamma: bool) -> Case:
+    """The pair ``(s, a)`` of a GDQ ``learner`` under ``params`` (its m and w): the
+    expected value is :func:`~gdq_pddl.learners.gdq.hybrid_backup`; the words ``head``
+    then the numbers; the slips of exercise 4 (``no_gamma``: the discount one too)."""
     t, p = learner.tables, learner.params
-    cases = []
-    for m in (0, 2):
-        params = p._replace(m=m)
-        learned = float(learned_value(t.model.slots, t.model.stuck, t.model.visits,
-                                      t.model.cost_sum, t.model.cost_n, t.model.cost_all,
-                                      t.table.goal, t.table.v, params, s, a))
-        args = {"s": s, "a": a, "v": t.table.v.copy(), "goal": context.goal.copy(),
-                "prior_next": t.prior.next_state.copy(), "visits": t.model.visits.copy(),
-                "learned": learned, "m": m, "w": p.prior_weight, "gamma": p.gamma,
-                "r_max": p.r_max, "prior_cost": p.prior_cost}
-        expected = float(hybrid_backup(t.table, t.model, t.prior.next_state, t.prior.reward,
-                                       t.prior.dead, params, s, a))
-        words = (f"the pair {_pair(spaces, s, a)}: the knowledge says it does nothing (-1), "
-                 f"but reality has a corridor p8-p17 and its one trial reached the goal, "
-                 f"learned = {_num(learned)}; m = {m}, w = {p.prior_weight:g}, gamma = "
-                 f"{p.gamma}, r_max = {p.r_max:g}")
-        wrong_rule = solutions.hybrid_backup(**{**args, "prior_next": np.where(
-            args["prior_next"] < 0, s, args["prior_next"])})
-        slips = ((wrong_rule, "a pair the knowledge says does nothing waits for m trials "
-                  "too: it is known after its first trial"),)
-        cases.append(Case(args, expected, words, slips))
-    return cases
+    visits, prior_next = t.model.visits, t.prior.next_state
+    learned = float(learned_value(t.model.slots, t.model.stuck, visits, t.model.cost_sum,
+                                  t.model.cost_n, t.model.cost_all, t.table.goal, t.table.v,
+                                  params, s, a)) if visits[s, a] else 0.0
+    expected = float(hybrid_backup(t.table, t.model, prior_next, t.prior.reward,
+                                   t.prior.dead, params, s, a))
+    m, w = params.m, params.prior_weight
+    args = {"s": s, "a": a, "v": t.table.v.copy(), "goal": learner.context.goal.copy(),
+            "prior_next": prior_next.copy(), "visits": visits.copy(), "learned": learned,
+            "m": m, "w": w, "gamma": p.gamma, "r_max": p.r_max, "prior_cost": p.prior_cost}
+    words = f"{head}learned = {_num(learned)}; m = {m}, w = {w:g}, gamma = {p.gamma}, " \
+        f"r_max = {p.r_max:g}"
+    wrong_rule = solutions.hybrid_backup(**{**args, "prior_next": np.where(
+        prior_next < 0, s, prior_next)}) if prior_next[s, a] < 0 else math.nan
+    slips = ((wrong_rule, "a pair the knowledge says does nothing waits for m trials too: "
+              "it is known after its first trial"),)
+    if no_gamma:
+        slips += ((_no_gamma_prior(args), "the prior's backup lacks the discount: it is "
+                   "-prior_cost + gamma * V(x)"),)
+    return Case(args, expected, words, slips)
 
 
 def _no_gamma_prior(args: dict[str, Any]) -> float:
