@@ -44,7 +44,7 @@ from gdq_pddl.errors import ConfigError
 from gdq_pddl.learners.config import FFReplanConfig
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.shaping import goal_distances
-from gdq_pddl.learners.tables import KIND_QLEARNING, Model, Params, Prior, QTable
+from gdq_pddl.learners.tables import KIND_QLEARNING, Model, Params, Prior, QTable, draw_guided
 from gdq_pddl.learners.tabular import TabularLearner
 
 __all__ = ["FFReplan", "FFReplanConfig", "NO_PLAN", "Expectation", "act", "observe"]
@@ -71,12 +71,7 @@ def act(table: QTable, visits: np.ndarray, prior: Prior, p: Params, s: int,
     q, allowed = table.q, table.allowed
     best = table.v[s]
     if best <= -(1.0 + NO_PLAN):
-        k = rng.integers(0, table.n_guide[s])
-        for a in range(q.shape[1]):
-            if table.guide[s, a]:
-                if k == 0:
-                    return a
-                k -= 1
+        return draw_guided(table, s, rng)
     for a in range(q.shape[1]):
         if allowed[s, a] and q[s, a] == best:
             return a
