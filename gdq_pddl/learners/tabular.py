@@ -52,14 +52,6 @@ MAX_DENSE_COUNTS = 50_000_000
 """The most entries :attr:`TabularLearner.counts` builds a dense array of (400 MB)."""
 
 
-def kind_rules(kind: int) -> type:
-    """The rules class of a built-in kind (:data:`gdq_pddl.learners.rules.KIND_RULES`): its
-    ``act`` is the default GDQ's own for ``KIND_GDQ`` (:func:`gdq_pddl.learners.gdq.act`),
-    plain epsilon-greedy for the others (:func:`~gdq_pddl.learners.tables.act_plain`); its
-    ``observe`` the kind's rule after a step."""
-    return rules.KIND_RULES[kind]
-
-
 def _capacity(context: TaskContext) -> int:
     """Successor slots per pair for ``context``: its ``max_successors``, or every state."""
     k = context.max_successors
@@ -122,7 +114,7 @@ class TabularLearner:
     def rules_for(cls, config: LearnerConfig) -> tuple:
         """``(act_rule, observe_rule)`` of a learner of this class with ``config``, without
         making one (what the compiled loop is compiled for)."""
-        own = kind_rules(cls.kind_of(config))
+        own = rules.KIND_RULES[cls.kind_of(config)]
         given = cls.act_rule, cls.observe_rule  # a plugin's own, or the kind's (properties)
         return tuple(o if isinstance(g, property) else g for g, o in zip(
             given, (own.act, own.observe), strict=True))
@@ -133,7 +125,7 @@ class TabularLearner:
         ``config`` is compiled for (:attr:`loop_rules`, else its kind's), or None when its
         rules are neither (a learner of another package with rules of its own: the loop
         is a copy calling them, :func:`gdq_pddl.learners.episodes._loop_of`)."""
-        marker = cls.loop_rules or kind_rules(cls.kind_of(config))
+        marker = cls.loop_rules or rules.KIND_RULES[cls.kind_of(config)]
         return marker if (marker.act, marker.observe) == cls.rules_for(config) else None
 
     @property
@@ -144,7 +136,7 @@ class TabularLearner:
         :meth:`act` and the compiled episode loop call it. A learner from another package
         may give its own numba function as a class attribute
         (``docs/howto-add-learner.md``)."""
-        return kind_rules(self.kind).act
+        return rules.KIND_RULES[self.kind].act
 
     @property
     def observe_rule(self):
@@ -153,7 +145,7 @@ class TabularLearner:
         own arrays, :attr:`~gdq_pddl.learners.tables.Tables.own`): its kind's
         (:data:`gdq_pddl.learners.rules.KIND_RULES`). :meth:`observe` calls it, and the
         compiled episode loop."""
-        return kind_rules(self.kind).observe
+        return rules.KIND_RULES[self.kind].observe
     config: LearnerConfig
     """The learner's settings (frozen)."""
     context: TaskContext
