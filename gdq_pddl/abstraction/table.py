@@ -86,10 +86,6 @@ class PlanTable:
     def n_states(self) -> int:
         return len(self.length)
 
-    @property
-    def has_plan(self) -> np.ndarray:
-        return self.length >= 0
-
     def allowed_actions(self, live: np.ndarray | None = None) -> np.ndarray:
         """DARLING's allowed set, a new bool array: ``first_actions``, and every action
         (every ``live`` column, if given) in the states without a plan."""
