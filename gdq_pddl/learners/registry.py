@@ -460,13 +460,18 @@ def learner_class(method: str) -> type:
     return parse_method(method).entry.learner_class()
 
 
+def _parsed(method: str) -> Method | None:
+    """``method`` parsed (:func:`parse_method`), or None where no learner has it."""
+    try:
+        return parse_method(method)
+    except ConfigError:
+        return None
+
+
 def colour(method: str) -> str:
     """The colour of ``method`` in every figure: its learner's for a bare name, a stable
     extra colour for a method with settings or a name no learner has."""
-    try:
-        parsed = parse_method(method)
-    except ConfigError:
-        parsed = None
+    parsed = _parsed(method)
     if parsed is not None and not parsed.settings:
         return parsed.entry.colour
     return _EXTRA[sum(map(ord, method)) % len(_EXTRA)]
@@ -475,11 +480,8 @@ def colour(method: str) -> str:
 def dashes(method: str) -> tuple[float, ...]:
     """The dash pattern of ``method``'s curves: its learner's (empty, solid, for a method
     with settings or a name no learner has)."""
-    try:
-        parsed = parse_method(method)
-    except ConfigError:
-        return ()
-    return parsed.entry.dashes if not parsed.settings else ()
+    parsed = _parsed(method)
+    return parsed.entry.dashes if parsed is not None and not parsed.settings else ()
 
 
 def order(methods: typing.Iterable[str]) -> list[str]:
@@ -488,9 +490,8 @@ def order(methods: typing.Iterable[str]) -> list[str]:
     rank = {e.name: i for i, e in enumerate(entries())}
 
     def where(m: str) -> tuple:
-        try:
-            parsed = parse_method(m)
-        except ConfigError:
+        parsed = _parsed(m)
+        if parsed is None:
             return (len(rank), m)
         return (rank[parsed.entry.name], bool(parsed.settings), m)
 
@@ -500,10 +501,8 @@ def order(methods: typing.Iterable[str]) -> list[str]:
 def family(method: str) -> str | None:
     """The learner ``method`` is a variant of (``GDQ`` for ``GDQ-code:m=3``), or None for a
     name no learner has."""
-    try:
-        return parse_method(method).entry.base
-    except ConfigError:
-        return None
+    parsed = _parsed(method)
+    return None if parsed is None else parsed.entry.base
 
 
 def settings_table(found: LearnerEntry) -> list[tuple[str, str, str, str]]:
