@@ -219,16 +219,6 @@ def load_learner(file: File, context: TaskContext) -> TabularLearner:
         learner = cls(context, config)
         params = Params(**header["params"])
         loaded = {**arrays, **{k: arrays[v] for k, v in header["aliases"].items()}}
-        # a file saved before the prior knew the file's rewards has no prior.reward: the
-        # context's (empty on the goal scale, where nothing else changed)
-        loaded.setdefault("prior.reward", learner.tables.prior.reward)
-        # and one saved before the prior kept chances of dead ends has no prior.dead: the
-        # context's (empty where the knowledge has no dead end)
-        loaded.setdefault("prior.dead", learner.tables.prior.dead)
-        # and one saved before learners had their own group has none: a learner's fresh
-        # own arrays (empty for the learners of that time)
-        for field, x in zip(learner.tables.own._fields, learner.tables.own, strict=True):
-            loaded.setdefault(f"own.{field}", x)
         tables = Tables(*(type(group)(*(loaded[f"{g}.{field}"] for field in group._fields))
                           for g, group in zip(Tables._fields, learner.tables, strict=True)))
         guards.check_tables(tables, params)

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 from gdq_pddl.abstraction.prior import PriorModel, dead_chances
 from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.pddl_env import PDDLInstance
-from gdq_pddl.errors import ConfigError
+from gdq_pddl.errors import ConfigError, ResultsError
 from gdq_pddl.learners import GDQ, GDQConfig, gdq, pddl_task_context, warm_start
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.learners.saving import load_learner, save_learner
@@ -164,16 +164,17 @@ def test_exploring_never_jumps_into_a_certain_dead_end(crossing: PDDLInstance,
     assert ("jump" in drawn) == (not knows_dead_ends)
 
 
-def test_the_chances_are_saved_and_a_file_from_before_them_loads(crossing: PDDLInstance,
-                                                                  tmp_path) -> None:
+def test_the_chances_are_saved_and_a_file_without_them_is_refused(crossing: PDDLInstance,
+                                                                   tmp_path) -> None:
     ctx = pddl_task_context(crossing)
     learner = GDQ(ctx)
     path, old = tmp_path / "g.npz", tmp_path / "old.npz"
     save_learner(path, learner)
     assert np.array_equal(load_learner(path, ctx).tables.prior.dead, ctx.prior.dead)
-    with np.load(path, allow_pickle=False) as z:  # saved before the prior kept chances
+    with np.load(path, allow_pickle=False) as z:  # as saved before the prior kept chances
         np.savez(old, **{k: z[k] for k in z.files if k != "prior.dead"})
-    assert np.array_equal(load_learner(old, ctx).tables.prior.dead, ctx.prior.dead)
+    with pytest.raises(ResultsError, match=r"old\.npz: damaged learner file .*prior\.dead"):
+        load_learner(old, ctx)
 
 
 @pytest.mark.parametrize("step_limit,first", [(3, "wade-in"), (2, "step-on-bridge")])

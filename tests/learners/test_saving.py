@@ -188,21 +188,6 @@ def test_a_gdq_on_a_problems_own_scale_round_trips_with_its_file_rewards(tmp_pat
         assert a.dtype == b.dtype and np.array_equal(a, b)
 
 
-def test_a_file_saved_before_the_prior_knew_rewards_loads(ctx_c, tmp_path):
-    """A file without ``prior.reward`` (saved before it existed) loads, with the
-    context's (empty on the goal scale); every other array as saved."""
-    path, old = tmp_path / "g.npz", tmp_path / "old.npz"
-    learner = make_learner("GDQ", ctx_c)
-    save_learner(path, learner)
-    with np.load(path, allow_pickle=False) as z:
-        arrays = {k: z[k] for k in z.files if k != "prior.reward"}
-    np.savez(old, **arrays)
-    loaded = load_learner(old, ctx_c)
-    assert loaded.tables.prior.reward.shape == (0, 0)
-    for a, b in zip(_arrays(loaded), _arrays(learner), strict=True):
-        assert a.dtype == b.dtype and np.array_equal(a, b)
-
-
 # --- identities: a file is used only with what it belongs to (issue 38) -------------------
 
 def test_a_learner_of_one_problem_is_refused_by_another_of_the_same_size(tmp_path):
