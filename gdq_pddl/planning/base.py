@@ -108,18 +108,15 @@ class PlanningProblem:
         domain = parse_domain(domain_text, domain_source)
         problem = parse_problem(problem_text, domain, problem_source, problem_name)
         check_size(problem, problem_source)
-        hashes = text_hash(domain_text), text_hash(problem_text)
+        gap = untold(domain, problem)  # what the text cannot carry (writer.untold)
         if not domain.probabilistic:
             out = cls(domain, problem, domain_text, problem_text)
-            out.text_gap = untold(domain, problem)  # a goal with alternatives
-            out.text_hashes = hashes
-            return out
-        det, gap = determinise(domain, determinisation), untold(domain, problem)
-        out = cls(det, problem, "" if gap else write_domain(det),
-                  write_parsed_problem(problem, domain), domain,
-                  ground_ppddl(domain, problem, determinisation))
-        out.text_gap = gap
-        out.text_hashes = hashes
+        else:
+            det = determinise(domain, determinisation)
+            out = cls(det, problem, "" if gap else write_domain(det),
+                      write_parsed_problem(problem, domain), domain,
+                      ground_ppddl(domain, problem, determinisation))
+        out.text_gap, out.text_hashes = gap, (text_hash(domain_text), text_hash(problem_text))
         return out
 
     @classmethod
