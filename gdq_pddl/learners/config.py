@@ -24,8 +24,7 @@ EXPLORE_ALL = 0.1
 
 GDQVariant = Literal["prior", "literal", "code"]
 GDQ_VARIANTS: tuple[str, ...] = ("prior", "literal", "code")
-"""``prior``, the default GDQ; ``literal`` and ``code``, the paper's two readings (the
-default's former name ``model`` is still accepted)."""
+"""``prior``, the default GDQ; ``literal`` and ``code``, the paper's two readings."""
 DarlingVariant = Literal["paper", "code"]
 
 MAX_BACKUPS = 1_000_000
@@ -244,8 +243,6 @@ class GDQConfig(LearnerConfig):
     must hold a plan table built with that tolerance (its ``darling_plans``)."""
 
     def _resolve(self) -> None:
-        if self.variant == "model":  # the default's former name
-            object.__setattr__(self, "variant", "prior")
         check_choice("variant", self.variant, GDQ_VARIANTS)
         prior = self.variant == "prior"
         for name, default in (("n_backups", 5), ("m", 0 if prior else 5),

@@ -213,7 +213,8 @@ def test_make_learner_takes_every_name_the_command_line_takes(ctx):
         make_learner("sarsa", ctx)
     with pytest.raises(ConfigError, match="unexpected keyword argument 'prior_cost'"):
         make_learner("Dyna-Q", ctx, prior_cost=2.0)
-    assert GDQConfig(variant="model").variant == "prior"  # the default's former name
+    with pytest.raises(ConfigError, match="variant must be one of 'prior', 'literal', 'code'"):
+        GDQConfig(variant="model")  # type: ignore[arg-type]  # the default's former name
     with pytest.raises(ConfigError):
         DarlingConfig(variant="literal")  # type: ignore[arg-type]
 
