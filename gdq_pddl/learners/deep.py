@@ -169,6 +169,8 @@ class DeepLearner:
                 raise ConfigError(f"{self.agent}: the next task's env has other observation "
                                   "or action spaces than the network was built for")
             self.model.set_env(vec)
+        self._states = int(getattr(env.observation_space, "n", 0))
+        self._masks = env.unwrapped.mask_table
         return recorder, vec, first
 
     def train_steps(self, env: gym.Env, steps: int, rng: np.random.Generator,
@@ -183,8 +185,6 @@ class DeepLearner:
             checkpoint(int(self.model.num_timesteps))
         self.model.learn(total_timesteps=steps, reset_num_timesteps=first,
                          callback=_every(every, checkpoint), progress_bar=False)
-        self._states = int(getattr(env.observation_space, "n", 0))
-        self._masks = env.unwrapped.mask_table
         return _records(recorder, len(recorder.rows))
 
     def greedy_actions(self, obs: Any, masks: np.ndarray | None = None) -> np.ndarray:
@@ -208,16 +208,10 @@ class DeepLearner:
         if len(recorder.rows) < n_episodes:  # the step budget is spent: no more learning
             obs = self.model._last_obs if self.model._last_obs is not None else vec.reset()
             while len(recorder.rows) < n_episodes:
-                obs, *_ = vec.step(self._predict(obs, vec))
-        self._states = int(getattr(env.observation_space, "n", 0))
-        self._masks = env.unwrapped.mask_table
+                masks = np.stack(vec.env_method("action_masks")) \
+                    if self.agent == "MaskablePPO" else None
+                obs, *_ = vec.step(self.greedy_actions(obs, masks))
         return _records(recorder, n_episodes)
-
-    def _predict(self, obs: Any, vec: Any) -> np.ndarray:
-        if self.agent == "MaskablePPO":
-            masks = np.stack(vec.env_method("action_masks"))
-            return self.model.predict(obs, deterministic=True, action_masks=masks)[0]
-        return self.model.predict(obs, deterministic=True)[0]
 
     def greedy_policy(self) -> np.ndarray:
         """int64[n_states]: the network's greedy action of each learner state (masked for
@@ -225,13 +219,8 @@ class DeepLearner:
         (its policy is not a function of the index alone, and policies.csv gets no rows)."""
         if self.model is None or self.config.obs != "state" or not self._states:
             return np.zeros(0, dtype=np.int64)
-        states = np.arange(self._states)
-        if self.agent == "MaskablePPO":
-            masks = self._masks[:self._states].astype(bool)
-            actions = self.model.predict(states, deterministic=True, action_masks=masks)[0]
-        else:
-            actions = self.model.predict(states, deterministic=True)[0]
-        return np.asarray(actions, dtype=np.int64)
+        masks = self._masks[:self._states].astype(bool) if self.agent == "MaskablePPO" else None
+        return np.asarray(self.greedy_actions(np.arange(self._states), masks), dtype=np.int64)
 
 
 class _Epsilon:
