@@ -1,0 +1,25 @@
+"""A run builds what its learners read, and no more: no planner runs for a learner that
+reads no plans (issue 35, "compile what is used")."""
+
+from __future__ import annotations
+
+import pytest
+
+from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.pddl_env import PDDLInstance, load_instance
+from gdq_pddl.experiments.checks import check_instance
+
+
+@pytest.fixture
+def no_plan_table(monkeypatch):
+    """Any plan table built fails the test."""
+    def refuse(self, *args, **kwargs):
+        raise AssertionError("a plan table was built")
+
+    for cls in (OfficeInstance, PDDLInstance):
+        monkeypatch.setattr(cls, "plan_table", refuse)
+
+
+def test_the_checks_before_a_run_build_no_plan_table(no_plan_table):
+    check_instance(OfficeInstance.of("C"))
+    check_instance(load_instance("keys-ppddl", "keys-ppddl-2"))
