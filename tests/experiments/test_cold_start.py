@@ -8,6 +8,8 @@ import pytest
 from gdq_pddl.envs.office import OfficeInstance
 from gdq_pddl.envs.pddl_env import PDDLInstance, load_instance
 from gdq_pddl.experiments.checks import check_instance
+from gdq_pddl.experiments.protocol import Unit, task_experiments
+from gdq_pddl.experiments.work import run_unit
 
 
 @pytest.fixture
@@ -23,3 +25,9 @@ def no_plan_table(monkeypatch):
 def test_the_checks_before_a_run_build_no_plan_table(no_plan_table):
     check_instance(OfficeInstance.of("C"))
     check_instance(load_instance("keys-ppddl", "keys-ppddl-2"))
+
+
+@pytest.mark.parametrize("method", ["Q-learning", "Dyna-Q", "R-max", "GDQ"])
+def test_a_learner_that_reads_no_plans_runs_without_a_plan_table(no_plan_table, method):
+    (exp,) = task_experiments(tasks=("C",), episodes=2, runs=1, methods=(method,))
+    assert len(run_unit(Unit(exp, method, 0))["returns"]) == 2
