@@ -3,6 +3,9 @@ reads no plans (issue 35, "compile what is used")."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
 from gdq_pddl.envs.office import OfficeInstance
@@ -31,3 +34,12 @@ def test_the_checks_before_a_run_build_no_plan_table(no_plan_table):
 def test_a_learner_that_reads_no_plans_runs_without_a_plan_table(no_plan_table, method):
     (exp,) = task_experiments(tasks=("C",), episodes=2, runs=1, methods=(method,))
     assert len(run_unit(Unit(exp, method, 0))["returns"]) == 2
+
+
+def test_the_command_and_its_report_import_no_scipy_stats():
+    """scipy.stats (0.6 s of CPU to import) is loaded only by a report that compares
+    methods or tasks (bootstrap, Welch's t-test), not by every command."""
+    code = "import sys, gdq_pddl.cli, gdq_pddl.analysis; print('scipy.stats' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "False"
