@@ -74,7 +74,7 @@ def _finite(x: np.ndarray) -> np.ndarray:
     return np.asarray(x, dtype=float)[~np.isnan(x)]
 
 
-def compare(a: np.ndarray, b: np.ndarray, name_a: str = "GDQ", name_b: str = "baseline",
+def compare(a: np.ndarray, b: np.ndarray, name_a: str, name_b: str,
             higher_is_better: bool = True, seed: int = SEED) -> Comparison:
     """Welch's t-test and the percentile bootstrap 95% CI of ``mean(a) - mean(b)`` over
     runs, NaN dropped: both NaN with fewer than 2 values a side; two constant samples

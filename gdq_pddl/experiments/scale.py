@@ -34,8 +34,7 @@ from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES, check_sizes
 from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.knowledge import BUILDING_PREFIX, building_of, load_world_named
-from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
-from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
+from gdq_pddl.experiments.protocol import DEFAULT_METHODS, Experiment, Hyper, Unit
 from gdq_pddl.experiments.runner import run_experiments, save_unit
 from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners.context import task_context
