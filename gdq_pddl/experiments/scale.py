@@ -30,7 +30,7 @@ from scipy.special import stdtrit  # t's quantile: scipy.stats costs 0.6 s of st
 from gdq_pddl.buildings import building_world
 from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.solve_compact import reference_value
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import ConfigError, GdqError
 from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES, check_sizes
 from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.knowledge import BUILDING_PREFIX, building_of, load_world_named
@@ -39,6 +39,7 @@ from gdq_pddl.experiments.runner import run_experiments, save_unit
 from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
+from gdq_pddl.learners.registry import parse_method
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import check_count, check_memory
 
@@ -327,6 +328,11 @@ def _check(sizes: list[int], runs: int, episodes: int, buildings: int,
                  f"{n_buildings:,} buildings", "give fewer --runs or --buildings")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
+    for m in map(parse_method, methods):  # a deep-RL agent: no tables, no loop to time
+        if hasattr(m.entry.learner_class(), "run_own_episodes"):
+            raise ConfigError(f"method {m.text} cannot run in scale, which times tabular "
+                              "learners' compiled loops on generated buildings: it runs its "
+                              "own episodes (compare it with `gdq-pddl run`)")
     for n in sizes:
         check_memory(_table_bytes(n), f"--sizes {n}: a learner's tables at {n:,} positions",
                      "give smaller --sizes")
