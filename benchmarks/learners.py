@@ -5,9 +5,13 @@
     python benchmarks/learners.py results --runs 100   # the same, with more runs
     python benchmarks/learners.py            # both
     python benchmarks/learners.py speed --method Q-learning Expected-SARSA   # any methods
+    python benchmarks/learners.py cold       # a first run's user CPU, empty numba cache
 
 Speed counts env steps (learner + env, compiled loop) after a JIT warm-up run; the methods
 take turns, repeat by repeat, so a loaded machine slows each alike (compare ratios).
+Cold runs ``gdq-pddl run --task C --method Q-learning --episodes 100 --runs 1 --jobs 1``
+(report included) with an empty ``NUMBA_CACHE_DIR`` each time: the user CPU of a first run
+(docs/reference/times.md), median of ``--runs`` (3 by default here).
 Results use the paper's protocol (alpha 0.1, gamma 0.95, epsilon 0.1, 20 steps, R_max 20)
 with the env seeded 1000 + run and the learner generator seeded 2000 + run.
 """
@@ -15,6 +19,12 @@ with the env seeded 1000 + run and the learner generator seeded 2000 + run.
 from __future__ import annotations
 
 import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
 import time
 
 import gymnasium
@@ -111,19 +121,40 @@ def results(task: str = "C", episodes: int = 300, runs: int = 5,
     return out
 
 
+def cold(runs: int = 3, method: str = "Q-learning") -> float:
+    """Median user CPU (s, the command and its children) of a first ``gdq-pddl run`` of
+    ``method`` on Task C, each with an empty numba cache."""
+    times = []
+    for _ in range(runs):
+        with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
+            before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
+            subprocess.run([sys.executable, "-m", "gdq_pddl.cli", "run", "--task", "C",
+                            "--method", method, "--episodes", "100", "--runs", "1", "--jobs",
+                            "1", "--out", os.path.join(out, "o")], check=True,
+                           env={**os.environ, "NUMBA_CACHE_DIR": cache},
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            times.append(resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime - before)
+    print(f"first run of {method} on Task C, empty numba cache: user CPU "
+          f"{', '.join(f'{t:.1f}' for t in times)} s, median {statistics.median(times):.1f} s")
+    return statistics.median(times)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", nargs="?", choices=["speed", "results", "all"], default="all")
+    parser.add_argument("what", nargs="?", choices=["speed", "results", "cold", "all"],
+                        default="all")
     parser.add_argument("--task", default="C")
     parser.add_argument("--episodes", type=int, default=300)
-    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--runs", type=int, help="runs (default: 5 of results, 3 of cold)")
     parser.add_argument("--method", nargs="+", help="methods (specs) to measure, the first "
                         "the reference of the speed ratios (default: the built-in ones)")
     args = parser.parse_args()
     if args.what in ("speed", "all"):
         speed(args.task, methods=tuple(args.method or METHODS))
+    if args.what == "cold":
+        cold(args.runs or 3, (args.method or ["Q-learning"])[0])
     if args.what in ("results", "all"):
-        results(args.task, args.episodes, args.runs,
+        results(args.task, args.episodes, args.runs or 5,
                 tuple(args.method or METHODS + DIAGNOSTICS))
 
 

@@ -185,7 +185,7 @@ class Writer:
                  for m in self.study.baselines(experiment) if (b := stat(m)).size]
         v, reason = verdict(comps), verdict_reason(comps)
         self.verdicts.rows.append((hypothesis, case, basis, variant, v, reason))
-        label = case if variant == "GDQ" else f"{case}, {variant}"
+        label = case if variant == registry.REFERENCE else f"{case}, {variant}"
         self.add(f"- **{label}: {v}**: {variant} {reason} ({basis})", *[f"  {note}"][:bool(note)])
         self.comparisons(comps, unit)
         return comps

@@ -44,7 +44,7 @@ from gdq_pddl.experiments.knowledge import (
     knowledge_instance,
     world_name,
 )
-from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS, ProblemSpec
+from gdq_pddl.experiments.protocol import DEFAULT_METHODS, ProblemSpec
 from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.learners import registry
@@ -262,7 +262,7 @@ def register_scale(sub) -> None:
     p.add_argument("--buildings", type=POSITIVE, default=2,
                    help="buildings per size: building seeds --seed, --seed + 1, ... "
                         "(default 2, at most 1000)")
-    size_args(p, SCALE_DEFAULT_METHODS, registry.names(), 5000, 5,
+    size_args(p, DEFAULT_METHODS, registry.names(), 5000, 5,
               seed="the first building seed (each run derives its own seeds from its "
                    "building, size and run number)")
     exec_args(p, "results/scale")

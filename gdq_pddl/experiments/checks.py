@@ -39,7 +39,9 @@ def check_instance(instance: PDDLInstance | OfficeInstance) -> None:
     source, key = instance.step_limit_key
     if not isinstance(instance, PDDLInstance):  # a PDDL problem's V* is within a budget
         check_solvable(model, f"{source}: {key}")
-    shortest = int(instance.plan_table().length[instance.learner_start])
+    # the plan table's length at the start, without running a planner (a learner that
+    # reads no plans never pays for one)
+    shortest = instance.goal_distance(instance.learner_start)
     if shortest < 0:  # World.resolve checks reachability: the knowledge disagrees
         raise WorldError(source, f"tasks.{instance.name}", "the planner finds no plan for "
                          f"task {instance.name}")

@@ -31,11 +31,8 @@ GDQ_VARIANTS = registry.variants_of(registry.REFERENCE)
 """The library's GDQ and the two readings of the paper it is compared with."""
 
 DEFAULT_METHODS = registry.built_in_names("default")
-"""What the commands compare unless told otherwise (not GDQ-literal: it never learns)."""
-
-SCALE_DEFAULT_METHODS = DEFAULT_METHODS
-"""What ``gdq-pddl scale`` compares unless told otherwise: every method but GDQ-literal,
-which never learns (``docs/decisions.md``)."""
+"""What the commands (``gdq-pddl scale`` too) compare unless told otherwise (not
+GDQ-literal: it never learns, ``docs/decisions.md``)."""
 
 
 @dataclass(frozen=True)

@@ -25,21 +25,21 @@ from itertools import groupby
 from pathlib import Path
 
 import numpy as np
-import scipy.stats as sps
+from scipy.special import stdtrit  # t's quantile: scipy.stats costs 0.6 s of start-up
 
 from gdq_pddl.buildings import building_world
 from gdq_pddl.envs.office import CompactEnv, OfficeInstance
 from gdq_pddl.envs.solve_compact import reference_value
-from gdq_pddl.errors import GdqError
+from gdq_pddl.errors import ConfigError, GdqError
 from gdq_pddl.experiments.checks import EPISODE_BYTES, UNIT_BYTES, check_sizes
 from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.knowledge import BUILDING_PREFIX, building_of, load_world_named
-from gdq_pddl.experiments.protocol import SCALE_DEFAULT_METHODS as DEFAULT_METHODS
-from gdq_pddl.experiments.protocol import Experiment, Hyper, Unit
+from gdq_pddl.experiments.protocol import DEFAULT_METHODS, Experiment, Hyper, Unit
 from gdq_pddl.experiments.runner import run_experiments, save_unit
 from gdq_pddl.experiments.work import make_learner
 from gdq_pddl.learners.context import task_context
 from gdq_pddl.learners.episodes import run_compact
+from gdq_pddl.learners.registry import parse_method
 from gdq_pddl.learners.tables import table_bytes
 from gdq_pddl.limits import check_count, check_memory
 
@@ -143,7 +143,7 @@ def paired_interval(r: BuildingResult, a: str, b: str) -> tuple[float, float]:
     of its 95% t-interval over the runs (0 with one run)."""
     mean, se = paired_difference([r], a, b)
     n = len(r.returns[b])
-    return mean, se * float(sps.t.ppf(0.975, n - 1)) if n > 1 else 0.0
+    return mean, se * float(stdtrit(n - 1, 0.975)) if n > 1 else 0.0
 
 
 HEADER = ("positions", "seed", "doors", "n_states", "n_actions", "plan_length", "step_limit",
@@ -328,6 +328,11 @@ def _check(sizes: list[int], runs: int, episodes: int, buildings: int,
                  f"{n_buildings:,} buildings", "give fewer --runs or --buildings")
     if not sizes or len(set(sizes)) != len(sizes):
         raise GdqError(f"--sizes must be one or more different sizes, got {list(sizes)}")
+    for m in map(parse_method, methods):  # a deep-RL agent: no tables, no loop to time
+        if hasattr(m.entry.learner_class(), "run_own_episodes"):
+            raise ConfigError(f"method {m.text} cannot run in scale, which times tabular "
+                              "learners' compiled loops on generated buildings: it runs its "
+                              "own episodes (compare it with `gdq-pddl run`)")
     for n in sizes:
         check_memory(_table_bytes(n), f"--sizes {n}: a learner's tables at {n:,} positions",
                      "give smaller --sizes")

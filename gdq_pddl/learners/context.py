@@ -10,8 +10,9 @@ between them, each instance says through :class:`Instance`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import Protocol
+from dataclasses import MISSING, dataclass, replace
+from functools import partial
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -49,24 +50,57 @@ class Instance(Protocol):
                    kind: str = "all") -> PlanTable: ...
 
 
+class BuiltWhenRead:
+    """A field of :class:`TaskContext` that may be given as a function of no arguments,
+    called when the field is first read (a plan table is a planner's run, which a learner
+    that reads no plans never pays for); ``default`` as a dataclass field's."""
+
+    def __init__(self, default: Any = MISSING) -> None:
+        self.default = default
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, context: Any, owner: type | None = None) -> Any:
+        if context is None:  # the dataclass asks for the default
+            if self.default is MISSING:
+                raise AttributeError(self.name)
+            return self.default
+        value = context.__dict__[self.name]
+        if callable(value):
+            value = context.__dict__[self.name] = value()
+        return value
+
+    def __set__(self, context: Any, value: Any) -> None:
+        context.__dict__[self.name] = value
+
+    @staticmethod
+    def built(context: Any, name: str) -> bool:
+        """Whether field ``name`` of ``context`` holds its value (was given or read)."""
+        return not callable(vars(context).get(name))
+
+
 @dataclass(frozen=True, eq=False)
 class TaskContext:
     """One task as the learners see it.
 
     ``plans`` (tolerance 0: every shortest plan from every learner state) is GDQ's H;
     ``darling_plans`` (plans up to ``(1 + darling_tolerance)`` x the shortest) defines
-    DARLING's allowed actions. Either may be empty (a planner that found nothing).
+    DARLING's allowed actions. Either may be empty (a planner that found nothing), and
+    either may be given as a function that makes it, called when it is first read
+    (:class:`BuiltWhenRead`: :func:`task_context` plans only for a learner that reads the
+    plans).
     """
 
     s0: int
     """Learner state at the start of every episode."""
     goal: np.ndarray
     """bool[n_states]: the learner states that end an episode with success."""
-    plans: PlanTable
+    plans: PlanTable = BuiltWhenRead()  # type: ignore[assignment]
     """Shortest plans from every learner state to the goal (tolerance 0)."""
     r_max: float
     """The world's success reward (failure is -r_max)."""
-    darling_plans: PlanTable | None = None
+    darling_plans: PlanTable | None = BuiltWhenRead(None)  # type: ignore[assignment]
     """Plans within the DARLING tolerance, or None if not built."""
     darling_tolerance: float | None = None
     """The tolerance ``darling_plans`` was built with."""
@@ -136,8 +170,13 @@ class TaskContext:
     @property
     def n_actions(self) -> int:
         """Columns of a state's row in the learner's tables (the number of learner
-        actions where :attr:`columns` is None)."""
-        return int(self.plans.first_actions.shape[1])
+        actions where :attr:`columns` is None): the plans' width, or while they are not
+        made, the columns' or the prior's."""
+        if not BuiltWhenRead.built(self, "plans"):
+            for given in (self.columns, getattr(self.prior, "next_state", None)):
+                if isinstance(given, np.ndarray) and given.ndim == 2:
+                    return int(given.shape[1])
+        return int(getattr(self.plans.first_actions, "shape", (0, 0))[1])
 
     @property
     def live(self) -> np.ndarray:
@@ -161,14 +200,15 @@ class TaskContext:
 def row_context(context: TaskContext, rows: np.ndarray) -> TaskContext:
     """``context`` restricted to the states ``rows`` (in that order): what the learners'
     mask hooks read, so a problem explored online remakes only the rows it changed."""
-    def plans(table: PlanTable | None) -> PlanTable | None:
+    def plans(name: str) -> PlanTable | None:
+        table = getattr(context, name)
         return None if table is None else PlanTable(table.first_actions[rows],
                                                     table.length[rows], table.plans)
 
     prior = context.prior
     return replace(
-        context, s0=0, goal=context.goal[rows], plans=plans(context.plans),
-        darling_plans=plans(context.darling_plans),
+        context, s0=0, goal=context.goal[rows], plans=partial(plans, "plans"),
+        darling_plans=partial(plans, "darling_plans"),
         prior=None if prior is None else prior.rows(rows),
         columns=None if context.columns is None else context.columns[rows],
         prior_reward=None if context.prior_reward is None else context.prior_reward[rows])
@@ -193,7 +233,7 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
                  darling_kind: str = "all") -> TaskContext:
     """The :class:`TaskContext` of an instance of the one pipeline: plans by ``planner``
     (its shortest, and DARLING's within ``darling_tolerance``, built as ``darling_kind``
-    says: :data:`~gdq_pddl.envs.office.TOLERANT_KINDS`)."""
+    says: :data:`~gdq_pddl.envs.office.TOLERANT_KINDS`), made when first read."""
     columns = getattr(instance, "columns", None)
     n_s, k = instance.n_states, instance.max_successors
     n_a = instance.n_actions if columns is None else columns.shape[1]
@@ -207,8 +247,8 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
                             "smaller")
     return TaskContext(
         s0=instance.learner_start, goal=instance.learner_goal,
-        plans=instance.plan_table(planner, 0.0), r_max=instance.r_max,
-        darling_plans=instance.plan_table(planner, darling_tolerance, darling_kind),
+        plans=partial(instance.plan_table, planner, 0.0), r_max=instance.r_max,
+        darling_plans=partial(instance.plan_table, planner, darling_tolerance, darling_kind),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,

@@ -221,10 +221,15 @@ class GDQ(TabularLearner):
                                1_000_000) < 0:
             raise AssertionError("reverse index sized too small")  # _prior_arrays
 
+    def _plans(self, context: TaskContext) -> None:
+        """None: the default plans on the prior (its ``explore="plans"`` reads the plans
+        for its guide alone)."""
+        return None
+
     @property
     def optimistic_pairs(self) -> np.ndarray:
         """bool[S, A]: OptInit's plan pairs of the paper's readings (:class:`PaperGDQ`);
-        the default plans on the prior, whose optimism is in its values."""
+        none here: the default plans on the prior, whose optimism is in its values."""
         return self.tables.plans.opt_r
 
 

@@ -17,6 +17,7 @@ import numpy as np
 from gdq_pddl.envs.compact import CompactModel
 from gdq_pddl.envs.step import width_of
 from gdq_pddl.errors import ConfigError
+from gdq_pddl.learners.context import BuiltWhenRead, TaskContext
 from gdq_pddl.learners.tables import (
     BACKUP_EXPECTED,
     BACKUP_SAMPLE,
@@ -171,15 +172,14 @@ def check_context(context: object, n_states: int | None = None,
                   n_actions: int | None = None) -> None:
     """A task context a learner can use (of ``n_states x n_actions`` when given: a task
     switch keeps the learner's size)."""
-    for name in ("s0", "goal", "plans", "r_max", "darling_plans", "prior"):
-        if not hasattr(context, name):
-            raise ConfigError(f"the context must be a TaskContext (office_task_context, "
-                              f"pddl_task_context), got {type(context).__name__}")
+    if not isinstance(context, TaskContext):
+        raise ConfigError(f"the context must be a TaskContext (office_task_context, "
+                          f"pddl_task_context), got {type(context).__name__}")
     goal = context.goal
     if not isinstance(goal, np.ndarray) or goal.ndim != 1 or len(goal) == 0 or \
             goal.dtype != np.bool_:
         raise ConfigError("TaskContext.goal must be a non-empty 1-D bool array")
-    size = (len(goal), int(getattr(context.plans.first_actions, "shape", (0, 0))[1]))
+    size = (len(goal), context.n_actions)
     if size[1] < 1:
         raise ConfigError("TaskContext.plans must have at least one action")
     if n_states is not None and size != (n_states, n_actions):
@@ -192,6 +192,8 @@ def check_context(context: object, n_states: int | None = None,
         raise ConfigError(f"TaskContext.r_max must be a finite number in [0, {MAX_NUMBER:g}],"
                           f" got {r_max!r}")
     for name in ("plans", "darling_plans"):
+        if not BuiltWhenRead.built(context, name):  # the context's own planner's, if read
+            continue
         table = getattr(context, name)
         if table is not None and table.enumerated:  # as the learner's Plans group
             group = Plans(np.ascontiguousarray(table.first_actions), table.plan_ptr,

@@ -20,7 +20,7 @@ from gdq_pddl.learners.tabular import TabularLearner
 from gdq_pddl.world import builtin_world
 
 
-def compile_loop(methods: Sequence[str] = ("Q-learning",)) -> None:
+def compile_loop(methods: Sequence[str]) -> None:
     """Compile the episode loops of ``methods`` (or load them from numba's cache), with the
     argument types of their learners on the office (the same on any ``ModelArrays`` env);
     nothing runs. A method whose learner cannot be made on the office is left out."""

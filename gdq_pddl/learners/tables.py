@@ -276,18 +276,9 @@ def greedy_draw(table: QTable, p: Params, s: int, rng: np.random.Generator) -> i
     return last
 
 
-@numba.njit(cache=True)
 def greedy(table: QTable, p: Params) -> np.ndarray:
     """The greedy policy: per state, the lowest-index action of maximal Q among the allowed
-    ones (DARLING: ``guide``, which differs from ``allowed`` for DARLING-code)."""
-    q = table.q
-    n_states, n_actions = q.shape
+    ones (DARLING: ``guide``, which differs from ``allowed`` for DARLING-code); 0 where
+    none is allowed. Plain numpy: called once per run, not worth a compile."""
     mask = table.guide if p.kind == KIND_DARLING else table.allowed
-    out = np.zeros(n_states, dtype=np.int64)
-    for s in range(n_states):
-        best = -np.inf
-        for a in range(n_actions):
-            if mask[s, a] and q[s, a] > best:
-                best = q[s, a]
-                out[s] = a
-    return out
+    return np.where(mask, table.q, -np.inf).argmax(axis=1).astype(np.int64)

@@ -177,9 +177,11 @@ class TabularLearner:
         """What the learner may execute, per state (:mod:`~gdq_pddl.learners.tables`)."""
         return allowed
 
-    def _plans(self, context: TaskContext) -> PlanTable:
-        """H: the plans this learner backs up (GDQ may ask for plans within a tolerance)."""
-        return context.plans
+    def _plans(self, context: TaskContext) -> PlanTable | None:
+        """H: the plans whose pairs the rules may read (``Plans``: OptInit's ``opt_r``, the
+        plans the paper's GDQ walks); None for a learner that reads no knowledge
+        (:attr:`reads_knowledge`), for which the context's plans are never made."""
+        return context.plans if self.reads_knowledge else None
 
     def _init_task(self) -> None:
         """What happens when a task starts (after the tables are rebuilt)."""
@@ -202,7 +204,8 @@ class TabularLearner:
         allowed = np.ascontiguousarray(self._allowed(context), dtype=np.bool_)
         guide = np.ascontiguousarray(self._guide(context, allowed), dtype=np.bool_)
         plans = self._plans(context)
-        opt_r = plans.start_pairs(context.s0)
+        opt_r = np.zeros(allowed.shape, dtype=np.bool_) if plans is None else \
+            plans.start_pairs(context.s0)
         walked = (plans.plan_ptr, plans.pair_ptr, plans.pair_state, plans.pair_action) \
             if self.kind == KIND_GDQ_PLANS else (  # only the paper's GDQs walk plans
                 np.zeros(len(allowed) + 1, dtype=np.int64), np.zeros(1, dtype=np.int64), _I0, _I0)

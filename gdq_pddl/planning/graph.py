@@ -12,8 +12,7 @@ import heapq
 import itertools
 import math
 from functools import cache
-
-import networkx as nx
+from typing import TYPE_CHECKING
 
 from gdq_pddl.planning.base import (
     Plan,
@@ -24,6 +23,9 @@ from gdq_pddl.planning.base import (
     no_plan,
 )
 from gdq_pddl.planning.heuristic import INFINITE, hmax_for
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 _SINK = -1
 
@@ -57,6 +59,8 @@ class GraphPlanner:
             return problem.remember(key, no_plan(self.name, t0,
                                                  states=graph.number_of_nodes()))
         if tolerance == 0:
+            import networkx as nx  # start-up time: loaded only when a plan is searched
+
             paths = nx.all_shortest_paths(graph, s0, _SINK)
         else:
             paths = _bounded_paths(graph, s0, length_bound(depth, tolerance))
@@ -69,6 +73,8 @@ class GraphPlanner:
         """The part of the state graph that plans within the tolerance can use (see the
         module docstring), its goal states and the shortest length."""
         task = problem.task
+        import networkx as nx  # start-up time: loaded only when a plan is searched
+
         hmax = hmax_for(task)
         h = cache(lambda s: hmax(s, goal[0]))
         graph = nx.DiGraph()
@@ -148,6 +154,8 @@ def shortest_length(task, s0: int, goal: tuple[int, int], h=lambda s: 0) -> int 
 
 def _bounded_paths(graph: nx.DiGraph, source: int, bound: int):
     """Loop-free paths ``source -> ... -> sink`` with at most ``bound`` actions."""
+    import networkx as nx  # start-up time: loaded only when a plan is searched
+
     to_sink = nx.single_source_shortest_path_length(graph.reverse(copy=False), _SINK)
     path, on_path = [source], {source}
 

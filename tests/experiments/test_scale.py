@@ -251,3 +251,19 @@ def test_scale_cli_says_how_to_resume_without_a_traceback(tmp_path, monkeypatch,
     # any registered method runs (DARLING-code too, since the registry); an unknown is refused
     assert main(["scale", "--method", "SARSA", "--out", str(tmp_path / "x")]) == 2
     assert "unknown method 'SARSA' (known: GDQ, GDQ-literal" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("method", ["PPO", "dqn", "MaskablePPO"])
+def test_scale_refuses_a_deep_rl_agent_in_one_line(tmp_path, capsys, monkeypatch, method):
+    """With the sb3 extra, a deep-RL agent is refused before anything is written: scale
+    times the compiled loops of tabular learners (it ran into the agent's missing act)."""
+    from gdq_pddl.learners import registry
+
+    monkeypatch.setattr(registry, "missing", lambda found: "")  # as if sb3 were installed
+    code = main(["scale", "--sizes", "40", "--buildings", "1", "--runs", "1", "--episodes",
+                 "2", "--method", "Q-learning", method, "--jobs", "1", "--out",
+                 str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "cannot run in scale" in err and "gdq-pddl run" in err
+    assert not (tmp_path / "o").exists()

@@ -3,6 +3,7 @@ name plus settings checked against the learner's config class, names in any case
 
 from __future__ import annotations
 
+import ast
 import re
 from pathlib import Path
 
@@ -25,7 +26,7 @@ def test_every_list_of_methods_reads_the_registry():
     names = tuple(e.name for e in registry.BUILT_IN)
     assert METHODS == protocol.METHODS == METHOD_ORDER == names
     assert set(protocol.PAPER_METHODS) <= set(protocol.DEFAULT_METHODS) | {"GDQ"}
-    assert protocol.DEFAULT_METHODS == protocol.SCALE_DEFAULT_METHODS
+    assert not hasattr(protocol, "SCALE_DEFAULT_METHODS")  # one default list, not aliases
     assert tuple(n for n in names if n.startswith("GDQ")) == protocol.GDQ_VARIANTS
     assert set(PLAN_METHODS) == {e.name for e in registry.BUILT_IN if e.knowledge != "none"}
     assert KNOWLEDGE_METHODS == PLAN_METHODS  # every guided method, in the registry's order
@@ -40,6 +41,33 @@ def test_no_module_but_the_registry_declares_a_learner():
              for i, line in enumerate(p.read_text().splitlines(), 1)
              if len(quoted.findall(line)) >= 2]
     assert lists == []
+
+
+LEARNER_MODULES = {f"learners/{m}.py" for m in (
+    "__init__", "registry", "config", "rules", "tabular", "agents", "deep", "gdq", "gdq_learner",
+    "gdq_paper", "rmax", "shaping", "replan")}
+"""The learners' own modules (their names, classes and messages)."""
+NAMING = {"analysis/sections.py": "the paper's report sections write about its methods",
+          "exercises/grading.py": "each exercise grades one named learner's rule"}
+"""The modules outside them that name a learner, and why."""
+
+
+def test_no_code_outside_the_learners_names_a_learner():
+    """No string of the package's code, outside the learners' modules and :data:`NAMING`,
+    is a learner's name or alias (any case, with settings or not): it reads the registry."""
+    keys = {registry.key_of(n) for e in registry.BUILT_IN + registry.DEEP
+            for n in (e.name, *e.aliases)}
+    found = set()
+    for path in PACKAGE.rglob("*.py"):
+        where = path.relative_to(PACKAGE).as_posix()
+        if where in LEARNER_MODULES or where in NAMING:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                name = node.value.partition(":")[0]
+                if "_" not in name and registry.key_of(name) in keys:
+                    found.add(f"{where}:{node.lineno}: {node.value!r}")
+    assert sorted(found) == []
 
 
 @pytest.mark.parametrize("given, canonical", [
