@@ -204,8 +204,12 @@ class OnlineInstance:
 
     @property
     def max_successors(self) -> int:
-        """Distinct next states a pair can have at most: its outcomes of probability > 0."""
-        return max([sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
+        """Distinct next states a pair can have at most: its outcomes of probability > 0;
+        of a factored ground action (too many to list), as many as its determinisation
+        lists plus one, a start: a learner's model makes room for more as it meets them
+        (:meth:`~gdq_pddl.learners.tabular.TabularLearner.observe`)."""
+        return max([len(op.outcomes) + 1 if op.factored else
+                    sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
 
     @property
     def prior(self) -> PriorModel:
@@ -523,13 +527,19 @@ class OnlineInstance:
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
             self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
         m, states = self.step_model(x)
+        drawn = np.flatnonzero(g.factored[offered]) if len(g.factored) else offered[:0]
         if self.base.knows_dead_ends:  # dead ends as the distances above say (-1)
             dead = np.isin(states, nxt[d_to < 0])
             dead[0] = d < 0  # x itself
             self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next, dead)
+            # a factored action's outcomes are not listed: no chance of a dead end is
+            # known (0, optimistic as the prior's successor is), but where x is one
+            self._prior_dead[r, drawn] = float(d < 0)
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+            for j in drawn.tolist():  # the parts' best gains add up
+                self._prior_reward[r, j] = g.best_gain(x, int(offered[j])) - pair_cost[0, j]
 
 
 def _no_way(base: PDDLInstance) -> str:

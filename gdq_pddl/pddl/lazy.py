@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask, combine, sample_parts
 from gdq_pddl.pddl.reachable import reality_ranks
 from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 
@@ -43,7 +43,7 @@ def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
     not the edges', failed trials aside), as :func:`~gdq_pddl.pddl.wordrows.compile_ops`
     sorts them."""
     place, reality = {}, []
-    for j, o in enumerate(op.outcomes):
+    for j, o in enumerate(op.outcomes if not op.factored else ()):  # drawn, never listed
         if o.probability > 0:
             place[j] = len(reality)
             reality.append((o.probability, bool(o.stuck), o.apply if o.moves() and not o.stuck
@@ -51,7 +51,7 @@ def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
     known = tuple(place[j] if j in place and not op.outcomes[j].stuck
                   else op.outcomes[j].apply for j in op.known)
     other = tuple(place[j] for j, o in enumerate(op.outcomes) if o.probability > 0
-                  and not o.stuck and j not in op.known and o.moves())
+                  and not o.stuck and j not in op.known and o.moves() and j in place)
     return tuple(reality), known, other
 
 
@@ -86,7 +86,7 @@ class LazyGraph:
         # action leaves the state as it is, and its outcomes need not be applied one by one
         quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
         for k, op in enumerate(task.ops):
-            if not any(o.add or o.dele for o in op.outcomes):
+            if not op.factored and not any(o.add or o.dele for o in op.outcomes):
                 quiet[k] = True
                 fire += [(k, p, n) for o in op.outcomes for p, n, _, _ in o.conditional]
         self._may_stay = quiet
@@ -94,6 +94,8 @@ class LazyGraph:
         self._fires = RowConditions([(p, n) for _, p, n in fire])
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
+        self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
+        """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
         self._gain_terms()
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
@@ -217,6 +219,35 @@ class LazyGraph:
         self._expanded[x] = True
         return fresh
 
+    def draw(self, x: int, k: int, rng: np.random.Generator) -> tuple[int, bool, float]:
+        """Reality's outcome of factored ground action ``k`` in discovered state ``x``,
+        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.grounding.sample_parts`,
+        one uniform a part): ``(next id, stuck, gain)``, the next state discovered if it
+        is new (a failed trial stays in ``x``; gain 0 without :attr:`gains`)."""
+        op = self.task.ops[k]
+        if not op.factored:
+            raise ValueError(f"{op.name} is not factored: its outcomes are listed "
+                             "(outcomes)")
+        s = self._masks[x]
+        o = combine(sample_parts(op, rng))
+        t = s if o.stuck else o.apply(s)
+        y = self._index.get(t)
+        if y is None:
+            y = self._index[t] = self._n
+            self._append([t])
+        return y, o.stuck, (o.gain(s) if self.gains else 0.0)
+
+    def best_gain(self, x: int, k: int) -> float:
+        """The most an outcome of factored ground action ``k`` earns in state ``x`` that
+        does not fail the trial (where one can: every part has such an outcome; else of
+        all): each part's most, added up, as the gains of its parts add up."""
+        s = self._masks[x]
+        parts = self.task.ops[k].parts
+        live = [[o.gain(s) for o in part if not o.stuck] for part in parts]
+        if all(live):
+            return float(sum(max(g) for g in live))
+        return float(sum(max(o.gain(s) for o in part) for part in parts))
+
     def _gain_terms(self) -> None:
         """Reality's outcomes of every ground action as one flat list (ground action
         ``k``'s from ``_first[k]``), their fixed rewards and their conditional rewards'
@@ -329,7 +360,9 @@ class LazyGraph:
         """Reality's outcomes of every offered action of expanded state ``x``: ``(column,
         probability, next id, stuck, gain)``, ``column`` an index into :meth:`offered`,
         merged and ordered as :func:`~gdq_pddl.pddl.outcomes.reality_outcomes` gives the
-        state's pairs (gain all zeros without ``gains``; none for a goal)."""
+        state's pairs (gain all zeros without ``gains``; none for a goal). A factored
+        ground action's column (:attr:`factored`) lists none: its outcome is drawn
+        (:meth:`draw`), never listed."""
         if self._require(x):
             return self._outcomes[x]
         return _NONE, np.zeros(0), _NONE, np.zeros(0, dtype=np.bool_), np.zeros(0)
