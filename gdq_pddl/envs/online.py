@@ -26,6 +26,17 @@ they read shortest plans on an enumerated problem, without any change to their r
 Distances of expanded states are one-step lookaheads over the estimates
 (``d(s) = 1 + min d(s')``), fixed when the state is expanded.
 
+A factored ground action (too many outcomes to list: IPPC-2008 sysadmin-slp's ``reboot``)
+is stepped by drawing one outcome of each of its parts
+(:meth:`~gdq_pddl.pddl.lazy.LazyGraph.draw`). What the learners see of it is what any
+learner sees: the sampled steps, from which the model-based ones build their learned
+model (its successor slots grow as a pair meets new next states). Its prior is the
+knowledge's as for any action (the successor of the determinisation's outcomes closest
+to the goal by the estimates, the parts' outcomes taken one at a time); on the problem's
+own scale its prior reward is the most its outcomes can earn (each part's most, added
+up); its chance of a dead end is 0 (not computed: it would need the product), but where
+the state itself is one.
+
 Rows never move; the arrays grow by doubling (a new *revision*: the learners resize);
 each change logs the rows it touched (:attr:`OnlineInstance.log`), which the episode
 loop hands to the learner (:class:`gdq_pddl.learners.online.Follower`). Unused rows are

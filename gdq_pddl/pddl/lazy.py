@@ -16,6 +16,12 @@ with their probabilities summed in outcome order, goal states never expanded. Ex
 every state in id order numbers them exactly as the enumeration does; in any other order
 the graph is the same up to renaming states.
 
+A factored ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`:
+a forall of probabilistic effects whose product is too large to list) has its edges (the
+determinisation's outcomes, each part's taken one at a time) but no listed outcome:
+reality's outcome of it is drawn part by part when an agent takes it (:meth:`LazyGraph.draw`),
+and the state it reaches is discovered then.
+
 A state's effects are applied on its Python int bitmask by the ground task's own
 outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`,
 :meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`): for one
@@ -96,6 +102,7 @@ class LazyGraph:
             if task.ops else ((), (), ())
         self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
         """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
+        self._fixed_gains: dict[int, tuple] = {}  # best_gain's parts that do not vary
         self._gain_terms()
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
@@ -242,11 +249,20 @@ class LazyGraph:
         does not fail the trial (where one can: every part has such an outcome; else of
         all): each part's most, added up, as the gains of its parts add up."""
         s = self._masks[x]
-        parts = self.task.ops[k].parts
-        live = [[o.gain(s) for o in part if not o.stuck] for part in parts]
-        if all(live):
-            return float(sum(max(g) for g in live))
-        return float(sum(max(o.gain(s) for o in part) for part in parts))
+        fixed = self._fixed_gains.get(k)
+        if fixed is None:  # the parts whose outcomes earn the same in every state, once
+            parts = self.task.ops[k].parts
+            same = [part for part in parts if not any(o.rewards for o in part)]
+            live = [[o.reward for o in part if not o.stuck] for part in same]
+            fixed = self._fixed_gains[k] = (
+                all(live), sum(max(g) for g in live if g), sum(max(o.reward for o in part)
+                                                              for part in same),
+                [part for part in parts if any(o.rewards for o in part)])
+        all_live, live_sum, any_sum, varying = fixed
+        live = [[o.gain(s) for o in part if not o.stuck] for part in varying]
+        if all_live and all(live):
+            return float(live_sum + sum(max(g) for g in live))
+        return float(any_sum + sum(max(o.gain(s) for o in part) for part in varying))
 
     def _gain_terms(self) -> None:
         """Reality's outcomes of every ground action as one flat list (ground action

@@ -6,6 +6,30 @@ planner's determinisation keeps and under what names (:data:`DETERMINISATIONS`,
 :func:`kept_outcomes`, :func:`planner_names`, :func:`kept_ground`). The one grounder,
 :func:`gdq_pddl.pddl.grounding.ground`, turns them into
 :class:`~gdq_pddl.pddl.grounding.GroundOutcome` bitmasks.
+
+**Factored effects.** Each binding of a ``forall`` of a probabilistic effect is an
+independent draw, so a ground action's outcomes are the product of its draws: IPPC-2008
+sysadmin-slp's ``reboot`` has ``2 x 4^(n-1)`` on ``n`` computers. Up to
+:data:`FACTORED_ABOVE` (4096) they are listed, as they always were (every problem that
+ran before is grounded byte for byte as before). Past it, where every outcome of the
+schema has the same choices (the action is its own outcomes *times* independent draws,
+not a mixture of products), the action is kept :class:`Factored`: its own outcomes and
+one part per draw, never multiplied out. Reality then draws one outcome of each part
+(:func:`~gdq_pddl.pddl.grounding.sample_parts`), as the competition's simulator samples
+each binding. The knowledge cannot list the product either, so its determinisation is
+**each part's outcomes taken one at a time** (:func:`factored_kept`): the outcome of
+every part at its most likely outcome, then, for each part, each of its other outcomes
+with every other part at its most likely: ``1 + sum(|part| - 1)`` outcomes, growing with
+the sum of the parts, not their product. Why this one (``docs/decisions.md``): the
+delete relaxation over it is the delete relaxation over every outcome of the product
+(each outcome of each part adds its facts in some listed outcome, under the same
+precondition and conditions), so h_max, h_add and h_FF, which online exploration and its
+V* bound read, are what the listed product would give; its first outcome is the
+product's most likely combination of draws (the most likely draw of each independent
+part), what ``most-likely`` keeps; and it is the part-by-part reading the issue cites from the
+competition's determinising planners. What it leaves out are the combinations in which
+two or more parts leave their most likely outcome at once: a replanning learner meets
+them as they happen.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ from gdq_pddl.envs.online import OnlineInstance
 from gdq_pddl.envs.online_env import OnlineEnv
 from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import TooManyStates
-from gdq_pddl.learners import make_learner, run_episodes
+from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.pddl import ppddl_effects
 from gdq_pddl.pddl.grounding import combine
@@ -120,6 +120,30 @@ def test_the_env_draws_a_factored_action_as_listed(monkeypatch):
     for key, p in want.items():
         sd = (p * (1 - p) / draws) ** 0.5
         assert abs(counts.get(key, 0) / draws - p) <= 5 * sd + 1 / draws, (key, p)
+
+
+def test_a_factored_pairs_prior_reward_is_the_listed_ones(monkeypatch):
+    """On the problem's own scale a pair's prior reward is the most its outcomes earn:
+    of a factored reboot, each part's most added up, which is the listing's most (five
+    computers, enumerated without factoring) in every state a run expands."""
+    listed = PDDLInstance.from_texts(SYSADMIN, network(5))
+    enumerated = pddl_task_context(listed).prior_reward
+    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    online = OnlineInstance(PDDLInstance.from_texts(SYSADMIN, network(5)))
+    env = OnlineEnv(online)
+    env.reset(seed=0)
+    run_episodes(make_learner("Q-learning", online_context(online)), env, 10,
+                 np.random.default_rng(1))
+    checked = 0
+    for row in range(online.n_rows):
+        x = online.state_of(row)
+        if x >= 0 and online.graph.expanded[x]:
+            s = listed.graph.index[online.graph.mask(x)]
+            k = int((online.columns[row] >= 0).sum())
+            assert np.array_equal(online.columns[row, :k], listed.graph.offered[s, :k])
+            assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
+            checked += 1
+    assert checked > 5
 
 
 def test_the_determinisation_grows_with_the_sum_of_the_parts():
