@@ -129,7 +129,7 @@ class GroundOp:
 
     @cached_property
     def _single(self) -> GroundOutcome:
-        if len(self.outcomes) != 1 or self.outcomes[0].conditional:
+        if len(self.outcomes) != 1 or self.outcomes[0].conditional or self.parts:
             raise TypeError(f"{self.name} has no single unconditional effect (see its "
                             "outcomes)")
         return self.outcomes[0]
