@@ -214,11 +214,17 @@ class OnlineInstance:
                 "states": f"{n} rows sha256:{digest.hexdigest()}"}
 
     @property
+    def successors_grow(self) -> bool:
+        """Whether a ground action is factored: its pairs' next states are more than
+        :attr:`max_successors` lists, and the learners make room as they meet them."""
+        return bool(self.graph.factored.any())
+
+    @property
     def max_successors(self) -> int:
         """Distinct next states a pair can have at most: its outcomes of probability > 0;
         of a factored ground action (too many to list), as many as its determinisation
         lists plus one, a start: a learner's model makes room for more as it meets them
-        (:meth:`~gdq_pddl.learners.tabular.TabularLearner.observe`)."""
+        (:attr:`successors_grow`)."""
         return max([len(op.outcomes) + 1 if op.factored else
                     sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
 

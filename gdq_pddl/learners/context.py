@@ -77,6 +77,11 @@ class TaskContext:
     world's true model (:func:`successor_capacity`): how many successor slots per pair the
     model-based learners allocate. A capacity, not knowledge the learners use; None:
     every learner state (always enough, and as large as a dense model)."""
+    successors_grow: bool = False
+    """The true model's next states of a pair are more than any capacity could list (a
+    problem with factored actions, explored online: :attr:`max_successors` is a start):
+    the model-based learners double a pair's slots when it meets one more. False: a
+    transition past :attr:`max_successors` is an error."""
     prior: PriorModel | None = None
     """The action knowledge as a deterministic model over every learner pair (where each
     action leads if the knowledge is right; :mod:`gdq_pddl.abstraction.prior`): what
@@ -210,6 +215,7 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         plans=instance.plan_table(planner, 0.0), r_max=instance.r_max,
         darling_plans=instance.plan_table(planner, darling_tolerance, darling_kind),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
+        successors_grow=bool(getattr(instance, "successors_grow", False)),
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),

@@ -316,13 +316,15 @@ class TabularLearner:
 
     def _room_for(self, s: int, a: int, s2: int) -> None:
         """Twice the successor slots where column ``a`` of ``s`` has none free for a new
-        ``s2``: a problem explored online whose factored actions have more outcomes than
-        any capacity could list (:attr:`OnlineInstance.max_successors
-        <gdq_pddl.envs.online.OnlineInstance.max_successors>` is a start); elsewhere the
-        capacity is the true model's, and this never happens."""
+        ``s2``, where the context says the slots are a start
+        (:attr:`TaskContext.successors_grow <gdq_pddl.learners.context.TaskContext.
+        successors_grow>`: a problem explored online whose factored actions have more
+        outcomes than any capacity could list); elsewhere the capacity bounds the true
+        model's successors, and a step past it is an error."""
         slots = self._model.slots
         k = slots.shape[2]
-        if self.kind in MODEL_BASED and 0 < k < len(self.q) and slots[s, a, k - 1] != 0 \
+        if self.context.successors_grow and self.kind in MODEL_BASED and 0 < k < len(self.q) \
+                and slots[s, a, k - 1] != 0 \
                 and not learned_model.has_successor(slots, s, a, s2):
             self.reserve_successors(min(2 * k, len(self.q)))
 
