@@ -77,11 +77,6 @@ class TaskContext:
     world's true model (:func:`successor_capacity`): how many successor slots per pair the
     model-based learners allocate. A capacity, not knowledge the learners use; None:
     every learner state (always enough, and as large as a dense model)."""
-    successors_grow: bool = False
-    """The true model's next states of a pair are more than any capacity could list (a
-    problem with factored actions, explored online: :attr:`max_successors` is a start):
-    the model-based learners double a pair's slots when it meets one more. False: a
-    transition past :attr:`max_successors` is an error."""
     prior: PriorModel | None = None
     """The action knowledge as a deterministic model over every learner pair (where each
     action leads if the knowledge is right; :mod:`gdq_pddl.abstraction.prior`): what
@@ -127,6 +122,11 @@ class TaskContext:
     """The determinisation the planner and the prior read a PPDDL problem by
     (``"all-outcomes"``, ``"most-likely"``); None where there is no choice (STRIPS, the
     office)."""
+    successors_grow: bool = False
+    """The true model's next states of a pair are more than any capacity could list (a
+    problem with factored actions, explored online: :attr:`max_successors` is a start):
+    the model-based learners double a pair's slots when it meets one more. False: a
+    transition past :attr:`max_successors` is an error."""
 
     @property
     def n_env_actions(self) -> int:
