@@ -9,12 +9,18 @@ planner's determinisation keeps and under what names (:data:`DETERMINISATIONS`,
 
 **Factored effects.** Each binding of a ``forall`` of a probabilistic effect is an
 independent draw, so a ground action's outcomes are the product of its draws: IPPC-2008
-sysadmin-slp's ``reboot`` has ``2 x 4^(n-1)`` on ``n`` computers. Up to
-:data:`FACTORED_ABOVE` (4096) they are listed, as they always were (every problem that
-ran before is grounded byte for byte as before). Past it, where every outcome of the
-schema has the same choices (the action is its own outcomes *times* independent draws,
-not a mixture of products), the action is kept :class:`Factored`: its own outcomes and
-one part per draw, never multiplied out. Reality then draws one outcome of each part
+sysadmin-slp's ``reboot`` has ``2 x 4^(n-1)`` on ``n`` computers. Where every outcome
+of the schema has the same choices (the action is its own outcomes *times* independent
+draws, not a mixture of products) and the product of the parts' sizes passes
+:data:`FACTORED_ABOVE` (4096), the action is kept :class:`Factored`: its own outcomes
+and one part per draw, never multiplied out. Otherwise they are listed, as they always
+were. The rule reads the product, not the listing after equal effects merge: finding
+the merged size means listing up to 4096 of them, seconds an action (``_merged`` over
+fact sets); so an action whose draws merge to at most 4096 outcomes while their product
+passes it (draws with equal effects, such as rewards that add up) was listed before and
+is factored now, and its problem runs online. None of the public problems that ran
+before is such a one (their grounded actions are the same: ``docs/decisions.md``).
+Reality draws one outcome of each part of a factored action
 (:func:`~gdq_pddl.pddl.grounding.sample_parts`), as the competition's simulator samples
 each binding. The knowledge cannot list the product either, so its determinisation is
 **each part's outcomes taken one at a time** (:func:`factored_kept`): the outcome of
@@ -26,8 +32,8 @@ delete relaxation over it is the delete relaxation over every outcome of the pro
 precondition and conditions), so h_max, h_add and h_FF, which online exploration and its
 V* bound read, are what the listed product would give; its first outcome is the
 product's most likely combination of draws (the most likely draw of each independent
-part), what ``most-likely`` keeps; and it is the part-by-part reading the issue cites from the
-competition's determinising planners. What it leaves out are the combinations in which
+part), what ``most-likely`` keeps; and it is the part-by-part reading the issue cites
+from the competition's determinising planners. What it leaves out are the combinations in which
 two or more parts leave their most likely outcome at once: a replanning learner meets
 them as they happen.
 """
@@ -44,9 +50,9 @@ from gdq_pddl.pddl.normalise import MAX_ATOMS, TRUE, extend, ground_dnf
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
 FACTORED_ABOVE = MAX_OUTCOMES
-"""A ground action whose outcomes, listed, would be more than this many is kept as
-independent parts (:class:`Factored`) instead of refused: every problem that ran before
-(at most this many outcomes an action) is grounded exactly as it was."""
+"""A ground action whose independent parts' product has more outcomes than this is kept
+as its parts (:class:`Factored`), never listed; at most this many, it is listed as it
+always was (the module docstring)."""
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (``docs/domains.md``): every outcome of an
