@@ -26,6 +26,17 @@ they read shortest plans on an enumerated problem, without any change to their r
 Distances of expanded states are one-step lookaheads over the estimates
 (``d(s) = 1 + min d(s')``), fixed when the state is expanded.
 
+A factored ground action (too many outcomes to list: IPPC-2008 sysadmin-slp's ``reboot``)
+is stepped by drawing one outcome of each of its parts
+(:meth:`~gdq_pddl.pddl.lazy.LazyGraph.draw`). What the learners see of it is what any
+learner sees: the sampled steps, from which the model-based ones build their learned
+model (its successor slots grow as a pair meets new next states). Its prior is the
+knowledge's as for any action (the successor of the determinisation's outcomes closest
+to the goal by the estimates, the parts' outcomes taken one at a time); on the problem's
+own scale its prior reward is the most its outcomes can earn (each part's most, added
+up); its chance of a dead end is 0 (not computed: it would need the product), but where
+the state itself is one.
+
 Rows never move; the arrays grow by doubling (a new *revision*: the learners resize);
 each change logs the rows it touched (:attr:`OnlineInstance.log`), which the episode
 loop hands to the learner (:class:`gdq_pddl.learners.online.Follower`). Unused rows are
@@ -203,9 +214,19 @@ class OnlineInstance:
                 "states": f"{n} rows sha256:{digest.hexdigest()}"}
 
     @property
+    def successors_grow(self) -> bool:
+        """Whether a ground action is factored: its pairs' next states are more than
+        :attr:`max_successors` lists, and the learners make room as they meet them."""
+        return bool(self.graph.factored.any())
+
+    @property
     def max_successors(self) -> int:
-        """Distinct next states a pair can have at most: its outcomes of probability > 0."""
-        return max([sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
+        """Distinct next states a pair can have at most: its outcomes of probability > 0;
+        of a factored ground action (too many to list), as many as its determinisation
+        lists plus one, a start: a learner's model makes room for more as it meets them
+        (:attr:`successors_grow`)."""
+        return max([len(op.outcomes) + 1 if op.factored else
+                    sum(o.probability > 0 for o in op.outcomes) for op in self.task.ops] + [1])
 
     @property
     def prior(self) -> PriorModel:
@@ -523,13 +544,19 @@ class OnlineInstance:
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
             self.first_tolerant[r, col[other & (1 + d_to <= bound)]] = True
         m, states = self.step_model(x)
+        drawn = np.flatnonzero(g.factored[offered]) if len(g.factored) else offered[:0]
         if self.base.knows_dead_ends:  # dead ends as the distances above say (-1)
             dead = np.isin(states, nxt[d_to < 0])
             dead[0] = d < 0  # x itself
             self._prior_dead[r, :k] = dead_chances(m.ptr, m.prob, m.next, dead)
+            # a factored action's outcomes are not listed: no chance of a dead end is
+            # known (0, optimistic as the prior's successor is), but where x is one
+            self._prior_dead[r, drawn] = float(d < 0)
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+            for j in drawn.tolist():  # the parts' best gains add up
+                self._prior_reward[r, j] = g.best_gain(x, int(offered[j])) - pair_cost[0, j]
 
 
 def _no_way(base: PDDLInstance) -> str:

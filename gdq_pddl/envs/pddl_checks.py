@@ -177,7 +177,8 @@ def check_step_rewards(problem: PlanningProblem, costs: list[CostDist], r_max: f
     """Refuse, naming the domain file, its action and the bound, a problem one step of
     which can pay more than :data:`~gdq_pddl.limits.MAX_NUMBER` in size: an outcome's
     rewards and costs (each within it, all counted: :meth:`~gdq_pddl.pddl.grounding.
-    GroundOutcome.largest_gain`), the action's cost (``costs``: one per ground action; a
+    GroundOutcome.largest_gain`; of a factored action, its parts' largest added up), the
+    action's cost (``costs``: one per ground action; a
     uniform one's larger end, a normal one's mean plus :data:`NORMAL_SPREAD` deviations)
     and, on the problem's own scale (``own``), the goal reward ``r_max`` the step that
     reaches the goal adds. What the learners take (each reward within that bound) holds
@@ -186,7 +187,8 @@ def check_step_rewards(problem: PlanningProblem, costs: list[CostDist], r_max: f
     for op, cost in zip(problem.learner_task.ops, costs, strict=True):
         top = max(abs(cost.a), abs(cost.b)) if cost.kind == "uniform" else \
             abs(cost.a) + NORMAL_SPREAD * abs(cost.b) if cost.kind == "normal" else abs(cost.a)
-        earned = max((o.largest_gain() for o in op.outcomes), default=0.0)
+        earned = sum(max(o.largest_gain() for o in part) for part in op.parts) \
+            if op.factored else max((o.largest_gain() for o in op.outcomes), default=0.0)
         goal = r_max if own else 0.0
         if earned + top + goal > MAX_NUMBER:
             schema = Atom.parse(op.name).predicate

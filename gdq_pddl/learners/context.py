@@ -156,6 +156,11 @@ class TaskContext:
     """The determinisation the planner and the prior read a PPDDL problem by
     (``"all-outcomes"``, ``"most-likely"``); None where there is no choice (STRIPS, the
     office)."""
+    successors_grow: bool = False
+    """The true model's next states of a pair are more than any capacity could list (a
+    problem with factored actions, explored online: :attr:`max_successors` is a start):
+    the model-based learners double a pair's slots when it meets one more. False: a
+    transition past :attr:`max_successors` is an error."""
 
     @property
     def n_env_actions(self) -> int:
@@ -250,6 +255,7 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
         plans=partial(instance.plan_table, planner, 0.0), r_max=instance.r_max,
         darling_plans=partial(instance.plan_table, planner, darling_tolerance, darling_kind),
         darling_tolerance=float(darling_tolerance), name=instance.name, max_successors=k,
+        successors_grow=bool(getattr(instance, "successors_grow", False)),
         prior=instance.prior, columns=columns,
         n_ground_actions=None if columns is None else instance.n_actions,
         exact_knowledge=bool(getattr(instance, "ppddl", False)),

@@ -208,8 +208,10 @@ class GDQ(TabularLearner):
     def observe(self, s: int, a: int, r: float, s2: int, terminated: bool, truncated: bool,
                 rng: np.random.Generator) -> None:
         """:meth:`TabularLearner.observe` (its rule records the step, then sweeps), with
-        room in the reverse index first."""
-        self.reserve_reverse(gdq.reverse_room(self.max_successors))
+        room in the reverse index first (where the slots are a start, for one successor
+        more than they hold: the model may make room for it, ``_room_for``)."""
+        self.reserve_reverse(gdq.reverse_room(self.max_successors
+                                              + int(self.context.successors_grow)))
         super().observe(s, a, r, s2, terminated, truncated, rng)
 
     def _init_task(self) -> None:

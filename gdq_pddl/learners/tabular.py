@@ -304,9 +304,24 @@ class TabularLearner:
         a = self._column("a", s, a)
         r = guards.check_reward(r)
         guards.check_generator(rng)
+        self._room_for(s, a, s2)
         if not self.observe_rule(*self.tables, self.params, s, a, r, s2, bool(terminated),
                              bool(truncated), rng):
             raise ValueError(learned_model.OVERFLOW)
+
+    def _room_for(self, s: int, a: int, s2: int) -> None:
+        """Twice the successor slots where column ``a`` of ``s`` has none free for a new
+        ``s2``, where the context says the slots are a start
+        (:attr:`TaskContext.successors_grow <gdq_pddl.learners.context.TaskContext.
+        successors_grow>`: a problem explored online whose factored actions have more
+        outcomes than any capacity could list); elsewhere the capacity bounds the true
+        model's successors, and a step past it is an error."""
+        slots = self._model.slots
+        k = slots.shape[2]
+        if self.context.successors_grow and self.kind in MODEL_BASED and 0 < k < len(self.q) \
+                and slots[s, a, k - 1] != 0 \
+                and not learned_model.has_successor(slots, s, a, s2):
+            self.reserve_successors(min(2 * k, len(self.q)))
 
     def _column(self, name: str, s: int, a: object) -> int:
         """The column of env action ``a`` in state ``s``; refused where ``s`` does not

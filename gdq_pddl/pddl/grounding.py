@@ -20,6 +20,7 @@ constrained first, and ground actions unreachable with deletes ignored are dropp
 from __future__ import annotations
 
 import itertools
+import math
 from collections import Counter, defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -32,6 +33,9 @@ from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Junction, Proble
 from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
 from gdq_pddl.pddl.ppddl_effects import (
     DETERMINISATIONS,
+    Factored,
+    Ground,
+    factored_kept,
     ground_outcomes,
     kept_ground,
     planner_names,
@@ -81,9 +85,11 @@ class GroundOutcome:
 class GroundOp:
     """A ground action: its name, precondition and outcomes. ``known``: the outcomes the
     planner's determinisation keeps (a STRIPS action: its one). The outcomes are a flat
-    distribution (a ``forall`` of probabilistic effects is their product, drawn once); a
-    factored form would replace :attr:`outcomes` by independent parts whose product it is,
-    read through the same methods."""
+    distribution (a ``forall`` of probabilistic effects is their product, listed), but
+    for a *factored* action (:attr:`parts` not empty), whose product is too large to
+    list: reality draws one outcome of each part, and :attr:`outcomes` lists only what
+    the determinisation reads (each part's outcomes one at a time:
+    :func:`~gdq_pddl.pddl.ppddl_effects.factored_kept`), not reality's distribution."""
 
     name: str
     pre: int
@@ -98,6 +104,22 @@ class GroundOp:
     ``when``, ``forall`` and ``probabilistic``, function terms valued: :func:`action_cost`);
     costs and rewards inside them are its outcomes' (:class:`GroundOutcome`). None: it
     states no cost anywhere (the goal scale's default applies)."""
+    parts: tuple[tuple[GroundOutcome, ...], ...] = field(default=(), kw_only=True)
+    """A factored action's independent parts (each a distribution summing to 1; the first:
+    its own outcomes, then one per binding of a forall of probabilistic effects):
+    reality's outcome is one outcome of each, drawn independently, side by side
+    (:func:`combine`). Empty: :attr:`outcomes` is reality's distribution."""
+
+    @property
+    def factored(self) -> bool:
+        """Whether reality's outcomes are :attr:`parts`' product, not :attr:`outcomes`."""
+        return bool(self.parts)
+
+    def product_size(self) -> int:
+        """How many outcomes listing reality's distribution would take at most (the
+        product of the parts' sizes; :attr:`outcomes`' for an action not factored)."""
+        return math.prod(len(part) for part in self.parts) if self.parts \
+            else len(self.outcomes)
 
     @classmethod
     def strips(cls, name: str, pre: int, neg: int, add: int, dele: int,
@@ -107,7 +129,7 @@ class GroundOp:
 
     @cached_property
     def _single(self) -> GroundOutcome:
-        if len(self.outcomes) != 1 or self.outcomes[0].conditional:
+        if len(self.outcomes) != 1 or self.outcomes[0].conditional or self.parts:
             raise TypeError(f"{self.name} has no single unconditional effect (see its "
                             "outcomes)")
         return self.outcomes[0]
@@ -134,6 +156,44 @@ class GroundOp:
     def apply(self, state: int) -> int:
         """A STRIPS action's successor of ``state`` (a TypeError for any other)."""
         return self._single.apply(state)
+
+
+def combine(outcomes) -> GroundOutcome:
+    """The outcomes ``outcomes`` (one of each part of a factored action) side by side, as
+    one outcome: adds, deletes and conditional effects together (adds win), rewards
+    summed, probabilities multiplied; a failed trial if one is (then nothing else
+    happens, as :func:`~gdq_pddl.pddl.ppddl_effects.ground_outcomes` lists it)."""
+    add = dele = 0
+    p, reward, stuck = 1.0, 0.0, False
+    conditional: list[tuple[int, int, int, int]] = []
+    rewards: list = []
+    for o in outcomes:
+        p *= o.probability
+        add, dele = add | o.add, dele | o.dele
+        stuck |= o.stuck
+        conditional += o.conditional
+        reward += o.reward
+        rewards += o.rewards
+    if stuck:
+        return GroundOutcome(p, 0, 0, True, (), reward, tuple(rewards))
+    return GroundOutcome(p, add, dele & ~add, False, tuple(dict.fromkeys(conditional)),
+                         reward, tuple(rewards))
+
+
+def sample_parts(op: GroundOp, rng) -> tuple[GroundOutcome, ...]:
+    """One outcome of each part of factored ``op``, drawn independently from ``rng`` (a
+    numpy Generator): one uniform per part, the first outcome whose cumulative
+    probability passes it (as :func:`~gdq_pddl.envs.step.draw_outcome` draws)."""
+    u = rng.random(len(op.parts))
+    out = []
+    for part, x in zip(op.parts, u.tolist(), strict=True):
+        acc = 0.0
+        for o in part:
+            acc += o.probability
+            if x < acc:
+                break
+        out.append(o)
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -189,9 +249,19 @@ class GroundTask:
         return out
 
     def outcome_states(self, state: int) -> list[int]:
-        """Every state reality may reach from ``state`` (failed trials aside)."""
-        return [o.apply(state) for op in self.applicable(state)
+        """Every state reality may reach from ``state`` (failed trials aside); a
+        TypeError where a factored action applies (its outcomes are never listed)."""
+        ops = self.applicable(state)
+        factored = next((op.name for op in ops if op.factored), None)
+        if factored is not None:
+            raise TypeError(f"{factored} is factored: its outcomes are drawn, never listed")
+        return [o.apply(state) for op in ops
                 for o in op.outcomes if o.probability > 0 and not o.stuck]
+
+    @cached_property
+    def factored(self) -> tuple[str, ...]:
+        """The names of the factored ground actions (:attr:`GroundOp.parts`)."""
+        return tuple(op.name for op in self.ops if op.factored)
 
     def is_goal(self, state: int, goal: tuple[int, int] | None = None) -> bool:
         """Whether ``goal`` (default: the problem's) holds in ``state``; never, for a
@@ -281,6 +351,7 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                                                    for o in a.outcomes)
                     for a in domain.actions)
     raw = []
+    factored: dict[int, Factored] = {}  # by index in raw
     with slow_progress("grounding", " actions") as bar:
         for action in domain.actions:
             def too_many(action: Action = action) -> PDDLError:
@@ -305,6 +376,9 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                     args = tuple(b[p] for p, _ in action.parameters)
                     outs = ground_outcomes(action, args, b, objects, static, fluent,
                                            too_many, value, domain.source)
+                    if isinstance(outs, Factored):  # relaxed: every part's outcomes
+                        factored[len(raw)] = outs
+                        outs = [(0, p, g) for part in outs.parts for p, g in part]
                     raw.append((action, args, pre, outs))
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, found = relaxed_reachability(raw, init, plain)
@@ -322,17 +396,31 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
             common_pos = common_neg = -1
             for p, n in alts:
                 common_pos, common_neg = common_pos & p, common_neg & n
-            outcomes = tuple(GroundOutcome(
-                p, m(add), m(dele - add), stuck,
-                tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds if cp <= reached),
-                reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts
-                                                 if cp <= reached), amount)
-                                          for alts, amount in rewards) if r[0]))
-                for _, p, (add, dele, conds, reward, rewards, stuck) in outs)
-            known, kept_names = kept_ground(action, outs, outcomes, determinisation, names)
-            ops.append(GroundOp(str(Atom(action.name, args)), common_pos, common_neg, outcomes,
+            def outcome(p: float, g: Ground) -> GroundOutcome:
+                add, dele, conds, reward, rewards, stuck = g
+                return GroundOutcome(
+                    p, m(add), m(dele - add), stuck,
+                    tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds
+                          if cp <= reached),
+                    reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts
+                                                     if cp <= reached), amount)
+                                              for alts, amount in rewards) if r[0]))
+
+            name = str(Atom(action.name, args))
+            parts: tuple[tuple[GroundOutcome, ...], ...] = ()
+            if i in factored:
+                listed, known, kept_names = factored_kept(factored[i], determinisation,
+                                                          action.name)
+                outcomes = tuple(outcome(p, g) for p, g in listed)
+                parts = tuple(tuple(outcome(p, g) for p, g in part)
+                              for part in factored[i].parts)
+            else:
+                outcomes = tuple(outcome(p, g) for _, p, g in outs)
+                known, kept_names = kept_ground(action, outs, outcomes, determinisation,
+                                                names)
+            ops.append(GroundOp(name, common_pos, common_neg, outcomes,
                                 known, tuple(alts) if len(alts) > 1 else (),
-                                cost=action_cost(action, args, domain, problem)))
+                                cost=action_cost(action, args, domain, problem), parts=parts))
             kept.append(kept_names)
     task = GroundTask(facts, tuple(ops), m(init), statics=statics, fact_index=index,
                       disjunctive=any(op.alternatives for op in ops),

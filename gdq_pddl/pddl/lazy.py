@@ -16,6 +16,12 @@ with their probabilities summed in outcome order, goal states never expanded. Ex
 every state in id order numbers them exactly as the enumeration does; in any other order
 the graph is the same up to renaming states.
 
+A factored ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`:
+a forall of probabilistic effects whose product is too large to list) has its edges (the
+determinisation's outcomes, each part's taken one at a time) but no listed outcome:
+reality's outcome of it is drawn part by part when an agent takes it (:meth:`LazyGraph.draw`),
+and the state it reaches is discovered then.
+
 A state's effects are applied on its Python int bitmask by the ground task's own
 outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`,
 :meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`): for one
@@ -27,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask
+from gdq_pddl.pddl.grounding import GroundOp, GroundTask, combine, sample_parts
 from gdq_pddl.pddl.reachable import reality_ranks
 from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 
@@ -43,7 +49,7 @@ def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
     not the edges', failed trials aside), as :func:`~gdq_pddl.pddl.wordrows.compile_ops`
     sorts them."""
     place, reality = {}, []
-    for j, o in enumerate(op.outcomes):
+    for j, o in enumerate(op.outcomes if not op.factored else ()):  # drawn, never listed
         if o.probability > 0:
             place[j] = len(reality)
             reality.append((o.probability, bool(o.stuck), o.apply if o.moves() and not o.stuck
@@ -51,7 +57,7 @@ def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
     known = tuple(place[j] if j in place and not op.outcomes[j].stuck
                   else op.outcomes[j].apply for j in op.known)
     other = tuple(place[j] for j, o in enumerate(op.outcomes) if o.probability > 0
-                  and not o.stuck and j not in op.known and o.moves())
+                  and not o.stuck and j not in op.known and o.moves() and j in place)
     return tuple(reality), known, other
 
 
@@ -86,7 +92,7 @@ class LazyGraph:
         # action leaves the state as it is, and its outcomes need not be applied one by one
         quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
         for k, op in enumerate(task.ops):
-            if not any(o.add or o.dele for o in op.outcomes):
+            if not op.factored and not any(o.add or o.dele for o in op.outcomes):
                 quiet[k] = True
                 fire += [(k, p, n) for o in op.outcomes for p, n, _, _ in o.conditional]
         self._may_stay = quiet
@@ -94,6 +100,9 @@ class LazyGraph:
         self._fires = RowConditions([(p, n) for _, p, n in fire])
         self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
             if task.ops else ((), (), ())
+        self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
+        """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
+        self._fixed_gains: dict[int, tuple] = {}  # best_gain's parts that do not vary
         self._gain_terms()
         self._masks: list[int] = [task.init]
         self._index: dict[int, int] = {task.init: 0}
@@ -217,6 +226,44 @@ class LazyGraph:
         self._expanded[x] = True
         return fresh
 
+    def draw(self, x: int, k: int, rng: np.random.Generator) -> tuple[int, bool, float]:
+        """Reality's outcome of factored ground action ``k`` in discovered state ``x``,
+        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.grounding.sample_parts`,
+        one uniform a part): ``(next id, stuck, gain)``, the next state discovered if it
+        is new (a failed trial stays in ``x``; gain 0 without :attr:`gains`)."""
+        op = self.task.ops[k]
+        if not op.factored:
+            raise ValueError(f"{op.name} is not factored: its outcomes are listed "
+                             "(outcomes)")
+        s = self._masks[x]
+        o = combine(sample_parts(op, rng))
+        t = s if o.stuck else o.apply(s)
+        y = self._index.get(t)
+        if y is None:
+            y = self._index[t] = self._n
+            self._append([t])
+        return y, o.stuck, (o.gain(s) if self.gains else 0.0)
+
+    def best_gain(self, x: int, k: int) -> float:
+        """The most an outcome of factored ground action ``k`` earns in state ``x`` that
+        does not fail the trial (where one can: every part has such an outcome; else of
+        all): each part's most, added up, as the gains of its parts add up."""
+        s = self._masks[x]
+        fixed = self._fixed_gains.get(k)
+        if fixed is None:  # the parts whose outcomes earn the same in every state, once
+            parts = self.task.ops[k].parts
+            same = [part for part in parts if not any(o.rewards for o in part)]
+            live = [[o.reward for o in part if not o.stuck] for part in same]
+            fixed = self._fixed_gains[k] = (
+                all(live), sum(max(g) for g in live if g), sum(max(o.reward for o in part)
+                                                              for part in same),
+                [part for part in parts if any(o.rewards for o in part)])
+        all_live, live_sum, any_sum, varying = fixed
+        live = [[o.gain(s) for o in part if not o.stuck] for part in varying]
+        if all_live and all(live):
+            return float(live_sum + sum(max(g) for g in live))
+        return float(any_sum + sum(max(o.gain(s) for o in part) for part in varying))
+
     def _gain_terms(self) -> None:
         """Reality's outcomes of every ground action as one flat list (ground action
         ``k``'s from ``_first[k]``), their fixed rewards and their conditional rewards'
@@ -329,7 +376,9 @@ class LazyGraph:
         """Reality's outcomes of every offered action of expanded state ``x``: ``(column,
         probability, next id, stuck, gain)``, ``column`` an index into :meth:`offered`,
         merged and ordered as :func:`~gdq_pddl.pddl.outcomes.reality_outcomes` gives the
-        state's pairs (gain all zeros without ``gains``; none for a goal)."""
+        state's pairs (gain all zeros without ``gains``; none for a goal). A factored
+        ground action's column (:attr:`factored`) lists none: its outcome is drawn
+        (:meth:`draw`), never listed."""
         if self._require(x):
             return self._outcomes[x]
         return _NONE, np.zeros(0), _NONE, np.zeros(0, dtype=np.bool_), np.zeros(0)

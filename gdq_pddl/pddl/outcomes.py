@@ -15,7 +15,7 @@ import numpy as np
 
 from gdq_pddl.limits import slow_progress
 from gdq_pddl.pddl.offered import columns_in
-from gdq_pddl.pddl.reachable import StateGraph
+from gdq_pddl.pddl.reachable import StateGraph, refuse_factored
 from gdq_pddl.pddl.wordrows import CompiledOp, compile_ops
 
 OUTCOME_CHUNK = 1 << 22
@@ -38,6 +38,7 @@ def reality_outcomes(graph: StateGraph, gains: bool = True
     merge work arrays stay bounded, and only the merged rows are kept. A bar counts the
     chunks past 2 s."""
     task = graph.task
+    refuse_factored(task, "reality's outcomes")  # never listed (a graph is refused first)
     width = graph.offered.shape[1]
     n_words = graph.words.shape[1]
     ops = compile_ops(task, n_words, every=True)

@@ -322,6 +322,7 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     auto`` asks: it goes online then, and a doomed enumeration of millions of states took
     minutes).
     """
+    refuse_factored(task, source)
     n_ops = len(task.ops)
     n_words = max(1, -(-len(task.facts) // 64))
     ops = compile_ops(task, n_words)
@@ -424,6 +425,21 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
     del nxt
     return StateGraph(task, np.concatenate(levels), ptr, edge_op, edge_next,
                       np.concatenate(goal), np.concatenate(depth), offered)
+
+
+def refuse_factored(task: GroundTask, source: str) -> None:
+    """Refuse (:class:`TooManyStates`: ``--explore auto`` goes online then) to enumerate
+    a task with a factored ground action (:attr:`GroundOp.parts
+    <gdq_pddl.pddl.grounding.GroundOp.parts>`): reality's outcomes of it are drawn part
+    by part, never listed, and enumeration and the true model's tables list them."""
+    if not getattr(task, "factored", ()):
+        return
+    op = next(op for op in task.ops if op.factored)
+    raise TooManyStates(f"{source}: {op.name} has {op.product_size():,} outcomes, kept as "
+                        f"{len(op.parts)} independent parts (a forall of probabilistic "
+                        "effects): they are drawn part by part and never listed, so the "
+                        "states and the true model are not enumerated; explore online "
+                        "(--explore online, or auto)")
 
 
 def reality_ranks(task: GroundTask) -> np.ndarray:

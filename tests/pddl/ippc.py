@@ -15,9 +15,9 @@ from gdq_pddl.pddl import parse_domain, parse_problem
 from gdq_pddl.pddl.ppddl import ground_ppddl
 
 
-def grounded(domain_text: str, problem_text: str):
+def grounded(domain_text: str, problem_text: str, determinisation: str = "all-outcomes"):
     domain = parse_domain(domain_text, "d.pddl")
-    return ground_ppddl(domain, parse_problem(problem_text, domain, "p.pddl"))
+    return ground_ppddl(domain, parse_problem(problem_text, domain, "p.pddl"), determinisation)
 
 
 def mask(task, *atoms: str) -> int:
@@ -431,3 +431,95 @@ def interpreted_rewards_agree(domain_text: str, problem_text: str, own: bool,
             rows = [(m.prob[o], inst.atoms(int(m.next[o])) | statics, gains[o])
                     for o in range(m.ptr[i], m.ptr[i + 1])]
             compare(state, task.ops[k].name, rows)
+
+
+# --- the interpreter against factored ground actions ----------------------------------------
+
+def product_distribution(op, state: int) -> dict[int, float]:
+    """Where factored ``op`` leads from ``state``, its parts' product listed (small cases
+    only): next state -> probability."""
+    from itertools import product
+
+    from gdq_pddl.pddl.grounding import combine
+
+    out: dict[int, float] = {}
+    for pick in product(*op.parts):
+        o = combine(pick)
+        t = state if o.stuck else o.apply(state)
+        out[t] = out.get(t, 0.0) + o.probability
+    return out
+
+
+def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
+                                draws: int = 0) -> int:
+    """Every state the interpreter reaches: the library applies the same ground actions,
+    and each leads to the interpreter's distribution: a listed one by its outcomes, a
+    factored one by its parts' product, and, in the first three states with ``draws``,
+    by that many draws of its parts (:func:`~gdq_pddl.pddl.grounding.sample_parts` from
+    ``rng``), each next state's frequency within 5 standard deviations (plus one draw)
+    of its probability. Returns how many (state, factored action) were compared."""
+    from gdq_pddl.pddl.grounding import combine, sample_parts
+
+    learner, planner = grounded(domain_text, problem_text)
+    planner_agrees(learner, planner)
+    tree = sexp(domain_text)[0]
+    schemas = {a[1]: (a[5], a[7]) for a in tree if isinstance(a, list) and a[0] == ":action"}
+    init = frozenset("(" + " ".join(a) + ")" for a in sexp(problem_text)[0][4][1:])
+    statics = learner.statics
+    ops = {op.name: op for op in learner.ops}
+
+    def interpret(state: frozenset[str]) -> dict[str, dict[frozenset[str], float]]:
+        out = {}
+        for name, (pre, eff) in schemas.items():
+            for o in OBJECTS:
+                b = {"?x": o}
+                if holds(pre, b, state):
+                    dist: dict[frozenset[str], float] = {}
+                    for p, adds, dels in effect(eff, b, state):
+                        t = (state - dels) | adds
+                        dist[t] = dist.get(t, 0.0) + p
+                    out[f"({name} {o})"] = {t: p for t, p in dist.items() if p > 1e-12}
+        return out
+
+    seen, frontier, order = {init}, [init], [init]
+    while frontier:
+        nxt = []
+        for state in frontier:
+            for d in interpret(state).values():
+                for t in d:
+                    if t not in seen:
+                        seen.add(t)
+                        nxt.append(t)
+                        order.append(t)
+        frontier = nxt
+    compared = 0
+    for i, state in enumerate(order):
+        s = learner.mask(state - statics)
+        expected = interpret(state)
+        assert {op.name for op in learner.applicable(s)} == set(expected), domain_text
+        for name, want in expected.items():
+            op = ops[name]
+            if op.factored:
+                got = product_distribution(op, s)
+                compared += 1
+            else:
+                got = {}
+                for o in op.outcomes:
+                    t = o.apply(s)
+                    got[t] = got.get(t, 0.0) + o.probability
+            got = {learner.atoms(t) | statics: p for t, p in got.items() if p > 1e-12}
+            assert got.keys() == want.keys(), (domain_text, name, sorted(state))
+            for t, p in want.items():
+                assert got[t] == pytest.approx(p), (domain_text, name)
+            if op.factored and draws and i < 3:
+                counts: dict[frozenset[str], int] = {}
+                for _ in range(draws):
+                    o = combine(sample_parts(op, rng))
+                    t = learner.atoms(s if o.stuck else o.apply(s)) | statics
+                    counts[t] = counts.get(t, 0) + 1
+                assert counts.keys() <= want.keys(), (domain_text, name)
+                for t, p in want.items():
+                    sd = (max(0.0, p * (1 - p)) / draws) ** 0.5
+                    assert abs(counts.get(t, 0) / draws - p) <= 5 * sd + 1 / draws, \
+                        (domain_text, name, p, counts.get(t, 0))
+    return compared

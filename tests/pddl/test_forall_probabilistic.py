@@ -13,6 +13,7 @@ import pytest
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.pddl import parse_domain, parse_problem
+from gdq_pddl.pddl.grounding import GroundOutcome
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 from gdq_pddl.pddl.ppddl import ground_ppddl
 from tests.pddl.ippc import (
@@ -154,22 +155,49 @@ def test_the_value_of_independent_draws_derived_by_hand():
     assert instance.optimal()["v_star"] == pytest.approx(55 / 3, abs=1e-3)
 
 
-def test_too_many_outcomes_name_the_forall_in_the_users_file():
-    objects = " ".join(f"k{i}" for i in range(13))  # 2^13 = 8192 outcomes
+def test_past_the_limit_independent_draws_stay_factored():
+    """13 coins: 2^13 = 8192 outcomes, past FACTORED_ABOVE: flip is kept as its own
+    outcome (nothing) and 13 parts of 2 outcomes (never listed); its determinisation one
+    coin at a time: every coin at its most likely draw (a tie: the first written, up),
+    then each coin alone down (1 + 13 outcomes). 12 coins (4096 outcomes) are listed as
+    before."""
+    objects = " ".join(f"k{i}" for i in range(13))
     text = TWO.replace("(:objects a b - coin)", f"(:objects {objects} - coin)") \
         .replace("(and (up a) (up b))", "(up k0)")
+    domain = parse_domain(text, "many.pddl")
+    learner, planner = ground_ppddl(domain, parse_problem(text, domain, "many.pddl"))
+    flip = op_named(learner, "(flip)")
+    assert flip.factored and flip.product_size() == 8192 and len(flip.parts) == 14
+    assert flip.parts[0] == (GroundOutcome(1.0, 0, 0),)
+    assert [sorted(o.probability for o in part) for part in flip.parts[1:]] == [[0.5, 0.5]] * 13
+    every = (1 << 13) - 1
+    assert [o.add for o in flip.outcomes] == [every] + [every & ~(1 << i) for i in range(13)]
+    assert flip.outcomes[0].probability == 0.5 ** 13
+    assert flip.known == tuple(range(14)) and len(planner.ops) == 14
+    fewer = text.replace(" k12 ", " ")
+    domain = parse_domain(fewer, "many.pddl")
+    learner, _ = ground_ppddl(domain, parse_problem(fewer, domain, "many.pddl"))
+    assert len(op_named(learner, "(flip)").outcomes) == 4096
+    assert not op_named(learner, "(flip)").factored
+
+
+def test_too_many_outcomes_that_cannot_be_factored_name_the_forall():
+    """A forall of draws inside one branch of a probabilistic effect is a mixture of
+    products, not independent parts: past MAX_OUTCOMES it is refused, naming the forall's
+    line and why it is not factored."""
+    objects = " ".join(f"k{i}" for i in range(13))
+    text = TWO.replace("(:objects a b - coin)", f"(:objects {objects} - coin)") \
+        .replace("(and (up a) (up b))", "(up k0)") \
+        .replace(":effect (forall (?c - coin) (probabilistic 1/2 (up ?c)))",
+                 ":effect (probabilistic 1/2\n (forall (?c - coin) (probabilistic 1/2 (up ?c))))")
     domain = parse_domain(text, "many.pddl")
     problem = parse_problem(text, domain, "many.pddl")
     with pytest.raises(PDDLError) as err:
         ground_ppddl(domain, problem)
     message = str(err.value)
-    assert message.startswith("many.pddl:4:"), message  # the line of the forall
+    assert message.startswith("many.pddl:5:"), message  # the line of the forall
     assert f"more than {MAX_OUTCOMES} outcomes" in message and "(flip)" in message
-    # 12 coins (4096 outcomes) are within the limit
-    fewer = text.replace(" k12 ", " ")
-    domain = parse_domain(fewer, "many.pddl")
-    learner, _ = ground_ppddl(domain, parse_problem(fewer, domain, "many.pddl"))
-    assert len(op_named(learner, "(flip)").outcomes) == 4096
+    assert "\n" not in message
 
 
 def test_a_cost_inside_the_forall_is_paid_per_binding():
