@@ -29,11 +29,17 @@ def one_state_model(graph: LazyGraph, x: int, offered: np.ndarray, constants: Mo
     where = np.empty(len(states), dtype=np.int64)
     where[order] = np.arange(len(states))
     states = states[order]
-    # a pair with no outcome (a dead end's column) changes nothing: full state 0 stays
-    ptr, prob, (nxt, stuck, gain) = with_noops(
-        column, prob, [where[local[1:]], np.asarray(stuck, dtype=np.bool_),
-                       np.asarray(gain, dtype=np.float64)],
-        len(offered), len(offered), offered[None, :])
+    fields = [where[local[1:]], np.asarray(stuck, dtype=np.bool_),
+              np.asarray(gain, dtype=np.float64)]
+    counts = np.bincount(column, minlength=len(offered))
+    if counts.all():  # every column has its outcomes, in column order: the CSR as it is
+        ptr = np.zeros(len(offered) + 1, dtype=np.int64)
+        np.cumsum(counts, out=ptr[1:])
+        prob, nxt = np.array(prob, dtype=np.float64), fields[0]
+        stuck, gain = fields[1].copy(), fields[2].copy()  # not the graph's own arrays
+    else:  # a pair with no outcome (a dead end's column) changes nothing: state 0 stays
+        ptr, prob, (nxt, stuck, gain) = with_noops(column, prob, fields, len(offered),
+                                                   len(offered), offered[None, :])
     return constants._replace(
         ptr=ptr, prob=prob, next=nxt, stuck=stuck,
         obs_of=np.zeros(len(states), dtype=np.int64),

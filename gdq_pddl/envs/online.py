@@ -468,19 +468,33 @@ class OnlineInstance:
             self.retargeted.append(pr)
         return r
 
-    def _target(self, y: int) -> tuple[int, int]:
-        """The prior successor row standing for graph state ``y`` and its distance: its
-        own row, else the chain row of its estimate (the dead-end row where the
-        relaxation cannot reach the goal)."""
-        r = int(self.row_of_state[y])
-        if r >= 0:
-            return r, int(self.dist[r])
-        h = int(self.h_of[y])
-        if h == 0:
-            return self.chain[0], 0
-        if h == INFINITE:
-            return self.dead, -1
-        return self._chain_row(h - 1), h
+    def _targets(self, x: int, r: int, nxt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The prior successor row standing for each of ``nxt`` (the edges' next states of
+        graph state ``x``, whose row is ``r``) and its distance: its own row, else the
+        chain row of its estimate (the dead-end row, distance -1, where the relaxation
+        cannot reach the goal); ``(r, -1)`` where it is ``x`` itself. The chain rows
+        needed are made in the order the edges first ask for them."""
+        to = np.full(len(nxt), r, dtype=np.int64)
+        d_to = np.full(len(nxt), -1, dtype=np.int64)
+        at = np.flatnonzero(nxt != x)
+        ys = nxt[at]
+        rows = self.row_of_state[ys]
+        own = rows >= 0  # reached: its own row
+        to[at[own]] = rows[own]
+        d_to[at[own]] = self.dist[rows[own]]
+        at, h = at[~own], self.h_of[ys[~own]]
+        goal, dead = h == 0, h == INFINITE
+        to[at[goal]], d_to[at[goal]] = self.chain[0], 0
+        to[at[dead]] = self.dead
+        chained = ~goal & ~dead
+        if chained.any():
+            h = h[chained]
+            _, first = np.unique(h, return_index=True)
+            for k in h[np.sort(first)].tolist():  # the chain rows, as edge order asks
+                self._chain_row(k - 1)
+            to[at[chained]] = np.asarray(self.chain, dtype=np.int64)[h - 1]
+            d_to[at[chained]] = h
+        return to, d_to
 
     def _offered(self, x: int) -> np.ndarray:
         offered = self.graph.offered(x)
@@ -495,10 +509,8 @@ class OnlineInstance:
         offered = self._offered(x)
         k = len(offered)
         op, nxt = g.edges(x)
-        targets = [self._target(y) if y != x else (r, -1) for y in nxt.tolist()]
+        to, d_to = self._targets(x, r, nxt)  # may make chain rows: before the widening
         self._room(self.n_rows, k)
-        to = np.array([t for t, _ in targets], dtype=np.int64)
-        d_to = np.array([d for _, d in targets], dtype=np.int64)
         col = np.searchsorted(offered, op)
         other = (nxt != x) & (d_to >= 0)
         d = int(1 + d_to[other].min()) if other.any() else -1
@@ -515,9 +527,10 @@ class OnlineInstance:
         first = order[np.r_[True, col[order[1:]] != col[order[:-1]]]] if len(order) \
             else order
         self.prior_next[r, col[first]] = to[first]
-        for j, y in zip(col[first].tolist(), nxt[first].tolist(), strict=True):
-            if self.row_of_state[y] < 0 and not g.is_goal[y]:
-                self.waiting.setdefault(y, []).append((r, j))
+        ys = nxt[first]
+        wait = (self.row_of_state[ys] < 0) & ~g.is_goal[ys]  # their rows are not made yet
+        for j, y in zip(col[first][wait].tolist(), ys[wait].tolist(), strict=True):
+            self.waiting.setdefault(y, []).append((r, j))
         if d > 0:
             bound = length_bound(d, self.darling_tolerance)
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
