@@ -39,8 +39,13 @@ import sys, time
 t0 = time.perf_counter()
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.envs.online import OnlineInstance
+try:  # the problem as a ProblemSpec (since the runner's typed specs), else a tuple
+    from gdq_pddl.experiments.protocol import ProblemSpec
+    spec = ProblemSpec(sys.argv[1], sys.argv[2])
+except ImportError:
+    spec = (sys.argv[1], sys.argv[2], "", "all-outcomes")
 t1 = time.perf_counter()
-inst = load_pddl_instance((sys.argv[1], sys.argv[2], "", "all-outcomes"))
+inst = load_pddl_instance(spec)
 t2 = time.perf_counter()
 online = OnlineInstance(inst)
 t3 = time.perf_counter()

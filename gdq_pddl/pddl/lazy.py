@@ -39,6 +39,16 @@ from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 _NONE = np.zeros(0, dtype=np.int64)
 
 
+_STAYS = np.iinfo(np.int64).min
+"""Where an effect leads that changes nothing (the expanded state itself)."""
+
+
+def _unpacked(row: np.ndarray) -> np.ndarray:
+    """bool[64 n_words]: fact ``f`` of a word row (bit ``f % 64`` of word ``f // 64``)."""
+    return np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
+                         bitorder="little").view(np.bool_)
+
+
 def _spans(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(positions, owner)``: the positions ``ptr[i] .. ptr[i + 1] - 1`` of each listed
     item ``i`` of a flat list grouped by item (``ptr``: where each item's part starts), in
@@ -163,50 +173,57 @@ class LazyGraph:
         effect, by their facts' bits; the changed rows are looked up by their bytes; the
         rest stay in ``x``."""
         row = self._words[x]
-        ok = self._holds(row)
+        bits = _unpacked(row)
+        ok = self._holds_bits(bits)
         acts = np.flatnonzero(ok)
-        moving, rows = self._moved(row, ok)
-        sid, fresh = self._ids(x, row, moving, rows)
+        column = np.cumsum(ok) - 1  # each applicable ground action's column
+        moving, rows = self._moved(row, bits, ok)
+        sid, fresh = self._ids(row, rows)
+        lead = self._lead  # effect -> where it leads: x unless it moves
+        lead[moving] = sid
 
-        def next_of(effects: np.ndarray) -> np.ndarray:
-            """The (provisional: -1 - j for the j-th new row) id each effect leads to."""
-            at = np.minimum(np.searchsorted(moving, effects), max(len(moving) - 1, 0))
-            hit = moving[at] == effects if len(moving) else np.zeros(len(effects), bool)
-            return np.where(hit, sid[at] if len(moving) else 0, x)
-
-        e_pos, _ = _spans(self._edge_ptr, acts)
-        e_op, e_next = self._edge_op[e_pos], next_of(self._edge_eff[e_pos])
-        r_pos, col = _spans(self._real_ptr, acts)
-        r_next = np.where(self._real_moves[r_pos], next_of(self._real_eff[r_pos]), x)
+        e_pos = np.flatnonzero(ok[self._edge_op])
+        e_op, e_next = self._edge_op[e_pos], lead[self._edge_eff[e_pos]]
+        r_pos = np.flatnonzero(ok[self._real_op])
+        col = column[self._real_op[r_pos]]
+        r_next = np.where(self._real_moves[r_pos], lead[self._real_eff[r_pos]], _STAYS)
+        lead[moving] = _STAYS
+        e_next[e_next == _STAYS] = x
+        r_next[r_next == _STAYS] = x
         n = self._n
-        new = [] if not fresh else self._numbered(n, fresh, e_next, r_pos, r_next)
         if fresh:  # provisional ids -1 - j: the j-th new row's
+            new = self._numbered(n, fresh, e_next, r_pos, r_next)
             for ids in (e_next, r_next):
                 neg = ids < 0
                 ids[neg] = new[-1 - ids[neg]]
         # the determinisation's edges: each next state once a ground action, the first
-        key = e_op * (n + len(fresh) + 1) + e_next
-        _, first = np.unique(key, return_index=True)
-        first.sort()
+        # (only ground actions with several kept outcomes can repeat one)
+        keep = np.ones(len(e_pos), dtype=np.bool_)
+        several = np.flatnonzero(self._edge_several[e_pos])
+        if len(several):
+            key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
+            _, first = np.unique(key, return_index=True)
+            keep[several] = False
+            keep[several[first]] = True
         self._offered[x] = acts
-        self._edges[x] = (e_op[first], e_next[first])
-        self._outcomes[x] = self._merged(row, r_pos, col, r_next)
+        self._edges[x] = (e_op[keep], e_next[keep])
+        self._outcomes[x] = self._merged(bits, r_pos, col, r_next)
         self._expanded[x] = True
         return [fresh[j] for j in np.argsort(new)] if fresh else []
 
-    def _moved(self, row: np.ndarray, ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _moved(self, row: np.ndarray, bits: np.ndarray,
+               ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(effects, rows)``: the outcomes (by flat effect index, increasing) of the
-        applicable ground actions that have something to do in the state of ``row`` (an
-        unconditional add or delete, or a conditional effect whose condition holds), and
-        the row each leads to (adds win, as :meth:`GroundOutcome.apply
-        <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
+        applicable ground actions that have something to do in the state of ``row``
+        (``bits``: its facts, :func:`_unpacked`): an unconditional add or delete, or a
+        conditional effect whose condition holds; and the row each leads to (adds win, as
+        :meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
         plain = self._plain_eff[ok[self._eff_op[self._plain_eff]]]
-        fired = np.flatnonzero(self._when.holds(row) & ok[self._when_op]) \
+        fired = np.flatnonzero(self._when.holds_bits(bits) & ok[self._when_op]) \
             if self._when.n else _NONE
         moving = np.union1d(plain, self._when_eff[fired]) if len(fired) else plain
-        rows = np.broadcast_to(row, (len(moving), len(row)))
         if not len(moving):
-            return moving, rows
+            return moving, np.zeros((0, len(row)), dtype=np.uint64)
         u_pos, u_own = _spans(self._bit_ptr, moving)
         c_pos, c_own = _spans(self._when_ptr, fired)
         own = np.concatenate([u_own, np.searchsorted(moving, self._when_eff[fired])[c_own]])
@@ -217,30 +234,31 @@ class LazyGraph:
                                                            self._when_add[c_pos]]))
         np.bitwise_or.at(dele, (own, word), np.concatenate([self._bit_del[u_pos],
                                                             self._when_del[c_pos]]))
-        return moving, (rows & ~dele) | add
+        return moving, (row & ~dele) | add
 
-    def _ids(self, x: int, row: np.ndarray, moving: np.ndarray,
-             rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
-        """The id of the state each of ``rows`` is (``x`` where the row is unchanged), and
-        the rows never seen before, in order of first appearance in ``rows`` (they get
-        provisional ids ``-1 - j`` meanwhile)."""
-        sid = np.full(len(moving), x, dtype=np.int64)
-        changed = np.flatnonzero((rows != row).any(axis=1)) if len(moving) else _NONE
+    def _ids(self, row: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
+        """The id of the state each of ``rows`` is (:data:`_STAYS` where the row is
+        ``row``, unchanged), and the rows never seen before, in order of first appearance
+        in ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
+        sid = np.full(len(rows), _STAYS, dtype=np.int64)
+        changed = np.flatnonzero((rows != row).any(axis=1))
         fresh: list[bytes] = []
         if not len(changed):
             return sid, fresh
         size = 8 * self.n_words
         data = np.ascontiguousarray(rows[changed], dtype="<u8").tobytes()
-        get, new, ids = self._index.get, {}, []
-        for i in range(0, len(data), size):
-            key = data[i:i + size]
-            j = get(key)
-            if j is None:
-                j = new.get(key)
+        keys = [data[i:i + size] for i in range(0, len(data), size)]
+        ids = list(map(self._index.get, keys))
+        if None in ids:
+            new: dict[bytes, int] = {}
+            for i, j in enumerate(ids):
                 if j is None:
-                    j = new[key] = -1 - len(fresh)
-                    fresh.append(key)
-            ids.append(j)
+                    key = keys[i]
+                    j = new.get(key)
+                    if j is None:
+                        j = new[key] = -1 - len(fresh)
+                        fresh.append(key)
+                    ids[i] = j
         sid[changed] = ids
         return sid, fresh
 
@@ -251,40 +269,43 @@ class LazyGraph:
         ground action, then outcome), then among reality's other outcomes' next states (by
         :func:`~gdq_pddl.pddl.reachable.reality_ranks` of their ground action, then
         outcome); the index gets them."""
-        ranked = r_pos[np.argsort(self._real_rank[r_pos], kind="stable")]
-        at = np.searchsorted(r_pos, ranked)
-        seq = np.concatenate([e_next, r_next[at]])
-        seq = seq[seq < 0]
+        later = np.flatnonzero(r_next < 0)
+        later = later[np.argsort(self._real_rank[r_pos[later]], kind="stable")]
+        seq = np.concatenate([e_next[e_next < 0], r_next[later]])
         _, first = np.unique(seq, return_index=True)  # provisional ids -k .. -1
         order = -1 - seq[np.sort(first)]  # j of each new row, in order of appearance
         new = np.empty(len(fresh), dtype=np.int64)
         new[order] = np.arange(n, n + len(fresh))
-        for j, key in enumerate(fresh):
-            self._index[key] = int(new[j])
+        self._index.update(zip(fresh, new.tolist(), strict=True))
         return new
 
-    def _merged(self, row: np.ndarray, r_pos: np.ndarray, col: np.ndarray,
+    def _merged(self, bits: np.ndarray, r_pos: np.ndarray, col: np.ndarray,
                 nxt: np.ndarray) -> tuple[np.ndarray, ...]:
         """Reality's outcomes ``(column, probability, next, stuck, gain)`` of the state of
-        ``row``, equal ones of a column (same next state, failed trial or not, gain)
-        merged, their probabilities summed in outcome order, by column and then first
-        appearance."""
+        ``bits``, equal ones of a column (same next state, failed trial or not, gain)
+        merged into the first, their probabilities summed in outcome order (only ground
+        actions with several outcomes can have equal ones)."""
         stuck = self._real_stuck[r_pos]
-        gain = self._gains(row)[r_pos] if self.gains else np.zeros(len(r_pos))
+        gain = self._gains(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
         prob = self._real_prob[r_pos]
-        if not len(r_pos):
+        several = np.flatnonzero(self._real_several[r_pos])
+        if not len(several):
             return col, prob, nxt, stuck, gain
-        order = np.lexsort((gain, stuck, nxt, col))  # stable: equals in outcome order
-        c, t, s, g = col[order], nxt[order], stuck[order], gain[order]
+        c, t, s, g = col[several], nxt[several], stuck[several], gain[several]
+        order = np.lexsort((g, s, t, c))  # stable: equals in outcome order
+        c, t, s, g = c[order], t[order], s[order], g[order]
         starts = np.r_[True, (c[1:] != c[:-1]) | (t[1:] != t[:-1]) | (s[1:] != s[:-1])
                        | (g[1:] != g[:-1])]
         group = np.empty(len(order), dtype=np.int64)
         group[order] = np.cumsum(starts) - 1
-        summed = np.bincount(group, weights=prob)  # in outcome order, from 0.0
-        first = order[starts]  # each group's first outcome
-        by = np.argsort(first)
-        first = first[by]
-        return col[first], summed[by], nxt[first], stuck[first], gain[first]
+        summed = np.bincount(group, weights=prob[several])  # in outcome order, from 0.0
+        first = several[order[starts]]  # each group's first outcome
+        keep = np.ones(len(r_pos), dtype=np.bool_)
+        keep[several] = False
+        keep[first] = True
+        prob = prob.copy()
+        prob[first] = summed
+        return col[keep], prob[keep], nxt[keep], stuck[keep], gain[keep]
 
     def _compile(self, task: GroundTask) -> None:
         """Every ground action's outcomes as flat arrays (:meth:`_expand_one` reads them
@@ -330,6 +351,10 @@ class LazyGraph:
         self._when_ptr, self._when_word, self._when_add, self._when_del = _effect_bits(
             [(a, d) for _, (_, _, a, d) in when])
         self._real_rank = reality_ranks(task)[real_op] if len(real_op) else real_op
+        self._real_op = real_op
+        self._real_several = np.diff(self._real_ptr)[real_op] > 1
+        self._edge_several = np.diff(self._edge_ptr)[self._edge_op] > 1
+        self._lead = np.full(len(outcomes), _STAYS, dtype=np.int64)
 
     def _gain_terms(self) -> None:
         """Reality's outcomes of every ground action as one flat list (``_real``), their
@@ -349,32 +374,33 @@ class LazyGraph:
         self._alt_term = np.array(term, dtype=np.int64)
         self._reward_alts = RowConditions(alts)
 
-    def _gains(self, row: np.ndarray) -> np.ndarray:
-        """float64: each of reality's outcomes' reward in the state of ``row``, by
+    def _gains(self, bits: np.ndarray) -> np.ndarray:
+        """float64: each of reality's outcomes' reward in the state of ``bits``, by
         :meth:`_gain_terms`'s flat list: as :meth:`GroundOutcome.gain
         <gdq_pddl.pddl.grounding.GroundOutcome.gain>` sums them (the fixed reward plus the
         amounts of the terms one of whose alternatives holds, in order)."""
         if not len(self._term_entry):
             return self._base_gain
         held = np.zeros(len(self._term_entry), dtype=np.bool_)
-        held[self._alt_term[self._reward_alts.holds(row)]] = True
+        held[self._alt_term[self._reward_alts.holds_bits(bits)]] = True
         extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
                             minlength=len(self._base_gain))
         return self._base_gain + extra
 
-    def _holds(self, row: np.ndarray) -> np.ndarray:
-        """bool[n_ops]: the ground action's precondition holds in ``row`` (the
-        enumeration's rule: :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
-        ok = self._conditions.holds(row)
+    def _holds_bits(self, bits: np.ndarray) -> np.ndarray:
+        """bool[n_ops]: the ground action's precondition holds in the state of ``bits``
+        (:func:`_unpacked`; the enumeration's rule:
+        :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
+        ok = self._conditions.holds_bits(bits)
         if len(self._alt_op):  # one alternative of a disjunctive precondition
             met = np.zeros(len(ok), dtype=np.bool_)
-            met[self._alt_op[self._alternatives.holds(row)]] = True
+            met[self._alt_op[self._alternatives.holds_bits(bits)]] = True
             ok &= met | self._plain
         return ok
 
     def _applicable(self, row: np.ndarray) -> np.ndarray:
         """int64: the ground actions whose precondition holds in ``row``, increasing."""
-        return np.flatnonzero(self._holds(row))
+        return np.flatnonzero(self._holds_bits(_unpacked(row)))
 
     def _append(self, keys: list[bytes]) -> None:
         """Store newly discovered states (their rows' bytes, ids already in
