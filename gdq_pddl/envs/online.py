@@ -371,11 +371,17 @@ class OnlineInstance:
         old = getattr(self, "columns", None)
 
         def grown(name: str, fill: Any, dtype: Any, two_d: bool = True) -> np.ndarray:
+            # each element written once (the old block copied, the rest filled); zeros
+            # from the allocator's zeroed pages, touched only when a row is used (rows
+            # double, and a row is as wide as the ground actions: 1,800 on boxworld p05)
             shape = (rows, width) if two_d else (rows,)
-            out = np.full(shape, fill, dtype=dtype)
-            if old is not None:
-                have = getattr(self, name)
-                out[tuple(slice(0, n) for n in have.shape)] = have
+            have = getattr(self, name) if old is not None else np.zeros((0,) * len(shape))
+            out = np.zeros(shape, dtype=dtype) if not fill else np.empty(shape, dtype=dtype)
+            out[tuple(slice(0, n) for n in have.shape)] = have
+            if fill:
+                out[have.shape[0]:] = fill
+                if two_d:
+                    out[:have.shape[0], have.shape[1]:] = fill
             return out
 
         self.columns = grown("columns", -1, np.int64)
@@ -520,12 +526,10 @@ class OnlineInstance:
                        d_to * (g.n_states + 1) + nxt)
         self.columns[r] = -1
         self.columns[r, :k] = offered
-        # each column's edge of the least key, the first in edge order among equals (a
-        # stable sort by column, then key; one pass, where a loop over hundreds of
-        # columns cost most of an expansion)
-        order = np.lexsort((key, col))
-        first = order[np.r_[True, col[order[1:]] != col[order[:-1]]]] if len(order) \
-            else order
+        # each column's edge of the least key, the first in edge order among equals (the
+        # edges come by ground action: a column's are consecutive, its least key by one
+        # reduction, where a loop over hundreds of columns cost most of an expansion)
+        first = _first_least(col, key)
         self.prior_next[r, col[first]] = to[first]
         ys = nxt[first]
         wait = (self.row_of_state[ys] < 0) & ~g.is_goal[ys]  # their rows are not made yet
@@ -543,6 +547,18 @@ class OnlineInstance:
         if self.own:
             pair_cost = np.where(offered >= 0, self.mean_cost[offered], 0.0)[None, :]
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
+
+
+def _first_least(group: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """The index of the first item of least ``key`` in each run of equal ``group``
+    values (``group`` nondecreasing), by group."""
+    if not len(group):
+        return np.zeros(0, dtype=np.int64)
+    starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
+    least = np.minimum.reduceat(key, starts)
+    runs = np.diff(np.r_[starts, len(group)])
+    hit = np.flatnonzero(key == np.repeat(least, runs))
+    return hit[np.r_[True, group[hit[1:]] != group[hit[:-1]]]]
 
 
 def _no_way(base: PDDLInstance) -> str:
