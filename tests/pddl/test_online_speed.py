@@ -248,3 +248,19 @@ def test_an_online_run_shows_its_episodes_and_the_states_found(monkeypatch):
     assert (bar.total, bar.n, bar.closed) == (5, 5, True)
     assert "online" in bar.desc and bar.states[0] >= 1
     assert bar.states == sorted(bar.states) and bar.states[-1] <= online.graph.n_states
+
+
+def test_each_columns_least_edge_is_the_sorts():
+    """An online row's prior successor of each column: the edge of least key, the first
+    among equals, by one reduction over the columns' consecutive edges (envs/online.py
+    _first_least), as the stable sort by column then key picks it."""
+    from gdq_pddl.envs.online import _first_least
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        n = int(rng.integers(0, 40))
+        col = np.sort(rng.integers(0, 8, size=n))
+        key = rng.integers(0, 4, size=n) * (1 if rng.random() < 0.5 else 10**12)
+        order = np.lexsort((key, col))
+        plain = order[np.r_[True, col[order[1:]] != col[order[:-1]]]] if n else order
+        assert _first_least(col, key).tolist() == plain.tolist()
