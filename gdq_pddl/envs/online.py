@@ -392,11 +392,17 @@ class OnlineInstance:
         old = getattr(self, "columns", None)
 
         def grown(name: str, fill: Any, dtype: Any, two_d: bool = True) -> np.ndarray:
+            # each element written once (the old block copied, the rest filled); zeros
+            # from the allocator's zeroed pages, touched only when a row is used (rows
+            # double, and a row is as wide as the ground actions: 1,800 on boxworld p05)
             shape = (rows, width) if two_d else (rows,)
-            out = np.full(shape, fill, dtype=dtype)
-            if old is not None:
-                have = getattr(self, name)
-                out[tuple(slice(0, n) for n in have.shape)] = have
+            have = getattr(self, name) if old is not None else np.zeros((0,) * len(shape))
+            out = np.zeros(shape, dtype=dtype) if not fill else np.empty(shape, dtype=dtype)
+            out[tuple(slice(0, n) for n in have.shape)] = have
+            if fill:
+                out[have.shape[0]:] = fill
+                if two_d:
+                    out[:have.shape[0], have.shape[1]:] = fill
             return out
 
         self.columns = grown("columns", -1, np.int64)
@@ -489,19 +495,33 @@ class OnlineInstance:
             self.retargeted.append(pr)
         return r
 
-    def _target(self, y: int) -> tuple[int, int]:
-        """The prior successor row standing for graph state ``y`` and its distance: its
-        own row, else the chain row of its estimate (the dead-end row where the
-        relaxation cannot reach the goal)."""
-        r = int(self.row_of_state[y])
-        if r >= 0:
-            return r, int(self.dist[r])
-        h = int(self.h_of[y])
-        if h == 0:
-            return self.chain[0], 0
-        if h == INFINITE:
-            return self.dead, -1
-        return self._chain_row(h - 1), h
+    def _targets(self, x: int, r: int, nxt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The prior successor row standing for each of ``nxt`` (the edges' next states of
+        graph state ``x``, whose row is ``r``) and its distance: its own row, else the
+        chain row of its estimate (the dead-end row, distance -1, where the relaxation
+        cannot reach the goal); ``(r, -1)`` where it is ``x`` itself. The chain rows
+        needed are made in the order the edges first ask for them."""
+        to = np.full(len(nxt), r, dtype=np.int64)
+        d_to = np.full(len(nxt), -1, dtype=np.int64)
+        at = np.flatnonzero(nxt != x)
+        ys = nxt[at]
+        rows = self.row_of_state[ys]
+        own = rows >= 0  # reached: its own row
+        to[at[own]] = rows[own]
+        d_to[at[own]] = self.dist[rows[own]]
+        at, h = at[~own], self.h_of[ys[~own]]
+        goal, dead = h == 0, h == INFINITE
+        to[at[goal]], d_to[at[goal]] = self.chain[0], 0
+        to[at[dead]] = self.dead
+        chained = ~goal & ~dead
+        if chained.any():
+            h = h[chained]
+            _, first = np.unique(h, return_index=True)
+            for k in h[np.sort(first)].tolist():  # the chain rows, as edge order asks
+                self._chain_row(k - 1)
+            to[at[chained]] = np.asarray(self.chain, dtype=np.int64)[h - 1]
+            d_to[at[chained]] = h
+        return to, d_to
 
     def _offered(self, x: int) -> np.ndarray:
         offered = self.graph.offered(x)
@@ -516,10 +536,8 @@ class OnlineInstance:
         offered = self._offered(x)
         k = len(offered)
         op, nxt = g.edges(x)
-        targets = [self._target(y) if y != x else (r, -1) for y in nxt.tolist()]
+        to, d_to = self._targets(x, r, nxt)  # may make chain rows: before the widening
         self._room(self.n_rows, k)
-        to = np.array([t for t, _ in targets], dtype=np.int64)
-        d_to = np.array([d for _, d in targets], dtype=np.int64)
         col = np.searchsorted(offered, op)
         other = (nxt != x) & (d_to >= 0)
         d = int(1 + d_to[other].min()) if other.any() else -1
@@ -529,16 +547,15 @@ class OnlineInstance:
                        d_to * (g.n_states + 1) + nxt)
         self.columns[r] = -1
         self.columns[r, :k] = offered
-        # each column's edge of the least key, the first in edge order among equals (a
-        # stable sort by column, then key; one pass, where a loop over hundreds of
-        # columns cost most of an expansion)
-        order = np.lexsort((key, col))
-        first = order[np.r_[True, col[order[1:]] != col[order[:-1]]]] if len(order) \
-            else order
+        # each column's edge of the least key, the first in edge order among equals (the
+        # edges come by ground action: a column's are consecutive, its least key by one
+        # reduction, where a loop over hundreds of columns cost most of an expansion)
+        first = _first_least(col, key)
         self.prior_next[r, col[first]] = to[first]
-        for j, y in zip(col[first].tolist(), nxt[first].tolist(), strict=True):
-            if self.row_of_state[y] < 0 and not g.is_goal[y]:
-                self.waiting.setdefault(y, []).append((r, j))
+        ys = nxt[first]
+        wait = (self.row_of_state[ys] < 0) & ~g.is_goal[ys]  # their rows are not made yet
+        for j, y in zip(col[first][wait].tolist(), ys[wait].tolist(), strict=True):
+            self.waiting.setdefault(y, []).append((r, j))
         if d > 0:
             bound = length_bound(d, self.darling_tolerance)
             self.first_shortest[r, col[other & (1 + d_to == d)]] = True
@@ -557,6 +574,30 @@ class OnlineInstance:
             self._prior_reward[r, :k] = prior_rewards(m.ptr, m.stuck, m.gain, pair_cost)[0]
             for j in drawn.tolist():  # the parts' best gains add up
                 self._prior_reward[r, j] = g.best_gain(x, int(offered[j])) - pair_cost[0, j]
+
+
+def _first_least(group: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """The index of the first item of least ``key`` in each run of equal ``group``
+    values (``group`` nondecreasing), by group: a run of one item is its own; the items
+    of longer runs (boxworld's drives: 2 to 4 edges a column) are sorted by group, then
+    key, stably (``ufunc.reduceat`` over 1,800 short runs cost more than the sort)."""
+    n = len(group)
+    if not n:
+        return np.zeros(0, dtype=np.int64)
+    lead = np.ones(n, dtype=np.bool_)
+    lead[1:] = group[1:] != group[:-1]
+    starts = np.flatnonzero(lead)
+    long_run = np.diff(np.append(starts, n)) > 1
+    if not long_run.any():
+        return starts
+    longer = np.flatnonzero(long_run)
+    items = np.flatnonzero(long_run[np.cumsum(lead) - 1])
+    order = items[np.lexsort((key[items], group[items]))]
+    first = np.ones(len(order), dtype=np.bool_)
+    first[1:] = group[order[1:]] != group[order[:-1]]
+    out = starts.copy()
+    out[longer] = order[first]
+    return out
 
 
 def _no_way(base: PDDLInstance) -> str:

@@ -16,49 +16,77 @@ with their probabilities summed in outcome order, goal states never expanded. Ex
 every state in id order numbers them exactly as the enumeration does; in any other order
 the graph is the same up to renaming states.
 
+A state is expanded in one pass over every ground action at once (``LazyGraph.
+_expand_one``), with no Python call per outcome: IPPC-2008 boxworld p05 has 1,800 ground
+actions, all applicable in every state (each effect is under a ``when``), and applying
+their outcomes one by one on the state's bitmask cost 50 ms a state. The outcomes that
+have something to do (an unconditional add or delete, or a conditional effect whose
+condition holds, all conditions tested together) are applied to copies of the state's
+word row by their facts' bits; the rows that changed are looked up by their bytes (a
+dict: the states found so far); the rest stay. Edges are deduplicated, outcomes merged
+(probabilities summed in outcome order, as a loop sums them) and new states numbered by
+sorts on whole arrays.
+
 A factored ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`:
 a forall of probabilistic effects whose product is too large to list) has its edges (the
 determinisation's outcomes, each part's taken one at a time) but no listed outcome:
 reality's outcome of it is drawn part by part when an agent takes it (:meth:`LazyGraph.draw`),
 and the state it reaches is discovered then.
-
-A state's effects are applied on its Python int bitmask by the ground task's own
-outcomes (:meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`,
-:meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`): for one
-state that is some microseconds an outcome, where a numpy call on a one-row array costs
-more than the whole effect.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundOp, GroundTask, combine, sample_parts
+from gdq_pddl.pddl.grounding import GroundTask, combine, sample_parts, set_bits
 from gdq_pddl.pddl.reachable import reality_ranks
 from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
 
 _NONE = np.zeros(0, dtype=np.int64)
 
 
-def _compiled(op: GroundOp) -> tuple[tuple, tuple, tuple]:
-    """A ground action for one state at a time: reality's outcomes ``(probability, stuck,
-    apply or None (the state stays), gain or None (it depends on the state: see
-    GroundOutcome.gain), outcome)`` of probability > 0, in outcome order; the edges'
-    outcomes (a place in that tuple, or an apply of its own for an outcome reality leaves
-    out); the places of the outcomes only reality reaches (those with an effect that are
-    not the edges', failed trials aside), as :func:`~gdq_pddl.pddl.wordrows.compile_ops`
-    sorts them."""
-    place, reality = {}, []
-    for j, o in enumerate(op.outcomes if not op.factored else ()):  # drawn, never listed
-        if o.probability > 0:
-            place[j] = len(reality)
-            reality.append((o.probability, bool(o.stuck), o.apply if o.moves() and not o.stuck
-                            else None, None if o.rewards else o.reward + 0.0, o))
-    known = tuple(place[j] if j in place and not op.outcomes[j].stuck
-                  else op.outcomes[j].apply for j in op.known)
-    other = tuple(place[j] for j, o in enumerate(op.outcomes) if o.probability > 0
-                  and not o.stuck and j not in op.known and o.moves() and j in place)
-    return tuple(reality), known, other
+_STAYS = np.iinfo(np.int64).min
+"""Where an effect leads that changes nothing (the expanded state itself)."""
+
+
+def _unpacked(row: np.ndarray) -> np.ndarray:
+    """bool[64 n_words]: fact ``f`` of a word row (bit ``f % 64`` of word ``f // 64``)."""
+    return np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
+                         bitorder="little").view(np.bool_)
+
+
+def _spans(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(positions, owner)``: the positions ``ptr[i] .. ptr[i + 1] - 1`` of each listed
+    item ``i`` of a flat list grouped by item (``ptr``: where each item's part starts), in
+    the order listed, and the place in ``items`` of the item each belongs to."""
+    starts = ptr[items]
+    lengths = ptr[items + 1] - starts
+    owner = np.repeat(np.arange(len(items), dtype=np.int64), lengths)
+    ends = np.cumsum(lengths)
+    return np.arange(int(ends[-1]) if len(ends) else 0, dtype=np.int64) + \
+        np.repeat(starts - ends + lengths, lengths), owner
+
+
+def _bits(masks: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(owner, word, bit)`` of every fact set in each mask of ``masks``, by mask then
+    fact: the index of its mask, its word (``f // 64``) and its bit in the word (uint64)."""
+    facts = [list(set_bits(m)) for m in masks]
+    owner = np.repeat(np.arange(len(masks), dtype=np.int64), [len(f) for f in facts])
+    flat = np.array([f for fs in facts for f in fs], dtype=np.int64)
+    return owner, flat >> 6, np.left_shift(np.uint64(1), (flat & 63).astype(np.uint64))
+
+
+def _effect_bits(effects: list[tuple[int, int]]) -> tuple[np.ndarray, ...]:
+    """The facts ``(add, delete)`` masks of each effect set or clear as a flat list
+    grouped by effect (adds first): ``(ptr, word, add bit, delete bit)``, one entry a
+    fact, its bit in ``add bit`` or in ``delete bit`` (0 in the other)."""
+    owner, word, bit = _bits([m for pair in effects for m in pair])
+    is_add = owner % 2 == 0
+    order = np.argsort(owner // 2, kind="stable")
+    zero = np.zeros(len(bit), dtype=np.uint64)
+    ptr = np.searchsorted(owner[order] // 2, np.arange(len(effects) + 1))
+    return (ptr.astype(np.int64), word[order], np.where(is_add, bit, zero)[order],
+            np.where(is_add, zero, bit)[order])
 
 
 class LazyGraph:
@@ -86,31 +114,19 @@ class LazyGraph:
         self._alternatives = RowConditions([(p, n) for _, p, n in alt])
         self._plain = np.ones(len(task.ops), dtype=np.bool_)  # no alternatives to meet
         self._plain[self._alt_op] = False
-        self._rank = reality_ranks(task).tolist()
-        # ground actions whose every outcome only has conditional effects (IPPC boxworld:
-        # all of them), and those effects' conditions: in a state where none holds, the
-        # action leaves the state as it is, and its outcomes need not be applied one by one
-        quiet, fire = np.zeros(len(task.ops), dtype=np.bool_), []
-        for k, op in enumerate(task.ops):
-            if not op.factored and not any(o.add or o.dele for o in op.outcomes):
-                quiet[k] = True
-                fire += [(k, p, n) for o in op.outcomes for p, n, _, _ in o.conditional]
-        self._may_stay = quiet
-        self._fire_op = np.array([k for k, _, _ in fire], dtype=np.int64)
-        self._fires = RowConditions([(p, n) for _, p, n in fire])
-        self._reality, self._known, self._other = zip(*map(_compiled, task.ops), strict=True) \
-            if task.ops else ((), (), ())
+        self._compile(task)
         self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
         """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
         self._fixed_gains: dict[int, tuple] = {}  # best_gain's parts that do not vary
         self._gain_terms()
-        self._masks: list[int] = [task.init]
-        self._index: dict[int, int] = {task.init: 0}
+        self._index: dict[bytes, int] = {}
         self._words = np.zeros((16, self.n_words), dtype=np.uint64)
         self._goal = np.zeros(16, dtype=np.bool_)
         self._expanded = np.zeros(16, dtype=np.bool_)
         self._n = 0
-        self._append([task.init])
+        init = task.init.to_bytes(8 * self.n_words, "little")
+        self._index[init] = 0
+        self._append([init])
         self._offered: dict[int, np.ndarray] = {}
         self._edges: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._outcomes: dict[int, tuple[np.ndarray, ...]] = {}
@@ -158,73 +174,197 @@ class LazyGraph:
 
     def _expand_one(self, x: int) -> list[int]:
         """Expand state ``x``: store its offered actions, edges and outcomes; return the
-        masks of the states it discovers (already given ids in :attr:`_index`)."""
-        s, index, fresh = self._masks[x], self._index, []
-        n = self._n
+        rows of the states it discovers (already given ids in :attr:`_index`).
 
-        def id_of(t: int) -> int:
-            i = index.get(t)
-            if i is None:
-                i = index[t] = n + len(fresh)
-                fresh.append(t)
-            return i
-
+        Every outcome of the applicable ground actions at once: the effects that change
+        something here (an unconditional add or delete, or a conditional effect whose
+        condition holds: all tested together) are applied to copies of the row, one per
+        effect, by their facts' bits; the changed rows are looked up by their bytes; the
+        rest stay in ``x``."""
         row = self._words[x]
-        acts = self._applicable(row).tolist()
-        reality, gains = self._reality, self.gains
-        stays = self._stays(row).tolist()
-        nexts = [[s] * len(reality[k]) if stays[k] else
-                 [s if apply is None else apply(s) for _, _, apply, _, _ in reality[k]]
-                 for k in acts]  # each outcome applied once
-        edge_op, edge_next = [], []
-        for k, ts in zip(acts, nexts, strict=True):  # by ground action, then kept outcome
-            if stays[k]:  # every outcome the planner knows stays in x
-                if self._known[k]:
-                    edge_op.append(k)
-                    edge_next.append(x)
-                continue
-            seen: dict[int, None] = {}
-            for at in self._known[k]:
-                t = ts[at] if isinstance(at, int) else at(s)
-                if t not in seen:  # each state once a ground action
-                    seen[t] = None
-                    edge_op.append(k)
-                    edge_next.append(id_of(t))
-        for k, ts in sorted(((k, ts) for k, ts in zip(acts, nexts, strict=True)
-                             if self._other[k] and not stays[k]), key=lambda e: self._rank[e[0]]):
-            for at in self._other[k]:
-                id_of(ts[at])
-        column, prob, nxt, stuck, gain = [], [], [], [], []
-        worth, first = self._gains(row) if gains else None, self._first
-        for c, (k, ts) in enumerate(zip(acts, nexts, strict=True)):  # reality, merged
-            if len(ts) == 1:  # one outcome (most ground actions): nothing to merge
-                p, st, _, _, _ = reality[k][0]
-                column.append(c)
-                prob.append(p)
-                nxt.append(index[ts[0]])
-                stuck.append(st)
-                gain.append(worth[first[k]] if worth is not None else 0.0)
-                continue
-            merged: dict[tuple, float] = {}
-            for i, (t, (p, st, _, _, _)) in enumerate(zip(ts, reality[k], strict=True)):
-                key: tuple = (index[t], st)
-                if worth is not None:
-                    key += (worth[first[k] + i],)
-                merged[key] = merged.get(key, 0.0) + p  # summed in outcome order
-            for key, p in merged.items():
-                column.append(c)
-                prob.append(p)
-                nxt.append(key[0])
-                stuck.append(key[1])
-                gain.append(key[2] if gains else 0.0)
-        self._offered[x] = np.array(acts, dtype=np.int64)
-        self._edges[x] = (np.array(edge_op, dtype=np.int64),
-                          np.array(edge_next, dtype=np.int64))
-        self._outcomes[x] = (np.array(column, dtype=np.int64), np.array(prob, dtype=float),
-                             np.array(nxt, dtype=np.int64), np.array(stuck, dtype=np.bool_),
-                             np.array(gain, dtype=float))
+        bits = _unpacked(row)
+        ok = self._holds_bits(bits)
+        acts = np.flatnonzero(ok)
+        column = np.cumsum(ok) - 1  # each applicable ground action's column
+        moving, rows = self._moved(row, bits, ok)
+        sid, fresh = self._ids(row, rows)
+        lead = self._lead  # effect -> where it leads: x unless it moves
+        lead[moving] = sid
+
+        e_pos = np.flatnonzero(ok[self._edge_op])
+        e_op, e_next = self._edge_op[e_pos], lead[self._edge_eff[e_pos]]
+        r_pos = np.flatnonzero(ok[self._real_op])
+        col = column[self._real_op[r_pos]]
+        r_next = np.where(self._real_moves[r_pos], lead[self._real_eff[r_pos]], _STAYS)
+        lead[moving] = _STAYS
+        e_next[e_next == _STAYS] = x
+        r_next[r_next == _STAYS] = x
+        n = self._n
+        if fresh:  # provisional ids -1 - j: the j-th new row's
+            new = self._numbered(n, fresh, e_next, r_pos, r_next)
+            for ids in (e_next, r_next):
+                neg = ids < 0
+                ids[neg] = new[-1 - ids[neg]]
+        # the determinisation's edges: each next state once a ground action, the first
+        # (only ground actions with several kept outcomes can repeat one)
+        keep = np.ones(len(e_pos), dtype=np.bool_)
+        several = np.flatnonzero(self._edge_several[e_pos])
+        if len(several):
+            key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
+            _, first = np.unique(key, return_index=True)
+            keep[several] = False
+            keep[several[first]] = True
+        self._offered[x] = acts
+        self._edges[x] = (e_op[keep], e_next[keep])
+        self._outcomes[x] = self._merged(bits, r_pos, col, r_next)
         self._expanded[x] = True
-        return fresh
+        return [fresh[j] for j in np.argsort(new)] if fresh else []
+
+    def _moved(self, row: np.ndarray, bits: np.ndarray,
+               ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(effects, rows)``: the outcomes (by flat effect index, increasing) of the
+        applicable ground actions that have something to do in the state of ``row``
+        (``bits``: its facts, :func:`_unpacked`): an unconditional add or delete, or a
+        conditional effect whose condition holds; and the row each leads to (adds win, as
+        :meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
+        plain = self._plain_eff[ok[self._eff_op[self._plain_eff]]]
+        fired = np.flatnonzero(self._when.holds_bits(bits) & ok[self._when_op]) \
+            if self._when.n else _NONE
+        moving = np.union1d(plain, self._when_eff[fired]) if len(fired) else plain
+        if not len(moving):
+            return moving, np.zeros((0, len(row)), dtype=np.uint64)
+        u_pos, u_own = _spans(self._bit_ptr, moving)
+        c_pos, c_own = _spans(self._when_ptr, fired)
+        own = np.concatenate([u_own, np.searchsorted(moving, self._when_eff[fired])[c_own]])
+        word = np.concatenate([self._bit_word[u_pos], self._when_word[c_pos]])
+        add = np.zeros((len(moving), len(row)), dtype=np.uint64)
+        dele = np.zeros_like(add)
+        np.bitwise_or.at(add, (own, word), np.concatenate([self._bit_add[u_pos],
+                                                           self._when_add[c_pos]]))
+        np.bitwise_or.at(dele, (own, word), np.concatenate([self._bit_del[u_pos],
+                                                            self._when_del[c_pos]]))
+        return moving, (row & ~dele) | add
+
+    def _ids(self, row: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
+        """The id of the state each of ``rows`` is (:data:`_STAYS` where the row is
+        ``row``, unchanged), and the rows never seen before, in order of first appearance
+        in ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
+        sid = np.full(len(rows), _STAYS, dtype=np.int64)
+        changed = np.flatnonzero((rows != row).any(axis=1))
+        fresh: list[bytes] = []
+        if not len(changed):
+            return sid, fresh
+        size = 8 * self.n_words
+        data = np.ascontiguousarray(rows[changed], dtype="<u8").tobytes()
+        keys = [data[i:i + size] for i in range(0, len(data), size)]
+        ids = list(map(self._index.get, keys))
+        if None in ids:
+            new: dict[bytes, int] = {}
+            for i, j in enumerate(ids):
+                if j is None:
+                    key = keys[i]
+                    j = new.get(key)
+                    if j is None:
+                        j = new[key] = -1 - len(fresh)
+                        fresh.append(key)
+                    ids[i] = j
+        sid[changed] = ids
+        return sid, fresh
+
+    def _numbered(self, n: int, fresh: list[bytes], e_next: np.ndarray, r_pos: np.ndarray,
+                  r_next: np.ndarray) -> np.ndarray:
+        """The ids of the new rows (by provisional id ``-1 - j``) from ``n`` on, as the
+        enumeration orders them: by first appearance among the edges' next states (by
+        ground action, then outcome), then among reality's other outcomes' next states (by
+        :func:`~gdq_pddl.pddl.reachable.reality_ranks` of their ground action, then
+        outcome); the index gets them."""
+        later = np.flatnonzero(r_next < 0)
+        later = later[np.argsort(self._real_rank[r_pos[later]], kind="stable")]
+        seq = np.concatenate([e_next[e_next < 0], r_next[later]])
+        _, first = np.unique(seq, return_index=True)  # provisional ids -k .. -1
+        order = -1 - seq[np.sort(first)]  # j of each new row, in order of appearance
+        new = np.empty(len(fresh), dtype=np.int64)
+        new[order] = np.arange(n, n + len(fresh))
+        self._index.update(zip(fresh, new.tolist(), strict=True))
+        return new
+
+    def _merged(self, bits: np.ndarray, r_pos: np.ndarray, col: np.ndarray,
+                nxt: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Reality's outcomes ``(column, probability, next, stuck, gain)`` of the state of
+        ``bits``, equal ones of a column (same next state, failed trial or not, gain)
+        merged into the first, their probabilities summed in outcome order (only ground
+        actions with several outcomes can have equal ones)."""
+        stuck = self._real_stuck[r_pos]
+        gain = self._gains(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
+        prob = self._real_prob[r_pos]
+        several = np.flatnonzero(self._real_several[r_pos])
+        if not len(several):
+            return col, prob, nxt, stuck, gain
+        c, t, s, g = col[several], nxt[several], stuck[several], gain[several]
+        order = np.lexsort((g, s, t, c))  # stable: equals in outcome order
+        c, t, s, g = c[order], t[order], s[order], g[order]
+        starts = np.r_[True, (c[1:] != c[:-1]) | (t[1:] != t[:-1]) | (s[1:] != s[:-1])
+                       | (g[1:] != g[:-1])]
+        group = np.empty(len(order), dtype=np.int64)
+        group[order] = np.cumsum(starts) - 1
+        summed = np.bincount(group, weights=prob[several])  # in outcome order, from 0.0
+        first = several[order[starts]]  # each group's first outcome
+        keep = np.ones(len(r_pos), dtype=np.bool_)
+        keep[several] = False
+        keep[first] = True
+        prob = prob.copy()
+        prob[first] = summed
+        return col[keep], prob[keep], nxt[keep], stuck[keep], gain[keep]
+
+    def _compile(self, task: GroundTask) -> None:
+        """Every ground action's outcomes as flat arrays (:meth:`_expand_one` reads them
+        for all applicable ground actions at once). An *effect* is one outcome of one
+        ground action (ground action ``k``'s from ``sum(len(ops[i].outcomes), i < k)``):
+        its unconditional facts (``_bit_*``, grouped by effect) and its conditional
+        effects (``_when``, ``_when_*``). The determinisation's edges (``_edge_*``: by
+        ground action, then the kept outcomes in order) and reality's outcomes of
+        probability > 0 (``_real_*``: by ground action, then outcome) point at their
+        effects; a failed trial or an outcome that changes nothing stays (not
+        ``_real_moves``)."""
+        ops = task.ops
+        first = np.cumsum([0] + [len(op.outcomes) for op in ops]).tolist()
+        outcomes = [o for op in ops for o in op.outcomes]
+        self._eff_op = np.repeat(np.arange(len(ops), dtype=np.int64),
+                                 [len(op.outcomes) for op in ops])
+        edges = [(k, first[k] + j) for k, op in enumerate(ops) for j in op.known]
+        self._edge_op = np.array([k for k, _ in edges], dtype=np.int64)
+        self._edge_eff = np.array([e for _, e in edges], dtype=np.int64)
+        self._edge_ptr = np.searchsorted(self._edge_op, np.arange(len(ops) + 1))
+        real = [(k, first[k] + j, o) for k, op in enumerate(ops)
+                for j, o in enumerate(op.outcomes)
+                if o.probability > 0 and not op.factored]  # a factored one's are drawn
+        self._real = [o for _, _, o in real]
+        real_op = np.array([k for k, _, _ in real], dtype=np.int64)
+        self._real_ptr = np.searchsorted(real_op, np.arange(len(ops) + 1))
+        self._real_eff = np.array([e for _, e, _ in real], dtype=np.int64)
+        self._real_prob = np.array([o.probability for o in self._real], dtype=float)
+        self._real_stuck = np.array([bool(o.stuck) for o in self._real], dtype=np.bool_)
+        self._real_moves = np.array([o.moves() and not o.stuck for o in self._real],
+                                    dtype=np.bool_)
+        # the effects a state's edges or reality's moves read (not a failed trial's, nor
+        # one of probability 0 the determinisation leaves out)
+        used = {e for _, e in edges} | {e for (_, e, _), m in zip(real, self._real_moves,
+                                                                   strict=True) if m}
+        self._plain_eff = np.array([e for e, o in enumerate(outcomes)
+                                    if e in used and (o.add or o.dele)], dtype=np.int64)
+        self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = _effect_bits(
+            [(o.add, o.dele) for o in outcomes])
+        when = [(e, c) for e, o in enumerate(outcomes) if e in used for c in o.conditional]
+        self._when = RowConditions([(p, n) for _, (p, n, _, _) in when])
+        self._when_eff = np.array([e for e, _ in when], dtype=np.int64)
+        self._when_op = self._eff_op[self._when_eff]
+        self._when_ptr, self._when_word, self._when_add, self._when_del = _effect_bits(
+            [(a, d) for _, (_, _, a, d) in when])
+        self._real_rank = reality_ranks(task)[real_op] if len(real_op) else real_op
+        self._real_op = real_op
+        self._real_several = np.diff(self._real_ptr)[real_op] > 1
+        self._edge_several = np.diff(self._edge_ptr)[self._edge_op] > 1
+        self._lead = np.full(len(outcomes), _STAYS, dtype=np.int64)
 
     def draw(self, x: int, k: int, rng: np.random.Generator) -> tuple[int, bool, float]:
         """Reality's outcome of factored ground action ``k`` in discovered state ``x``,
@@ -235,20 +375,21 @@ class LazyGraph:
         if not op.factored:
             raise ValueError(f"{op.name} is not factored: its outcomes are listed "
                              "(outcomes)")
-        s = self._masks[x]
+        s = self.mask(x)
         o = combine(sample_parts(op, rng))
         t = s if o.stuck else o.apply(s)
-        y = self._index.get(t)
+        key = t.to_bytes(8 * self.n_words, "little")
+        y = self._index.get(key)
         if y is None:
-            y = self._index[t] = self._n
-            self._append([t])
+            y = self._index[key] = self._n
+            self._append([key])
         return y, o.stuck, (o.gain(s) if self.gains else 0.0)
 
     def best_gain(self, x: int, k: int) -> float:
         """The most an outcome of factored ground action ``k`` earns in state ``x`` that
         does not fail the trial (where one can: every part has such an outcome; else of
         all): each part's most, added up, as the gains of its parts add up."""
-        s = self._masks[x]
+        s = self.mask(x)
         fixed = self._fixed_gains.get(k)
         if fixed is None:  # the parts whose outcomes earn the same in every state, once
             parts = self.task.ops[k].parts
@@ -265,64 +406,59 @@ class LazyGraph:
         return float(any_sum + sum(max(o.gain(s) for o in part) for part in varying))
 
     def _gain_terms(self) -> None:
-        """Reality's outcomes of every ground action as one flat list (ground action
-        ``k``'s from ``_first[k]``), their fixed rewards and their conditional rewards'
-        conditions, so that :meth:`_gains` values them all in a state at once."""
-        first, base, entry, amount, alts, term = [], [], [], [], [], []
-        for outcomes in self._reality:
-            first.append(len(base))
-            for _, _, _, fixed, o in outcomes:
-                base.append(fixed if fixed is not None else o.reward)
-                for alternatives, worth in (o.rewards if fixed is None else ()):
-                    term += [len(entry)] * len(alternatives)
-                    alts += list(alternatives)
-                    entry.append(len(base) - 1)
-                    amount.append(worth)
-        self._first = first
+        """Reality's outcomes of every ground action as one flat list (``_real``), their
+        fixed rewards and their conditional rewards' conditions, so that :meth:`_gains`
+        values them all in a state at once."""
+        base, entry, amount, alts, term = [], [], [], [], []
+        for o in self._real:
+            base.append(o.reward if o.rewards else o.reward + 0.0)
+            for alternatives, worth in o.rewards:
+                term += [len(entry)] * len(alternatives)
+                alts += list(alternatives)
+                entry.append(len(base) - 1)
+                amount.append(worth)
         self._base_gain = np.array(base, dtype=float)
         self._term_entry = np.array(entry, dtype=np.int64)
         self._term_amount = np.array(amount, dtype=float)
         self._alt_term = np.array(term, dtype=np.int64)
         self._reward_alts = RowConditions(alts)
 
-    def _gains(self, row: np.ndarray) -> list[float]:
-        """Each outcome's reward in the state of ``row``, by :meth:`_gain_terms`'s flat
-        list: as :meth:`GroundOutcome.gain <gdq_pddl.pddl.grounding.GroundOutcome.gain>`
-        sums them (the fixed reward plus the amounts of the terms one of whose
-        alternatives holds, in order)."""
+    def _gains(self, bits: np.ndarray) -> np.ndarray:
+        """float64: each of reality's outcomes' reward in the state of ``bits``, by
+        :meth:`_gain_terms`'s flat list: as :meth:`GroundOutcome.gain
+        <gdq_pddl.pddl.grounding.GroundOutcome.gain>` sums them (the fixed reward plus the
+        amounts of the terms one of whose alternatives holds, in order)."""
         if not len(self._term_entry):
-            return self._base_gain.tolist()
+            return self._base_gain
         held = np.zeros(len(self._term_entry), dtype=np.bool_)
-        held[self._alt_term[self._reward_alts.holds(row)]] = True
+        held[self._alt_term[self._reward_alts.holds_bits(bits)]] = True
         extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
                             minlength=len(self._base_gain))
-        return (self._base_gain + extra).tolist()
+        return self._base_gain + extra
 
-    def _stays(self, row: np.ndarray) -> np.ndarray:
-        """bool[n_ops]: the ground action leaves the state of ``row`` as it is, whatever
-        its outcome (no effect but conditional ones, none of whose conditions holds)."""
-        stays = self._may_stay.copy()
-        if len(self._fire_op):
-            stays[self._fire_op[self._fires.holds(row)]] = False
-        return stays
-
-    def _applicable(self, row: np.ndarray) -> np.ndarray:
-        """int64: the ground actions whose precondition holds in ``row``, increasing (the
-        enumeration's rule: :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
-        ok = self._conditions.holds(row)
+    def _holds_bits(self, bits: np.ndarray) -> np.ndarray:
+        """bool[n_ops]: the ground action's precondition holds in the state of ``bits``
+        (:func:`_unpacked`; the enumeration's rule:
+        :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
+        ok = self._conditions.holds_bits(bits)
         if len(self._alt_op):  # one alternative of a disjunctive precondition
             met = np.zeros(len(ok), dtype=np.bool_)
-            met[self._alt_op[self._alternatives.holds(row)]] = True
+            met[self._alt_op[self._alternatives.holds_bits(bits)]] = True
             ok &= met | self._plain
-        return np.flatnonzero(ok)
+        return ok
 
-    def _append(self, masks: list[int]) -> None:
-        """Store newly discovered states (their ids already in :attr:`_index`), growing
-        the arrays by doubling."""
-        if not masks:
+    def _applicable(self, row: np.ndarray) -> np.ndarray:
+        """int64: the ground actions whose precondition holds in ``row``, increasing."""
+        return np.flatnonzero(self._holds_bits(_unpacked(row)))
+
+    def _append(self, keys: list[bytes]) -> None:
+        """Store newly discovered states (their rows' bytes, ids already in
+        :attr:`_index`), growing the arrays by doubling."""
+        if not keys:
             return
-        rows = self._rows(masks)
-        n, m = self._n, len(masks)
+        rows = np.frombuffer(b"".join(keys), dtype="<u8").astype(np.uint64) \
+            .reshape(-1, self.n_words)
+        n, m = self._n, len(keys)
         if n + m > len(self._words):
             cap = max(2 * len(self._words), n + m)
             for name in ("_words", "_goal", "_expanded"):
@@ -332,16 +468,7 @@ class LazyGraph:
                 setattr(self, name, new)
         self._words[n:n + m] = rows
         self._goal[n:n + m] = goal_rows(self.task, rows)
-        if n:  # state 0's mask is in place from the start
-            self._masks.extend(masks)
         self._n = n + m
-
-    def _rows(self, masks: list[int]) -> np.ndarray:
-        """uint64[len(masks), n_words]: bitmasks as word rows (fact ``f`` is bit ``f % 64``
-        of word ``f // 64``, as :func:`~gdq_pddl.pddl.wordrows.words`)."""
-        size = 8 * self.n_words
-        data = b"".join(m.to_bytes(size, "little") for m in masks)
-        return np.frombuffer(data, dtype="<u8").astype(np.uint64).reshape(-1, self.n_words)
 
     def _require(self, x: int) -> bool:
         """Whether state ``x`` was expanded (False: a goal, never expanded); an error for
@@ -388,15 +515,18 @@ class LazyGraph:
         was not discovered."""
         rows = np.asarray(rows, dtype=np.uint64).reshape(-1, self.n_words)
         size = 8 * self.n_words
-        data = rows.astype("<u8").tobytes()
+        data = np.ascontiguousarray(rows, dtype="<u8").tobytes()
         get = self._index.get
-        return np.array([get(int.from_bytes(data[i:i + size], "little"), -1)
-                         for i in range(0, len(data), size)], dtype=np.int64)
+        return np.array([get(data[i:i + size], -1) for i in range(0, len(data), size)],
+                        dtype=np.int64)
 
     def mask(self, x: int) -> int:
         """State ``x`` as a Python int bitmask over ``task.facts``."""
-        return self._masks[x]
+        if not 0 <= x < self._n:
+            raise IndexError(f"state {x} is not a discovered state (0 to {self._n - 1})")
+        return int.from_bytes(np.ascontiguousarray(self._words[x], dtype="<u8").tobytes(),
+                              "little")
 
     def atoms(self, x: int) -> frozenset[str]:
         """The fluent atoms true in state ``x``."""
-        return self.task.atoms(self._masks[x])
+        return self.task.atoms(self.mask(x))

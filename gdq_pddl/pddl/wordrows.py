@@ -50,8 +50,13 @@ class RowConditions:
 
     def holds(self, row: np.ndarray) -> np.ndarray:
         """bool[n]: each condition holds in the word row ``row``."""
-        bits = np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
-                             bitorder="little").view(np.bool_)
+        return self.holds_bits(np.unpackbits(np.ascontiguousarray(row, dtype="<u8")
+                                             .view(np.uint8), bitorder="little").view(np.bool_))
+
+    def holds_bits(self, bits: np.ndarray) -> np.ndarray:
+        """bool[n]: each condition holds in the state whose facts are ``bits`` (bool, fact
+        ``f`` at ``bits[f]``: a word row unpacked, little-endian bit order), for several
+        sets of conditions tested on one state unpacking it once."""
         missing = np.bincount(self.pos_of[~bits[self.pos_fact]], minlength=self.n)
         present = np.bincount(self.neg_of[bits[self.neg_fact]], minlength=self.n)
         return (missing == 0) & (present == 0)
