@@ -6,7 +6,9 @@ packages, so pytest puts the repository root on ``sys.path`` wherever a test fil
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
@@ -140,3 +142,35 @@ class Background:
 
 
 BACKGROUND = Background()
+
+
+WARM_KERNELS = """
+import warnings
+warnings.simplefilter("ignore")
+import numpy as np
+from gdq_pddl.envs.office import CompactEnv, OfficeEnv
+from gdq_pddl.learners import METHODS, make_learner, office_task_context, run_episodes
+from gdq_pddl.learners.episodes import loops_cached
+if not loops_cached(METHODS):
+    env = OfficeEnv(task="C")
+    ctx = office_task_context(env.world, "C")
+    for base in (env, CompactEnv(task="C", world=env.world)):
+        for name in METHODS:
+            base.reset(seed=0)
+            run_episodes(make_learner(name, ctx), base, 3, np.random.default_rng(0))
+"""
+"""Compiles every learner's kernels into numba's on-disk cache (the one this process uses):
+its OptInit, and its episode loop over both kinds of dynamics (a PDDL env's and the
+compact env's); nothing when the loops are cached already."""
+
+
+def start_warm_kernels() -> Future:
+    """Queue :data:`WARM_KERNELS` on the second core, before any test's subprocess: on a
+    fresh checkout the main process, running the tests that need no learner meanwhile,
+    then loads most learners' kernels instead of compiling them itself. Only a cache
+    warmer: a test never waits for it, and whatever it has not compiled yet a test
+    compiles (numba writes its cache files whole, and a damaged one is recompiled)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
+    return BACKGROUND.run("warm kernels", [sys.executable, "-c", WARM_KERNELS], env=env,
+                          timeout=900, cwd=REPO_ROOT)
