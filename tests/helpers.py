@@ -154,14 +154,18 @@ from gdq_pddl.learners.episodes import loops_cached
 if not loops_cached(METHODS):
     env = OfficeEnv(task="C")
     ctx = office_task_context(env.world, "C")
+    learners = {name: make_learner(name, ctx) for name in METHODS}
+    first = ["Q-learning", "GDQ-code", "GDQ", "Dyna-Q"]
+    order = first + [name for name in METHODS if name not in first]
     for base in (env, CompactEnv(task="C", world=env.world)):
-        for name in METHODS:
+        for name in order:
             base.reset(seed=0)
-            run_episodes(make_learner(name, ctx), base, 3, np.random.default_rng(0))
+            run_episodes(learners[name], base, 3, np.random.default_rng(0))
 """
 """Compiles every learner's kernels into numba's on-disk cache (the one this process uses):
-its OptInit, and its episode loop over both kinds of dynamics (a PDDL env's and the
-compact env's); nothing when the loops are cached already."""
+first every learner's OptInit (the early tests build learners), then the episode loops
+over both kinds of dynamics (a PDDL env's, then the compact env's), the loops the most
+tests run first; nothing when the loops are cached already."""
 
 
 def start_warm_kernels() -> Future:
