@@ -15,7 +15,7 @@ from gdq_pddl import limits
 from gdq_pddl.learners import office_task_context, precompile
 from gdq_pddl.world import load_world
 from gdq_pddl.world_types import World
-from tests.helpers import BACKGROUND, start_warm_kernels
+from tests.helpers import BACKGROUND, WARMER, start_warm_kernels
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -44,6 +44,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
     BACKGROUND.stop()
+    WARMER.stop()
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -168,13 +168,18 @@ over both kinds of dynamics (a PDDL env's, then the compact env's), the loops th
 tests run first; nothing when the loops are cached already."""
 
 
+WARMER = Background()
+"""Runs :data:`WARM_KERNELS` beside :data:`BACKGROUND`'s queue, not in it: queued first,
+its 90 s of compiling on a fresh checkout held up the subprocesses the early tests wait
+for (tests/docs), and the main process sat idle."""
+
+
 def start_warm_kernels() -> Future:
-    """Queue :data:`WARM_KERNELS` on the second core, before any test's subprocess: on a
-    fresh checkout the main process, running the tests that need no learner meanwhile,
-    then loads most learners' kernels instead of compiling them itself. Only a cache
-    warmer: a test never waits for it, and whatever it has not compiled yet a test
+    """Start :data:`WARM_KERNELS` when collection ends: on a fresh checkout the main
+    process then loads most learners' kernels instead of compiling them itself. Only a
+    cache warmer: a test never waits for it, and whatever it has not compiled yet a test
     compiles (numba writes its cache files whole, and a damaged one is recompiled)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
-    return BACKGROUND.run("warm kernels", [sys.executable, "-c", WARM_KERNELS], env=env,
-                          timeout=900, cwd=REPO_ROOT)
+    return WARMER.run("warm kernels", [sys.executable, "-c", WARM_KERNELS], env=env,
+                      timeout=900, cwd=REPO_ROOT)
