@@ -15,7 +15,7 @@ from gdq_pddl import limits
 from gdq_pddl.learners import office_task_context, precompile
 from gdq_pddl.world import load_world
 from gdq_pddl.world_types import World
-from tests.helpers import BACKGROUND
+from tests.helpers import BACKGROUND, WARMER, start_warm_kernels
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -24,11 +24,18 @@ def pytest_configure(config: pytest.Config) -> None:
                             "tests.helpers.Background)")
 
 
+WARM_KERNELS_FROM = 500
+"""A session of at least this many tests (the suite has about 2,000) first queues
+:func:`~tests.helpers.start_warm_kernels`; a few files end before it would help."""
+
+
 def pytest_collection_finish(session: pytest.Session) -> None:
     if session.config.option.collectonly:
         return
     marked = [(item, item.get_closest_marker("background")) for item in session.items]
     marked = [(item, mark) for item, mark in marked if mark is not None]
+    if len(session.items) >= WARM_KERNELS_FROM:
+        start_warm_kernels()
     # first the subprocesses with a numba cache of their own: on a fresh checkout the others
     # then find the kernels this process has compiled meanwhile, instead of compiling them
     for item, mark in sorted(marked, key=lambda pair: not pair[1].kwargs.get("first")):
@@ -37,6 +44,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
     BACKGROUND.stop()
+    WARMER.stop()
 
 
 @pytest.fixture(scope="session", autouse=True)

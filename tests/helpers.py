@@ -6,7 +6,9 @@ packages, so pytest puts the repository root on ``sys.path`` wherever a test fil
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
@@ -140,3 +142,44 @@ class Background:
 
 
 BACKGROUND = Background()
+
+
+WARM_KERNELS = """
+import warnings
+warnings.simplefilter("ignore")
+import numpy as np
+from gdq_pddl.envs.office import CompactEnv, OfficeEnv
+from gdq_pddl.learners import METHODS, make_learner, office_task_context, run_episodes
+from gdq_pddl.learners.episodes import loops_cached
+if not loops_cached(METHODS):
+    env = OfficeEnv(task="C")
+    ctx = office_task_context(env.world, "C")
+    learners = {name: make_learner(name, ctx) for name in METHODS}
+    first = ["Q-learning", "GDQ-code", "GDQ", "Dyna-Q"]
+    order = first + [name for name in METHODS if name not in first]
+    for base in (env, CompactEnv(task="C", world=env.world)):
+        for name in order:
+            base.reset(seed=0)
+            run_episodes(learners[name], base, 3, np.random.default_rng(0))
+"""
+"""Compiles every learner's kernels into numba's on-disk cache (the one this process uses):
+first every learner's OptInit (the early tests build learners), then the episode loops
+over both kinds of dynamics (a PDDL env's, then the compact env's), the loops the most
+tests run first; nothing when the loops are cached already."""
+
+
+WARMER = Background()
+"""Runs :data:`WARM_KERNELS` beside :data:`BACKGROUND`'s queue, not in it: queued first,
+its 90 s of compiling on a fresh checkout held up the subprocesses the early tests wait
+for (tests/docs), and the main process sat idle."""
+
+
+def start_warm_kernels() -> Future:
+    """Start :data:`WARM_KERNELS` when collection ends: on a fresh checkout the main
+    process then loads most learners' kernels instead of compiling them itself. Only a
+    cache warmer: a test never waits for it, and whatever it has not compiled yet a test
+    compiles (numba writes its cache files whole, and a damaged one is recompiled)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
+    return WARMER.run("warm kernels", [sys.executable, "-c", WARM_KERNELS], env=env,
+                      timeout=900, cwd=REPO_ROOT)
