@@ -16,12 +16,17 @@ pairs: this script is the paired table for single problems. ``--last 0.1`` compa
 over each run's last 10% of episodes instead of all of them. A ``gdq-pddl scale`` folder
 (its ``building-N-sS.npz`` files) gives a row per building, with the building's
 reference value V_ref (a lower bound on V*) in the V* column; a building folder of an
-unfinished one (``units/building-N-sS``), a row per method on the runs it saved.
+unfinished one (``units/building-N-sS``), a row per method on the runs it saved. A
+``gdq-pddl run`` folder a limit stopped (``config.json`` and ``units/`` but no
+``episodes.csv``) gives a row per method that saved a run, on the runs it shares with the
+reference, the problem marked ``(unfinished)`` and a cell's run count when it is below the
+reference's (such a comparison is left out of the wins / ties / losses row).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 from pathlib import Path
 
@@ -65,6 +70,9 @@ def rows(folders: list[Path], reference: str, last: float = 1.0) -> pd.DataFrame
             continue
         if folder.name.startswith("building-") and any(folder.glob("*-[0-9]*.npz")):
             out += unit_rows(folder, reference, last)
+            continue
+        if not (folder / "episodes.csv").is_file() and (folder / "units").is_dir():
+            out += unfinished_rows(folder, reference, last)
             continue
         study = Study.open(folder)
         for exp in study.experiments:
@@ -147,6 +155,47 @@ def unit_rows(folder: Path, reference: str, last: float = 1.0) -> list[dict]:
     return out
 
 
+def unfinished_rows(folder: Path, reference: str, last: float = 1.0) -> list[dict]:
+    """The rows of a ``gdq-pddl run`` folder stopped before its end, from the runs it saved
+    (``units/EXPERIMENT__TASK__METHOD__runI.npz``, the schedule's one task each): each
+    method against the reference on the runs both saved; V* unknown (NaN: ``optimal.json``
+    is written at the end)."""
+    means: dict[tuple[str, str], dict[str, dict[int, float]]] = {}
+    for path in (folder / "units").glob("*__run[0-9]*.npz"):
+        exp, task, method, run = path.stem.split("__")
+        with np.load(path) as data:
+            returns = data["returns"]
+        keep = max(1, int(round(returns.size * last)))
+        means.setdefault((exp, task), {}).setdefault(method, {})[int(run[3:])] = float(
+            returns[-keep:].mean())
+    order = [m for e in json.loads((folder / "config.json").read_text())["experiments"]
+             for m in e["methods"]] if (folder / "config.json").is_file() else []
+    out = []
+    for (exp, task), runs in sorted(means.items()):
+        if reference not in runs:
+            continue
+        label = f"{folder.name} (unfinished)"
+        if len(means) > 1:
+            label += f":{exp}:{task}"
+        full = len(runs[reference])
+        for m in sorted(runs, key=lambda m: (m not in order, order.index(m) if m in order
+                                             else 0, m)):
+            by_run = runs[m]
+            common = sorted(set(by_run) & set(runs[reference]))
+            if m == reference or not common:
+                continue
+            ref = np.array([runs[reference][r] for r in common])
+            other = np.array([by_run[r] for r in common])
+            mean, low, high, outcome = paired(ref, other)
+            out.append({"problem": label, "v_star": math.nan, "runs": len(common),
+                        "reference": reference,
+                        "reference_mean": float(np.mean(list(runs[reference].values()))),
+                        "method": m, "method_mean": float(other.mean()), "diff": mean,
+                        "low": low, "high": high, "outcome": outcome,
+                        "note": f"{len(common)} of {full} runs" if len(common) < full else ""})
+    return out
+
+
 def markdown(df: pd.DataFrame) -> str:
     """Problems down, methods across: each cell the method's mean, then the reference
     minus it with its 95% interval and outcome; a last row of wins / ties / losses."""
@@ -164,11 +213,13 @@ def markdown(df: pd.DataFrame) -> str:
                 continue
             r = g.loc[m]
             cells.append(f"{number(r['diff'], sign=True)} [{number(r.low, sign=True)}, "
-                         f"{number(r.high, sign=True)}] {r.outcome} ({number(r.method_mean)})")
+                         f"{number(r.high, sign=True)}] {r.outcome} ({number(r.method_mean)})"
+                         + (f" ({r.note})" if isinstance(r.get("note"), str) and r.note else ""))
         lines.append("| " + " | ".join(cells) + " |")
     counts = []
     for m in methods:
-        o = df.loc[df["method"] == m, "outcome"]
+        partial = df["note"].fillna("").astype(bool) if "note" in df else False
+        o = df.loc[(df["method"] == m) & ~partial, "outcome"]
         counts.append(f"{(o == WIN).sum()} / {(o == TIE).sum()} / {(o == LOSS).sum()}")
     lines.append("| **wins / ties / losses** | | | " + " | ".join(counts) + " |")
     return "\n".join(lines) + "\n"
