@@ -19,12 +19,12 @@ import numpy as np
 from gdq_pddl.abstraction import PlanTable
 from gdq_pddl.abstraction.prior import PriorModel, prior_rewards
 from gdq_pddl.abstraction.table import pack_plans
-from gdq_pddl.envs.office import OfficeInstance
+from gdq_pddl.envs.office import TOLERANT_KINDS, OfficeInstance
 from gdq_pddl.envs.solve import expected_costs
 from gdq_pddl.envs.step import ModelArrays
-from gdq_pddl.errors import PlanningError
+from gdq_pddl.errors import ConfigError, PlanningError
 from gdq_pddl.learners.tables import table_bytes
-from gdq_pddl.limits import human_bytes, physical_memory
+from gdq_pddl.limits import MAX_TOLERANCE, check_real, human_bytes, physical_memory
 from gdq_pddl.world_types import Task, World
 
 
@@ -238,7 +238,13 @@ def task_context(instance: Instance, planner: str = "graph", darling_tolerance: 
                  darling_kind: str = "all") -> TaskContext:
     """The :class:`TaskContext` of an instance of the one pipeline: plans by ``planner``
     (its shortest, and DARLING's within ``darling_tolerance``, built as ``darling_kind``
-    says: :data:`~gdq_pddl.envs.office.TOLERANT_KINDS`), made when first read."""
+    says: :data:`~gdq_pddl.envs.office.TOLERANT_KINDS`), made when first read; the
+    tolerance and kind are checked here, so a bad one is refused even by a run whose
+    learners never read DARLING's plans."""
+    check_real("darling_tolerance", darling_tolerance, 0.0, MAX_TOLERANCE)
+    if darling_kind not in TOLERANT_KINDS:
+        raise ConfigError(f"unknown plan table kind {darling_kind!r} (known: "
+                          f"{', '.join(TOLERANT_KINDS)})")
     columns = getattr(instance, "columns", None)
     n_s, k = instance.n_states, instance.max_successors
     n_a = instance.n_actions if columns is None else columns.shape[1]

@@ -124,6 +124,16 @@ def test_plan_tables_refuse_absurd_tolerances(kind):
         graph_plan_table(keys.graph, 1e308)
 
 
+def test_a_bad_darling_kind_is_refused_before_any_plan_is_read():
+    # DARLING's plans are built when first read; a learner that reads none must still not
+    # run with a kind no table has
+    from gdq_pddl.learners import office_task_context
+    from gdq_pddl.world import load_world
+
+    with pytest.raises(GdqError, match="unknown plan table kind 'paths'"):
+        office_task_context(load_world(), "C", darling_kind="paths")
+
+
 def test_value_iteration_refuses_up_front_what_memory_cannot_hold(monkeypatch):
     from dataclasses import replace
 
