@@ -206,6 +206,26 @@ def random_domain(rng, choices: bool = False) -> tuple[str, str]:
     return domain, problem
 
 
+def interpreter(schemas: dict):
+    """The independent interpreter's next-state distributions in a state: ``(ground
+    action name -> {next state: probability})`` for every schema and object whose
+    precondition holds (``schemas``: name -> (precondition, effect) s-expressions)."""
+    def interpret(state: frozenset[str]) -> dict[str, dict[frozenset[str], float]]:
+        out = {}
+        for name, (pre, eff) in schemas.items():
+            for o in OBJECTS:
+                b = {"?x": o}
+                if holds(pre, b, state):
+                    dist: dict[frozenset[str], float] = {}
+                    for p, adds, dels in effect(eff, b, state):
+                        t = (state - dels) | adds
+                        dist[t] = dist.get(t, 0.0) + p
+                    out[f"({name} {o})"] = {t: p for t, p in dist.items() if p > 1e-12}
+        return out
+
+    return interpret
+
+
 def interpreted_model_agrees(domain_text: str, problem_text: str) -> None:
     """The interpreter and the library reach the same states, and in each agree on what
     applies and where it leads."""
@@ -221,18 +241,7 @@ def interpreted_model_agrees(domain_text: str, problem_text: str) -> None:
     statics = learner.statics  # init atoms no effect changes (full states are compared)
     ops = {op.name: op for op in learner.ops}
 
-    def interpret(state: frozenset[str]) -> dict[str, dict[frozenset[str], float]]:
-        out = {}
-        for name, (pre, eff) in schemas.items():
-            for o in OBJECTS:
-                b = {"?x": o}
-                if holds(pre, b, state):
-                    dist: dict[frozenset[str], float] = {}
-                    for p, adds, dels in effect(eff, b, state):
-                        t = (state - dels) | adds
-                        dist[t] = dist.get(t, 0.0) + p
-                    out[f"({name} {o})"] = {t: p for t, p in dist.items() if p > 1e-12}
-        return out
+    interpret = interpreter(schemas)
 
     seen = {init}
     frontier = [init]
@@ -468,18 +477,7 @@ def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
     statics = learner.statics
     ops = {op.name: op for op in learner.ops}
 
-    def interpret(state: frozenset[str]) -> dict[str, dict[frozenset[str], float]]:
-        out = {}
-        for name, (pre, eff) in schemas.items():
-            for o in OBJECTS:
-                b = {"?x": o}
-                if holds(pre, b, state):
-                    dist: dict[frozenset[str], float] = {}
-                    for p, adds, dels in effect(eff, b, state):
-                        t = (state - dels) | adds
-                        dist[t] = dist.get(t, 0.0) + p
-                    out[f"({name} {o})"] = {t: p for t, p in dist.items() if p > 1e-12}
-        return out
+    interpret = interpreter(schemas)
 
     seen, frontier, order = {init}, [init], [init]
     while frontier:
