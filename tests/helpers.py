@@ -164,7 +164,7 @@ if not loops_cached(METHODS):
 """
 """Compiles every learner's kernels into numba's on-disk cache (the one this process uses):
 first every learner's OptInit (the early tests build learners), then the episode loops
-over both kinds of dynamics (a PDDL env's, then the compact env's), the loops the most
+over both kinds of dynamics (the office env's, then the compact env's), the loops the most
 tests run first; nothing when the loops are cached already."""
 
 
