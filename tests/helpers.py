@@ -183,3 +183,15 @@ def start_warm_kernels() -> Future:
         [str(REPO_ROOT), os.environ.get("PYTHONPATH", "")])}
     return WARMER.run("warm kernels", [sys.executable, "-c", WARM_KERNELS], env=env,
                       timeout=900, cwd=REPO_ROOT)
+
+
+def expanded_rows(online, base):
+    """``(row, state, k)`` for each row of OnlineInstance ``online`` whose state was
+    expanded: ``state`` the same state's index in ``base`` (the enumerated instance of the
+    same problem), ``k`` the row's columns in use (both list a state's ground actions in
+    the same order, so the first ``k`` columns compare)."""
+    for row in range(online.n_rows):
+        x = online.state_of(row)
+        if x >= 0 and online.graph.expanded[x]:
+            yield row, base.graph.index[online.graph.mask(x)], \
+                int((online.columns[row] >= 0).sum())

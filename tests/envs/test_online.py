@@ -25,6 +25,7 @@ from gdq_pddl.learners.learned_model import new_model, resized
 from gdq_pddl.learners.online import online_context
 from gdq_pddl.planning.heuristic import INFINITE, hadd_for, hff_for
 from gdq_pddl.resources import resolve_pddl
+from tests.helpers import expanded_rows
 
 PPDDL = [("keys-ppddl", "keys-ppddl-1"), ("lift", "lift-1"), ("courier", "courier-1"),
          ("courier", "courier-2")]
@@ -150,13 +151,9 @@ def test_own_scale_prior_rewards_are_the_enumerated_ones() -> None:
     run_episodes(make_learner("Q-learning", online_context(online)), env, 30,
                  np.random.default_rng(1))
     checked = 0
-    for row in range(online.n_rows):
-        x = online.state_of(row)
-        if x >= 0 and online.graph.expanded[x]:
-            s = base.graph.index[online.graph.mask(x)]
-            k = int((online.columns[row] >= 0).sum())
-            assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
-            checked += 1
+    for row, s, k in expanded_rows(online, base):
+        assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
+        checked += 1
     assert checked > 5
 
 

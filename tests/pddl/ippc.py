@@ -7,11 +7,13 @@ interpreter of PDDL text with the random domains it is checked on."""
 from __future__ import annotations
 
 from fractions import Fraction
+from itertools import product
 
 import numpy as np
 import pytest
 
 from gdq_pddl.pddl import parse_domain, parse_problem
+from gdq_pddl.pddl.grounding import combine, sample_parts
 from gdq_pddl.pddl.ppddl import ground_ppddl
 
 
@@ -206,6 +208,23 @@ def random_domain(rng, choices: bool = False) -> tuple[str, str]:
     return domain, problem
 
 
+def reached(interpret, init: frozenset[str]) -> list[frozenset[str]]:
+    """Every state the interpreter (:func:`interpreter`) reaches from ``init``, in
+    breadth-first order: the interpreter's own exploration of what reality reaches."""
+    seen, frontier, order = {init}, [init], [init]
+    while frontier:
+        nxt = []
+        for state in frontier:
+            for dist in interpret(state).values():
+                for t in dist:
+                    if t not in seen:
+                        seen.add(t)
+                        nxt.append(t)
+        order += nxt
+        frontier = nxt
+    return order
+
+
 def interpreter(schemas: dict):
     """The independent interpreter's next-state distributions in a state: ``(ground
     action name -> {next state: probability})`` for every schema and object whose
@@ -242,18 +261,7 @@ def interpreted_model_agrees(domain_text: str, problem_text: str) -> None:
     ops = {op.name: op for op in learner.ops}
 
     interpret = interpreter(schemas)
-
-    seen = {init}
-    frontier = [init]
-    while frontier:  # the interpreter's own exploration of what reality reaches
-        nxt = []
-        for state in frontier:
-            for dist in interpret(state).values():
-                for t in dist:
-                    if t not in seen:
-                        seen.add(t)
-                        nxt.append(t)
-        frontier = nxt
+    seen = set(reached(interpret, init))  # the interpreter's own exploration
     library = {learner.atoms(s) | statics for s in graph.states}
     assert library == seen, domain_text
     for s in graph.states:
@@ -447,10 +455,6 @@ def interpreted_rewards_agree(domain_text: str, problem_text: str, own: bool,
 def product_distribution(op, state: int) -> dict[int, float]:
     """Where factored ``op`` leads from ``state``, its parts' product listed (small cases
     only): next state -> probability."""
-    from itertools import product
-
-    from gdq_pddl.pddl.grounding import combine
-
     out: dict[int, float] = {}
     for pick in product(*op.parts):
         o = combine(pick)
@@ -467,7 +471,6 @@ def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
     by that many draws of its parts (:func:`~gdq_pddl.pddl.grounding.sample_parts` from
     ``rng``), each next state's frequency within 5 standard deviations (plus one draw)
     of its probability. Returns how many (state, factored action) were compared."""
-    from gdq_pddl.pddl.grounding import combine, sample_parts
 
     learner, planner = grounded(domain_text, problem_text)
     planner_agrees(learner, planner)
@@ -478,20 +481,8 @@ def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
     ops = {op.name: op for op in learner.ops}
 
     interpret = interpreter(schemas)
-
-    seen, frontier, order = {init}, [init], [init]
-    while frontier:
-        nxt = []
-        for state in frontier:
-            for d in interpret(state).values():
-                for t in d:
-                    if t not in seen:
-                        seen.add(t)
-                        nxt.append(t)
-                        order.append(t)
-        frontier = nxt
     compared = 0
-    for i, state in enumerate(order):
+    for i, state in enumerate(reached(interpret, init)):
         s = learner.mask(state - statics)
         expected = interpret(state)
         assert {op.name for op in learner.applicable(s)} == set(expected), domain_text

@@ -24,6 +24,7 @@ from gdq_pddl.learners.online import online_context
 from gdq_pddl.pddl import ppddl_effects
 from gdq_pddl.pddl.grounding import combine
 from gdq_pddl.pddl.reachable import reachable_graph
+from tests.helpers import expanded_rows
 from tests.pddl.ippc import grounded, interpreted_factored_agrees, random_domain
 
 # A network of computers as in IPPC-2008 sysadmin-slp (written here in our own words):
@@ -135,14 +136,10 @@ def test_a_factored_pairs_prior_reward_is_the_listed_ones(monkeypatch):
     run_episodes(make_learner("Q-learning", online_context(online)), env, 10,
                  np.random.default_rng(1))
     checked = 0
-    for row in range(online.n_rows):
-        x = online.state_of(row)
-        if x >= 0 and online.graph.expanded[x]:
-            s = listed.graph.index[online.graph.mask(x)]
-            k = int((online.columns[row] >= 0).sum())
-            assert np.array_equal(online.columns[row, :k], listed.graph.offered[s, :k])
-            assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
-            checked += 1
+    for row, s, k in expanded_rows(online, listed):
+        assert np.array_equal(online.columns[row, :k], listed.graph.offered[s, :k])
+        assert np.allclose(online.prior_reward[row, :k], enumerated[s, :k])
+        checked += 1
     assert checked > 5
 
 
