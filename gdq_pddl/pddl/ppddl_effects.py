@@ -134,8 +134,7 @@ def _shared_choices(action: Action, b: dict[str, str], objects, static, fluent, 
         parts: list[list[tuple[float, Ground]]] = [_merged(own)]
         for _, draw in draws:
             if len(draw) == 1:  # for sure: beside the action's own outcomes
-                parts[0] = _merged([(p * q, _both(x, y)) for p, x in parts[0]
-                                    for q, y in draw])
+                parts[0] = _times(parts[0], draw)
             else:
                 parts.append(draw)
         return Factored(tuple(tuple(part) for part in parts))
@@ -146,7 +145,7 @@ def _shared_choices(action: Action, b: dict[str, str], objects, static, fluent, 
             continue
         out = [first]
         for choice, draw in draws:
-            out = _merged([(p * q, _both(x, y)) for p, x in out for q, y in draw])
+            out = _times(out, draw)
             if len(out) > MAX_OUTCOMES:
                 raise past(choice)
         listed += [(k, p, g) for p, g in out]
@@ -206,7 +205,7 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
         for bb in extend(b, choice.variables, objects, MAX_ATOMS, too_many):
             draw = _merged([g for inner in choice.outcomes for g in _ground_outcome(
                 inner, bb, objects, static, fluent, too_many, value, past)])
-            out = _merged([(p * q, _both(x, y)) for p, x in out for q, y in draw])
+            out = _times(out, draw)
             if len(out) > MAX_OUTCOMES:
                 raise past(choice)
     return out
@@ -266,6 +265,13 @@ def _both(x: Ground, y: Ground) -> Ground:
         return (frozenset(), frozenset(), (), x[3] + y[3], x[4] + y[4], True)
     return (x[0] | y[0], x[1] | y[1], tuple(dict.fromkeys(x[2] + y[2])), x[3] + y[3],
             x[4] + y[4], False)
+
+
+def _times(dist: list[tuple[float, Ground]], draw: list[tuple[float, Ground]]
+           ) -> list[tuple[float, Ground]]:
+    """``dist`` and the independent ``draw`` side by side: their product, equal effects
+    merged (in the order ``dist``'s outcomes, then ``draw``'s, list them)."""
+    return _merged([(p * q, _both(x, y)) for p, x in dist for q, y in draw])
 
 
 def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
