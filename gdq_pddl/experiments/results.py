@@ -26,13 +26,6 @@ _WHOLE = {"run": 0, "episode": 1, "steps": 0}
 """Columns holding whole numbers, and their least value."""
 
 
-def order_methods(methods: Iterable[str]) -> list[str]:
-    """``methods`` in the registry's order (:func:`gdq_pddl.learners.registry.order`:
-    a learner's name, then the same learner with settings), unknown names after them in
-    sorted order."""
-    return registry.order(methods)
-
-
 def is_gdq(method: str) -> bool:
     """GDQ or one of its variants (``GDQ-literal``, ``GDQ-code``, with settings or not):
     not a baseline."""
