@@ -15,9 +15,6 @@ import pandas as pd
 from gdq_pddl.errors import GdqError, ResultsError
 from gdq_pddl.learners import registry
 
-METHOD_ORDER = registry.built_in_names()
-"""The order the built-in methods are listed in every figure and table (the registry's;
-methods with settings follow their learner, unknown ones follow all, sorted)."""
 TASKS_EXPERIMENT, ROBOT_EXPERIMENT, SWITCH_PREFIX = "tasks", "robot", "switch-"
 TEXT = ("experiment", "method", "task")
 KEYS = (*TEXT, "run", "episode")
