@@ -122,21 +122,14 @@ class _WorldChecks(Checks):
         world = World(
             name=self.name(self.get(w, "name", "world.name", str, "world"), "world.name", LABEL,
                            "a name of letters, digits, - and _"),
-            source=self.source,
-            positions=kept,
-            edges=edges,
-            doors=doors,
-            areas=areas,
-            landmarks=landmarks,
-            tasks={},
-            costs=self.costs(),
+            source=self.source, positions=kept, edges=edges, doors=doors, areas=areas,
+            landmarks=landmarks, tasks={}, costs=self.costs(),
             step_limit=self.count(w, "step_limit", "world.step_limit", 20),
             r_max=self.positive(w, "r_max", "world.r_max", 20.0),
             navigation_success=self.probability(w, "navigation_success",
                                                 "world.navigation_success")
             if "navigation_success" in w else 0.95,
-            description=self.get(w, "description", "world.description", str, ""),
-        )
+            description=self.get(w, "description", "world.description", str, ""))
         object.__setattr__(world, "tasks", self.tasks(world, forbidden))
         return world
 

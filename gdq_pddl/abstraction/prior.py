@@ -176,17 +176,13 @@ def dead_end_states(graph, start: int, step_limit: int) -> np.ndarray:
     return dead
 
 
+@numba.njit(cache=True)
 def dead_chances(ptr: np.ndarray, prob: np.ndarray, nxt: np.ndarray,
                  dead_state: np.ndarray) -> np.ndarray:
     """float64[n_pairs]: :attr:`PriorModel.dead` of the pairs of a model in CSR form
     (outcomes of pair ``i`` are ``ptr[i]:ptr[i + 1]``, with probabilities ``prob`` and
     next states ``nxt``): the probability of the outcomes whose next state is a dead end
     (``dead_state``, bool by state); 1 where every outcome is one, 0 where there is none."""
-    return _dead_chances(ptr, prob, nxt, dead_state)
-
-
-@numba.njit(cache=True)
-def _dead_chances(ptr, prob, nxt, dead_state):
     out = np.zeros(len(ptr) - 1)  # a loop: no array per outcome (a model has tens of millions)
     for i in range(len(ptr) - 1):
         chance, live = 0.0, False
@@ -216,6 +212,7 @@ def with_dead_chances(prior: PriorModel, ptr: np.ndarray, prob: np.ndarray, nxt:
     return replace(prior, dead=dead.reshape(prior.next_state.shape))
 
 
+@numba.njit(cache=True)
 def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,
                   pair_cost: np.ndarray) -> np.ndarray:
     """float64[n_states, n_actions]: the most a trial of each pair can pay, on a problem's
@@ -226,11 +223,6 @@ def prior_rewards(ptr: np.ndarray, stuck: np.ndarray, gain: np.ndarray,
     outcome closest to the goal, which may be the one that pays least: the death of the
     human to rescue in IPPC-2008 search and rescue ends the mission sooner).
     ``ptr``, ``stuck``, ``gain``: a :class:`~gdq_pddl.envs.step.ModelArrays`'."""
-    return _prior_rewards(ptr, stuck, gain, pair_cost)
-
-
-@numba.njit(cache=True)
-def _prior_rewards(ptr, stuck, gain, pair_cost):
     n_states, n_actions = pair_cost.shape
     out = np.zeros((n_states, n_actions))
     for i in range(n_states * n_actions):

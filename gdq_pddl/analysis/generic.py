@@ -22,8 +22,8 @@ from gdq_pddl.analysis.stats import (
 from gdq_pddl.analysis.study import Study, curves_stem
 from gdq_pddl.analysis.writer import TEMPLATES, Writer, milestone_str, number, pct
 from gdq_pddl.errors import PlanningError
-from gdq_pddl.experiments.results import optimal_entry, order_methods
-from gdq_pddl.learners import DarlingConfig
+from gdq_pddl.experiments.results import optimal_entry
+from gdq_pddl.learners import DarlingConfig, registry
 from gdq_pddl.planning import get_planner
 
 
@@ -226,7 +226,7 @@ def write_iqm(w: Writer, slices: list[tuple[str, str]]) -> None:
         return
     w.add(say("iqm", tasks=[t for _, t in slices]), "")
     rows = []
-    for m in order_methods({m for e, _ in slices for m in study.methods(e)}):
+    for m in registry.order({m for e, _ in slices for m in study.methods(e)}):
         scores = [run_means(study.returns(e, m, t)) / study.v_star(e, t) for e, t in slices]
         scores = [x for x in scores if x.size]
         point, low, high = iqm_ci(scores, seed=w.opts.seed)

@@ -15,7 +15,6 @@ from matplotlib.ticker import NullFormatter
 from gdq_pddl.analysis.figures import method_colour, save_all
 from gdq_pddl.analysis.writer import render, table_text
 from gdq_pddl.experiments import scale
-from gdq_pddl.experiments.results import order_methods
 from gdq_pddl.learners import registry
 from gdq_pddl.outputs import write_text
 
@@ -25,7 +24,7 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")  # a building seed's, in ever
 
 def _names(results: list[scale.BuildingResult]) -> tuple[list[str], list[str]]:
     """Every method, and those compared with :data:`REFERENCE` (none when it did not run)."""
-    names = order_methods(n for r in results for n in r.returns)
+    names = registry.order(n for r in results for n in r.returns)
     return names, [n for n in names if n != REFERENCE] if REFERENCE in names else []
 
 

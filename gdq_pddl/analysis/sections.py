@@ -85,7 +85,6 @@ fraction of V*."""
     w.figure("fraction_of_vstar", "return as a fraction of V*")
 
 
-
 def write_hypothesis_1(w: Writer) -> None:
     """Hypothesis I: GDQ collects more reward (tasks A-D), and when the moving average of
 return first turns positive."""

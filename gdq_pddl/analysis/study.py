@@ -27,8 +27,8 @@ from gdq_pddl.experiments.results import (
     load_policies,
     load_results,
     optimal_entry,
-    order_methods,
 )
+from gdq_pddl.learners import registry
 from gdq_pddl.world_types import Task, World
 
 PAPER_EXPERIMENTS = (TASKS_EXPERIMENT, ROBOT_EXPERIMENT)  # and every switch-*
@@ -98,7 +98,7 @@ class Study:
 
     def methods(self, experiment: str | None = None) -> list[str]:
         df = self.results if experiment is None else self.rows(experiment)
-        return order_methods(df["method"].unique())
+        return registry.order(df["method"].unique())
 
     def tasks(self, experiment: str) -> list[str]:
         """Task labels in order of first appearance (a switch's old task first)."""

@@ -14,7 +14,7 @@ import pandas as pd
 
 from gdq_pddl.analysis.stats import HOLDS, Comparison, Milestone, compare, verdict, verdict_reason
 from gdq_pddl.analysis.study import Study
-from gdq_pddl.experiments.results import is_gdq, order_methods
+from gdq_pddl.experiments.results import is_gdq
 from gdq_pddl.learners import registry
 
 
@@ -127,14 +127,14 @@ class Verdicts:
             ["sum", "size"])
         return "; ".join(f"{VARIANT_NAMES.get(v, v)} (`{v}`): {int(h['sum'])} of "
                          f"{int(h['size'])} cases hold" for v, h in held.loc[
-                             order_methods(held.index)].iterrows()) + "."
+                             registry.order(held.index)].iterrows()) + "."
 
     def section(self, notes: Sequence[str]) -> list[str]:
         """``## Verdicts``: a row per case, a column per variant, then the counts and the
         skipped parts."""
         summary = ["## Verdicts", ""]
         if self.rows:
-            f, variants = self.frame, order_methods(self.frame["variant"].unique())
+            f, variants = self.frame, registry.order(self.frame["variant"].unique())
             table = f.pivot_table(index=["hypothesis", "case"], columns="variant",
                                   values="verdict", aggfunc="first", sort=False).reindex(
                 columns=variants).map(lambda v: "–" if pd.isna(v) else f"**{v}**")

@@ -211,10 +211,6 @@ def experiment_kw(args: argparse.Namespace) -> dict:
             "planner": args.planner}
 
 
-PLAN_METHODS = tuple(e.name for e in registry.BUILT_IN if e.knowledge != "none")
-"""The built-in methods that read the planner's knowledge (what --planner changes)."""
-
-
 def check_planner(name: str, methods: Sequence[str] = ()) -> None:
     """Fail now, not inside a worker, on an unknown planner; warn when one that returns
     one plan per query is given to methods that learn from every plan."""

@@ -166,7 +166,6 @@ def contradiction(problem: Problem) -> str:
     return ""
 
 
-
 NORMAL_SPREAD = 10.0
 """Standard deviations past its mean that :func:`check_step_rewards` counts a normal cost
 as drawing at most."""

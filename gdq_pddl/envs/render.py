@@ -273,7 +273,6 @@ class MapPainter:
                             arrowprops={"arrowstyle": "-|>", "color": colour, "lw": lw,
                                         "shrinkA": 7, "shrinkB": 7})
 
-
     def draw_plans(self, ax: Axes, routes: Sequence[Sequence[str]], task: Task | None = None,
                    labels: Sequence[str] | None = None) -> None:
         """The world on ``ax`` with each route of ``routes`` (positions, as
@@ -302,7 +301,6 @@ class MapPainter:
         if routes:
             ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), fontsize=8,
                       frameon=False)
-
 
     def _plain_map(self, ax: Axes, task: Task | None) -> None:
         """The world on ``ax`` at a size to read: corridors grey, doors dotted brown with

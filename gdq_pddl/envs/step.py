@@ -73,7 +73,6 @@ def pair_of(model: ModelArrays, fs: int, action: int) -> int | None:
     return int(fs * model.acts.shape[1] + hits[0]) if len(hits) else None
 
 
-
 @numba.njit(cache=True)
 def sample_cost(kind: int, a: float, b: float, rng: np.random.Generator) -> float:
     """Draw one action cost (no draw at all for a constant)."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
@@ -51,8 +51,6 @@ class Verdict:
     passed: bool
     message: str
     cases: int = 0
-    failed_case: int | None = None
-    details: dict[str, Any] = field(default_factory=dict)
 
 
 # --- the office the cases come from ------------------------------------------------------------
@@ -501,14 +499,13 @@ def grade(number: int, function: Callable, title: str) -> Verdict:
         except NotImplementedError:
             return Verdict(False, f"{head}: not written yet (the function raises "
                                   f"NotImplementedError). Fill it in and check again.",
-                           len(cases), i)
+                           len(cases))
         except Exception as exc:  # the student's code: any error is theirs to see
             return Verdict(False, f"{head}: case {i} of {len(cases)} raised "
                                   f"{type(exc).__name__}: {exc}\nThe input: {case.words}.",
-                           len(cases), i)
+                           len(cases))
         problem = diff(case, got)
         if problem is not None:
             return Verdict(False, f"{head}: case {i} of {len(cases)} differs.\nThe input: "
-                                  f"{case.words}.\nWhat differs: {problem}.", len(cases), i,
-                           {"expected": case.expected, "got": got})
+                                  f"{case.words}.\nWhat differs: {problem}.", len(cases))
     return Verdict(True, f"{head}: all {len(cases)} cases pass.", len(cases))

@@ -25,7 +25,7 @@ import pandas as pd
 from gdq_pddl.errors import GdqError
 from gdq_pddl.experiments.folder import read_unit
 from gdq_pddl.experiments.protocol import Experiment, Unit
-from gdq_pddl.experiments.results import load_config, order_methods
+from gdq_pddl.experiments.results import load_config
 from gdq_pddl.experiments.work import load_world_named, resolve_task, run_unit
 from gdq_pddl.learners import registry
 from gdq_pddl.outputs import atomic_write
@@ -159,7 +159,7 @@ def load_pair_runs(out: Path) -> PairRuns:
                        keep_default_na=False)
     config = load_config(out).raw
     exp = config["experiments"][0]
-    pairs, methods = tuple(facts), tuple(order_methods(exp["methods"]))
+    pairs, methods = tuple(facts), tuple(registry.order(exp["methods"]))
     grid = pd.MultiIndex.from_product([pairs, methods, range(int(exp["runs"]))])
     means = runs.set_index(["pair", "method", "run"])["mean_return"].reindex(grid)
     return PairRuns(pairs, methods, means.to_numpy().reshape(len(pairs), len(methods), -1),

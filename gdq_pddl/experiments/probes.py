@@ -1,6 +1,5 @@
-"""What a learner's inputs hold before any episode: its knowledge along the true optimal
-route (:func:`route_check`, the knowledge experiments) and Q at the start state right after
-OptInit (:func:`optinit_values`, the report's *why GDQ-literal fails*)."""
+"""What a learner's inputs hold before any episode: Q at the start state right after OptInit
+(:func:`optinit_values`, the report's *why GDQ-literal fails*)."""
 
 from __future__ import annotations
 

@@ -15,22 +15,12 @@ import pandas as pd
 from gdq_pddl.errors import GdqError, ResultsError
 from gdq_pddl.learners import registry
 
-METHOD_ORDER = registry.built_in_names()
-"""The order the built-in methods are listed in every figure and table (the registry's;
-methods with settings follow their learner, unknown ones follow all, sorted)."""
 TASKS_EXPERIMENT, ROBOT_EXPERIMENT, SWITCH_PREFIX = "tasks", "robot", "switch-"
 TEXT = ("experiment", "method", "task")
 KEYS = (*TEXT, "run", "episode")
 """The columns that name one episode: no two rows share them."""
 _WHOLE = {"run": 0, "episode": 1, "steps": 0}
 """Columns holding whole numbers, and their least value."""
-
-
-def order_methods(methods: Iterable[str]) -> list[str]:
-    """``methods`` in the registry's order (:func:`gdq_pddl.learners.registry.order`:
-    a learner's name, then the same learner with settings), unknown names after them in
-    sorted order."""
-    return registry.order(methods)
 
 
 def is_gdq(method: str) -> bool:

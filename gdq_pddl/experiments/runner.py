@@ -254,7 +254,6 @@ def run_unit_keeping_learner(unit: Unit) -> dict[str, np.ndarray]:
     return run_unit(unit, keep_learner=True)
 
 
-
 def run_experiments(experiments: list[Experiment], out: Path, jobs: int | None = None,
                     executor: str = "local", address: str | None = None,
                     resume: bool = False, progress: bool = True, work: Work | None = None,

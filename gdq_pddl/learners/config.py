@@ -351,6 +351,8 @@ Observation = Literal["state", "facts", "distance"]
 
 MAX_HIDDEN = 4096
 """The most units a hidden layer may have."""
+PACKAGE_FIELDS = ("hidden", "steps", "shaping", "scale", "obs", "exploration_steps")
+"""The deep settings the package reads itself; every other field is an agent's keyword."""
 
 
 @documented
@@ -384,8 +386,10 @@ class DeepConfig:
         check_fields(self)
 
     def agent_kwargs(self) -> dict[str, Any]:
-        """The agent's own keyword arguments (besides the policy, env and seed)."""
-        return {"gamma": self.gamma, "learning_rate": self.learning_rate}
+        """The agent's own keyword arguments (besides the policy, env and seed): every
+        field but :data:`PACKAGE_FIELDS`."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if f.name not in PACKAGE_FIELDS}
 
 
 @documented
@@ -401,11 +405,6 @@ class PPOConfig(DeepConfig):
     """Passes over the collected steps in each update."""
     ent_coef: float = real(0.0, 0.0, 1.0)
     """Weight of the entropy bonus."""
-
-    def agent_kwargs(self) -> dict[str, Any]:
-        return super().agent_kwargs() | {"n_steps": self.n_steps, "batch_size":
-                                         self.batch_size, "n_epochs": self.n_epochs,
-                                         "ent_coef": self.ent_coef}
 
 
 @documented
@@ -432,11 +431,3 @@ class DQNConfig(DeepConfig):
     """Epsilon at the first step."""
     exploration_final_eps: float = real(0.05, 0.0, 1.0)
     """Epsilon after ``exploration_steps`` steps."""
-
-    def agent_kwargs(self) -> dict[str, Any]:
-        return super().agent_kwargs() | {
-            "buffer_size": self.buffer_size, "learning_starts": self.learning_starts,
-            "train_freq": self.train_freq,
-            "target_update_interval": self.target_update_interval,
-            "exploration_initial_eps": self.exploration_initial_eps,
-            "exploration_final_eps": self.exploration_final_eps}

@@ -22,26 +22,19 @@ def goal_distances(graph) -> np.ndarray:
     order = np.argsort(graph.edge_next, kind="stable")
     pred_ptr = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(np.bincount(graph.edge_next, minlength=n), out=pred_ptr[1:])
-    return _breadth_first(pred_ptr, src[order], np.flatnonzero(graph.is_goal), n)
+    return breadth_first(pred_ptr, src[order], np.flatnonzero(graph.is_goal), n)
 
 
 def distances_from(graph, start: int) -> np.ndarray:
     """Forward BFS from ``start``: the fewest edges to every state (-1: not reachable)."""
-    return _breadth_first(graph.edge_ptr, graph.edge_next,
-                          np.array([start], dtype=np.int64), graph.n_states)
+    return breadth_first(graph.edge_ptr, graph.edge_next, np.array([start], dtype=np.int64),
+                         graph.n_states)
 
 
 def breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
                   n: int) -> np.ndarray:
     """The fewest edges from ``frontier`` to each of ``n`` states (-1: none) over the CSR
-    edges ``ptr``, ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``)."""
-    return _breadth_first(ptr, to, frontier, n)
-
-
-def _breadth_first(ptr: np.ndarray, to: np.ndarray, frontier: np.ndarray,
-                   n: int) -> np.ndarray:
-    """Levels of a breadth-first search from ``frontier`` over the CSR edges ``ptr``,
-    ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``), a level at a time."""
+    edges ``ptr``, ``to`` (state ``v``'s are ``to[ptr[v]:ptr[v + 1]]``), a level at a time."""
     dist = np.full(n, -1, dtype=np.int64)
     dist[frontier] = 0
     d = 0

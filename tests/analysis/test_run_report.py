@@ -113,7 +113,7 @@ def test_run_experiment_gets_a_methods_section_with_numbers_from_the_csv(run_fol
     assert f"V* = {V_STAR['C']:.2f}" in section
     rows = re.findall(r"^\| (\*\*)?([A-Za-z-]+)(?:\*\*)? \| (\d+ \|.*)$", section, re.M)
     names = [name for _, name, _ in rows]
-    # a row per method, in METHOD_ORDER (DARLING-code after DARLING)
+    # a row per method, in the registry's order (DARLING-code after DARLING)
     assert names == ["GDQ", "GDQ-code", "DARLING", "DARLING-code", "Dyna-Q", "Q-learning"]
     data = _read_matrices(out)
     for _, method, cells in rows:
