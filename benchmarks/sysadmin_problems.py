@@ -11,7 +11,7 @@ computer up as the goal (goal reward 500, metric maximize reward). The domain is
 competition's public ``sysadmin-slp`` domain file, read as published (not shipped here).
 ``reboot ?x``'s effect draws, for every other computer, whether it goes down: its
 outcomes are a product of one draw per computer, ``2 x 4^(n-1)`` of them, kept factored
-past 4096 (:data:`gdq_pddl.pddl.ppddl_effects.FACTORED_ABOVE`).
+past 4096 (:data:`gdq_pddl.pddl.factored.FACTORED_ABOVE`).
 
 ``run`` times ``gdq-pddl run --method GDQ DARLING Q-learning --episodes 10 --runs 1
 --jobs 1`` on each (the problem goes online: its actions are factored) and prints the

@@ -16,77 +16,42 @@ with their probabilities summed in outcome order, goal states never expanded. Ex
 every state in id order numbers them exactly as the enumeration does; in any other order
 the graph is the same up to renaming states.
 
-A state is expanded in one pass over every ground action at once (``LazyGraph.
-_expand_one``), with no Python call per outcome: IPPC-2008 boxworld p05 has 1,800 ground
-actions, all applicable in every state (each effect is under a ``when``), and applying
-their outcomes one by one on the state's bitmask cost 50 ms a state. The outcomes that
-have something to do (an unconditional add or delete, or a conditional effect whose
-condition holds, all conditions tested together) are applied to copies of the state's
-word row by their facts' bits; the rows that changed are looked up by their bytes (a
-dict: the states found so far); the rest stay. Edges are deduplicated, outcomes merged
-(probabilities summed in outcome order, as a loop sums them) and new states numbered by
-sorts on whole arrays.
+A state is expanded in one pass over every ground action at once, no Python call per
+outcome (IPPC-2008 boxworld p05: 1,800 ground actions, all applicable in every state;
+one outcome at a time cost 50 ms a state). The outcomes that have something to do (an
+unconditional add or delete, or a conditional effect whose condition holds, all tested
+together) are applied to copies of the state's word row by their facts' bits; the rows
+that changed are looked up by their bytes (a dict of the states found); the rest stay.
+Edges are deduplicated, outcomes merged (probabilities summed in outcome order, as a loop
+sums them) and new states numbered by sorts on whole arrays.
 
 A factored ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`:
 a forall of probabilistic effects whose product is too large to list) has its edges (the
 determinisation's outcomes, each part's taken one at a time) but no listed outcome:
-reality's outcome of it is drawn part by part when an agent takes it (:meth:`LazyGraph.draw`),
-and the state it reaches is discovered then.
+reality's outcome of it is drawn part by part when an agent takes it
+(:meth:`LazyGraph.draw`, :mod:`gdq_pddl.pddl.factored`), and the state it reaches is
+discovered then.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundTask, combine, sample_parts, set_bits
+from gdq_pddl.pddl.factored import best_gain, combine, gain_terms, sample_parts
+from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.reachable import reality_ranks
-from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
+from gdq_pddl.pddl.wordrows import (
+    RowConditions,
+    RowGains,
+    effect_bits,
+    goal_rows,
+    spans,
+    unpacked,
+)
 
 _NONE = np.zeros(0, dtype=np.int64)
-
-
 _STAYS = np.iinfo(np.int64).min
 """Where an effect leads that changes nothing (the expanded state itself)."""
-
-
-def _unpacked(row: np.ndarray) -> np.ndarray:
-    """bool[64 n_words]: fact ``f`` of a word row (bit ``f % 64`` of word ``f // 64``)."""
-    return np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
-                         bitorder="little").view(np.bool_)
-
-
-def _spans(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(positions, owner)``: the positions ``ptr[i] .. ptr[i + 1] - 1`` of each listed
-    item ``i`` of a flat list grouped by item (``ptr``: where each item's part starts), in
-    the order listed, and the place in ``items`` of the item each belongs to."""
-    starts = ptr[items]
-    lengths = ptr[items + 1] - starts
-    owner = np.repeat(np.arange(len(items), dtype=np.int64), lengths)
-    ends = np.cumsum(lengths)
-    return np.arange(int(ends[-1]) if len(ends) else 0, dtype=np.int64) + \
-        np.repeat(starts - ends + lengths, lengths), owner
-
-
-def _bits(masks: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(owner, word, bit)`` of every fact set in each mask of ``masks``, by mask then
-    fact: the index of its mask, its word (``f // 64``) and its bit in the word (uint64)."""
-    facts = [list(set_bits(m)) for m in masks]
-    owner = np.repeat(np.arange(len(masks), dtype=np.int64), [len(f) for f in facts])
-    flat = np.array([f for fs in facts for f in fs], dtype=np.int64)
-    return owner, flat >> 6, np.left_shift(np.uint64(1), (flat & 63).astype(np.uint64))
-
-
-def _effect_bits(effects: list[tuple[int, int]]) -> tuple[np.ndarray, ...]:
-    """The facts ``(add, delete)`` masks of each effect set or clear as a flat list
-    grouped by effect (adds first): ``(ptr, word, add bit, delete bit)``, one entry a
-    fact, its bit in ``add bit`` or in ``delete bit`` (0 in the other)."""
-    owner, word, bit = _bits([m for pair in effects for m in pair])
-    is_add = owner % 2 == 0
-    order = np.argsort(owner // 2, kind="stable")
-    zero = np.zeros(len(bit), dtype=np.uint64)
-    ptr = np.searchsorted(owner[order] // 2, np.arange(len(effects) + 1))
-    return (ptr.astype(np.int64), word[order], np.where(is_add, bit, zero)[order],
-            np.where(is_add, zero, bit)[order])
 
 
 class LazyGraph:
@@ -118,7 +83,6 @@ class LazyGraph:
         self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
         """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
         self._fixed_gains: dict[int, tuple] = {}  # best_gain's parts that do not vary
-        self._gain_terms()
         self._index: dict[bytes, int] = {}
         self._words = np.zeros((16, self.n_words), dtype=np.uint64)
         self._goal = np.zeros(16, dtype=np.bool_)
@@ -182,7 +146,7 @@ class LazyGraph:
         effect, by their facts' bits; the changed rows are looked up by their bytes; the
         rest stay in ``x``."""
         row = self._words[x]
-        bits = _unpacked(row)
+        bits = unpacked(row)
         ok = self._holds_bits(bits)
         acts = np.flatnonzero(ok)
         column = np.cumsum(ok) - 1  # each applicable ground action's column
@@ -224,17 +188,18 @@ class LazyGraph:
                ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(effects, rows)``: the outcomes (by flat effect index, increasing) of the
         applicable ground actions that have something to do in the state of ``row``
-        (``bits``: its facts, :func:`_unpacked`): an unconditional add or delete, or a
-        conditional effect whose condition holds; and the row each leads to (adds win, as
-        :meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
+        (``bits``: its facts, :func:`~gdq_pddl.pddl.wordrows.unpacked`): an unconditional
+        add or delete, or a conditional effect whose condition holds; and the row each
+        leads to (adds win, as :meth:`GroundOutcome.apply
+        <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
         plain = self._plain_eff[ok[self._eff_op[self._plain_eff]]]
         fired = np.flatnonzero(self._when.holds_bits(bits) & ok[self._when_op]) \
             if self._when.n else _NONE
         moving = np.union1d(plain, self._when_eff[fired]) if len(fired) else plain
         if not len(moving):
             return moving, np.zeros((0, len(row)), dtype=np.uint64)
-        u_pos, u_own = _spans(self._bit_ptr, moving)
-        c_pos, c_own = _spans(self._when_ptr, fired)
+        u_pos, u_own = spans(self._bit_ptr, moving)
+        c_pos, c_own = spans(self._when_ptr, fired)
         own = np.concatenate([u_own, np.searchsorted(moving, self._when_eff[fired])[c_own]])
         word = np.concatenate([self._bit_word[u_pos], self._when_word[c_pos]])
         add = np.zeros((len(moving), len(row)), dtype=np.uint64)
@@ -295,7 +260,7 @@ class LazyGraph:
         merged into the first, their probabilities summed in outcome order (only ground
         actions with several outcomes can have equal ones)."""
         stuck = self._real_stuck[r_pos]
-        gain = self._gains(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
+        gain = self._gains.of(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
         prob = self._real_prob[r_pos]
         several = np.flatnonzero(self._real_several[r_pos])
         if not len(several):
@@ -342,6 +307,7 @@ class LazyGraph:
         real_op = np.array([k for k, _, _ in real], dtype=np.int64)
         self._real_ptr = np.searchsorted(real_op, np.arange(len(ops) + 1))
         self._real_eff = np.array([e for _, e, _ in real], dtype=np.int64)
+        self._gains = RowGains(self._real)
         self._real_prob = np.array([o.probability for o in self._real], dtype=float)
         self._real_stuck = np.array([bool(o.stuck) for o in self._real], dtype=np.bool_)
         self._real_moves = np.array([o.moves() and not o.stuck for o in self._real],
@@ -352,13 +318,13 @@ class LazyGraph:
                                                                    strict=True) if m}
         self._plain_eff = np.array([e for e, o in enumerate(outcomes)
                                     if e in used and (o.add or o.dele)], dtype=np.int64)
-        self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = _effect_bits(
+        self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = effect_bits(
             [(o.add, o.dele) for o in outcomes])
         when = [(e, c) for e, o in enumerate(outcomes) if e in used for c in o.conditional]
         self._when = RowConditions([(p, n) for _, (p, n, _, _) in when])
         self._when_eff = np.array([e for e, _ in when], dtype=np.int64)
         self._when_op = self._eff_op[self._when_eff]
-        self._when_ptr, self._when_word, self._when_add, self._when_del = _effect_bits(
+        self._when_ptr, self._when_word, self._when_add, self._when_del = effect_bits(
             [(a, d) for _, (_, _, a, d) in when])
         self._real_rank = reality_ranks(task)[real_op] if len(real_op) else real_op
         self._real_op = real_op
@@ -368,7 +334,7 @@ class LazyGraph:
 
     def draw(self, x: int, k: int, rng: np.random.Generator) -> tuple[int, bool, float]:
         """Reality's outcome of factored ground action ``k`` in discovered state ``x``,
-        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.grounding.sample_parts`,
+        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.factored.sample_parts`,
         one uniform a part): ``(next id, stuck, gain)``, the next state discovered if it
         is new (a failed trial stays in ``x``; gain 0 without :attr:`gains`)."""
         op = self.task.ops[k]
@@ -376,7 +342,7 @@ class LazyGraph:
             raise ValueError(f"{op.name} is not factored: its outcomes are listed "
                              "(outcomes)")
         s = self.mask(x)
-        o = combine(sample_parts(op, rng))
+        o = combine(sample_parts(op.parts, rng))
         t = s if o.stuck else o.apply(s)
         key = t.to_bytes(8 * self.n_words, "little")
         y = self._index.get(key)
@@ -387,58 +353,15 @@ class LazyGraph:
 
     def best_gain(self, x: int, k: int) -> float:
         """The most an outcome of factored ground action ``k`` earns in state ``x`` that
-        does not fail the trial (where one can: every part has such an outcome; else of
-        all): each part's most, added up, as the gains of its parts add up."""
-        s = self.mask(x)
-        fixed = self._fixed_gains.get(k)
-        if fixed is None:  # the parts whose outcomes earn the same in every state, once
-            parts = self.task.ops[k].parts
-            same = [part for part in parts if not any(o.rewards for o in part)]
-            live = [[o.reward for o in part if not o.stuck] for part in same]
-            fixed = self._fixed_gains[k] = (
-                all(live), sum(max(g) for g in live if g), sum(max(o.reward for o in part)
-                                                              for part in same),
-                [part for part in parts if any(o.rewards for o in part)])
-        all_live, live_sum, any_sum, varying = fixed
-        live = [[o.gain(s) for o in part if not o.stuck] for part in varying]
-        if all_live and all(live):
-            return float(live_sum + sum(max(g) for g in live))
-        return float(any_sum + sum(max(o.gain(s) for o in part) for part in varying))
-
-    def _gain_terms(self) -> None:
-        """Reality's outcomes of every ground action as one flat list (``_real``), their
-        fixed rewards and their conditional rewards' conditions, so that :meth:`_gains`
-        values them all in a state at once."""
-        base, entry, amount, alts, term = [], [], [], [], []
-        for o in self._real:
-            base.append(o.reward if o.rewards else o.reward + 0.0)
-            for alternatives, worth in o.rewards:
-                term += [len(entry)] * len(alternatives)
-                alts += list(alternatives)
-                entry.append(len(base) - 1)
-                amount.append(worth)
-        self._base_gain = np.array(base, dtype=float)
-        self._term_entry = np.array(entry, dtype=np.int64)
-        self._term_amount = np.array(amount, dtype=float)
-        self._alt_term = np.array(term, dtype=np.int64)
-        self._reward_alts = RowConditions(alts)
-
-    def _gains(self, bits: np.ndarray) -> np.ndarray:
-        """float64: each of reality's outcomes' reward in the state of ``bits``, by
-        :meth:`_gain_terms`'s flat list: as :meth:`GroundOutcome.gain
-        <gdq_pddl.pddl.grounding.GroundOutcome.gain>` sums them (the fixed reward plus the
-        amounts of the terms one of whose alternatives holds, in order)."""
-        if not len(self._term_entry):
-            return self._base_gain
-        held = np.zeros(len(self._term_entry), dtype=np.bool_)
-        held[self._alt_term[self._reward_alts.holds_bits(bits)]] = True
-        extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
-                            minlength=len(self._base_gain))
-        return self._base_gain + extra
+        does not fail the trial (:func:`~gdq_pddl.pddl.factored.best_gain`)."""
+        terms = self._fixed_gains.get(k)
+        if terms is None:
+            terms = self._fixed_gains[k] = gain_terms(self.task.ops[k].parts)
+        return best_gain(terms, self.mask(x))
 
     def _holds_bits(self, bits: np.ndarray) -> np.ndarray:
         """bool[n_ops]: the ground action's precondition holds in the state of ``bits``
-        (:func:`_unpacked`; the enumeration's rule:
+        (:func:`~gdq_pddl.pddl.wordrows.unpacked`; the enumeration's rule:
         :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
         ok = self._conditions.holds_bits(bits)
         if len(self._alt_op):  # one alternative of a disjunctive precondition
@@ -446,10 +369,6 @@ class LazyGraph:
             met[self._alt_op[self._alternatives.holds_bits(bits)]] = True
             ok &= met | self._plain
         return ok
-
-    def _applicable(self, row: np.ndarray) -> np.ndarray:
-        """int64: the ground actions whose precondition holds in ``row``, increasing."""
-        return np.flatnonzero(self._holds_bits(_unpacked(row)))
 
     def _append(self, keys: list[bytes]) -> None:
         """Store newly discovered states (their rows' bytes, ids already in
@@ -490,7 +409,7 @@ class LazyGraph:
     def applicable(self, x: int) -> np.ndarray:
         """int64: the ground actions whose precondition holds in state ``x``, expanded or
         not (a goal too), increasing."""
-        return self._applicable(self.words[x])
+        return np.flatnonzero(self._holds_bits(unpacked(self.words[x])))
 
     def edges(self, x: int) -> tuple[np.ndarray, np.ndarray]:
         """``(op index, next id)`` of state ``x``'s determinisation edges: those

@@ -1,14 +1,27 @@
 """Conditions normalised in one place, so that grounding never sees PDDL syntax: negation
 normal form (:func:`nnf`), plain conjunctions (:func:`conjunction`), and ground
-disjunctive normal form for one binding (:func:`ground_dnf`)."""
+disjunctive normal form for one binding (:func:`ground_dnf`); and the bindings of an
+action's parameters that meet its static preconditions (:func:`action_bindings`, over
+the objects and static atoms :func:`index_problem` indexes)."""
 
 from __future__ import annotations
 
 import itertools
 import math
+from collections import defaultdict
 from collections.abc import Callable, Iterator, Mapping
 
-from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
+from gdq_pddl.pddl.formulas import is_subtype
+from gdq_pddl.pddl.model import (
+    Action,
+    Atom,
+    Condition,
+    Domain,
+    Junction,
+    Literal,
+    Problem,
+    Quantified,
+)
 
 MAX_DISJUNCTS = 4096
 """Most alternatives one ground condition may expand into."""
@@ -120,3 +133,61 @@ def _all(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list
         if not out:
             return FALSE
     return out
+
+
+def index_problem(domain: Domain, problem: Problem) -> tuple[
+        frozenset[str], dict[str, set[tuple[str, ...]]], dict[str, list[str]],
+        dict[str, frozenset[str]]]:
+    """The fluent predicates, the static atoms' arguments by predicate, and the objects
+    of each type (sorted, and as a set): what :func:`action_bindings` reads."""
+    fluent = domain.fluent_predicates()
+    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
+    for a in problem.init:
+        if a.predicate not in fluent:
+            static_tuples[a.predicate].add(a.args)
+    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
+               for t in domain.types}
+    return fluent, static_tuples, by_type, {t: frozenset(o) for t, o in by_type.items()}
+
+
+def action_bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
+                    by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
+                    fluent: frozenset[str]):
+    """Yield every parameter binding that satisfies the static preconditions."""
+    params = dict(action.parameters)
+    fixed = [lit for lit in action.precondition if lit.atom.predicate not in fluent]
+    equalities = [lit for lit in fixed if lit.atom.predicate == "="]
+    statics = [lit.atom for lit in fixed if lit.positive and lit.atom.predicate != "="]
+    neg_statics = [lit.atom for lit in fixed if not lit.positive and lit.atom.predicate != "="]
+    bindings: list[dict[str, str]] = [{}]
+    todo = list(statics)
+    while todo and bindings:
+        bound = bindings[0].keys()
+        atom = max(todo, key=lambda a: (sum(1 for x in a.args if x in bound or x[0] != "?"),
+                                        -len(static_tuples.get(a.predicate, ()))))
+        todo.remove(atom)
+        known = tuple(i for i, x in enumerate(atom.args) if x in bound or x[0] != "?")
+        index: dict[tuple[str, ...], list[tuple[str, ...]]] = defaultdict(list)
+        # sorted: set order follows Python's per-process string hashing, and the order of
+        # ground actions (a PDDL env's action indices) must not
+        for tup in sorted(static_tuples.get(atom.predicate, ())):
+            index[tuple(tup[i] for i in known)].append(tup)
+        nxt = []
+        for b in bindings:
+            for tup in index.get(tuple(b.get(atom.args[i], atom.args[i]) for i in known), ()):
+                nb = dict(b)
+                if all(x[0] != "?" or nb.setdefault(x, v) == v
+                       for x, v in zip(atom.args, tup, strict=True)):
+                    nxt.append(nb)
+        bindings = nxt
+    for b in bindings:
+        free = [p for p in params if p not in b]
+        for values in itertools.product(*(by_type.get(params[p], ()) for p in free)):
+            full = dict(b, **dict(zip(free, values, strict=True)))
+            if (all(full[p] in typed.get(t, ()) for p, t in params.items())
+                    and not any(tuple(full.get(x, x) for x in a.args)
+                                in static_tuples.get(a.predicate, ()) for a in neg_statics)
+                    and all((full.get(e.atom.args[0], e.atom.args[0])
+                             == full.get(e.atom.args[1], e.atom.args[1])) == e.positive
+                            for e in equalities)):
+                yield full

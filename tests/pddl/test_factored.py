@@ -21,8 +21,8 @@ from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import TooManyStates
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.learners.online import online_context
-from gdq_pddl.pddl import ppddl_effects
-from gdq_pddl.pddl.grounding import combine
+from gdq_pddl.pddl import factored as factoring
+from gdq_pddl.pddl.factored import combine
 from gdq_pddl.pddl.reachable import reachable_graph
 from tests.helpers import expanded_rows
 from tests.pddl.ippc import grounded, interpreted_factored_agrees, random_domain
@@ -59,7 +59,7 @@ def test_random_factored_effects_agree_with_the_interpreter(monkeypatch):
     factored (FACTORED_ABOVE = 1): in every state the interpreter reaches, the parts'
     product is its distribution, and 2,000 draws of the parts in each of the first three
     states match it (5 standard deviations)."""
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     compared = 0
     for seed in range(30):
         rng = np.random.default_rng(1000 + seed)
@@ -73,7 +73,7 @@ def test_the_parts_product_is_the_listing_outcome_by_outcome(monkeypatch):
     product gives in every state each reboot's same next states, failed trials and
     rewards with the same probabilities."""
     listed, _ = grounded(SYSADMIN, network(5))
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     factored, _ = grounded(SYSADMIN, network(5))
     assert factored.facts == listed.facts
     for a, b in zip(listed.ops, factored.ops, strict=True):
@@ -103,7 +103,7 @@ def test_the_env_draws_a_factored_action_as_listed(monkeypatch):
     for o in reboot.outcomes:
         key = (o.apply(s0), o.gain(s0))
         want[key] = want.get(key, 0.0) + o.probability
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     online = OnlineInstance(PDDLInstance.from_texts(SYSADMIN, network(5)))
     assert online.graph.factored.all()
     k = next(i for i, op in enumerate(online.task.ops) if op.name == "(reboot c0)")
@@ -129,7 +129,7 @@ def test_a_factored_pairs_prior_reward_is_the_listed_ones(monkeypatch):
     computers, enumerated without factoring) in every state a run expands."""
     listed = PDDLInstance.from_texts(SYSADMIN, network(5))
     enumerated = pddl_task_context(listed).prior_reward
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     online = OnlineInstance(PDDLInstance.from_texts(SYSADMIN, network(5)))
     env = OnlineEnv(online)
     env.reset(seed=0)
@@ -149,7 +149,7 @@ def test_the_determinisation_grows_with_the_sum_of_the_parts():
     then each other outcome of one part alone (1 + 1 + 6 x 3), and plans on all that
     change something (all-outcomes: not c0 staying down with nothing else happening), or
     on the first (most-likely)."""
-    assert ppddl_effects.FACTORED_ABOVE == 4096
+    assert factoring.FACTORED_ABOVE == 4096
     learner, planner = grounded(SYSADMIN, network(7))
     reboot = next(op for op in learner.ops if op.name == "(reboot c0)")
     assert reboot.factored and reboot.product_size() == 8192
@@ -214,3 +214,22 @@ def test_cli_runs_a_factored_problem_online(tmp_path, capsys):
     assert optimal["explored"] == "online" and "independent parts" in \
         optimal["explored_because"]
     assert len((tmp_path / "run" / "episodes.csv").read_text().splitlines()) == 1 + 2 * 2
+
+
+def test_the_factored_effects_code_is_one_module():
+    """What keeps independent effects as their parts, draws them and determinises them is
+    defined in gdq_pddl/pddl/factored.py, and nowhere else: the grounder, the schema
+    effects and the online store import it."""
+    import ast
+    from pathlib import Path
+
+    import gdq_pddl.pddl as pkg
+    names = {"FACTORED_ABOVE", "Factored", "factor", "factored_kept", "combine",
+             "sample_parts", "gain_terms", "best_gain", "times", "merged", "both"}
+    assert {name for name in names if hasattr(factoring, name)} == names
+    for path in Path(pkg.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defined = {n.name for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
+        defined |= {t.id for n in tree.body if isinstance(n, ast.Assign)
+                    for t in n.targets if isinstance(t, ast.Name)}
+        assert path.name == "factored.py" or not defined & names, path.name
