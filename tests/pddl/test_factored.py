@@ -214,6 +214,13 @@ def test_cli_runs_a_factored_problem_online(tmp_path, capsys):
     assert optimal["explored"] == "online" and "independent parts" in \
         optimal["explored_because"]
     assert len((tmp_path / "run" / "episodes.csv").read_text().splitlines()) == 1 + 2 * 2
+    # the reason given, first and on resuming, is that the actions are factored, only
+    assert main([*base, "--out", str(tmp_path / "run"), "--resume"]) == 0
+    resumed = next(iter(json.loads((tmp_path / "run" / "optimal.json").read_text())
+                        .values()))
+    for info in (optimal, resumed):
+        assert info["explored_because"].startswith(str(tmp_path / "p.pddl") + ": (reboot c0) "
+                                                   "has 8,192 outcomes, kept as 7 independent")
 
 
 def test_the_factored_effects_code_is_one_module():
