@@ -4,12 +4,10 @@ Each binding of a ``forall`` of a probabilistic effect is an independent draw, s
 action's outcomes are the product of its draws (:func:`times`): IPPC-2008 sysadmin-slp's
 ``reboot`` has ``2 x 4^(n-1)`` on ``n`` computers. Where every outcome of the schema has
 the same choices (its own outcomes *times* independent draws, not a mixture of products)
-and the product of the parts' sizes passes :data:`FACTORED_ABOVE` (4096), the action is
-kept :class:`Factored` (:func:`factor`): its own outcomes and one part per draw, never
-multiplied out; otherwise listed, as always. The rule reads the product, not the listing
-after equal effects merge (finding that size took seconds an action): an action whose
-draws merge to at most 4096 outcomes while their product passes it is factored, and its
-problem runs online; no public problem that ran before is one (``docs/decisions.md``).
+and its listing, equal effects merged, would pass :data:`FACTORED_ABOVE` (4096) outcomes,
+the action is kept :class:`Factored` (:func:`factor`): its own outcomes and one part per
+draw, never multiplied out; otherwise listed, as before factoring. The listing's size is
+read without listing where the parts are :func:`separable` (``docs/decisions.md``).
 
 Reality draws one outcome of each part (:func:`sample_parts`), as the competition's
 simulator samples each binding, and applies them side by side (:func:`combine`). The
@@ -31,9 +29,8 @@ from dataclasses import dataclass, replace
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
 
 FACTORED_ABOVE = MAX_OUTCOMES
-"""A ground action whose independent parts' product has more outcomes than this is kept
-as its parts (:class:`Factored`), never listed; at most this many, it is listed as it
-always was (the module docstring)."""
+"""A ground action whose listing would have more outcomes than this is kept as its parts
+(:class:`Factored`), never listed; at most this many, it is listed as it always was."""
 
 Ground = tuple[frozenset[str], frozenset[str], tuple[tuple, ...], float, tuple, bool]
 """A ground outcome's effect as fact sets: adds, deletes, conditional effects ``(must hold,
@@ -78,18 +75,56 @@ class Factored:
 
 
 def factor(own: Dist, draws: list[Dist]) -> Factored | None:
-    """The action of outcomes ``own`` (merged) times the independent ``draws`` (each
-    merged) kept :class:`Factored`, where the product of their sizes passes
-    :data:`FACTORED_ABOVE`; None where it is listed (the module docstring)."""
-    if len(own) * math.prod(len(d) for d in draws) <= FACTORED_ABOVE:
+    """The action of schema outcomes ``own`` (one ``(probability, effect)`` each, its
+    choices aside) times the independent ``draws`` (each merged) kept :class:`Factored`,
+    where listing it would pass :data:`FACTORED_ABOVE` outcomes; None where it is listed
+    (the module docstring). The listing's size is read exactly but cheaply: at most the
+    product of the sizes; exactly that where the parts are :func:`separable`; else the
+    listing made schema outcome by schema outcome, draw by draw, and stopped where it
+    passes (where the listing was refused before factoring)."""
+    cap = FACTORED_ABOVE
+    if len(own) * math.prod(len(d) for d in draws) <= cap:
         return None
-    parts = [own]
+    if not separable([own, *draws]):
+        total = 0
+        for first in own:
+            out = [first]
+            for draw in draws:
+                out = times(out, draw)
+                if len(out) > cap:
+                    break
+            total += len(out)
+            if total > cap:
+                break
+        else:
+            return None
+    parts = [merged(own)]
     for draw in draws:
         if len(draw) == 1:  # for sure: beside the action's own outcomes
             parts[0] = times(parts[0], draw)
         else:
             parts.append(draw)
     return Factored(tuple(tuple(part) for part in parts))
+
+
+def separable(parts: list[Dist]) -> bool:
+    """Whether side by side, one outcome of each of ``parts`` (distributions, equal
+    effects merged), no two combinations give the same effect, so that the merged product
+    is as large as the plain one: no failed trial, no fact and no conditional effect that
+    two parts set, and every part but one earning nothing whatever its outcome (the one
+    part's amounts then are the sums)."""
+    facts: set[str] = set()
+    conds: set[tuple] = set()
+    earning = 0
+    for part in parts:
+        mine = set().union(*(g[0] | g[1] for _, g in part))
+        its = {c for _, g in part for c in g[2]}
+        if any(g[5] for _, g in part) or mine & facts or its & conds:
+            return False
+        facts |= mine
+        conds |= its
+        earning += any(g[3] != 0.0 or g[4] != () for _, g in part)
+    return earning <= 1
 
 
 def factored_kept(factored: Factored, determinisation: str, name: str

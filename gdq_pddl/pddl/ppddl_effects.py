@@ -84,7 +84,7 @@ def _shared_choices(action: Action, b: dict[str, str], objects, static, fluent, 
                                                            too_many, value, past)])))
     own = [_ground_outcome(o, b, objects, static, fluent, too_many, value, past)[0]
            for o in _without_choices(action)]
-    kept = None if any(off) else factor(merged(own), [d for _, d in draws])
+    kept = None if any(off) else factor(own, [d for _, d in draws])
     if kept is not None:
         return kept
     listed: list[tuple[int, float, Ground]] = []

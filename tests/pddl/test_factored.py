@@ -240,3 +240,74 @@ def test_the_factored_effects_code_is_one_module():
         defined |= {t.id for n in tree.body if isinstance(n, ast.Assign)
                     for t in n.targets if isinstance(t, ast.Name)}
         assert path.name == "factored.py" or not defined & names, path.name
+
+
+# thirteen coins, each paying 1 with 1/2 when tossed: 2^13 = 8,192 combinations, but
+# only the sums 0..13 differ, so the listing (equal effects merged) has 14 outcomes
+PAY = """(define (domain pay) (:requirements :adl :probabilistic-effects :rewards)
+  (:types coin) (:predicates (done))
+  (:action toss :parameters () :effect (and (done)
+    (forall (?c - coin) (probabilistic 1/2 (increase (reward) 1))))))
+(define (problem pay-13) (:domain pay) (:objects %s - coin) (:init) (:goal (done)))
+"""
+
+
+def test_draws_whose_listing_fits_are_listed_not_factored():
+    """The rule reads the listing after equal effects merge, not the product: 13 coins
+    paying 1 each with 1/2 list 14 outcomes, a binomial of the sum, as before factoring."""
+    from math import comb
+
+    text = PAY % " ".join(f"k{i}" for i in range(13))
+    learner, _ = grounded(text, text)
+    toss = learner.ops[0]
+    assert not toss.factored and len(toss.outcomes) == 14
+    assert sorted((o.reward, o.probability) for o in toss.outcomes) == [
+        (float(k), comb(13, k) / 2 ** 13) for k in range(14)]
+
+
+def _listing_fits(own, draws, cap) -> bool:
+    """Independently of :func:`factored.times`: whether the listing before factoring was
+    made (each schema outcome's product with the draws, every prefix of draws at most
+    ``cap`` distinct effects, and their sum at most ``cap``)."""
+    from functools import reduce
+
+    total = 0
+    for first in own:
+        for j in range(1, len(draws) + 1):
+            size = len({reduce(factoring.both, (g for _, g in combo), first[1])
+                        for combo in product(*draws[:j])})
+            if size > cap:
+                return False
+        total += size if draws else 1
+    return total <= cap
+
+
+def test_the_factoring_rule_is_the_listings_size_exactly(monkeypatch):
+    """Random parts over a few facts, conditional effects, amounts and failed trials,
+    against caps of 1 to 40: an action is factored exactly where its listing passes the
+    cap (where it was refused before factoring), whether the parts are separable (the
+    size is the product, no listing made) or not (the listing made and stopped)."""
+    rng = np.random.default_rng(7)
+    facts, conds = ["a", "b", "c", "d"], ["x", "y"]
+
+    def effect(own: str) -> tuple:  # own: the part's own facts (none shared), or ""
+        pool = [own + f for f in facts]
+        return (frozenset(f for f in pool if rng.random() < 0.3),
+                frozenset(f for f in pool if rng.random() < 0.1),
+                tuple(own + c for c in conds if rng.random() < 0.2),
+                float(rng.integers(2)) if rng.random() < earns else 0.0, (),
+                bool(rng.random() < 0.03))
+
+    seen = {True: 0, False: 0}
+    for trial in range(400):
+        apart, earns = trial % 2 == 0, rng.choice([0.0, 0.3])
+        parts = [factoring.merged([(1.0, effect(str(j) if apart else ""))
+                                   for _ in range(rng.integers(1, 4))])
+                 for j in range(rng.integers(2, 6))]
+        own, draws = parts[0], parts[1:]
+        cap = int(rng.integers(1, 41))
+        monkeypatch.setattr(factoring, "FACTORED_ABOVE", cap)
+        assert (factoring.factor(own, draws) is None) == _listing_fits(own, draws, cap)
+        if len(own) * np.prod([len(d) for d in draws]) > cap:
+            seen[factoring.separable(parts)] += 1
+    assert min(seen.values()) > 20  # both ways of reading the size are exercised
