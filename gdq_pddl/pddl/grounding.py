@@ -35,6 +35,7 @@ from gdq_pddl.pddl.normalise import (
     MAX_ATOMS,
     MAX_DISJUNCTS,
     action_bindings,
+    forget,
     ground_dnf,
     index_problem,
 )
@@ -319,13 +320,32 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                         factored[len(raw)] = outs
                         outs = [(0, p, g) for part in outs.parts for p, g in part]
                     raw.append((action, args, pre, outs))
+    forget()
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, found = relaxed_reachability(raw, init, plain)
     facts = tuple(sorted(reached))
     index = {f: i for i, f in enumerate(facts)}
 
-    def m(atoms) -> int:
-        return sum(1 << index[a] for a in atoms if a in index)
+    masks: dict[frozenset[str], int] = {}  # the same sets recur in many outcomes
+
+    def m(atoms: frozenset[str]) -> int:
+        mask = masks.get(atoms)
+        if mask is None:
+            mask = masks[atoms] = sum(1 << index[a] for a in atoms if a in index)
+        return mask
+
+    seen: dict[tuple, tuple | None] = {}  # a conditional effect's or reward's masks, once
+
+    def when(c: tuple) -> tuple | None:  # (must hold, must not, add, delete)
+        if c not in seen:
+            seen[c] = (m(c[0]), m(c[1]), m(c[2]), m(c[3])) if c[0] <= reached else None
+        return seen[c]
+
+    def earns(r: tuple) -> tuple | None:  # (alternatives, amount)
+        if r not in seen:
+            alts = tuple((m(cp), m(cn)) for cp, cn in r[0] if cp <= reached)
+            seen[r] = (alts, r[1]) if alts else None
+        return seen[r]
 
     ops, kept = [], []
     with slow_progress("grounding", " actions", len(found), found) as bar:
@@ -339,11 +359,8 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                 add, dele, conds, reward, rewards, stuck = g
                 return GroundOutcome(
                     p, m(add), m(dele - add), stuck,
-                    tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds
-                          if cp <= reached),
-                    reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts
-                                                     if cp <= reached), amount)
-                                              for alts, amount in rewards) if r[0]))
+                    tuple(w for w in map(when, conds) if w is not None),
+                    reward, tuple(r for r in map(earns, rewards) if r is not None))
 
             name = str(Atom(action.name, args))
             parts: tuple[tuple[GroundOutcome, ...], ...] = ()
@@ -361,7 +378,7 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                                 known, tuple(alts) if len(alts) > 1 else (),
                                 cost=action_cost(action, args, domain, problem), parts=parts))
             kept.append(kept_names)
-    task = GroundTask(facts, tuple(ops), m(init), statics=statics, fact_index=index,
+    task = GroundTask(facts, tuple(ops), m(frozenset(init)), statics=statics, fact_index=index,
                       disjunctive=any(op.alternatives for op in ops),
                       **goal_masks(problem, fluent, statics, index))
     return task, kept

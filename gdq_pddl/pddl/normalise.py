@@ -9,7 +9,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections import defaultdict
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 
 from gdq_pddl.pddl.formulas import is_subtype
 from gdq_pddl.pddl.model import (
@@ -65,6 +65,17 @@ def conjunction(cond: Condition) -> tuple[Literal, ...] | None:
     return None
 
 
+_SEEN: list = [None, {}]
+"""The ``static`` of the problem being grounded (compared by identity), and the ground
+alternatives of each quantified condition under each binding found so far for it
+(:func:`forget` empties it)."""
+
+
+def forget() -> None:
+    """Drop what :func:`ground_dnf` keeps of the problem grounded last."""
+    _SEEN[:] = [None, {}]
+
+
 def ground_dnf(cond: Condition, binding: Mapping[str, str],
                objects: Callable[[str], list[str]], static: Callable[[Atom], bool | None],
                too_many: Callable[[], Exception],
@@ -85,11 +96,22 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
             return TRUE if truth == cond.positive else FALSE
         fact = frozenset((str(atom),))
         return [(fact, frozenset())] if cond.positive else [(frozenset(), fact)]
-    if isinstance(cond, Quantified):
-        parts = [ground_dnf(cond.body, b, objects, static, too_many, budget)
-                 for b in extend(binding, cond.variables, objects, budget[0], too_many)]
-        return _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
-    parts = [ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts]
+    # the parts one at a time: a conjunction stops at a part that never holds, a
+    # disjunction at one that always does (sysadmin's exists over pairs of computers: a
+    # static (conn ?c ?d) false for most ?c spares the rest)
+    if isinstance(cond, Quantified):  # once a binding (an effect may repeat a condition)
+        if _SEEN[0] is not static:
+            _SEEN[:] = [static, {}]
+        key = (id(cond), tuple(binding.items()))
+        hit = _SEEN[1].get(key)
+        if hit is not None and hit[0] is cond:
+            return hit[1]
+        parts = (ground_dnf(cond.body, b, objects, static, too_many, budget)
+                 for b in extend(binding, cond.variables, objects, budget[0], too_many))
+        out = _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
+        _SEEN[1][key] = (cond, out)
+        return out
+    parts = (ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts)
     return _all(parts, too_many) if cond.kind == "and" else _any(parts, too_many)
 
 
@@ -105,7 +127,7 @@ def extend(binding: Mapping[str, str], variables: tuple[tuple[str, str], ...],
         yield {**binding, **dict(zip((v for v, _ in variables), values, strict=True))}
 
 
-def _any(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
+def _any(parts: Iterable[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
     out: dict[Disjunct, None] = {}
     for part in parts:
         if part == TRUE:
@@ -116,7 +138,7 @@ def _any(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list
     return list(out)
 
 
-def _all(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
+def _all(parts: Iterable[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
     out = TRUE
     for part in parts:
         if not part:
