@@ -3,6 +3,7 @@ when the competition's own p01-p15 are not at hand, and a run of each.
 
     python benchmarks/sysadmin_problems.py write OUT 10 20 30 40 50   # OUT/sysadmin-<n>.pddl
     python benchmarks/sysadmin_problems.py run DOMAIN OUT 10 20       # a short run of each
+    python benchmarks/sysadmin_problems.py ground DOMAIN 10 20 50     # grounding time
 
 A problem of ``n`` computers, as the competition's generator writes them: a directed
 ring ``(conn comp<i> comp<i+1>)``, ``n // 2`` extra links drawn at random (seeded by
@@ -11,8 +12,11 @@ computer up as the goal (goal reward 500, metric maximize reward). The domain is
 competition's public ``sysadmin-slp`` domain file, read as published (not shipped here).
 ``reboot ?x``'s effect draws, for every other computer, whether it goes down: its
 outcomes are a product of one draw per computer, ``2 x 4^(n-1)`` of them, kept factored
-past 4096 (:data:`gdq_pddl.pddl.ppddl_effects.FACTORED_ABOVE`).
+past 4096 (:data:`gdq_pddl.pddl.factored.FACTORED_ABOVE`).
 
+``ground`` grounds each (the best of 3 below 50 computers, else once) and prints the time
+and a hash of every ground action (to compare two checkouts: run it under each one's
+``PYTHONPATH`` in turn).
 ``run`` times ``gdq-pddl run --method GDQ DARLING Q-learning --episodes 10 --runs 1
 --jobs 1`` on each (the problem goes online: its actions are factored) and prints the
 mean return, success rate and time of each method.
@@ -74,10 +78,32 @@ def run(domain: Path, out: Path, sizes: list[int]) -> None:
         print(table.to_string())
 
 
+def ground_times(domain: Path, sizes: list[int]) -> None:
+    """Print the grounding time and the ground actions' hash of each size."""
+    import hashlib
+
+    from gdq_pddl.pddl import ground, parse_domain, parse_problem
+
+    dom = parse_domain(domain.read_text(), str(domain))
+    for n in sizes:
+        problem = parse_problem(problem_text(n), dom, f"sysadmin-{n}")
+        took = []
+        for _ in range(3 if n < 50 else 1):
+            start = time.perf_counter()
+            task = ground(dom, problem)
+            took.append(time.perf_counter() - start)
+        digest = hashlib.sha256(repr([(op.name, op.pre, op.neg, op.outcomes, op.known,
+                                       op.parts) for op in task.ops]).encode()).hexdigest()
+        print(f"sysadmin-{n}: grounded in {min(took):.3f} s, actions {digest[:16]}")
+
+
 def main(argv: list[str]) -> int:
     if len(argv) >= 3 and argv[0] == "write":
         for path in write(Path(argv[1]), [int(n) for n in argv[2:]]):
             print(path)
+        return 0
+    if len(argv) >= 3 and argv[0] == "ground":
+        ground_times(Path(argv[1]), [int(n) for n in argv[2:]])
         return 0
     if len(argv) >= 4 and argv[0] == "run":
         run(Path(argv[1]), Path(argv[2]), [int(n) for n in argv[3:]])

@@ -49,6 +49,7 @@ from gdq_pddl.experiments.runner import resumed_exploration
 from gdq_pddl.experiments.work import load_pddl_instance
 from gdq_pddl.learners import registry
 from gdq_pddl.outputs import output_folder
+from gdq_pddl.pddl.reachable import factored_reason
 
 EXPLORE = ("auto", "enumerate", "online")
 """``gdq-pddl run --explore``: how a PPDDL problem's states are found."""
@@ -108,10 +109,11 @@ def _run_pddl(args: argparse.Namespace) -> int:
     because = "`--explore online` was given"  # why a problem is explored online
     try:  # check the files (and size) before any worker
         instance = load_pddl_instance(spec)
+        factored = factored_reason(instance.problem.learner_task, str(problem))
         if args.resume:  # as the run went, or refused, before any enumeration
             explore = resumed_exploration(out_folder(args, f"run-{instance.name}"), explore)
             if explore == "online" and args.explore == "auto":
-                because = "the run resumed went online under `--explore auto`"
+                because = factored or "the run resumed went online under `--explore auto`"
         if explore == "online":
             spec = replace(spec, exploration="online")
             instance = OnlineInstance(instance)  # its own checks
@@ -127,7 +129,8 @@ def _run_pddl(args: argparse.Namespace) -> int:
             print(f"gdq-pddl: {exc}\ngdq-pddl: so {problem} is explored online: its states "
                   "are found as episodes reach them, and V* is not computed (--explore)",
                   file=sys.stderr)
-            because = f"`--explore auto` found that its states do not fit: {exc}"
+            because = factored_reason(instance.task, str(problem)) or \
+                f"`--explore auto` found that its states do not fit: {exc}"
         elif isinstance(exc, (SizeError, TooManyStates)):
             raise
         else:

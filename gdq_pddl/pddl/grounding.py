@@ -14,7 +14,8 @@ determinisation (:mod:`gdq_pddl.pddl.ppddl`) and the relaxed forms
 normalised once (:func:`~gdq_pddl.pddl.normalise.ground_dnf`), each schema's outcomes
 expanded per binding (:func:`~gdq_pddl.pddl.ppddl_effects.ground_outcomes`); parameters
 are bound by joining the static preconditions against the initial state, most
-constrained first, and ground actions unreachable with deletes ignored are dropped.
+constrained first (:func:`~gdq_pddl.pddl.normalise.action_bindings`), and ground
+actions unreachable with deletes ignored are dropped.
 """
 
 from __future__ import annotations
@@ -28,17 +29,23 @@ from functools import cached_property
 
 from gdq_pddl.errors import PDDLError
 from gdq_pddl.limits import slow_progress
-from gdq_pddl.pddl.formulas import is_subtype
-from gdq_pddl.pddl.model import Action, Atom, CostTerm, Domain, Junction, Problem
-from gdq_pddl.pddl.normalise import MAX_ATOMS, MAX_DISJUNCTS, ground_dnf
+from gdq_pddl.pddl.factored import Factored, Ground, factored_kept
+from gdq_pddl.pddl.model import Action, Atom, Domain, Junction, Problem
+from gdq_pddl.pddl.normalise import (
+    MAX_ATOMS,
+    MAX_DISJUNCTS,
+    action_bindings,
+    forget,
+    ground_dnf,
+    index_problem,
+)
 from gdq_pddl.pddl.ppddl_effects import (
     DETERMINISATIONS,
-    Factored,
-    Ground,
-    factored_kept,
+    action_cost,
     ground_outcomes,
     kept_ground,
     planner_names,
+    term_value,
 )
 
 
@@ -89,7 +96,7 @@ class GroundOp:
     for a *factored* action (:attr:`parts` not empty), whose product is too large to
     list: reality draws one outcome of each part, and :attr:`outcomes` lists only what
     the determinisation reads (each part's outcomes one at a time:
-    :func:`~gdq_pddl.pddl.ppddl_effects.factored_kept`), not reality's distribution."""
+    :func:`~gdq_pddl.pddl.factored.factored_kept`), not reality's distribution."""
 
     name: str
     pre: int
@@ -108,7 +115,7 @@ class GroundOp:
     """A factored action's independent parts (each a distribution summing to 1; the first:
     its own outcomes, then one per binding of a forall of probabilistic effects):
     reality's outcome is one outcome of each, drawn independently, side by side
-    (:func:`combine`). Empty: :attr:`outcomes` is reality's distribution."""
+    (:func:`~gdq_pddl.pddl.factored.combine`). Empty: :attr:`outcomes` is reality's distribution."""
 
     @property
     def factored(self) -> bool:
@@ -156,44 +163,6 @@ class GroundOp:
     def apply(self, state: int) -> int:
         """A STRIPS action's successor of ``state`` (a TypeError for any other)."""
         return self._single.apply(state)
-
-
-def combine(outcomes) -> GroundOutcome:
-    """The outcomes ``outcomes`` (one of each part of a factored action) side by side, as
-    one outcome: adds, deletes and conditional effects together (adds win), rewards
-    summed, probabilities multiplied; a failed trial if one is (then nothing else
-    happens, as :func:`~gdq_pddl.pddl.ppddl_effects.ground_outcomes` lists it)."""
-    add = dele = 0
-    p, reward, stuck = 1.0, 0.0, False
-    conditional: list[tuple[int, int, int, int]] = []
-    rewards: list = []
-    for o in outcomes:
-        p *= o.probability
-        add, dele = add | o.add, dele | o.dele
-        stuck |= o.stuck
-        conditional += o.conditional
-        reward += o.reward
-        rewards += o.rewards
-    if stuck:
-        return GroundOutcome(p, 0, 0, True, (), reward, tuple(rewards))
-    return GroundOutcome(p, add, dele & ~add, False, tuple(dict.fromkeys(conditional)),
-                         reward, tuple(rewards))
-
-
-def sample_parts(op: GroundOp, rng) -> tuple[GroundOutcome, ...]:
-    """One outcome of each part of factored ``op``, drawn independently from ``rng`` (a
-    numpy Generator): one uniform per part, the first outcome whose cumulative
-    probability passes it (as :func:`~gdq_pddl.envs.step.draw_outcome` draws)."""
-    u = rng.random(len(op.parts))
-    out = []
-    for part, x in zip(op.parts, u.tolist(), strict=True):
-        acc = 0.0
-        for o in part:
-            acc += o.probability
-            if x < acc:
-                break
-        out.append(o)
-    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -289,35 +258,6 @@ def set_bits(mask: int):
         mask ^= low
 
 
-def term_value(term: CostTerm, binding: Mapping[str, str], domain: Domain, problem: Problem,
-               action: Action, what: str) -> float:
-    """A cost or reward term under ``binding``: a number, or a function term valued in
-    the problem's ``:init`` (refused, naming it, where it has no value or a negative one)."""
-    if not isinstance(term, Atom):
-        return term
-    key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
-    if key not in problem.values:
-        raise PDDLError(problem.source, None, f"no value for {key} in :init ({what}, "
-                        f"{domain.source}:{action.line})")
-    value = problem.values[key]
-    if value < 0:
-        raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: {what} must be "
-                        ">= 0")
-    return value
-
-
-def action_cost(action: Action, args: tuple[str, ...], domain: Domain,
-                problem: Problem) -> float | None:
-    """:attr:`GroundOp.cost` of ``action`` with parameters ``args``: its terms outside every
-    construct summed, 0 where it states costs only inside them, None where none at all."""
-    if not action.states_cost():
-        return None
-    binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
-    name = str(Atom(action.name, args))
-    return float(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
-                     for term in action.cost))
-
-
 def ground(domain: Domain, problem: Problem,
            determinisation: str = DETERMINISATIONS[0]) -> GroundTask:
     """Ground ``problem``: every ground action with all its outcomes, ``known`` the
@@ -380,13 +320,32 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                         factored[len(raw)] = outs
                         outs = [(0, p, g) for part in outs.parts for p, g in part]
                     raw.append((action, args, pre, outs))
+    forget()
     init = {str(a) for a in problem.init if a.predicate in fluent}
     reached, found = relaxed_reachability(raw, init, plain)
     facts = tuple(sorted(reached))
     index = {f: i for i, f in enumerate(facts)}
 
-    def m(atoms) -> int:
-        return sum(1 << index[a] for a in atoms if a in index)
+    masks: dict[frozenset[str], int] = {}  # the same sets recur in many outcomes
+
+    def m(atoms: frozenset[str]) -> int:
+        mask = masks.get(atoms)
+        if mask is None:
+            mask = masks[atoms] = sum(1 << index[a] for a in atoms if a in index)
+        return mask
+
+    seen: dict[tuple, tuple | None] = {}  # a conditional effect's or reward's masks, once
+
+    def when(c: tuple) -> tuple | None:  # (must hold, must not, add, delete)
+        if c not in seen:
+            seen[c] = (m(c[0]), m(c[1]), m(c[2]), m(c[3])) if c[0] <= reached else None
+        return seen[c]
+
+    def earns(r: tuple) -> tuple | None:  # (alternatives, amount)
+        if r not in seen:
+            alts = tuple((m(cp), m(cn)) for cp, cn in r[0] if cp <= reached)
+            seen[r] = (alts, r[1]) if alts else None
+        return seen[r]
 
     ops, kept = [], []
     with slow_progress("grounding", " actions", len(found), found) as bar:
@@ -400,11 +359,8 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                 add, dele, conds, reward, rewards, stuck = g
                 return GroundOutcome(
                     p, m(add), m(dele - add), stuck,
-                    tuple((m(cp), m(cn), m(a), m(d)) for cp, cn, a, d in conds
-                          if cp <= reached),
-                    reward, tuple(r for r in ((tuple((m(cp), m(cn)) for cp, cn in alts
-                                                     if cp <= reached), amount)
-                                              for alts, amount in rewards) if r[0]))
+                    tuple(w for w in map(when, conds) if w is not None),
+                    reward, tuple(r for r in map(earns, rewards) if r is not None))
 
             name = str(Atom(action.name, args))
             parts: tuple[tuple[GroundOutcome, ...], ...] = ()
@@ -422,7 +378,7 @@ def ground_kept(domain: Domain, problem: Problem, determinisation: str = DETERMI
                                 known, tuple(alts) if len(alts) > 1 else (),
                                 cost=action_cost(action, args, domain, problem), parts=parts))
             kept.append(kept_names)
-    task = GroundTask(facts, tuple(ops), m(init), statics=statics, fact_index=index,
+    task = GroundTask(facts, tuple(ops), m(frozenset(init)), statics=statics, fact_index=index,
                       disjunctive=any(op.alternatives for op in ops),
                       **goal_masks(problem, fluent, statics, index))
     return task, kept
@@ -485,64 +441,6 @@ def relaxed_reachability(raw: list, init: set[str], by_outcome: bool
                         reached |= new
                         changed = True
     return reached, [i for i, ok in enumerate(live) if ok]
-
-
-def index_problem(domain: Domain, problem: Problem) -> tuple[
-        frozenset[str], dict[str, set[tuple[str, ...]]], dict[str, list[str]],
-        dict[str, frozenset[str]]]:
-    """The fluent predicates, the static atoms' arguments by predicate, and the objects
-    of each type (sorted, and as a set): what :func:`action_bindings` reads."""
-    fluent = domain.fluent_predicates()
-    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
-    for a in problem.init:
-        if a.predicate not in fluent:
-            static_tuples[a.predicate].add(a.args)
-    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
-               for t in domain.types}
-    return fluent, static_tuples, by_type, {t: frozenset(o) for t, o in by_type.items()}
-
-
-def action_bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
-                    by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
-                    fluent: frozenset[str]):
-    """Yield every parameter binding that satisfies the static preconditions."""
-    params = dict(action.parameters)
-    fixed = [lit for lit in action.precondition if lit.atom.predicate not in fluent]
-    equalities = [lit for lit in fixed if lit.atom.predicate == "="]
-    statics = [lit.atom for lit in fixed if lit.positive and lit.atom.predicate != "="]
-    neg_statics = [lit.atom for lit in fixed if not lit.positive and lit.atom.predicate != "="]
-    bindings: list[dict[str, str]] = [{}]
-    todo = list(statics)
-    while todo and bindings:
-        bound = bindings[0].keys()
-        atom = max(todo, key=lambda a: (sum(1 for x in a.args if x in bound or x[0] != "?"),
-                                        -len(static_tuples.get(a.predicate, ()))))
-        todo.remove(atom)
-        known = tuple(i for i, x in enumerate(atom.args) if x in bound or x[0] != "?")
-        index: dict[tuple[str, ...], list[tuple[str, ...]]] = defaultdict(list)
-        # sorted: set order follows Python's per-process string hashing, and the order of
-        # ground actions (a PDDL env's action indices) must not
-        for tup in sorted(static_tuples.get(atom.predicate, ())):
-            index[tuple(tup[i] for i in known)].append(tup)
-        nxt = []
-        for b in bindings:
-            for tup in index.get(tuple(b.get(atom.args[i], atom.args[i]) for i in known), ()):
-                nb = dict(b)
-                if all(x[0] != "?" or nb.setdefault(x, v) == v
-                       for x, v in zip(atom.args, tup, strict=True)):
-                    nxt.append(nb)
-        bindings = nxt
-    for b in bindings:
-        free = [p for p in params if p not in b]
-        for values in itertools.product(*(by_type.get(params[p], ()) for p in free)):
-            full = dict(b, **dict(zip(free, values, strict=True)))
-            if (all(full[p] in typed.get(t, ()) for p, t in params.items())
-                    and not any(tuple(full.get(x, x) for x in a.args)
-                                in static_tuples.get(a.predicate, ()) for a in neg_statics)
-                    and all((full.get(e.atom.args[0], e.atom.args[0])
-                             == full.get(e.atom.args[1], e.atom.args[1])) == e.positive
-                            for e in equalities)):
-                yield full
 
 
 def goal_masks(problem: Problem, fluent, statics, index: dict[str, int]) -> dict:

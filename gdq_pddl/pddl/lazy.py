@@ -16,77 +16,52 @@ with their probabilities summed in outcome order, goal states never expanded. Ex
 every state in id order numbers them exactly as the enumeration does; in any other order
 the graph is the same up to renaming states.
 
-A state is expanded in one pass over every ground action at once (``LazyGraph.
-_expand_one``), with no Python call per outcome: IPPC-2008 boxworld p05 has 1,800 ground
-actions, all applicable in every state (each effect is under a ``when``), and applying
-their outcomes one by one on the state's bitmask cost 50 ms a state. The outcomes that
-have something to do (an unconditional add or delete, or a conditional effect whose
-condition holds, all conditions tested together) are applied to copies of the state's
-word row by their facts' bits; the rows that changed are looked up by their bytes (a
-dict: the states found so far); the rest stay. Edges are deduplicated, outcomes merged
-(probabilities summed in outcome order, as a loop sums them) and new states numbered by
-sorts on whole arrays.
+A state is expanded in one pass over every ground action at once, no Python call per
+outcome (IPPC-2008 boxworld p05: 1,800 ground actions, all applicable in every state;
+one outcome at a time cost 50 ms a state). The outcomes that have something to do (an
+unconditional add or delete, or a conditional effect whose condition holds, all tested
+together) are applied to copies of the state's word row by their facts' bits; the rows
+that changed are looked up by their bytes (a dict of the states found); the rest stay.
+Edges are deduplicated, outcomes merged (probabilities summed in outcome order, as a loop
+sums them) and new states numbered by sorts on whole arrays.
 
 A factored ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`:
 a forall of probabilistic effects whose product is too large to list) has its edges (the
 determinisation's outcomes, each part's taken one at a time) but no listed outcome:
-reality's outcome of it is drawn part by part when an agent takes it (:meth:`LazyGraph.draw`),
-and the state it reaches is discovered then.
+reality's outcome of it is drawn part by part when an agent takes it
+(:meth:`LazyGraph.draw`, :mod:`gdq_pddl.pddl.factored`), and the state it reaches is
+discovered then.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gdq_pddl.pddl.grounding import GroundTask, combine, sample_parts, set_bits
+from gdq_pddl.pddl.factored import best_gain, combine, gain_terms, sample_parts
+from gdq_pddl.pddl.grounding import GroundTask
 from gdq_pddl.pddl.reachable import reality_ranks
-from gdq_pddl.pddl.wordrows import RowConditions, goal_rows
+from gdq_pddl.pddl.wordrows import (
+    RowConditions,
+    RowGains,
+    effect_bits,
+    goal_rows,
+    spans,
+    unpacked,
+)
 
 _NONE = np.zeros(0, dtype=np.int64)
-
-
 _STAYS = np.iinfo(np.int64).min
 """Where an effect leads that changes nothing (the expanded state itself)."""
-
-
-def _unpacked(row: np.ndarray) -> np.ndarray:
-    """bool[64 n_words]: fact ``f`` of a word row (bit ``f % 64`` of word ``f // 64``)."""
-    return np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
-                         bitorder="little").view(np.bool_)
-
-
-def _spans(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(positions, owner)``: the positions ``ptr[i] .. ptr[i + 1] - 1`` of each listed
-    item ``i`` of a flat list grouped by item (``ptr``: where each item's part starts), in
-    the order listed, and the place in ``items`` of the item each belongs to."""
-    starts = ptr[items]
-    lengths = ptr[items + 1] - starts
-    owner = np.repeat(np.arange(len(items), dtype=np.int64), lengths)
-    ends = np.cumsum(lengths)
-    return np.arange(int(ends[-1]) if len(ends) else 0, dtype=np.int64) + \
-        np.repeat(starts - ends + lengths, lengths), owner
-
-
-def _bits(masks: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(owner, word, bit)`` of every fact set in each mask of ``masks``, by mask then
-    fact: the index of its mask, its word (``f // 64``) and its bit in the word (uint64)."""
-    facts = [list(set_bits(m)) for m in masks]
-    owner = np.repeat(np.arange(len(masks), dtype=np.int64), [len(f) for f in facts])
-    flat = np.array([f for fs in facts for f in fs], dtype=np.int64)
-    return owner, flat >> 6, np.left_shift(np.uint64(1), (flat & 63).astype(np.uint64))
-
-
-def _effect_bits(effects: list[tuple[int, int]]) -> tuple[np.ndarray, ...]:
-    """The facts ``(add, delete)`` masks of each effect set or clear as a flat list
-    grouped by effect (adds first): ``(ptr, word, add bit, delete bit)``, one entry a
-    fact, its bit in ``add bit`` or in ``delete bit`` (0 in the other)."""
-    owner, word, bit = _bits([m for pair in effects for m in pair])
-    is_add = owner % 2 == 0
-    order = np.argsort(owner // 2, kind="stable")
-    zero = np.zeros(len(bit), dtype=np.uint64)
-    ptr = np.searchsorted(owner[order] // 2, np.arange(len(effects) + 1))
-    return (ptr.astype(np.int64), word[order], np.where(is_add, bit, zero)[order],
-            np.where(is_add, zero, bit)[order])
+FEW = 64
+"""Up to this many edges or outcomes of a state that may repeat a state, a set says
+whether any does (where none does, nothing is merged); new states of up to four times as
+many words in all are tested for the goal on their bitmasks."""
+DENSE_WORDS = 1 << 21
+"""At most this many words (16 MB) for the rows of every effect's unconditional adds and
+deletes, kept whole: a state whose conditional effects do not fire is then expanded with
+a gather of them, not the dozen array calls of assembling them from their facts (which
+cost more than the work where few ground actions apply: 23 blocks, 1,104 ground actions,
+0.21 ms a state)."""
 
 
 class LazyGraph:
@@ -118,7 +93,6 @@ class LazyGraph:
         self.factored = np.array([op.factored for op in task.ops], dtype=np.bool_)
         """bool[n_ops]: the ground action is factored (:meth:`draw` its outcome)."""
         self._fixed_gains: dict[int, tuple] = {}  # best_gain's parts that do not vary
-        self._gain_terms()
         self._index: dict[bytes, int] = {}
         self._words = np.zeros((16, self.n_words), dtype=np.uint64)
         self._goal = np.zeros(16, dtype=np.bool_)
@@ -182,12 +156,12 @@ class LazyGraph:
         effect, by their facts' bits; the changed rows are looked up by their bytes; the
         rest stay in ``x``."""
         row = self._words[x]
-        bits = _unpacked(row)
+        bits = unpacked(row)
         ok = self._holds_bits(bits)
         acts = np.flatnonzero(ok)
         column = np.cumsum(ok) - 1  # each applicable ground action's column
         moving, rows = self._moved(row, bits, ok)
-        sid, fresh = self._ids(row, rows)
+        sid, fresh = self._ids(x, rows)
         lead = self._lead  # effect -> where it leads: x unless it moves
         lead[moving] = sid
 
@@ -209,8 +183,8 @@ class LazyGraph:
         # (only ground actions with several kept outcomes can repeat one)
         keep = np.ones(len(e_pos), dtype=np.bool_)
         several = np.flatnonzero(self._edge_several[e_pos])
-        if len(several):
-            key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
+        key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
+        if len(several) and not (len(several) <= FEW and len(set(key.tolist())) == len(key)):
             _, first = np.unique(key, return_index=True)
             keep[several] = False
             keep[several[first]] = True
@@ -224,17 +198,21 @@ class LazyGraph:
                ok: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(effects, rows)``: the outcomes (by flat effect index, increasing) of the
         applicable ground actions that have something to do in the state of ``row``
-        (``bits``: its facts, :func:`_unpacked`): an unconditional add or delete, or a
-        conditional effect whose condition holds; and the row each leads to (adds win, as
-        :meth:`GroundOutcome.apply <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
-        plain = self._plain_eff[ok[self._eff_op[self._plain_eff]]]
+        (``bits``: its facts, :func:`~gdq_pddl.pddl.wordrows.unpacked`): an unconditional
+        add or delete, or a conditional effect whose condition holds; and the row each
+        leads to (adds win, as :meth:`GroundOutcome.apply
+        <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
+        at = np.flatnonzero(ok[self._plain_op])
+        plain = self._plain_eff[at]
         fired = np.flatnonzero(self._when.holds_bits(bits) & ok[self._when_op]) \
             if self._when.n else _NONE
+        if not len(fired) and self._plain_add is not None:  # a few calls, a state
+            return plain, (row & ~self._plain_del[at]) | self._plain_add[at]
         moving = np.union1d(plain, self._when_eff[fired]) if len(fired) else plain
         if not len(moving):
             return moving, np.zeros((0, len(row)), dtype=np.uint64)
-        u_pos, u_own = _spans(self._bit_ptr, moving)
-        c_pos, c_own = _spans(self._when_ptr, fired)
+        u_pos, u_own = spans(self._bit_ptr, moving)
+        c_pos, c_own = spans(self._when_ptr, fired)
         own = np.concatenate([u_own, np.searchsorted(moving, self._when_eff[fired])[c_own]])
         word = np.concatenate([self._bit_word[u_pos], self._when_word[c_pos]])
         add = np.zeros((len(moving), len(row)), dtype=np.uint64)
@@ -245,19 +223,15 @@ class LazyGraph:
                                                             self._when_del[c_pos]]))
         return moving, (row & ~dele) | add
 
-    def _ids(self, row: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
-        """The id of the state each of ``rows`` is (:data:`_STAYS` where the row is
-        ``row``, unchanged), and the rows never seen before, in order of first appearance
-        in ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
-        sid = np.full(len(rows), _STAYS, dtype=np.int64)
-        changed = np.flatnonzero((rows != row).any(axis=1))
-        fresh: list[bytes] = []
-        if not len(changed):
-            return sid, fresh
+    def _ids(self, x: int, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
+        """The id of the state each of ``rows`` is (``x`` where the row is state ``x``'s,
+        unchanged), and the rows never seen before, in order of first appearance in
+        ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
         size = 8 * self.n_words
-        data = np.ascontiguousarray(rows[changed], dtype="<u8").tobytes()
+        data = np.ascontiguousarray(rows, dtype="<u8").tobytes()
         keys = [data[i:i + size] for i in range(0, len(data), size)]
         ids = list(map(self._index.get, keys))
+        fresh: list[bytes] = []
         if None in ids:
             new: dict[bytes, int] = {}
             for i, j in enumerate(ids):
@@ -268,8 +242,7 @@ class LazyGraph:
                         j = new[key] = -1 - len(fresh)
                         fresh.append(key)
                     ids[i] = j
-        sid[changed] = ids
-        return sid, fresh
+        return np.array(ids, dtype=np.int64), fresh
 
     def _numbered(self, n: int, fresh: list[bytes], e_next: np.ndarray, r_pos: np.ndarray,
                   r_next: np.ndarray) -> np.ndarray:
@@ -281,8 +254,9 @@ class LazyGraph:
         later = np.flatnonzero(r_next < 0)
         later = later[np.argsort(self._real_rank[r_pos[later]], kind="stable")]
         seq = np.concatenate([e_next[e_next < 0], r_next[later]])
-        _, first = np.unique(seq, return_index=True)  # provisional ids -k .. -1
-        order = -1 - seq[np.sort(first)]  # j of each new row, in order of appearance
+        # j of each new row, in order of first appearance (a dict: np.unique's sorts cost
+        # more for the few a state discovers)
+        order = -1 - np.fromiter(dict.fromkeys(seq.tolist()), dtype=np.int64)
         new = np.empty(len(fresh), dtype=np.int64)
         new[order] = np.arange(n, n + len(fresh))
         self._index.update(zip(fresh, new.tolist(), strict=True))
@@ -295,12 +269,13 @@ class LazyGraph:
         merged into the first, their probabilities summed in outcome order (only ground
         actions with several outcomes can have equal ones)."""
         stuck = self._real_stuck[r_pos]
-        gain = self._gains(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
+        gain = self._gains.of(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
         prob = self._real_prob[r_pos]
         several = np.flatnonzero(self._real_several[r_pos])
-        if not len(several):
-            return col, prob, nxt, stuck, gain
         c, t, s, g = col[several], nxt[several], stuck[several], gain[several]
+        if len(several) <= FEW and len(set(zip(c.tolist(), t.tolist(), s.tolist(),
+                                               g.tolist(), strict=True))) == len(several):
+            return col, prob, nxt, stuck, gain  # none equal (a set is quicker for a few)
         order = np.lexsort((g, s, t, c))  # stable: equals in outcome order
         c, t, s, g = c[order], t[order], s[order], g[order]
         starts = np.r_[True, (c[1:] != c[:-1]) | (t[1:] != t[:-1]) | (s[1:] != s[:-1])
@@ -342,6 +317,7 @@ class LazyGraph:
         real_op = np.array([k for k, _, _ in real], dtype=np.int64)
         self._real_ptr = np.searchsorted(real_op, np.arange(len(ops) + 1))
         self._real_eff = np.array([e for _, e, _ in real], dtype=np.int64)
+        self._gains = RowGains(self._real)
         self._real_prob = np.array([o.probability for o in self._real], dtype=float)
         self._real_stuck = np.array([bool(o.stuck) for o in self._real], dtype=np.bool_)
         self._real_moves = np.array([o.moves() and not o.stuck for o in self._real],
@@ -352,13 +328,22 @@ class LazyGraph:
                                                                    strict=True) if m}
         self._plain_eff = np.array([e for e, o in enumerate(outcomes)
                                     if e in used and (o.add or o.dele)], dtype=np.int64)
-        self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = _effect_bits(
+        self._plain_op = self._eff_op[self._plain_eff]
+        self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = effect_bits(
             [(o.add, o.dele) for o in outcomes])
+        self._plain_add = self._plain_del = None  # each plain effect's row, if small
+        if len(self._plain_eff) * self.n_words <= DENSE_WORDS:
+            pos, own = spans(self._bit_ptr, self._plain_eff)
+            self._plain_add, self._plain_del = (
+                np.zeros((len(self._plain_eff), self.n_words), dtype=np.uint64)
+                for _ in range(2))
+            np.bitwise_or.at(self._plain_add, (own, self._bit_word[pos]), self._bit_add[pos])
+            np.bitwise_or.at(self._plain_del, (own, self._bit_word[pos]), self._bit_del[pos])
         when = [(e, c) for e, o in enumerate(outcomes) if e in used for c in o.conditional]
         self._when = RowConditions([(p, n) for _, (p, n, _, _) in when])
         self._when_eff = np.array([e for e, _ in when], dtype=np.int64)
         self._when_op = self._eff_op[self._when_eff]
-        self._when_ptr, self._when_word, self._when_add, self._when_del = _effect_bits(
+        self._when_ptr, self._when_word, self._when_add, self._when_del = effect_bits(
             [(a, d) for _, (_, _, a, d) in when])
         self._real_rank = reality_ranks(task)[real_op] if len(real_op) else real_op
         self._real_op = real_op
@@ -368,7 +353,7 @@ class LazyGraph:
 
     def draw(self, x: int, k: int, rng: np.random.Generator) -> tuple[int, bool, float]:
         """Reality's outcome of factored ground action ``k`` in discovered state ``x``,
-        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.grounding.sample_parts`,
+        drawn part by part from ``rng`` (:func:`~gdq_pddl.pddl.factored.sample_parts`,
         one uniform a part): ``(next id, stuck, gain)``, the next state discovered if it
         is new (a failed trial stays in ``x``; gain 0 without :attr:`gains`)."""
         op = self.task.ops[k]
@@ -376,7 +361,7 @@ class LazyGraph:
             raise ValueError(f"{op.name} is not factored: its outcomes are listed "
                              "(outcomes)")
         s = self.mask(x)
-        o = combine(sample_parts(op, rng))
+        o = combine(sample_parts(op.parts, rng))
         t = s if o.stuck else o.apply(s)
         key = t.to_bytes(8 * self.n_words, "little")
         y = self._index.get(key)
@@ -387,58 +372,15 @@ class LazyGraph:
 
     def best_gain(self, x: int, k: int) -> float:
         """The most an outcome of factored ground action ``k`` earns in state ``x`` that
-        does not fail the trial (where one can: every part has such an outcome; else of
-        all): each part's most, added up, as the gains of its parts add up."""
-        s = self.mask(x)
-        fixed = self._fixed_gains.get(k)
-        if fixed is None:  # the parts whose outcomes earn the same in every state, once
-            parts = self.task.ops[k].parts
-            same = [part for part in parts if not any(o.rewards for o in part)]
-            live = [[o.reward for o in part if not o.stuck] for part in same]
-            fixed = self._fixed_gains[k] = (
-                all(live), sum(max(g) for g in live if g), sum(max(o.reward for o in part)
-                                                              for part in same),
-                [part for part in parts if any(o.rewards for o in part)])
-        all_live, live_sum, any_sum, varying = fixed
-        live = [[o.gain(s) for o in part if not o.stuck] for part in varying]
-        if all_live and all(live):
-            return float(live_sum + sum(max(g) for g in live))
-        return float(any_sum + sum(max(o.gain(s) for o in part) for part in varying))
-
-    def _gain_terms(self) -> None:
-        """Reality's outcomes of every ground action as one flat list (``_real``), their
-        fixed rewards and their conditional rewards' conditions, so that :meth:`_gains`
-        values them all in a state at once."""
-        base, entry, amount, alts, term = [], [], [], [], []
-        for o in self._real:
-            base.append(o.reward if o.rewards else o.reward + 0.0)
-            for alternatives, worth in o.rewards:
-                term += [len(entry)] * len(alternatives)
-                alts += list(alternatives)
-                entry.append(len(base) - 1)
-                amount.append(worth)
-        self._base_gain = np.array(base, dtype=float)
-        self._term_entry = np.array(entry, dtype=np.int64)
-        self._term_amount = np.array(amount, dtype=float)
-        self._alt_term = np.array(term, dtype=np.int64)
-        self._reward_alts = RowConditions(alts)
-
-    def _gains(self, bits: np.ndarray) -> np.ndarray:
-        """float64: each of reality's outcomes' reward in the state of ``bits``, by
-        :meth:`_gain_terms`'s flat list: as :meth:`GroundOutcome.gain
-        <gdq_pddl.pddl.grounding.GroundOutcome.gain>` sums them (the fixed reward plus the
-        amounts of the terms one of whose alternatives holds, in order)."""
-        if not len(self._term_entry):
-            return self._base_gain
-        held = np.zeros(len(self._term_entry), dtype=np.bool_)
-        held[self._alt_term[self._reward_alts.holds_bits(bits)]] = True
-        extra = np.bincount(self._term_entry[held], weights=self._term_amount[held],
-                            minlength=len(self._base_gain))
-        return self._base_gain + extra
+        does not fail the trial (:func:`~gdq_pddl.pddl.factored.best_gain`)."""
+        terms = self._fixed_gains.get(k)
+        if terms is None:
+            terms = self._fixed_gains[k] = gain_terms(self.task.ops[k].parts)
+        return best_gain(terms, self.mask(x))
 
     def _holds_bits(self, bits: np.ndarray) -> np.ndarray:
         """bool[n_ops]: the ground action's precondition holds in the state of ``bits``
-        (:func:`_unpacked`; the enumeration's rule:
+        (:func:`~gdq_pddl.pddl.wordrows.unpacked`; the enumeration's rule:
         :meth:`~gdq_pddl.pddl.wordrows.CompiledOp.applies`)."""
         ok = self._conditions.holds_bits(bits)
         if len(self._alt_op):  # one alternative of a disjunctive precondition
@@ -446,10 +388,6 @@ class LazyGraph:
             met[self._alt_op[self._alternatives.holds_bits(bits)]] = True
             ok &= met | self._plain
         return ok
-
-    def _applicable(self, row: np.ndarray) -> np.ndarray:
-        """int64: the ground actions whose precondition holds in ``row``, increasing."""
-        return np.flatnonzero(self._holds_bits(_unpacked(row)))
 
     def _append(self, keys: list[bytes]) -> None:
         """Store newly discovered states (their rows' bytes, ids already in
@@ -467,7 +405,8 @@ class LazyGraph:
                 new[:n] = old[:n]
                 setattr(self, name, new)
         self._words[n:n + m] = rows
-        self._goal[n:n + m] = goal_rows(self.task, rows)
+        self._goal[n:n + m] = goal_rows(self.task, rows) if m * self.n_words > 4 * FEW \
+            else [self.task.is_goal(int.from_bytes(key, "little")) for key in keys]
         self._n = n + m
 
     def _require(self, x: int) -> bool:
@@ -490,7 +429,7 @@ class LazyGraph:
     def applicable(self, x: int) -> np.ndarray:
         """int64: the ground actions whose precondition holds in state ``x``, expanded or
         not (a goal too), increasing."""
-        return self._applicable(self.words[x])
+        return np.flatnonzero(self._holds_bits(unpacked(self.words[x])))
 
     def edges(self, x: int) -> tuple[np.ndarray, np.ndarray]:
         """``(op index, next id)`` of state ``x``'s determinisation edges: those

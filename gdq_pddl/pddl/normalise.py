@@ -1,14 +1,27 @@
 """Conditions normalised in one place, so that grounding never sees PDDL syntax: negation
 normal form (:func:`nnf`), plain conjunctions (:func:`conjunction`), and ground
-disjunctive normal form for one binding (:func:`ground_dnf`)."""
+disjunctive normal form for one binding (:func:`ground_dnf`); and the bindings of an
+action's parameters that meet its static preconditions (:func:`action_bindings`, over
+the objects and static atoms :func:`index_problem` indexes)."""
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections import defaultdict
+from collections.abc import Callable, Iterable, Iterator, Mapping
 
-from gdq_pddl.pddl.model import Atom, Condition, Junction, Literal, Quantified
+from gdq_pddl.pddl.formulas import is_subtype
+from gdq_pddl.pddl.model import (
+    Action,
+    Atom,
+    Condition,
+    Domain,
+    Junction,
+    Literal,
+    Problem,
+    Quantified,
+)
 
 MAX_DISJUNCTS = 4096
 """Most alternatives one ground condition may expand into."""
@@ -52,6 +65,17 @@ def conjunction(cond: Condition) -> tuple[Literal, ...] | None:
     return None
 
 
+_SEEN: list = [None, {}]
+"""The ``static`` of the problem being grounded (compared by identity), and the ground
+alternatives of each quantified condition under each binding found so far for it
+(:func:`forget` empties it)."""
+
+
+def forget() -> None:
+    """Drop what :func:`ground_dnf` keeps of the problem grounded last."""
+    _SEEN[:] = [None, {}]
+
+
 def ground_dnf(cond: Condition, binding: Mapping[str, str],
                objects: Callable[[str], list[str]], static: Callable[[Atom], bool | None],
                too_many: Callable[[], Exception],
@@ -72,11 +96,22 @@ def ground_dnf(cond: Condition, binding: Mapping[str, str],
             return TRUE if truth == cond.positive else FALSE
         fact = frozenset((str(atom),))
         return [(fact, frozenset())] if cond.positive else [(frozenset(), fact)]
-    if isinstance(cond, Quantified):
-        parts = [ground_dnf(cond.body, b, objects, static, too_many, budget)
-                 for b in extend(binding, cond.variables, objects, budget[0], too_many)]
-        return _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
-    parts = [ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts]
+    # the parts one at a time: a conjunction stops at a part that never holds, a
+    # disjunction at one that always does (sysadmin's exists over pairs of computers: a
+    # static (conn ?c ?d) false for most ?c spares the rest)
+    if isinstance(cond, Quantified):  # once a binding (an effect may repeat a condition)
+        if _SEEN[0] is not static:
+            _SEEN[:] = [static, {}]
+        key = (id(cond), tuple(binding.items()))
+        hit = _SEEN[1].get(key)
+        if hit is not None and hit[0] is cond:
+            return hit[1]
+        parts = (ground_dnf(cond.body, b, objects, static, too_many, budget)
+                 for b in extend(binding, cond.variables, objects, budget[0], too_many))
+        out = _all(parts, too_many) if cond.kind == "forall" else _any(parts, too_many)
+        _SEEN[1][key] = (cond, out)
+        return out
+    parts = (ground_dnf(p, binding, objects, static, too_many, budget) for p in cond.parts)
     return _all(parts, too_many) if cond.kind == "and" else _any(parts, too_many)
 
 
@@ -92,7 +127,7 @@ def extend(binding: Mapping[str, str], variables: tuple[tuple[str, str], ...],
         yield {**binding, **dict(zip((v for v, _ in variables), values, strict=True))}
 
 
-def _any(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
+def _any(parts: Iterable[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
     out: dict[Disjunct, None] = {}
     for part in parts:
         if part == TRUE:
@@ -103,7 +138,7 @@ def _any(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list
     return list(out)
 
 
-def _all(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
+def _all(parts: Iterable[list[Disjunct]], too_many: Callable[[], Exception]) -> list[Disjunct]:
     out = TRUE
     for part in parts:
         if not part:
@@ -120,3 +155,61 @@ def _all(parts: list[list[Disjunct]], too_many: Callable[[], Exception]) -> list
         if not out:
             return FALSE
     return out
+
+
+def index_problem(domain: Domain, problem: Problem) -> tuple[
+        frozenset[str], dict[str, set[tuple[str, ...]]], dict[str, list[str]],
+        dict[str, frozenset[str]]]:
+    """The fluent predicates, the static atoms' arguments by predicate, and the objects
+    of each type (sorted, and as a set): what :func:`action_bindings` reads."""
+    fluent = domain.fluent_predicates()
+    static_tuples: dict[str, set[tuple[str, ...]]] = defaultdict(set)
+    for a in problem.init:
+        if a.predicate not in fluent:
+            static_tuples[a.predicate].add(a.args)
+    by_type = {t: sorted(o for o, ot in problem.objects.items() if is_subtype(domain.types, ot, t))
+               for t in domain.types}
+    return fluent, static_tuples, by_type, {t: frozenset(o) for t, o in by_type.items()}
+
+
+def action_bindings(action: Action, static_tuples: dict[str, set[tuple[str, ...]]],
+                    by_type: dict[str, list[str]], typed: dict[str, frozenset[str]],
+                    fluent: frozenset[str]):
+    """Yield every parameter binding that satisfies the static preconditions."""
+    params = dict(action.parameters)
+    fixed = [lit for lit in action.precondition if lit.atom.predicate not in fluent]
+    equalities = [lit for lit in fixed if lit.atom.predicate == "="]
+    statics = [lit.atom for lit in fixed if lit.positive and lit.atom.predicate != "="]
+    neg_statics = [lit.atom for lit in fixed if not lit.positive and lit.atom.predicate != "="]
+    bindings: list[dict[str, str]] = [{}]
+    todo = list(statics)
+    while todo and bindings:
+        bound = bindings[0].keys()
+        atom = max(todo, key=lambda a: (sum(1 for x in a.args if x in bound or x[0] != "?"),
+                                        -len(static_tuples.get(a.predicate, ()))))
+        todo.remove(atom)
+        known = tuple(i for i, x in enumerate(atom.args) if x in bound or x[0] != "?")
+        index: dict[tuple[str, ...], list[tuple[str, ...]]] = defaultdict(list)
+        # sorted: set order follows Python's per-process string hashing, and the order of
+        # ground actions (a PDDL env's action indices) must not
+        for tup in sorted(static_tuples.get(atom.predicate, ())):
+            index[tuple(tup[i] for i in known)].append(tup)
+        nxt = []
+        for b in bindings:
+            for tup in index.get(tuple(b.get(atom.args[i], atom.args[i]) for i in known), ()):
+                nb = dict(b)
+                if all(x[0] != "?" or nb.setdefault(x, v) == v
+                       for x, v in zip(atom.args, tup, strict=True)):
+                    nxt.append(nb)
+        bindings = nxt
+    for b in bindings:
+        free = [p for p in params if p not in b]
+        for values in itertools.product(*(by_type.get(params[p], ()) for p in free)):
+            full = dict(b, **dict(zip(free, values, strict=True)))
+            if (all(full[p] in typed.get(t, ()) for p, t in params.items())
+                    and not any(tuple(full.get(x, x) for x in a.args)
+                                in static_tuples.get(a.predicate, ()) for a in neg_statics)
+                    and all((full.get(e.atom.args[0], e.atom.args[0])
+                             == full.get(e.atom.args[1], e.atom.args[1])) == e.positive
+                            for e in equalities)):
+                yield full

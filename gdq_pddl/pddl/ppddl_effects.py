@@ -3,56 +3,26 @@ outcome of a schema under one binding of its parameters as fact sets (:data:`Gro
 its choices drawn side by side and equal effects merged (:func:`ground_outcomes`; a
 STRIPS action's effect is its one outcome, :func:`outcomes_of`); and which of them the
 planner's determinisation keeps and under what names (:data:`DETERMINISATIONS`,
-:func:`kept_outcomes`, :func:`planner_names`, :func:`kept_ground`). The one grounder,
+:func:`kept_outcomes`, :func:`planner_names`, :func:`kept_ground`); what a ground action
+costs whatever happens (:func:`action_cost`, its terms valued by :func:`term_value`).
+The one grounder,
 :func:`gdq_pddl.pddl.grounding.ground`, turns them into
 :class:`~gdq_pddl.pddl.grounding.GroundOutcome` bitmasks.
 
-**Factored effects.** Each binding of a ``forall`` of a probabilistic effect is an
-independent draw, so a ground action's outcomes are the product of its draws: IPPC-2008
-sysadmin-slp's ``reboot`` has ``2 x 4^(n-1)`` on ``n`` computers. Where every outcome
-of the schema has the same choices (the action is its own outcomes *times* independent
-draws, not a mixture of products) and the product of the parts' sizes passes
-:data:`FACTORED_ABOVE` (4096), the action is kept :class:`Factored`: its own outcomes
-and one part per draw, never multiplied out. Otherwise they are listed, as they always
-were. The rule reads the product, not the listing after equal effects merge: finding
-the merged size means listing up to 4096 of them, seconds an action (``_merged`` over
-fact sets); so an action whose draws merge to at most 4096 outcomes while their product
-passes it (draws with equal effects, such as rewards that add up) was listed before and
-is factored now, and its problem runs online. None of the public problems that ran
-before is such a one (their grounded actions are the same: ``docs/decisions.md``).
-Reality draws one outcome of each part of a factored action
-(:func:`~gdq_pddl.pddl.grounding.sample_parts`), as the competition's simulator samples
-each binding. The knowledge cannot list the product either, so its determinisation is
-**each part's outcomes taken one at a time** (:func:`factored_kept`): the outcome of
-every part at its most likely outcome, then, for each part, each of its other outcomes
-with every other part at its most likely: ``1 + sum(|part| - 1)`` outcomes, growing with
-the sum of the parts, not their product. Why this one (``docs/decisions.md``): the
-delete relaxation over it is the delete relaxation over every outcome of the product
-(each outcome of each part adds its facts in some listed outcome, under the same
-precondition and conditions), so h_max, h_add and h_FF, which online exploration and its
-V* bound read, are what the listed product would give; its first outcome is the
-product's most likely combination of draws (the most likely draw of each independent
-part), what ``most-likely`` keeps; and it is the part-by-part reading the issue cites
-from the competition's determinising planners. What it leaves out are the combinations in which
-two or more parts leave their most likely outcome at once: a replanning learner meets
-them as they happen.
+Where an action's outcomes are independent draws too many to list, it is kept as its
+parts (:mod:`gdq_pddl.pddl.factored`).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from gdq_pddl.errors import PDDLError
-from gdq_pddl.pddl.model import Action, Atom, Choice, Domain, Junction, Literal, Outcome
+from gdq_pddl.pddl.factored import NOTHING, Factored, Ground, factor, merged, times
+from gdq_pddl.pddl.model import Action, Atom, Choice, Domain, Junction, Literal, Outcome, Problem
 from gdq_pddl.pddl.normalise import MAX_ATOMS, TRUE, extend, ground_dnf
 from gdq_pddl.pddl.parser import MAX_OUTCOMES
-
-FACTORED_ABOVE = MAX_OUTCOMES
-"""A ground action whose independent parts' product has more outcomes than this is kept
-as its parts (:class:`Factored`), never listed; at most this many, it is listed as it
-always was (the module docstring)."""
 
 DETERMINISATIONS = ("all-outcomes", "most-likely")
 """What the planner knows of a PPDDL domain (``docs/domains.md``): every outcome of an
@@ -64,22 +34,6 @@ def outcomes_of(action: Action) -> tuple[Outcome, ...]:
     return action.outcomes or (Outcome(1.0, action.effect),)
 
 
-Ground = tuple[frozenset[str], frozenset[str], tuple[tuple, ...], float, tuple, bool]
-"""A ground outcome's effect as fact sets: adds, deletes, conditional effects ``(must hold,
-must not hold, adds, deletes)``, the reward it always earns, its conditional rewards
-``(alternatives, amount)`` and whether it is a failed trial; equal ones are one outcome."""
-@dataclass(frozen=True)
-class Factored:
-    """A ground action's effect as independent parts whose product it is: ``parts[0]``
-    the action's own outcomes (its top-level distribution, without its choices), then one
-    part per binding of each of its choices (:class:`~gdq_pddl.pddl.model.Choice`), each
-    a distribution ``(probability, effect)`` summing to 1, equal effects merged; parts
-    with one outcome are folded into ``parts[0]``. Reality draws one outcome from every
-    part, independently, and applies them side by side."""
-
-    parts: tuple[tuple[tuple[float, Ground], ...], ...]
-
-
 def ground_outcomes(action: Action, args: tuple[str, ...], b: dict[str, str], objects,
                     static, fluent: frozenset[str], too_many, value,
                     source: str) -> list[tuple[int, float, Ground]] | Factored:
@@ -87,8 +41,9 @@ def ground_outcomes(action: Action, args: tuple[str, ...], b: dict[str, str], ob
     the schema it comes from, probability, effect)``; one per schema outcome but where a
     :class:`~gdq_pddl.pddl.model.Choice` expands, refused past :data:`MAX_OUTCOMES`.
     Where every outcome of the schema has the same choices and the product of its parts
-    passes :data:`FACTORED_ABOVE`, the action is kept :class:`Factored` instead (the
-    module docstring); refused still where one part alone passes :data:`MAX_OUTCOMES`."""
+    is too large to list, the action is kept :class:`Factored` instead
+    (:func:`~gdq_pddl.pddl.factored.factor`); refused still where one part alone passes
+    :data:`MAX_OUTCOMES`."""
     def past(choice: Choice | None) -> PDDLError:
         where = f"the forall at line {choice.line} " if choice is not None else ""
         return PDDLError(source, (choice.line if choice else action.line) or None,
@@ -116,36 +71,30 @@ def _shared_choices(action: Action, b: dict[str, str], objects, static, fluent, 
                     ) -> list[tuple[int, float, Ground]] | Factored:
     """:func:`ground_outcomes` of an action whose schema outcomes all have the same
     choices (``off``: which of them set nothing under ``b``): each choice binding's draw
-    made once; :class:`Factored` where the product of the parts passes
-    :data:`FACTORED_ABOVE` (and no outcome is off), else listed exactly as
-    :func:`_ground_outcome` lists each outcome (its own effect, then its choices' draws
-    side by side, in order, equal effects merged)."""
+    made once; :class:`Factored` where :func:`~gdq_pddl.pddl.factored.factor` keeps it so
+    (and no outcome is off), else listed exactly as :func:`_ground_outcome` lists each
+    outcome (its own effect, then its choices' draws side by side, in order, equal
+    effects merged)."""
     outs = outcomes_of(action)
     draws = []
     for choice in outs[0].choices:
         for bb in extend(b, choice.variables, objects, MAX_ATOMS, too_many):
-            draws.append((choice, _merged([g for inner in choice.outcomes for g in
+            draws.append((choice, merged([g for inner in choice.outcomes for g in
                                            _ground_outcome(inner, bb, objects, static, fluent,
                                                            too_many, value, past)])))
     own = [_ground_outcome(o, b, objects, static, fluent, too_many, value, past)[0]
            for o in _without_choices(action)]
-    if not any(off) and len(_merged(own)) * math.prod(len(d) for _, d in draws) \
-            > FACTORED_ABOVE:
-        parts: list[list[tuple[float, Ground]]] = [_merged(own)]
-        for _, draw in draws:
-            if len(draw) == 1:  # for sure: beside the action's own outcomes
-                parts[0] = _times(parts[0], draw)
-            else:
-                parts.append(draw)
-        return Factored(tuple(tuple(part) for part in parts))
+    kept = None if any(off) else factor(own, [d for _, d in draws])
+    if kept is not None:
+        return kept
     listed: list[tuple[int, float, Ground]] = []
     for k, (o, first) in enumerate(zip(outs, own, strict=True)):
         if off[k]:  # it sets nothing under b (as _ground_outcome skips its choices)
-            listed.append((k, o.probability, (frozenset(), frozenset(), (), 0.0, (), False)))
+            listed.append((k, o.probability, NOTHING))
             continue
         out = [first]
         for choice, draw in draws:
-            out = _times(out, draw)
+            out = times(out, draw)
             if len(out) > MAX_OUTCOMES:
                 raise past(choice)
         listed += [(k, p, g) for p, g in out]
@@ -176,7 +125,7 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
         return str(Atom(lit.atom.predicate, tuple(binding.get(x, x) for x in lit.atom.args)))
 
     if _guarded_off(o, b, static):  # it sets nothing under b: skip its choices' bindings
-        return [(o.probability, (frozenset(), frozenset(), (), 0.0, (), False))]
+        return [(o.probability, NOTHING)]
     add = frozenset(fact(lit, b) for lit in o.effect
                     if lit.positive and lit.atom.predicate in fluent)
     dele = frozenset(fact(lit, b) for lit in o.effect
@@ -203,9 +152,9 @@ def _ground_outcome(o: Outcome, b: dict[str, str], objects, static, fluent: froz
     out = [(o.probability, (add, dele, tuple(conds), reward, tuple(rewards), o.stuck))]
     for choice in o.choices:
         for bb in extend(b, choice.variables, objects, MAX_ATOMS, too_many):
-            draw = _merged([g for inner in choice.outcomes for g in _ground_outcome(
+            draw = merged([g for inner in choice.outcomes for g in _ground_outcome(
                 inner, bb, objects, static, fluent, too_many, value, past)])
-            out = _times(out, draw)
+            out = times(out, draw)
             if len(out) > MAX_OUTCOMES:
                 raise past(choice)
     return out
@@ -257,29 +206,6 @@ def _guarded_off(o: Outcome, b: Mapping[str, str], static) -> bool:
         if truth is not None and truth != lit.positive:
             return True
     return False
-
-
-def _both(x: Ground, y: Ground) -> Ground:
-    """Two effects side by side (a failed trial has no other effect)."""
-    if x[5] or y[5]:
-        return (frozenset(), frozenset(), (), x[3] + y[3], x[4] + y[4], True)
-    return (x[0] | y[0], x[1] | y[1], tuple(dict.fromkeys(x[2] + y[2])), x[3] + y[3],
-            x[4] + y[4], False)
-
-
-def _times(dist: list[tuple[float, Ground]], draw: list[tuple[float, Ground]]
-           ) -> list[tuple[float, Ground]]:
-    """``dist`` and the independent ``draw`` side by side: their product, equal effects
-    merged (in the order ``dist``'s outcomes, then ``draw``'s, list them)."""
-    return _merged([(p * q, _both(x, y)) for p, x in dist for q, y in draw])
-
-
-def _merged(dist: list[tuple[float, Ground]]) -> list[tuple[float, Ground]]:
-    """``dist`` with equal effects one outcome (first appearance first)."""
-    out: dict[Ground, float] = {}
-    for p, g in dist:
-        out[g] = out.get(g, 0.0) + p
-    return [(p, g) for g, p in out.items()]
 
 
 def kept_outcomes(action: Action, determinisation: str) -> tuple[int, ...]:
@@ -346,43 +272,30 @@ def kept_ground(action: Action, outs: list[tuple[int, float, Ground]], outcomes:
     return tuple(known), tuple(kept)
 
 
-def factored_kept(factored: Factored, determinisation: str, name: str
-                  ) -> tuple[list[tuple[float, Ground]], tuple[int, ...], tuple[str, ...]]:
-    """What a :class:`Factored` ground action lists (never its parts' product): the
-    outcome of every part's most likely outcome together, first, then each outcome of one
-    part with every other part at its most likely (*one part at a time*: 1 plus the sum of
-    the parts' other outcomes, equal effects once, each with the probability of the
-    first combination that gives it); the ones the planner's ``determinisation`` keeps
-    (all-outcomes: every one that does something; most-likely: the first), and their
-    planner schema names (``name``, or ``name_f<i>`` where several are kept)."""
-    parts = factored.parts
-    best = [max(range(len(part)), key=lambda i, part=part: (part[i][0], -i)) for part in parts]
+def term_value(term: float | Atom, binding: Mapping[str, str], domain: Domain, problem: Problem,
+               action: Action, what: str) -> float:
+    """A cost or reward term under ``binding``: a number, or a function term valued in
+    the problem's ``:init`` (refused, naming it, where it has no value or a negative one)."""
+    if not isinstance(term, Atom):
+        return term
+    key = str(Atom(term.predicate, tuple(binding.get(a, a) for a in term.args)))
+    if key not in problem.values:
+        raise PDDLError(problem.source, None, f"no value for {key} in :init ({what}, "
+                        f"{domain.source}:{action.line})")
+    value = problem.values[key]
+    if value < 0:
+        raise PDDLError(problem.source, None, f"{key} = {value:g} in :init: {what} must be "
+                        ">= 0")
+    return value
 
-    def join(a: tuple[float, Ground], b: tuple[float, Ground]) -> tuple[float, Ground]:
-        return a[0] * b[0], _both(a[1], b[1])
 
-    nothing: tuple[float, Ground] = (1.0, (frozenset(), frozenset(), (), 0.0, (), False))
-    prefix = [nothing]
-    for part, i in zip(parts, best, strict=True):
-        prefix.append(join(prefix[-1], part[i]))
-    suffix = [nothing] * (len(parts) + 1)
-    for j in range(len(parts) - 1, -1, -1):
-        suffix[j] = join(parts[j][best[j]], suffix[j + 1])
-    listed: dict[Ground, float] = {prefix[-1][1]: prefix[-1][0]}
-    for j, part in enumerate(parts):
-        for i, outcome in enumerate(part):
-            if i != best[j] and outcome[0] > 0:
-                p, g = join(join(prefix[j], outcome), suffix[j + 1])
-                listed.setdefault(g, p)
-    outcomes = [(p, g) for g, p in listed.items()]
-
-    def useful(i: int) -> bool:
-        p, g = outcomes[i]
-        return p > 0 and not g[5] and bool(g[0] or g[1] or g[2])
-
-    if determinisation == "all-outcomes":
-        known = tuple(i for i in range(len(outcomes)) if useful(i))
-    else:
-        known = (0,) if useful(0) else ()
-    names = (name,) if len(known) == 1 else tuple(f"{name}_f{i}" for i in known)
-    return outcomes, known, names
+def action_cost(action: Action, args: tuple[str, ...], domain: Domain,
+                problem: Problem) -> float | None:
+    """:attr:`GroundOp.cost` of ``action`` with parameters ``args``: its terms outside every
+    construct summed, 0 where it states costs only inside them, None where none at all."""
+    if not action.states_cost():
+        return None
+    binding = dict(zip((p for p, _ in action.parameters), args, strict=True))
+    name = str(Atom(action.name, args))
+    return float(sum(term_value(term, binding, domain, problem, action, f"the cost of {name}")
+                     for term in action.cost))

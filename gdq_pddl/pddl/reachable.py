@@ -427,19 +427,24 @@ def reachable_graph(task: GroundTask, max_states: int | None = MAX_STATES,
                       np.concatenate(goal), np.concatenate(depth), offered)
 
 
+def factored_reason(task: GroundTask, source: str) -> str:
+    """Why ``task``'s states and true model are not enumerated where it has a factored
+    ground action (:attr:`GroundOp.parts <gdq_pddl.pddl.grounding.GroundOp.parts>`):
+    reality's outcomes of it are drawn part by part, never listed; "" where it has none."""
+    op = next((op for op in task.ops if op.factored), None) \
+        if getattr(task, "factored", ()) else None
+    return "" if op is None else (
+        f"{source}: {op.name} has {op.product_size():,} outcomes, kept as {len(op.parts)} "
+        "independent parts (a forall of probabilistic effects): they are drawn part by part "
+        "and never listed, so the states and the true model are not enumerated")
+
+
 def refuse_factored(task: GroundTask, source: str) -> None:
     """Refuse (:class:`TooManyStates`: ``--explore auto`` goes online then) to enumerate
-    a task with a factored ground action (:attr:`GroundOp.parts
-    <gdq_pddl.pddl.grounding.GroundOp.parts>`): reality's outcomes of it are drawn part
-    by part, never listed, and enumeration and the true model's tables list them."""
-    if not getattr(task, "factored", ()):
-        return
-    op = next(op for op in task.ops if op.factored)
-    raise TooManyStates(f"{source}: {op.name} has {op.product_size():,} outcomes, kept as "
-                        f"{len(op.parts)} independent parts (a forall of probabilistic "
-                        "effects): they are drawn part by part and never listed, so the "
-                        "states and the true model are not enumerated; explore online "
-                        "(--explore online, or auto)")
+    a task with a factored ground action (:func:`factored_reason`)."""
+    reason = factored_reason(task, source)
+    if reason:
+        raise TooManyStates(f"{reason}; explore online (--explore online, or auto)")
 
 
 def reality_ranks(task: GroundTask) -> np.ndarray:

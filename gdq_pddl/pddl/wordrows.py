@@ -2,8 +2,10 @@
 them: what the enumeration (:mod:`gdq_pddl.pddl.reachable`) and reality's outcomes
 (:mod:`gdq_pddl.pddl.outcomes`) apply to a whole block of states at once.
 
-:func:`words` turns a fact bitmask into a row, :func:`holds` tests a condition on rows
-(:class:`RowConditions`: many conditions on one row),
+:func:`words` turns a fact bitmask into a row (:func:`unpacked`: a row into one flag a
+fact), :func:`holds` tests a condition on rows (:class:`RowConditions`: many conditions on
+one row; :class:`RowGains`: what many outcomes earn there; :func:`effect_bits` and
+:func:`spans`: many effects' facts, flat),
 :func:`row_keys` gives each row a sortable key (:class:`KeyIndex` finds them),
 :func:`compile_ops` compiles a task's ground actions (:class:`CompiledOp`: when one
 applies, its outcomes' effects as :class:`RowEffect`, which applies one and says what it
@@ -50,8 +52,7 @@ class RowConditions:
 
     def holds(self, row: np.ndarray) -> np.ndarray:
         """bool[n]: each condition holds in the word row ``row``."""
-        return self.holds_bits(np.unpackbits(np.ascontiguousarray(row, dtype="<u8")
-                                             .view(np.uint8), bitorder="little").view(np.bool_))
+        return self.holds_bits(unpacked(row))
 
     def holds_bits(self, bits: np.ndarray) -> np.ndarray:
         """bool[n]: each condition holds in the state whose facts are ``bits`` (bool, fact
@@ -62,11 +63,74 @@ class RowConditions:
         return (missing == 0) & (present == 0)
 
 
+class RowGains:
+    """What each of many ground outcomes (:class:`~gdq_pddl.pddl.grounding.GroundOutcome`)
+    earns in one state, all at once (:meth:`of`): its fixed reward plus the amount of each
+    conditional reward one of whose alternatives holds (:class:`RowConditions`)."""
+
+    def __init__(self, outcomes: list[GroundOutcome]) -> None:
+        base, entry, amount, alts, term = [], [], [], [], []
+        for o in outcomes:
+            base.append(o.reward if o.rewards else o.reward + 0.0)
+            for alternatives, worth in o.rewards:
+                term += [len(entry)] * len(alternatives)
+                alts += list(alternatives)
+                entry.append(len(base) - 1)
+                amount.append(worth)
+        self.base = np.array(base, dtype=float)
+        self.entry = np.array(entry, dtype=np.int64)
+        self.amount = np.array(amount, dtype=float)
+        self.alt_term = np.array(term, dtype=np.int64)
+        self.alts = RowConditions(alts)
+
+    def of(self, bits: np.ndarray) -> np.ndarray:
+        """float64: each outcome's reward in the state of ``bits`` (as
+        :meth:`RowConditions.holds_bits` reads them), as ``GroundOutcome.gain`` sums it."""
+        if not len(self.entry):
+            return self.base
+        held = np.zeros(len(self.entry), dtype=np.bool_)
+        held[self.alt_term[self.alts.holds_bits(bits)]] = True
+        return self.base + np.bincount(self.entry[held], weights=self.amount[held],
+                                       minlength=len(self.base))
+
+
 def _flat(lists: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     """``(which list, item)`` of every item of ``lists``, as int64 arrays."""
     which = np.repeat(np.arange(len(lists), dtype=np.int64), [len(x) for x in lists])
     items = np.array([f for x in lists for f in x], dtype=np.int64)
     return which, items
+
+
+def unpacked(row: np.ndarray) -> np.ndarray:
+    """bool[64 n_words]: fact ``f`` of a word row (bit ``f % 64`` of word ``f // 64``)."""
+    return np.unpackbits(np.ascontiguousarray(row, dtype="<u8").view(np.uint8),
+                         bitorder="little").view(np.bool_)
+
+
+def spans(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(positions, owner)``: the positions ``ptr[i] .. ptr[i + 1] - 1`` of each listed
+    item ``i`` of a flat list grouped by item (``ptr``: where each item's part starts), in
+    the order listed, and the place in ``items`` of the item each belongs to."""
+    starts = ptr[items]
+    lengths = ptr[items + 1] - starts
+    owner = np.repeat(np.arange(len(items), dtype=np.int64), lengths)
+    ends = np.cumsum(lengths)
+    return np.arange(int(ends[-1]) if len(ends) else 0, dtype=np.int64) + \
+        np.repeat(starts - ends + lengths, lengths), owner
+
+
+def effect_bits(effects: list[tuple[int, int]]) -> tuple[np.ndarray, ...]:
+    """The facts ``(add, delete)`` masks of each effect set or clear as a flat list
+    grouped by effect (adds first): ``(ptr, word, add bit, delete bit)``, one entry a
+    fact, its bit in ``add bit`` or in ``delete bit`` (0 in the other)."""
+    owner, flat = _flat([list(set_bits(m)) for pair in effects for m in pair])
+    word, bit = flat >> 6, np.left_shift(np.uint64(1), (flat & 63).astype(np.uint64))
+    is_add = owner % 2 == 0
+    order = np.argsort(owner // 2, kind="stable")
+    zero = np.zeros(len(bit), dtype=np.uint64)
+    ptr = np.searchsorted(owner[order] // 2, np.arange(len(effects) + 1))
+    return (ptr.astype(np.int64), word[order], np.where(is_add, bit, zero)[order],
+            np.where(is_add, zero, bit)[order])
 
 
 def row_keys(rows: np.ndarray) -> np.ndarray:

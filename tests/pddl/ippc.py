@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from gdq_pddl.pddl import parse_domain, parse_problem
-from gdq_pddl.pddl.grounding import combine, sample_parts
+from gdq_pddl.pddl.factored import combine, sample_parts
 from gdq_pddl.pddl.ppddl import ground_ppddl
 
 
@@ -468,7 +468,7 @@ def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
     """Every state the interpreter reaches: the library applies the same ground actions,
     and each leads to the interpreter's distribution: a listed one by its outcomes, a
     factored one by its parts' product, and, in the first three states with ``draws``,
-    by that many draws of its parts (:func:`~gdq_pddl.pddl.grounding.sample_parts` from
+    by that many draws of its parts (:func:`~gdq_pddl.pddl.factored.sample_parts` from
     ``rng``), each next state's frequency within 5 standard deviations (plus one draw)
     of its probability. Returns how many (state, factored action) were compared."""
 
@@ -503,7 +503,7 @@ def interpreted_factored_agrees(domain_text: str, problem_text: str, rng,
             if op.factored and draws and i < 3:
                 counts: dict[frozenset[str], int] = {}
                 for _ in range(draws):
-                    o = combine(sample_parts(op, rng))
+                    o = combine(sample_parts(op.parts, rng))
                     t = learner.atoms(s if o.stuck else o.apply(s)) | statics
                     counts[t] = counts.get(t, 0) + 1
                 assert counts.keys() <= want.keys(), (domain_text, name)

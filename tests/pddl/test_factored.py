@@ -21,8 +21,8 @@ from gdq_pddl.envs.pddl_env import PDDLInstance
 from gdq_pddl.errors import TooManyStates
 from gdq_pddl.learners import make_learner, pddl_task_context, run_episodes
 from gdq_pddl.learners.online import online_context
-from gdq_pddl.pddl import ppddl_effects
-from gdq_pddl.pddl.grounding import combine
+from gdq_pddl.pddl import factored as factoring
+from gdq_pddl.pddl.factored import combine
 from gdq_pddl.pddl.reachable import reachable_graph
 from tests.helpers import expanded_rows
 from tests.pddl.ippc import grounded, interpreted_factored_agrees, random_domain
@@ -59,7 +59,7 @@ def test_random_factored_effects_agree_with_the_interpreter(monkeypatch):
     factored (FACTORED_ABOVE = 1): in every state the interpreter reaches, the parts'
     product is its distribution, and 2,000 draws of the parts in each of the first three
     states match it (5 standard deviations)."""
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     compared = 0
     for seed in range(30):
         rng = np.random.default_rng(1000 + seed)
@@ -73,7 +73,7 @@ def test_the_parts_product_is_the_listing_outcome_by_outcome(monkeypatch):
     product gives in every state each reboot's same next states, failed trials and
     rewards with the same probabilities."""
     listed, _ = grounded(SYSADMIN, network(5))
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     factored, _ = grounded(SYSADMIN, network(5))
     assert factored.facts == listed.facts
     for a, b in zip(listed.ops, factored.ops, strict=True):
@@ -103,7 +103,7 @@ def test_the_env_draws_a_factored_action_as_listed(monkeypatch):
     for o in reboot.outcomes:
         key = (o.apply(s0), o.gain(s0))
         want[key] = want.get(key, 0.0) + o.probability
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     online = OnlineInstance(PDDLInstance.from_texts(SYSADMIN, network(5)))
     assert online.graph.factored.all()
     k = next(i for i, op in enumerate(online.task.ops) if op.name == "(reboot c0)")
@@ -129,7 +129,7 @@ def test_a_factored_pairs_prior_reward_is_the_listed_ones(monkeypatch):
     computers, enumerated without factoring) in every state a run expands."""
     listed = PDDLInstance.from_texts(SYSADMIN, network(5))
     enumerated = pddl_task_context(listed).prior_reward
-    monkeypatch.setattr(ppddl_effects, "FACTORED_ABOVE", 1)
+    monkeypatch.setattr(factoring, "FACTORED_ABOVE", 1)
     online = OnlineInstance(PDDLInstance.from_texts(SYSADMIN, network(5)))
     env = OnlineEnv(online)
     env.reset(seed=0)
@@ -149,7 +149,7 @@ def test_the_determinisation_grows_with_the_sum_of_the_parts():
     then each other outcome of one part alone (1 + 1 + 6 x 3), and plans on all that
     change something (all-outcomes: not c0 staying down with nothing else happening), or
     on the first (most-likely)."""
-    assert ppddl_effects.FACTORED_ABOVE == 4096
+    assert factoring.FACTORED_ABOVE == 4096
     learner, planner = grounded(SYSADMIN, network(7))
     reboot = next(op for op in learner.ops if op.name == "(reboot c0)")
     assert reboot.factored and reboot.product_size() == 8192
@@ -214,3 +214,119 @@ def test_cli_runs_a_factored_problem_online(tmp_path, capsys):
     assert optimal["explored"] == "online" and "independent parts" in \
         optimal["explored_because"]
     assert len((tmp_path / "run" / "episodes.csv").read_text().splitlines()) == 1 + 2 * 2
+    # the reason given, first and on resuming, is that the actions are factored, only
+    assert main([*base, "--out", str(tmp_path / "run"), "--resume"]) == 0
+    resumed = next(iter(json.loads((tmp_path / "run" / "optimal.json").read_text())
+                        .values()))
+    for info in (optimal, resumed):
+        assert info["explored_because"].startswith(str(tmp_path / "p.pddl") + ": (reboot c0) "
+                                                   "has 8,192 outcomes, kept as 7 independent")
+
+
+def test_the_factored_effects_code_is_one_module():
+    """What keeps independent effects as their parts, draws them and determinises them is
+    defined in gdq_pddl/pddl/factored.py, and nowhere else: the grounder, the schema
+    effects and the online store import it."""
+    import ast
+    from pathlib import Path
+
+    import gdq_pddl.pddl as pkg
+    names = {"FACTORED_ABOVE", "Factored", "factor", "factored_kept", "combine",
+             "sample_parts", "gain_terms", "best_gain", "times", "merged", "both"}
+    assert {name for name in names if hasattr(factoring, name)} == names
+    for path in Path(pkg.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        defined = {n.name for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
+        defined |= {t.id for n in tree.body if isinstance(n, ast.Assign)
+                    for t in n.targets if isinstance(t, ast.Name)}
+        assert path.name == "factored.py" or not defined & names, path.name
+
+
+# thirteen coins, each paying 1 with 1/2 when tossed: 2^13 = 8,192 combinations, but
+# only the sums 0..13 differ, so the listing (equal effects merged) has 14 outcomes
+PAY = """(define (domain pay) (:requirements :adl :probabilistic-effects :rewards)
+  (:types coin) (:predicates (done))
+  (:action toss :parameters () :effect (and (done)
+    (forall (?c - coin) (probabilistic 1/2 (increase (reward) 1))))))
+(define (problem pay-13) (:domain pay) (:objects %s - coin) (:init) (:goal (done)))
+"""
+
+
+def test_draws_whose_listing_fits_are_listed_not_factored():
+    """The rule reads the listing after equal effects merge, not the product: 13 coins
+    paying 1 each with 1/2 list 14 outcomes, a binomial of the sum, as before factoring."""
+    from math import comb
+
+    text = PAY % " ".join(f"k{i}" for i in range(13))
+    learner, _ = grounded(text, text)
+    toss = learner.ops[0]
+    assert not toss.factored and len(toss.outcomes) == 14
+    assert sorted((o.reward, o.probability) for o in toss.outcomes) == [
+        (float(k), comb(13, k) / 2 ** 13) for k in range(14)]
+
+
+def _listing_fits(own, draws, cap) -> bool:
+    """Independently of :func:`factored.times`: whether the listing before factoring was
+    made (each schema outcome's product with the draws, every prefix of draws at most
+    ``cap`` distinct effects, and their sum at most ``cap``)."""
+    from functools import reduce
+
+    total = 0
+    for first in own:
+        for j in range(1, len(draws) + 1):
+            size = len({reduce(factoring.both, (g for _, g in combo), first[1])
+                        for combo in product(*draws[:j])})
+            if size > cap:
+                return False
+        total += size if draws else 1
+    return total <= cap
+
+
+def test_the_factoring_rule_is_the_listings_size_exactly(monkeypatch):
+    """Random parts over a few facts, conditional effects, amounts and failed trials,
+    against caps of 1 to 40: an action is factored exactly where its listing passes the
+    cap (where it was refused before factoring), whether the parts are separable (the
+    size is the product, no listing made) or not (the listing made and stopped)."""
+    rng = np.random.default_rng(7)
+    facts, conds = ["a", "b", "c", "d"], ["x", "y"]
+
+    def effect(own: str) -> tuple:  # own: the part's own facts (none shared), or ""
+        pool = [own + f for f in facts]
+        return (frozenset(f for f in pool if rng.random() < 0.3),
+                frozenset(f for f in pool if rng.random() < 0.1),
+                tuple(own + c for c in conds if rng.random() < 0.2),
+                float(rng.integers(2)) if rng.random() < earns else 0.0, (),
+                bool(rng.random() < 0.03))
+
+    seen = {True: 0, False: 0}
+    for trial in range(400):
+        apart, earns = trial % 2 == 0, rng.choice([0.0, 0.3])
+        parts = [factoring.merged([(1.0, effect(str(j) if apart else ""))
+                                   for _ in range(rng.integers(1, 4))])
+                 for j in range(rng.integers(2, 6))]
+        own, draws = parts[0], parts[1:]
+        cap = int(rng.integers(1, 41))
+        monkeypatch.setattr(factoring, "FACTORED_ABOVE", cap)
+        assert (factoring.factor(own, draws) is None) == _listing_fits(own, draws, cap)
+        if len(own) * np.prod([len(d) for d in draws]) > cap:
+            seen[factoring.separable(parts)] += 1
+    assert min(seen.values()) > 20  # both ways of reading the size are exercised
+
+
+def test_grounding_reads_each_exists_once_and_stops_at_a_false_static(monkeypatch):
+    """Grounding sysadmin's reboot on n computers evaluates its exists over the computers
+    once a (reboot, computer) pair, though two outcomes of a draw carry it, and stops each
+    conjunction at its first false static literal ((conn ?c ?d): false for most ?c): about
+    2 n^3 condition nodes, not the 8 n^3 of reading every literal of every copy."""
+    from gdq_pddl.pddl import normalise
+
+    plain, calls = normalise.ground_dnf, [0]
+
+    def counted(*args, **kw):
+        calls[0] += 1
+        return plain(*args, **kw)
+
+    monkeypatch.setattr(normalise, "ground_dnf", counted)
+    n = 12
+    grounded(SYSADMIN, network(n))
+    assert calls[0] < 3 * n ** 3
