@@ -207,6 +207,54 @@ def test_rmax_planning_equals_plain_value_iteration(ctx_c):
     assert np.allclose(t.table.q[live], q[live], atol=1e-6)
 
 
+def _plan_every_state(q, v, allowed, goal, model, unknown, p, tolerance, max_sweeps):
+    """Gauss-Seidel value iteration visiting every state in every sweep (plan_known as it
+    was before it skipped the states without a known pair), in plain Python."""
+    done = 0
+    for _ in range(max_sweeps):
+        done += 1
+        change = 0.0
+        for s in range(q.shape[0]):
+            if goal[s]:
+                continue
+            best = -np.inf
+            for a in range(q.shape[1]):
+                if not allowed[s, a]:
+                    continue
+                if model.visits[s, a] > p.m:
+                    x = learned_model.learned_value(
+                        model.slots, model.stuck, model.visits, model.cost_sum,
+                        model.cost_n, model.cost_all, goal, v, p, s, a)
+                else:
+                    x = unknown[s]
+                change = max(change, abs(x - q[s, a]))
+                q[s, a] = x
+                best = max(best, x)
+            v[s] = best
+        if change <= tolerance:
+            break
+    return done
+
+
+@pytest.mark.parametrize("method", ["R-max:m=1", "R-max-shaping:m=2"])
+def test_rmax_planning_skips_unknown_states_to_the_bit(ctx_c, method):
+    # after some episodes few states have a known pair; then every unknown value moves, so
+    # the first sweep changes every state and the later ones propagate through the known
+    learner = make_learner(method, ctx_c)
+    run(learner, OfficeEnv(task="C"), 15, 3, fast=False)
+    t, p = learner.tables, learner.params
+    known = (t.model.visits > p.m) & t.table.allowed
+    assert 0 < known.any(axis=1).sum() < (~t.table.goal).sum()  # some states skipped
+    t.own.unknown[:] -= 1.5
+    q, v = t.table.q.copy(), t.table.v.copy()
+    want = _plan_every_state(q, v, t.table.allowed, t.table.goal, t.model, t.own.unknown, p,
+                             1e-12, 400)
+    before = learner.sweeps
+    got = plan_known(t.table, t.model, t.own, p, 1e-12, 400)
+    assert got == want > 2 and learner.sweeps == before + got
+    assert t.table.q.tobytes() == q.tobytes() and t.table.v.tobytes() == v.tobytes()
+
+
 def test_rmax_is_refused_nothing_and_acts_greedily(ctx_c):
     learner = make_learner("R-max", ctx_c, epsilon=0.0)
     assert learner.config.epsilon == 0.0
