@@ -37,6 +37,8 @@ Choices the sources leave open (``docs/decisions.md``, "R-max baselines"):
 - *Planning*: Gauss-Seidel value iteration over every state and allowed pair, from the
   current values, until no value changes by more than ``tolerance`` or ``max_sweeps``
   sweeps (Brafman and Tennenholtz solve the model exactly; this is that to a tolerance).
+  After its first sweep it visits only the states with a known pair, the others being
+  no-ops by then: the same values to the bit, at the known part's cost.
 - *Acting*: greedy, ties broken uniformly at random (``epsilon`` is 0: R-max explores
   by optimism alone).
 - *Terminal outcomes*: as every learned model here (:mod:`~gdq_pddl.learners.
