@@ -5,10 +5,11 @@
     python benchmarks/rmax_replan.py --method R-max-shaping --episodes 300
 
 R-max (``gdq_pddl.learners.rmax``) runs value iteration each time a pair becomes known.
-``plan_known`` used to visit every state in every sweep; it now visits them all in the
-first sweep only, and then only the states with a known pair (a state without one does
-not change after the first sweep). "before" here is the every-state sweep, compiled from
-this file, in a learner that is R-max in all else; "after" is the package's learner. Both
+``plan_known`` used to visit every state in every sweep; it now visits only the states
+with a known pair, kept between plans (every state in a first sweep only after the tables
+changed outside planning): a state without one does not change once visited. "before"
+here is the every-state sweep, compiled from this file, in a learner that is R-max in all
+else; "after" is the package's learner. Both
 learn the same runs (env seeded ``run``, the learner's draws from ``run``), taking turns
 run by run, so a loaded machine slows both alike; the script checks that each run's
 returns, steps and final Q table are the same bytes, and prints the seconds of learning
