@@ -37,6 +37,9 @@ Choices the sources leave open (``docs/decisions.md``, "R-max baselines"):
 - *Planning*: Gauss-Seidel value iteration over every state and allowed pair, from the
   current values, until no value changes by more than ``tolerance`` or ``max_sweeps``
   sweeps (Brafman and Tennenholtz solve the model exactly; this is that to a tolerance).
+  It visits only the states with a known pair, the others being no-ops once a sweep has
+  visited them (every state in the first sweep after the tables changed outside
+  planning): the same values to the bit, at the known part's cost.
 - *Acting*: greedy, ties broken uniformly at random (``epsilon`` is 0: R-max explores
   by optimism alone).
 - *Terminal outcomes*: as every learned model here (:mod:`~gdq_pddl.learners.
@@ -59,7 +62,7 @@ from gdq_pddl.learners.tables import KIND_DYNAQ, Model, Params, QTable, act_plai
 from gdq_pddl.learners.tabular import TabularLearner
 
 __all__ = ["Optimism", "RMax", "RMaxConfig", "RMaxShaping", "RMaxShapingConfig",
-           "plan_known", "v_max"]
+           "now_known", "plan_known", "v_max"]
 
 
 class Optimism(NamedTuple):
@@ -67,8 +70,14 @@ class Optimism(NamedTuple):
 
     unknown: np.ndarray  # float64[S]: U(s), the value of an unknown pair of state s
     sweeps: np.ndarray  # int64[1]: value-iteration sweeps run so far
+    known_states: np.ndarray  # int64[S]: its first ``planned[0]``: the states with a known
+    # pair, ascending (those the sweeps after the first visit)
+    planned: np.ndarray  # int64[2]: how many known_states; 1 while every other state is
+    # as planning leaves it (its pairs at U(s), its value their maximum), else 0
     SPEC = {"unknown": (np.dtype(np.float64), "S", None),
-            "sweeps": (np.dtype(np.int64), "1", None)}
+            "sweeps": (np.dtype(np.int64), "1", None),
+            "known_states": (np.dtype(np.int64), "S", None),
+            "planned": (np.dtype(np.int64), "2", None)}
 
 
 @numba.njit(cache=True)
@@ -77,21 +86,37 @@ def plan_known(table: QTable, model: Model, own: Optimism, p: Params, tolerance:
     """Gauss-Seidel value iteration on the known model: every allowed pair of every
     non-goal state gets its known value, or ``own.unknown[s]``; until the largest change
     is at most ``tolerance`` or after ``max_sweeps`` sweeps. Returns the sweeps run.
-    (``p.m`` is one less than R-max's m: known means ``visits > p.m``.)"""
+    (``p.m`` is one less than R-max's m: known means ``visits > p.m``.)
+
+    A state without a known pair is a no-op once a sweep has visited it (its pairs are
+    ``own.unknown[s]``, which planning does not change, and its value their maximum). So
+    the first sweep visits every state only when ``own.planned[1]`` is 0 (whatever
+    changed the tables outside planning sets it so: a task, new rows, new ``U``), and
+    every sweep else visits only ``own.known_states``, in the same order: the values,
+    the changes and the sweeps are those of visiting every state each sweep, to the bit
+    (``tests/learners/test_baselines.py``), at the cost of the known part of the model."""
     q, v, allowed, goal = table.q, table.v, table.allowed, table.goal
     n_states, n_actions = q.shape
+    known_states = own.known_states
+    full = own.planned[1] == 0
+    n_visit = n_states if full else own.planned[0]
     done = 0
     for _ in range(max_sweeps):
+        first = done == 0
         done += 1
         change = 0.0
-        for s in range(n_states):
+        found = 0
+        for i in range(n_visit):
+            s = i if full else known_states[i]
             if goal[s]:
                 continue
             best = -np.inf
+            known = False
             for a in range(n_actions):
                 if not allowed[s, a]:
                     continue
                 if model.visits[s, a] > p.m:
+                    known = True
                     x = learned_value(model.slots, model.stuck, model.visits, model.cost_sum,
                                       model.cost_n, model.cost_all, goal, v, p, s, a)
                 else:
@@ -100,10 +125,40 @@ def plan_known(table: QTable, model: Model, own: Optimism, p: Params, tolerance:
                 q[s, a] = x
                 best = max(best, x)
             v[s] = best
+            if full and known:
+                known_states[found] = s
+                found += 1
+        if first and full:
+            full = False
+            n_visit = found
+            own.planned[0] = found
+            own.planned[1] = 1
         if change <= tolerance:
             break
     own.sweeps[0] += done
     return done
+
+
+@numba.njit(cache=True)
+def now_known(own: Optimism, s: int) -> None:
+    """State ``s`` has a known pair: into ``own.known_states`` (ascending) if planning
+    keeps that list (``own.planned[1]``; else the next plan makes it)."""
+    if own.planned[1] == 0:
+        return
+    n = own.planned[0]
+    lo, hi = 0, n
+    while lo < hi:  # the first place holding a state >= s
+        mid = (lo + hi) // 2
+        if own.known_states[mid] < s:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo < n and own.known_states[lo] == s:
+        return
+    for i in range(n, lo, -1):
+        own.known_states[i] = own.known_states[i - 1]
+    own.known_states[lo] = s
+    own.planned[0] = n + 1
 
 
 @numba.njit(cache=True)
@@ -116,6 +171,7 @@ def observe(table: QTable, model: Model, plans: Any, prior: Any, queue: Any, own
     if not record(model, table.goal, p, s, a, r, s2, terminated, truncated):
         return False
     if model.visits[s, a] == p.m + 1:
+        now_known(own, s)
         plan_known(table, model, own, p, p.sweep_threshold, p.n_backups)
     return True
 
@@ -154,7 +210,8 @@ class RMax(TabularLearner):
 
     def _own_arrays(self, context: TaskContext) -> Optimism:
         return Optimism(np.ascontiguousarray(self._unknown(context), dtype=np.float64),
-                        np.zeros(1, dtype=np.int64))
+                        np.zeros(1, dtype=np.int64),
+                        np.zeros(context.n_states, dtype=np.int64), np.zeros(2, dtype=np.int64))
 
     def _build(self, context: TaskContext) -> Any:
         tables, params = super()._build(context)
@@ -170,6 +227,7 @@ class RMax(TabularLearner):
                    self.config.max_sweeps)
 
     def _revalue_rows(self, rows: np.ndarray) -> None:
+        self.tables.own.planned[1] = 0  # rows changed outside planning: a full sweep next
         t = self.tables.table
         t.q[rows] = np.where(t.allowed[rows], self.tables.own.unknown[rows, None], 0.0)
         super()._revalue_rows(rows)
@@ -177,6 +235,7 @@ class RMax(TabularLearner):
     def update_rows(self, rows: np.ndarray) -> None:
         """As the base class, with ``U`` again for the rows' distances first."""
         self.tables.own.unknown[:] = self._unknown(self.context)
+        self.tables.own.planned[1] = 0  # every state's U may have changed
         super().update_rows(rows)
 
     @property

@@ -5,6 +5,7 @@ replanning, and each compiled rule against a plain-Python reference on random st
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -18,7 +19,7 @@ from gdq_pddl.learners import learned_model, make_learner
 from gdq_pddl.learners.context import TaskContext
 from gdq_pddl.learners.registry import parse_method
 from gdq_pddl.learners.replan import NO_PLAN, FFReplan
-from gdq_pddl.learners.rmax import RMax, RMaxShaping, plan_known
+from gdq_pddl.learners.rmax import RMax, RMaxShaping, now_known, plan_known
 from gdq_pddl.learners.shaping import (
     distance_potential,
     goal_distances,
@@ -205,6 +206,106 @@ def test_rmax_planning_equals_plain_value_iteration(ctx_c):
     plan_known(t.table, t.model, t.own, p, 1e-12, 5000)
     live = ~t.table.goal
     assert np.allclose(t.table.q[live], q[live], atol=1e-6)
+
+
+def _plan_every_state(q, v, allowed, goal, model, unknown, p, tolerance, max_sweeps):
+    """Gauss-Seidel value iteration visiting every state in every sweep (plan_known as it
+    was before it skipped the states without a known pair), in plain Python."""
+    done = 0
+    for _ in range(max_sweeps):
+        done += 1
+        change = 0.0
+        for s in range(q.shape[0]):
+            if goal[s]:
+                continue
+            best = -np.inf
+            for a in range(q.shape[1]):
+                if not allowed[s, a]:
+                    continue
+                if model.visits[s, a] > p.m:
+                    x = learned_model.learned_value(
+                        model.slots, model.stuck, model.visits, model.cost_sum,
+                        model.cost_n, model.cost_all, goal, v, p, s, a)
+                else:
+                    x = unknown[s]
+                change = max(change, abs(x - q[s, a]))
+                q[s, a] = x
+                best = max(best, x)
+            v[s] = best
+        if change <= tolerance:
+            break
+    return done
+
+
+@pytest.mark.parametrize("method", ["R-max:m=1", "R-max-shaping:m=2"])
+def test_rmax_planning_skips_unknown_states_to_the_bit(ctx_c, method):
+    # after some episodes few states have a known pair; then every unknown value moves, so
+    # the first sweep changes every state and the later ones propagate through the known
+    learner = make_learner(method, ctx_c)
+    run(learner, OfficeEnv(task="C"), 15, 3, fast=False)
+    t, p = learner.tables, learner.params
+    known = (t.model.visits > p.m) & t.table.allowed
+    assert 0 < known.any(axis=1).sum() < (~t.table.goal).sum()  # some states skipped
+    t.own.unknown[:] -= 1.5
+    t.own.planned[1] = 0  # U changed outside planning: the next plan visits every state
+    q, v = t.table.q.copy(), t.table.v.copy()
+    want = _plan_every_state(q, v, t.table.allowed, t.table.goal, t.model, t.own.unknown, p,
+                             1e-12, 400)
+    before = learner.sweeps
+    got = plan_known(t.table, t.model, t.own, p, 1e-12, 400)
+    assert got == want > 2 and learner.sweeps == before + got
+    assert t.table.q.tobytes() == q.tobytes() and t.table.v.tobytes() == v.tobytes()
+
+
+@numba.njit
+def _observe_full_first(table, model, plans, prior, queue, own, p, s, a, r, s2, terminated,
+                        truncated, rng):
+    """R-max's observe with every plan's first sweep over every state (as before the
+    known states were kept between plans)."""
+    if not learned_model.record(model, table.goal, p, s, a, r, s2, terminated, truncated):
+        return False
+    if model.visits[s, a] == p.m + 1:
+        own.planned[1] = 0
+        plan_known(table, model, own, p, p.sweep_threshold, p.n_backups)
+    return True
+
+
+class _RMaxFullFirst(RMax):
+    observe_rule = staticmethod(_observe_full_first)
+    loop_rules = None
+
+
+class _RMaxShapingFullFirst(RMaxShaping):
+    observe_rule = staticmethod(_observe_full_first)
+    loop_rules = None
+
+
+@pytest.mark.parametrize("method, reference", [("R-max", _RMaxFullFirst),
+                                               ("R-max-shaping", _RMaxShapingFullFirst)])
+def test_rmax_known_states_kept_between_plans_to_the_bit(ctx_c, method, reference):
+    learner = make_learner(method, ctx_c)
+    full = reference(ctx_c, learner.config)
+    a = run(learner, OfficeEnv(task="C"), 30, 4, fast=False)
+    b = run(full, OfficeEnv(task="C"), 30, 4, fast=False)
+    assert a.returns.tobytes() == b.returns.tobytes()
+    assert learner.q.tobytes() == full.q.tobytes() and learner.sweeps == full.sweeps
+    own = learner.tables.own
+    n = own.planned[0]
+    has_known = ((learner.tables.model.visits > learner.params.m)
+                 & learner.tables.table.allowed).any(axis=1)
+    assert own.planned[1] == 1 and own.known_states[:n].tolist() == \
+        np.flatnonzero(has_known).tolist()
+
+
+def test_rmax_now_known_keeps_the_states_ascending_once_each():
+    own = RMax(tiny_context(6, 2, goal=[5], length=[1, 1, 1, 1, 1, 0])).tables.own
+    own.planned[:] = (0, 1)
+    for s in (3, 1, 4, 1, 0, 3):
+        now_known(own, s)
+    assert own.planned[0] == 4 and own.known_states[:4].tolist() == [0, 1, 3, 4]
+    own.planned[:] = (0, 0)  # no list kept: the next plan makes it
+    now_known(own, 2)
+    assert own.planned[0] == 0
 
 
 def test_rmax_is_refused_nothing_and_acts_greedily(ctx_c):

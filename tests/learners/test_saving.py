@@ -35,7 +35,7 @@ from gdq_pddl.learners.saving import FORMAT_VERSION
 from gdq_pddl.learners.tables import Tables
 
 METHODS = ["Q-learning", "Dyna-Q", "DARLING", "DARLING-code", "GDQ", "GDQ-literal",
-           "GDQ-code"]
+           "GDQ-code", "R-max", "R-max-shaping"]
 
 
 def _arrays(learner):
