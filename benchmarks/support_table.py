@@ -9,7 +9,10 @@ Each argument is a folder of one domain's files (the IPPC-2006/2008 and pddlgym 
 ``domain.pddl`` and problem files, or files that hold a domain and its problem each, as
 the IPPC-2008 boxworld files do) or one problem file (its domain in the same file or in
 ``domain.pddl`` beside it). In a folder the problem measured is the first by name
-(``p01...``) that parses: the small one.
+(``p01...``) that parses: the small one; a folder whose problems are in a ``problems/``
+folder beside its ``domain.pddl`` gives the first of those. A folder with a domain file
+and no problem (a published domain whose problems are not public) still gets a row: the
+constructs its domain uses, and ``not run: no problem file``.
 
 For each it prints one Markdown row:
 
@@ -57,7 +60,8 @@ class Case:
 
     label: str
     domain: Path
-    problem: Path
+    problem: Path | None
+    """``None`` for a folder that holds a domain and no problem."""
 
 
 def _defines(path: Path) -> set[str]:
@@ -72,19 +76,25 @@ def _defines(path: Path) -> set[str]:
 
 
 def find_case(arg: str) -> Case:
-    """The domain and the problem measured for a folder or a problem file."""
+    """The domain and the problem measured for a folder or a problem file (the folder's
+    ``problems/`` folder when the folder itself holds none), or the domain alone."""
     path = Path(arg)
-    files = sorted(path.glob("*.pddl")) if path.is_dir() else [path]
     folder = path if path.is_dir() else path.parent
+    domains = [f for f in sorted(folder.glob("*.pddl"))
+               if "domain" in _defines(f) and "problem" not in _defines(f)]
+    files = sorted(path.glob("*.pddl")) if path.is_dir() else [path]
+    if path.is_dir() and not any("problem" in _defines(f) for f in files):
+        files = sorted((path / "problems").glob("*.pddl"))
     for problem in files:
         kinds = _defines(problem)
         if "problem" not in kinds:
             continue
         domain = problem if "domain" in kinds else next(
-            (f for f in sorted(folder.glob("*.pddl")) if f != problem
-             and "domain" in _defines(f) and "problem" not in _defines(f)), None)
+            (f for f in domains if f != problem), None)
         if domain is not None:
             return Case(folder.name, domain, problem)
+    if path.is_dir() and domains:
+        return Case(folder.name, domains[0], None)
     raise SystemExit(f"{arg}: no problem file with its domain found (a folder of .pddl files "
                      "or a problem file was expected)")
 
@@ -114,7 +124,7 @@ def constructs(case: Case) -> str:
     text = read_pddl_text(case.domain)
     try:
         domain = parse_domain(text, str(case.domain))
-        problem = read_problem(case.problem, domain)
+        problem = None if case.problem is None else read_problem(case.problem, domain)
     except GdqError as e:
         return f"refused by the reader: {str(e).splitlines()[0]}"
     found: set[str] = set()
@@ -124,7 +134,7 @@ def constructs(case: Case) -> str:
             for section in items[2:]:
                 if section.items and section.items[0].symbol == ":action":
                     _walk(section, False, found)
-    if problem.goal_reward is not None:
+    if problem is not None and problem.goal_reward is not None:
         found.add("goal-reward")
     order = [*WATCHED, "probabilistic under forall", "reward effects", "total-cost",
              "goal-reward"]
@@ -141,6 +151,8 @@ def command(case: Case, out: Path, args: argparse.Namespace) -> list[str]:
 
 def measure(case: Case, args: argparse.Namespace) -> tuple[str, str, float]:
     """``(how it ran, the measured figures, wall seconds)`` of one problem's run."""
+    if case.problem is None:
+        return "not run: no problem file", "", 0.0
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out"
         cmd = command(case, out, args)
@@ -187,10 +199,13 @@ def main(argv: list[str] | None = None) -> int:
     for arg in args.paths:
         case = find_case(arg)
         how, figures, wall = measure(case, args)
-        row = (f"| {case.label} | {case.problem.name} | {constructs(case)} | {how} | "
-               f"{figures or '-'} | {wall:.0f} |")
+        problem = "-" if case.problem is None else case.problem.name
+        seconds = "-" if case.problem is None else f"{wall:.0f}"
+        row = (f"| {case.label} | {problem} | {constructs(case)} | {how} | "
+               f"{figures or '-'} | {seconds} |")
         rows.append(row)
-        commands.append(shlex.join(command(case, Path("OUT"), args)))
+        if case.problem is not None:
+            commands.append(shlex.join(command(case, Path("OUT"), args)))
         print(row, flush=True)
     text = "\n".join([*head, *rows, "", "Commands:", "",
                       *(f"    {c}" for c in commands), ""])

@@ -57,10 +57,42 @@ def test_a_domain_the_reader_refuses_is_named_with_the_readers_line(tmp_path):
     assert "oneof" in support_table.constructs(case)
 
 
-def test_a_folder_without_a_problem_is_an_error(tmp_path):
-    shutil.copy(SHIPPED / "domains" / "lift.pddl", tmp_path / "domain.pddl")
+def test_a_folder_without_any_domain_or_problem_is_an_error(tmp_path):
+    (tmp_path / "notes.pddl").write_text("; nothing defined here\n")
     with pytest.raises(SystemExit, match="no problem file"):
         support_table.find_case(str(tmp_path))
+
+
+def test_a_folder_with_a_domain_and_no_problem_gets_a_row_of_its_constructs(tmp_path):
+    """The IPPC-2006 blocksworld, tireworld and zenotravel: a domain published without
+    its problems still says what it uses, and that it was not run."""
+    (tmp_path / "domain.pddl").write_text(COMBINED.split("(define (problem")[0])
+    case = support_table.find_case(str(tmp_path))
+    assert (case.domain.name, case.problem) == ("domain.pddl", None)
+    assert support_table.constructs(case) == (
+        "1 actions; probabilistic, when, forall, probabilistic under forall, reward effects")
+    args = argparse.Namespace(method=["Q-learning"], episodes=3, runs=1, seed=1, budget=1.0)
+    assert support_table.measure(case, args) == ("not run: no problem file", "", 0.0)
+
+
+def test_a_domain_beside_a_problems_folder_gives_its_first_problem(tmp_path):
+    shutil.copy(SHIPPED / "domains" / "lift.pddl", tmp_path / "domain.pddl")
+    (tmp_path / "problems").mkdir()
+    for name, source in (("p02.pddl", "lift-2.pddl"), ("p01.pddl", "lift-1.pddl")):
+        shutil.copy(SHIPPED / "problems" / source, tmp_path / "problems" / name)
+    case = support_table.find_case(str(tmp_path))
+    assert (case.domain, case.problem) == (tmp_path / "domain.pddl",
+                                           tmp_path / "problems" / "p01.pddl")
+
+
+def test_the_table_names_a_domain_without_problems_and_prints_no_command(tmp_path, capsys):
+    (tmp_path / "domain.pddl").write_text(COMBINED.split("(define (problem")[0])
+    out = tmp_path / "table.md"
+    assert support_table.main([str(tmp_path), "--out", str(out)]) == 0
+    text = out.read_text()
+    assert f"| {tmp_path.name} | - | 1 actions; " in text
+    assert "| not run: no problem file | - | - |" in text
+    assert "gdq-pddl run" not in text
 
 
 @pytest.mark.slow
