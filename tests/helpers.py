@@ -161,24 +161,26 @@ if not loops_cached(METHODS):
             learners[name] = make_learner(name, ctx)
         base.reset(seed=0)
         run_episodes(learners[name], base, 3, np.random.default_rng(0))
-    late = ["FF-Replan", "R-max", "GDQ", "Dyna-Q-shaping", "Q-shaping"]
-    for name in late:
-        run(name, compact)
-        run(name, office)
-    for name in ["Q-learning", "Dyna-Q", "GDQ-code"]:
+    for name in ["FF-Replan", "R-max", "Dyna-Q-shaping", "GDQ", "Q-shaping", "Dyna-Q"]:
+        run(name, compact if name != "Dyna-Q" else office)
+        run(name, office if name != "Dyna-Q" else compact)
+    for name in ["Q-learning", "GDQ-code"]:
         run(name, compact)
     for name in METHODS:
         run(name, compact)
         run(name, office)
 """
 """Compiles every learner's kernels into numba's on-disk cache (the one this process uses),
-in about the reverse of the order the main process first needs them, so that the two meet
-once instead of compiling the same kernels side by side: first the rules classes the early
-tests do not run (FF-Replan's, R-max's, the default GDQ's, whose OptInit the main process
-has compiled by then, the shaping learners'), each loop on both kinds of dynamics
-(the compact env's, then the office env's); then the compact loops of Q-learning, Dyna-Q
-and the paper's GDQ, whose office loops and OptInit the early tests compile; then every
-learner on both, which loads what is left. Nothing when the loops are cached already."""
+in about the reverse of the order the main process first needs them, so that the two
+(and the early subprocesses: the notebook, the examples) load what the other compiled
+instead of compiling the same kernels side by side: first the rules classes the early
+tests do not run (FF-Replan's, R-max's, a shaping learner's, then the default GDQ's, whose
+OptInit the main process has compiled by then, the other shaping learner's), each loop on
+both kinds of dynamics (the compact env's first); then Dyna-Q's loops (the office one
+first: the notebook and the main process need it next); then the compact loops of
+Q-learning and the paper's GDQ, whose office loops and OptInit the early tests compile;
+then every learner on both, which loads what is left. Nothing when the loops are cached
+already."""
 
 
 WARMER = Background()
