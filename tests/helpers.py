@@ -10,7 +10,7 @@ import os
 import subprocess
 import sys
 import threading
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from pathlib import Path
 
 import numpy as np
@@ -113,6 +113,11 @@ class Background:
             if key not in self.futures:
                 self.futures[key] = self.pool.submit(self._run, argv, timeout, kwargs)
             return self.futures[key]
+
+    def after(self, future: Future, timeout: float = 900) -> None:
+        """The commands queued from now on start once ``future`` is done (or after
+        ``timeout`` seconds)."""
+        self.pool.submit(wait, [future], timeout)
 
     def _run(self, argv: list[str], timeout: float, kwargs) -> subprocess.CompletedProcess:
         with self.lock:
