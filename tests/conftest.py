@@ -34,17 +34,23 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         return
     marked = [(item, item.get_closest_marker("background")) for item in session.items]
     marked = [(item, mark) for item, mark in marked if mark is not None]
-    if len(session.items) >= WARM_KERNELS_FROM:
-        start_warm_kernels()
-    # first the subprocesses with a numba cache of their own: on a fresh checkout the others
-    # then find the kernels this process has compiled meanwhile, instead of compiling them
-    for item, mark in sorted(marked, key=lambda pair: not pair[1].kwargs.get("first")):
-        mark.args[0](item)
+    warming = start_warm_kernels() if len(session.items) >= WARM_KERNELS_FROM else None
+    # first the subprocesses with a numba cache of their own; the others after the warmer:
+    # on a fresh checkout they then load the kernels the warmer and this process compiled
+    # meanwhile (started sooner, the notebook's kernel compiled two loops a third time)
+    for item, mark in marked:
+        if mark.kwargs.get("first"):
+            mark.args[0](item)
+    if warming is not None:
+        BACKGROUND.after(warming)
+    for item, mark in marked:
+        if not mark.kwargs.get("first"):
+            mark.args[0](item)
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
+    WARMER.stop()  # first: the queue may be waiting for it
     BACKGROUND.stop()
-    WARMER.stop()
 
 
 @pytest.fixture(scope="session", autouse=True)

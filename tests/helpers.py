@@ -10,7 +10,7 @@ import os
 import subprocess
 import sys
 import threading
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 from pathlib import Path
 
 import numpy as np
@@ -114,6 +114,11 @@ class Background:
                 self.futures[key] = self.pool.submit(self._run, argv, timeout, kwargs)
             return self.futures[key]
 
+    def after(self, future: Future, timeout: float = 900) -> None:
+        """The commands queued from now on start once ``future`` is done (or after
+        ``timeout`` seconds)."""
+        self.pool.submit(wait, [future], timeout)
+
     def _run(self, argv: list[str], timeout: float, kwargs) -> subprocess.CompletedProcess:
         with self.lock:
             if self.stopped:
@@ -152,20 +157,35 @@ from gdq_pddl.envs.office import CompactEnv, OfficeEnv
 from gdq_pddl.learners import METHODS, make_learner, office_task_context, run_episodes
 from gdq_pddl.learners.episodes import loops_cached
 if not loops_cached(METHODS):
-    env = OfficeEnv(task="C")
-    ctx = office_task_context(env.world, "C")
-    learners = {name: make_learner(name, ctx) for name in METHODS}
-    first = ["Q-learning", "GDQ-code", "GDQ", "Dyna-Q"]
-    order = first + [name for name in METHODS if name not in first]
-    for base in (env, CompactEnv(task="C", world=env.world)):
-        for name in order:
-            base.reset(seed=0)
-            run_episodes(learners[name], base, 3, np.random.default_rng(0))
+    office = OfficeEnv(task="C")
+    compact = CompactEnv(task="C", world=office.world)
+    ctx = office_task_context(office.world, "C")
+    learners = {}
+    def run(name, base):
+        if name not in learners:
+            learners[name] = make_learner(name, ctx)
+        base.reset(seed=0)
+        run_episodes(learners[name], base, 3, np.random.default_rng(0))
+    for name in ["FF-Replan", "R-max", "Dyna-Q-shaping", "GDQ", "Q-shaping", "Dyna-Q"]:
+        run(name, compact if name != "Dyna-Q" else office)
+        run(name, office if name != "Dyna-Q" else compact)
+    for name in ["Q-learning", "GDQ-code"]:
+        run(name, compact)
+    for name in METHODS:
+        run(name, compact)
+        run(name, office)
 """
-"""Compiles every learner's kernels into numba's on-disk cache (the one this process uses):
-first every learner's OptInit (the early tests build learners), then the episode loops
-over both kinds of dynamics (the office env's, then the compact env's), the loops the most
-tests run first; nothing when the loops are cached already."""
+"""Compiles every learner's kernels into numba's on-disk cache (the one this process uses),
+in about the reverse of the order the main process first needs them, so that the two
+(and the early subprocesses: the notebook, the examples) load what the other compiled
+instead of compiling the same kernels side by side: first the rules classes the early
+tests do not run (FF-Replan's, R-max's, a shaping learner's, then the default GDQ's, whose
+OptInit the main process has compiled by then, the other shaping learner's), each loop on
+both kinds of dynamics (the compact env's first); then Dyna-Q's loops (the office one
+first: the notebook and the main process need it next); then the compact loops of
+Q-learning and the paper's GDQ, whose office loops and OptInit the early tests compile;
+then every learner on both, which loads what is left. Nothing when the loops are cached
+already."""
 
 
 WARMER = Background()

@@ -247,7 +247,10 @@ rng = np.random.default_rng(0)
 for name in METHODS:
     learner = make_learner(name, ctx)  # OptInit
     env.reset(seed=0)
-    run_episodes(learner, env, 3, rng)  # the compiled loop: act, observe, the env's step
+    # Q-learning in the compiled loop (its own indexing, the env's step inlined), every
+    # other learner's compiled act and observe from the Python loop (the env's step
+    # compiled once, env_act), not a copy of the loop per rules class
+    run_episodes(learner, env, 3, rng, fast=name == "Q-learning")
     learner.start_task(ctx)
     learner.greedy_policy()
 print("bounds-checked")
@@ -265,12 +268,15 @@ def start_bounds_checked(item=None):
 
 @pytest.mark.background.with_args(start_bounds_checked, first=True)
 def test_compiled_code_runs_with_numba_bounds_checking():
-    """Every learner's compiled loop and OptInit, compiled afresh with bounds checking:
-    any index out of range raises IndexError there. One process for every learner (the
-    rules compile once; the loop has one signature for all), 3 episodes each on the office
-    (the compact loop compiles the same rules), and LLVM's optimisations off
-    (``NUMBA_OPT=0``): the bounds checks are placed before them, and without them the
-    compiling takes a third less. The process starts when collection ends and compiles on
+    """Every learner's compiled rules (act, observe) and OptInit, the episode loop and
+    the env's step, compiled afresh with bounds checking: any index out of range raises
+    IndexError there. One process for every learner (numba cannot cache bounds-checked
+    code: it compiles all of it each time), 3 episodes each on the office (the compact
+    loop compiles the same rules); the loop itself once, with Q-learning's rules, the
+    other learners' rules called from the Python loop (the same compiled functions the
+    loop calls: a copy of the loop per rules class cost 24 s more CPU, 76 -> 52 s), and
+    LLVM's optimisations off (``NUMBA_OPT=0``): the bounds checks are placed before
+    them. The process starts when collection ends and compiles on
     the second core while the tests before this one run (``tests.helpers.Background``).
     (A learner run in another env is refused before any compiled code runs:
     ``test_a_learner_run_in_another_env_is_refused``.)"""
