@@ -52,16 +52,6 @@ from gdq_pddl.pddl.wordrows import (
 _NONE = np.zeros(0, dtype=np.int64)
 _STAYS = np.iinfo(np.int64).min
 """Where an effect leads that changes nothing (the expanded state itself)."""
-FEW = 64
-"""Up to this many edges or outcomes of a state that may repeat a state, a set says
-whether any does (where none does, nothing is merged); new states of up to four times as
-many words in all are tested for the goal on their bitmasks."""
-DENSE_WORDS = 1 << 21
-"""At most this many words (16 MB) for the rows of every effect's unconditional adds and
-deletes, kept whole: a state whose conditional effects do not fire is then expanded with
-a gather of them, not the dozen array calls of assembling them from their facts (which
-cost more than the work where few ground actions apply: 23 blocks, 1,104 ground actions,
-0.21 ms a state)."""
 
 
 class LazyGraph:
@@ -161,7 +151,7 @@ class LazyGraph:
         acts = np.flatnonzero(ok)
         column = np.cumsum(ok) - 1  # each applicable ground action's column
         moving, rows = self._moved(row, bits, ok)
-        sid, fresh = self._ids(x, rows)
+        sid, fresh = self._ids(row, rows)
         lead = self._lead  # effect -> where it leads: x unless it moves
         lead[moving] = sid
 
@@ -183,8 +173,8 @@ class LazyGraph:
         # (only ground actions with several kept outcomes can repeat one)
         keep = np.ones(len(e_pos), dtype=np.bool_)
         several = np.flatnonzero(self._edge_several[e_pos])
-        key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
-        if len(several) and not (len(several) <= FEW and len(set(key.tolist())) == len(key)):
+        if len(several):
+            key = e_op[several] * (n + len(fresh) + 1) + e_next[several]
             _, first = np.unique(key, return_index=True)
             keep[several] = False
             keep[several[first]] = True
@@ -202,12 +192,9 @@ class LazyGraph:
         add or delete, or a conditional effect whose condition holds; and the row each
         leads to (adds win, as :meth:`GroundOutcome.apply
         <gdq_pddl.pddl.grounding.GroundOutcome.apply>`)."""
-        at = np.flatnonzero(ok[self._plain_op])
-        plain = self._plain_eff[at]
+        plain = self._plain_eff[ok[self._eff_op[self._plain_eff]]]
         fired = np.flatnonzero(self._when.holds_bits(bits) & ok[self._when_op]) \
             if self._when.n else _NONE
-        if not len(fired) and self._plain_add is not None:  # a few calls, a state
-            return plain, (row & ~self._plain_del[at]) | self._plain_add[at]
         moving = np.union1d(plain, self._when_eff[fired]) if len(fired) else plain
         if not len(moving):
             return moving, np.zeros((0, len(row)), dtype=np.uint64)
@@ -223,15 +210,19 @@ class LazyGraph:
                                                             self._when_del[c_pos]]))
         return moving, (row & ~dele) | add
 
-    def _ids(self, x: int, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
-        """The id of the state each of ``rows`` is (``x`` where the row is state ``x``'s,
-        unchanged), and the rows never seen before, in order of first appearance in
-        ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
+    def _ids(self, row: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, list[bytes]]:
+        """The id of the state each of ``rows`` is (:data:`_STAYS` where the row is
+        ``row``, unchanged), and the rows never seen before, in order of first appearance
+        in ``rows`` (they get provisional ids ``-1 - j`` meanwhile)."""
+        sid = np.full(len(rows), _STAYS, dtype=np.int64)
+        changed = np.flatnonzero((rows != row).any(axis=1))
+        fresh: list[bytes] = []
+        if not len(changed):
+            return sid, fresh
         size = 8 * self.n_words
-        data = np.ascontiguousarray(rows, dtype="<u8").tobytes()
+        data = np.ascontiguousarray(rows[changed], dtype="<u8").tobytes()
         keys = [data[i:i + size] for i in range(0, len(data), size)]
         ids = list(map(self._index.get, keys))
-        fresh: list[bytes] = []
         if None in ids:
             new: dict[bytes, int] = {}
             for i, j in enumerate(ids):
@@ -242,7 +233,8 @@ class LazyGraph:
                         j = new[key] = -1 - len(fresh)
                         fresh.append(key)
                     ids[i] = j
-        return np.array(ids, dtype=np.int64), fresh
+        sid[changed] = ids
+        return sid, fresh
 
     def _numbered(self, n: int, fresh: list[bytes], e_next: np.ndarray, r_pos: np.ndarray,
                   r_next: np.ndarray) -> np.ndarray:
@@ -254,9 +246,8 @@ class LazyGraph:
         later = np.flatnonzero(r_next < 0)
         later = later[np.argsort(self._real_rank[r_pos[later]], kind="stable")]
         seq = np.concatenate([e_next[e_next < 0], r_next[later]])
-        # j of each new row, in order of first appearance (a dict: np.unique's sorts cost
-        # more for the few a state discovers)
-        order = -1 - np.fromiter(dict.fromkeys(seq.tolist()), dtype=np.int64)
+        _, first = np.unique(seq, return_index=True)  # provisional ids -k .. -1
+        order = -1 - seq[np.sort(first)]  # j of each new row, in order of appearance
         new = np.empty(len(fresh), dtype=np.int64)
         new[order] = np.arange(n, n + len(fresh))
         self._index.update(zip(fresh, new.tolist(), strict=True))
@@ -272,10 +263,9 @@ class LazyGraph:
         gain = self._gains.of(bits)[r_pos] if self.gains else np.zeros(len(r_pos))
         prob = self._real_prob[r_pos]
         several = np.flatnonzero(self._real_several[r_pos])
+        if not len(several):
+            return col, prob, nxt, stuck, gain
         c, t, s, g = col[several], nxt[several], stuck[several], gain[several]
-        if len(several) <= FEW and len(set(zip(c.tolist(), t.tolist(), s.tolist(),
-                                               g.tolist(), strict=True))) == len(several):
-            return col, prob, nxt, stuck, gain  # none equal (a set is quicker for a few)
         order = np.lexsort((g, s, t, c))  # stable: equals in outcome order
         c, t, s, g = c[order], t[order], s[order], g[order]
         starts = np.r_[True, (c[1:] != c[:-1]) | (t[1:] != t[:-1]) | (s[1:] != s[:-1])
@@ -328,17 +318,8 @@ class LazyGraph:
                                                                    strict=True) if m}
         self._plain_eff = np.array([e for e, o in enumerate(outcomes)
                                     if e in used and (o.add or o.dele)], dtype=np.int64)
-        self._plain_op = self._eff_op[self._plain_eff]
         self._bit_ptr, self._bit_word, self._bit_add, self._bit_del = effect_bits(
             [(o.add, o.dele) for o in outcomes])
-        self._plain_add = self._plain_del = None  # each plain effect's row, if small
-        if len(self._plain_eff) * self.n_words <= DENSE_WORDS:
-            pos, own = spans(self._bit_ptr, self._plain_eff)
-            self._plain_add, self._plain_del = (
-                np.zeros((len(self._plain_eff), self.n_words), dtype=np.uint64)
-                for _ in range(2))
-            np.bitwise_or.at(self._plain_add, (own, self._bit_word[pos]), self._bit_add[pos])
-            np.bitwise_or.at(self._plain_del, (own, self._bit_word[pos]), self._bit_del[pos])
         when = [(e, c) for e, o in enumerate(outcomes) if e in used for c in o.conditional]
         self._when = RowConditions([(p, n) for _, (p, n, _, _) in when])
         self._when_eff = np.array([e for e, _ in when], dtype=np.int64)
@@ -405,8 +386,7 @@ class LazyGraph:
                 new[:n] = old[:n]
                 setattr(self, name, new)
         self._words[n:n + m] = rows
-        self._goal[n:n + m] = goal_rows(self.task, rows) if m * self.n_words > 4 * FEW \
-            else [self.task.is_goal(int.from_bytes(key, "little")) for key in keys]
+        self._goal[n:n + m] = goal_rows(self.task, rows)
         self._n = n + m
 
     def _require(self, x: int) -> bool:

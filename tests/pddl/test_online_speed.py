@@ -12,13 +12,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from gdq_pddl.pddl import lazy as lazy_module
 from gdq_pddl.pddl import ppddl_effects
 from gdq_pddl.pddl.grounding import GroundOutcome
 from gdq_pddl.pddl.lazy import LazyGraph
 from gdq_pddl.pddl.reachable import reality_ranks
 from gdq_pddl.planning.base import PlanningProblem
-from tests.helpers import REPO_ROOT
 from tests.pddl.test_lazy import (
     ORDER,
     TRAP,
@@ -161,18 +159,11 @@ def small_task(name: str, tmp_path):
     return random_task(int(name.split()[1]))
 
 
-@pytest.mark.parametrize("few", [True, False])
 @pytest.mark.parametrize("name", TASKS)
-def test_the_vectorised_expansion_is_the_plain_one_on_random_states(name, few, tmp_path,
-                                                                    monkeypatch):
+def test_the_vectorised_expansion_is_the_plain_one_on_random_states(name, tmp_path):
     """From random states (any set of facts, reachable or not), a random order of
     expansions gives the offered actions, edges, merged outcomes (probabilities and gains
-    bit for bit) and new states' numbering of the plain way, one outcome at a time; both
-    as a small state is expanded (sets, effects' rows whole) and as a large one is
-    (``few``: False, the sorts and the rows assembled from facts)."""
-    if not few:
-        monkeypatch.setattr(lazy_module, "FEW", 0)
-        monkeypatch.setattr(lazy_module, "DENSE_WORDS", 0)
+    bit for bit) and new states' numbering of the plain way, one outcome at a time."""
     task = small_task(name, tmp_path)
     rng = np.random.default_rng(len(name) + 31 * sum(map(ord, name)))
     checked = 0
@@ -273,43 +264,3 @@ def test_each_columns_least_edge_is_the_sorts():
         order = np.lexsort((key, col))
         plain = order[np.r_[True, col[order[1:]] != col[order[:-1]]]] if n else order
         assert _first_least(col, key).tolist() == plain.tolist()
-
-
-def test_a_state_where_few_actions_apply_is_expanded_without_sorting(monkeypatch):
-    """Where few ground actions apply (blocks with cracks, put down, stack: no conditional
-    effect), a state is expanded without the calls whose fixed cost outweighed the work
-    (0.13 -> 0.21 ms a state on 23 blocks): no effect's row assembled from its facts
-    (``spans``), no sort to number new states or find equal outcomes (``np.unique``,
-    ``np.lexsort``), no goal test on word rows; and the graph is the one expanded the
-    array way."""
-    from gdq_pddl.pddl import wordrows
-
-    text = (REPO_ROOT / "domains" / "cracking-blocks.pddl").read_text()
-    problem = (REPO_ROOT / "problems" / "cracking-1.pddl").read_text()
-    task = PlanningProblem.from_texts(text, problem).learner_task
-    calls: list[str] = []
-
-    def counted(name, f):
-        def call(*args, **kw):
-            calls.append(name)
-            return f(*args, **kw)
-        return call
-
-    for name in ("unique", "lexsort"):
-        monkeypatch.setattr(np, name, counted(name, getattr(np, name)))
-    monkeypatch.setattr(lazy_module, "spans", counted("spans", lazy_module.spans))
-    monkeypatch.setattr(lazy_module, "goal_rows", counted("goal_rows", wordrows.goal_rows))
-    small = LazyGraph(task)
-    expand_all(small, "id order", np.random.default_rng(0))
-    assert small.n_states > 50 and calls == []
-    monkeypatch.setattr(lazy_module, "FEW", 0)
-    monkeypatch.setattr(lazy_module, "DENSE_WORDS", 0)
-    large = LazyGraph(task)
-    expand_all(large, "id order", np.random.default_rng(0))
-    assert {"unique", "lexsort", "spans", "goal_rows"} <= set(calls)
-    assert np.array_equal(small.words, large.words)
-    for x in range(small.n_states):
-        if small.expanded[x]:
-            assert all(np.array_equal(a, b) for a, b in zip(
-                (*small.edges(x), *small.outcomes(x)), (*large.edges(x), *large.outcomes(x)),
-                strict=True))
